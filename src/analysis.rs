@@ -1,0 +1,235 @@
+//! One configuration, measured end to end: depth range, splits, windows, density, closed-form
+//! aggregates, shimmer with and without snapping, coverage and light depth ranges.
+
+use crate::cascades::{LightPose, Rig};
+use crate::config::Config;
+use crate::depth_range::{self, DepthRange};
+use crate::geometry::CameraPose;
+use crate::metrics::{self, Aggregates, DensitySample};
+use crate::motion;
+use crate::shimmer::{self, PathResult, ShimmerOptions};
+
+/// Which optional parts to compute. The summary metrics are always computed and never depend
+/// on these switches, so a sweep row equals what `analyze` reports for the same config.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AnalysisOptions {
+    /// S4 cell flips per probe (the only per-probe work when window sizes are fixed).
+    pub cell_flips: bool,
+    /// Keep per-frame shimmer rows (`shimmer.csv`).
+    pub frame_rows: bool,
+    /// Sample the density profile (`density.csv`).
+    pub density_profile: bool,
+    /// Light near/far per cascade (`cascades.csv`).
+    pub light_depth: bool,
+}
+
+impl AnalysisOptions {
+    /// Everything, as `analyze` writes it.
+    pub fn full() -> Self {
+        AnalysisOptions {
+            cell_flips: true,
+            frame_rows: true,
+            density_profile: true,
+            light_depth: true,
+        }
+    }
+
+    /// Only what a sweep row needs.
+    pub fn summary_only() -> Self {
+        AnalysisOptions {
+            cell_flips: false,
+            frame_rows: false,
+            density_profile: false,
+            light_depth: false,
+        }
+    }
+}
+
+/// The flat summary: the metric names users' scripts and CI thresholds read.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Summary {
+    /// False when the scene is not visible within the shadow distance; then every metric below
+    /// is 0 and no cascade is built.
+    pub cascades_needed: bool,
+    pub z_lo: f64,
+    pub z_hi: f64,
+    pub max_aliasing: f64,
+    pub mean_aliasing: f64,
+    pub mean_log_aliasing: f64,
+    pub undersampled_fraction: f64,
+    /// RMS sub-texel phase drift (S3) over the path with snapping, in texels.
+    pub shimmer_snapped: f64,
+    /// The same without snapping.
+    pub shimmer_unsnapped: f64,
+    /// Largest relative texel-size change between frames (S1).
+    pub size_jitter: f64,
+    /// Slice corners outside their window, over every frame, with the configured snapping.
+    pub coverage_violations: u64,
+    /// cascades x resolution^2 x 4 bytes (32-bit depth).
+    pub memory_bytes: u64,
+}
+
+/// One cascade as built for the configured camera (frame 0).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct CascadeReport {
+    pub cascade: usize,
+    pub near: f64,
+    pub far: f64,
+    /// Minimal bounding-sphere radius of the slice, whatever the fit.
+    pub radius: f64,
+    pub width: f64,
+    pub height: f64,
+    pub texel_size: f64,
+    pub light_near: f64,
+    pub light_far: f64,
+    pub coverage_violations: u64,
+    pub coverage_worst_texels: f64,
+    pub min_slack_texels: f64,
+    pub max_aliasing: f64,
+    pub min_aliasing: f64,
+}
+
+#[derive(Debug, Clone)]
+pub struct Analysis {
+    pub config: Config,
+    pub range: DepthRange,
+    pub rig: Option<Rig>,
+    pub cascades: Vec<CascadeReport>,
+    pub aggregates: Option<Aggregates>,
+    pub density: Vec<DensitySample>,
+    pub snapped: Option<PathResult>,
+    pub unsnapped: Option<PathResult>,
+    pub summary: Summary,
+}
+
+impl Analysis {
+    /// The path result of the configured snap mode.
+    pub fn configured_path(&self) -> Option<&PathResult> {
+        if self.config.shadow.snap {
+            self.snapped.as_ref()
+        } else {
+            self.unsnapped.as_ref()
+        }
+    }
+}
+
+pub fn memory_bytes(cascades: usize, resolution: u32) -> u64 {
+    cascades as u64 * resolution as u64 * resolution as u64 * 4
+}
+
+/// Runs the analysis of one validated config.
+pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
+    let range = depth_range::for_config(config);
+    let memory = memory_bytes(config.shadow.cascades, config.shadow.resolution);
+    let Some(rig) = Rig::from_config(config) else {
+        return Analysis {
+            config: config.clone(),
+            range,
+            rig: None,
+            cascades: Vec::new(),
+            aggregates: None,
+            density: Vec::new(),
+            snapped: None,
+            unsnapped: None,
+            summary: Summary {
+                cascades_needed: false,
+                z_lo: 0.0,
+                z_hi: 0.0,
+                max_aliasing: 0.0,
+                mean_aliasing: 0.0,
+                mean_log_aliasing: 0.0,
+                undersampled_fraction: 0.0,
+                shimmer_snapped: 0.0,
+                shimmer_unsnapped: 0.0,
+                size_jitter: 0.0,
+                coverage_violations: 0,
+                memory_bytes: memory,
+            },
+        };
+    };
+    let (z_lo, z_hi) = range.bounds().expect("a rig implies a range");
+    let pose0: CameraPose = config.camera.pose();
+    let lp0 = LightPose::new(&rig.light, &pose0);
+    let windows0: Vec<_> = (0..rig.cascade_count())
+        .map(|i| rig.window(i, &lp0, config.shadow.snap))
+        .collect();
+    let texel: Vec<f64> = windows0.iter().map(|w| w.texel_size()).collect();
+    let k = rig.lens.pixels_per_unit_slope(config.screen.height);
+    let aggregates = metrics::aggregates(&rig.splits, &texel, k);
+    let density = if opts.density_profile {
+        metrics::density_profile(
+            &rig.splits,
+            &texel,
+            &rig.lens,
+            config.screen.height,
+            config.analysis.density_samples,
+        )
+    } else {
+        Vec::new()
+    };
+
+    let poses = motion::camera_path(config).expect("validated when the config was loaded");
+    let probes = shimmer::probes(&rig, &pose0, &config.scene, config.analysis.probes);
+    let sopts = ShimmerOptions {
+        cell_flips: opts.cell_flips,
+        probe_drift: false,
+        frame_rows: opts.frame_rows,
+    };
+    let snapped = shimmer::along_path(&rig, &poses, &probes, true, sopts);
+    let unsnapped = shimmer::along_path(&rig, &poses, &probes, false, sopts);
+    let configured = if config.shadow.snap { &snapped } else { &unsnapped };
+
+    let cascades = windows0
+        .iter()
+        .enumerate()
+        .map(|(i, w)| {
+            let (light_near, light_far) = if opts.light_depth {
+                rig.light_depth_range(i, &pose0, w, &config.scene)
+            } else {
+                (0.0, 0.0)
+            };
+            CascadeReport {
+                cascade: i,
+                near: rig.slices[i].near,
+                far: rig.slices[i].far,
+                radius: rig.slices[i].sphere.radius,
+                width: w.width(),
+                height: w.height(),
+                texel_size: w.texel_size(),
+                light_near,
+                light_far,
+                coverage_violations: configured.coverage.violations[i],
+                coverage_worst_texels: configured.coverage.worst_texels[i],
+                min_slack_texels: configured.coverage.min_slack_texels[i],
+                max_aliasing: aggregates.cascade_max_aliasing[i],
+                min_aliasing: aggregates.cascade_min_aliasing[i],
+            }
+        })
+        .collect();
+
+    let summary = Summary {
+        cascades_needed: true,
+        z_lo,
+        z_hi,
+        max_aliasing: aggregates.max_aliasing,
+        mean_aliasing: aggregates.mean_aliasing,
+        mean_log_aliasing: aggregates.mean_log_aliasing,
+        undersampled_fraction: aggregates.undersampled_fraction,
+        shimmer_snapped: snapped.stats.rms,
+        shimmer_unsnapped: unsnapped.stats.rms,
+        size_jitter: snapped.stats.size_jitter.max(unsnapped.stats.size_jitter),
+        coverage_violations: configured.coverage.total(),
+        memory_bytes: memory,
+    };
+    Analysis {
+        config: config.clone(),
+        range,
+        rig: Some(rig),
+        cascades,
+        aggregates: Some(aggregates),
+        density,
+        snapped: Some(snapped),
+        unsnapped: Some(unsnapped),
+        summary,
+    }
+}

@@ -1,0 +1,618 @@
+//! The scene file: TOML in, a validated [`Config`] out.
+//!
+//! This is the only place where degrees appear: `fov_y_deg` and the rotational motion steps
+//! are converted to radians here, and everything downstream works in radians. Unknown keys,
+//! NaN, infinities and out-of-range values are errors that name the key, the value and what
+//! is allowed; TOML syntax and type errors carry the line and column.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::geometry::{Aabb, CameraPose};
+
+/// How the window of a cascade is fitted around its slice of the view frustum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Fit {
+    /// Minimal bounding sphere of the slice (closed form): a square window whose size depends
+    /// only on the lens and the split depths, so it never changes as the camera moves or turns.
+    /// Costs about 2x the texel area of a tight box on average, buys exact stability.
+    Sphere,
+    /// Tight light-space bounding box of the slice's 8 corners, refitted every frame. Sharper
+    /// (smaller texels) but its size changes whenever the camera turns, which snapping cannot fix.
+    Aabb,
+}
+
+impl Fit {
+    pub fn name(self) -> &'static str {
+        match self {
+            Fit::Sphere => "sphere",
+            Fit::Aabb => "aabb",
+        }
+    }
+}
+
+impl std::fmt::Display for Fit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The camera as configured (frame 0 of the motion path).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct CameraSettings {
+    pub position: DVec3,
+    pub target: DVec3,
+    pub up: DVec3,
+    /// Vertical field of view in degrees, as written in the file.
+    pub fov_y_deg: f64,
+    /// Near and far clip planes, world units along the view axis.
+    pub near: f64,
+    pub far: f64,
+}
+
+impl CameraSettings {
+    /// Vertical field of view in radians.
+    pub fn fov_y(&self) -> f64 {
+        self.fov_y_deg.to_radians()
+    }
+
+    pub fn pose(&self) -> CameraPose {
+        CameraPose::look_at(self.position, self.target, self.up)
+            .expect("validated: position != target and up not parallel to the view direction")
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Screen {
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Screen {
+    pub fn aspect(&self) -> f64 {
+        self.width as f64 / self.height as f64
+    }
+}
+
+/// Shadow settings: the knobs an engine exposes.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ShadowSettings {
+    /// Shadow distance: cascades end at min(camera far, max_distance). Larger spreads the same
+    /// texels over more depth (blurrier); smaller cuts shadows off sooner.
+    pub max_distance: f64,
+    /// Number of cascades (1..=16). More cascades lower the worst-case aliasing at the cost of
+    /// memory and draw calls; returns diminish beyond about 4.
+    pub cascades: usize,
+    /// Practical split weight: 0 uniform (starves the near cascades), 1 logarithmic (equal worst
+    /// case in every cascade, but a tiny first cascade when near is small).
+    pub lambda: f64,
+    /// Texels per side of each cascade's map (16..=16384). Texel size scales as 1/resolution.
+    pub resolution: u32,
+    pub fit: Fit,
+    /// Move each window in whole texels on a world-anchored grid. Removes shimmer under camera
+    /// translation (and rotation, for the sphere fit).
+    pub snap: bool,
+    /// Clip the split range to where the scene's bounds are visible; skips empty depth.
+    pub fit_depth_to_scene: bool,
+}
+
+/// Which way the camera moves along the shimmer path, one pose per frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MotionPath {
+    /// Sideways along the camera's right axis, `step` world units per frame.
+    Strafe,
+    /// Along the view direction, `step` world units per frame.
+    Dolly,
+    /// Turning about the camera's up vector, `step` radians per frame.
+    Yaw,
+    /// Tilting about the camera's right axis, `step` radians per frame.
+    Pitch,
+    /// Circling the target about the up vector, `step` radians per frame.
+    Orbit,
+    /// Poses read from a CSV file: (position, target) per frame.
+    File { path: PathBuf, poses: Vec<(DVec3, DVec3)> },
+}
+
+impl MotionPath {
+    pub fn name(&self) -> &'static str {
+        match self {
+            MotionPath::Strafe => "strafe",
+            MotionPath::Dolly => "dolly",
+            MotionPath::Yaw => "yaw",
+            MotionPath::Pitch => "pitch",
+            MotionPath::Orbit => "orbit",
+            MotionPath::File { .. } => "file",
+        }
+    }
+
+    /// True when every frame differs from the previous one by a pure translation.
+    pub fn is_translation(&self) -> bool {
+        matches!(self, MotionPath::Strafe | MotionPath::Dolly)
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct MotionSettings {
+    pub path: MotionPath,
+    /// Number of poses, frame 0 being the configured camera.
+    pub frames: usize,
+    /// World units per frame (strafe, dolly) or radians per frame (yaw, pitch, orbit).
+    pub step: f64,
+    /// The step as written: degrees for the rotational paths.
+    pub step_as_written: f64,
+}
+
+/// How densely the sampled quantities are sampled. The closed forms do not depend on these.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct AnalysisSettings {
+    /// Log-spaced depths in `density.csv` (plus both sides of every split).
+    pub density_samples: usize,
+    /// World-fixed probe points per cascade for the shimmer metrics S3/S4.
+    pub probes: usize,
+}
+
+impl Default for AnalysisSettings {
+    fn default() -> Self {
+        AnalysisSettings {
+            density_samples: 512,
+            probes: 256,
+        }
+    }
+}
+
+/// A validated scene and shadow setting.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Config {
+    /// The file stem, used for the default output directory `reports/<name>/`.
+    pub name: String,
+    /// Where the config was read from, if from a file.
+    pub path: Option<PathBuf>,
+    pub camera: CameraSettings,
+    pub screen: Screen,
+    /// Unit direction in which light travels.
+    pub light_direction: DVec3,
+    /// The light direction as written (any length).
+    pub light_direction_as_written: DVec3,
+    /// World-space bounds of everything that casts or receives shadows.
+    pub scene: Aabb,
+    pub shadow: ShadowSettings,
+    pub motion: MotionSettings,
+    pub analysis: AnalysisSettings,
+}
+
+// ---------------------------------------------------------------------------------------------
+// Raw TOML layer
+// ---------------------------------------------------------------------------------------------
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawConfig {
+    camera: RawCamera,
+    screen: RawScreen,
+    light: RawLight,
+    scene: RawScene,
+    #[serde(default)]
+    shadow: RawShadow,
+    #[serde(default)]
+    motion: RawMotion,
+    #[serde(default)]
+    analysis: RawAnalysis,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCamera {
+    position: [f64; 3],
+    target: [f64; 3],
+    up: Option<[f64; 3]>,
+    fov_y_deg: f64,
+    near: f64,
+    far: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScreen {
+    width: i64,
+    height: i64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLight {
+    direction: [f64; 3],
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    min: [f64; 3],
+    max: [f64; 3],
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawShadow {
+    max_distance: Option<f64>,
+    cascades: Option<i64>,
+    lambda: Option<f64>,
+    resolution: Option<i64>,
+    fit: Option<Fit>,
+    snap: Option<bool>,
+    fit_depth_to_scene: Option<bool>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMotion {
+    path: Option<String>,
+    frames: Option<i64>,
+    step: Option<f64>,
+    file: Option<String>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawAnalysis {
+    density_samples: Option<i64>,
+    probes: Option<i64>,
+}
+
+// ---------------------------------------------------------------------------------------------
+// Loading and validation
+// ---------------------------------------------------------------------------------------------
+
+/// Byte offset to 1-based (line, column), counting columns in characters.
+pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    let column = text[line_start..offset].chars().count() + 1;
+    (line, column)
+}
+
+/// Turn a `toml` deserialisation error into one with the file's line and column.
+pub fn toml_error(path: &str, text: &str, err: &toml::de::Error) -> Error {
+    let (line, column) = err.span().map(|span| line_column(text, span.start)).unwrap_or((1, 1));
+    Error::Toml {
+        path: path.to_string(),
+        line,
+        column,
+        message: err.message().trim().to_string(),
+    }
+}
+
+/// Finds where `table.key = ...` is written, for error messages about values that parsed
+/// but are out of range. Returns 1-based (line, column) of the key, if found.
+pub fn locate_key(text: &str, dotted: &str) -> Option<(usize, usize)> {
+    let (table, key) = match dotted.rsplit_once('.') {
+        Some((t, k)) => (t, k),
+        None => ("", dotted),
+    };
+    let mut current = String::new();
+    for (i, line) in text.lines().enumerate() {
+        let trimmed = line.trim_start();
+        if let Some(rest) = trimmed.strip_prefix('[') {
+            let rest = rest.trim_start_matches('[');
+            if let Some(end) = rest.find(']') {
+                current = rest[..end].trim().to_string();
+            }
+            continue;
+        }
+        if current != table {
+            continue;
+        }
+        if let Some(after) = trimmed.strip_prefix(key) {
+            if after.trim_start().starts_with('=') {
+                let column = line.len() - trimmed.len() + 1;
+                return Some((i + 1, column));
+            }
+        }
+    }
+    None
+}
+
+/// Builds "value not allowed" errors that point at the key in the file.
+pub struct Validator<'a> {
+    pub path: &'a str,
+    pub text: &'a str,
+}
+
+impl Validator<'_> {
+    pub fn invalid(&self, key: &str, value: impl std::fmt::Display, allowed: &str) -> Error {
+        let location = match (self.path.is_empty(), locate_key(self.text, key)) {
+            (_, Some((line, column))) if !self.path.is_empty() => {
+                format!("{}:{line}:{column}: ", self.path)
+            }
+            (_, Some((line, column))) => format!("line {line}, column {column}: "),
+            (false, None) => format!("{}: ", self.path),
+            (true, None) => String::new(),
+        };
+        Error::Invalid {
+            location,
+            key: key.to_string(),
+            value: value.to_string(),
+            allowed: allowed.to_string(),
+        }
+    }
+
+    pub fn finite(&self, key: &str, v: f64) -> Result<f64> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.invalid(key, v, "a finite number"))
+        }
+    }
+
+    pub fn vec3(&self, key: &str, v: [f64; 3]) -> Result<DVec3> {
+        if v.iter().all(|c| c.is_finite()) {
+            Ok(DVec3::from_array(v))
+        } else {
+            Err(self.invalid(key, format!("{v:?}"), "three finite numbers"))
+        }
+    }
+
+    pub fn int_range(&self, key: &str, v: i64, lo: i64, hi: i64) -> Result<i64> {
+        if (lo..=hi).contains(&v) {
+            Ok(v)
+        } else {
+            Err(self.invalid(key, v, &format!("an integer in {lo}..={hi}")))
+        }
+    }
+}
+
+impl Config {
+    /// Reads and validates a config file. Relative paths inside it (the motion path file)
+    /// are resolved against the file's directory.
+    pub fn load(path: &Path) -> Result<Config> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "config".to_string());
+        let mut config = Config::from_toml_str(&text, &path.display().to_string(), path.parent())?;
+        config.name = name;
+        config.path = Some(path.to_path_buf());
+        Ok(config)
+    }
+
+    /// Parses and validates config text. `label` names the source in messages; `base_dir`
+    /// resolves a relative motion path file.
+    pub fn from_toml_str(text: &str, label: &str, base_dir: Option<&Path>) -> Result<Config> {
+        let raw: RawConfig = toml::from_str(text).map_err(|e| toml_error(label, text, &e))?;
+        let v = Validator { path: label, text };
+        validate(raw, &v, base_dir)
+    }
+
+    /// The inputs as used, for `summary.json`.
+    pub fn echo(&self) -> serde_json::Value {
+        let motion_step_unit = match self.motion.path {
+            MotionPath::Strafe | MotionPath::Dolly => "world units per frame",
+            MotionPath::File { .. } => "unused (poses from file)",
+            _ => "degrees per frame",
+        };
+        let mut motion = serde_json::json!({
+            "path": self.motion.path.name(),
+            "frames": self.motion.frames,
+            "step": self.motion.step_as_written,
+            "step_unit": motion_step_unit,
+        });
+        if let MotionPath::File { path, .. } = &self.motion.path {
+            motion["file"] = serde_json::Value::String(path.display().to_string());
+        }
+        serde_json::json!({
+            "camera": self.camera,
+            "screen": self.screen,
+            "light": {
+                "direction": self.light_direction_as_written,
+                "direction_normalised": self.light_direction,
+            },
+            "scene": { "min": self.scene.min, "max": self.scene.max },
+            "shadow": self.shadow,
+            "motion": motion,
+            "analysis": self.analysis,
+        })
+    }
+
+    /// Effective far end of the shadow range before scene clipping: min(far, max_distance).
+    pub fn shadow_far(&self) -> f64 {
+        self.camera.far.min(self.shadow.max_distance)
+    }
+}
+
+fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Result<Config> {
+    // Camera.
+    let position = v.vec3("camera.position", raw.camera.position)?;
+    let target = v.vec3("camera.target", raw.camera.target)?;
+    let up = match raw.camera.up {
+        Some(u) => v.vec3("camera.up", u)?,
+        None => DVec3::Y,
+    };
+    let view = target - position;
+    if view.length() <= 1e-12 * (1.0 + position.length()) {
+        return Err(v.invalid(
+            "camera.target",
+            format!("{:?}", raw.camera.target),
+            "a point different from camera.position (the view direction is target - position)",
+        ));
+    }
+    if up.length() <= 1e-300 {
+        return Err(v.invalid("camera.up", format!("{up:?}"), "a non-zero vector"));
+    }
+    if view.normalize().cross(up.normalize()).length() < 1e-9 {
+        return Err(v.invalid(
+            "camera.up",
+            format!("{:?}", up.to_array()),
+            "a vector not parallel to the view direction (target - position)",
+        ));
+    }
+    let fov = v.finite("camera.fov_y_deg", raw.camera.fov_y_deg)?;
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(v.invalid("camera.fov_y_deg", fov, "degrees strictly between 0 and 180"));
+    }
+    let near = v.finite("camera.near", raw.camera.near)?;
+    if near <= 0.0 {
+        return Err(v.invalid("camera.near", near, "a number > 0"));
+    }
+    let far = v.finite("camera.far", raw.camera.far)?;
+    if far <= near {
+        return Err(v.invalid(
+            "camera.far",
+            far,
+            &format!("a number greater than camera.near ({near})"),
+        ));
+    }
+
+    // Screen.
+    let width = v.int_range("screen.width", raw.screen.width, 1, 1 << 20)? as u32;
+    let height = v.int_range("screen.height", raw.screen.height, 1, 1 << 20)? as u32;
+
+    // Light.
+    let dir_raw = v.vec3("light.direction", raw.light.direction)?;
+    let len = dir_raw.length();
+    if len <= 1e-12 || !len.is_finite() {
+        return Err(v.invalid(
+            "light.direction",
+            format!("{:?}", raw.light.direction),
+            "a non-zero vector (the direction light travels)",
+        ));
+    }
+    let light_direction = dir_raw / len;
+
+    // Scene.
+    let smin = v.vec3("scene.min", raw.scene.min)?;
+    let smax = v.vec3("scene.max", raw.scene.max)?;
+    if smin.cmpgt(smax).any() {
+        return Err(v.invalid(
+            "scene.max",
+            format!("{:?}", raw.scene.max),
+            &format!(
+                "each component >= scene.min {:?} (a zero thickness is allowed)",
+                raw.scene.min
+            ),
+        ));
+    }
+
+    // Shadow.
+    let s = raw.shadow;
+    let max_distance = match s.max_distance {
+        Some(d) => {
+            let d = v.finite("shadow.max_distance", d)?;
+            if d <= 0.0 {
+                return Err(v.invalid("shadow.max_distance", d, "a number > 0"));
+            }
+            d
+        }
+        None => far,
+    };
+    let cascades = v.int_range("shadow.cascades", s.cascades.unwrap_or(4), 1, 16)? as usize;
+    let lambda = v.finite("shadow.lambda", s.lambda.unwrap_or(0.75))?;
+    if !(0.0..=1.0).contains(&lambda) {
+        return Err(v.invalid("shadow.lambda", lambda, "a number in [0, 1] (0 uniform, 1 logarithmic)"));
+    }
+    let resolution = v.int_range("shadow.resolution", s.resolution.unwrap_or(2048), 16, 16384)? as u32;
+    let shadow = ShadowSettings {
+        max_distance,
+        cascades,
+        lambda,
+        resolution,
+        fit: s.fit.unwrap_or(Fit::Sphere),
+        snap: s.snap.unwrap_or(true),
+        fit_depth_to_scene: s.fit_depth_to_scene.unwrap_or(true),
+    };
+
+    // Motion.
+    let m = raw.motion;
+    let frames = v.int_range("motion.frames", m.frames.unwrap_or(240), 2, 1_000_000)? as usize;
+    let step_as_written = v.finite("motion.step", m.step.unwrap_or(0.05))?;
+    let path_name = m.path.unwrap_or_else(|| "strafe".to_string());
+    let (path, step) = match path_name.as_str() {
+        "strafe" => (MotionPath::Strafe, step_as_written),
+        "dolly" => (MotionPath::Dolly, step_as_written),
+        "yaw" => (MotionPath::Yaw, step_as_written.to_radians()),
+        "pitch" => (MotionPath::Pitch, step_as_written.to_radians()),
+        "orbit" => (MotionPath::Orbit, step_as_written.to_radians()),
+        "file" => {
+            let file = m.file.ok_or_else(|| {
+                v.invalid(
+                    "motion.file",
+                    "(missing)",
+                    "a CSV file with columns px,py,pz,tx,ty,tz when motion.path = \"file\"",
+                )
+            })?;
+            let p = PathBuf::from(&file);
+            let p = match base_dir {
+                Some(dir) if p.is_relative() => dir.join(p),
+                _ => p,
+            };
+            let poses = crate::motion::read_path_file(&p)?;
+            (MotionPath::File { path: p, poses }, 0.0)
+        }
+        other => {
+            return Err(v.invalid(
+                "motion.path",
+                format!("{other:?}"),
+                "one of \"strafe\", \"dolly\", \"yaw\", \"pitch\", \"orbit\", \"file\"",
+            ))
+        }
+    };
+    let frames = match &path {
+        MotionPath::File { poses, .. } => poses.len(),
+        _ => frames,
+    };
+
+    let a = raw.analysis;
+    let analysis = AnalysisSettings {
+        density_samples: v.int_range(
+            "analysis.density_samples",
+            a.density_samples.unwrap_or(512),
+            2,
+            1_000_000,
+        )? as usize,
+        probes: v.int_range("analysis.probes", a.probes.unwrap_or(256), 1, 1_000_000)? as usize,
+    };
+
+    let config = Config {
+        name: "config".to_string(),
+        path: None,
+        camera: CameraSettings {
+            position,
+            target,
+            up,
+            fov_y_deg: fov,
+            near,
+            far,
+        },
+        screen: Screen { width, height },
+        light_direction,
+        light_direction_as_written: dir_raw,
+        scene: Aabb::new(smin, smax),
+        shadow,
+        motion: MotionSettings {
+            path,
+            frames,
+            step,
+            step_as_written,
+        },
+        analysis,
+    };
+    // Every pose of the motion path must be a valid camera (pitching through the up vector,
+    // or a path file row with position == target, is a config error, not a panic later).
+    crate::motion::camera_path(&config).map_err(|(frame, why)| {
+        v.invalid(
+            if matches!(config.motion.path, MotionPath::File { .. }) {
+                "motion.file"
+            } else {
+                "motion.step"
+            },
+            format!("{} (frame {frame})", config.motion.step_as_written),
+            &format!("a motion that keeps a valid camera in every frame: {why}"),
+        )
+    })?;
+    Ok(config)
+}

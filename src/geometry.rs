@@ -1,0 +1,385 @@
+//! Conventions, stated once for the whole crate.
+//!
+//! * World space is right-handed with +Y up. All lengths are world units, all angles radians.
+//! * The camera looks along `forward = normalise(target - position)`; `right = forward x up`,
+//!   `up' = right x forward`. **View depth** `d` of a point `p` is `forward . (p - position)`:
+//!   distance along the view axis, not Euclidean distance. (Engines that look down -z in view
+//!   space flip the sign on input; nothing here depends on that.)
+//! * Slice corners of the view frustum between depths `n` and `f` are
+//!   `position + forward*z + right*(+-tanH*z) + up'*(+-tanV*z)` for `z in {n, f}`.
+//!   Corner `i` uses bit 0 for the sign along right, bit 1 along up, bit 2 for near (0) / far (1).
+//! * `L` is the unit direction in which light **travels** (from the sun toward the ground).
+//! * Light space (`light_from_world`, a pure rotation): `z = L`, `x = normalise(world_up x z)`
+//!   with world_up = +Y, falling back to +Z when `L` is within 1e-6 of vertical, `y = z x x`.
+//!   There is no translation, so a texel grid in light space is anchored to the world origin and
+//!   a static point keeps its light-space coordinates in every frame.
+
+use glam::{DMat3, DVec2, DVec3};
+
+/// Axis-aligned box in world space.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Aabb {
+    pub min: DVec3,
+    pub max: DVec3,
+}
+
+impl Aabb {
+    pub fn new(min: DVec3, max: DVec3) -> Self {
+        Aabb { min, max }
+    }
+
+    pub fn corner(&self, i: usize) -> DVec3 {
+        DVec3::new(
+            if i & 1 == 0 { self.min.x } else { self.max.x },
+            if i & 2 == 0 { self.min.y } else { self.max.y },
+            if i & 4 == 0 { self.min.z } else { self.max.z },
+        )
+    }
+
+    pub fn contains(&self, p: DVec3, eps: f64) -> bool {
+        p.cmpge(self.min - DVec3::splat(eps)).all() && p.cmple(self.max + DVec3::splat(eps)).all()
+    }
+
+    pub fn translated(&self, offset: DVec3) -> Self {
+        Aabb::new(self.min + offset, self.max + offset)
+    }
+
+    pub fn hexahedron(&self) -> Hexahedron {
+        let planes = [
+            Plane::new(-DVec3::X, -self.min.x),
+            Plane::new(DVec3::X, self.max.x),
+            Plane::new(-DVec3::Y, -self.min.y),
+            Plane::new(DVec3::Y, self.max.y),
+            Plane::new(-DVec3::Z, -self.min.z),
+            Plane::new(DVec3::Z, self.max.z),
+        ];
+        Hexahedron {
+            vertices: std::array::from_fn(|i| self.corner(i)),
+            planes,
+        }
+    }
+}
+
+/// Half-angle tangents of a symmetric perspective frustum.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lens {
+    /// tan(fov_y / 2)
+    pub tan_v: f64,
+    /// aspect * tan(fov_y / 2)
+    pub tan_h: f64,
+}
+
+impl Lens {
+    /// `fov_y` in radians, `aspect` = width / height.
+    pub fn new(fov_y: f64, aspect: f64) -> Self {
+        let tan_v = (0.5 * fov_y).tan();
+        Lens {
+            tan_v,
+            tan_h: aspect * tan_v,
+        }
+    }
+
+    /// Squared tangent of the half-diagonal field of view, `k^2 = tanH^2 + tanV^2`.
+    pub fn k2(&self) -> f64 {
+        self.tan_h * self.tan_h + self.tan_v * self.tan_v
+    }
+
+    /// World size of one screen pixel at view depth `d` on a surface facing the camera:
+    /// `P(d) = 2 d tanV / H`. The same for every pixel (the plane z = d maps linearly).
+    pub fn pixel_size(&self, depth: f64, screen_height: u32) -> f64 {
+        2.0 * depth * self.tan_v / screen_height as f64
+    }
+
+    /// Pixels per unit of x/z on the image: `K = H / (2 tanV)`, so aliasing is `K*T/d`.
+    pub fn pixels_per_unit_slope(&self, screen_height: u32) -> f64 {
+        screen_height as f64 / (2.0 * self.tan_v)
+    }
+}
+
+/// An orthonormal camera frame at a position.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraPose {
+    pub position: DVec3,
+    pub forward: DVec3,
+    pub right: DVec3,
+    pub up: DVec3,
+}
+
+impl CameraPose {
+    /// None when `target == position` or `up` is parallel to the view direction.
+    pub fn look_at(position: DVec3, target: DVec3, up: DVec3) -> Option<Self> {
+        Self::look_to(position, target - position, up)
+    }
+
+    pub fn look_to(position: DVec3, direction: DVec3, up: DVec3) -> Option<Self> {
+        let forward = direction.try_normalize()?;
+        let right = forward.cross(up).try_normalize()?;
+        if forward.cross(up.normalize()).length() < 1e-9 {
+            return None;
+        }
+        let up = right.cross(forward);
+        if !(position.is_finite() && forward.is_finite() && right.is_finite()) {
+            return None;
+        }
+        Some(CameraPose {
+            position,
+            forward,
+            right,
+            up,
+        })
+    }
+
+    /// View depth of a world point.
+    pub fn depth(&self, p: DVec3) -> f64 {
+        self.forward.dot(p - self.position)
+    }
+
+    /// The world point at view depth `z` whose image-plane slopes are (sx, sy) = (x/z, y/z).
+    pub fn point(&self, sx: f64, sy: f64, z: f64) -> DVec3 {
+        self.position + self.forward * z + self.right * (sx * z) + self.up * (sy * z)
+    }
+
+    /// The 8 corners of the frustum slice between depths `near` and `far`.
+    pub fn slice_corners(&self, lens: &Lens, near: f64, far: f64) -> [DVec3; 8] {
+        std::array::from_fn(|i| {
+            let sx = if i & 1 == 0 { -lens.tan_h } else { lens.tan_h };
+            let sy = if i & 2 == 0 { -lens.tan_v } else { lens.tan_v };
+            let z = if i & 4 == 0 { near } else { far };
+            self.point(sx, sy, z)
+        })
+    }
+
+    /// The slice as a convex hexahedron with exact (analytic) bounding planes.
+    pub fn slice_hexahedron(&self, lens: &Lens, near: f64, far: f64) -> Hexahedron {
+        let p = self.position;
+        let side = |n: DVec3| Plane::new(n, n.dot(p));
+        let planes = [
+            side(-self.right - self.forward * lens.tan_h),
+            side(self.right - self.forward * lens.tan_h),
+            side(-self.up - self.forward * lens.tan_v),
+            side(self.up - self.forward * lens.tan_v),
+            Plane::new(-self.forward, -(near + self.forward.dot(p))),
+            Plane::new(self.forward, far + self.forward.dot(p)),
+        ];
+        Hexahedron {
+            vertices: self.slice_corners(lens, near, far),
+            planes,
+        }
+    }
+}
+
+/// The light's orthonormal basis. `light_from_world` is a pure rotation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightBasis {
+    pub x: DVec3,
+    pub y: DVec3,
+    /// The direction light travels.
+    pub z: DVec3,
+    /// True when the +Z fallback reference was used (light within 1e-6 of vertical).
+    pub vertical_fallback: bool,
+}
+
+impl LightBasis {
+    /// `direction` need not be normalised but must be non-zero and finite.
+    pub fn new(direction: DVec3) -> Self {
+        let z = direction.normalize();
+        // A light straight down (or up) makes world_up x z vanish; a fixed fallback reference
+        // keeps the basis deterministic, so the grid does not spin from frame to frame.
+        let (reference, vertical_fallback) = if DVec3::Y.cross(z).length() < 1e-6 {
+            (DVec3::Z, true)
+        } else {
+            (DVec3::Y, false)
+        };
+        let x = reference.cross(z).normalize();
+        let y = z.cross(x);
+        LightBasis {
+            x,
+            y,
+            z,
+            vertical_fallback,
+        }
+    }
+
+    /// Rows are the light axes, so `light_from_world * p` gives light-space coordinates.
+    pub fn light_from_world(&self) -> DMat3 {
+        DMat3::from_cols(self.x, self.y, self.z).transpose()
+    }
+
+    pub fn world_from_light(&self) -> DMat3 {
+        DMat3::from_cols(self.x, self.y, self.z)
+    }
+
+    pub fn to_light(&self, p: DVec3) -> DVec3 {
+        DVec3::new(self.x.dot(p), self.y.dot(p), self.z.dot(p))
+    }
+
+    pub fn to_light_xy(&self, p: DVec3) -> DVec2 {
+        DVec2::new(self.x.dot(p), self.y.dot(p))
+    }
+}
+
+/// Half-space `normal . p <= offset`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plane {
+    pub normal: DVec3,
+    pub offset: f64,
+}
+
+impl Plane {
+    pub fn new(normal: DVec3, offset: f64) -> Self {
+        Plane { normal, offset }
+    }
+
+    pub fn signed_distance(&self, p: DVec3) -> f64 {
+        (self.normal.dot(p) - self.offset) / self.normal.length()
+    }
+}
+
+/// A convex hexahedron (box, frustum slice, light-space window prism): 8 corners indexed by
+/// bits as in [`CameraPose::slice_corners`], and its 6 bounding half-spaces given exactly,
+/// so degenerate (zero-thickness) boxes keep well-defined planes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hexahedron {
+    pub vertices: [DVec3; 8],
+    pub planes: [Plane; 6],
+}
+
+/// The 12 edges: corner pairs that differ in exactly one index bit.
+pub const HEX_EDGES: [(usize, usize); 12] = [
+    (0, 1),
+    (2, 3),
+    (4, 5),
+    (6, 7),
+    (0, 2),
+    (1, 3),
+    (4, 6),
+    (5, 7),
+    (0, 4),
+    (1, 5),
+    (2, 6),
+    (3, 7),
+];
+
+impl Hexahedron {
+    fn scale(&self) -> f64 {
+        self.vertices.iter().map(|v| v.abs().max_element()).fold(0.0, f64::max)
+    }
+
+    fn extent(&self) -> f64 {
+        let mut lo = self.vertices[0];
+        let mut hi = self.vertices[0];
+        for v in &self.vertices {
+            lo = lo.min(*v);
+            hi = hi.max(*v);
+        }
+        (hi - lo).max_element()
+    }
+
+    pub fn contains(&self, p: DVec3, eps: f64) -> bool {
+        self.planes.iter().all(|pl| pl.signed_distance(p) <= eps)
+    }
+}
+
+/// Range of `dir . p` over the intersection of two convex hexahedra, or None when they do not
+/// meet. Exact up to rounding: a linear function attains its extremes at vertices of the
+/// intersection, and each such vertex is a vertex of one solid inside the other, or where an
+/// edge of one solid crosses a face plane of the other.
+pub fn intersection_range(a: &Hexahedron, b: &Hexahedron, dir: DVec3) -> Option<(f64, f64)> {
+    // Tolerance for "inside": relative to the coordinates involved, so a touching contact
+    // still counts and rounding at 1e6 units does not reject real vertices.
+    let scale = a.scale().max(b.scale());
+    let size = a.extent().max(b.extent()).max(1e-300);
+    let eps = 1e-9 * size + 4.0 * f64::EPSILON * scale;
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    let mut take = |p: DVec3| {
+        let v = dir.dot(p);
+        lo = lo.min(v);
+        hi = hi.max(v);
+    };
+    for (s, o) in [(a, b), (b, a)] {
+        for v in &s.vertices {
+            if o.contains(*v, eps) {
+                take(*v);
+            }
+        }
+        for &(i, j) in &HEX_EDGES {
+            let p = s.vertices[i];
+            let q = s.vertices[j];
+            for pl in &o.planes {
+                let denom = pl.normal.dot(q - p);
+                if denom.abs() <= 1e-300 {
+                    continue;
+                }
+                let t = (pl.offset - pl.normal.dot(p)) / denom;
+                if !(0.0..=1.0).contains(&t) {
+                    continue;
+                }
+                let x = p + (q - p) * t;
+                if o.contains(x, eps) && s.contains(x, eps) {
+                    take(x);
+                }
+            }
+        }
+    }
+    if lo <= hi {
+        Some((lo, hi))
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn light_basis_is_orthonormal_and_right_handed() {
+        for d in [
+            DVec3::new(-0.4, -1.0, -0.3),
+            DVec3::new(0.0, -1.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1e-9, -1.0, 0.0),
+        ] {
+            let b = LightBasis::new(d);
+            assert_relative_eq!(b.x.length(), 1.0, epsilon = 1e-12);
+            assert_relative_eq!(b.y.length(), 1.0, epsilon = 1e-12);
+            assert!(b.x.dot(b.y).abs() < 1e-12 && b.x.dot(b.z).abs() < 1e-12);
+            assert_relative_eq!(b.x.cross(b.y).dot(b.z), 1.0, epsilon = 1e-12);
+            assert_relative_eq!(b.z.dot(d.normalize()), 1.0, epsilon = 1e-12);
+        }
+        assert!(LightBasis::new(DVec3::NEG_Y).vertical_fallback);
+        // world_up x z for a horizontal light along +X is -Z.
+        let b = LightBasis::new(DVec3::X);
+        assert_relative_eq!(b.x.dot(DVec3::NEG_Z), 1.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn view_depth_is_along_the_axis_not_euclidean() {
+        let pose = CameraPose::look_at(DVec3::ZERO, DVec3::new(0.0, 0.0, -10.0), DVec3::Y).unwrap();
+        let p = pose.point(0.5, 0.25, 4.0);
+        assert_relative_eq!(pose.depth(p), 4.0, epsilon = 1e-12);
+        assert!(p.length() > 4.0);
+    }
+
+    #[test]
+    fn box_inside_frustum_range_is_its_depth_span() {
+        let pose = CameraPose::look_at(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0), DVec3::Y).unwrap();
+        let lens = Lens::new(60f64.to_radians(), 1.0);
+        let frustum = pose.slice_hexahedron(&lens, 0.1, 100.0);
+        let small = Aabb::new(DVec3::new(-1.0, -1.0, -20.0), DVec3::new(1.0, 1.0, -10.0));
+        let (lo, hi) = intersection_range(&frustum, &small.hexahedron(), pose.forward).unwrap();
+        assert_relative_eq!(lo, 10.0, epsilon = 1e-9);
+        assert_relative_eq!(hi, 20.0, epsilon = 1e-9);
+        // A huge box around the camera: the frustum itself bounds the range.
+        let huge = Aabb::new(DVec3::splat(-1e4), DVec3::splat(1e4));
+        let (lo, hi) = intersection_range(&frustum, &huge.hexahedron(), pose.forward).unwrap();
+        assert_relative_eq!(lo, 0.1, epsilon = 1e-9);
+        assert_relative_eq!(hi, 100.0, epsilon = 1e-9);
+        // Behind the camera: nothing.
+        let behind = Aabb::new(DVec3::new(-1.0, -1.0, 5.0), DVec3::new(1.0, 1.0, 6.0));
+        assert!(intersection_range(&frustum, &behind.hexahedron(), pose.forward).is_none());
+    }
+}

@@ -1,0 +1,82 @@
+//! Shared helpers for the integration tests.
+#![allow(dead_code)]
+
+use csm_lab::Config;
+
+/// The default outdoor scene as text, so tests can edit one line at a time.
+pub const BASE: &str = r#"
+[camera]
+position = [0.0, 10.0, 0.0]
+target = [0.0, 0.0, -50.0]
+up = [0.0, 1.0, 0.0]
+fov_y_deg = 60.0
+near = 0.1
+far = 1000.0
+
+[screen]
+width = 1920
+height = 1080
+
+[light]
+direction = [-0.4, -1.0, -0.3]
+
+[scene]
+min = [-200.0, 0.0, -200.0]
+max = [200.0, 40.0, 200.0]
+
+[shadow]
+max_distance = 150.0
+cascades = 4
+lambda = 0.75
+resolution = 2048
+fit = "sphere"
+snap = true
+fit_depth_to_scene = true
+
+[motion]
+path = "strafe"
+frames = 60
+step = 0.05
+"#;
+
+/// BASE with `key = ...` lines replaced (keys must be unique in BASE) or appended to a table.
+pub fn with(edits: &[(&str, &str)]) -> String {
+    let mut text = BASE.to_string();
+    for (key, line) in edits {
+        let (table, name) = key.split_once('.').unwrap();
+        let mut out = Vec::new();
+        let mut current = String::new();
+        let mut done = false;
+        for l in text.lines() {
+            let t = l.trim();
+            if t.starts_with('[') {
+                if current == table && !done {
+                    out.push(line.to_string());
+                    done = true;
+                }
+                current = t.trim_matches(|c| c == '[' || c == ']').to_string();
+            }
+            if current == table && (t.starts_with(&format!("{name} =")) || t.starts_with(&format!("{name}="))) {
+                if !done {
+                    out.push(line.to_string());
+                    done = true;
+                }
+                continue;
+            }
+            out.push(l.to_string());
+        }
+        if !done {
+            if current != table {
+                out.push(format!("[{table}]"));
+            }
+            out.push(line.to_string());
+        }
+        text = out.join("\n");
+        text.push('\n');
+    }
+    text
+}
+
+pub fn config(text: &str) -> Config {
+    Config::from_toml_str(text, "test.toml", None).unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
