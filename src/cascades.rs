@@ -70,7 +70,7 @@ pub struct Rig {
     pub splits: Vec<f64>,
     pub slices: Vec<Slice>,
     /// Sphere fit: window side per cascade, with the snapping border included.
-    sphere_side: Vec<f64>,
+    pub sphere_side: Vec<f64>,
 }
 
 impl Rig {
