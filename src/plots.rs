@@ -55,18 +55,52 @@ pub trait Figure {
         Ok(s.into_bytes())
     }
 
+    /// The SVG rasterised at twice its size (crisp on slides and high-DPI screens). Going
+    /// through the SVG keeps one drawing path, so the PNG shows exactly what the SVG shows.
     fn to_png(&self) -> Result<Vec<u8>> {
-        init_fonts();
-        let (w, h) = self.size();
-        let mut rgb = vec![255u8; (w * h * 3) as usize];
-        {
-            let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-            root.fill(&WHITE).map_err(|e| Error::Other(format!("plot: {e}")))?;
-            self.draw(&root).map_err(|e| Error::Other(format!("plot: {}", e.0)))?;
-            root.present().map_err(|e| Error::Other(format!("plot: {e}")))?;
-        }
-        encode_png(w, h, &rgb)
+        svg_to_png(&self.to_svg()?, 2.0)
     }
+}
+
+/// The font database resvg lays text out with: the embedded DejaVu faces, also answering
+/// for the generic `sans-serif` family that the SVGs name.
+fn font_db() -> std::sync::Arc<resvg::usvg::fontdb::Database> {
+    static DB: std::sync::OnceLock<std::sync::Arc<resvg::usvg::fontdb::Database>> = std::sync::OnceLock::new();
+    DB.get_or_init(|| {
+        let mut db = resvg::usvg::fontdb::Database::new();
+        db.load_font_data(dejavu::sans::regular().to_vec());
+        db.load_font_data(dejavu::sans::bold().to_vec());
+        db.set_sans_serif_family("DejaVu Sans");
+        std::sync::Arc::new(db)
+    })
+    .clone()
+}
+
+/// Rasterises SVG bytes to an opaque PNG on a white background, `scale` pixels per SVG unit.
+pub fn svg_to_png(svg: &[u8], scale: f32) -> Result<Vec<u8>> {
+    use resvg::tiny_skia;
+    let opt = resvg::usvg::Options {
+        font_family: "DejaVu Sans".to_string(),
+        fontdb: font_db(),
+        ..Default::default()
+    };
+    let tree = resvg::usvg::Tree::from_data(svg, &opt).map_err(|e| Error::Other(format!("SVG to PNG: {e}")))?;
+    let size = tree.size();
+    let (w, h) = (
+        (size.width() * scale).ceil() as u32,
+        (size.height() * scale).ceil() as u32,
+    );
+    let mut pixmap =
+        tiny_skia::Pixmap::new(w, h).ok_or_else(|| Error::Other(format!("SVG to PNG: bad size {w}x{h}")))?;
+    pixmap.fill(tiny_skia::Color::WHITE);
+    resvg::render(
+        &tree,
+        tiny_skia::Transform::from_scale(scale, scale),
+        &mut pixmap.as_mut(),
+    );
+    // Opaque background, so premultiplied RGBA equals straight RGBA: drop alpha.
+    let rgb: Vec<u8> = pixmap.data().chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+    encode_png(w, h, &rgb)
 }
 
 /// RGB8 pixels to PNG bytes.
