@@ -27,6 +27,8 @@ pub struct Cli {
 pub enum Command {
     /// Build the cascades of one scene and shadow setting, measure them, write CSV/JSON/SVG.
     Analyze(AnalyzeArgs),
+    /// Sweep λ × cascades × resolution (× fit) in parallel; write CSV, plots and a report.
+    Sweep(SweepArgs),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -42,6 +44,39 @@ pub struct AnalyzeArgs {
     /// Output directory [default: reports/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// What to print on stdout.
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    pub format: Format,
+}
+
+#[derive(Debug, Args)]
+pub struct SweepArgs {
+    /// Scene and shadow settings (TOML); its `[sweep]` table gives the grid.
+    pub config: PathBuf,
+    /// Output directory [default: reports/<config name>/].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// λ axis: start:end:step (0:1:0.05) or a list (0,0.5,1).
+    #[arg(long, value_name = "SPEC")]
+    pub lambda: Option<String>,
+    /// Cascade counts: a range (1..8) or a list (2,4).
+    #[arg(long, value_name = "SPEC")]
+    pub cascades: Option<String>,
+    /// Resolutions: a list (1024,2048).
+    #[arg(long, value_name = "SPEC")]
+    pub resolution: Option<String>,
+    /// Fits: sphere, aabb or sphere,aabb.
+    #[arg(long, value_name = "SPEC")]
+    pub fit: Option<String>,
+    /// Worker threads [default: one per core]. Results are identical at any count.
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Skip the SVG/PNG figures (the report is written without them).
+    #[arg(long)]
+    pub no_plots: bool,
     /// What to print on stdout.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
@@ -73,6 +108,7 @@ pub fn default_out_dir(config: &Config) -> PathBuf {
 pub fn run(cli: Cli) -> Result<Outcome> {
     match cli.command {
         Command::Analyze(args) => run_analyze(&args),
+        Command::Sweep(args) => run_sweep(&args),
     }
 }
 
@@ -101,6 +137,67 @@ fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
         }
         Format::Json => {
             let bytes = output::json_bytes("summary", &output::summary_value(&analysis))?;
+            print!("{}", String::from_utf8_lossy(&bytes));
+            eprintln!("wrote {} files to {}", written.len(), dir.display());
+        }
+    }
+    Ok(Outcome::Success)
+}
+
+/// Runs a sweep as the CLI does, without printing: (result, rendered files).
+pub fn sweep_files(args: &SweepArgs) -> Result<(crate::report::SweepResult, output::RenderedFiles)> {
+    use crate::sweep::{self, Grid, GridOverrides};
+    let config = Config::load(&args.config)?;
+    let overrides = GridOverrides {
+        lambda: args.lambda.as_deref().map(sweep::parse_lambda_spec).transpose()?,
+        cascades: args.cascades.as_deref().map(sweep::parse_cascades_spec).transpose()?,
+        resolution: args
+            .resolution
+            .as_deref()
+            .map(sweep::parse_resolution_spec)
+            .transpose()?,
+        fit: args.fit.as_deref().map(sweep::parse_fit_spec).transpose()?,
+    };
+    let grid = Grid::resolve(&config, &overrides)?;
+    let show_progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let bar = if show_progress {
+        let bar = indicatif::ProgressBar::new(grid.len() as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} sweeping {pos}/{len} configurations {wide_bar} {eta}")
+                .expect("valid template"),
+        );
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let start = std::time::Instant::now();
+    let rows = sweep::run(&config, &grid, args.threads.map(usize::from), &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    let compute = start.elapsed();
+    let command = format!("csm-lab sweep {} {}", args.config.display(), grid.cli_args());
+    let result = crate::report::SweepResult::new(config, grid, rows, command);
+    let files = crate::report::render_all(&result, !args.no_plots)?;
+    if !args.quiet {
+        eprintln!(
+            "analysed {} configurations in {:.1} ms",
+            result.rows.len(),
+            compute.as_secs_f64() * 1e3
+        );
+    }
+    Ok((result, files))
+}
+
+fn run_sweep(args: &SweepArgs) -> Result<Outcome> {
+    let (result, files) = sweep_files(args)?;
+    let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&result.config));
+    let written = output::write_files(&dir, &files)?;
+    match args.format {
+        Format::Table => {
+            print!("{}", crate::report::stdout_table(&result));
+            println!("wrote {} files to {}", written.len(), dir.display());
+        }
+        Format::Json => {
+            let bytes = output::json_bytes("recommendation", &crate::report::recommendation_value(&result))?;
             print!("{}", String::from_utf8_lossy(&bytes));
             eprintln!("wrote {} files to {}", written.len(), dir.display());
         }

@@ -182,6 +182,8 @@ pub struct Config {
     pub shadow: ShadowSettings,
     pub motion: MotionSettings,
     pub analysis: AnalysisSettings,
+    /// The `[sweep]` table, if any.
+    pub sweep: Option<crate::sweep::SweepSpec>,
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -201,6 +203,7 @@ struct RawConfig {
     motion: RawMotion,
     #[serde(default)]
     analysis: RawAnalysis,
+    sweep: Option<crate::sweep::RawSweep>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -577,6 +580,8 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         probes: v.int_range("analysis.probes", a.probes.unwrap_or(256), 1, 1_000_000)? as usize,
     };
 
+    let sweep = raw.sweep.map(|s| crate::sweep::validate_raw(s, v)).transpose()?;
+
     let config = Config {
         name: "config".to_string(),
         path: None,
@@ -600,6 +605,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             step_as_written,
         },
         analysis,
+        sweep,
     };
     // Every pose of the motion path must be a valid camera (pitching through the up vector,
     // or a path file row with position == target, is a config error, not a panic later).

@@ -60,13 +60,16 @@ pub fn export_all<T: ?Sized>(dir: &Path, data: &T, exporters: &[&dyn Exporter<T>
     write_files(dir, &rendered)
 }
 
+/// Rendered files: (file name, bytes).
+pub type RenderedFiles = Vec<(String, Vec<u8>)>;
+
 /// Writes already-rendered files atomically into `dir`.
-pub fn write_files(dir: &Path, files: &[(&str, Vec<u8>)]) -> Result<Vec<PathBuf>> {
+pub fn write_files<N: AsRef<str>>(dir: &Path, files: &[(N, Vec<u8>)]) -> Result<Vec<PathBuf>> {
     ensure_dir(dir)?;
     files
         .iter()
         .map(|(name, bytes)| {
-            let path = dir.join(name);
+            let path = dir.join(name.as_ref());
             write_atomic(&path, bytes)?;
             Ok(path)
         })

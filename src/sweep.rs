@@ -1,0 +1,807 @@
+//! Parameter sweeps: every combination of λ × cascade count × resolution (× fit) of one
+//! scene, analysed in parallel, then reduced to a Pareto front and a recommendation.
+//!
+//! Axes come from the config's `[sweep]` table and can be overridden on the command line.
+//! Ranges are decimal-exact: `0 to 1 step 0.05` is computed in scaled integers and gives
+//! exactly 21 values, the last one exactly 1.0. Rows come out in grid order whatever the
+//! thread count (rayon's indexed `collect` keeps order), so files are byte-identical.
+
+use std::collections::BTreeSet;
+
+use rayon::prelude::*;
+use serde::Deserialize;
+
+use crate::analysis::{analyze, AnalysisOptions, Summary};
+use crate::config::{Config, Fit, Validator};
+use crate::error::{Error, Result};
+
+/// One axis: its values in order, and the canonical spec that reproduces it on the CLI.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Axis<T> {
+    pub values: Vec<T>,
+    pub spec: String,
+}
+
+/// The grid of a sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    pub lambda: Axis<f64>,
+    pub cascades: Axis<usize>,
+    pub resolution: Axis<u32>,
+    pub fit: Axis<Fit>,
+}
+
+/// The `[sweep]` table as validated.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SweepSpec {
+    pub lambda: Option<Axis<f64>>,
+    pub cascades: Option<Axis<usize>>,
+    pub resolution: Option<Axis<u32>>,
+    pub fit: Option<Axis<Fit>>,
+    /// Memory budget for the recommendation, MiB (2^20 bytes).
+    pub memory_budget_mib: Option<f64>,
+    /// A larger grid is an error, not an out-of-memory.
+    pub max_configs: usize,
+}
+
+pub const DEFAULT_MAX_CONFIGS: usize = 100_000;
+/// Budget used for the recommendation when none is configured.
+pub const DEFAULT_BUDGET_MIB: f64 = 64.0;
+
+// ---------------------------------------------------------------------------------------------
+// Decimal-exact ranges
+// ---------------------------------------------------------------------------------------------
+
+/// A finite f64 as an exact decimal `mantissa * 10^-scale`, from its shortest round-trip
+/// representation ("0.05" -> (5, 2)). None when it needs more digits than an i128 holds.
+fn to_decimal(x: f64) -> Option<(i128, u32)> {
+    let s = format!("{x}");
+    let (neg, s) = match s.strip_prefix('-') {
+        Some(r) => (true, r),
+        None => (false, s.as_str()),
+    };
+    let (int, frac) = s.split_once('.').unwrap_or((s, ""));
+    if int.len() + frac.len() > 36 {
+        return None;
+    }
+    let digits: i128 = format!("{int}{frac}").parse().ok()?;
+    Some((if neg { -digits } else { digits }, frac.len() as u32))
+}
+
+/// `start, start + step, ...` up to and including `end` when it is on the grid, computed in
+/// decimal so that 0:1:0.05 has 21 values ending exactly at 1.0. Each value is the f64 nearest
+/// to the exact decimal, i.e. the same number a user would get by typing it.
+pub fn decimal_range(start: f64, end: f64, step: f64) -> std::result::Result<Vec<f64>, String> {
+    if !(start.is_finite() && end.is_finite() && step.is_finite()) {
+        return Err("start, end and step must be finite numbers".into());
+    }
+    if step <= 0.0 {
+        return Err(format!("step must be > 0 (got {step})"));
+    }
+    if end < start {
+        return Err(format!("end ({end}) must be >= start ({start})"));
+    }
+    let approx_count = ((end - start) / step).floor() + 1.0;
+    if approx_count > 1e7 {
+        return Err(format!("{approx_count} values is far too many"));
+    }
+    match (to_decimal(start), to_decimal(end), to_decimal(step)) {
+        (Some((s, ds)), Some((e, de)), Some((p, dp))) => {
+            let d = ds.max(de).max(dp);
+            let scale = |m: i128, k: u32| m * 10i128.pow(d - k);
+            let (s, e, p) = (scale(s, ds), scale(e, de), scale(p, dp));
+            let n = (e - s) / p;
+            Ok((0..=n)
+                .map(|i| {
+                    let m = s + i * p;
+                    format!("{m}e-{d}").parse::<f64>().expect("a decimal literal parses")
+                })
+                .collect())
+        }
+        // Numbers too long for exact decimals: fall back to multiplication (no accumulation).
+        _ => {
+            let n = approx_count as i64;
+            Ok((0..n).map(|i| (start + i as f64 * step).min(end)).collect())
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Config table
+// ---------------------------------------------------------------------------------------------
+
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub(crate) enum RawAxis {
+    List(Vec<f64>),
+    Range(RawRange),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawRange {
+    start: f64,
+    end: f64,
+    step: f64,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawSweep {
+    lambda: Option<RawAxis>,
+    cascades: Option<RawAxis>,
+    resolution: Option<RawAxis>,
+    fit: Option<Vec<Fit>>,
+    memory_budget_mib: Option<f64>,
+    max_configs: Option<i64>,
+}
+
+fn fmt_list<T: std::fmt::Display>(v: &[T]) -> String {
+    v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(",")
+}
+
+/// Checks an axis' values: not empty, no duplicates, each allowed.
+fn check_values<T: PartialEq + Copy + std::fmt::Display>(
+    values: &[T],
+    allowed: &str,
+    ok: impl Fn(T) -> bool,
+) -> std::result::Result<(), String> {
+    if values.is_empty() {
+        return Err("the axis is empty; give at least one value".into());
+    }
+    if let Some(bad) = values.iter().find(|v| !ok(**v)) {
+        return Err(format!("{bad} is outside {allowed}"));
+    }
+    for (i, a) in values.iter().enumerate() {
+        if values[..i].contains(a) {
+            return Err(format!("{a} is listed twice"));
+        }
+    }
+    Ok(())
+}
+
+fn lambda_ok(x: f64) -> bool {
+    (0.0..=1.0).contains(&x)
+}
+
+fn cascades_ok(x: usize) -> bool {
+    (1..=16).contains(&x)
+}
+
+fn resolution_ok(x: u32) -> bool {
+    (16..=16384).contains(&x)
+}
+
+fn raw_lambda(raw: RawAxis) -> std::result::Result<Axis<f64>, String> {
+    let axis = match raw {
+        RawAxis::List(values) => Axis {
+            spec: fmt_list(&values),
+            values,
+        },
+        RawAxis::Range(r) => Axis {
+            values: decimal_range(r.start, r.end, r.step)?,
+            spec: format!("{}:{}:{}", r.start, r.end, r.step),
+        },
+    };
+    check_values(&axis.values, "[0, 1]", lambda_ok)?;
+    Ok(axis)
+}
+
+fn whole(values: Vec<f64>) -> std::result::Result<Vec<i64>, String> {
+    values
+        .into_iter()
+        .map(|v| {
+            if v.fract() == 0.0 && v.abs() < 1e15 {
+                Ok(v as i64)
+            } else {
+                Err(format!("{v} is not a whole number"))
+            }
+        })
+        .collect()
+}
+
+fn raw_ints(raw: RawAxis) -> std::result::Result<Vec<i64>, String> {
+    match raw {
+        RawAxis::List(v) => whole(v),
+        RawAxis::Range(r) => whole(decimal_range(r.start, r.end, r.step)?),
+    }
+}
+
+fn int_axis<T: TryFrom<i64> + Copy + PartialEq + std::fmt::Display>(
+    raw: RawAxis,
+    allowed: &str,
+    ok: impl Fn(T) -> bool,
+) -> std::result::Result<Axis<T>, String> {
+    let ints = raw_ints(raw)?;
+    let values = ints
+        .iter()
+        .map(|&i| T::try_from(i).map_err(|_| format!("{i} is outside {allowed}")))
+        .collect::<std::result::Result<Vec<T>, String>>()?;
+    check_values(&values, allowed, ok)?;
+    Ok(Axis {
+        spec: fmt_list(&values),
+        values,
+    })
+}
+
+pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>) -> Result<SweepSpec> {
+    let lambda = raw
+        .lambda
+        .map(raw_lambda)
+        .transpose()
+        .map_err(|why| v.invalid("sweep.lambda", "as written", &format!("values in [0, 1]: {why}")))?;
+    let cascades = raw
+        .cascades
+        .map(|r| int_axis::<usize>(r, "1..=16", cascades_ok))
+        .transpose()
+        .map_err(|why| {
+            v.invalid(
+                "sweep.cascades",
+                "as written",
+                &format!("whole numbers in 1..=16: {why}"),
+            )
+        })?;
+    let resolution = raw
+        .resolution
+        .map(|r| int_axis::<u32>(r, "16..=16384", resolution_ok))
+        .transpose()
+        .map_err(|why| {
+            v.invalid(
+                "sweep.resolution",
+                "as written",
+                &format!("whole numbers in 16..=16384: {why}"),
+            )
+        })?;
+    let fit = match raw.fit {
+        Some(f) => {
+            check_values(&f.iter().map(|x| x.name()).collect::<Vec<_>>(), "sphere, aabb", |_| {
+                true
+            })
+            .map_err(|why| {
+                v.invalid(
+                    "sweep.fit",
+                    format!("{f:?}"),
+                    &format!("\"sphere\" and/or \"aabb\": {why}"),
+                )
+            })?;
+            Some(Axis {
+                spec: fmt_list(&f),
+                values: f,
+            })
+        }
+        None => None,
+    };
+    let memory_budget_mib = match raw.memory_budget_mib {
+        Some(b) if !(b.is_finite() && b > 0.0) => {
+            return Err(v.invalid("sweep.memory_budget_mib", b, "a number of MiB > 0"));
+        }
+        b => b,
+    };
+    let max_configs = v.int_range(
+        "sweep.max_configs",
+        raw.max_configs.unwrap_or(DEFAULT_MAX_CONFIGS as i64),
+        1,
+        10_000_000,
+    )? as usize;
+    Ok(SweepSpec {
+        lambda,
+        cascades,
+        resolution,
+        fit,
+        memory_budget_mib,
+        max_configs,
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Command-line specs
+// ---------------------------------------------------------------------------------------------
+
+/// `--lambda 0:1:0.05` (start:end:step, inclusive), `--lambda 0,0.5,1` or `--lambda 0.75`.
+pub fn parse_lambda_spec(spec: &str) -> Result<Axis<f64>> {
+    let flag = |m: String| Error::flag("--lambda", spec, m);
+    let num = |s: &str| {
+        s.trim().parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
+            flag(format!(
+                "{s:?} is not a number; use start:end:step (0:1:0.05) or a list (0,0.5,1)"
+            ))
+        })
+    };
+    let values = if spec.contains(':') {
+        let parts: Vec<&str> = spec.split(':').collect();
+        if parts.len() != 3 {
+            return Err(flag("a range is start:end:step, e.g. 0:1:0.05".into()));
+        }
+        decimal_range(num(parts[0])?, num(parts[1])?, num(parts[2])?).map_err(flag)?
+    } else {
+        spec.split(',').map(num).collect::<Result<Vec<_>>>()?
+    };
+    check_values(&values, "[0, 1]", lambda_ok).map_err(flag)?;
+    Ok(Axis {
+        values,
+        spec: spec.to_string(),
+    })
+}
+
+fn parse_int_list<T>(flag: &str, spec: &str, allowed: &str, ok: impl Fn(T) -> bool, ranges: bool) -> Result<Axis<T>>
+where
+    T: std::str::FromStr + Copy + PartialEq + std::fmt::Display + TryFrom<u64>,
+{
+    let err = |m: String| Error::flag(flag, spec, m);
+    let one = |s: &str| {
+        s.trim().parse::<T>().map_err(|_| {
+            err(format!(
+                "{s:?} is not a whole number; use {}",
+                if ranges {
+                    "a range (1..8) or a list (2,4)"
+                } else {
+                    "a list (1024,2048)"
+                }
+            ))
+        })
+    };
+    let values: Vec<T> = if ranges && spec.contains("..") {
+        let (a, b) = spec.split_once("..").expect("checked");
+        let b = b.strip_prefix('=').unwrap_or(b);
+        let (lo, hi): (u64, u64) = (
+            a.trim()
+                .parse()
+                .map_err(|_| err("a range is first..last, e.g. 1..8".into()))?,
+            b.trim()
+                .parse()
+                .map_err(|_| err("a range is first..last, e.g. 1..8".into()))?,
+        );
+        if hi < lo {
+            return Err(err(format!("the range ends ({hi}) before it starts ({lo})")));
+        }
+        if hi - lo > 100_000 {
+            return Err(err("the range is far too long".into()));
+        }
+        (lo..=hi)
+            .map(|i| T::try_from(i).map_err(|_| err(format!("{i} is outside {allowed}"))))
+            .collect::<Result<Vec<T>>>()?
+    } else {
+        spec.split(',').map(one).collect::<Result<Vec<T>>>()?
+    };
+    check_values(&values, allowed, ok).map_err(err)?;
+    Ok(Axis {
+        values,
+        spec: spec.to_string(),
+    })
+}
+
+/// `--cascades 1..8` (inclusive), `--cascades 2,4` or `--cascades 4`.
+pub fn parse_cascades_spec(spec: &str) -> Result<Axis<usize>> {
+    parse_int_list("--cascades", spec, "1..=16", cascades_ok, true)
+}
+
+/// `--resolution 1024,2048` or `--resolution 2048`.
+pub fn parse_resolution_spec(spec: &str) -> Result<Axis<u32>> {
+    parse_int_list("--resolution", spec, "16..=16384", resolution_ok, false)
+}
+
+/// `--fit sphere,aabb`.
+pub fn parse_fit_spec(spec: &str) -> Result<Axis<Fit>> {
+    let values = spec
+        .split(',')
+        .map(|s| match s.trim() {
+            "sphere" => Ok(Fit::Sphere),
+            "aabb" => Ok(Fit::Aabb),
+            other => Err(Error::flag(
+                "--fit",
+                spec,
+                format!("{other:?} is not a fit; use sphere, aabb or sphere,aabb"),
+            )),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    check_values(
+        &values.iter().map(|f| f.name()).collect::<Vec<_>>(),
+        "sphere, aabb",
+        |_| true,
+    )
+    .map_err(|m| Error::flag("--fit", spec, m))?;
+    Ok(Axis {
+        values,
+        spec: spec.to_string(),
+    })
+}
+
+/// Command-line overrides of the grid.
+#[derive(Debug, Clone, Default)]
+pub struct GridOverrides {
+    pub lambda: Option<Axis<f64>>,
+    pub cascades: Option<Axis<usize>>,
+    pub resolution: Option<Axis<u32>>,
+    pub fit: Option<Axis<Fit>>,
+}
+
+impl Grid {
+    /// The grid for a config: CLI overrides, then the `[sweep]` table, then the defaults
+    /// (λ 0:1:0.05, cascades 1..8, resolution 512,1024,2048,4096, the config's own fit).
+    pub fn resolve(config: &Config, overrides: &GridOverrides) -> Result<Grid> {
+        let spec = config.sweep.clone().unwrap_or_default();
+        let max_configs = if config.sweep.is_some() {
+            spec.max_configs
+        } else {
+            DEFAULT_MAX_CONFIGS
+        };
+        let grid = Grid {
+            lambda: overrides.lambda.clone().or(spec.lambda).unwrap_or_else(|| Axis {
+                values: decimal_range(0.0, 1.0, 0.05).expect("valid"),
+                spec: "0:1:0.05".into(),
+            }),
+            cascades: overrides.cascades.clone().or(spec.cascades).unwrap_or_else(|| Axis {
+                values: (1..=8).collect(),
+                spec: "1..8".into(),
+            }),
+            resolution: overrides
+                .resolution
+                .clone()
+                .or(spec.resolution)
+                .unwrap_or_else(|| Axis {
+                    values: vec![512, 1024, 2048, 4096],
+                    spec: "512,1024,2048,4096".into(),
+                }),
+            fit: overrides.fit.clone().or(spec.fit).unwrap_or_else(|| Axis {
+                values: vec![config.shadow.fit],
+                spec: config.shadow.fit.name().into(),
+            }),
+        };
+        let n = grid.len();
+        if n > max_configs {
+            return Err(Error::Other(format!(
+                "the sweep grid has {n} configurations ({} λ × {} cascade counts × {} resolutions × {} fits), \
+                 more than sweep.max_configs = {max_configs}; narrow an axis (--lambda, --cascades, --resolution, --fit) \
+                 or raise sweep.max_configs",
+                grid.lambda.values.len(),
+                grid.cascades.values.len(),
+                grid.resolution.values.len(),
+                grid.fit.values.len()
+            )));
+        }
+        Ok(grid)
+    }
+
+    pub fn len(&self) -> usize {
+        self.lambda.values.len() * self.cascades.values.len() * self.resolution.values.len() * self.fit.values.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// All settings in row order: fit, then resolution, then cascades, then λ (innermost).
+    pub fn settings(&self) -> Vec<Setting> {
+        let mut out = Vec::with_capacity(self.len());
+        for &fit in &self.fit.values {
+            for &resolution in &self.resolution.values {
+                for &cascades in &self.cascades.values {
+                    for &lambda in &self.lambda.values {
+                        out.push(Setting {
+                            lambda,
+                            cascades,
+                            resolution,
+                            fit,
+                        });
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The CLI arguments that reproduce this grid.
+    pub fn cli_args(&self) -> String {
+        format!(
+            "--lambda {} --cascades {} --resolution {} --fit {}",
+            self.lambda.spec, self.cascades.spec, self.resolution.spec, self.fit.spec
+        )
+    }
+}
+
+/// One point of the grid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Setting {
+    pub lambda: f64,
+    pub cascades: usize,
+    pub resolution: u32,
+    pub fit: Fit,
+}
+
+impl Setting {
+    /// The base config with this setting applied.
+    pub fn apply(&self, base: &Config) -> Config {
+        let mut c = base.clone();
+        c.shadow.lambda = self.lambda;
+        c.shadow.cascades = self.cascades;
+        c.shadow.resolution = self.resolution;
+        c.shadow.fit = self.fit;
+        c
+    }
+
+    pub fn label(&self) -> String {
+        format!(
+            "{} x {}^2, lambda {}, {}",
+            self.cascades, self.resolution, self.lambda, self.fit
+        )
+    }
+}
+
+/// One row of `sweep.csv`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub setting: Setting,
+    pub summary: Summary,
+}
+
+/// Runs the full analysis of every setting in parallel. `threads` = None uses rayon's default
+/// pool; `on_done` is called once per finished configuration (progress bars).
+pub fn run(base: &Config, grid: &Grid, threads: Option<usize>, on_done: &(dyn Fn() + Sync)) -> Result<Vec<Row>> {
+    let settings = grid.settings();
+    let work = || {
+        settings
+            .par_iter()
+            .map(|s| {
+                let a = analyze(&s.apply(base), &AnalysisOptions::summary_only());
+                on_done();
+                Row {
+                    setting: *s,
+                    summary: a.summary,
+                }
+            })
+            .collect::<Vec<_>>()
+    };
+    match threads {
+        Some(n) => {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| {
+                Error::flag(
+                    "--threads",
+                    &n.to_string(),
+                    format!("cannot start the thread pool: {e}"),
+                )
+            })?;
+            Ok(pool.install(work))
+        }
+        None => Ok(work()),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pareto front and recommendation
+// ---------------------------------------------------------------------------------------------
+
+/// Indices of the rows on the Pareto front of memory against mean aliasing (both minimised),
+/// ordered by memory. Among exact ties the first row in grid order is kept. Rows whose scene
+/// needs no cascades are left out.
+pub fn pareto_front(rows: &[Row]) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed).collect();
+    idx.sort_by(|&a, &b| {
+        let (ra, rb) = (&rows[a].summary, &rows[b].summary);
+        ra.memory_bytes
+            .cmp(&rb.memory_bytes)
+            .then(ra.mean_aliasing.total_cmp(&rb.mean_aliasing))
+            .then(a.cmp(&b))
+    });
+    let mut front = Vec::new();
+    let mut best = f64::INFINITY;
+    for i in idx {
+        let m = rows[i].summary.mean_aliasing;
+        if m < best {
+            best = m;
+            front.push(i);
+        }
+    }
+    front
+}
+
+/// Largest shimmer (RMS texels per frame, snapped) a configuration may have to be recommended.
+pub const STABLE_SHIMMER: f64 = 1e-3;
+
+/// What the recommendation optimises, in words (printed in reports).
+pub const OBJECTIVE: &str = "lowest mean aliasing (the average shadow-texel-to-pixel ratio over the depth range) \
+among configurations that fit the memory budget, cover every slice (coverage_violations = 0) and are stable when \
+snapped (shimmer_snapped <= 1e-3 texel); ties go to the lower max aliasing, then less memory, then fewer cascades";
+
+/// The recommended row and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recommendation {
+    pub index: usize,
+    pub budget_bytes: u64,
+    /// False when nothing fits the budget: the cheapest acceptable configuration is returned.
+    pub within_budget: bool,
+}
+
+fn acceptable(r: &Row) -> bool {
+    r.summary.cascades_needed && r.summary.coverage_violations == 0 && r.summary.shimmer_snapped <= STABLE_SHIMMER
+}
+
+/// Picks the recommendation by [`OBJECTIVE`]. None when no row needs cascades or none is
+/// acceptable.
+pub fn recommend(rows: &[Row], budget_mib: f64) -> Option<Recommendation> {
+    let budget_bytes = (budget_mib * 1024.0 * 1024.0).floor() as u64;
+    let better = |a: &Row, b: &Row| {
+        let (x, y) = (&a.summary, &b.summary);
+        x.mean_aliasing
+            .total_cmp(&y.mean_aliasing)
+            .then(x.max_aliasing.total_cmp(&y.max_aliasing))
+            .then(x.memory_bytes.cmp(&y.memory_bytes))
+            .then(a.setting.cascades.cmp(&b.setting.cascades))
+    };
+    let within = (0..rows.len())
+        .filter(|&i| acceptable(&rows[i]) && rows[i].summary.memory_bytes <= budget_bytes)
+        .min_by(|&a, &b| better(&rows[a], &rows[b]).then(a.cmp(&b)));
+    if let Some(index) = within {
+        return Some(Recommendation {
+            index,
+            budget_bytes,
+            within_budget: true,
+        });
+    }
+    (0..rows.len())
+        .filter(|&i| acceptable(&rows[i]))
+        .min_by(|&a, &b| {
+            rows[a]
+                .summary
+                .memory_bytes
+                .cmp(&rows[b].summary.memory_bytes)
+                .then(better(&rows[a], &rows[b]))
+                .then(a.cmp(&b))
+        })
+        .map(|index| Recommendation {
+            index,
+            budget_bytes,
+            within_budget: false,
+        })
+}
+
+/// Distinct values of the rows' fits (for plots).
+pub fn fits_in(rows: &[Row]) -> Vec<Fit> {
+    rows.iter()
+        .map(|r| r.setting.fit)
+        .collect::<BTreeSet<_>>()
+        .into_iter()
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_are_decimal_exact() {
+        let v = decimal_range(0.0, 1.0, 0.05).unwrap();
+        assert_eq!(v.len(), 21);
+        assert_eq!(v[20], 1.0);
+        assert_eq!(v[3], 0.15);
+        assert_eq!(v[7], 0.35);
+        for (i, x) in v.iter().enumerate() {
+            // Each value is the double nearest the decimal i/20, as if typed.
+            assert_eq!(*x, format!("{}", i as f64 / 20.0).parse::<f64>().unwrap());
+        }
+        // Naive accumulation would drift (0.1 + 0.2 != 0.3); decimal steps do not.
+        let w = decimal_range(0.1, 0.7, 0.1).unwrap();
+        assert_eq!(w, vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]);
+        // An end off the grid is not included.
+        assert_eq!(decimal_range(0.0, 1.0, 0.3).unwrap(), vec![0.0, 0.3, 0.6, 0.9]);
+        assert_eq!(decimal_range(2.0, 2.0, 1.0).unwrap(), vec![2.0]);
+        assert!(decimal_range(0.0, 1.0, 0.0).is_err());
+        assert!(decimal_range(0.0, 1.0, -0.1).is_err());
+        assert!(decimal_range(1.0, 0.0, 0.1).is_err());
+        assert!(decimal_range(0.0, f64::NAN, 0.1).is_err());
+    }
+
+    #[test]
+    fn cli_specs_parse_and_bad_specs_name_the_flag() {
+        assert_eq!(parse_lambda_spec("0:1:0.05").unwrap().values.len(), 21);
+        assert_eq!(parse_lambda_spec("0,0.5,1").unwrap().values, vec![0.0, 0.5, 1.0]);
+        assert_eq!(parse_lambda_spec("0.75").unwrap().values, vec![0.75]);
+        assert_eq!(parse_cascades_spec("1..8").unwrap().values, (1..=8).collect::<Vec<_>>());
+        assert_eq!(parse_cascades_spec("1..=3").unwrap().values, vec![1, 2, 3]);
+        assert_eq!(parse_cascades_spec("2,4").unwrap().values, vec![2, 4]);
+        assert_eq!(parse_resolution_spec("1024,2048").unwrap().values, vec![1024, 2048]);
+        assert_eq!(
+            parse_fit_spec("sphere,aabb").unwrap().values,
+            vec![Fit::Sphere, Fit::Aabb]
+        );
+        for (r, flag) in [
+            (parse_lambda_spec("0:1").map(|_| ()), "--lambda"),
+            (parse_lambda_spec("0:1:0").map(|_| ()), "--lambda"),
+            (parse_lambda_spec("1:0:0.1").map(|_| ()), "--lambda"),
+            (parse_lambda_spec("0,x").map(|_| ()), "--lambda"),
+            (parse_lambda_spec("0,1.5").map(|_| ()), "--lambda"),
+            (parse_lambda_spec("").map(|_| ()), "--lambda"),
+            (parse_cascades_spec("8..1").map(|_| ()), "--cascades"),
+            (parse_cascades_spec("0,4").map(|_| ()), "--cascades"),
+            (parse_cascades_spec("1..17").map(|_| ()), "--cascades"),
+            (parse_cascades_spec("2,2").map(|_| ()), "--cascades"),
+            (parse_resolution_spec("1024,abc").map(|_| ()), "--resolution"),
+            (parse_resolution_spec("8").map(|_| ()), "--resolution"),
+            (parse_fit_spec("box").map(|_| ()), "--fit"),
+        ] {
+            let e = r.unwrap_err().to_string();
+            assert!(e.starts_with(flag), "{e}");
+        }
+    }
+
+    fn row(memory: u64, mean: f64, cascades_needed: bool) -> Row {
+        Row {
+            setting: Setting {
+                lambda: 0.5,
+                cascades: 1,
+                resolution: 512,
+                fit: Fit::Sphere,
+            },
+            summary: Summary {
+                cascades_needed,
+                z_lo: 1.0,
+                z_hi: 2.0,
+                max_aliasing: mean * 2.0,
+                mean_aliasing: mean,
+                mean_log_aliasing: mean,
+                undersampled_fraction: 0.0,
+                shimmer_snapped: 0.0,
+                shimmer_unsnapped: 0.3,
+                size_jitter: 0.0,
+                coverage_violations: 0,
+                memory_bytes: memory,
+            },
+        }
+    }
+
+    #[test]
+    fn pareto_front_is_exactly_the_non_dominated_rows() {
+        let mut rng = crate::rng::SplitMix64::new(11);
+        for _ in 0..50 {
+            let rows: Vec<Row> = (0..60)
+                .map(|_| {
+                    row(
+                        1 + (rng.unit() * 8.0) as u64,
+                        (rng.unit() * 20.0).round() / 4.0,
+                        rng.unit() > 0.1,
+                    )
+                })
+                .collect();
+            let front = pareto_front(&rows);
+            let dominated = |i: usize| {
+                rows.iter().enumerate().any(|(j, r)| {
+                    j != i
+                        && r.summary.cascades_needed
+                        && r.summary.memory_bytes <= rows[i].summary.memory_bytes
+                        && r.summary.mean_aliasing <= rows[i].summary.mean_aliasing
+                        && (r.summary.memory_bytes < rows[i].summary.memory_bytes
+                            || r.summary.mean_aliasing < rows[i].summary.mean_aliasing)
+                })
+            };
+            for &i in &front {
+                assert!(rows[i].summary.cascades_needed && !dominated(i));
+            }
+            // Every non-dominated row is on the front or an exact duplicate of a front row.
+            for i in 0..rows.len() {
+                if rows[i].summary.cascades_needed && !dominated(i) {
+                    assert!(front
+                        .iter()
+                        .any(|&f| rows[f].summary.memory_bytes == rows[i].summary.memory_bytes
+                            && rows[f].summary.mean_aliasing == rows[i].summary.mean_aliasing));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn recommendation_respects_the_budget_and_falls_back_to_the_cheapest() {
+        let mib = 1024 * 1024;
+        let rows = vec![
+            row(80 * mib, 1.0, true),
+            row(32 * mib, 2.0, true),
+            row(64 * mib, 1.5, true),
+        ];
+        let r = recommend(&rows, 64.0).unwrap();
+        assert_eq!((r.index, r.within_budget), (2, true));
+        let r = recommend(&rows, 16.0).unwrap();
+        assert_eq!((r.index, r.within_budget), (1, false));
+        let mut unstable = rows.clone();
+        unstable[2].summary.shimmer_snapped = 0.2;
+        assert_eq!(recommend(&unstable, 64.0).unwrap().index, 1);
+        assert!(recommend(&[row(mib, 1.0, false)], 64.0).is_none());
+    }
+}
