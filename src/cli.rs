@@ -27,6 +27,8 @@ pub struct Cli {
 pub enum Command {
     /// Build the cascades of one scene and shadow setting, measure them, write CSV/JSON/SVG.
     Analyze(AnalyzeArgs),
+    /// Gate on quality: judge threshold rules and compare with a baseline (exit 1 on failure).
+    Check(CheckArgs),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -42,6 +44,27 @@ pub struct AnalyzeArgs {
     /// Output directory [default: reports/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// What to print on stdout.
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    pub format: Format,
+}
+
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// Scene and shadow settings (TOML).
+    pub config: PathBuf,
+    /// Rules and baseline tolerances (TOML; see docs/check.md).
+    #[arg(long)]
+    pub thresholds: PathBuf,
+    /// An earlier summary.json (or, with --sweep, sweep.csv) to compare against.
+    #[arg(long)]
+    pub baseline: Option<PathBuf>,
+    /// Judge sweep rows (summary metrics only) instead of the one configuration.
+    #[arg(long)]
+    pub sweep: bool,
+    /// Also write a JUnit XML report to this file.
+    #[arg(long)]
+    pub junit: Option<PathBuf>,
     /// What to print on stdout.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
@@ -73,6 +96,7 @@ pub fn default_out_dir(config: &Config) -> PathBuf {
 pub fn run(cli: Cli) -> Result<Outcome> {
     match cli.command {
         Command::Analyze(args) => run_analyze(&args),
+        Command::Check(args) => crate::check::run_check(&args),
     }
 }
 
