@@ -29,6 +29,8 @@ pub enum Command {
     Analyze(AnalyzeArgs),
     /// Sweep λ × cascades × resolution (× fit) in parallel; write CSV, plots and a report.
     Sweep(SweepArgs),
+    /// Gate on quality: judge threshold rules and compare with a baseline (exit 1 on failure).
+    Check(CheckArgs),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -82,6 +84,27 @@ pub struct SweepArgs {
     pub format: Format,
 }
 
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// Scene and shadow settings (TOML).
+    pub config: PathBuf,
+    /// Rules and baseline tolerances (TOML; see docs/check.md).
+    #[arg(long)]
+    pub thresholds: PathBuf,
+    /// An earlier summary.json (or, with --sweep, sweep.csv) to compare against.
+    #[arg(long)]
+    pub baseline: Option<PathBuf>,
+    /// Judge sweep rows (summary metrics only) instead of the one configuration.
+    #[arg(long)]
+    pub sweep: bool,
+    /// Also write a JUnit XML report to this file.
+    #[arg(long)]
+    pub junit: Option<PathBuf>,
+    /// What to print on stdout.
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    pub format: Format,
+}
+
 /// How a successful run ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Outcome {
@@ -109,6 +132,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
     match cli.command {
         Command::Analyze(args) => run_analyze(&args),
         Command::Sweep(args) => run_sweep(&args),
+        Command::Check(args) => crate::check::run_check(&args),
     }
 }
 

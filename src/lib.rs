@@ -11,6 +11,7 @@
 
 pub mod analysis;
 pub mod cascades;
+pub mod check;
 pub mod cli;
 pub mod config;
 pub mod depth_range;

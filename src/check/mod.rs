@@ -1,0 +1,186 @@
+//! `csm-lab check`: quality thresholds and regression gates for CI.
+//!
+//! A thresholds file ([`thresholds`]) holds rules on summary, per-cascade and per-depth
+//! metrics ([`metric`]); [`evaluate`] judges them against an analysis (per-depth extremes in
+//! closed form, [`depth`]), [`baseline`] compares the summary metrics with an earlier
+//! `summary.json`, [`sweep`] does both for sweep rows, and [`report`] / [`junit`] render the
+//! outcome. Exit codes: 0 everything passes, 1 a rule failed or a metric regressed, 2 an error.
+
+pub mod baseline;
+pub mod depth;
+pub mod evaluate;
+pub mod junit;
+pub mod metric;
+pub mod report;
+pub mod sweep;
+pub mod thresholds;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use crate::analysis::{analyze, Analysis, AnalysisOptions};
+use crate::cli::{CheckArgs, Format, Outcome};
+use crate::config::Config;
+use crate::error::{Error, Result};
+use crate::output;
+
+pub use report::{Body, CheckReport};
+pub use thresholds::{Rule, Thresholds};
+
+/// What `check` computes: the summary (independent of the options), and the per-cascade
+/// light depths a rule may limit; no per-frame rows, density samples or cell flips.
+pub fn check_options() -> AnalysisOptions {
+    AnalysisOptions {
+        light_depth: true,
+        ..AnalysisOptions::summary_only()
+    }
+}
+
+/// Judges one analysed configuration: every rule, and the baseline summary if given.
+pub fn check_analysis(
+    analysis: &Analysis,
+    thresholds: &Thresholds,
+    baseline: Option<(&str, &BTreeMap<metric::SummaryMetric, f64>)>,
+) -> Result<CheckReport> {
+    let results = evaluate::evaluate_all(&thresholds.rules, analysis)?;
+    let baseline = baseline.map(|(file, values)| {
+        let current: BTreeMap<_, _> = metric::summary_values(&analysis.summary).into_iter().collect();
+        report::SummaryBaseline {
+            file: file.to_string(),
+            comparisons: baseline::compare(&current, values, &thresholds.tolerances),
+        }
+    });
+    Ok(CheckReport {
+        config: config_label(&analysis.config),
+        name: analysis.config.name.clone(),
+        thresholds: thresholds.label.clone(),
+        tolerances: thresholds.tolerances.clone(),
+        body: Body::Single { results, baseline },
+    })
+}
+
+/// Judges sweep rows: the rules per row, and the baseline rows if given.
+pub fn check_rows(
+    config: &Config,
+    rows: &[sweep::SweepRow],
+    thresholds: &Thresholds,
+    baseline: Option<(&str, &[sweep::SweepRow])>,
+) -> Result<CheckReport> {
+    let reports = sweep::evaluate_rows(&thresholds.rules, rows);
+    let baseline = baseline
+        .map(|(file, base)| {
+            Ok::<_, Error>(report::SweepBaseline {
+                file: file.to_string(),
+                comparison: sweep::compare_rows(rows, base, &thresholds.tolerances)?,
+            })
+        })
+        .transpose()?;
+    Ok(CheckReport {
+        config: config_label(config),
+        name: config.name.clone(),
+        thresholds: thresholds.label.clone(),
+        tolerances: thresholds.tolerances.clone(),
+        body: Body::Sweep {
+            rows: reports,
+            baseline,
+        },
+    })
+}
+
+fn config_label(config: &Config) -> String {
+    config
+        .path
+        .as_ref()
+        .map_or_else(|| config.name.clone(), |p| p.display().to_string())
+}
+
+/// Writes the JUnit file atomically, creating its directory.
+pub fn write_junit(path: &Path, report: &CheckReport) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        output::ensure_dir(dir)?;
+    }
+    output::write_atomic(path, junit::render(report).as_bytes())
+}
+
+/// The `check` command. Every input is read and validated before anything is analysed, and
+/// nothing is printed or written unless the whole check succeeded.
+pub fn run_check(args: &CheckArgs) -> Result<Outcome> {
+    let config = Config::load(&args.config)?;
+    let thresholds = Thresholds::load(&args.thresholds)?;
+    if thresholds.rules.is_empty() && args.baseline.is_none() {
+        return Err(Error::flag(
+            "--thresholds",
+            &args.thresholds.display().to_string(),
+            "has no [[rule]] entries and no --baseline was given: nothing to check",
+        ));
+    }
+    let report = if args.sweep {
+        let base_rows = match &args.baseline {
+            Some(p) => Some(sweep::read_sweep_csv(p).map_err(|e| {
+                with_hint(
+                    e,
+                    "with --sweep, --baseline takes a sweep.csv; compare a summary.json without --sweep",
+                )
+            })?),
+            None => None,
+        };
+        let rows = sweep::sweep_rows_for(&config)?;
+        let applicable = thresholds
+            .rules
+            .iter()
+            .any(|r| matches!(r.target, thresholds::Target::Summary(_)));
+        if !applicable && args.baseline.is_none() {
+            return Err(Error::Other(format!(
+                "--sweep: none of the rules in {} applies to sweep rows (only summary-metric rules do) \
+                 and no --baseline was given: nothing to check",
+                thresholds.label
+            )));
+        }
+        let label = args.baseline.as_ref().map(|p| p.display().to_string());
+        check_rows(&config, &rows, &thresholds, label.as_deref().zip(base_rows.as_deref()))?
+    } else {
+        let base = match &args.baseline {
+            Some(p) => Some(
+                baseline::read_summary_json(p).map_err(|e| with_hint(e, "to compare with a sweep.csv, add --sweep"))?,
+            ),
+            None => None,
+        };
+        let analysis = analyze(&config, &check_options());
+        let label = args.baseline.as_ref().map(|p| p.display().to_string());
+        check_analysis(&analysis, &thresholds, label.as_deref().zip(base.as_ref()))?
+    };
+
+    let stdout = match args.format {
+        Format::Table => report.table().into_bytes(),
+        Format::Json => output::json_bytes("check", &report.json())?,
+    };
+    if let Some(p) = &args.junit {
+        write_junit(p, &report)?;
+    }
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    out.write_all(&stdout)
+        .and_then(|_| out.flush())
+        .map_err(|e| Error::Other(format!("cannot write to stdout: {e}")))?;
+    if let Some(p) = &args.junit {
+        eprintln!("wrote {}", p.display());
+    }
+    Ok(if report.passed() {
+        Outcome::Success
+    } else {
+        Outcome::ThresholdViolated
+    })
+}
+
+/// Appends a hint to data-file errors about which kind of baseline a mode expects.
+fn with_hint(e: Error, hint: &str) -> Error {
+    match e {
+        Error::DataFile { path, line, message } => Error::DataFile {
+            path,
+            line,
+            message: format!("{message} ({hint})"),
+        },
+        Error::Other(m) => Error::Other(format!("{m} ({hint})")),
+        other => other,
+    }
+}

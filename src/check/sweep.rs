@@ -1,0 +1,352 @@
+//! Rules and baselines over sweep rows: one row per configuration, summary metrics only.
+//!
+//! A row is a key (`lambda`, `cascades`, `resolution`, `fit`) and a map from metric name to
+//! value. Only summary-metric rules apply to a row; per-cascade and per-depth rules are
+//! reported as not applicable for every row. A configuration passes when none of the rules
+//! that apply to it fails.
+//!
+//! Baselines: two sweep tables are matched by key and compared metric by metric with the
+//! same tolerances as a single summary ([`super::baseline`]). Configurations present in only
+//! one of the tables are listed, not judged.
+
+use std::cmp::Ordering;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use super::baseline::{compare, Comparison, Tolerances, Verdict};
+use super::evaluate::{evaluate_values, RuleResult, Status};
+use super::metric::SummaryMetric;
+use super::thresholds::Rule;
+use crate::config::Config;
+use crate::error::{Error, Result};
+
+/// The columns that identify a configuration in `sweep.csv`.
+pub const KEY_COLUMNS: [&str; 4] = ["lambda", "cascades", "resolution", "fit"];
+
+/// Which configuration a row measures.
+#[derive(Debug, Clone)]
+pub struct SweepKey {
+    pub lambda: f64,
+    pub cascades: u32,
+    pub resolution: u32,
+    pub fit: String,
+}
+
+impl SweepKey {
+    /// The key of a config's own shadow setting.
+    pub fn of_config(config: &Config) -> Self {
+        SweepKey {
+            lambda: config.shadow.lambda,
+            cascades: config.shadow.cascades as u32,
+            resolution: config.shadow.resolution,
+            fit: config.shadow.fit.name().to_string(),
+        }
+    }
+
+    /// `lambda=0.75 cascades=4 resolution=2048 fit=sphere`
+    pub fn label(&self) -> String {
+        format!(
+            "lambda={} cascades={} resolution={} fit={}",
+            self.lambda, self.cascades, self.resolution, self.fit
+        )
+    }
+}
+
+// Keys compare lambda bit-for-bit in total order, so they can key a BTreeMap.
+impl Ord for SweepKey {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.lambda
+            .total_cmp(&other.lambda)
+            .then(self.cascades.cmp(&other.cascades))
+            .then(self.resolution.cmp(&other.resolution))
+            .then_with(|| self.fit.cmp(&other.fit))
+    }
+}
+
+impl PartialOrd for SweepKey {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl PartialEq for SweepKey {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+
+impl Eq for SweepKey {}
+
+/// One configuration's summary values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepRow {
+    pub key: SweepKey,
+    /// Metric name -> value (booleans as 1/0).
+    pub metrics: BTreeMap<String, f64>,
+}
+
+impl SweepRow {
+    /// The values named like summary metrics; other entries are ignored.
+    pub fn summary_values(&self) -> BTreeMap<SummaryMetric, f64> {
+        self.metrics
+            .iter()
+            .filter_map(|(k, v)| SummaryMetric::from_name(k).map(|m| (m, *v)))
+            .collect()
+    }
+}
+
+/// The rules judged on one row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RowReport {
+    pub key: SweepKey,
+    pub results: Vec<RuleResult>,
+}
+
+impl RowReport {
+    pub fn count(&self, s: Status) -> usize {
+        self.results.iter().filter(|r| r.status == s).count()
+    }
+
+    /// No applicable rule failed.
+    pub fn passed(&self) -> bool {
+        self.count(Status::Fail) == 0
+    }
+}
+
+/// Judges every rule on every row, rows in the given order, rules in file order.
+pub fn evaluate_rows(rules: &[Rule], rows: &[SweepRow]) -> Vec<RowReport> {
+    rows.iter()
+        .map(|row| RowReport {
+            key: row.key.clone(),
+            results: rules.iter().map(|r| evaluate_values(r, &row.metrics)).collect(),
+        })
+        .collect()
+}
+
+/// One configuration present in both tables.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RowComparison {
+    pub key: SweepKey,
+    pub comparisons: Vec<Comparison>,
+}
+
+/// Two sweep tables compared.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepComparison {
+    /// In key order.
+    pub matched: Vec<RowComparison>,
+    /// Configurations the baseline does not have (new), in key order.
+    pub only_current: Vec<SweepKey>,
+    /// Configurations the current table does not have (dropped), in key order.
+    pub only_baseline: Vec<SweepKey>,
+}
+
+impl SweepComparison {
+    pub fn count(&self, v: Verdict) -> usize {
+        self.matched
+            .iter()
+            .flat_map(|r| &r.comparisons)
+            .filter(|c| c.verdict == v)
+            .count()
+    }
+}
+
+fn index_rows<'a>(rows: &'a [SweepRow], which: &str) -> Result<BTreeMap<&'a SweepKey, &'a SweepRow>> {
+    let mut map = BTreeMap::new();
+    for row in rows {
+        if map.insert(&row.key, row).is_some() {
+            return Err(Error::Other(format!(
+                "the {which} sweep table has two rows for {}; each configuration must appear once",
+                row.key.label()
+            )));
+        }
+    }
+    Ok(map)
+}
+
+/// Matches rows by key and compares their summary metrics. Duplicate keys are an error.
+pub fn compare_rows(current: &[SweepRow], baseline: &[SweepRow], tol: &Tolerances) -> Result<SweepComparison> {
+    let cur = index_rows(current, "current")?;
+    let base = index_rows(baseline, "baseline")?;
+    let mut out = SweepComparison {
+        matched: Vec::new(),
+        only_current: Vec::new(),
+        only_baseline: Vec::new(),
+    };
+    for (key, row) in &cur {
+        match base.get(key) {
+            Some(b) => out.matched.push(RowComparison {
+                key: (*key).clone(),
+                comparisons: compare(&row.summary_values(), &b.summary_values(), tol),
+            }),
+            None => out.only_current.push((*key).clone()),
+        }
+    }
+    out.only_baseline = base
+        .keys()
+        .filter(|k| !cur.contains_key(*k))
+        .map(|k| (*k).clone())
+        .collect();
+    Ok(out)
+}
+
+/// Parses `sweep.csv` by column name: the key columns are required, every column named like
+/// a summary metric is read (booleans as 1/0), other columns are ignored.
+pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
+    let data_err = |line: u64, message: String| Error::DataFile {
+        path: path.to_path_buf(),
+        line: line as usize,
+        message,
+    };
+    let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(text.as_bytes());
+    let headers = reader
+        .headers()
+        .map_err(|e| data_err(1, format!("not a CSV table: {e}")))?
+        .clone();
+    let column = |name: &str| headers.iter().position(|h| h.trim() == name);
+    let mut key_idx = [0usize; 4];
+    for (slot, name) in key_idx.iter_mut().zip(KEY_COLUMNS) {
+        *slot = column(name).ok_or_else(|| {
+            data_err(
+                1,
+                format!(
+                    "no `{name}` column; a sweep.csv has the key columns {} and the summary metric columns",
+                    KEY_COLUMNS.join(", ")
+                ),
+            )
+        })?;
+    }
+    let metric_cols: Vec<(usize, SummaryMetric)> = headers
+        .iter()
+        .enumerate()
+        .filter_map(|(i, h)| SummaryMetric::from_name(h.trim()).map(|m| (i, m)))
+        .collect();
+    if metric_cols.is_empty() {
+        return Err(data_err(
+            1,
+            "no column is named like a summary metric (max_aliasing, ...)".into(),
+        ));
+    }
+    let mut rows = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line());
+            data_err(line, format!("malformed CSV row: {e}"))
+        })?;
+        let line = record.position().map_or(0, |p| p.line());
+        let field = |i: usize| record.get(i).unwrap_or("").trim();
+        let number = |i: usize, what: &str| -> Result<f64> {
+            let s = field(i);
+            let v = match s {
+                "true" => 1.0,
+                "false" => 0.0,
+                _ => s
+                    .parse::<f64>()
+                    .map_err(|_| data_err(line, format!("`{what}` = {s:?} is not a number")))?,
+            };
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(data_err(line, format!("`{what}` = {s:?} is not a finite number")))
+            }
+        };
+        let int = |i: usize, what: &str| -> Result<u32> {
+            let s = field(i);
+            s.parse::<u32>()
+                .map_err(|_| data_err(line, format!("`{what}` = {s:?} is not a whole number")))
+        };
+        let key = SweepKey {
+            lambda: number(key_idx[0], "lambda")?,
+            cascades: int(key_idx[1], "cascades")?,
+            resolution: int(key_idx[2], "resolution")?,
+            fit: field(key_idx[3]).to_string(),
+        };
+        let metrics = metric_cols
+            .iter()
+            .map(|&(i, m)| Ok((m.name().to_string(), number(i, m.name())?)))
+            .collect::<Result<BTreeMap<_, _>>>()?;
+        rows.push(SweepRow { key, metrics });
+    }
+    Ok(rows)
+}
+
+/// Reads a `sweep.csv`.
+pub fn read_sweep_csv(path: &Path) -> Result<Vec<SweepRow>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
+    parse_sweep_csv(&text, path)
+}
+
+/// The rows `--sweep` judges: every configuration of the config's sweep grid (its `[sweep]`
+/// table, or the default grid), run by the sweep runner exactly as `csm-lab sweep` runs it,
+/// so each row equals the corresponding line of `sweep.csv`.
+pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
+    let grid = crate::sweep::Grid::resolve(config, &crate::sweep::GridOverrides::default())?;
+    let rows = crate::sweep::run(config, &grid, None, &|| {})?;
+    Ok(rows
+        .into_iter()
+        .map(|r| SweepRow {
+            key: SweepKey {
+                lambda: r.setting.lambda,
+                cascades: r.setting.cascades as u32,
+                resolution: r.setting.resolution,
+                fit: r.setting.fit.name().to_string(),
+            },
+            metrics: SummaryMetric::ALL
+                .into_iter()
+                .map(|m| (m.name().to_string(), m.value(&r.summary)))
+                .collect(),
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_order_and_compare_by_value() {
+        let k = |lambda: f64, fit: &str| SweepKey {
+            lambda,
+            cascades: 4,
+            resolution: 2048,
+            fit: fit.into(),
+        };
+        assert_eq!(k(0.5, "sphere"), k(0.5, "sphere"));
+        assert!(k(0.25, "sphere") < k(0.5, "aabb"));
+        assert!(k(0.5, "aabb") < k(0.5, "sphere"));
+        assert_eq!(
+            k(0.75, "sphere").label(),
+            "lambda=0.75 cascades=4 resolution=2048 fit=sphere"
+        );
+    }
+
+    #[test]
+    fn csv_errors_name_the_line_and_the_column() {
+        let p = Path::new("s.csv");
+        let e = parse_sweep_csv("lambda,cascades,fit,max_aliasing\n0.5,4,sphere,2\n", p).unwrap_err();
+        assert!(e.to_string().contains("`resolution`"), "{e}");
+        let e = parse_sweep_csv(
+            "lambda,cascades,resolution,fit,max_aliasing\n0.5,4,2048,sphere,2\n0.5,4,2048,aabb,x\n",
+            p,
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string().starts_with("s.csv:3:") && e.to_string().contains("max_aliasing"),
+            "{e}"
+        );
+        let e = parse_sweep_csv(
+            "lambda,cascades,resolution,fit,max_aliasing\n0.5,4.5,2048,sphere,2\n",
+            p,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("cascades"), "{e}");
+        let e = parse_sweep_csv(
+            "lambda,cascades,resolution,fit,max_aliasing\n0.5,4,2048,sphere,NaN\n",
+            p,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("finite"), "{e}");
+        let e = parse_sweep_csv("lambda,cascades,resolution,fit,snap\n0.5,4,2048,sphere,true\n", p).unwrap_err();
+        assert!(e.to_string().contains("summary metric"), "{e}");
+    }
+}
