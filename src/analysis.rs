@@ -169,14 +169,18 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
     };
 
     let poses = motion::camera_path(config).expect("validated when the config was loaded");
-    let probes = shimmer::probes(&rig, &pose0, &config.scene, config.analysis.probes);
     let sopts = ShimmerOptions {
         cell_flips: opts.cell_flips,
         probe_drift: false,
         frame_rows: opts.frame_rows,
     };
-    let snapped = shimmer::along_path(&rig, &poses, &probes, true, sopts);
-    let unsnapped = shimmer::along_path(&rig, &poses, &probes, false, sopts);
+    // Probes cost more than the rest of a sphere-fit analysis; place them only when used.
+    let probes = if shimmer::needs_probes(&rig, sopts) {
+        shimmer::probes(&rig, &pose0, &config.scene, config.analysis.probes)
+    } else {
+        Vec::new()
+    };
+    let (snapped, unsnapped) = shimmer::along_path_both(&rig, &poses, &probes, sopts);
     let configured = if config.shadow.snap { &snapped } else { &unsnapped };
 
     let cascades = windows0

@@ -13,6 +13,12 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, CameraPose};
 
+/// Largest world coordinate or distance accepted, in world units: far beyond any real world
+/// (engines re-centre long before), and small enough that every derived quantity (texel
+/// coordinates, squared radii) stays finite. Found necessary by the property tests: a camera
+/// strafing 1e305 units per frame turned the shimmer metrics into NaN.
+pub const MAX_WORLD: f64 = 1e9;
+
 /// How the window of a cascade is fitted around its slice of the view frustum.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -360,6 +366,16 @@ impl Validator<'_> {
         }
     }
 
+    /// Three finite numbers, none beyond [`MAX_WORLD`] in magnitude.
+    pub fn point(&self, key: &str, v: [f64; 3]) -> Result<DVec3> {
+        let p = self.vec3(key, v)?;
+        if p.abs().max_element() <= MAX_WORLD {
+            Ok(p)
+        } else {
+            Err(self.invalid(key, format!("{v:?}"), "three numbers within ±1e9 world units"))
+        }
+    }
+
     pub fn int_range(&self, key: &str, v: i64, lo: i64, hi: i64) -> Result<i64> {
         if (lo..=hi).contains(&v) {
             Ok(v)
@@ -428,10 +444,17 @@ impl Config {
     }
 }
 
+fn p_display(path: &MotionPath) -> String {
+    match path {
+        MotionPath::File { path, .. } => path.display().to_string(),
+        other => other.name().to_string(),
+    }
+}
+
 fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Result<Config> {
     // Camera.
-    let position = v.vec3("camera.position", raw.camera.position)?;
-    let target = v.vec3("camera.target", raw.camera.target)?;
+    let position = v.point("camera.position", raw.camera.position)?;
+    let target = v.point("camera.target", raw.camera.target)?;
     let up = match raw.camera.up {
         Some(u) => v.vec3("camera.up", u)?,
         None => DVec3::Y,
@@ -455,19 +478,39 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         ));
     }
     let fov = v.finite("camera.fov_y_deg", raw.camera.fov_y_deg)?;
-    if !(fov > 0.0 && fov < 180.0) {
-        return Err(v.invalid("camera.fov_y_deg", fov, "degrees strictly between 0 and 180"));
+    // Strictly between 0 and 180, with a margin: at 1e-300 degrees tan(fov/2) underflows and
+    // the pixel footprint becomes infinite.
+    if !(0.001..=179.999).contains(&fov) {
+        return Err(v.invalid(
+            "camera.fov_y_deg",
+            fov,
+            "degrees strictly between 0 and 180, from 0.001 to 179.999",
+        ));
     }
     let near = v.finite("camera.near", raw.camera.near)?;
     if near <= 0.0 {
         return Err(v.invalid("camera.near", near, "a number > 0"));
     }
     let far = v.finite("camera.far", raw.camera.far)?;
+    if far > MAX_WORLD {
+        return Err(v.invalid("camera.far", far, "a number at most 1e9 world units"));
+    }
     if far <= near {
         return Err(v.invalid(
             "camera.far",
             far,
             &format!("a number greater than camera.near ({near})"),
+        ));
+    }
+    // A depth ratio beyond 1e12 overflows the logarithmic split term (1e-308 .. 1000 did).
+    if far / near > 1e12 {
+        return Err(v.invalid(
+            "camera.near",
+            near,
+            &format!(
+                "a number at least camera.far / 1e12 ({:e}): far / near may be at most 1e12",
+                far / 1e12
+            ),
         ));
     }
 
@@ -488,8 +531,8 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let light_direction = dir_raw / len;
 
     // Scene.
-    let smin = v.vec3("scene.min", raw.scene.min)?;
-    let smax = v.vec3("scene.max", raw.scene.max)?;
+    let smin = v.point("scene.min", raw.scene.min)?;
+    let smax = v.point("scene.max", raw.scene.max)?;
     if smin.cmpgt(smax).any() {
         return Err(v.invalid(
             "scene.max",
@@ -568,6 +611,26 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         MotionPath::File { poses, .. } => poses.len(),
         _ => frames,
     };
+    // Keep the whole path within the world bounds.
+    if path.is_translation() && step_as_written.abs() * (frames - 1) as f64 > MAX_WORLD {
+        return Err(v.invalid(
+            "motion.step",
+            step_as_written,
+            &format!("a step whose {} frames travel at most 1e9 world units", frames),
+        ));
+    }
+    if let MotionPath::File { poses, .. } = &path {
+        if let Some(row) = poses
+            .iter()
+            .position(|(p, t)| p.abs().max(t.abs()).max_element() > MAX_WORLD)
+        {
+            return Err(v.invalid(
+                "motion.file",
+                format!("{} (pose row {})", p_display(&path), row + 1),
+                "positions and targets within ±1e9 world units",
+            ));
+        }
+    }
 
     let a = raw.analysis;
     let analysis = AnalysisSettings {

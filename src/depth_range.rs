@@ -37,9 +37,15 @@ pub fn receiver_range(
     fit_to_scene: bool,
 ) -> DepthRange {
     if !fit_to_scene {
-        return DepthRange::Range {
-            z_lo: near,
-            z_hi: shadow_far,
+        // The same "thinner than a relative 1e-9" rule as below: a shadow distance at (or
+        // before) the near plane leaves nothing to split.
+        return if shadow_far > near * (1.0 + 1e-9) {
+            DepthRange::Range {
+                z_lo: near,
+                z_hi: shadow_far,
+            }
+        } else {
+            DepthRange::Empty
         };
     }
     let frustum = pose.slice_hexahedron(lens, near, shadow_far);
@@ -126,6 +132,23 @@ mod tests {
                 "{z_lo} {z_hi} vs {slo} {shi}"
             );
         }
+    }
+
+    /// Regression (found by the property tests): without scene fitting, a shadow distance
+    /// shorter than the near plane gave a reversed range, and the aggregates panicked.
+    #[test]
+    fn a_shadow_distance_before_the_near_plane_needs_no_cascades() {
+        let lens = Lens::new(1.0, 1.5);
+        let pose = CameraPose::look_at(DVec3::ZERO, DVec3::NEG_Z, DVec3::Y).unwrap();
+        let scene = Aabb::new(DVec3::splat(-10.0), DVec3::splat(10.0));
+        for fit in [false, true] {
+            assert_eq!(receiver_range(&pose, &lens, 9.0, 8.3, &scene, fit), DepthRange::Empty);
+            assert_eq!(receiver_range(&pose, &lens, 9.0, 9.0, &scene, fit), DepthRange::Empty);
+        }
+        assert_eq!(
+            receiver_range(&pose, &lens, 0.5, 8.3, &scene, false),
+            DepthRange::Range { z_lo: 0.5, z_hi: 8.3 }
+        );
     }
 
     #[test]

@@ -61,7 +61,8 @@ pub fn camera_path(config: &Config) -> std::result::Result<Vec<CameraPose>, (usi
                 let pose = pose.ok_or_else(|| bad(t))?;
                 // Pitching over the top flips the camera's right axis: a discontinuity no
                 // real camera controller makes, so it is an error rather than a silent roll.
-                if pose.right.dot(pose0.right) <= 0.0 {
+                // (Yaw and orbit turn the right axis continuously, through any angle.)
+                if matches!(path, MotionPath::Pitch) && pose.right.dot(pose0.right) <= 0.0 {
                     return Err(bad(t));
                 }
                 poses.push(pose);

@@ -28,7 +28,26 @@ use crate::rng::halton;
 
 /// `x - round(x)`, in [-0.5, 0.5].
 pub fn wrap(x: f64) -> f64 {
-    x - x.round()
+    x - round_half_away(x)
+}
+
+/// `f64::round` (ties away from zero), bit for bit, without the libm call that baseline x86-64
+/// makes for it: this sits in the innermost shimmer loops.
+#[inline]
+fn round_half_away(x: f64) -> f64 {
+    // At 2^52 and beyond every double is an integer (and NaN/inf fall through too).
+    if x.is_nan() || x.abs() >= 4_503_599_627_370_496.0 {
+        return x.round();
+    }
+    // The i64 conversion truncates exactly here, and `x - t` is exact (its fractional part).
+    let t = (x as i64) as f64;
+    let r = match x - t {
+        d if d >= 0.5 => t + 1.0,
+        d if d <= -0.5 => t - 1.0,
+        _ => t,
+    };
+    // round(-0.3) is -0.0: the result always carries the sign of x.
+    r.copysign(x)
 }
 
 /// Shimmer of one cascade between frames `frame - 1` and `frame`.
@@ -126,6 +145,14 @@ pub struct PathResult {
     pub frames: Vec<FrameShimmer>,
 }
 
+/// True when [`along_path`] evaluates probes with these options: for S4, on request, or
+/// whenever a window can change size between frames. A sphere-fit window's side is fixed per
+/// cascade in the [`Rig`] (never recomputed per frame), so its S3 always has the closed form
+/// and needs no probes; callers may then pass empty probe lists.
+pub fn needs_probes(rig: &Rig, opts: ShimmerOptions) -> bool {
+    opts.cell_flips || opts.probe_drift || rig.fit != crate::config::Fit::Sphere
+}
+
 /// Walk the path once for one snap mode: shimmer and coverage together, so each window is
 /// computed once per frame.
 pub fn along_path(
@@ -135,119 +162,307 @@ pub fn along_path(
     snapped: bool,
     opts: ShimmerOptions,
 ) -> PathResult {
-    let m = rig.cascade_count();
-    let probe_xy: Vec<Vec<DVec2>> = probes
-        .iter()
-        .map(|ps| ps.iter().map(|p| rig.light.to_light_xy(*p)).collect())
-        .collect();
-    let mut prev: Vec<Option<Window>> = vec![None; m];
-    let mut coverage = Coverage {
-        violations: vec![0; m],
-        worst_texels: vec![0.0; m],
-        min_slack_texels: vec![f64::INFINITY; m],
+    let [r] = walk(rig, poses, probes, [snapped], opts);
+    r
+}
+
+/// Both snap modes in one walk, `(snapped, unsnapped)`: the same results as two calls of
+/// [`along_path`], bit for bit, with the per-frame work the modes share done once.
+pub fn along_path_both(
+    rig: &Rig,
+    poses: &[CameraPose],
+    probes: &[Vec<DVec3>],
+    opts: ShimmerOptions,
+) -> (PathResult, PathResult) {
+    let [s, u] = walk(rig, poses, probes, [true, false], opts);
+    (s, u)
+}
+
+/// The extremes of one cascade's slice corners in texel units (`corner / T`, before the
+/// window origin is subtracted) for one frame. Both snap modes use the same window size, so
+/// this is computed once for both.
+struct CornerTexels {
+    texel: DVec2,
+    lo: DVec2,
+    hi: DVec2,
+}
+
+impl CornerTexels {
+    /// From the corners and their light-space bounds `(lo, hi)`.
+    fn new(corners: &[DVec2; 8], bounds: (DVec2, DVec2), texel: DVec2) -> Self {
+        let (lo, hi) = if texel.cmpgt(DVec2::ZERO).all() {
+            // Dividing by a positive number is monotone under round-to-nearest, so the bounds
+            // divided are exactly the bounds of the divided corners (the values a per-corner
+            // `texel_coords` call computes), for 2 divisions instead of 8.
+            (bounds.0 / texel, bounds.1 / texel)
+        } else {
+            crate::cascades::bounds_2d(&corners.map(|c| c / texel))
+        };
+        CornerTexels { texel, lo, hi }
+    }
+}
+
+/// Running totals of one snap mode along the path.
+struct ModeState {
+    snapped: bool,
+    prev: Vec<Option<Window>>,
+    coverage: Coverage,
+    sum_ms: f64,
+    pairs: usize,
+    /// Largest squared S3: `sqrt` is monotone, so the largest drift is its root (one
+    /// square root per path instead of one per frame pair, bit-identical).
+    max_drift_sq: f64,
+    jitter: f64,
+    flip_sum: f64,
+    frames: Vec<FrameShimmer>,
+}
+
+impl ModeState {
+    fn new(snapped: bool, m: usize) -> Self {
+        ModeState {
+            snapped,
+            prev: vec![None; m],
+            coverage: Coverage {
+                violations: vec![0; m],
+                worst_texels: vec![0.0; m],
+                min_slack_texels: vec![f64::INFINITY; m],
+            },
+            sum_ms: 0.0,
+            pairs: 0,
+            max_drift_sq: 0.0,
+            jitter: 0.0,
+            flip_sum: 0.0,
+            frames: Vec::new(),
+        }
+    }
+
+    /// Coverage: the slice and the window are convex, so the slice's light-space footprint is
+    /// the hull of its corners; checking the 8 corners is exact.
+    #[inline]
+    fn cover(&mut self, i: usize, w: &Window, corners: &[DVec2; 8], ct: &CornerTexels, resolution: u32) {
+        let n = resolution as f64;
+        let o = w.origin_texels;
+        // Smallest margin over the corners, from the extreme corners alone: `x - o` and
+        // `n - x` are monotone in x under round-to-nearest, so the extreme of the rounded
+        // margins is the rounded margin of the extreme: bit-identical to a per-corner minimum.
+        let slack = (ct.lo.x - o.x)
+            .min(n - (ct.hi.x - o.x))
+            .min(ct.lo.y - o.y)
+            .min(n - (ct.hi.y - o.y));
+        let cov = &mut self.coverage;
+        cov.min_slack_texels[i] = cov.min_slack_texels[i].min(slack);
+        // Every corner's tolerance is at least 1e-9, so unless the worst margin is below
+        // -1e-9 no corner can count as outside and the per-corner pass is skipped.
+        if -slack > 1e-9 {
+            for c in corners {
+                let s = w.texel_coords(*c);
+                let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
+                // Rounding tolerance: a few ulps of the texel coordinate's magnitude.
+                let tol = 1e-9 + 8.0 * f64::EPSILON * (*c / w.texel).abs().max_element();
+                if -slack > tol {
+                    cov.violations[i] += 1;
+                    cov.worst_texels[i] = cov.worst_texels[i].max(-slack);
+                }
+            }
+        }
+    }
+
+    /// Shimmer between this cascade's previous window and `w`.
+    #[inline]
+    fn shimmer(&mut self, t: usize, i: usize, w: &Window, probe_xy: &[DVec2], opts: ShimmerOptions) {
+        let Some(p) = self.prev[i] else {
+            return;
+        };
+        let same_size = w.texel == p.texel;
+        // x / x is exactly 1, so an unchanged size gives exactly 0 without the divisions.
+        let size_change = if same_size {
+            0.0
+        } else {
+            ((w.texel.x / p.texel.x - 1.0).abs()).max((w.texel.y / p.texel.y - 1.0).abs())
+        };
+        self.jitter = self.jitter.max(size_change);
+        let closed_form = same_size && !opts.probe_drift;
+        let (ms, mx_sq, flips) = if closed_form && !opts.cell_flips {
+            let ms = closed_form_drift(&p, w);
+            (ms, ms, None)
+        } else {
+            per_probe(&p, w, probe_xy, closed_form, opts.cell_flips)
+        };
+        if let Some(f) = flips {
+            self.flip_sum += f;
+        }
+        self.sum_ms += ms;
+        self.pairs += 1;
+        self.max_drift_sq = self.max_drift_sq.max(mx_sq);
+        if opts.frame_rows {
+            self.frames.push(FrameShimmer {
+                frame: t,
+                cascade: i,
+                snapped: self.snapped,
+                size_change,
+                phase_drift_rms: ms.sqrt(),
+                phase_drift_max: mx_sq.sqrt(),
+                cell_flips: flips,
+            });
+        }
+    }
+
+    fn finish(mut self, opts: ShimmerOptions) -> PathResult {
+        for s in &mut self.coverage.min_slack_texels {
+            if !s.is_finite() {
+                *s = 0.0;
+            }
+        }
+        let pairs = self.pairs;
+        let stats = ShimmerStats {
+            rms: if pairs > 0 {
+                (self.sum_ms / pairs as f64).sqrt()
+            } else {
+                0.0
+            },
+            max: self.max_drift_sq.sqrt(),
+            size_jitter: self.jitter,
+            cell_flip_rate: opts
+                .cell_flips
+                .then(|| if pairs > 0 { self.flip_sum / pairs as f64 } else { 0.0 }),
+        };
+        PathResult {
+            stats,
+            coverage: self.coverage,
+            frames: self.frames,
+        }
+    }
+}
+
+/// S3 of a same-size window pair without probes: the grid translates, so every point drifts
+/// by the wrapped origin difference. Returns the squared drift.
+#[inline]
+fn closed_form_drift(p: &Window, w: &Window) -> f64 {
+    let d = DVec2::new(
+        wrap(p.origin_texels.x - w.origin_texels.x),
+        wrap(p.origin_texels.y - w.origin_texels.y),
+    );
+    d.length_squared()
+}
+
+/// S3 between windows `p` and `w` as (mean square, largest square) over the probes, or from
+/// the closed form when `closed_form` says it holds; with `cell_flips`, S4 too. (Squares
+/// throughout: `DVec2::length` is the root of `length_squared`, taken once at the end.)
+#[inline(never)]
+fn per_probe(
+    p: &Window,
+    w: &Window,
+    probe_xy: &[DVec2],
+    closed_form: bool,
+    cell_flips: bool,
+) -> (f64, f64, Option<f64>) {
+    let (mut ss, mut pmx_sq, mut flipped) = (0.0, 0.0f64, 0usize);
+    for q in probe_xy {
+        let s0 = p.texel_coords(*q);
+        let s1 = w.texel_coords(*q);
+        let d = DVec2::new(wrap(s1.x - s0.x), wrap(s1.y - s0.y));
+        let d2 = d.length_squared();
+        ss += d2;
+        pmx_sq = pmx_sq.max(d2);
+        // Sampled texel centres in light space, and how far they moved in texels of the
+        // current window.
+        let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
+        let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
+        let moved = ((c1 - c0) / w.texel).abs();
+        if moved.x >= 0.5 || moved.y >= 0.5 {
+            flipped += 1;
+        }
+    }
+    let count = probe_xy.len().max(1) as f64;
+    let (ms, mx_sq) = if closed_form {
+        let ms = closed_form_drift(p, w);
+        (ms, ms)
+    } else {
+        (ss / count, pmx_sq)
     };
-    let mut sum_ms = 0.0;
-    let mut pairs = 0usize;
-    let mut max_drift: f64 = 0.0;
-    let mut jitter: f64 = 0.0;
-    let mut flip_sum = 0.0;
-    let mut frames = Vec::new();
+    (ms, mx_sq, cell_flips.then(|| flipped as f64 / count))
+}
+
+/// The walk behind [`along_path`] and [`along_path_both`]: per frame, the camera's light-space
+/// frame and each slice's corners are computed once for all modes; so are the corners' texel
+/// coordinates whenever the modes' windows have the same texel size (always, in the [`Rig`]).
+fn walk<const K: usize>(
+    rig: &Rig,
+    poses: &[CameraPose],
+    probes: &[Vec<DVec3>],
+    modes: [bool; K],
+    opts: ShimmerOptions,
+) -> [PathResult; K] {
+    let m = rig.cascade_count();
+    let mut probe_xy: Vec<Vec<DVec2>> = if needs_probes(rig, opts) {
+        probes
+            .iter()
+            .map(|ps| ps.iter().map(|p| rig.light.to_light_xy(*p)).collect())
+            .collect()
+    } else {
+        Vec::new()
+    };
+    // A cascade without probes measures 0 wherever probes are needed.
+    probe_xy.resize(m, Vec::new());
+    let mut states = modes.map(|snapped| ModeState::new(snapped, m));
     for (t, pose) in poses.iter().enumerate() {
         let lp = LightPose::new(&rig.light, pose);
-        for i in 0..m {
-            let w = rig.window(i, &lp, snapped);
-            // Coverage: the slice and the window are convex, so the slice's light-space
-            // footprint is the hull of its corners; checking the 8 corners is exact.
-            let slice = &rig.slices[i];
-            let n = rig.resolution as f64;
-            for c in lp.corners(&rig.lens, slice.near, slice.far) {
-                let s = w.texel_coords(c);
-                let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
-                coverage.min_slack_texels[i] = coverage.min_slack_texels[i].min(slack);
-                // Rounding tolerance: a few ulps of the texel coordinate's magnitude.
-                let tol = 1e-9 + 8.0 * f64::EPSILON * (c / w.texel).abs().max_element();
-                if -slack > tol {
-                    coverage.violations[i] += 1;
-                    coverage.worst_texels[i] = coverage.worst_texels[i].max(-slack);
+        for (i, (slice, probe_xy)) in rig.slices.iter().zip(&probe_xy).enumerate() {
+            let corners = lp.corners(&rig.lens, slice.near, slice.far);
+            let bounds = crate::cascades::bounds_2d(&corners);
+            let mut shared: Option<CornerTexels> = None;
+            for st in &mut states {
+                let w = rig.window(i, &lp, st.snapped);
+                if matches!(&shared, Some(ct) if ct.texel != w.texel) {
+                    shared = None;
                 }
+                let ct = shared.get_or_insert_with(|| CornerTexels::new(&corners, bounds, w.texel));
+                st.cover(i, &w, &corners, ct, rig.resolution);
+                st.shimmer(t, i, &w, probe_xy, opts);
+                st.prev[i] = Some(w);
             }
-            if let Some(p) = prev[i] {
-                let size_change = ((w.texel.x / p.texel.x - 1.0).abs()).max((w.texel.y / p.texel.y - 1.0).abs());
-                jitter = jitter.max(size_change);
-                let same_size = w.texel == p.texel;
-                let closed_form = same_size && !opts.probe_drift;
-                let mut flips = None;
-                let (mut ms, mut mx) = (0.0, 0.0f64);
-                if closed_form {
-                    let d = DVec2::new(
-                        wrap(p.origin_texels.x - w.origin_texels.x),
-                        wrap(p.origin_texels.y - w.origin_texels.y),
-                    );
-                    ms = d.length_squared();
-                    mx = d.length();
-                }
-                if !closed_form || opts.cell_flips {
-                    let xy = &probe_xy[i];
-                    let (mut ss, mut pmx, mut flipped) = (0.0, 0.0f64, 0usize);
-                    for q in xy {
-                        let s0 = p.texel_coords(*q);
-                        let s1 = w.texel_coords(*q);
-                        let d = DVec2::new(wrap(s1.x - s0.x), wrap(s1.y - s0.y));
-                        ss += d.length_squared();
-                        pmx = pmx.max(d.length());
-                        // Sampled texel centres in light space, and how far they moved in
-                        // texels of the current window.
-                        let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
-                        let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
-                        let moved = ((c1 - c0) / w.texel).abs();
-                        if moved.x >= 0.5 || moved.y >= 0.5 {
-                            flipped += 1;
-                        }
-                    }
-                    let count = xy.len().max(1) as f64;
-                    if !closed_form {
-                        ms = ss / count;
-                        mx = pmx;
-                    }
-                    if opts.cell_flips {
-                        flips = Some(flipped as f64 / count);
-                        flip_sum += flipped as f64 / count;
-                    }
-                }
-                sum_ms += ms;
-                pairs += 1;
-                max_drift = max_drift.max(mx);
-                if opts.frame_rows {
-                    frames.push(FrameShimmer {
-                        frame: t,
-                        cascade: i,
-                        snapped,
-                        size_change,
-                        phase_drift_rms: ms.sqrt(),
-                        phase_drift_max: mx,
-                        cell_flips: flips,
-                    });
-                }
-            }
-            prev[i] = Some(w);
         }
     }
-    for s in &mut coverage.min_slack_texels {
-        if !s.is_finite() {
-            *s = 0.0;
+    states.map(|st| st.finish(opts))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The inlined rounding against `f64::round`, bit for bit, on ties, signed zeros, the
+    /// 2^52 boundary, huge values and random numbers of every magnitude.
+    #[test]
+    fn round_half_away_is_bit_identical_to_f64_round() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -2.5,
+            0.49999999999999994,
+            -0.49999999999999994,
+            4503599627370495.5,
+            -4503599627370495.5,
+            4503599627370496.0,
+            9007199254740993.0,
+            1e300,
+            -1e300,
+            f64::MIN_POSITIVE,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let mut rng = crate::rng::SplitMix64::new(11);
+        for _ in 0..200_000 {
+            let x = rng.range(-1.0, 1.0) * 10f64.powf(rng.range(-12.0, 18.0));
+            xs.push(x);
+            xs.push(x.trunc() + 0.5);
         }
-    }
-    let stats = ShimmerStats {
-        rms: if pairs > 0 { (sum_ms / pairs as f64).sqrt() } else { 0.0 },
-        max: max_drift,
-        size_jitter: jitter,
-        cell_flip_rate: opts
-            .cell_flips
-            .then(|| if pairs > 0 { flip_sum / pairs as f64 } else { 0.0 }),
-    };
-    PathResult {
-        stats,
-        coverage,
-        frames,
+        for x in xs {
+            assert_eq!(round_half_away(x).to_bits(), x.round().to_bits(), "{x:e}");
+            assert_eq!(wrap(x).to_bits(), (x - x.round()).to_bits(), "{x:e}");
+        }
+        assert!(round_half_away(f64::NAN).is_nan());
     }
 }
