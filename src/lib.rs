@@ -21,10 +21,12 @@ pub mod metrics;
 pub mod motion;
 pub mod output;
 pub mod plots;
+pub mod precision;
 pub mod rng;
 pub mod shimmer;
 pub mod snapping;
 pub mod splits;
+pub mod stress;
 
 pub use analysis::{analyze, Analysis, AnalysisOptions, Summary};
 pub use config::Config;
