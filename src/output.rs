@@ -432,7 +432,7 @@ pub fn summary_table(a: &Analysis) -> String {
             (
                 "lookup_error_max",
                 s.lookup_error_max,
-                "S7: largest |s_f32 - s_f64| lookup error (texels)",
+                "S7: largest |s_f32 - s_exact| lookup error (texels)",
             ),
             ("lookup_error_rms", s.lookup_error_rms, "RMS of S7 (texels)"),
         ] {

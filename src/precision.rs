@@ -587,8 +587,9 @@ pub const F32_LIMIT: f64 = 1.2676506002282294e30; // 2^100
 
 /// Why a config cannot run in binary32, or None. Checks the texel sizes of frame 0 and the
 /// largest world coordinate the pipeline handles (camera positions along the path plus the
-/// farthest slice point, and the scene bounds). The check is on absolute coordinates, so it is
-/// conservative for `camera_relative`.
+/// farthest slice point, and the scene bounds) against [`F32_LIMIT`], on absolute coordinates
+/// (conservative for `camera_relative`); then builds every frame's f32 windows in the
+/// configured snap space and refuses one that collapses or is not finite.
 pub fn f32_range_problem(config: &Config) -> Option<String> {
     let rig = Rig::from_config(config)?;
     let poses = crate::motion::camera_path(config).ok()?;
