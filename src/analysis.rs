@@ -7,6 +7,7 @@ use crate::depth_range::{self, DepthRange};
 use crate::geometry::CameraPose;
 use crate::metrics::{self, Aggregates, DensitySample};
 use crate::motion;
+use crate::precision::{self, LookupError, Precision};
 use crate::shimmer::{self, PathResult, ShimmerOptions};
 
 /// Which optional parts to compute. The summary metrics are always computed and never depend
@@ -67,6 +68,11 @@ pub struct Summary {
     pub coverage_violations: u64,
     /// cascades x resolution^2 x 4 bytes (32-bit depth).
     pub memory_bytes: u64,
+    /// S7, static lookup error of the binary32 pipeline against its f64 evaluation, largest
+    /// over the path, cascades and probes (texels; 0 with precision = "f64").
+    pub lookup_error_max: f64,
+    /// RMS of S7 over the same set (texels; 0 with precision = "f64").
+    pub lookup_error_rms: f64,
 }
 
 /// One cascade as built for the configured camera (frame 0).
@@ -87,6 +93,9 @@ pub struct CascadeReport {
     pub min_slack_texels: f64,
     pub max_aliasing: f64,
     pub min_aliasing: f64,
+    /// S7 of this cascade over the path (texels; 0 with precision = "f64").
+    pub lookup_error_max: f64,
+    pub lookup_error_rms: f64,
 }
 
 #[derive(Debug, Clone)]
@@ -99,6 +108,8 @@ pub struct Analysis {
     pub density: Vec<DensitySample>,
     pub snapped: Option<PathResult>,
     pub unsnapped: Option<PathResult>,
+    /// S7 for the configured snap setting, when precision = "f32".
+    pub lookup_error: Option<LookupError>,
     pub summary: Summary,
 }
 
@@ -131,6 +142,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
             density: Vec::new(),
             snapped: None,
             unsnapped: None,
+            lookup_error: None,
             summary: Summary {
                 cascades_needed: false,
                 z_lo: 0.0,
@@ -144,6 +156,8 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
                 size_jitter: 0.0,
                 coverage_violations: 0,
                 memory_bytes: memory,
+                lookup_error_max: 0.0,
+                lookup_error_rms: 0.0,
             },
         };
     };
@@ -174,14 +188,33 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         probe_drift: false,
         frame_rows: opts.frame_rows,
     };
-    // Probes cost more than the rest of a sphere-fit analysis; place them only when used.
-    let probes = if shimmer::needs_probes(&rig, sopts) {
+    // Probes cost more than the rest of a sphere-fit analysis; place them only when used
+    // (the f32 emulation always looks probes up: its drift and lookup error are per probe).
+    let probes = if config.shadow.precision == Precision::F32 || shimmer::needs_probes(&rig, sopts) {
         shimmer::probes(&rig, &pose0, &config.scene, config.analysis.probes)
     } else {
         Vec::new()
     };
-    let (snapped, unsnapped) = shimmer::along_path_both(&rig, &poses, &probes, sopts);
+    // With precision = "f32" every path metric measures the emulated binary32 pipeline.
+    let (snapped, unsnapped, lookup_error) = match config.shadow.precision {
+        Precision::F64 => {
+            let (s, u) = shimmer::along_path_both(&rig, &poses, &probes, sopts);
+            (s, u, None)
+        }
+        Precision::F32 => {
+            let space = config.shadow.snap_space;
+            let s = precision::along_path(&rig, &poses, &probes, space, true, sopts);
+            let u = precision::along_path(&rig, &poses, &probes, space, false, sopts);
+            let lookup = if config.shadow.snap { s.lookup } else { u.lookup };
+            (s.path, u.path, Some(lookup))
+        }
+    };
     let configured = if config.shadow.snap { &snapped } else { &unsnapped };
+    let cascade_lookup = |i: usize| {
+        lookup_error
+            .as_ref()
+            .map_or((0.0, 0.0), |l| (l.cascade_max[i], l.cascade_rms[i]))
+    };
 
     let cascades = windows0
         .iter()
@@ -207,6 +240,8 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
                 min_slack_texels: configured.coverage.min_slack_texels[i],
                 max_aliasing: aggregates.cascade_max_aliasing[i],
                 min_aliasing: aggregates.cascade_min_aliasing[i],
+                lookup_error_max: cascade_lookup(i).0,
+                lookup_error_rms: cascade_lookup(i).1,
             }
         })
         .collect();
@@ -224,6 +259,8 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         size_jitter: snapped.stats.size_jitter.max(unsnapped.stats.size_jitter),
         coverage_violations: configured.coverage.total(),
         memory_bytes: memory,
+        lookup_error_max: lookup_error.as_ref().map_or(0.0, |l| l.max),
+        lookup_error_rms: lookup_error.as_ref().map_or(0.0, |l| l.rms),
     };
     Analysis {
         config: config.clone(),
@@ -234,6 +271,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         density,
         snapped: Some(snapped),
         unsnapped: Some(unsnapped),
+        lookup_error,
         summary,
     }
 }

@@ -10,6 +10,7 @@ use crate::config::Config;
 use crate::error::Result;
 use crate::output::{self, Exporter};
 use crate::plots;
+use crate::precision::{self, Precision};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -31,6 +32,9 @@ pub enum Command {
     Sweep(SweepArgs),
     /// Gate on quality: judge threshold rules and compare with a baseline (exit 1 on failure).
     Check(CheckArgs),
+    /// Run a battery of pathological inputs through validation and analysis, check invariants,
+    /// write stress.csv; exit 1 if an invariant fails.
+    Stress(StressArgs),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -49,6 +53,27 @@ pub struct AnalyzeArgs {
     /// What to print on stdout.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
+    /// Arithmetic of the cascade pipeline, overriding `[shadow] precision`: f64 (exact) or f32
+    /// (an engine's binary32 pipeline, emulated; see `snap_space`).
+    #[arg(long, value_enum)]
+    pub precision: Option<Precision>,
+}
+
+#[derive(Debug, Args)]
+pub struct StressArgs {
+    /// Output directory for stress.csv.
+    #[arg(long, default_value = "reports/stress")]
+    pub out: PathBuf,
+    /// Random cases added to the fixed battery (0..=100000).
+    #[arg(long, default_value_t = 32)]
+    pub cases: u64,
+    /// Seed of the random cases (same seed, same cases, same file).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Also fail a case whose f32 drift (texels per frame, either snap space) exceeds this.
+    /// By default f32 residuals are reported, not judged.
+    #[arg(long, value_name = "TEXELS", allow_negative_numbers = true)]
+    pub max_f32_drift: Option<f64>,
 }
 
 #[derive(Debug, Args)]
@@ -133,6 +158,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
         Command::Analyze(args) => run_analyze(&args),
         Command::Sweep(args) => run_sweep(&args),
         Command::Check(args) => crate::check::run_check(&args),
+        Command::Stress(args) => run_stress(&args),
     }
 }
 
@@ -150,7 +176,15 @@ pub fn analyze_exporters() -> Vec<&'static dyn Exporter<crate::analysis::Analysi
 }
 
 fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
-    let config = Config::load(&args.config)?;
+    let mut config = Config::load(&args.config)?;
+    if let Some(p) = args.precision {
+        config.shadow.precision = p;
+        if p == Precision::F32 {
+            if let Some(why) = precision::f32_range_problem(&config) {
+                return Err(crate::error::Error::flag("--precision", "f32", why));
+            }
+        }
+    }
     let analysis = analyze(&config, &AnalysisOptions::full());
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&config));
     let written = output::export_all(&dir, &analysis, &analyze_exporters())?;
@@ -227,4 +261,40 @@ fn run_sweep(args: &SweepArgs) -> Result<Outcome> {
         }
     }
     Ok(Outcome::Success)
+}
+
+fn run_stress(args: &StressArgs) -> Result<Outcome> {
+    use crate::error::Error;
+    use crate::stress;
+    if args.cases > 100_000 {
+        return Err(Error::flag(
+            "--cases",
+            &args.cases.to_string(),
+            "at most 100000 random cases",
+        ));
+    }
+    if let Some(limit) = args.max_f32_drift {
+        if !(limit.is_finite() && limit >= 0.0) {
+            return Err(Error::flag(
+                "--max-f32-drift",
+                &limit.to_string(),
+                "a finite number of texels >= 0",
+            ));
+        }
+    }
+    let mut cases = stress::battery();
+    cases.extend(stress::random_cases(args.cases as usize, args.seed));
+    let opts = stress::StressOptions {
+        max_f32_drift: args.max_f32_drift,
+    };
+    let results = stress::run(&cases, &opts);
+    let bytes = stress::csv(&results)?;
+    output::write_files(&args.out, &[("stress.csv", bytes)])?;
+    print!("{}", stress::table(&results));
+    println!("wrote {}", args.out.join("stress.csv").display());
+    Ok(if results.iter().all(|r| r.pass()) {
+        Outcome::Success
+    } else {
+        Outcome::ThresholdViolated
+    })
 }

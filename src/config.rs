@@ -12,6 +12,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, CameraPose};
+use crate::precision::{Precision, SnapSpace};
 
 /// Largest world coordinate or distance accepted, in world units: far beyond any real world
 /// (engines re-centre long before), and small enough that every derived quantity (texel
@@ -104,6 +105,12 @@ pub struct ShadowSettings {
     pub snap: bool,
     /// Clip the split range to where the scene's bounds are visible; skips empty depth.
     pub fit_depth_to_scene: bool,
+    /// Arithmetic of the cascade pipeline: exact f64, or an engine's binary32 emulated
+    /// operation by operation (see [`crate::precision`]).
+    pub precision: Precision,
+    /// Where the binary32 pipeline computes: at absolute world coordinates, or relative to a
+    /// camera-near anchor. Only matters with `precision = "f32"`.
+    pub snap_space: SnapSpace,
 }
 
 /// Which way the camera moves along the shimmer path, one pose per frame.
@@ -185,6 +192,9 @@ pub struct Config {
     pub light_direction_as_written: DVec3,
     /// World-space bounds of everything that casts or receives shadows.
     pub scene: Aabb,
+    /// `[scene] world_offset`: already added to the camera, target, scene bounds and path-file
+    /// poses above; kept for the echo.
+    pub world_offset: DVec3,
     pub shadow: ShadowSettings,
     pub motion: MotionSettings,
     pub analysis: AnalysisSettings,
@@ -241,6 +251,7 @@ struct RawLight {
 struct RawScene {
     min: [f64; 3],
     max: [f64; 3],
+    world_offset: Option<[f64; 3]>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -253,6 +264,8 @@ struct RawShadow {
     fit: Option<Fit>,
     snap: Option<bool>,
     fit_depth_to_scene: Option<bool>,
+    precision: Option<String>,
+    snap_space: Option<String>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -431,7 +444,7 @@ impl Config {
                 "direction": self.light_direction_as_written,
                 "direction_normalised": self.light_direction,
             },
-            "scene": { "min": self.scene.min, "max": self.scene.max },
+            "scene": { "min": self.scene.min, "max": self.scene.max, "world_offset": self.world_offset },
             "shadow": self.shadow,
             "motion": motion,
             "analysis": self.analysis,
@@ -452,9 +465,29 @@ fn p_display(path: &MotionPath) -> String {
 }
 
 fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Result<Config> {
+    // The world offset moves everything that has a position, before any other check, so the
+    // rest of the crate only ever sees the moved scene.
+    let world_offset = match raw.scene.world_offset {
+        Some(o) => v.point("scene.world_offset", o)?,
+        None => DVec3::ZERO,
+    };
+
+    let moved = |key: &str, p: [f64; 3]| -> Result<DVec3> {
+        let q = v.point(key, p)? + world_offset;
+        if q.abs().max_element() <= MAX_WORLD {
+            Ok(q)
+        } else {
+            Err(v.invalid(
+                "scene.world_offset",
+                format!("{:?}", world_offset.to_array()),
+                &format!("an offset that keeps {key} within ±1e9 world units ({p:?} + offset)"),
+            ))
+        }
+    };
+
     // Camera.
-    let position = v.point("camera.position", raw.camera.position)?;
-    let target = v.point("camera.target", raw.camera.target)?;
+    let position = moved("camera.position", raw.camera.position)?;
+    let target = moved("camera.target", raw.camera.target)?;
     let up = match raw.camera.up {
         Some(u) => v.vec3("camera.up", u)?,
         None => DVec3::Y,
@@ -464,7 +497,12 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         return Err(v.invalid(
             "camera.target",
             format!("{:?}", raw.camera.target),
-            "a point different from camera.position (the view direction is target - position)",
+            if world_offset == DVec3::ZERO {
+                "a point different from camera.position (the view direction is target - position)"
+            } else {
+                "a point different from camera.position once scene.world_offset is added (at this offset \
+                 the two round to the same point)"
+            },
         ));
     }
     if up.length() <= 1e-300 {
@@ -531,8 +569,8 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let light_direction = dir_raw / len;
 
     // Scene.
-    let smin = v.point("scene.min", raw.scene.min)?;
-    let smax = v.point("scene.max", raw.scene.max)?;
+    let smin = moved("scene.min", raw.scene.min)?;
+    let smax = moved("scene.max", raw.scene.max)?;
     if smin.cmpgt(smax).any() {
         return Err(v.invalid(
             "scene.max",
@@ -562,6 +600,21 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         return Err(v.invalid("shadow.lambda", lambda, "a number in [0, 1] (0 uniform, 1 logarithmic)"));
     }
     let resolution = v.int_range("shadow.resolution", s.resolution.unwrap_or(2048), 16, 16384)? as u32;
+    let precision = match s.precision.as_deref() {
+        None => Precision::F64,
+        Some(name) => Precision::from_name(name)
+            .ok_or_else(|| v.invalid("shadow.precision", format!("{name:?}"), "one of \"f64\", \"f32\""))?,
+    };
+    let snap_space = match s.snap_space.as_deref() {
+        None => SnapSpace::World,
+        Some(name) => SnapSpace::from_name(name).ok_or_else(|| {
+            v.invalid(
+                "shadow.snap_space",
+                format!("{name:?}"),
+                "one of \"world\", \"camera_relative\"",
+            )
+        })?,
+    };
     let shadow = ShadowSettings {
         max_distance,
         cascades,
@@ -570,6 +623,8 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         fit: s.fit.unwrap_or(Fit::Sphere),
         snap: s.snap.unwrap_or(true),
         fit_depth_to_scene: s.fit_depth_to_scene.unwrap_or(true),
+        precision,
+        snap_space,
     };
 
     // Motion.
@@ -596,7 +651,10 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
                 Some(dir) if p.is_relative() => dir.join(p),
                 _ => p,
             };
-            let poses = crate::motion::read_path_file(&p)?;
+            let poses = crate::motion::read_path_file(&p)?
+                .into_iter()
+                .map(|(position, target)| (position + world_offset, target + world_offset))
+                .collect();
             (MotionPath::File { path: p, poses }, 0.0)
         }
         other => {
@@ -660,6 +718,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         light_direction,
         light_direction_as_written: dir_raw,
         scene: Aabb::new(smin, smax),
+        world_offset,
         shadow,
         motion: MotionSettings {
             path,
@@ -683,5 +742,11 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             &format!("a motion that keeps a valid camera in every frame: {why}"),
         )
     })?;
+    // binary32 must be able to hold every texel coordinate the emulated pipeline computes.
+    if config.shadow.precision == Precision::F32 {
+        if let Some(why) = crate::precision::f32_range_problem(&config) {
+            return Err(v.invalid("shadow.precision", "\"f32\"", &why));
+        }
+    }
     Ok(config)
 }

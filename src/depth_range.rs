@@ -36,6 +36,11 @@ pub fn receiver_range(
     scene: &Aabb,
     fit_to_scene: bool,
 ) -> DepthRange {
+    // A shadow distance at or below the near plane leaves nothing to split, with or without
+    // scene clipping (unclipped, it used to give a decreasing range).
+    if shadow_far <= near {
+        return DepthRange::Empty;
+    }
     if !fit_to_scene {
         // The same "thinner than a relative 1e-9" rule as below: a shadow distance at (or
         // before) the near plane leaves nothing to split.
@@ -163,5 +168,24 @@ mod tests {
         // Beyond the shadow distance is empty too.
         let far = Aabb::new(DVec3::new(-1.0, -1.0, -300.0), DVec3::new(1.0, 1.0, -200.0));
         assert_eq!(receiver_range(&pose, &lens, 0.1, 150.0, &far, true), DepthRange::Empty);
+    }
+
+    /// Regression (found by `csm-lab stress`): a shadow distance below the near plane without
+    /// scene clipping gave the range [near, shadow_far] backwards, and the analysis panicked.
+    #[test]
+    fn a_shadow_distance_below_the_near_plane_needs_no_cascades_with_or_without_clipping() {
+        let lens = Lens::new(1.0, 1.5);
+        let pose = CameraPose::look_at(DVec3::ZERO, DVec3::NEG_Z, DVec3::Y).unwrap();
+        let scene = Aabb::new(DVec3::splat(-100.0), DVec3::splat(100.0));
+        for fit in [false, true] {
+            for shadow_far in [0.05, 0.1] {
+                assert_eq!(
+                    receiver_range(&pose, &lens, 0.1, shadow_far, &scene, fit),
+                    DepthRange::Empty,
+                    "{fit} {shadow_far}"
+                );
+            }
+            assert!(receiver_range(&pose, &lens, 0.1, 0.2, &scene, fit).bounds().is_some());
+        }
     }
 }

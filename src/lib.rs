@@ -22,11 +22,13 @@ pub mod metrics;
 pub mod motion;
 pub mod output;
 pub mod plots;
+pub mod precision;
 pub mod report;
 pub mod rng;
 pub mod shimmer;
 pub mod snapping;
 pub mod splits;
+pub mod stress;
 pub mod sweep;
 
 pub use analysis::{analyze, Analysis, AnalysisOptions, Summary};

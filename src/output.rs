@@ -131,7 +131,7 @@ pub struct DensityCsv;
 pub struct ShimmerCsv;
 pub struct SummaryJson;
 
-pub const CASCADES_COLUMNS: [&str; 14] = [
+pub const CASCADES_COLUMNS: [&str; 16] = [
     "cascade",
     "near",
     "far",
@@ -146,6 +146,8 @@ pub const CASCADES_COLUMNS: [&str; 14] = [
     "min_slack_texels",
     "max_aliasing",
     "min_aliasing",
+    "lookup_error_max",
+    "lookup_error_rms",
 ];
 
 impl Exporter<Analysis> for CascadesCsv {
@@ -173,6 +175,8 @@ impl Exporter<Analysis> for CascadesCsv {
                     num("min_slack_texels", c.min_slack_texels)?,
                     num("max_aliasing", c.max_aliasing)?,
                     num("min_aliasing", c.min_aliasing)?,
+                    num("lookup_error_max", c.lookup_error_max)?,
+                    num("lookup_error_rms", c.lookup_error_rms)?,
                 ])
             })
             .collect::<Result<Vec<_>>>()?;
@@ -420,6 +424,23 @@ pub fn summary_table(a: &Analysis) -> String {
     ];
     for (k, v, what) in rows {
         let _ = writeln!(out, "  {k:<22} {v:>12}  {what}");
+    }
+    if c.shadow.precision == crate::precision::Precision::F32 {
+        let _ = writeln!(
+            out,
+            "  precision f32, snap_space {}: shimmer, size jitter and coverage above measure the emulated binary32 pipeline",
+            c.shadow.snap_space
+        );
+        for (k, v, what) in [
+            (
+                "lookup_error_max",
+                s.lookup_error_max,
+                "S7: largest |s_f32 - s_exact| lookup error (texels)",
+            ),
+            ("lookup_error_rms", s.lookup_error_rms, "RMS of S7 (texels)"),
+        ] {
+            let _ = writeln!(out, "  {k:<22} {:>12}  {what}", format!("{v:.3e}"));
+        }
     }
     out
 }

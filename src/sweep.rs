@@ -744,6 +744,8 @@ mod tests {
                 size_jitter: 0.0,
                 coverage_violations: 0,
                 memory_bytes: memory,
+                lookup_error_max: 0.0,
+                lookup_error_rms: 0.0,
             },
         }
     }

@@ -6,7 +6,8 @@
 //! - **per-depth** metrics: functions of view depth (`aliasing`, `texels_per_pixel`), limited
 //!   over a depth range and evaluated exactly by [`super::depth`].
 //!
-//! `max_aliasing` and `coverage_violations` exist both as summary and as per-cascade metrics;
+//! `max_aliasing`, `coverage_violations`, `lookup_error_max` and `lookup_error_rms` exist both as
+//! summary and as per-cascade metrics;
 //! a rule picks the per-cascade one only when it says `cascade = ...`.
 //!
 //! The "worse" direction is what a baseline comparison uses to call a change a regression or
@@ -61,11 +62,13 @@ pub enum SummaryMetric {
     SizeJitter,
     CoverageViolations,
     MemoryBytes,
+    LookupErrorMax,
+    LookupErrorRms,
 }
 
 impl SummaryMetric {
     /// In the order of the fields of [`Summary`] (and of `summary.json`'s flat keys).
-    pub const ALL: [SummaryMetric; 12] = [
+    pub const ALL: [SummaryMetric; 14] = [
         SummaryMetric::CascadesNeeded,
         SummaryMetric::ZLo,
         SummaryMetric::ZHi,
@@ -78,6 +81,8 @@ impl SummaryMetric {
         SummaryMetric::SizeJitter,
         SummaryMetric::CoverageViolations,
         SummaryMetric::MemoryBytes,
+        SummaryMetric::LookupErrorMax,
+        SummaryMetric::LookupErrorRms,
     ];
 
     pub fn name(self) -> &'static str {
@@ -94,6 +99,8 @@ impl SummaryMetric {
             SummaryMetric::SizeJitter => "size_jitter",
             SummaryMetric::CoverageViolations => "coverage_violations",
             SummaryMetric::MemoryBytes => "memory_bytes",
+            SummaryMetric::LookupErrorMax => "lookup_error_max",
+            SummaryMetric::LookupErrorRms => "lookup_error_rms",
         }
     }
 
@@ -125,6 +132,8 @@ impl SummaryMetric {
             SummaryMetric::SizeJitter => "largest relative texel-size change between frames",
             SummaryMetric::CoverageViolations => "slice corners outside their window, all cascades and frames",
             SummaryMetric::MemoryBytes => "cascades x resolution^2 x 4 bytes",
+            SummaryMetric::LookupErrorMax => "largest static f32 lookup error S7 (texels; 0 in f64)",
+            SummaryMetric::LookupErrorRms => "RMS static f32 lookup error S7 (texels; 0 in f64)",
         }
     }
 
@@ -143,6 +152,8 @@ impl SummaryMetric {
             SummaryMetric::SizeJitter => s.size_jitter,
             SummaryMetric::CoverageViolations => s.coverage_violations as f64,
             SummaryMetric::MemoryBytes => s.memory_bytes as f64,
+            SummaryMetric::LookupErrorMax => s.lookup_error_max,
+            SummaryMetric::LookupErrorRms => s.lookup_error_rms,
         }
     }
 }
@@ -168,11 +179,13 @@ pub enum CascadeMetric {
     MinSlackTexels,
     MaxAliasing,
     MinAliasing,
+    LookupErrorMax,
+    LookupErrorRms,
 }
 
 impl CascadeMetric {
     /// In the order of the fields of [`CascadeReport`] (and of `cascades.csv`).
-    pub const ALL: [CascadeMetric; 13] = [
+    pub const ALL: [CascadeMetric; 15] = [
         CascadeMetric::Near,
         CascadeMetric::Far,
         CascadeMetric::Radius,
@@ -186,6 +199,8 @@ impl CascadeMetric {
         CascadeMetric::MinSlackTexels,
         CascadeMetric::MaxAliasing,
         CascadeMetric::MinAliasing,
+        CascadeMetric::LookupErrorMax,
+        CascadeMetric::LookupErrorRms,
     ];
 
     pub fn name(self) -> &'static str {
@@ -203,6 +218,8 @@ impl CascadeMetric {
             CascadeMetric::MinSlackTexels => "min_slack_texels",
             CascadeMetric::MaxAliasing => "max_aliasing",
             CascadeMetric::MinAliasing => "min_aliasing",
+            CascadeMetric::LookupErrorMax => "lookup_error_max",
+            CascadeMetric::LookupErrorRms => "lookup_error_rms",
         }
     }
 
@@ -236,6 +253,8 @@ impl CascadeMetric {
             CascadeMetric::MinSlackTexels => "smallest margin between a slice corner and the window edge (texels)",
             CascadeMetric::MaxAliasing => "aliasing ratio at the cascade's near edge",
             CascadeMetric::MinAliasing => "aliasing ratio at the cascade's far edge",
+            CascadeMetric::LookupErrorMax => "largest static f32 lookup error S7 in this cascade (texels)",
+            CascadeMetric::LookupErrorRms => "RMS static f32 lookup error S7 in this cascade (texels)",
         }
     }
 
@@ -254,6 +273,8 @@ impl CascadeMetric {
             CascadeMetric::MinSlackTexels => c.min_slack_texels,
             CascadeMetric::MaxAliasing => c.max_aliasing,
             CascadeMetric::MinAliasing => c.min_aliasing,
+            CascadeMetric::LookupErrorMax => c.lookup_error_max,
+            CascadeMetric::LookupErrorRms => c.lookup_error_rms,
         }
     }
 }
@@ -390,6 +411,8 @@ mod tests {
             size_jitter: 8.0,
             coverage_violations: 9,
             memory_bytes: 10,
+            lookup_error_max: 11.0,
+            lookup_error_rms: 12.0,
         };
         let json = serde_json::to_value(&s).unwrap();
         let keys: Vec<&str> = json.as_object().unwrap().keys().map(|k| k.as_str()).collect();
@@ -422,6 +445,8 @@ mod tests {
             min_slack_texels: 11.0,
             max_aliasing: 12.0,
             min_aliasing: 13.0,
+            lookup_error_max: 14.0,
+            lookup_error_rms: 15.0,
         };
         let json = serde_json::to_value(&c).unwrap();
         let obj = json.as_object().unwrap();
@@ -447,7 +472,9 @@ mod tests {
         dedup.sort_unstable();
         dedup.dedup();
         assert_eq!(dedup.len(), names.len());
-        assert_eq!(names.len(), 12 + 13 - 2 + 2);
+        // Four names are both summary and per-cascade metrics (max_aliasing,
+        // coverage_violations, lookup_error_max, lookup_error_rms).
+        assert_eq!(names.len(), 14 + 15 - 4 + 2);
     }
 
     #[test]

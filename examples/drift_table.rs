@@ -1,0 +1,12 @@
+//! Prints the drift-against-world-offset table of `docs/accuracy.md` (Markdown).
+//! Run: `cargo run --release --example drift_table`.
+
+fn main() {
+    match csm_lab::precision::drift_table() {
+        Ok(rows) => print!("{}", csm_lab::precision::drift_table_markdown(&rows)),
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(2);
+        }
+    }
+}
