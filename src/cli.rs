@@ -27,6 +27,8 @@ pub struct Cli {
 pub enum Command {
     /// Build the cascades of one scene and shadow setting, measure them, write CSV/JSON/SVG.
     Analyze(AnalyzeArgs),
+    /// Time against error of every sampled metric; writes bench.csv and bench.svg.
+    Bench(BenchArgs),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -45,6 +47,19 @@ pub struct AnalyzeArgs {
     /// What to print on stdout.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Output directory [default: reports/bench/].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Scene to measure [default: the built-in configs/default.toml].
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Timed repetitions per point; the best is kept (1..=1000).
+    #[arg(long, default_value_t = 5)]
+    pub repeats: u32,
 }
 
 /// How a successful run ended.
@@ -73,6 +88,7 @@ pub fn default_out_dir(config: &Config) -> PathBuf {
 pub fn run(cli: Cli) -> Result<Outcome> {
     match cli.command {
         Command::Analyze(args) => run_analyze(&args),
+        Command::Bench(args) => run_bench(&args),
     }
 }
 
@@ -105,5 +121,33 @@ fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
             eprintln!("wrote {} files to {}", written.len(), dir.display());
         }
     }
+    Ok(Outcome::Success)
+}
+
+/// The scene `bench` measures when no `--config` is given.
+pub const DEFAULT_SCENE: &str = include_str!("../configs/default.toml");
+
+fn run_bench(args: &BenchArgs) -> Result<Outcome> {
+    if !(1..=1000).contains(&args.repeats) {
+        return Err(crate::error::Error::flag(
+            "--repeats",
+            &args.repeats.to_string(),
+            "allowed: an integer in 1..=1000",
+        ));
+    }
+    let config = match &args.config {
+        Some(path) => Config::load(path)?,
+        None => {
+            let mut c = Config::from_toml_str(DEFAULT_SCENE, "configs/default.toml (built in)", None)?;
+            c.name = "default".to_string();
+            c
+        }
+    };
+    let report = crate::bench::run(&config, args.repeats as usize)?;
+    let dir = args.out.clone().unwrap_or_else(|| Path::new("reports").join("bench"));
+    let exporters: [&dyn Exporter<crate::bench::BenchReport>; 2] = [&crate::bench::BenchCsv, &crate::bench::BenchSvg];
+    let written = output::export_all(&dir, &report, &exporters)?;
+    print!("{}", report.table());
+    println!("wrote {} files to {}", written.len(), dir.display());
     Ok(Outcome::Success)
 }
