@@ -35,6 +35,8 @@ pub enum Command {
     /// Run a battery of pathological inputs through validation and analysis, check invariants,
     /// write stress.csv; exit 1 if an invariant fails.
     Stress(StressArgs),
+    /// Time against error of every sampled metric; writes bench.csv and bench.svg.
+    Bench(BenchArgs),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -130,6 +132,19 @@ pub struct CheckArgs {
     pub format: Format,
 }
 
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Output directory [default: reports/bench/].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Scene to measure [default: the built-in configs/default.toml].
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Timed repetitions per point; the best is kept (1..=1000).
+    #[arg(long, default_value_t = 5)]
+    pub repeats: u32,
+}
+
 /// How a successful run ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Outcome {
@@ -159,6 +174,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
         Command::Sweep(args) => run_sweep(&args),
         Command::Check(args) => crate::check::run_check(&args),
         Command::Stress(args) => run_stress(&args),
+        Command::Bench(args) => run_bench(&args),
     }
 }
 
@@ -297,4 +313,32 @@ fn run_stress(args: &StressArgs) -> Result<Outcome> {
     } else {
         Outcome::ThresholdViolated
     })
+}
+
+/// The scene `bench` measures when no `--config` is given.
+pub const DEFAULT_SCENE: &str = include_str!("../configs/default.toml");
+
+fn run_bench(args: &BenchArgs) -> Result<Outcome> {
+    if !(1..=1000).contains(&args.repeats) {
+        return Err(crate::error::Error::flag(
+            "--repeats",
+            &args.repeats.to_string(),
+            "allowed: an integer in 1..=1000",
+        ));
+    }
+    let config = match &args.config {
+        Some(path) => Config::load(path)?,
+        None => {
+            let mut c = Config::from_toml_str(DEFAULT_SCENE, "configs/default.toml (built in)", None)?;
+            c.name = "default".to_string();
+            c
+        }
+    };
+    let report = crate::bench::run(&config, args.repeats as usize)?;
+    let dir = args.out.clone().unwrap_or_else(|| Path::new("reports").join("bench"));
+    let exporters: [&dyn Exporter<crate::bench::BenchReport>; 2] = [&crate::bench::BenchCsv, &crate::bench::BenchSvg];
+    let written = output::export_all(&dir, &report, &exporters)?;
+    print!("{}", report.table());
+    println!("wrote {} files to {}", written.len(), dir.display());
+    Ok(Outcome::Success)
 }

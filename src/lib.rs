@@ -10,6 +10,7 @@
 //! [`snapping`]) → [`metrics`], [`shimmer`] → [`analysis`] → [`output`], [`plots`].
 
 pub mod analysis;
+pub mod bench;
 pub mod cascades;
 pub mod check;
 pub mod cli;
