@@ -100,6 +100,8 @@ pub struct Analysis {
     pub snapped: Option<PathResult>,
     pub unsnapped: Option<PathResult>,
     pub summary: Summary,
+    /// The preset's split/fit/snap rules, selection and light-depth findings (None without a preset).
+    pub preset: Option<crate::presets::PresetReport>,
 }
 
 impl Analysis {
@@ -119,9 +121,21 @@ pub fn memory_bytes(cascades: usize, resolution: u32) -> u64 {
 
 /// Runs the analysis of one validated config.
 pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
-    let range = depth_range::for_config(config);
-    let memory = memory_bytes(config.shadow.cascades, config.shadow.resolution);
-    let Some(rig) = Rig::from_config(config) else {
+    let rig = Rig::from_config(config);
+    // A preset has its own range (no scene clipping): the view depths that read its cascades.
+    let range = match (&config.shadow.preset, &rig) {
+        (None, _) => depth_range::for_config(config),
+        (Some(_), Some(r)) => DepthRange::Range {
+            z_lo: r.splits[0],
+            z_hi: r.splits[r.cascade_count()],
+        },
+        (Some(_), None) => DepthRange::Empty,
+    };
+    let memory = match &rig {
+        Some(r) => memory_bytes(r.cascade_count(), r.resolution),
+        None => memory_bytes(config.shadow.cascades, config.shadow.resolution),
+    };
+    let Some(rig) = rig else {
         return Analysis {
             config: config.clone(),
             range,
@@ -145,6 +159,11 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
                 coverage_violations: 0,
                 memory_bytes: memory,
             },
+            preset: config
+                .shadow
+                .preset
+                .as_ref()
+                .map(|p| crate::presets::report(p, None, Vec::new())),
         };
     };
     let (z_lo, z_hi) = range.bounds().expect("a rig implies a range");
@@ -179,14 +198,21 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
     let unsnapped = shimmer::along_path(&rig, &poses, &probes, false, sopts);
     let configured = if config.shadow.snap { &snapped } else { &unsnapped };
 
+    // Light depth ranges: always for a preset (its report needs them), else when asked for.
+    let depths = (opts.light_depth || config.shadow.preset.is_some()).then(|| {
+        windows0
+            .iter()
+            .enumerate()
+            .map(|(i, w)| rig.light_depth(i, &lp0, w, &config.scene))
+            .collect::<Vec<_>>()
+    });
     let cascades = windows0
         .iter()
         .enumerate()
         .map(|(i, w)| {
-            let (light_near, light_far) = if opts.light_depth {
-                rig.light_depth_range(i, &pose0, w, &config.scene)
-            } else {
-                (0.0, 0.0)
+            let (light_near, light_far) = match (&depths, opts.light_depth) {
+                (Some(d), true) => (d[i].near, d[i].far),
+                _ => (0.0, 0.0),
             };
             CascadeReport {
                 cascade: i,
@@ -221,9 +247,15 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         coverage_violations: configured.coverage.total(),
         memory_bytes: memory,
     };
+    let preset = config
+        .shadow
+        .preset
+        .as_ref()
+        .map(|p| crate::presets::report(p, Some(&rig), depths.unwrap_or_default()));
     Analysis {
         config: config.clone(),
         range,
+        preset,
         rig: Some(rig),
         cascades,
         aggregates: Some(aggregates),

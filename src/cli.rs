@@ -27,6 +27,8 @@ pub struct Cli {
 pub enum Command {
     /// Build the cascades of one scene and shadow setting, measure them, write CSV/JSON/SVG.
     Analyze(AnalyzeArgs),
+    /// Run several engine presets on one scene and compare them (CSV, plots, HTML, Markdown).
+    Compare(CompareArgs),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -45,6 +47,25 @@ pub struct AnalyzeArgs {
     /// What to print on stdout.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
+    /// Reproduce an engine's cascades instead of csm-lab's own (overrides shadow.preset):
+    /// dart, threejs, unity-sample, eevee, learnopengl, bevy, godot, unreal, unity, unity-urp, filament.
+    #[arg(long)]
+    pub preset: Option<String>,
+}
+
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// Scene file (TOML); its camera, screen, light, scene and motion are shared by every preset.
+    pub config: PathBuf,
+    /// Comma-separated presets to compare [default: all].
+    #[arg(long)]
+    pub presets: Option<String>,
+    /// Every preset at its own defaults: ignore [shadow] cascades, resolution and max_distance.
+    #[arg(long)]
+    pub defaults: bool,
+    /// Output directory [default: reports/<config name>/].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 /// How a successful run ended.
@@ -73,6 +94,7 @@ pub fn default_out_dir(config: &Config) -> PathBuf {
 pub fn run(cli: Cli) -> Result<Outcome> {
     match cli.command {
         Command::Analyze(args) => run_analyze(&args),
+        Command::Compare(args) => run_compare(&args),
     }
 }
 
@@ -90,7 +112,15 @@ pub fn analyze_exporters() -> Vec<&'static dyn Exporter<crate::analysis::Analysi
 }
 
 fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
-    let config = Config::load(&args.config)?;
+    let choice = crate::presets::PresetChoice {
+        name: args
+            .preset
+            .as_deref()
+            .map(|s| crate::presets::parse_flag("--preset", s))
+            .transpose()?,
+        ..Default::default()
+    };
+    let config = Config::load_with_preset(&args.config, &choice)?;
     let analysis = analyze(&config, &AnalysisOptions::full());
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&config));
     let written = output::export_all(&dir, &analysis, &analyze_exporters())?;
@@ -105,5 +135,21 @@ fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
             eprintln!("wrote {} files to {}", written.len(), dir.display());
         }
     }
+    Ok(Outcome::Success)
+}
+
+fn run_compare(args: &CompareArgs) -> Result<Outcome> {
+    let presets = match &args.presets {
+        Some(list) => crate::presets::parse_list("--presets", list)?,
+        None => crate::presets::PresetName::ALL.to_vec(),
+    };
+    let comparison = crate::compare::run(&args.config, &presets, args.defaults)?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out_dir(&comparison.analyses[0].config));
+    let written = output::export_all(&dir, &comparison, &crate::compare::exporters())?;
+    print!("{}", crate::compare::summary_table(&comparison));
+    println!("wrote {} files to {}", written.len(), dir.display());
     Ok(Outcome::Success)
 }

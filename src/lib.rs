@@ -12,6 +12,7 @@
 pub mod analysis;
 pub mod cascades;
 pub mod cli;
+pub mod compare;
 pub mod config;
 pub mod depth_range;
 pub mod error;
@@ -21,6 +22,7 @@ pub mod metrics;
 pub mod motion;
 pub mod output;
 pub mod plots;
+pub mod presets;
 pub mod rng;
 pub mod shimmer;
 pub mod snapping;

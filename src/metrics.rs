@@ -43,7 +43,10 @@ pub fn aggregates(splits: &[f64], texel: &[f64], k: f64) -> Aggregates {
         let kt = k * texel[i];
         cmax.push(kt / a);
         cmin.push(kt / b);
-        max_aliasing = max_aliasing.max(kt / a);
+        // An empty selection interval (an engine cascade no visible depth reads) has no worst point.
+        if b > a {
+            max_aliasing = max_aliasing.max(kt / a);
+        }
         sum_z += kt * (b / a).ln();
         sum_log += kt * (1.0 / a - 1.0 / b);
         // a(d) > 1 exactly for d < K T_i.
@@ -112,8 +115,13 @@ pub fn density_profile(
         })
         .collect();
     for (i, &c) in splits.iter().enumerate().take(m).skip(1) {
-        out.push(sample(c, i - 1));
-        out.push(sample(c, i));
+        // Both sides of each split, skipping cascades whose interval is empty.
+        if splits[i - 1] < c {
+            out.push(sample(c, i - 1));
+        }
+        if c < splits[i + 1] {
+            out.push(sample(c, i));
+        }
     }
     out.sort_by(|a, b| a.depth.total_cmp(&b.depth).then(a.cascade.cmp(&b.cascade)));
     out.dedup_by(|a, b| a.depth == b.depth && a.cascade == b.cascade);

@@ -12,18 +12,22 @@
 //!   light axis, i.e. the probe now reads a different texel. Under a uniform sub-texel shift
 //!   `(dx, dy)` this is about `|dx| + |dy| - |dx||dy|`.
 //!
-//! **Closed form.** The light basis is fixed, so when `T_t == T_{t-1}` the grid only translates:
-//! every point drifts by the same `d = w(o_{t-1} - o_t)` (window origins in texels), whatever
-//! the camera did. S3 is then computed from the two window origins alone, without probes; only
+//! **Closed form.** When the light basis is fixed (csm-lab's fits, most presets) and
+//! `T_t == T_{t-1}`, the grid only translates: every point drifts by the same
+//! `d = w(o_{t-1} - o_t)` (window origins in texels), whatever the camera did. S3 is then computed from the two window origins alone, without probes; only
 //! a size change needs the per-probe evaluation. Windows keep their origin in texel units, so
 //! snapped origins are exact integers and the snapped drift is exactly zero, even far from the
 //! world origin.
+//!
+//! **Moving bases.** A few engine presets derive the light basis from the camera (Filament's
+//! look-to with the camera's right axis, seed 004's look-at from a light position). Then the
+//! grid rotates between frames and every probe is read through each frame's own basis.
 
 use glam::{DVec2, DVec3};
 
 use crate::cascades::{LightPose, Rig};
 use crate::fitting::Window;
-use crate::geometry::{Aabb, CameraPose};
+use crate::geometry::{Aabb, CameraPose, LightBasis};
 use crate::rng::halton;
 
 /// `x - round(x)`, in [-0.5, 0.5].
@@ -95,8 +99,14 @@ pub fn probes(rig: &Rig, pose0: &CameraPose, scene: &Aabb, per_cascade: usize) -
         .iter()
         .enumerate()
         .map(|(i, s)| {
+            // Probes go where the cascade is read: its selection interval (the fitted slice
+            // when the selection is empty; the two are equal in csm-lab's own pipeline).
+            let (near, far) = match rig.selection(i) {
+                (a, b) if b > a => (a, b),
+                _ => (s.near, s.far),
+            };
             let point = |j: u64| {
-                let z = s.near + (s.far - s.near) * halton(j, 2);
+                let z = near + (far - near) * halton(j, 2);
                 let sx = (2.0 * halton(j, 3) - 1.0) * lens.tan_h;
                 let sy = (2.0 * halton(j, 5) - 1.0) * lens.tan_v;
                 pose0.point(sx, sy, z)
@@ -136,11 +146,17 @@ pub fn along_path(
     opts: ShimmerOptions,
 ) -> PathResult {
     let m = rig.cascade_count();
-    let probe_xy: Vec<Vec<DVec2>> = probes
-        .iter()
-        .map(|ps| ps.iter().map(|p| rig.light.to_light_xy(*p)).collect())
-        .collect();
-    let mut prev: Vec<Option<Window>> = vec![None; m];
+    // With a fixed basis a static probe has the same light-space x/y in every frame.
+    let fixed = rig.fixed_basis();
+    let probe_xy: Vec<Vec<DVec2>> = if fixed {
+        probes
+            .iter()
+            .map(|ps| ps.iter().map(|p| rig.light.to_light_xy(*p)).collect())
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let mut prev: Vec<Option<(Window, LightBasis)>> = vec![None; m];
     let mut coverage = Coverage {
         violations: vec![0; m],
         worst_texels: vec![0.0; m],
@@ -156,26 +172,16 @@ pub fn along_path(
         let lp = LightPose::new(&rig.light, pose);
         for i in 0..m {
             let w = rig.window(i, &lp, snapped);
-            // Coverage: the slice and the window are convex, so the slice's light-space
-            // footprint is the hull of its corners; checking the 8 corners is exact.
-            let slice = &rig.slices[i];
-            let n = rig.resolution as f64;
-            for c in lp.corners(&rig.lens, slice.near, slice.far) {
-                let s = w.texel_coords(c);
-                let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
-                coverage.min_slack_texels[i] = coverage.min_slack_texels[i].min(slack);
-                // Rounding tolerance: a few ulps of the texel coordinate's magnitude.
-                let tol = 1e-9 + 8.0 * f64::EPSILON * (c / w.texel).abs().max_element();
-                if -slack > tol {
-                    coverage.violations[i] += 1;
-                    coverage.worst_texels[i] = coverage.worst_texels[i].max(-slack);
-                }
-            }
-            if let Some(p) = prev[i] {
+            let basis = if fixed { rig.light } else { rig.basis(i, &lp) };
+            let cov = rig.coverage(i, &lp, &w);
+            coverage.violations[i] += cov.violations;
+            coverage.worst_texels[i] = coverage.worst_texels[i].max(cov.worst_texels);
+            coverage.min_slack_texels[i] = coverage.min_slack_texels[i].min(cov.min_slack_texels);
+            if let Some((p, pb)) = prev[i] {
                 let size_change = ((w.texel.x / p.texel.x - 1.0).abs()).max((w.texel.y / p.texel.y - 1.0).abs());
                 jitter = jitter.max(size_change);
                 let same_size = w.texel == p.texel;
-                let closed_form = same_size && !opts.probe_drift;
+                let closed_form = same_size && pb == basis && !opts.probe_drift;
                 let mut flips = None;
                 let (mut ms, mut mx) = (0.0, 0.0f64);
                 if closed_form {
@@ -187,24 +193,43 @@ pub fn along_path(
                     mx = d.length();
                 }
                 if !closed_form || opts.cell_flips {
-                    let xy = &probe_xy[i];
                     let (mut ss, mut pmx, mut flipped) = (0.0, 0.0f64, 0usize);
-                    for q in xy {
-                        let s0 = p.texel_coords(*q);
-                        let s1 = w.texel_coords(*q);
+                    let mut probe = |s0: DVec2, s1: DVec2, moved: DVec2| {
                         let d = DVec2::new(wrap(s1.x - s0.x), wrap(s1.y - s0.y));
                         ss += d.length_squared();
                         pmx = pmx.max(d.length());
-                        // Sampled texel centres in light space, and how far they moved in
-                        // texels of the current window.
-                        let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
-                        let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
-                        let moved = ((c1 - c0) / w.texel).abs();
                         if moved.x >= 0.5 || moved.y >= 0.5 {
                             flipped += 1;
                         }
-                    }
-                    let count = xy.len().max(1) as f64;
+                    };
+                    let count = if fixed {
+                        for q in &probe_xy[i] {
+                            let s0 = p.texel_coords(*q);
+                            let s1 = w.texel_coords(*q);
+                            // Sampled texel centres in light space, and how far they moved in
+                            // texels of the current window.
+                            let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
+                            let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
+                            probe(s0, s1, ((c1 - c0) / w.texel).abs());
+                        }
+                        probe_xy[i].len()
+                    } else {
+                        // The basis changed: each frame reads a probe through its own basis.
+                        // The previous texel centre is a line along the previous light
+                        // direction; take its point at the probe's depth and measure how far
+                        // it lies from the current texel centre in the current basis.
+                        for q in &probes[i] {
+                            let s0 = p.texel_coords(pb.to_light_xy(*q));
+                            let s1 = w.texel_coords(basis.to_light_xy(*q));
+                            let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
+                            let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
+                            let c0_world = pb.x * c0.x + pb.y * c0.y + pb.z * pb.z.dot(*q);
+                            let c0_now = basis.to_light_xy(c0_world);
+                            probe(s0, s1, ((c1 - c0_now) / w.texel).abs());
+                        }
+                        probes[i].len()
+                    };
+                    let count = count.max(1) as f64;
                     if !closed_form {
                         ms = ss / count;
                         mx = pmx;
@@ -229,7 +254,7 @@ pub fn along_path(
                     });
                 }
             }
-            prev[i] = Some(w);
+            prev[i] = Some((w, basis));
         }
     }
     for s in &mut coverage.min_slack_texels {
