@@ -386,9 +386,11 @@ impl Rig {
         w
     }
 
-    /// Corners that cascade `i`'s window must cover in one frame, in the cascade's basis: its
-    /// fitted slice, plus its selection interval where that reaches outside the fitted slice.
-    pub fn cover_corners(&self, i: usize, lp: &LightPose) -> Vec<DVec2> {
+    /// How well cascade `i`'s window `w` covers what it must in the frame of `lp`: its fitted
+    /// slice, plus its selection interval where that reaches outside the fitted slice. The
+    /// slices and the window are convex, so a slice's light-space footprint is the hull of its
+    /// corners and checking the corners is exact.
+    pub fn coverage(&self, i: usize, lp: &LightPose, w: &Window) -> FrameCoverage {
         let local;
         let lp = if self.fixed_basis() {
             lp
@@ -396,26 +398,24 @@ impl Rig {
             local = LightPose::new(&self.basis(i, lp), &lp.pose);
             &local
         };
-        let s = &self.slices[i];
-        let mut out = lp.corners(&self.lens, s.near, s.far).to_vec();
-        let (a, b) = self.selection(i);
-        if b > a && (a < s.near || b > s.far) {
-            out.extend_from_slice(&lp.corners(&self.lens, a, b));
-        }
-        out
-    }
-
-    /// How well cascade `i`'s window `w` covers what it must in the frame of `lp`. The slice
-    /// and the window are convex, so the slice's light-space footprint is the hull of its
-    /// corners and checking the corners is exact.
-    pub fn coverage(&self, i: usize, lp: &LightPose, w: &Window) -> FrameCoverage {
-        let n = self.resolution as f64;
         let mut out = FrameCoverage {
             violations: 0,
             worst_texels: 0.0,
             min_slack_texels: f64::INFINITY,
         };
-        for c in self.cover_corners(i, lp) {
+        let s = &self.slices[i];
+        self.cover(&mut out, &lp.corners(&self.lens, s.near, s.far), w);
+        let (a, b) = self.selection(i);
+        if b > a && (a < s.near || b > s.far) {
+            self.cover(&mut out, &lp.corners(&self.lens, a, b), w);
+        }
+        out
+    }
+
+    #[inline]
+    fn cover(&self, out: &mut FrameCoverage, corners: &[DVec2; 8], w: &Window) {
+        let n = self.resolution as f64;
+        for &c in corners {
             let s = w.texel_coords(c);
             let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
             out.min_slack_texels = out.min_slack_texels.min(slack);
@@ -426,7 +426,6 @@ impl Rig {
                 out.worst_texels = out.worst_texels.max(-slack);
             }
         }
-        out
     }
 
     /// Light-space depth range the cascade must render: near far enough toward the light to

@@ -230,11 +230,11 @@ impl Figure for DensityOverlay<'_> {
             if a.density.is_empty() {
                 continue;
             }
-            let color = series_color(i);
+            let color = preset_color(i);
             // Samples are sorted by depth with both sides of every split: the line shows the
             // sawtooth's jumps as vertical segments.
             let pts: Vec<(f64, f64)> = a.density.iter().map(|d| (d.depth, d.texels_per_pixel)).collect();
-            let style = color.stroke_width(if i < 8 { 3 } else { 2 });
+            let style = color.stroke_width(3);
             chart
                 .draw_series(LineSeries::new(pts, style))?
                 .label(format!(
@@ -270,6 +270,33 @@ impl ShimmerCoverageBars<'_> {
     }
 }
 
+/// A segmented axis of exactly `n` rows (plotters includes the end of an integer range).
+fn rows_axis(n: usize) -> std::ops::Range<usize> {
+    if n >= 2 {
+        0..n - 1
+    } else {
+        0..1
+    }
+}
+
+/// Eleven distinguishable colours, one per preset.
+pub fn preset_color(i: usize) -> RGBColor {
+    const C: [RGBColor; 11] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
+        RGBColor(0, 0, 128),
+    ];
+    C[i % C.len()]
+}
+
 /// Value labels: "0" for exact zeros, 3 significant digits otherwise.
 fn short(v: f64) -> String {
     if v == 0.0 {
@@ -284,7 +311,7 @@ fn short(v: f64) -> String {
 impl Figure for ShimmerCoverageBars<'_> {
     fn size(&self) -> (u32, u32) {
         let n = self.0.analyses.len() as u32;
-        (1280, 170 + 44 * n)
+        (1280, 200 + 56 * n)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
@@ -311,15 +338,23 @@ impl Figure for ShimmerCoverageBars<'_> {
             .fold(0.0f64, f64::max)
             .max(0.05)
             * 1.3;
-        let label_of = |r: usize| {
-            let kind = if r % 2 == 0 { "snapped" } else { "unsnapped" };
+        // Row r (preset r / 2, snapped then unsnapped) is drawn top-down.
+        let pos = |r: usize| rows - 1 - r;
+        let snaps: Vec<bool> = c.analyses.iter().map(|a| a.config.shadow.snap).collect();
+        let label_of = |p: usize| {
+            let r = rows - 1 - p;
+            let kind = match (r % 2, snaps[r / 2]) {
+                (0, true) => "snapped",
+                (0, false) => "(never snaps)",
+                _ => "unsnapped",
+            };
             format!("{} {kind}", names[r / 2])
         };
         let mut chart = ChartBuilder::on(&left)
             .margin(12)
             .x_label_area_size(46)
             .y_label_area_size(190)
-            .build_cartesian_2d(0.0..xmax, (0..rows).into_segmented())?;
+            .build_cartesian_2d(0.0..xmax, rows_axis(rows).into_segmented())?;
         chart
             .configure_mesh()
             .disable_y_mesh()
@@ -337,7 +372,7 @@ impl Figure for ShimmerCoverageBars<'_> {
                 .into_iter()
                 .enumerate()
             {
-                let r = 2 * i + k;
+                let r = pos(2 * i + k);
                 let color = if k == 0 { series_color(0) } else { series_color(1) };
                 let mut bar = Rectangle::new(
                     [(0.0, SegmentValue::Exact(r)), (v, SegmentValue::Exact(r + 1))],
@@ -360,18 +395,18 @@ impl Figure for ShimmerCoverageBars<'_> {
             .map(|a| a.summary.coverage_violations as f64)
             .fold(0.0f64, f64::max)
             .max(1.0)
-            * 1.45;
+            * 2.0;
         let mut chart = ChartBuilder::on(&right)
             .margin(12)
             .x_label_area_size(46)
             .y_label_area_size(110)
-            .build_cartesian_2d(0.0..cmax, (0..n).into_segmented())?;
+            .build_cartesian_2d(0.0..cmax, rows_axis(n).into_segmented())?;
         chart
             .configure_mesh()
             .disable_y_mesh()
             .y_labels(n)
             .y_label_formatter(&|v| match v {
-                SegmentValue::CenterOf(r) | SegmentValue::Exact(r) if *r < n => names[*r].clone(),
+                SegmentValue::CenterOf(r) | SegmentValue::Exact(r) if *r < n => names[n - 1 - *r].clone(),
                 _ => String::new(),
             })
             .x_desc("slice corners outside their window (count over the path)")
@@ -381,9 +416,10 @@ impl Figure for ShimmerCoverageBars<'_> {
         for (i, a) in c.analyses.iter().enumerate() {
             let v = a.summary.coverage_violations as f64;
             let (worst, _) = coverage_extremes(a);
+            let i = n - 1 - i;
             let mut bar = Rectangle::new(
                 [(0.0, SegmentValue::Exact(i)), (v, SegmentValue::Exact(i + 1))],
-                series_color(3).filled(),
+                RGBColor(214, 39, 40).filled(),
             );
             bar.set_margin(6, 6, 0, 0);
             chart.draw_series(std::iter::once(bar))?;

@@ -634,7 +634,15 @@ pub fn resolve(cx: ResolveContext<'_>, shadow: &mut ShadowSettings, v: &Validato
                     return Err(v.invalid(
                         "shadow.cascades",
                         shadow.cascades,
-                        &format!("one of {} for the {name} preset", join(&list)),
+                        &format!(
+                            "one of {} for the {name} preset{}",
+                            join(&list),
+                            if cx.choice.also_allowed.is_empty() {
+                                ""
+                            } else {
+                                " (compare --defaults runs every preset at its own defaults)"
+                            }
+                        ),
                     ));
                 }
                 cascades = shadow.cascades;

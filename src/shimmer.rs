@@ -156,7 +156,9 @@ pub fn along_path(
     } else {
         Vec::new()
     };
-    let mut prev: Vec<Option<(Window, LightBasis)>> = vec![None; m];
+    let mut prev: Vec<Option<Window>> = vec![None; m];
+    // Each cascade's basis in the previous frame (only tracked when it can change).
+    let mut prev_basis: Vec<LightBasis> = vec![rig.light; m];
     let mut coverage = Coverage {
         violations: vec![0; m],
         worst_texels: vec![0.0; m],
@@ -172,16 +174,17 @@ pub fn along_path(
         let lp = LightPose::new(&rig.light, pose);
         for i in 0..m {
             let w = rig.window(i, &lp, snapped);
-            let basis = if fixed { rig.light } else { rig.basis(i, &lp) };
             let cov = rig.coverage(i, &lp, &w);
             coverage.violations[i] += cov.violations;
             coverage.worst_texels[i] = coverage.worst_texels[i].max(cov.worst_texels);
             coverage.min_slack_texels[i] = coverage.min_slack_texels[i].min(cov.min_slack_texels);
-            if let Some((p, pb)) = prev[i] {
+            if let Some(p) = prev[i] {
                 let size_change = ((w.texel.x / p.texel.x - 1.0).abs()).max((w.texel.y / p.texel.y - 1.0).abs());
                 jitter = jitter.max(size_change);
                 let same_size = w.texel == p.texel;
-                let closed_form = same_size && pb == basis && !opts.probe_drift;
+                let basis = if fixed { rig.light } else { rig.basis(i, &lp) };
+                let pb = prev_basis[i];
+                let closed_form = same_size && (fixed || pb == basis) && !opts.probe_drift;
                 let mut flips = None;
                 let (mut ms, mut mx) = (0.0, 0.0f64);
                 if closed_form {
@@ -254,7 +257,10 @@ pub fn along_path(
                     });
                 }
             }
-            prev[i] = Some((w, basis));
+            prev[i] = Some(w);
+            if !fixed {
+                prev_basis[i] = rig.basis(i, &lp);
+            }
         }
     }
     for s in &mut coverage.min_slack_texels {
