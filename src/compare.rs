@@ -22,7 +22,7 @@ use crate::config::Config;
 use crate::error::{Error, Result};
 use crate::output::{csv_bytes, num, Exporter};
 use crate::plots::{draw_message, log_range, series_color, Figure, PlotResult, FONT};
-use crate::presets::{lambda_value, PresetChoice, PresetName};
+use crate::presets::{is_generic_note, lambda_value, PresetChoice, PresetName};
 
 /// The presets compared and their analyses, in the order given.
 #[derive(Debug, Clone)]
@@ -488,6 +488,8 @@ fn scene_lines(c: &Comparison) -> Vec<String> {
             cfg.motion.frames,
             cfg.motion.step_as_written
         ),
+        "csm-lab's own [shadow] lambda, fit, snap and fit_depth_to_scene do not apply: each preset has its own rules."
+            .to_string(),
         if c.engine_defaults {
             "Every preset runs at its own defaults (--defaults).".to_string()
         } else {
@@ -559,7 +561,12 @@ fn preset_lines(a: &Analysis) -> Vec<String> {
     if !a.summary.cascades_needed {
         out.push("no visible depth reads any cascade: nothing to measure".to_string());
     }
-    out.extend(p.notes.iter().map(|n| format!("note: {n}")));
+    out.extend(
+        p.notes
+            .iter()
+            .filter(|n| !is_generic_note(n))
+            .map(|n| format!("note: {n}")),
+    );
     out
 }
 

@@ -214,6 +214,22 @@ mod tests {
         }
     }
 
+    /// A cascade no depth reads (an engine preset clipped by the camera's planes) changes
+    /// nothing: not the worst case, not the means, not the profile.
+    #[test]
+    fn empty_selection_intervals_contribute_nothing() {
+        let lens = Lens::new(1.0, 1.6);
+        let a = aggregates(&[1.0, 10.0, 100.0], &[0.01, 0.1], 500.0);
+        let b = aggregates(&[1.0, 10.0, 10.0, 100.0], &[0.01, 50.0, 0.1], 500.0);
+        assert_eq!(a.max_aliasing, b.max_aliasing);
+        assert_eq!(a.mean_aliasing, b.mean_aliasing);
+        assert_eq!(a.mean_log_aliasing, b.mean_log_aliasing);
+        assert_eq!(a.undersampled_fraction, b.undersampled_fraction);
+        let p = density_profile(&[1.0, 10.0, 10.0, 100.0], &[0.01, 50.0, 0.1], &lens, 1080, 64);
+        assert!(p.iter().all(|x| x.cascade != 1));
+        assert_eq!(p.iter().filter(|x| x.depth == 10.0).count(), 2);
+    }
+
     #[test]
     fn profile_has_both_sides_of_each_split() {
         let lens = Lens::new(1.0, 1.6);

@@ -734,6 +734,19 @@ fn check_bevy(b: &BevyKnobs, cascades: usize, max_distance: f64, v: &Validator<'
     Ok(())
 }
 
+/// Notes every preset gets alike (csm-lab's own `[shadow]` settings it ignores); reports that
+/// list several presets say this once instead.
+pub fn is_generic_note(note: &str) -> bool {
+    [
+        "shadow.lambda ",
+        "shadow.fit ",
+        "shadow.snap ",
+        "shadow.fit_depth_to_scene ",
+    ]
+    .iter()
+    .any(|k| note.starts_with(k))
+}
+
 fn join(list: &[usize]) -> String {
     list.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", ")
 }
