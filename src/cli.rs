@@ -60,7 +60,7 @@ pub struct CompareArgs {
     /// Comma-separated presets to compare [default: all].
     #[arg(long)]
     pub presets: Option<String>,
-    /// Every preset at its own defaults: ignore [shadow] cascades, resolution and max_distance.
+    /// Every preset at its own defaults: ignore shadow.cascades, shadow.resolution and shadow.max_distance.
     #[arg(long)]
     pub defaults: bool,
     /// Output directory [default: reports/<config name>/].
