@@ -68,6 +68,7 @@ pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool) -> Result
                 name: Some(*p),
                 also_allowed: presets.to_vec(),
                 engine_defaults,
+                lenient_overrides: true,
             };
             Config::load_with_preset(path, &choice)
         })

@@ -135,6 +135,31 @@ fn compare_with_defaults_runs_every_preset_at_its_own_settings() {
 }
 
 #[test]
+fn a_count_an_engine_does_not_offer_falls_back_to_its_default_in_compare() {
+    let text = common::with(&[("shadow.cascades", "cascades = 3")]);
+    let (out, dir) = compare(&text, &["--presets", "godot,unreal"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let md = std::fs::read_to_string(dir.path().join("out/compare.md")).unwrap();
+    assert!(
+        md.contains("shadow.cascades = 3 is not offered by godot (1, 2, 4): its default 4 is used"),
+        "{md}"
+    );
+    let csv = std::fs::read_to_string(dir.path().join("out/compare.csv")).unwrap();
+    let counts: Vec<&str> = csv.lines().skip(1).map(|l| l.split(',').nth(2).unwrap()).collect();
+    assert_eq!(counts, ["4", "3"]);
+    // analyze with that preset keeps it an error naming the key.
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = write_config(dir.path(), &text);
+    let out = bin()
+        .args(["analyze", cfg.to_str().unwrap(), "--preset", "godot", "--out"])
+        .arg(dir.path().join("o"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("shadow.cascades"), "{}", stderr(&out));
+}
+
+#[test]
 fn compare_output_is_byte_identical_between_runs() {
     let dir = tempfile::tempdir().unwrap();
     let cfg = write_config(dir.path(), BASE);

@@ -972,6 +972,7 @@ fn shadow_overrides_apply_and_fixed_implementations_say_what_they_ignore() {
         name: Some(PresetName::Godot),
         also_allowed: vec![],
         engine_defaults: true,
+        lenient_overrides: false,
     };
     let c = Config::from_toml_str_with_preset(&text, "t.toml", None, &choice).unwrap();
     let p = c.shadow.preset.unwrap();
@@ -986,6 +987,36 @@ fn shadow_overrides_apply_and_fixed_implementations_say_what_they_ignore() {
         panic!()
     };
     assert_eq!((b.first_cascade_far_bound, b.overlap_proportion), (5.0, 0.5));
+}
+
+#[test]
+fn compare_style_loading_falls_back_to_the_engine_default_with_a_note() {
+    let text = scene("", "[shadow]\ncascades = 3\nresolution = 1000\n");
+    let choice = |p| PresetChoice {
+        name: Some(p),
+        lenient_overrides: true,
+        ..Default::default()
+    };
+    let c = Config::from_toml_str_with_preset(&text, "t.toml", None, &choice(PresetName::Godot)).unwrap();
+    assert_eq!((c.shadow.cascades, c.shadow.resolution), (4, 1000));
+    let notes = c.shadow.preset.unwrap().notes.join("\n");
+    assert!(
+        notes.contains("shadow.cascades = 3 is not offered by godot (1, 2, 4): its default 4 is used"),
+        "{notes}"
+    );
+    let c = Config::from_toml_str_with_preset(&text, "t.toml", None, &choice(PresetName::Bevy)).unwrap();
+    assert_eq!((c.shadow.cascades, c.shadow.resolution), (3, 2048));
+    let notes = c.shadow.preset.unwrap().notes.join("\n");
+    assert!(
+        notes.contains("shadow.resolution = 1000 is not a power of two"),
+        "{notes}"
+    );
+    // Loading for one preset (analyze) keeps these errors.
+    let strict = PresetChoice {
+        name: Some(PresetName::Godot),
+        ..Default::default()
+    };
+    assert!(Config::from_toml_str_with_preset(&text, "t.toml", None, &strict).is_err());
 }
 
 #[test]

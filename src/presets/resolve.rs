@@ -147,6 +147,10 @@ pub struct PresetChoice {
     /// Ignore `[shadow] cascades`, `resolution` and `max_distance`: the preset's own defaults
     /// (`compare --defaults`).
     pub engine_defaults: bool,
+    /// A `[shadow]` count or map size the preset does not offer falls back to the preset's
+    /// default with a note instead of being an error (`compare`, where one file's settings meet
+    /// several engines).
+    pub lenient_overrides: bool,
 }
 
 /// Which `[shadow]` keys the file wrote (their values are already validated in
@@ -281,33 +285,38 @@ pub fn resolve(cx: ResolveContext<'_>, shadow: &mut ShadowSettings, v: &Validato
                 }
             }
             Counts::Allowed(list) => {
-                if !list.contains(&shadow.cascades) {
+                if list.contains(&shadow.cascades) {
+                    cascades = shadow.cascades;
+                } else if cx.choice.lenient_overrides {
+                    notes.push(format!(
+                        "shadow.cascades = {} is not offered by {name} ({}): its default {cascades} is used",
+                        shadow.cascades,
+                        join(&list)
+                    ));
+                } else {
                     return Err(v.invalid(
                         "shadow.cascades",
                         shadow.cascades,
-                        &format!(
-                            "one of {} for the {name} preset{}",
-                            join(&list),
-                            if cx.choice.also_allowed.is_empty() {
-                                ""
-                            } else {
-                                " (compare --defaults runs every preset at its own defaults)"
-                            }
-                        ),
+                        &format!("one of {} for the {name} preset", join(&list)),
                     ));
                 }
-                cascades = shadow.cascades;
             }
         }
     }
     // Map size.
     let mut resolution = default_resolution(&knobs, cascades);
     if w.resolution {
-        resolution = shadow.resolution;
-        if power_of_two_maps(name) && !resolution.is_power_of_two() {
+        if !power_of_two_maps(name) || shadow.resolution.is_power_of_two() {
+            resolution = shadow.resolution;
+        } else if cx.choice.lenient_overrides {
+            notes.push(format!(
+                "shadow.resolution = {} is not a power of two, which {name} requires: its default {resolution} is used",
+                shadow.resolution
+            ));
+        } else {
             return Err(v.invalid(
                 "shadow.resolution",
-                resolution,
+                shadow.resolution,
                 &format!("a power of two for the {name} preset (the engine requires it)"),
             ));
         }
