@@ -111,6 +111,8 @@ pub struct Analysis {
     /// S7 for the configured snap setting, when precision = "f32".
     pub lookup_error: Option<LookupError>,
     pub summary: Summary,
+    /// The preset's split/fit/snap rules, selection and light-depth findings (None without a preset).
+    pub preset: Option<crate::presets::PresetReport>,
 }
 
 impl Analysis {
@@ -130,9 +132,21 @@ pub fn memory_bytes(cascades: usize, resolution: u32) -> u64 {
 
 /// Runs the analysis of one validated config.
 pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
-    let range = depth_range::for_config(config);
-    let memory = memory_bytes(config.shadow.cascades, config.shadow.resolution);
-    let Some(rig) = Rig::from_config(config) else {
+    let rig = Rig::from_config(config);
+    // A preset has its own range (no scene clipping): the view depths that read its cascades.
+    let range = match (&config.shadow.preset, &rig) {
+        (None, _) => depth_range::for_config(config),
+        (Some(_), Some(r)) => DepthRange::Range {
+            z_lo: r.splits[0],
+            z_hi: r.splits[r.cascade_count()],
+        },
+        (Some(_), None) => DepthRange::Empty,
+    };
+    let memory = match &rig {
+        Some(r) => memory_bytes(r.cascade_count(), r.resolution),
+        None => memory_bytes(config.shadow.cascades, config.shadow.resolution),
+    };
+    let Some(rig) = rig else {
         return Analysis {
             config: config.clone(),
             range,
@@ -159,6 +173,11 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
                 lookup_error_max: 0.0,
                 lookup_error_rms: 0.0,
             },
+            preset: config
+                .shadow
+                .preset
+                .as_ref()
+                .map(|p| crate::presets::report(p, None, Vec::new())),
         };
     };
     let (z_lo, z_hi) = range.bounds().expect("a rig implies a range");
@@ -216,14 +235,21 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
             .map_or((0.0, 0.0), |l| (l.cascade_max[i], l.cascade_rms[i]))
     };
 
+    // Light depth ranges: always for a preset (its report needs them), else when asked for.
+    let depths = (opts.light_depth || config.shadow.preset.is_some()).then(|| {
+        windows0
+            .iter()
+            .enumerate()
+            .map(|(i, w)| rig.light_depth(i, &lp0, w, &config.scene))
+            .collect::<Vec<_>>()
+    });
     let cascades = windows0
         .iter()
         .enumerate()
         .map(|(i, w)| {
-            let (light_near, light_far) = if opts.light_depth {
-                rig.light_depth_range(i, &pose0, w, &config.scene)
-            } else {
-                (0.0, 0.0)
+            let (light_near, light_far) = match (&depths, opts.light_depth) {
+                (Some(d), true) => (d[i].near, d[i].far),
+                _ => (0.0, 0.0),
             };
             CascadeReport {
                 cascade: i,
@@ -262,9 +288,15 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         lookup_error_max: lookup_error.as_ref().map_or(0.0, |l| l.max),
         lookup_error_rms: lookup_error.as_ref().map_or(0.0, |l| l.rms),
     };
+    let preset = config
+        .shadow
+        .preset
+        .as_ref()
+        .map(|p| crate::presets::report(p, Some(&rig), depths.unwrap_or_default()));
     Analysis {
         config: config.clone(),
         range,
+        preset,
         rig: Some(rig),
         cascades,
         aggregates: Some(aggregates),

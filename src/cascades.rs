@@ -1,10 +1,22 @@
 //! Building the cascades an engine would build: split, fit, snap, and light near/far.
 //!
 //! A [`Rig`] holds everything that stays fixed while the camera moves: the lens, the light
-//! basis, the split depths and, for the sphere fit, each window's size. Engines keep split
-//! intervals static from frame to frame (refitting them every frame is unstable by
+//! basis, the split depths and, for constant-size windows, each window's size. Engines keep
+//! split intervals static from frame to frame (refitting them every frame is unstable by
 //! construction), and so does the rig: the splits come from the configured camera.
-//! Per frame only the window position (and, for the AABB fit, its size) is recomputed.
+//! Per frame only the window position (and, for box fits, its size) is recomputed.
+//!
+//! **Selection vs fitted slices.** `splits` are the *selection* boundaries: cascade `i` is the
+//! one a view depth in `[splits[i], splits[i+1])` reads (in a blend band, the coarser of the two
+//! cascades counts, the worst case of csm-math.md 3.5). `slices` are the *fitted* intervals the
+//! windows are built around. csm-lab's own pipeline uses one for the other; engine presets
+//! (see [`crate::presets`]) may overlap their fitted slices (blend bands, Bevy's overlap, EEVEE's
+//! fade) or select differently from how they fit (three.js, seed 004).
+//!
+//! **Scheme.** How a window is sized, centred and snapped, which light basis a cascade uses,
+//! and which light depth range it renders are described by a [`Scheme`]. csm-lab's built-in
+//! fits are the schemes [`Rig::new`] builds: minimal sphere or tight box, snapped with the
+//! rounding rule of [`SnapRule::default`] on the world-anchored grid, light depth from the scene.
 
 use glam::{DVec2, DVec3};
 
@@ -16,13 +28,15 @@ use crate::snapping::SnapRule;
 use crate::splits;
 
 /// The camera frame in light-space x/y, computed once per frame so that slice corners and
-/// sphere centres of every cascade cost a few multiply-adds each.
+/// sphere centres of every cascade cost a few multiply-adds each. `pose` is kept for schemes
+/// whose light basis depends on the camera.
 #[derive(Debug, Clone, Copy)]
 pub struct LightPose {
     pub position: DVec2,
     pub forward: DVec2,
     pub right: DVec2,
     pub up: DVec2,
+    pub pose: CameraPose,
 }
 
 impl LightPose {
@@ -32,6 +46,7 @@ impl LightPose {
             forward: light.to_light_xy(pose.forward),
             right: light.to_light_xy(pose.right),
             up: light.to_light_xy(pose.up),
+            pose: *pose,
         }
     }
 
@@ -51,7 +66,7 @@ impl LightPose {
     }
 }
 
-/// One cascade's slice: depth interval and minimal bounding sphere (fixed for the whole run).
+/// One cascade's fitted slice: depth interval and minimal bounding sphere (fixed for the run).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Slice {
     pub near: f64,
@@ -59,23 +74,129 @@ pub struct Slice {
     pub sphere: Sphere,
 }
 
+/// Which light-space basis a cascade uses in a frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BasisRule {
+    /// The rig's `light` basis in every frame: fixed in the world (csm-lab, most engines).
+    Fixed,
+    /// Look-to along the light with the camera's right axis as the up reference (Filament):
+    /// the basis turns when the camera yaws. Falls back to `light` when the camera's right
+    /// axis is within acos(0.999) of the light direction.
+    CameraRight,
+    /// Look-at from a light *position* to the centroid of each slice, up +Y (seed 004): every
+    /// cascade has its own direction, and it changes whenever the camera moves.
+    LookAtFrom(DVec3),
+}
+
+/// How a cascade's window is sized and centred, in its light basis.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WindowRule {
+    /// Square of side `sphere_side[i]` centred on the view-axis point at `centre_depth[i]`
+    /// (any sphere fit: minimal, corner average, far cap).
+    AxisCentred { centre_depth: Vec<f64> },
+    /// Square of side `sphere_side[i]` centred on the light-space bounding-box centre of the
+    /// slice's corners (the slice-diameter windows of three.js and Bevy).
+    BoxCentred,
+    /// Tight light-space bounding box of the slice's corners, grown by `pad` world units per
+    /// side and, with `border`, by the snap rule's largest shift (csm-lab's `aabb` fit).
+    Tight { pad: f64, border: bool },
+    /// Tight box extents, but centred on the light-space axis through the world origin (the
+    /// window-centring defect of seed 002).
+    TightAtOrigin,
+}
+
+/// The light depth range a cascade renders, and whether casters nearer the light survive.
+/// Depths are light-space z (along the direction light travels) in the cascade's basis.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LightDepthRule {
+    /// Fitted to the scene: casters within the window's prism, receivers of the slice (csm-lab;
+    /// also the model for engines that fit to scene bounds, or where the source does not say).
+    Scene,
+    /// The slice's own light-depth extent. `keeps_casters`: casters in front are kept by
+    /// unclipped depth or pancaking (Bevy); otherwise they are lost (seed 002).
+    Slice { keeps_casters: bool },
+    /// Sphere centre ± max(r, `min_half`), the near side extended by `toward_light`; casters
+    /// in front are kept (Godot's pancake, Unreal's whole-scene caster range).
+    Sphere {
+        radius: Vec<f64>,
+        toward_light: f64,
+        min_half: f64,
+    },
+    /// A light plane `margin` in front of the slice's nearest corner, rendering distances
+    /// `[near, far]` from it; nothing else is kept (three.js).
+    Margin { margin: f64, near: f64, far: f64 },
+    /// Distances `[near, far]` from a point along the light (EEVEE 2017's lamp clip range).
+    FromPoint { point: DVec3, near: f64, far: f64 },
+    /// Seed 004's mirrored range: light-view z values passed as distances, so the rendered
+    /// distances from `eye` are `[-dmax - pad, -dmin + pad]` for a slice at `[dmin, dmax]`.
+    Mirrored { eye: DVec3, pad: f64 },
+}
+
+/// Everything about how cascades are placed besides the split depths.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scheme {
+    /// Short name of the fit for tables and CSV (`sphere`, `aabb`, `diameter-ceil`, ...).
+    pub fit_label: String,
+    pub basis: BasisRule,
+    pub window: WindowRule,
+    /// False for implementations that never snap: then the "snapped" window is the unsnapped one.
+    pub snaps: bool,
+    /// Light-space x/y of a point the snap grid runs through: zero for a grid anchored at the
+    /// world origin, the lamp's position for EEVEE.
+    pub snap_anchor: DVec2,
+    pub depth: LightDepthRule,
+}
+
+/// The light depth range a cascade renders and what falls outside it (frame 0).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct LightDepth {
+    /// Rendered range, light-space z in the cascade's basis (world units along the light).
+    pub near: f64,
+    pub far: f64,
+    /// World units of receiver depth (the cascade's slice within the scene bounds) outside the range.
+    pub receivers_outside: f64,
+    /// World units of caster depth toward the light (scene within the window's prism) in front
+    /// of the range that the cascade loses; 0 when the engine keeps such casters.
+    pub casters_outside: f64,
+}
+
+/// Slice corners outside a window in one frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameCoverage {
+    pub violations: u64,
+    /// How far outside the worst corner lies, in texels (0 when all are inside).
+    pub worst_texels: f64,
+    /// The smallest margin between a corner and the window edge, in texels (negative outside).
+    pub min_slack_texels: f64,
+}
+
 /// Everything fixed over a motion path.
 #[derive(Debug, Clone)]
 pub struct Rig {
     pub lens: Lens,
     pub light: LightBasis,
+    /// csm-lab's fit; for a preset, the nearest built-in family (sphere for constant-size
+    /// windows, aabb for box fits) — the preset's own rule is in `scheme`.
     pub fit: Fit,
     pub resolution: u32,
     pub snap_rule: SnapRule,
+    /// Selection boundaries (see the module docs); equal to the fitted boundaries for csm-lab's
+    /// own pipeline.
     pub splits: Vec<f64>,
+    /// Fitted slices.
     pub slices: Vec<Slice>,
-    /// Sphere fit: window side per cascade, with the snapping border included.
+    /// Constant-size windows: side per cascade, border included.
     pub sphere_side: Vec<f64>,
+    pub scheme: Scheme,
 }
 
 impl Rig {
-    /// Builds the rig for a config, or None when the scene needs no cascades.
+    /// Builds the rig for a config (csm-lab's pipeline or the config's preset), or None when
+    /// the scene needs no cascades.
     pub fn from_config(config: &Config) -> Option<Rig> {
+        if let Some(preset) = &config.shadow.preset {
+            return crate::presets::rig(config, preset);
+        }
         let DepthRange::Range { z_lo, z_hi } = depth_range::for_config(config) else {
             return None;
         };
@@ -92,6 +213,7 @@ impl Rig {
         ))
     }
 
+    /// csm-lab's own pipeline: fitted slices = selection intervals = consecutive splits.
     pub fn new(lens: Lens, light: LightBasis, fit: Fit, resolution: u32, snap_rule: SnapRule, splits: Vec<f64>) -> Rig {
         let k2 = lens.k2();
         let slices: Vec<Slice> = splits
@@ -107,6 +229,12 @@ impl Rig {
             .iter()
             .map(|s| Window::side_with_border(2.0 * s.sphere.radius, resolution, shift))
             .collect();
+        let window = match fit {
+            Fit::Sphere => WindowRule::AxisCentred {
+                centre_depth: slices.iter().map(|s| s.sphere.centre_depth).collect(),
+            },
+            Fit::Aabb => WindowRule::Tight { pad: 0.0, border: true },
+        };
         Rig {
             lens,
             light,
@@ -116,6 +244,52 @@ impl Rig {
             splits,
             slices,
             sphere_side,
+            scheme: Scheme {
+                fit_label: fit.name().to_string(),
+                basis: BasisRule::Fixed,
+                window,
+                snaps: true,
+                snap_anchor: DVec2::ZERO,
+                depth: LightDepthRule::Scene,
+            },
+        }
+    }
+
+    /// A rig for an arbitrary scheme: `selection` has one more entry than `fitted`, and
+    /// `sides` gives the constant window side per cascade (ignored by box fits).
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_scheme(
+        lens: Lens,
+        light: LightBasis,
+        fit: Fit,
+        resolution: u32,
+        snap_rule: SnapRule,
+        selection: Vec<f64>,
+        fitted: &[(f64, f64)],
+        sides: Vec<f64>,
+        scheme: Scheme,
+    ) -> Rig {
+        assert_eq!(selection.len(), fitted.len() + 1, "one selection interval per cascade");
+        assert_eq!(sides.len(), fitted.len(), "one window side per cascade");
+        let k2 = lens.k2();
+        let slices = fitted
+            .iter()
+            .map(|&(near, far)| Slice {
+                near,
+                far,
+                sphere: minimal_sphere(near, far, k2),
+            })
+            .collect();
+        Rig {
+            lens,
+            light,
+            fit,
+            resolution,
+            snap_rule,
+            splits: selection,
+            slices,
+            sphere_side: sides,
+            scheme,
         }
     }
 
@@ -123,26 +297,133 @@ impl Rig {
         self.slices.len()
     }
 
-    /// Cascade `i`'s window for a camera frame. Both snap modes use the same window size, so
-    /// comparing them isolates the effect of snapping.
-    pub fn window(&self, i: usize, lp: &LightPose, snapped: bool) -> Window {
-        let slice = &self.slices[i];
-        let snap = snapped.then_some(self.snap_rule);
-        match self.fit {
-            Fit::Sphere => {
-                let centre = lp.position + lp.forward * slice.sphere.centre_depth;
-                Window::centred(centre, DVec2::splat(self.sphere_side[i]), self.resolution, snap)
+    /// True when every cascade uses `light` in every frame, so light-space coordinates of a
+    /// static point never change.
+    pub fn fixed_basis(&self) -> bool {
+        self.scheme.basis == BasisRule::Fixed
+    }
+
+    /// The selection interval of cascade `i`: the view depths that read it.
+    pub fn selection(&self, i: usize) -> (f64, f64) {
+        (self.splits[i], self.splits[i + 1])
+    }
+
+    /// Cascade `i`'s light basis in the frame of `lp`.
+    pub fn basis(&self, i: usize, lp: &LightPose) -> LightBasis {
+        match &self.scheme.basis {
+            BasisRule::Fixed => self.light,
+            BasisRule::CameraRight => camera_right_basis(self.light.z, lp.pose.right).unwrap_or(self.light),
+            BasisRule::LookAtFrom(eye) => {
+                let s = &self.slices[i];
+                // The 8 corners of a symmetric slice average to its axis point at mid-depth.
+                let centroid = lp.pose.position + lp.pose.forward * (0.5 * (s.near + s.far));
+                let dir = centroid - *eye;
+                if dir.length() > 1e-12 * (1.0 + eye.length()) {
+                    LightBasis::new(dir)
+                } else {
+                    self.light
+                }
             }
-            Fit::Aabb => {
+        }
+    }
+
+    /// Cascade `i`'s window for a camera frame, in the cascade's basis ([`Rig::basis`]). Both
+    /// snap modes use the same window size, so comparing them isolates the effect of snapping.
+    pub fn window(&self, i: usize, lp: &LightPose, snapped: bool) -> Window {
+        if self.fixed_basis() {
+            self.window_in(i, lp, snapped)
+        } else {
+            self.window_in(i, &LightPose::new(&self.basis(i, lp), &lp.pose), snapped)
+        }
+    }
+
+    /// The window given the camera frame in the cascade's own basis.
+    fn window_in(&self, i: usize, lp: &LightPose, snapped: bool) -> Window {
+        let slice = &self.slices[i];
+        let snap = (snapped && self.scheme.snaps).then_some(self.snap_rule);
+        match &self.scheme.window {
+            WindowRule::AxisCentred { centre_depth } => {
+                let centre = lp.position + lp.forward * centre_depth[i];
+                self.centred(centre, DVec2::splat(self.sphere_side[i]), snap)
+            }
+            WindowRule::BoxCentred => {
+                let (lo, hi) = bounds_2d(&lp.corners(&self.lens, slice.near, slice.far));
+                self.centred(0.5 * (lo + hi), DVec2::splat(self.sphere_side[i]), snap)
+            }
+            WindowRule::Tight { pad, border } => {
                 let corners = lp.corners(&self.lens, slice.near, slice.far);
                 let (lo, hi) = bounds_2d(&corners);
-                let shift = self.snap_rule.max_shift_texels();
-                let extent = hi - lo;
-                let size = DVec2::new(
-                    Window::side_with_border(extent.x, self.resolution, shift),
-                    Window::side_with_border(extent.y, self.resolution, shift),
-                );
-                Window::centred(0.5 * (lo + hi), size, self.resolution, snap)
+                let extent = hi - lo + DVec2::splat(2.0 * pad);
+                let size = if *border {
+                    let shift = self.snap_rule.max_shift_texels();
+                    DVec2::new(
+                        Window::side_with_border(extent.x, self.resolution, shift),
+                        Window::side_with_border(extent.y, self.resolution, shift),
+                    )
+                } else {
+                    extent
+                };
+                self.centred(0.5 * (lo + hi), size, snap)
+            }
+            WindowRule::TightAtOrigin => {
+                let (lo, hi) = bounds_2d(&lp.corners(&self.lens, slice.near, slice.far));
+                self.centred(DVec2::ZERO, hi - lo, snap)
+            }
+        }
+    }
+
+    /// A window centred at `centre`, snapped on the grid through `snap_anchor`.
+    fn centred(&self, centre: DVec2, size: DVec2, snap: Option<SnapRule>) -> Window {
+        let anchor = self.scheme.snap_anchor;
+        if anchor == DVec2::ZERO {
+            return Window::centred(centre, size, self.resolution, snap);
+        }
+        // Snap relative to the anchor, then express the origin relative to the world origin
+        // again: a constant (non-integer) offset per cascade, so frame differences of snapped
+        // origins stay whole texels.
+        let mut w = Window::centred(centre - anchor, size, self.resolution, snap);
+        w.origin_texels += anchor / w.texel;
+        w
+    }
+
+    /// How well cascade `i`'s window `w` covers what it must in the frame of `lp`: its fitted
+    /// slice, plus its selection interval where that reaches outside the fitted slice. The
+    /// slices and the window are convex, so a slice's light-space footprint is the hull of its
+    /// corners and checking the corners is exact.
+    pub fn coverage(&self, i: usize, lp: &LightPose, w: &Window) -> FrameCoverage {
+        let local;
+        let lp = if self.fixed_basis() {
+            lp
+        } else {
+            local = LightPose::new(&self.basis(i, lp), &lp.pose);
+            &local
+        };
+        let mut out = FrameCoverage {
+            violations: 0,
+            worst_texels: 0.0,
+            min_slack_texels: f64::INFINITY,
+        };
+        let s = &self.slices[i];
+        self.cover(&mut out, &lp.corners(&self.lens, s.near, s.far), w);
+        let (a, b) = self.selection(i);
+        if b > a && (a < s.near || b > s.far) {
+            self.cover(&mut out, &lp.corners(&self.lens, a, b), w);
+        }
+        out
+    }
+
+    #[inline]
+    fn cover(&self, out: &mut FrameCoverage, corners: &[DVec2; 8], w: &Window) {
+        let n = self.resolution as f64;
+        for &c in corners {
+            let s = w.texel_coords(c);
+            let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
+            out.min_slack_texels = out.min_slack_texels.min(slack);
+            // Rounding tolerance: a few ulps of the texel coordinate's magnitude.
+            let tol = 1e-9 + 8.0 * f64::EPSILON * (c / w.texel).abs().max_element();
+            if -slack > tol {
+                out.violations += 1;
+                out.worst_texels = out.worst_texels.max(-slack);
             }
         }
     }
@@ -152,38 +433,157 @@ impl Rig {
     /// receiver of the slice. Computed from the scene bounds clipped to the window's prism.
     pub fn light_depth_range(&self, i: usize, pose: &CameraPose, window: &Window, scene: &Aabb) -> (f64, f64) {
         let slice = &self.slices[i];
-        let slice_hex = pose.slice_hexahedron(&self.lens, slice.near, slice.far);
-        let scene_hex = scene.hexahedron();
-        let l = &self.light;
-        let slice_z = slice_hex.vertices.iter().map(|v| l.z.dot(*v));
-        let (slice_lo, slice_hi) = slice_z.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| (a.min(z), b.max(z)));
-        let scene_z = (0..8).map(|c| l.z.dot(scene.corner(c)));
-        let (scene_lo, scene_hi) = scene_z.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| (a.min(z), b.max(z)));
-        // The window's prism along the light, long enough to hold the scene and the slice.
-        let lo = window.min();
-        let hi = lo + DVec2::new(window.width(), window.height());
-        let z0 = scene_lo.min(slice_lo) - 1.0;
-        let z1 = scene_hi.max(slice_hi) + 1.0;
-        let prism = Hexahedron {
-            vertices: std::array::from_fn(|c| {
-                let x = if c & 1 == 0 { lo.x } else { hi.x };
-                let y = if c & 2 == 0 { lo.y } else { hi.y };
-                let z = if c & 4 == 0 { z0 } else { z1 };
-                l.x * x + l.y * y + l.z * z
-            }),
-            planes: [
-                Plane::new(-l.x, -lo.x),
-                Plane::new(l.x, hi.x),
-                Plane::new(-l.y, -lo.y),
-                Plane::new(l.y, hi.y),
-                Plane::new(-l.z, -z0),
-                Plane::new(l.z, z1),
-            ],
-        };
-        let near = intersection_range(&scene_hex, &prism, l.z).map_or(slice_lo, |(a, _)| a.min(slice_hi));
-        let far = intersection_range(&slice_hex, &scene_hex, l.z).map_or(slice_hi, |(_, b)| b);
+        let n = depth_needs(&self.light, &self.lens, pose, (slice.near, slice.far), window, scene);
+        let near = n.casters_near.map_or(n.slice_lo, |a| a.min(n.slice_hi));
+        let far = n.receivers.map_or(n.slice_hi, |(_, b)| b);
         (near.min(far), far)
     }
+
+    /// The light depth range cascade `i` renders under the scheme's rule, and how much of the
+    /// scene falls outside it, for the camera frame `lp` and its window `window`.
+    pub fn light_depth(&self, i: usize, lp: &LightPose, window: &Window, scene: &Aabb) -> LightDepth {
+        if self.scheme.depth == LightDepthRule::Scene && self.fixed_basis() {
+            let (near, far) = self.light_depth_range(i, &lp.pose, window, scene);
+            return LightDepth {
+                near,
+                far,
+                receivers_outside: 0.0,
+                casters_outside: 0.0,
+            };
+        }
+        let basis = self.basis(i, lp);
+        let s = &self.slices[i];
+        let fitted = depth_needs(&basis, &self.lens, &lp.pose, (s.near, s.far), window, scene);
+        // Receivers: the fitted slice and, where it reaches outside, the selection interval.
+        let mut receivers = fitted.receivers;
+        let (a, b) = self.selection(i);
+        if b > a && (a < s.near || b > s.far) {
+            let sel = depth_needs(&basis, &self.lens, &lp.pose, (a, b), window, scene);
+            receivers = match (receivers, sel.receivers) {
+                (Some((p, q)), Some((r, t))) => Some((p.min(r), q.max(t))),
+                (x, y) => x.or(y),
+            };
+        }
+        let (slice_lo, slice_hi) = (fitted.slice_lo, fitted.slice_hi);
+        let (near, far, keeps_casters) = match &self.scheme.depth {
+            LightDepthRule::Scene => {
+                let near = fitted.casters_near.map_or(slice_lo, |a| a.min(slice_hi));
+                let far = fitted.receivers.map_or(slice_hi, |(_, b)| b);
+                (near.min(far), far, true)
+            }
+            LightDepthRule::Slice { keeps_casters } => (slice_lo, slice_hi, *keeps_casters),
+            LightDepthRule::Sphere {
+                radius,
+                toward_light,
+                min_half,
+            } => {
+                let WindowRule::AxisCentred { centre_depth } = &self.scheme.window else {
+                    unreachable!("sphere depth ranges go with axis-centred windows")
+                };
+                let c = basis.z.dot(lp.pose.position + lp.pose.forward * centre_depth[i]);
+                let h = radius[i].max(*min_half);
+                (c - h - toward_light, c + h, true)
+            }
+            LightDepthRule::Margin { margin, near, far } => {
+                let plane = slice_lo - margin;
+                (plane + near, plane + far, false)
+            }
+            LightDepthRule::FromPoint { point, near, far } => {
+                let p = basis.z.dot(*point);
+                (p + near, p + far, false)
+            }
+            LightDepthRule::Mirrored { eye, pad } => {
+                let e = basis.z.dot(*eye);
+                let (dmin, dmax) = (slice_lo - e, slice_hi - e);
+                (e - dmax - pad, e - dmin + pad, false)
+            }
+        };
+        let receivers_outside = receivers.map_or(0.0, |(lo, hi)| {
+            let inside = (hi.min(far) - lo.max(near)).max(0.0);
+            (hi - lo) - inside
+        });
+        let casters_outside = if keeps_casters {
+            0.0
+        } else {
+            fitted.casters_near.map_or(0.0, |c| (near - c).max(0.0))
+        };
+        LightDepth {
+            near,
+            far,
+            receivers_outside,
+            casters_outside,
+        }
+    }
+}
+
+/// Light-depth facts about one slice for one pose, in `basis`.
+struct DepthNeeds {
+    slice_lo: f64,
+    slice_hi: f64,
+    /// Nearest scene point within the window's prism (casters that can shadow the window).
+    casters_near: Option<f64>,
+    /// Light-depth range of the slice within the scene (receivers).
+    receivers: Option<(f64, f64)>,
+}
+
+fn depth_needs(
+    l: &LightBasis,
+    lens: &Lens,
+    pose: &CameraPose,
+    (near, far): (f64, f64),
+    window: &Window,
+    scene: &Aabb,
+) -> DepthNeeds {
+    let slice_hex = pose.slice_hexahedron(lens, near, far);
+    let scene_hex = scene.hexahedron();
+    let slice_z = slice_hex.vertices.iter().map(|v| l.z.dot(*v));
+    let (slice_lo, slice_hi) = slice_z.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| (a.min(z), b.max(z)));
+    let scene_z = (0..8).map(|c| l.z.dot(scene.corner(c)));
+    let (scene_lo, scene_hi) = scene_z.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| (a.min(z), b.max(z)));
+    // The window's prism along the light, long enough to hold the scene and the slice.
+    let lo = window.min();
+    let hi = lo + DVec2::new(window.width(), window.height());
+    let z0 = scene_lo.min(slice_lo) - 1.0;
+    let z1 = scene_hi.max(slice_hi) + 1.0;
+    let prism = Hexahedron {
+        vertices: std::array::from_fn(|c| {
+            let x = if c & 1 == 0 { lo.x } else { hi.x };
+            let y = if c & 2 == 0 { lo.y } else { hi.y };
+            let z = if c & 4 == 0 { z0 } else { z1 };
+            l.x * x + l.y * y + l.z * z
+        }),
+        planes: [
+            Plane::new(-l.x, -lo.x),
+            Plane::new(l.x, hi.x),
+            Plane::new(-l.y, -lo.y),
+            Plane::new(l.y, hi.y),
+            Plane::new(-l.z, -z0),
+            Plane::new(l.z, z1),
+        ],
+    };
+    DepthNeeds {
+        slice_lo,
+        slice_hi,
+        casters_near: intersection_range(&scene_hex, &prism, l.z).map(|(a, _)| a),
+        receivers: intersection_range(&slice_hex, &scene_hex, l.z),
+    }
+}
+
+/// Look-to basis along `z` whose y axis is the component of `up` perpendicular to `z`, or None
+/// when `up` is within acos(0.999) of `z`.
+pub fn camera_right_basis(z: DVec3, up: DVec3) -> Option<LightBasis> {
+    let up = up.try_normalize()?;
+    if up.dot(z).abs() > 0.999 {
+        return None;
+    }
+    let y = (up - z * up.dot(z)).normalize();
+    let x = y.cross(z);
+    Some(LightBasis {
+        x,
+        y,
+        z,
+        vertical_fallback: false,
+    })
 }
 
 /// Component-wise min and max of a set of 2-D points.
@@ -201,4 +601,24 @@ pub fn bounds_2d(points: &[DVec2]) -> (DVec2, DVec2) {
 pub fn slice_corners_world(rig: &Rig, i: usize, pose: &CameraPose) -> [DVec3; 8] {
     let s = &rig.slices[i];
     pose.slice_corners(&rig.lens, s.near, s.far)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn camera_right_basis_is_orthonormal_right_handed_and_follows_the_camera() {
+        let z = DVec3::new(0.3, -1.0, 0.2).normalize();
+        for up in [DVec3::X, DVec3::new(0.6, 0.0, 0.8), DVec3::new(-0.2, 0.1, 1.0)] {
+            let b = camera_right_basis(z, up).unwrap();
+            assert!((b.x.length() - 1.0).abs() < 1e-12 && (b.y.length() - 1.0).abs() < 1e-12);
+            assert!(b.x.dot(b.y).abs() < 1e-12 && b.x.dot(b.z).abs() < 1e-12 && b.y.dot(b.z).abs() < 1e-12);
+            assert!((b.x.cross(b.y).dot(b.z) - 1.0).abs() < 1e-12);
+            // y is the reference direction with its component along the light removed.
+            let expected = (up.normalize() - z * up.normalize().dot(z)).normalize();
+            assert!((b.y - expected).length() < 1e-12);
+        }
+        assert!(camera_right_basis(z, z * 3.0).is_none());
+    }
 }

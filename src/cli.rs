@@ -37,6 +37,8 @@ pub enum Command {
     Stress(StressArgs),
     /// Time against error of every sampled metric; writes bench.csv and bench.svg.
     Bench(BenchArgs),
+    /// Run several engine presets on one scene and compare them (CSV, plots, HTML, Markdown).
+    Compare(CompareArgs),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -59,6 +61,10 @@ pub struct AnalyzeArgs {
     /// (an engine's binary32 pipeline, emulated; see `snap_space`).
     #[arg(long, value_enum)]
     pub precision: Option<Precision>,
+    /// Reproduce an engine's cascades instead of csm-lab's own (overrides shadow.preset):
+    /// dart, threejs, unity-sample, eevee, learnopengl, bevy, godot, unreal, unity, unity-urp, filament.
+    #[arg(long)]
+    pub preset: Option<String>,
 }
 
 #[derive(Debug, Args)]
@@ -145,6 +151,21 @@ pub struct BenchArgs {
     pub repeats: u32,
 }
 
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// Scene file (TOML); its camera, screen, light, scene and motion are shared by every preset.
+    pub config: PathBuf,
+    /// Comma-separated presets to compare [default: all].
+    #[arg(long)]
+    pub presets: Option<String>,
+    /// Every preset at its own defaults: ignore shadow.cascades, shadow.resolution and shadow.max_distance.
+    #[arg(long)]
+    pub defaults: bool,
+    /// Output directory [default: reports/<config name>/].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
 /// How a successful run ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Outcome {
@@ -175,6 +196,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
         Command::Check(args) => crate::check::run_check(&args),
         Command::Stress(args) => run_stress(&args),
         Command::Bench(args) => run_bench(&args),
+        Command::Compare(args) => run_compare(&args),
     }
 }
 
@@ -192,8 +214,23 @@ pub fn analyze_exporters() -> Vec<&'static dyn Exporter<crate::analysis::Analysi
 }
 
 fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
-    let mut config = Config::load(&args.config)?;
+    let choice = crate::presets::PresetChoice {
+        name: args
+            .preset
+            .as_deref()
+            .map(|s| crate::presets::parse_flag("--preset", s))
+            .transpose()?,
+        ..Default::default()
+    };
+    let mut config = Config::load_with_preset(&args.config, &choice)?;
     if let Some(p) = args.precision {
+        if p == Precision::F32 && config.shadow.preset.is_some() {
+            return Err(crate::error::Error::flag(
+                "--precision",
+                "f32",
+                "the binary32 emulation models csm-lab's own sphere and aabb pipelines, not engine presets",
+            ));
+        }
         config.shadow.precision = p;
         if p == Precision::F32 {
             if let Some(why) = precision::f32_range_problem(&config) {
@@ -339,6 +376,22 @@ fn run_bench(args: &BenchArgs) -> Result<Outcome> {
     let exporters: [&dyn Exporter<crate::bench::BenchReport>; 2] = [&crate::bench::BenchCsv, &crate::bench::BenchSvg];
     let written = output::export_all(&dir, &report, &exporters)?;
     print!("{}", report.table());
+    println!("wrote {} files to {}", written.len(), dir.display());
+    Ok(Outcome::Success)
+}
+
+fn run_compare(args: &CompareArgs) -> Result<Outcome> {
+    let presets = match &args.presets {
+        Some(list) => crate::presets::parse_list("--presets", list)?,
+        None => crate::presets::PresetName::ALL.to_vec(),
+    };
+    let comparison = crate::compare::run(&args.config, &presets, args.defaults)?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out_dir(&comparison.analyses[0].config));
+    let written = output::export_all(&dir, &comparison, &crate::compare::exporters())?;
+    print!("{}", crate::compare::summary_table(&comparison));
     println!("wrote {} files to {}", written.len(), dir.display());
     Ok(Outcome::Success)
 }

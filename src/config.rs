@@ -13,6 +13,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, CameraPose};
 use crate::precision::{Precision, SnapSpace};
+use crate::presets::PresetChoice;
 
 /// Largest world coordinate or distance accepted, in world units: far beyond any real world
 /// (engines re-centre long before), and small enough that every derived quantity (texel
@@ -111,6 +112,11 @@ pub struct ShadowSettings {
     /// Where the binary32 pipeline computes: at absolute world coordinates, or relative to a
     /// camera-near anchor. Only matters with `precision = "f32"`.
     pub snap_space: SnapSpace,
+    /// An engine's whole cascade set-up instead of csm-lab's own ([`crate::presets`]). When set,
+    /// `cascades`, `resolution` and `max_distance` hold the preset's effective values, `snap`
+    /// whether it snaps, `fit` the family of its fit, and `fit_depth_to_scene` is false.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preset: Option<crate::presets::Preset>,
 }
 
 /// Which way the camera moves along the shimmer path, one pose per frame.
@@ -220,6 +226,20 @@ struct RawConfig {
     #[serde(default)]
     analysis: RawAnalysis,
     sweep: Option<crate::sweep::RawSweep>,
+    // Engine knob tables, one per preset (see crate::presets).
+    dart: Option<crate::presets::RawDart>,
+    threejs: Option<crate::presets::RawThreejs>,
+    #[serde(rename = "unity-sample")]
+    unity_sample: Option<crate::presets::RawUnitySample>,
+    eevee: Option<crate::presets::RawEevee>,
+    learnopengl: Option<crate::presets::RawLearnOpenGl>,
+    bevy: Option<crate::presets::RawBevy>,
+    godot: Option<crate::presets::RawGodot>,
+    unreal: Option<crate::presets::RawUnreal>,
+    unity: Option<crate::presets::RawUnity>,
+    #[serde(rename = "unity-urp")]
+    unity_urp: Option<crate::presets::RawUnityUrp>,
+    filament: Option<crate::presets::RawFilament>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -266,6 +286,7 @@ struct RawShadow {
     fit_depth_to_scene: Option<bool>,
     precision: Option<String>,
     snap_space: Option<String>,
+    preset: Option<String>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -402,12 +423,17 @@ impl Config {
     /// Reads and validates a config file. Relative paths inside it (the motion path file)
     /// are resolved against the file's directory.
     pub fn load(path: &Path) -> Result<Config> {
+        Config::load_with_preset(path, &PresetChoice::default())
+    }
+
+    /// [`Config::load`] with the preset chosen (or overridden) as in `choice`.
+    pub fn load_with_preset(path: &Path, choice: &PresetChoice) -> Result<Config> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
         let name = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "config".to_string());
-        let mut config = Config::from_toml_str(&text, &path.display().to_string(), path.parent())?;
+        let mut config = Config::from_toml_str_with_preset(&text, &path.display().to_string(), path.parent(), choice)?;
         config.name = name;
         config.path = Some(path.to_path_buf());
         Ok(config)
@@ -416,9 +442,19 @@ impl Config {
     /// Parses and validates config text. `label` names the source in messages; `base_dir`
     /// resolves a relative motion path file.
     pub fn from_toml_str(text: &str, label: &str, base_dir: Option<&Path>) -> Result<Config> {
+        Config::from_toml_str_with_preset(text, label, base_dir, &PresetChoice::default())
+    }
+
+    /// [`Config::from_toml_str`] with the preset chosen (or overridden) as in `choice`.
+    pub fn from_toml_str_with_preset(
+        text: &str,
+        label: &str,
+        base_dir: Option<&Path>,
+        choice: &PresetChoice,
+    ) -> Result<Config> {
         let raw: RawConfig = toml::from_str(text).map_err(|e| toml_error(label, text, &e))?;
         let v = Validator { path: label, text };
-        validate(raw, &v, base_dir)
+        validate(raw, &v, base_dir, choice)
     }
 
     /// The inputs as used, for `summary.json`.
@@ -464,7 +500,7 @@ fn p_display(path: &MotionPath) -> String {
     }
 }
 
-fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Result<Config> {
+fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>, choice: &PresetChoice) -> Result<Config> {
     // The world offset moves everything that has a position, before any other check, so the
     // rest of the crate only ever sees the moved scene.
     let world_offset = match raw.scene.world_offset {
@@ -584,6 +620,15 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
 
     // Shadow.
     let s = raw.shadow;
+    let written = crate::presets::Written {
+        max_distance: s.max_distance.is_some(),
+        cascades: s.cascades.is_some(),
+        resolution: s.resolution.is_some(),
+        lambda: s.lambda.is_some(),
+        fit: s.fit.is_some(),
+        snap: s.snap.is_some(),
+        fit_depth_to_scene: s.fit_depth_to_scene.is_some(),
+    };
     let max_distance = match s.max_distance {
         Some(d) => {
             let d = v.finite("shadow.max_distance", d)?;
@@ -615,7 +660,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             )
         })?,
     };
-    let shadow = ShadowSettings {
+    let mut shadow = ShadowSettings {
         max_distance,
         cascades,
         lambda,
@@ -625,7 +670,48 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         fit_depth_to_scene: s.fit_depth_to_scene.unwrap_or(true),
         precision,
         snap_space,
+        preset: None,
     };
+    let camera = CameraSettings {
+        position,
+        target,
+        up,
+        fov_y_deg: fov,
+        near,
+        far,
+    };
+    let scene = Aabb::new(smin, smax);
+    let tables = crate::presets::RawTables {
+        dart: raw.dart,
+        threejs: raw.threejs,
+        unity_sample: raw.unity_sample,
+        eevee: raw.eevee,
+        learnopengl: raw.learnopengl,
+        bevy: raw.bevy,
+        godot: raw.godot,
+        unreal: raw.unreal,
+        unity: raw.unity,
+        unity_urp: raw.unity_urp,
+        filament: raw.filament,
+    };
+    let cx = crate::presets::ResolveContext {
+        choice,
+        file_preset: s.preset,
+        written,
+        tables,
+        camera: &camera,
+        light_direction,
+        scene: &scene,
+    };
+    crate::presets::resolve(cx, &mut shadow, v)?;
+    if shadow.preset.is_some() && shadow.precision == Precision::F32 {
+        return Err(v.invalid(
+            "shadow.precision",
+            "\"f32\"",
+            "\"f64\" with an engine preset (the binary32 emulation models csm-lab's own sphere and aabb \
+             pipelines, not the presets' windows)",
+        ));
+    }
 
     // Motion.
     let m = raw.motion;
@@ -706,18 +792,11 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let config = Config {
         name: "config".to_string(),
         path: None,
-        camera: CameraSettings {
-            position,
-            target,
-            up,
-            fov_y_deg: fov,
-            near,
-            far,
-        },
+        camera,
         screen: Screen { width, height },
         light_direction,
         light_direction_as_written: dir_raw,
-        scene: Aabb::new(smin, smax),
+        scene,
         world_offset,
         shadow,
         motion: MotionSettings {

@@ -43,7 +43,10 @@ pub fn aggregates(splits: &[f64], texel: &[f64], k: f64) -> Aggregates {
         let kt = k * texel[i];
         cmax.push(kt / a);
         cmin.push(kt / b);
-        max_aliasing = max_aliasing.max(kt / a);
+        // An empty selection interval (an engine cascade no visible depth reads) has no worst point.
+        if b > a {
+            max_aliasing = max_aliasing.max(kt / a);
+        }
         sum_z += kt * (b / a).ln();
         sum_log += kt * (1.0 / a - 1.0 / b);
         // a(d) > 1 exactly for d < K T_i.
@@ -112,8 +115,13 @@ pub fn density_profile(
         })
         .collect();
     for (i, &c) in splits.iter().enumerate().take(m).skip(1) {
-        out.push(sample(c, i - 1));
-        out.push(sample(c, i));
+        // Both sides of each split, skipping cascades whose interval is empty.
+        if splits[i - 1] < c {
+            out.push(sample(c, i - 1));
+        }
+        if c < splits[i + 1] {
+            out.push(sample(c, i));
+        }
     }
     out.sort_by(|a, b| a.depth.total_cmp(&b.depth).then(a.cascade.cmp(&b.cascade)));
     out.dedup_by(|a, b| a.depth == b.depth && a.cascade == b.cascade);
@@ -204,6 +212,22 @@ mod tests {
             assert!((a.undersampled_fraction - under / cells as f64).abs() < 1e-4);
             assert!(a.max_aliasing >= worst && a.max_aliasing <= worst * 1.001);
         }
+    }
+
+    /// A cascade no depth reads (an engine preset clipped by the camera's planes) changes
+    /// nothing: not the worst case, not the means, not the profile.
+    #[test]
+    fn empty_selection_intervals_contribute_nothing() {
+        let lens = Lens::new(1.0, 1.6);
+        let a = aggregates(&[1.0, 10.0, 100.0], &[0.01, 0.1], 500.0);
+        let b = aggregates(&[1.0, 10.0, 10.0, 100.0], &[0.01, 50.0, 0.1], 500.0);
+        assert_eq!(a.max_aliasing, b.max_aliasing);
+        assert_eq!(a.mean_aliasing, b.mean_aliasing);
+        assert_eq!(a.mean_log_aliasing, b.mean_log_aliasing);
+        assert_eq!(a.undersampled_fraction, b.undersampled_fraction);
+        let p = density_profile(&[1.0, 10.0, 10.0, 100.0], &[0.01, 50.0, 0.1], &lens, 1080, 64);
+        assert!(p.iter().all(|x| x.cascade != 1));
+        assert_eq!(p.iter().filter(|x| x.depth == 10.0).count(), 2);
     }
 
     #[test]

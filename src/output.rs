@@ -270,6 +270,9 @@ pub fn summary_value(a: &Analysis) -> serde_json::Value {
     if obj.get("config").is_some_and(|c| c.is_null()) {
         obj.remove("config");
     }
+    if let Some(p) = &a.preset {
+        obj.insert("preset".into(), serde_json::to_value(p).expect("plain struct"));
+    }
     let flat = serde_json::to_value(s).expect("plain struct");
     for (k, x) in flat.as_object().expect("object") {
         obj.insert(k.clone(), x.clone());
@@ -337,16 +340,30 @@ pub fn summary_table(a: &Analysis) -> String {
     let mut out = String::new();
     let s = &a.summary;
     let c = &a.config;
-    let _ = writeln!(
-        out,
-        "{}: {} cascades x {}^2, lambda {}, fit {}, snap {}",
-        c.name,
-        c.shadow.cascades,
-        c.shadow.resolution,
-        c.shadow.lambda,
-        c.shadow.fit,
-        if c.shadow.snap { "on" } else { "off" }
-    );
+    if let Some(p) = &a.preset {
+        let _ = writeln!(
+            out,
+            "{}: preset {}: {} cascades x {}^2, shadow distance {}",
+            c.name, p.name, c.shadow.cascades, c.shadow.resolution, c.shadow.max_distance
+        );
+        let _ = writeln!(out, "  split: {}", p.split_rule);
+        let _ = writeln!(out, "  fit: {}; snap: {}", p.fit, p.snap);
+        let _ = writeln!(out, "  light depth: {}", p.light_depth_rule);
+        for n in &p.notes {
+            let _ = writeln!(out, "  note: {n}");
+        }
+    } else {
+        let _ = writeln!(
+            out,
+            "{}: {} cascades x {}^2, lambda {}, fit {}, snap {}",
+            c.name,
+            c.shadow.cascades,
+            c.shadow.resolution,
+            c.shadow.lambda,
+            c.shadow.fit,
+            if c.shadow.snap { "on" } else { "off" }
+        );
+    }
     if !s.cascades_needed {
         let _ = writeln!(
             out,
@@ -361,7 +378,9 @@ pub fn summary_table(a: &Analysis) -> String {
         "depth range {:.4} .. {:.4}{}",
         s.z_lo,
         s.z_hi,
-        if c.shadow.fit_depth_to_scene {
+        if a.preset.is_some() {
+            " (the view depths that read the preset's cascades)"
+        } else if c.shadow.fit_depth_to_scene {
             " (clipped to the scene bounds)"
         } else {
             ""
@@ -440,6 +459,30 @@ pub fn summary_table(a: &Analysis) -> String {
             ("lookup_error_rms", s.lookup_error_rms, "RMS of S7 (texels)"),
         ] {
             let _ = writeln!(out, "  {k:<22} {:>12}  {what}", format!("{v:.3e}"));
+        }
+    }
+    if let Some(p) = &a.preset {
+        let worst = a
+            .configured_path()
+            .map_or(0.0, |r| r.coverage.worst_texels.iter().cloned().fold(0.0, f64::max));
+        for (k, v, what) in [
+            (
+                "coverage_worst_texels",
+                format!("{worst:.4}"),
+                "how far the worst corner lies outside its window",
+            ),
+            (
+                "receivers_outside_depth",
+                format!("{:.4}", p.receivers_outside_depth),
+                "receiver depth outside the light depth range (world units)",
+            ),
+            (
+                "casters_outside_depth",
+                format!("{:.4}", p.casters_outside_depth),
+                "caster depth lost in front of the light depth range",
+            ),
+        ] {
+            let _ = writeln!(out, "  {k:<22} {v:>12}  {what}");
         }
     }
     out

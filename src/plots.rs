@@ -345,7 +345,9 @@ impl Figure for CascadesFigure<'_> {
         for i in 0..rig.cascade_count() {
             let w = rig.window(i, &lp, a.config.shadow.snap);
             let s = &rig.slices[i];
-            let corners = lp.corners(&rig.lens, s.near, s.far);
+            // Windows are in each cascade's own basis (the same for all but a few presets).
+            let lpi = LightPose::new(&rig.basis(i, &lp), &pose);
+            let corners = lpi.corners(&rig.lens, s.near, s.far);
             let lo = w.min();
             let hi = lo + glam::DVec2::new(w.width(), w.height());
             all.extend_from_slice(&corners);

@@ -12,18 +12,22 @@
 //!   light axis, i.e. the probe now reads a different texel. Under a uniform sub-texel shift
 //!   `(dx, dy)` this is about `|dx| + |dy| - |dx||dy|`.
 //!
-//! **Closed form.** The light basis is fixed, so when `T_t == T_{t-1}` the grid only translates:
-//! every point drifts by the same `d = w(o_{t-1} - o_t)` (window origins in texels), whatever
-//! the camera did. S3 is then computed from the two window origins alone, without probes; only
+//! **Closed form.** When the light basis is fixed (csm-lab's fits, most presets) and
+//! `T_t == T_{t-1}`, the grid only translates: every point drifts by the same
+//! `d = w(o_{t-1} - o_t)` (window origins in texels), whatever the camera did. S3 is then computed from the two window origins alone, without probes; only
 //! a size change needs the per-probe evaluation. Windows keep their origin in texel units, so
 //! snapped origins are exact integers and the snapped drift is exactly zero, even far from the
 //! world origin.
+//!
+//! **Moving bases.** A few engine presets derive the light basis from the camera (Filament's
+//! look-to with the camera's right axis, seed 004's look-at from a light position). Then the
+//! grid rotates between frames and every probe is read through each frame's own basis.
 
 use glam::{DVec2, DVec3};
 
 use crate::cascades::{LightPose, Rig};
 use crate::fitting::Window;
-use crate::geometry::{Aabb, CameraPose};
+use crate::geometry::{Aabb, CameraPose, LightBasis};
 use crate::rng::halton;
 
 /// `x - round(x)`, in [-0.5, 0.5].
@@ -114,8 +118,14 @@ pub fn probes(rig: &Rig, pose0: &CameraPose, scene: &Aabb, per_cascade: usize) -
         .iter()
         .enumerate()
         .map(|(i, s)| {
+            // Probes go where the cascade is read: its selection interval (the fitted slice
+            // when the selection is empty; the two are equal in csm-lab's own pipeline).
+            let (near, far) = match rig.selection(i) {
+                (a, b) if b > a => (a, b),
+                _ => (s.near, s.far),
+            };
             let point = |j: u64| {
-                let z = s.near + (s.far - s.near) * halton(j, 2);
+                let z = near + (far - near) * halton(j, 2);
                 let sx = (2.0 * halton(j, 3) - 1.0) * lens.tan_h;
                 let sy = (2.0 * halton(j, 5) - 1.0) * lens.tan_v;
                 pose0.point(sx, sy, z)
@@ -150,7 +160,18 @@ pub struct PathResult {
 /// cascade in the [`Rig`] (never recomputed per frame), so its S3 always has the closed form
 /// and needs no probes; callers may then pass empty probe lists.
 pub fn needs_probes(rig: &Rig, opts: ShimmerOptions) -> bool {
-    opts.cell_flips || opts.probe_drift || rig.fit != crate::config::Fit::Sphere
+    opts.cell_flips || opts.probe_drift || rig.fit != crate::config::Fit::Sphere || !fast_walk_applies(rig)
+}
+
+/// Whether the shared two-mode walk serves this rig: a fixed light basis, and each cascade's
+/// selection interval inside its fitted slice (so the slice corners decide coverage). True for
+/// csm-lab's own fits and most engine presets; the others take [`along_path_general`].
+fn fast_walk_applies(rig: &Rig) -> bool {
+    rig.fixed_basis()
+        && (0..rig.cascade_count()).all(|i| {
+            let (a, b) = rig.selection(i);
+            b <= a || (a >= rig.slices[i].near && b <= rig.slices[i].far)
+        })
 }
 
 /// Walk the path once for one snap mode: shimmer and coverage together, so each window is
@@ -162,8 +183,12 @@ pub fn along_path(
     snapped: bool,
     opts: ShimmerOptions,
 ) -> PathResult {
-    let [r] = walk(rig, poses, probes, [snapped], opts);
-    r
+    if fast_walk_applies(rig) {
+        let [r] = walk(rig, poses, probes, [snapped], opts);
+        r
+    } else {
+        along_path_general(rig, poses, probes, snapped, opts)
+    }
 }
 
 /// Both snap modes in one walk, `(snapped, unsnapped)`: the same results as two calls of
@@ -174,8 +199,15 @@ pub fn along_path_both(
     probes: &[Vec<DVec3>],
     opts: ShimmerOptions,
 ) -> (PathResult, PathResult) {
-    let [s, u] = walk(rig, poses, probes, [true, false], opts);
-    (s, u)
+    if fast_walk_applies(rig) {
+        let [s, u] = walk(rig, poses, probes, [true, false], opts);
+        (s, u)
+    } else {
+        (
+            along_path_general(rig, poses, probes, true, opts),
+            along_path_general(rig, poses, probes, false, opts),
+        )
+    }
 }
 
 /// The extremes of one cascade's slice corners in texel units (`corner / T`, before the
@@ -424,6 +456,154 @@ fn walk<const K: usize>(
         }
     }
     states.map(|st| st.finish(opts))
+}
+
+/// One snap mode along the path for any rig, including engine presets whose light basis moves
+/// with the camera (each probe is read through each frame's basis) or whose selection interval
+/// reaches outside the fitted slice (coverage then checks both, via [`Rig::coverage`]).
+fn along_path_general(
+    rig: &Rig,
+    poses: &[CameraPose],
+    probes: &[Vec<DVec3>],
+    snapped: bool,
+    opts: ShimmerOptions,
+) -> PathResult {
+    let m = rig.cascade_count();
+    // With a fixed basis a static probe has the same light-space x/y in every frame.
+    let fixed = rig.fixed_basis();
+    let probe_xy: Vec<Vec<DVec2>> = if fixed {
+        probes
+            .iter()
+            .map(|ps| ps.iter().map(|p| rig.light.to_light_xy(*p)).collect())
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let mut prev: Vec<Option<Window>> = vec![None; m];
+    // Each cascade's basis in the previous frame (only tracked when it can change).
+    let mut prev_basis: Vec<LightBasis> = vec![rig.light; m];
+    let mut coverage = Coverage {
+        violations: vec![0; m],
+        worst_texels: vec![0.0; m],
+        min_slack_texels: vec![f64::INFINITY; m],
+    };
+    let mut sum_ms = 0.0;
+    let mut pairs = 0usize;
+    let mut max_drift: f64 = 0.0;
+    let mut jitter: f64 = 0.0;
+    let mut flip_sum = 0.0;
+    let mut frames = Vec::new();
+    for (t, pose) in poses.iter().enumerate() {
+        let lp = LightPose::new(&rig.light, pose);
+        for i in 0..m {
+            let w = rig.window(i, &lp, snapped);
+            let cov = rig.coverage(i, &lp, &w);
+            coverage.violations[i] += cov.violations;
+            coverage.worst_texels[i] = coverage.worst_texels[i].max(cov.worst_texels);
+            coverage.min_slack_texels[i] = coverage.min_slack_texels[i].min(cov.min_slack_texels);
+            if let Some(p) = prev[i] {
+                let size_change = ((w.texel.x / p.texel.x - 1.0).abs()).max((w.texel.y / p.texel.y - 1.0).abs());
+                jitter = jitter.max(size_change);
+                let same_size = w.texel == p.texel;
+                let basis = if fixed { rig.light } else { rig.basis(i, &lp) };
+                let pb = prev_basis[i];
+                let closed_form = same_size && (fixed || pb == basis) && !opts.probe_drift;
+                let mut flips = None;
+                let (mut ms, mut mx) = (0.0, 0.0f64);
+                if closed_form {
+                    let d = DVec2::new(
+                        wrap(p.origin_texels.x - w.origin_texels.x),
+                        wrap(p.origin_texels.y - w.origin_texels.y),
+                    );
+                    ms = d.length_squared();
+                    mx = d.length();
+                }
+                if !closed_form || opts.cell_flips {
+                    let (mut ss, mut pmx, mut flipped) = (0.0, 0.0f64, 0usize);
+                    let mut probe = |s0: DVec2, s1: DVec2, moved: DVec2| {
+                        let d = DVec2::new(wrap(s1.x - s0.x), wrap(s1.y - s0.y));
+                        ss += d.length_squared();
+                        pmx = pmx.max(d.length());
+                        if moved.x >= 0.5 || moved.y >= 0.5 {
+                            flipped += 1;
+                        }
+                    };
+                    let count = if fixed {
+                        for q in &probe_xy[i] {
+                            let s0 = p.texel_coords(*q);
+                            let s1 = w.texel_coords(*q);
+                            // Sampled texel centres in light space, and how far they moved in
+                            // texels of the current window.
+                            let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
+                            let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
+                            probe(s0, s1, ((c1 - c0) / w.texel).abs());
+                        }
+                        probe_xy[i].len()
+                    } else {
+                        // The basis changed: each frame reads a probe through its own basis.
+                        // The previous texel centre is a line along the previous light
+                        // direction; take its point at the probe's depth and measure how far
+                        // it lies from the current texel centre in the current basis.
+                        for q in &probes[i] {
+                            let s0 = p.texel_coords(pb.to_light_xy(*q));
+                            let s1 = w.texel_coords(basis.to_light_xy(*q));
+                            let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
+                            let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
+                            let c0_world = pb.x * c0.x + pb.y * c0.y + pb.z * pb.z.dot(*q);
+                            let c0_now = basis.to_light_xy(c0_world);
+                            probe(s0, s1, ((c1 - c0_now) / w.texel).abs());
+                        }
+                        probes[i].len()
+                    };
+                    let count = count.max(1) as f64;
+                    if !closed_form {
+                        ms = ss / count;
+                        mx = pmx;
+                    }
+                    if opts.cell_flips {
+                        flips = Some(flipped as f64 / count);
+                        flip_sum += flipped as f64 / count;
+                    }
+                }
+                sum_ms += ms;
+                pairs += 1;
+                max_drift = max_drift.max(mx);
+                if opts.frame_rows {
+                    frames.push(FrameShimmer {
+                        frame: t,
+                        cascade: i,
+                        snapped,
+                        size_change,
+                        phase_drift_rms: ms.sqrt(),
+                        phase_drift_max: mx,
+                        cell_flips: flips,
+                    });
+                }
+            }
+            prev[i] = Some(w);
+            if !fixed {
+                prev_basis[i] = rig.basis(i, &lp);
+            }
+        }
+    }
+    for s in &mut coverage.min_slack_texels {
+        if !s.is_finite() {
+            *s = 0.0;
+        }
+    }
+    let stats = ShimmerStats {
+        rms: if pairs > 0 { (sum_ms / pairs as f64).sqrt() } else { 0.0 },
+        max: max_drift,
+        size_jitter: jitter,
+        cell_flip_rate: opts
+            .cell_flips
+            .then(|| if pairs > 0 { flip_sum / pairs as f64 } else { 0.0 }),
+    };
+    PathResult {
+        stats,
+        coverage,
+        frames,
+    }
 }
 
 #[cfg(test)]

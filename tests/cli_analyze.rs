@@ -329,3 +329,28 @@ fn an_unknown_flag_exits_2_and_help_exits_0() {
     let out = bin().arg("--help").output().unwrap();
     assert_eq!(out.status.code(), Some(0));
 }
+
+#[test]
+fn the_f32_emulation_with_an_engine_preset_is_refused_with_the_key_or_flag() {
+    assert_rejected(
+        &with(&[
+            ("shadow.preset", "preset = \"bevy\""),
+            ("shadow.precision", "precision = \"f32\""),
+        ]),
+        &["shadow.precision", "f64", "preset"],
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = write_config(dir.path(), &with(&[("shadow.preset", "preset = \"godot\"")]));
+    let out = bin()
+        .args(["analyze", cfg.to_str().unwrap(), "--precision", "f32", "--out"])
+        .arg(dir.path().join("o"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("--precision") && stderr(&out).contains("presets"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!dir.path().join("o").exists());
+}
