@@ -112,6 +112,9 @@ pub struct SweepArgs {
     /// Skip the SVG/PNG figures (the report is written without them).
     #[arg(long)]
     pub no_plots: bool,
+    /// Sweep an engine preset's own axes (overrides shadow.preset); see `analyze --preset`.
+    #[arg(long)]
+    pub preset: Option<String>,
     /// What to print on stdout.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
@@ -258,7 +261,15 @@ fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
 /// Runs a sweep as the CLI does, without printing: (result, rendered files).
 pub fn sweep_files(args: &SweepArgs) -> Result<(crate::report::SweepResult, output::RenderedFiles)> {
     use crate::sweep::{self, Grid, GridOverrides};
-    let config = Config::load(&args.config)?;
+    let choice = crate::presets::PresetChoice {
+        name: args
+            .preset
+            .as_deref()
+            .map(|s| crate::presets::parse_flag("--preset", s))
+            .transpose()?,
+        ..Default::default()
+    };
+    let config = Config::load_with_preset(&args.config, &choice)?;
     let overrides = GridOverrides {
         lambda: args.lambda.as_deref().map(sweep::parse_lambda_spec).transpose()?,
         cascades: args.cascades.as_deref().map(sweep::parse_cascades_spec).transpose()?,
@@ -270,6 +281,11 @@ pub fn sweep_files(args: &SweepArgs) -> Result<(crate::report::SweepResult, outp
         fit: args.fit.as_deref().map(sweep::parse_fit_spec).transpose()?,
     };
     let grid = Grid::resolve(&config, &overrides)?;
+    if !args.quiet {
+        for note in &grid.notes {
+            eprintln!("note: {note}");
+        }
+    }
     let show_progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
     let bar = if show_progress {
         let bar = indicatif::ProgressBar::new(grid.len() as u64);
@@ -285,7 +301,15 @@ pub fn sweep_files(args: &SweepArgs) -> Result<(crate::report::SweepResult, outp
     let rows = sweep::run(&config, &grid, args.threads.map(usize::from), &|| bar.inc(1))?;
     bar.finish_and_clear();
     let compute = start.elapsed();
-    let command = format!("csm-lab sweep {} {}", args.config.display(), grid.cli_args());
+    let preset = match &config.shadow.preset {
+        Some(p) => format!(" --preset {}", p.name),
+        None => String::new(),
+    };
+    let command = format!(
+        "csm-lab sweep {}{preset} {}",
+        args.config.display(),
+        grid.cli_args(&config)
+    );
     let result = crate::report::SweepResult::new(config, grid, rows, command);
     let files = crate::report::render_all(&result, !args.no_plots)?;
     if !args.quiet {

@@ -78,7 +78,7 @@ impl SweepResult {
     }
 }
 
-pub const SWEEP_COLUMNS: [&str; 18] = [
+pub const SWEEP_COLUMNS: [&str; 19] = [
     "lambda",
     "cascades",
     "resolution",
@@ -97,10 +97,19 @@ pub const SWEEP_COLUMNS: [&str; 18] = [
     "cascades_needed",
     "pareto",
     "recommended",
+    "preset",
 ];
 
 pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
     let rec = r.recommendation.as_ref().map(|x| x.index);
+    // Empty for csm-lab's own pipeline.
+    let preset = r
+        .config
+        .shadow
+        .preset
+        .as_ref()
+        .map(|p| p.name.to_string())
+        .unwrap_or_default();
     let rows = r
         .rows
         .iter()
@@ -126,6 +135,7 @@ pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
                 s.cascades_needed.to_string(),
                 r.front.contains(&i).to_string(),
                 (rec == Some(i)).to_string(),
+                preset.clone(),
             ])
         })
         .collect::<Result<Vec<_>>>()?;
@@ -386,7 +396,8 @@ impl<'a> LambdaDensityFigure<'a> {
         };
         let analyses = picks
             .iter()
-            .map(|&lambda| analyze(&Setting { lambda, ..rec.setting }.apply(&result.config), &opts))
+            .filter_map(|&lambda| Setting { lambda, ..rec.setting }.apply(&result.config).ok())
+            .map(|c| analyze(&c, &opts))
             .collect();
         LambdaDensityFigure { result, analyses }
     }
@@ -742,6 +753,16 @@ fn scene_facts(c: &Config, rows: &[Row]) -> Vec<(String, String)> {
             ),
         ),
     ];
+    if let Some(p) = &c.shadow.preset {
+        v.push((
+            "Engine preset".to_string(),
+            format!(
+                "{} ({}); the sweep varies only the axes this engine has",
+                p.name,
+                crate::presets::split_rule(&p.knobs)
+            ),
+        ));
+    }
     if let Some(r) = rows.iter().find(|r| r.summary.cascades_needed) {
         v.push((
             "Depth range split".to_string(),

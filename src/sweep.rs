@@ -29,6 +29,8 @@ pub struct Grid {
     pub cascades: Axis<usize>,
     pub resolution: Axis<u32>,
     pub fit: Axis<Fit>,
+    /// What was left out of the `[sweep]` table because the preset has no such axis or value.
+    pub notes: Vec<String>,
 }
 
 /// The `[sweep]` table as validated.
@@ -418,6 +420,10 @@ pub struct GridOverrides {
 impl Grid {
     /// The grid for a config: CLI overrides, then the `[sweep]` table, then the defaults
     /// (λ 0:1:0.05, cascades 1..8, resolution 512,1024,2048,4096, the config's own fit).
+    ///
+    /// With an engine preset the grid sweeps the axes that engine has: λ only where its split
+    /// rule has one (otherwise the single value it uses), its allowed cascade counts, its map
+    /// sizes; the fit is the preset's. Every point is checked here, before any work starts.
     pub fn resolve(config: &Config, overrides: &GridOverrides) -> Result<Grid> {
         let spec = config.sweep.clone().unwrap_or_default();
         let max_configs = if config.sweep.is_some() {
@@ -425,27 +431,140 @@ impl Grid {
         } else {
             DEFAULT_MAX_CONFIGS
         };
-        let grid = Grid {
-            lambda: overrides.lambda.clone().or(spec.lambda).unwrap_or_else(|| Axis {
+        let axes = crate::presets::axes(config);
+        let preset = config.shadow.preset.as_ref();
+        let source = |flag_given: bool, flag: &str, key: &str| {
+            if flag_given {
+                flag.to_string()
+            } else {
+                key.to_string()
+            }
+        };
+        let mut notes = Vec::new();
+        // Axes from the [sweep] table were written for csm-lab's own pipeline: with a preset,
+        // what that engine lacks is dropped with a note. Axes given as flags must apply.
+        let lambda_source = source(overrides.lambda.is_some(), "--lambda", "sweep.lambda");
+        let lambda_axis = match (overrides.lambda.clone(), preset, axes.lambda) {
+            (Some(axis), Some(p), None) => {
+                return Err(Error::flag(
+                    "--lambda",
+                    &axis.spec,
+                    format!(
+                        "the {} preset has no λ to sweep ({}); drop --lambda",
+                        p.name,
+                        crate::presets::split_rule(&p.knobs)
+                    ),
+                ))
+            }
+            (Some(axis), _, _) => Some(axis),
+            (None, Some(p), None) => {
+                if let Some(axis) = &spec.lambda {
+                    notes.push(format!(
+                        "sweep.lambda = {} left out: the {} preset has no λ ({})",
+                        axis.spec,
+                        p.name,
+                        crate::presets::split_rule(&p.knobs)
+                    ));
+                }
+                None
+            }
+            (None, _, _) => spec.lambda.clone(),
+        };
+        let lambda = match (lambda_axis, preset, axes.lambda) {
+            (Some(axis), _, _) => axis,
+            (None, Some(p), None) => {
+                let v = crate::presets::lambda_value(&p.knobs).unwrap_or(config.shadow.lambda);
+                Axis {
+                    values: vec![v],
+                    spec: v.to_string(),
+                }
+            }
+            (None, _, _) => Axis {
                 values: decimal_range(0.0, 1.0, 0.05).expect("valid"),
                 spec: "0:1:0.05".into(),
-            }),
-            cascades: overrides.cascades.clone().or(spec.cascades).unwrap_or_else(|| Axis {
-                values: (1..=8).collect(),
-                spec: "1..8".into(),
-            }),
-            resolution: overrides
-                .resolution
-                .clone()
-                .or(spec.resolution)
-                .unwrap_or_else(|| Axis {
-                    values: vec![512, 1024, 2048, 4096],
-                    spec: "512,1024,2048,4096".into(),
-                }),
-            fit: overrides.fit.clone().or(spec.fit).unwrap_or_else(|| Axis {
+            },
+        };
+        let table_cascades = match (&spec.cascades, preset) {
+            (Some(axis), Some(p)) => {
+                let values: Vec<usize> = axis
+                    .values
+                    .iter()
+                    .copied()
+                    .filter(|n| axes.cascades.contains(n))
+                    .collect();
+                if values.len() < axis.values.len() {
+                    notes.push(format!(
+                        "sweep.cascades: {} left out: the {} preset takes {}",
+                        fmt_list(
+                            &axis
+                                .values
+                                .iter()
+                                .filter(|n| !axes.cascades.contains(n))
+                                .collect::<Vec<_>>()
+                        ),
+                        p.name,
+                        fmt_list(&axes.cascades)
+                    ));
+                }
+                (!values.is_empty()).then(|| Axis {
+                    spec: fmt_list(&values),
+                    values,
+                })
+            }
+            (table, _) => table.clone(),
+        };
+        let cascades = overrides.cascades.clone().or(table_cascades).unwrap_or_else(|| {
+            let mut values: Vec<usize> = (1..=8).filter(|n| axes.cascades.contains(n)).collect();
+            if values.is_empty() {
+                values = axes.cascades.clone();
+            }
+            Axis {
+                spec: fmt_list(&values),
+                values,
+            }
+        });
+        let resolution = overrides
+            .resolution
+            .clone()
+            .or(spec.resolution)
+            .unwrap_or_else(|| Axis {
+                values: vec![512, 1024, 2048, 4096],
+                spec: "512,1024,2048,4096".into(),
+            });
+        let fit = match (overrides.fit.clone(), &spec.fit, preset) {
+            (Some(axis), _, Some(p)) => {
+                return Err(Error::flag(
+                    "--fit",
+                    &axis.spec,
+                    format!(
+                        "the {} preset fixes its fit ({}); drop --fit",
+                        p.name, config.shadow.fit
+                    ),
+                ))
+            }
+            (Some(axis), _, None) => axis,
+            (None, Some(axis), Some(p)) => {
+                notes.push(format!(
+                    "sweep.fit = {} left out: the {} preset fixes its fit",
+                    axis.spec, p.name
+                ));
+                Axis {
+                    values: vec![config.shadow.fit],
+                    spec: config.shadow.fit.name().into(),
+                }
+            }
+            (None, Some(axis), None) => axis.clone(),
+            (None, None, _) => Axis {
                 values: vec![config.shadow.fit],
                 spec: config.shadow.fit.name().into(),
-            }),
+            },
+        };
+        let grid = Grid {
+            lambda,
+            cascades,
+            resolution,
+            fit,
+            notes,
         };
         let n = grid.len();
         if n > max_configs {
@@ -458,6 +577,26 @@ impl Grid {
                 grid.resolution.values.len(),
                 grid.fit.values.len()
             )));
+        }
+        if preset.is_some() {
+            // Each axis value must be one the engine accepts: say which axis and which value.
+            let mut c = config.clone();
+            let cascades_source = source(overrides.cascades.is_some(), "--cascades", "sweep.cascades");
+            let resolution_source = source(overrides.resolution.is_some(), "--resolution", "sweep.resolution");
+            for &v in &grid.cascades.values {
+                crate::presets::set_cascades(&mut c, v)
+                    .map_err(|e| Error::Other(format!("{cascades_source} = {}: {e}", grid.cascades.spec)))?;
+            }
+            for &v in &grid.resolution.values {
+                crate::presets::set_resolution(&mut c, v)
+                    .map_err(|e| Error::Other(format!("{resolution_source} = {}: {e}", grid.resolution.spec)))?;
+            }
+            if axes.lambda.is_some() {
+                for &v in &grid.lambda.values {
+                    crate::presets::set_lambda(&mut c, v)
+                        .map_err(|e| Error::Other(format!("{lambda_source} = {}: {e}", grid.lambda.spec)))?;
+                }
+            }
         }
         Ok(grid)
     }
@@ -490,12 +629,22 @@ impl Grid {
         out
     }
 
-    /// The CLI arguments that reproduce this grid.
-    pub fn cli_args(&self) -> String {
-        format!(
-            "--lambda {} --cascades {} --resolution {} --fit {}",
-            self.lambda.spec, self.cascades.spec, self.resolution.spec, self.fit.spec
-        )
+    /// The CLI arguments that reproduce this grid for `config` (a preset sweep names only the
+    /// axes its engine has).
+    pub fn cli_args(&self, config: &Config) -> String {
+        let axes = crate::presets::axes(config);
+        let mut out = String::new();
+        if axes.lambda.is_some() {
+            out.push_str(&format!("--lambda {} ", self.lambda.spec));
+        }
+        out.push_str(&format!(
+            "--cascades {} --resolution {}",
+            self.cascades.spec, self.resolution.spec
+        ));
+        if axes.fit {
+            out.push_str(&format!(" --fit {}", self.fit.spec));
+        }
+        out
     }
 }
 
@@ -509,14 +658,25 @@ pub struct Setting {
 }
 
 impl Setting {
-    /// The base config with this setting applied.
-    pub fn apply(&self, base: &Config) -> Config {
+    /// The base config with this setting applied. With a preset, λ goes to the engine's own
+    /// λ-like knob (when it has one) and the count and map size are checked against the
+    /// engine's; [`Grid::resolve`] has already checked every point, so this does not fail for
+    /// a resolved grid.
+    pub fn apply(&self, base: &Config) -> Result<Config> {
         let mut c = base.clone();
-        c.shadow.lambda = self.lambda;
-        c.shadow.cascades = self.cascades;
-        c.shadow.resolution = self.resolution;
-        c.shadow.fit = self.fit;
-        c
+        if c.shadow.preset.is_some() {
+            if crate::presets::axes(&c).lambda.is_some() {
+                crate::presets::set_lambda(&mut c, self.lambda)?;
+            }
+            crate::presets::set_cascades(&mut c, self.cascades)?;
+            crate::presets::set_resolution(&mut c, self.resolution)?;
+        } else {
+            c.shadow.lambda = self.lambda;
+            c.shadow.cascades = self.cascades;
+            c.shadow.resolution = self.resolution;
+            c.shadow.fit = self.fit;
+        }
+        Ok(c)
     }
 
     pub fn label(&self) -> String {
@@ -542,14 +702,14 @@ pub fn run(base: &Config, grid: &Grid, threads: Option<usize>, on_done: &(dyn Fn
         settings
             .par_iter()
             .map(|s| {
-                let a = analyze(&s.apply(base), &AnalysisOptions::summary_only());
+                let a = analyze(&s.apply(base)?, &AnalysisOptions::summary_only());
                 on_done();
-                Row {
+                Ok(Row {
                     setting: *s,
                     summary: a.summary,
-                }
+                })
             })
-            .collect::<Vec<_>>()
+            .collect::<Result<Vec<_>>>()
     };
     match threads {
         Some(n) => {
@@ -560,9 +720,9 @@ pub fn run(base: &Config, grid: &Grid, threads: Option<usize>, on_done: &(dyn Fn
                     format!("cannot start the thread pool: {e}"),
                 )
             })?;
-            Ok(pool.install(work))
+            pool.install(work)
         }
-        None => Ok(work()),
+        None => work(),
     }
 }
 

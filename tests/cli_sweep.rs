@@ -359,3 +359,90 @@ fn a_failed_write_leaves_every_file_whole_and_no_temporary_files() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("cannot write"));
 }
+
+#[test]
+fn a_preset_sweep_varies_only_the_axes_that_engine_has_and_each_row_equals_analyze() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = small_config(dir.path());
+    // EEVEE has a λ (its cascade exponent): λ × counts × resolutions; the fit axis of the
+    // [sweep] table is dropped with a note.
+    let out = dir.path().join("eevee");
+    let o = bin()
+        .args([
+            "sweep",
+            cfg.to_str().unwrap(),
+            "--preset",
+            "eevee",
+            "--resolution",
+            "1024",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("note: sweep.fit"));
+    let (header, rows) = read_csv(&out.join("sweep.csv"));
+    assert_eq!(rows.len(), 3 * 3, "3 λ x 3 counts x 1 resolution");
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let choice = csm_lab::presets::PresetChoice {
+        name: Some(csm_lab::presets::parse_flag("--preset", "eevee").unwrap()),
+        ..Default::default()
+    };
+    let base = csm_lab::Config::load_with_preset(&cfg, &choice).unwrap();
+    for row in &rows {
+        assert_eq!(row[col("preset")], "eevee");
+        let mut c = base.clone();
+        csm_lab::presets::set_lambda(&mut c, row[col("lambda")].parse().unwrap()).unwrap();
+        csm_lab::presets::set_cascades(&mut c, row[col("cascades")].parse().unwrap()).unwrap();
+        csm_lab::presets::set_resolution(&mut c, row[col("resolution")].parse().unwrap()).unwrap();
+        let a = csm_lab::analyze(&c, &csm_lab::AnalysisOptions::full());
+        assert_eq!(
+            row[col("mean_aliasing")].parse::<f64>().unwrap(),
+            a.summary.mean_aliasing,
+            "{row:?}"
+        );
+        assert_eq!(
+            row[col("shimmer_unsnapped")].parse::<f64>().unwrap(),
+            a.summary.shimmer_unsnapped
+        );
+    }
+    let lambdas: std::collections::BTreeSet<String> = rows.iter().map(|r| r[col("lambda")].clone()).collect();
+    assert_eq!(lambdas.len(), 3, "the engine's λ is swept");
+    // Bevy has no λ and at most 4 cascades: the table's λ axis and counts above 4 are dropped.
+    let out = dir.path().join("bevy");
+    let o = bin()
+        .args([
+            "sweep",
+            cfg.to_str().unwrap(),
+            "--preset",
+            "bevy",
+            "--no-plots",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, rows) = read_csv(&out.join("sweep.csv"));
+    assert_eq!(rows.len(), 3 * 2, "1 λ x counts {{1, 3, 4}} x 2 resolutions");
+    // Flags the engine cannot take are errors naming the flag.
+    for (args, fragment) in [
+        (vec!["--preset", "unreal", "--lambda", "0,1"], "--lambda"),
+        (vec!["--preset", "bevy", "--fit", "aabb"], "--fit"),
+        (vec!["--preset", "bevy", "--cascades", "6"], "--cascades"),
+        (vec!["--preset", "bevy", "--resolution", "1000"], "--resolution"),
+        (vec!["--preset", "nope"], "--preset"),
+    ] {
+        let o = bin()
+            .args(["sweep", cfg.to_str().unwrap(), "--quiet", "--out"])
+            .arg(dir.path().join("bad"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(fragment), "{args:?}: {err}");
+    }
+    assert!(!dir.path().join("bad").exists());
+}
