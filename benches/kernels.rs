@@ -5,40 +5,21 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use rayon::prelude::*;
+use glam::DVec2;
 
-use csm_lab::analysis::{analyze, AnalysisOptions, Summary};
+use csm_lab::analysis::{analyze, AnalysisOptions};
 use csm_lab::cascades::{LightPose, Rig};
-use csm_lab::config::{Config, Fit};
+use csm_lab::config::Config;
 use csm_lab::depth_range;
+use csm_lab::fitting::{minimal_sphere, Window};
 use csm_lab::geometry::{Lens, LightBasis};
 use csm_lab::snapping::SnapRule;
 use csm_lab::splits;
+use csm_lab::sweep::{self, Grid, GridOverrides};
 
 fn default_config() -> Config {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/default.toml");
     Config::load(&path).expect("configs/default.toml loads")
-}
-
-/// The default sweep's 672 configurations: lambda 0..=1 in steps of 0.05 (i / 20, so each value
-/// is the double nearest the decimal), 1..=8 cascades, four resolutions; sphere fit, 240
-/// frames. Both snap modes are measured inside every `analyze` call.
-fn sweep_configs(base: &Config) -> Vec<Config> {
-    let mut out = Vec::with_capacity(672);
-    for i in 0..=20 {
-        for cascades in 1..=8 {
-            for resolution in [512, 1024, 2048, 4096] {
-                let mut c = base.clone();
-                c.shadow.lambda = i as f64 / 20.0;
-                c.shadow.cascades = cascades;
-                c.shadow.resolution = resolution;
-                c.shadow.fit = Fit::Sphere;
-                c.motion.frames = 240;
-                out.push(c);
-            }
-        }
-    }
-    out
 }
 
 fn cascade_build(c: &mut Criterion) {
@@ -57,6 +38,24 @@ fn cascade_build(c: &mut Criterion) {
             let splits = splits::practical(black_box(z_lo), black_box(z_hi), s.cascades, black_box(s.lambda));
             let rig = Rig::new(lens, light, s.fit, s.resolution, SnapRule::default(), splits);
             rig.window(black_box(0), black_box(&lp), true)
+        })
+    });
+
+    // One cascade: its two split depths, its minimal sphere, the bordered window side, and the
+    // snapped window for the configured camera.
+    let k2 = lens.k2();
+    let (m, i) = (s.cascades, 1usize);
+    c.bench_function("cascade_build/one_cascade", |b| {
+        b.iter(|| {
+            let (lo, hi, lambda) = (black_box(z_lo), black_box(z_hi), black_box(s.lambda));
+            let near = lambda * splits::logarithmic(lo, hi, i, m) + (1.0 - lambda) * splits::uniform(lo, hi, i, m);
+            let far =
+                lambda * splits::logarithmic(lo, hi, i + 1, m) + (1.0 - lambda) * splits::uniform(lo, hi, i + 1, m);
+            let sphere = minimal_sphere(near, far, k2);
+            let rule = SnapRule::default();
+            let side = Window::side_with_border(2.0 * sphere.radius, s.resolution, rule.max_shift_texels());
+            let centre = lp.position + lp.forward * sphere.centre_depth;
+            Window::centred(centre, DVec2::splat(side), s.resolution, Some(rule))
         })
     });
 
@@ -79,29 +78,19 @@ fn one_analysis(c: &mut Criterion) {
 }
 
 fn default_sweep(c: &mut Criterion) {
+    // The sweep exactly as `csm-lab sweep configs/default.toml` computes it: the grid of the
+    // config's [sweep] table (21 λ × 8 counts × 4 resolutions, 240 frames, both snap modes).
     let base = default_config();
-    let configs = sweep_configs(&base);
-    assert_eq!(configs.len(), 672);
+    let grid = Grid::resolve(&base, &GridOverrides::default()).expect("default grid");
+    assert_eq!(grid.len(), 672);
     let mut group = c.benchmark_group("sweep");
     group.sample_size(20);
     group.bench_function("default_672_configs", |b| {
-        b.iter(|| {
-            let rows: Vec<Summary> = configs
-                .par_iter()
-                .map(|c| analyze(c, &AnalysisOptions::summary_only()).summary)
-                .collect();
-            black_box(rows)
-        })
+        b.iter(|| black_box(sweep::run(&base, &grid, None, &|| {}).expect("sweep runs")))
     });
     // One core: the figure to compare when other work shares the machine.
     group.bench_function("default_672_configs_one_thread", |b| {
-        b.iter(|| {
-            let rows: Vec<Summary> = configs
-                .iter()
-                .map(|c| analyze(c, &AnalysisOptions::summary_only()).summary)
-                .collect();
-            black_box(rows)
-        })
+        b.iter(|| black_box(sweep::run(&base, &grid, Some(1), &|| {}).expect("sweep runs")))
     });
     group.finish();
 }
