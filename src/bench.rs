@@ -32,7 +32,7 @@ use crate::error::{Error, Result};
 use crate::metrics::{self, DensitySample};
 use crate::motion;
 use crate::output::{csv_bytes, num, Exporter};
-use crate::plots::{log_range, series_color, Figure, PlotResult, FONT};
+use crate::plots::{draw_legend, log_range, series_color, Figure, PlotResult, FONT};
 use crate::shimmer::{self, wrap, ShimmerOptions};
 
 /// The relative error the summary table asks each metric to reach.
@@ -608,13 +608,7 @@ impl Figure for BenchFigure<'_> {
                 .label(format!("{} ({})", m.name, m.unit))
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font((FONT, 13))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerLeft, 13)?;
         Ok(())
     }
 }

@@ -21,7 +21,9 @@ use crate::analysis::{analyze, Analysis, AnalysisOptions};
 use crate::config::Config;
 use crate::error::{Error, Result};
 use crate::output::{csv_bytes, num, Exporter};
-use crate::plots::{draw_message, log_range, series_color, Figure, PlotResult, FONT};
+use crate::plots::{
+    draw_legend, draw_message, log_range, series_color, texels_per_pixel_chart, Figure, PlotResult, FONT,
+};
 use crate::presets::{is_generic_note, lambda_value, PresetChoice, PresetName};
 
 /// The presets compared and their analyses, in the order given.
@@ -203,30 +205,15 @@ impl Figure for DensityOverlay<'_> {
             .map(|a| a.summary.z_lo)
             .fold(f64::INFINITY, f64::min);
         let z_hi = with_cascades.iter().map(|a| a.summary.z_hi).fold(0.0, f64::max);
-        let tpp = with_cascades
-            .iter()
-            .flat_map(|a| a.density.iter().map(|d| d.texels_per_pixel));
-        let (ymin, ymax) = tpp.fold((1.0f64, 1.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
-        let (y0, y1) = log_range(ymin, ymax);
-        let (x0, x1) = log_range(z_lo, z_hi);
-        let mut chart = ChartBuilder::on(root)
-            .caption(&title, (FONT, 22))
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc("view depth (world units, log)")
-            .y_desc("texels per pixel (log; above 1 = sharper than the screen)")
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 13))
-            .draw()?;
-        let ideal = BLACK.stroke_width(2);
-        chart
-            .draw_series(DashedLineSeries::new(vec![(x0, 1.0), (x1, 1.0)], 8, 5, ideal))?
-            .label("ideal: 1 texel per pixel")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], ideal));
+        let (mut chart, _) = texels_per_pixel_chart(
+            root,
+            &title,
+            22,
+            log_range(z_lo, z_hi),
+            with_cascades
+                .iter()
+                .flat_map(|a| a.density.iter().map(|d| d.texels_per_pixel)),
+        )?;
         for (i, a) in c.analyses.iter().enumerate() {
             if a.density.is_empty() {
                 continue;
@@ -247,13 +234,7 @@ impl Figure for DensityOverlay<'_> {
                 ))
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font((FONT, 13))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight, 13)?;
         Ok(())
     }
 }

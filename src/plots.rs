@@ -4,6 +4,8 @@
 
 use std::sync::Once;
 
+use plotters::coord::cartesian::Cartesian2d;
+use plotters::coord::combinators::LogCoord;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -159,6 +161,59 @@ pub fn log_range(lo: f64, hi: f64) -> (f64, f64) {
     (lo / 1.3, hi * 1.3)
 }
 
+/// The chart type of the log-log "texels per pixel against view depth" figures.
+pub type DepthChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+
+/// A log-log chart of texels per pixel against view depth over `depth` with its axes, labels and
+/// the dashed "ideal: 1 texel per pixel" line already drawn; the y range covers `texels_per_pixel`
+/// and 1. Shared by `analyze`'s density figure, `sweep`'s λ figure and `compare`'s overlay.
+pub fn texels_per_pixel_chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    caption_size: u32,
+    depth: (f64, f64),
+    texels_per_pixel: impl Iterator<Item = f64>,
+) -> Result<(DepthChart<'a, DB>, (f64, f64)), PlotError> {
+    let (ymin, ymax) = texels_per_pixel.fold((1.0f64, 1.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let (y0, y1) = log_range(ymin, ymax);
+    let (x0, x1) = depth;
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FONT, caption_size))
+        .margin(14)
+        .x_label_area_size(50)
+        .y_label_area_size(70)
+        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+    chart
+        .configure_mesh()
+        .x_desc("view depth (world units, log)")
+        .y_desc("texels per pixel (log; above 1 = sharper than the screen)")
+        .axis_desc_style((FONT, 15))
+        .label_style((FONT, 13))
+        .draw()?;
+    let ideal = BLACK.stroke_width(2);
+    chart
+        .draw_series(DashedLineSeries::new(vec![(x0, 1.0), (x1, 1.0)], 8, 5, ideal))?
+        .label("ideal: 1 texel per pixel")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], ideal));
+    Ok((chart, (y0, y1)))
+}
+
+/// Draws the series legend in the house style (white, framed box) at `position`.
+pub fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    font_size: u32,
+) -> PlotResult {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font((FONT, font_size))
+        .draw()?;
+    Ok(())
+}
+
 // ---------------------------------------------------------------------------------------------
 // analyze: density.svg, shimmer.svg, cascades.svg
 // ---------------------------------------------------------------------------------------------
@@ -177,24 +232,13 @@ impl Figure for DensityFigure<'_> {
                 "No cascades needed: the scene is not visible within the shadow distance.",
             );
         };
-        let z_lo = a.summary.z_lo;
-        let z_hi = a.summary.z_hi;
-        let tpp = a.density.iter().map(|d| d.texels_per_pixel);
-        let (ymin, ymax) = tpp.fold((1.0f64, 1.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
-        let (y0, y1) = log_range(ymin, ymax);
-        let mut chart = ChartBuilder::on(root)
-            .caption(&title, (FONT, 22))
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d((z_lo..z_hi).log_scale(), (y0..y1).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc("view depth (world units, log)")
-            .y_desc("texels per pixel (log; above 1 = sharper than the screen)")
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 13))
-            .draw()?;
+        let (mut chart, (y0, y1)) = texels_per_pixel_chart(
+            root,
+            &title,
+            22,
+            (a.summary.z_lo, a.summary.z_hi),
+            a.density.iter().map(|d| d.texels_per_pixel),
+        )?;
         for (i, s) in rig.splits[1..rig.splits.len() - 1].iter().enumerate() {
             let style = RGBColor(150, 150, 150).stroke_width(1);
             let series = chart.draw_series(DashedLineSeries::new(vec![(*s, y0), (*s, y1)], 5, 4, style))?;
@@ -204,11 +248,6 @@ impl Figure for DensityFigure<'_> {
                     .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
             }
         }
-        let ideal = BLACK.stroke_width(2);
-        chart
-            .draw_series(DashedLineSeries::new(vec![(z_lo, 1.0), (z_hi, 1.0)], 8, 5, ideal))?
-            .label("ideal: 1 texel per pixel")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], ideal));
         for (i, c) in a.cascades.iter().enumerate() {
             let color = series_color(i);
             let pts: Vec<(f64, f64)> = a
@@ -225,13 +264,7 @@ impl Figure for DensityFigure<'_> {
                 ))
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3)));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font((FONT, 13))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight, 13)?;
         Ok(())
     }
 }
@@ -286,13 +319,7 @@ impl Figure for ShimmerFigure<'_> {
             .draw_series(LineSeries::new(s_pts, blue.stroke_width(4)))?
             .label(format!("snapped (RMS {:.3e} texels)", sn.stats.rms))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], blue.stroke_width(4)));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font((FONT, 14))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 14)?;
         Ok(())
     }
 }
@@ -400,13 +427,7 @@ impl Figure for CascadesFigure<'_> {
             )))?
             .label("camera")
             .legend(|(x, y)| Circle::new((x + 8, y), 4, BLACK.filled()));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font((FONT, 13))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft, 13)?;
         Ok(())
     }
 }

@@ -11,7 +11,9 @@ use crate::analysis::{analyze, Analysis, AnalysisOptions};
 use crate::config::{Config, Fit};
 use crate::error::Result;
 use crate::output::{csv_bytes, json_bytes, num};
-use crate::plots::{log_range, series_color, svg_to_png, Figure, PlotResult, FONT};
+use crate::plots::{
+    draw_legend, log_range, series_color, svg_to_png, texels_per_pixel_chart, Figure, PlotResult, FONT,
+};
 use crate::sweep::{self, Grid, Recommendation, Row, Setting};
 
 /// Everything a sweep produced, ready to be written.
@@ -417,31 +419,15 @@ impl Figure for LambdaDensityFigure<'_> {
             "Texels per pixel vs depth for several λ: {} cascades × {}², {} fit",
             rec.setting.cascades, rec.setting.resolution, rec.setting.fit
         );
-        let (z_lo, z_hi) = (rec.summary.z_lo, rec.summary.z_hi);
-        let all = self
-            .analyses
-            .iter()
-            .flat_map(|a| a.density.iter().map(|d| d.texels_per_pixel));
-        let (ymin, ymax) = all.fold((1.0f64, 1.0f64), |(a, b), v| (a.min(v), b.max(v)));
-        let (y0, y1) = log_range(ymin, ymax);
-        let mut chart = ChartBuilder::on(root)
-            .caption(&title, (FONT, 20))
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d((z_lo..z_hi).log_scale(), (y0..y1).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc("view depth (world units, log)")
-            .y_desc("texels per pixel (log; above 1 = sharper than the screen)")
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 13))
-            .draw()?;
-        let ideal = BLACK.stroke_width(2);
-        chart
-            .draw_series(DashedLineSeries::new(vec![(z_lo, 1.0), (z_hi, 1.0)], 8, 5, ideal))?
-            .label("ideal: 1 texel per pixel")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], ideal));
+        let (mut chart, (y0, y1)) = texels_per_pixel_chart(
+            root,
+            &title,
+            20,
+            (rec.summary.z_lo, rec.summary.z_hi),
+            self.analyses
+                .iter()
+                .flat_map(|a| a.density.iter().map(|d| d.texels_per_pixel)),
+        )?;
         for (k, a) in self.analyses.iter().enumerate() {
             let color = series_color(k);
             let width = if a.config.shadow.lambda == rec.setting.lambda {
@@ -481,13 +467,7 @@ impl Figure for LambdaDensityFigure<'_> {
                 }
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font((FONT, 13))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight, 13)?;
         Ok(())
     }
 }
@@ -563,13 +543,7 @@ impl Figure for ShimmerSweepFigure<'_> {
                 format!("snapped (largest {max_sn:.3} texels: NOT stable)")
             })
             .legend(move |(x, y)| Circle::new((x + 8, y), 4, blue.filled()));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .label_font((FONT, 14))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 14)?;
         Ok(())
     }
 }
@@ -653,13 +627,7 @@ impl Figure for ParetoFigure<'_> {
                 (FONT, 15).into_font().color(&red),
             )))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .label_font((FONT, 13))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 13)?;
         Ok(())
     }
 }
