@@ -56,7 +56,9 @@ pub fn aggregates(splits: &[f64], texel: &[f64], k: f64) -> Aggregates {
         max_aliasing,
         mean_aliasing: sum_z / (z_hi - z_lo),
         mean_log_aliasing: sum_log / (z_hi / z_lo).ln(),
-        undersampled_fraction: under / (z_hi - z_lo),
+        // The per-cascade lengths add up to the range only up to rounding: a share cannot
+        // exceed 1, so a sum one ulp over the range is reported as exactly 1.
+        undersampled_fraction: (under / (z_hi - z_lo)).min(1.0),
         cascade_max_aliasing: cmax,
         cascade_min_aliasing: cmin,
         split_jumps: texel.windows(2).map(|w| w[1] / w[0]).collect(),
@@ -210,6 +212,7 @@ mod tests {
             assert_relative_eq!(a.mean_aliasing, sum_z / cells as f64, max_relative = 2e-3);
             assert_relative_eq!(a.mean_log_aliasing, sum_ln / cells as f64, max_relative = 2e-3);
             assert!((a.undersampled_fraction - under / cells as f64).abs() < 1e-4);
+            assert!((0.0..=1.0).contains(&a.undersampled_fraction));
             assert!(a.max_aliasing >= worst && a.max_aliasing <= worst * 1.001);
         }
     }

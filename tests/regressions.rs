@@ -124,3 +124,18 @@ fn positions_and_paths_beyond_1e9_world_units_are_config_errors() {
         other => panic!("{other:?}"),
     }
 }
+
+/// The under-sampled share is a fraction: the three.js preset at its defaults on the default
+/// scene used to report 1.0000000000000002 (per-cascade lengths summing one ulp over the range).
+#[test]
+fn the_undersampled_fraction_never_exceeds_one() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/default.toml");
+    let choice = csm_lab::presets::PresetChoice {
+        name: Some(csm_lab::presets::parse_flag("--preset", "threejs").unwrap()),
+        engine_defaults: true,
+        ..Default::default()
+    };
+    let config = csm_lab::Config::load_with_preset(&path, &choice).unwrap();
+    let a = csm_lab::analyze(&config, &csm_lab::AnalysisOptions::summary_only());
+    assert_eq!(a.summary.undersampled_fraction, 1.0);
+}
