@@ -760,7 +760,12 @@ pub const STABLE_SHIMMER: f64 = 1e-3;
 /// What the recommendation optimises, in words (printed in reports).
 pub const OBJECTIVE: &str = "lowest mean aliasing (the average shadow-texel-to-pixel ratio over the depth range) \
 among configurations that fit the memory budget, cover every slice (coverage_violations = 0) and are stable when \
-snapped (shimmer_snapped <= 1e-3 texel); ties go to the lower max aliasing, then less memory, then fewer cascades";
+snapped (shimmer_snapped <= 1e-3 texel); means within 1% of the lowest count as equal, and among those the lowest \
+max aliasing wins, then less memory, then fewer cascades";
+
+/// Mean aliasing within this fraction of the best counts as equal: a 0.2% better mean is not
+/// worth a 20% worse worst case, so near-ties are decided by max aliasing.
+pub const MEAN_TOLERANCE: f64 = 0.01;
 
 /// The recommended row and why.
 #[derive(Debug, Clone, PartialEq)]
@@ -779,38 +784,50 @@ fn acceptable(r: &Row) -> bool {
 /// acceptable.
 pub fn recommend(rows: &[Row], budget_mib: f64) -> Option<Recommendation> {
     let budget_bytes = (budget_mib * 1024.0 * 1024.0).floor() as u64;
-    let better = |a: &Row, b: &Row| {
-        let (x, y) = (&a.summary, &b.summary);
-        x.mean_aliasing
-            .total_cmp(&y.mean_aliasing)
-            .then(x.max_aliasing.total_cmp(&y.max_aliasing))
-            .then(x.memory_bytes.cmp(&y.memory_bytes))
-            .then(a.setting.cascades.cmp(&b.setting.cascades))
-    };
-    let within = (0..rows.len())
-        .filter(|&i| acceptable(&rows[i]) && rows[i].summary.memory_bytes <= budget_bytes)
-        .min_by(|&a, &b| better(&rows[a], &rows[b]).then(a.cmp(&b)));
-    if let Some(index) = within {
+    let ok: Vec<usize> = (0..rows.len()).filter(|&i| acceptable(&rows[i])).collect();
+    let within: Vec<usize> = ok
+        .iter()
+        .copied()
+        .filter(|&i| rows[i].summary.memory_bytes <= budget_bytes)
+        .collect();
+    if let Some(index) = pick(rows, &within) {
         return Some(Recommendation {
             index,
             budget_bytes,
             within_budget: true,
         });
     }
-    (0..rows.len())
-        .filter(|&i| acceptable(&rows[i]))
+    // Nothing fits the budget: the cheapest acceptable configurations, best among them.
+    let cheapest = ok.iter().map(|&i| rows[i].summary.memory_bytes).min()?;
+    let cheap: Vec<usize> = ok
+        .into_iter()
+        .filter(|&i| rows[i].summary.memory_bytes == cheapest)
+        .collect();
+    pick(rows, &cheap).map(|index| Recommendation {
+        index,
+        budget_bytes,
+        within_budget: false,
+    })
+}
+
+/// The best of `candidates` by [`OBJECTIVE`]: the shortlist within [`MEAN_TOLERANCE`] of the
+/// lowest mean aliasing, then the lowest max aliasing, less memory, fewer cascades, grid order.
+fn pick(rows: &[Row], candidates: &[usize]) -> Option<usize> {
+    let best = candidates
+        .iter()
+        .map(|&i| rows[i].summary.mean_aliasing)
+        .min_by(f64::total_cmp)?;
+    candidates
+        .iter()
+        .copied()
+        .filter(|&i| rows[i].summary.mean_aliasing <= best * (1.0 + MEAN_TOLERANCE))
         .min_by(|&a, &b| {
-            rows[a]
-                .summary
-                .memory_bytes
-                .cmp(&rows[b].summary.memory_bytes)
-                .then(better(&rows[a], &rows[b]))
+            let (x, y) = (&rows[a].summary, &rows[b].summary);
+            x.max_aliasing
+                .total_cmp(&y.max_aliasing)
+                .then(x.memory_bytes.cmp(&y.memory_bytes))
+                .then(rows[a].setting.cascades.cmp(&rows[b].setting.cascades))
                 .then(a.cmp(&b))
-        })
-        .map(|index| Recommendation {
-            index,
-            budget_bytes,
-            within_budget: false,
         })
 }
 
@@ -965,5 +982,11 @@ mod tests {
         unstable[2].summary.shimmer_snapped = 0.2;
         assert_eq!(recommend(&unstable, 64.0).unwrap().index, 1);
         assert!(recommend(&[row(mib, 1.0, false)], 64.0).is_none());
+        // Means within 1% are a tie decided by the worst case; beyond 1% the mean decides.
+        let mut near = vec![row(mib, 1.0, true), row(mib, 1.009, true), row(mib, 1.02, true)];
+        near[0].summary.max_aliasing = 10.0;
+        near[1].summary.max_aliasing = 5.0;
+        near[2].summary.max_aliasing = 1.0;
+        assert_eq!(recommend(&near, 64.0).unwrap().index, 1);
     }
 }

@@ -180,12 +180,21 @@ fn pareto_rows_are_non_dominated_and_the_recommendation_fits_the_budget() {
         serde_json::from_slice(&std::fs::read(out.join("recommendation.json")).unwrap()).unwrap();
     assert_eq!(json["within_budget"], serde_json::Value::Bool(true));
     assert_eq!(json["recommended"]["mean_aliasing"].as_f64().unwrap(), mean(rec[0]));
-    // Nothing acceptable within the budget has a lower mean aliasing.
-    for r in &rows {
-        let ok = mem(r) <= 32 * 1024 * 1024
-            && r[col("coverage_violations")] == "0"
-            && r[col("shimmer_snapped")].parse::<f64>().unwrap() <= 1e-3;
-        assert!(!ok || mean(r) >= mean(rec[0]), "{r:?} beats the recommendation");
+    // The recommendation is within 1% of the lowest mean aliasing of the acceptable rows within
+    // the budget, and none of those near-ties has a lower max aliasing.
+    let max = |r: &Vec<String>| r[col("max_aliasing")].parse::<f64>().unwrap();
+    let ok: Vec<&Vec<String>> = rows
+        .iter()
+        .filter(|r| {
+            mem(r) <= 32 * 1024 * 1024
+                && r[col("coverage_violations")] == "0"
+                && r[col("shimmer_snapped")].parse::<f64>().unwrap() <= 1e-3
+        })
+        .collect();
+    let best = ok.iter().map(|r| mean(r)).fold(f64::INFINITY, f64::min);
+    assert!(mean(rec[0]) <= best * 1.01);
+    for r in ok.iter().filter(|r| mean(r) <= best * 1.01) {
+        assert!(max(r) >= max(rec[0]), "{r:?} is a near-tie with a lower worst case");
     }
 }
 
