@@ -88,30 +88,23 @@ pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool) -> Result
     })
 }
 
-/// The columns of `compare.csv`: `preset`, the sweep columns, then the extra findings.
-pub const COLUMNS: [&str; 21] = [
-    "preset",
-    "lambda",
-    "cascades",
-    "resolution",
-    "fit",
-    "z_lo",
-    "z_hi",
-    "max_aliasing",
-    "mean_aliasing",
-    "mean_log_aliasing",
-    "undersampled_fraction",
-    "shimmer_snapped",
-    "shimmer_unsnapped",
-    "size_jitter",
-    "coverage_violations",
-    "memory_bytes",
+/// `compare.csv`: `preset`, the sweep columns ([`crate::report::SUMMARY_COLUMNS`]), then these
+/// extra findings.
+pub const EXTRA_COLUMNS: [&str; 5] = [
     "snaps",
     "coverage_worst_texels",
     "min_slack_texels",
     "receivers_outside_depth",
     "casters_outside_depth",
 ];
+
+/// The header of `compare.csv`.
+pub fn columns() -> Vec<&'static str> {
+    std::iter::once("preset")
+        .chain(crate::report::SUMMARY_COLUMNS)
+        .chain(EXTRA_COLUMNS)
+        .collect()
+}
 
 /// Worst coverage miss (texels) and smallest slack over the configured snap mode's path.
 fn coverage_extremes(a: &Analysis) -> (f64, f64) {
@@ -146,29 +139,22 @@ pub fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
                 None => String::new(),
             };
             let cascades = a.rig.as_ref().map_or(a.config.shadow.cascades, |r| r.cascade_count());
-            Ok(vec![
-                preset_of(a).map_or_else(String::new, |p| p.to_string()),
+            let mut fields = vec![preset_of(a).map_or_else(String::new, |p| p.to_string())];
+            fields.extend(crate::report::summary_fields(
                 lambda,
-                cascades.to_string(),
-                a.config.shadow.resolution.to_string(),
-                fit_label(a),
-                num("z_lo", s.z_lo)?,
-                num("z_hi", s.z_hi)?,
-                num("max_aliasing", s.max_aliasing)?,
-                num("mean_aliasing", s.mean_aliasing)?,
-                num("mean_log_aliasing", s.mean_log_aliasing)?,
-                num("undersampled_fraction", s.undersampled_fraction)?,
-                num("shimmer_snapped", s.shimmer_snapped)?,
-                num("shimmer_unsnapped", s.shimmer_unsnapped)?,
-                num("size_jitter", s.size_jitter)?,
-                s.coverage_violations.to_string(),
-                s.memory_bytes.to_string(),
+                cascades,
+                a.config.shadow.resolution,
+                &fit_label(a),
+                s,
+            )?);
+            fields.extend([
                 a.config.shadow.snap.to_string(),
                 num("coverage_worst_texels", worst)?,
                 num("min_slack_texels", slack)?,
                 num("receivers_outside_depth", p.map_or(0.0, |p| p.receivers_outside_depth))?,
                 num("casters_outside_depth", p.map_or(0.0, |p| p.casters_outside_depth))?,
-            ])
+            ]);
+            Ok(fields)
         })
         .collect()
 }
@@ -181,7 +167,7 @@ impl Exporter<Comparison> for CompareCsv {
     }
 
     fn render(&self, c: &Comparison) -> Result<Vec<u8>> {
-        csv_bytes(&COLUMNS, &rows(c)?)
+        csv_bytes(&columns(), &rows(c)?)
     }
 }
 

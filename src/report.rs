@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::analysis::{analyze, Analysis, AnalysisOptions};
+use crate::analysis::{analyze, Analysis, AnalysisOptions, Summary};
 use crate::config::{Config, Fit};
 use crate::error::Result;
 use crate::output::{csv_bytes, json_bytes, num};
@@ -85,7 +85,9 @@ impl SweepResult {
     }
 }
 
-pub const SWEEP_COLUMNS: [&str; 19] = [
+/// The columns every per-configuration table shares (`sweep.csv`, `compare.csv`): the setting,
+/// then the summary metrics. A contract: users' scripts and CI baselines read them by name.
+pub const SUMMARY_COLUMNS: [&str; 15] = [
     "lambda",
     "cascades",
     "resolution",
@@ -101,11 +103,32 @@ pub const SWEEP_COLUMNS: [&str; 19] = [
     "size_jitter",
     "coverage_violations",
     "memory_bytes",
-    "cascades_needed",
-    "pareto",
-    "recommended",
-    "preset",
 ];
+
+/// The fields of [`SUMMARY_COLUMNS`] for one configuration (`lambda` may be empty where a split
+/// rule has none).
+pub fn summary_fields(lambda: String, cascades: usize, resolution: u32, fit: &str, s: &Summary) -> Result<Vec<String>> {
+    Ok(vec![
+        lambda,
+        cascades.to_string(),
+        resolution.to_string(),
+        fit.to_string(),
+        num("z_lo", s.z_lo)?,
+        num("z_hi", s.z_hi)?,
+        num("max_aliasing", s.max_aliasing)?,
+        num("mean_aliasing", s.mean_aliasing)?,
+        num("mean_log_aliasing", s.mean_log_aliasing)?,
+        num("undersampled_fraction", s.undersampled_fraction)?,
+        num("shimmer_snapped", s.shimmer_snapped)?,
+        num("shimmer_unsnapped", s.shimmer_unsnapped)?,
+        num("size_jitter", s.size_jitter)?,
+        s.coverage_violations.to_string(),
+        s.memory_bytes.to_string(),
+    ])
+}
+
+/// `sweep.csv`: [`SUMMARY_COLUMNS`], then these.
+pub const SWEEP_EXTRA_COLUMNS: [&str; 4] = ["cascades_needed", "pareto", "recommended", "preset"];
 
 pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
     let rec = r.recommendation.as_ref().map(|x| x.index);
@@ -122,31 +145,25 @@ pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
         .iter()
         .enumerate()
         .map(|(i, row)| {
-            let s = &row.summary;
-            Ok(vec![
-                num("lambda", row.setting.lambda)?,
-                row.setting.cascades.to_string(),
-                row.setting.resolution.to_string(),
-                row.setting.fit.to_string(),
-                num("z_lo", s.z_lo)?,
-                num("z_hi", s.z_hi)?,
-                num("max_aliasing", s.max_aliasing)?,
-                num("mean_aliasing", s.mean_aliasing)?,
-                num("mean_log_aliasing", s.mean_log_aliasing)?,
-                num("undersampled_fraction", s.undersampled_fraction)?,
-                num("shimmer_snapped", s.shimmer_snapped)?,
-                num("shimmer_unsnapped", s.shimmer_unsnapped)?,
-                num("size_jitter", s.size_jitter)?,
-                s.coverage_violations.to_string(),
-                s.memory_bytes.to_string(),
-                s.cascades_needed.to_string(),
+            let st = &row.setting;
+            let mut fields = summary_fields(
+                num("lambda", st.lambda)?,
+                st.cascades,
+                st.resolution,
+                st.fit.name(),
+                &row.summary,
+            )?;
+            fields.extend([
+                row.summary.cascades_needed.to_string(),
                 r.front.contains(&i).to_string(),
                 (rec == Some(i)).to_string(),
                 preset.clone(),
-            ])
+            ]);
+            Ok(fields)
         })
         .collect::<Result<Vec<_>>>()?;
-    csv_bytes(&SWEEP_COLUMNS, &rows)
+    let header: Vec<&str> = SUMMARY_COLUMNS.iter().chain(&SWEEP_EXTRA_COLUMNS).copied().collect();
+    csv_bytes(&header, &rows)
 }
 
 fn row_json(row: &Row) -> serde_json::Value {
