@@ -67,7 +67,7 @@ use glam::{DVec2, DVec3};
 use crate::cascades::{LightPose, Rig};
 use crate::config::{Config, Fit};
 use crate::geometry::CameraPose;
-use crate::shimmer::{wrap, Coverage, FrameShimmer, PathResult, ShimmerOptions, ShimmerStats};
+use crate::shimmer::{wrap, PathResult, PathTotals, ShimmerOptions};
 use crate::snapping::SnapMode;
 
 /// Arithmetic of the cascade pipeline (`[shadow] precision`, `--precision`).
@@ -432,17 +432,11 @@ pub fn along_path(
         .map(|ps| ps.iter().map(|p| rig.light.to_light_xy(*p)).collect())
         .collect();
 
-    let mut coverage = Coverage {
-        violations: vec![0; m],
-        worst_texels: vec![0.0; m],
-        min_slack_texels: vec![f64::INFINITY; m],
-    };
+    let mut totals = PathTotals::new(snapped, m);
     // Previous frame per cascade: window origin (world-anchored light space, f64), texel size
     // and the probes' texel coordinates (None outside the window).
     type Frame = (DVec2, DVec2, Vec<Option<DVec2>>);
     let mut prev: Vec<Option<Frame>> = vec![None; m];
-    let (mut sum_ms, mut pairs, mut max_drift, mut jitter, mut flip_sum) = (0.0, 0usize, 0.0f64, 0.0f64, 0.0);
-    let mut frames = Vec::new();
     let mut err_sq = vec![0.0; m];
     let mut err_max = vec![0.0f64; m];
     let mut err_count = vec![0usize; m];
@@ -459,14 +453,7 @@ pub fn along_path(
             // window's f32 origin and texel size.
             let slice = &rig.slices[i];
             for c in lp.corners(&rig.lens, slice.near, slice.far) {
-                let s = (c - anchor_xy - o) / tx;
-                let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
-                coverage.min_slack_texels[i] = coverage.min_slack_texels[i].min(slack);
-                let tol = 1e-9 + 8.0 * f64::EPSILON * (c / tx).abs().max_element();
-                if -slack > tol {
-                    coverage.violations[i] += 1;
-                    coverage.worst_texels[i] = coverage.worst_texels[i].max(-slack);
-                }
+                totals.corner(i, (c - anchor_xy - o) / tx, n, (c / tx).abs().max_element());
             }
             // The shader's lookups, and S7 against the exact lookup in the same window, for the
             // probes this window serves (None for probes the camera has left behind: an
@@ -498,14 +485,14 @@ pub fn along_path(
             let o_world = o + anchor_xy;
             if let Some((po, ptx, ps)) = &prev[i] {
                 let size_change = (tx.x / ptx.x - 1.0).abs().max((tx.y / ptx.y - 1.0).abs());
-                jitter = jitter.max(size_change);
-                let (mut ss, mut mx, mut flipped, mut served) = (0.0, 0.0f64, 0usize, 0usize);
+                totals.size_change(size_change);
+                let (mut ss, mut mx_sq, mut flipped, mut served) = (0.0, 0.0f64, 0usize, 0usize);
                 let both = s32.iter().zip(ps).filter_map(|(a, b)| a.zip(*b));
                 for (s1, s0) in both {
                     served += 1;
                     let d = DVec2::new(wrap(s1.x - s0.x), wrap(s1.y - s0.y));
                     ss += d.length_squared();
-                    mx = mx.max(d.length());
+                    mx_sq = mx_sq.max(d.length_squared());
                     if opts.cell_flips {
                         // Sampled texel centres and how far they moved, in texels of the
                         // current window.
@@ -520,41 +507,13 @@ pub fn along_path(
                 // Frame pairs in which the cascade serves no probe say nothing about drift.
                 if served > 0 {
                     let count = served as f64;
-                    let ms = ss / count;
                     let flips = opts.cell_flips.then_some(flipped as f64 / count);
-                    flip_sum += flips.unwrap_or(0.0);
-                    sum_ms += ms;
-                    pairs += 1;
-                    max_drift = max_drift.max(mx);
-                    if opts.frame_rows {
-                        frames.push(FrameShimmer {
-                            frame: t,
-                            cascade: i,
-                            snapped,
-                            size_change,
-                            phase_drift_rms: ms.sqrt(),
-                            phase_drift_max: mx,
-                            cell_flips: flips,
-                        });
-                    }
+                    totals.drift(t, i, size_change, (ss / count, mx_sq, flips), opts);
                 }
             }
             prev[i] = Some((o_world, tx, s32));
         }
     }
-    for s in &mut coverage.min_slack_texels {
-        if !s.is_finite() {
-            *s = 0.0;
-        }
-    }
-    let stats = ShimmerStats {
-        rms: if pairs > 0 { (sum_ms / pairs as f64).sqrt() } else { 0.0 },
-        max: max_drift,
-        size_jitter: jitter,
-        cell_flip_rate: opts
-            .cell_flips
-            .then(|| if pairs > 0 { flip_sum / pairs as f64 } else { 0.0 }),
-    };
     let total: usize = err_count.iter().sum();
     let lookup = LookupError {
         max: err_max.iter().cloned().fold(0.0, f64::max),
@@ -571,11 +530,7 @@ pub fn along_path(
         cascade_max: err_max,
     };
     EmulatedPath {
-        path: PathResult {
-            stats,
-            coverage,
-            frames,
-        },
+        path: totals.finish(opts),
         lookup,
     }
 }

@@ -234,10 +234,11 @@ impl CornerTexels {
     }
 }
 
-/// Running totals of one snap mode along the path.
-struct ModeState {
+/// Running totals of one snap mode along a path: coverage, S1, S3, S4 and the per-frame rows.
+/// Every walk (the shared two-mode walk, the general walk for engine presets, the binary32
+/// emulation in [`crate::precision`]) accumulates into one of these.
+pub(crate) struct PathTotals {
     snapped: bool,
-    prev: Vec<Option<Window>>,
     coverage: Coverage,
     sum_ms: f64,
     pairs: usize,
@@ -249,11 +250,10 @@ struct ModeState {
     frames: Vec<FrameShimmer>,
 }
 
-impl ModeState {
-    fn new(snapped: bool, m: usize) -> Self {
-        ModeState {
+impl PathTotals {
+    pub(crate) fn new(snapped: bool, m: usize) -> Self {
+        PathTotals {
             snapped,
-            prev: vec![None; m],
             coverage: Coverage {
                 violations: vec![0; m],
                 worst_texels: vec![0.0; m],
@@ -268,58 +268,45 @@ impl ModeState {
         }
     }
 
-    /// Coverage: the slice and the window are convex, so the slice's light-space footprint is
-    /// the hull of its corners; checking the 8 corners is exact.
+    /// One slice corner of cascade `i` at texel coordinates `s` in a window of `n` texels;
+    /// `magnitude` is the size of the coordinate before the origin was subtracted, which sets
+    /// the rounding tolerance (a few ulps of it, at least 1e-9 texel).
     #[inline]
-    fn cover(&mut self, i: usize, w: &Window, corners: &[DVec2; 8], ct: &CornerTexels, resolution: u32) {
-        let n = resolution as f64;
-        let o = w.origin_texels;
-        // Smallest margin over the corners, from the extreme corners alone: `x - o` and
-        // `n - x` are monotone in x under round-to-nearest, so the extreme of the rounded
-        // margins is the rounded margin of the extreme: bit-identical to a per-corner minimum.
-        let slack = (ct.lo.x - o.x)
-            .min(n - (ct.hi.x - o.x))
-            .min(ct.lo.y - o.y)
-            .min(n - (ct.hi.y - o.y));
+    pub(crate) fn corner(&mut self, i: usize, s: DVec2, n: f64, magnitude: f64) {
+        let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
         let cov = &mut self.coverage;
         cov.min_slack_texels[i] = cov.min_slack_texels[i].min(slack);
-        // Every corner's tolerance is at least 1e-9, so unless the worst margin is below
-        // -1e-9 no corner can count as outside and the per-corner pass is skipped.
-        if -slack > 1e-9 {
-            for c in corners {
-                let s = w.texel_coords(*c);
-                let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
-                // Rounding tolerance: a few ulps of the texel coordinate's magnitude.
-                let tol = 1e-9 + 8.0 * f64::EPSILON * (*c / w.texel).abs().max_element();
-                if -slack > tol {
-                    cov.violations[i] += 1;
-                    cov.worst_texels[i] = cov.worst_texels[i].max(-slack);
-                }
-            }
+        let tol = 1e-9 + 8.0 * f64::EPSILON * magnitude;
+        if -slack > tol {
+            cov.violations[i] += 1;
+            cov.worst_texels[i] = cov.worst_texels[i].max(-slack);
         }
     }
 
-    /// Shimmer between this cascade's previous window and `w`.
+    /// One frame's coverage of cascade `i` as [`Rig::coverage`] measured it.
+    pub(crate) fn add_coverage(&mut self, i: usize, cov: crate::cascades::FrameCoverage) {
+        let c = &mut self.coverage;
+        c.violations[i] += cov.violations;
+        c.worst_texels[i] = c.worst_texels[i].max(cov.worst_texels);
+        c.min_slack_texels[i] = c.min_slack_texels[i].min(cov.min_slack_texels);
+    }
+
+    /// S1 of one frame pair.
     #[inline]
-    fn shimmer(&mut self, t: usize, i: usize, w: &Window, probe_xy: &[DVec2], opts: ShimmerOptions) {
-        let Some(p) = self.prev[i] else {
-            return;
-        };
-        let same_size = w.texel == p.texel;
-        // x / x is exactly 1, so an unchanged size gives exactly 0 without the divisions.
-        let size_change = if same_size {
-            0.0
-        } else {
-            ((w.texel.x / p.texel.x - 1.0).abs()).max((w.texel.y / p.texel.y - 1.0).abs())
-        };
+    pub(crate) fn size_change(&mut self, size_change: f64) {
         self.jitter = self.jitter.max(size_change);
-        let closed_form = same_size && !opts.probe_drift;
-        let (ms, mx_sq, flips) = if closed_form && !opts.cell_flips {
-            let ms = closed_form_drift(&p, w);
-            (ms, ms, None)
-        } else {
-            per_probe(&p, w, probe_xy, closed_form, opts.cell_flips)
-        };
+    }
+
+    /// S3 and S4 of one frame pair: (mean square drift, largest square drift, flip share).
+    #[inline]
+    pub(crate) fn drift(
+        &mut self,
+        t: usize,
+        i: usize,
+        size_change: f64,
+        (ms, mx_sq, flips): (f64, f64, Option<f64>),
+        opts: ShimmerOptions,
+    ) {
         if let Some(f) = flips {
             self.flip_sum += f;
         }
@@ -339,7 +326,7 @@ impl ModeState {
         }
     }
 
-    fn finish(mut self, opts: ShimmerOptions) -> PathResult {
+    pub(crate) fn finish(mut self, opts: ShimmerOptions) -> PathResult {
         for s in &mut self.coverage.min_slack_texels {
             if !s.is_finite() {
                 *s = 0.0;
@@ -363,6 +350,70 @@ impl ModeState {
             coverage: self.coverage,
             frames: self.frames,
         }
+    }
+}
+
+/// One snap mode of a walk: its totals and each cascade's previous window.
+struct ModeState {
+    totals: PathTotals,
+    prev: Vec<Option<Window>>,
+}
+
+impl ModeState {
+    fn new(snapped: bool, m: usize) -> Self {
+        ModeState {
+            totals: PathTotals::new(snapped, m),
+            prev: vec![None; m],
+        }
+    }
+
+    /// Coverage: the slice and the window are convex, so the slice's light-space footprint is
+    /// the hull of its corners; checking the 8 corners is exact.
+    #[inline]
+    fn cover(&mut self, i: usize, w: &Window, corners: &[DVec2; 8], ct: &CornerTexels, resolution: u32) {
+        let n = resolution as f64;
+        let o = w.origin_texels;
+        // Smallest margin over the corners, from the extreme corners alone: `x - o` and
+        // `n - x` are monotone in x under round-to-nearest, so the extreme of the rounded
+        // margins is the rounded margin of the extreme: bit-identical to a per-corner minimum.
+        let slack = (ct.lo.x - o.x)
+            .min(n - (ct.hi.x - o.x))
+            .min(ct.lo.y - o.y)
+            .min(n - (ct.hi.y - o.y));
+        let cov = &mut self.totals.coverage;
+        cov.min_slack_texels[i] = cov.min_slack_texels[i].min(slack);
+        // Every corner's tolerance is at least 1e-9, so unless the worst margin is below
+        // -1e-9 no corner can count as outside and the per-corner pass is skipped.
+        if -slack > 1e-9 {
+            for c in corners {
+                self.totals
+                    .corner(i, w.texel_coords(*c), n, (*c / w.texel).abs().max_element());
+            }
+        }
+    }
+
+    /// Shimmer between this cascade's previous window and `w`.
+    #[inline]
+    fn shimmer(&mut self, t: usize, i: usize, w: &Window, probe_xy: &[DVec2], opts: ShimmerOptions) {
+        let Some(p) = self.prev[i] else {
+            return;
+        };
+        let same_size = w.texel == p.texel;
+        // x / x is exactly 1, so an unchanged size gives exactly 0 without the divisions.
+        let size_change = if same_size {
+            0.0
+        } else {
+            ((w.texel.x / p.texel.x - 1.0).abs()).max((w.texel.y / p.texel.y - 1.0).abs())
+        };
+        let closed_form = same_size && !opts.probe_drift;
+        let (ms, mx_sq, flips) = if closed_form && !opts.cell_flips {
+            let ms = closed_form_drift(&p, w);
+            (ms, ms, None)
+        } else {
+            per_probe(&p, w, probe_xy, closed_form, opts.cell_flips)
+        };
+        self.totals.size_change(size_change);
+        self.totals.drift(t, i, size_change, (ms, mx_sq, flips), opts);
     }
 }
 
@@ -444,7 +495,7 @@ fn walk<const K: usize>(
             let bounds = crate::cascades::bounds_2d(&corners);
             let mut shared: Option<CornerTexels> = None;
             for st in &mut states {
-                let w = rig.window(i, &lp, st.snapped);
+                let w = rig.window(i, &lp, st.totals.snapped);
                 if matches!(&shared, Some(ct) if ct.texel != w.texel) {
                     shared = None;
                 }
@@ -455,7 +506,7 @@ fn walk<const K: usize>(
             }
         }
     }
-    states.map(|st| st.finish(opts))
+    states.map(|st| st.totals.finish(opts))
 }
 
 /// One snap mode along the path for any rig, including engine presets whose light basis moves
@@ -479,131 +530,80 @@ fn along_path_general(
     } else {
         Vec::new()
     };
-    let mut prev: Vec<Option<Window>> = vec![None; m];
+    let no_probes: Vec<DVec3> = Vec::new();
     // Each cascade's basis in the previous frame (only tracked when it can change).
     let mut prev_basis: Vec<LightBasis> = vec![rig.light; m];
-    let mut coverage = Coverage {
-        violations: vec![0; m],
-        worst_texels: vec![0.0; m],
-        min_slack_texels: vec![f64::INFINITY; m],
-    };
-    let mut sum_ms = 0.0;
-    let mut pairs = 0usize;
-    let mut max_drift: f64 = 0.0;
-    let mut jitter: f64 = 0.0;
-    let mut flip_sum = 0.0;
-    let mut frames = Vec::new();
+    let mut st = ModeState::new(snapped, m);
     for (t, pose) in poses.iter().enumerate() {
         let lp = LightPose::new(&rig.light, pose);
         for i in 0..m {
             let w = rig.window(i, &lp, snapped);
-            let cov = rig.coverage(i, &lp, &w);
-            coverage.violations[i] += cov.violations;
-            coverage.worst_texels[i] = coverage.worst_texels[i].max(cov.worst_texels);
-            coverage.min_slack_texels[i] = coverage.min_slack_texels[i].min(cov.min_slack_texels);
-            if let Some(p) = prev[i] {
+            st.totals.add_coverage(i, rig.coverage(i, &lp, &w));
+            let basis = if fixed { rig.light } else { rig.basis(i, &lp) };
+            if let Some(p) = st.prev[i] {
                 let size_change = ((w.texel.x / p.texel.x - 1.0).abs()).max((w.texel.y / p.texel.y - 1.0).abs());
-                jitter = jitter.max(size_change);
-                let same_size = w.texel == p.texel;
-                let basis = if fixed { rig.light } else { rig.basis(i, &lp) };
                 let pb = prev_basis[i];
-                let closed_form = same_size && (fixed || pb == basis) && !opts.probe_drift;
-                let mut flips = None;
-                let (mut ms, mut mx) = (0.0, 0.0f64);
-                if closed_form {
-                    let d = DVec2::new(
-                        wrap(p.origin_texels.x - w.origin_texels.x),
-                        wrap(p.origin_texels.y - w.origin_texels.y),
-                    );
-                    ms = d.length_squared();
-                    mx = d.length();
-                }
-                if !closed_form || opts.cell_flips {
-                    let (mut ss, mut pmx, mut flipped) = (0.0, 0.0f64, 0usize);
-                    let mut probe = |s0: DVec2, s1: DVec2, moved: DVec2| {
-                        let d = DVec2::new(wrap(s1.x - s0.x), wrap(s1.y - s0.y));
-                        ss += d.length_squared();
-                        pmx = pmx.max(d.length());
-                        if moved.x >= 0.5 || moved.y >= 0.5 {
-                            flipped += 1;
-                        }
-                    };
-                    let count = if fixed {
-                        for q in &probe_xy[i] {
-                            let s0 = p.texel_coords(*q);
-                            let s1 = w.texel_coords(*q);
-                            // Sampled texel centres in light space, and how far they moved in
-                            // texels of the current window.
-                            let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
-                            let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
-                            probe(s0, s1, ((c1 - c0) / w.texel).abs());
-                        }
-                        probe_xy[i].len()
-                    } else {
-                        // The basis changed: each frame reads a probe through its own basis.
-                        // The previous texel centre is a line along the previous light
-                        // direction; take its point at the probe's depth and measure how far
-                        // it lies from the current texel centre in the current basis.
-                        for q in &probes[i] {
-                            let s0 = p.texel_coords(pb.to_light_xy(*q));
-                            let s1 = w.texel_coords(basis.to_light_xy(*q));
-                            let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
-                            let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
-                            let c0_world = pb.x * c0.x + pb.y * c0.y + pb.z * pb.z.dot(*q);
-                            let c0_now = basis.to_light_xy(c0_world);
-                            probe(s0, s1, ((c1 - c0_now) / w.texel).abs());
-                        }
-                        probes[i].len()
-                    };
-                    let count = count.max(1) as f64;
-                    if !closed_form {
-                        ms = ss / count;
-                        mx = pmx;
-                    }
-                    if opts.cell_flips {
-                        flips = Some(flipped as f64 / count);
-                        flip_sum += flipped as f64 / count;
-                    }
-                }
-                sum_ms += ms;
-                pairs += 1;
-                max_drift = max_drift.max(mx);
-                if opts.frame_rows {
-                    frames.push(FrameShimmer {
-                        frame: t,
-                        cascade: i,
-                        snapped,
-                        size_change,
-                        phase_drift_rms: ms.sqrt(),
-                        phase_drift_max: mx,
-                        cell_flips: flips,
-                    });
-                }
+                let closed_form = w.texel == p.texel && (fixed || pb == basis) && !opts.probe_drift;
+                let drift = if closed_form && !opts.cell_flips {
+                    let ms = closed_form_drift(&p, &w);
+                    (ms, ms, None)
+                } else if fixed {
+                    per_probe(
+                        &p,
+                        &w,
+                        probe_xy.get(i).map_or(&[][..], |v| &v[..]),
+                        closed_form,
+                        opts.cell_flips,
+                    )
+                } else {
+                    let ps = probes.get(i).unwrap_or(&no_probes);
+                    per_probe_moving_basis(&p, &w, ps, (&pb, &basis), closed_form, opts.cell_flips)
+                };
+                st.totals.size_change(size_change);
+                st.totals.drift(t, i, size_change, drift, opts);
             }
-            prev[i] = Some(w);
-            if !fixed {
-                prev_basis[i] = rig.basis(i, &lp);
-            }
+            st.prev[i] = Some(w);
+            prev_basis[i] = basis;
         }
     }
-    for s in &mut coverage.min_slack_texels {
-        if !s.is_finite() {
-            *s = 0.0;
+    st.totals.finish(opts)
+}
+
+/// [`per_probe`] for a basis that moved between the frames: each frame reads a probe through
+/// its own basis. The previous texel centre is a line along the previous light direction; its
+/// point at the probe's depth is measured against the current texel centre in the current basis.
+fn per_probe_moving_basis(
+    p: &Window,
+    w: &Window,
+    probes: &[DVec3],
+    (pb, basis): (&LightBasis, &LightBasis),
+    closed_form: bool,
+    cell_flips: bool,
+) -> (f64, f64, Option<f64>) {
+    let (mut ss, mut pmx_sq, mut flipped) = (0.0, 0.0f64, 0usize);
+    for q in probes {
+        let s0 = p.texel_coords(pb.to_light_xy(*q));
+        let s1 = w.texel_coords(basis.to_light_xy(*q));
+        let d = DVec2::new(wrap(s1.x - s0.x), wrap(s1.y - s0.y));
+        let d2 = d.length_squared();
+        ss += d2;
+        pmx_sq = pmx_sq.max(d2);
+        let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
+        let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
+        let c0_world = pb.x * c0.x + pb.y * c0.y + pb.z * pb.z.dot(*q);
+        let moved = ((c1 - basis.to_light_xy(c0_world)) / w.texel).abs();
+        if moved.x >= 0.5 || moved.y >= 0.5 {
+            flipped += 1;
         }
     }
-    let stats = ShimmerStats {
-        rms: if pairs > 0 { (sum_ms / pairs as f64).sqrt() } else { 0.0 },
-        max: max_drift,
-        size_jitter: jitter,
-        cell_flip_rate: opts
-            .cell_flips
-            .then(|| if pairs > 0 { flip_sum / pairs as f64 } else { 0.0 }),
+    let count = probes.len().max(1) as f64;
+    let (ms, mx_sq) = if closed_form {
+        let ms = closed_form_drift(p, w);
+        (ms, ms)
+    } else {
+        (ss / count, pmx_sq)
     };
-    PathResult {
-        stats,
-        coverage,
-        frames,
-    }
+    (ms, mx_sq, cell_flips.then(|| flipped as f64 / count))
 }
 
 #[cfg(test)]
