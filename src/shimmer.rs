@@ -536,13 +536,13 @@ fn along_path_general(
     let mut st = ModeState::new(snapped, m);
     for (t, pose) in poses.iter().enumerate() {
         let lp = LightPose::new(&rig.light, pose);
-        for i in 0..m {
+        for (i, prev_basis) in prev_basis.iter_mut().enumerate() {
             let w = rig.window(i, &lp, snapped);
             st.totals.add_coverage(i, rig.coverage(i, &lp, &w));
             let basis = if fixed { rig.light } else { rig.basis(i, &lp) };
             if let Some(p) = st.prev[i] {
                 let size_change = ((w.texel.x / p.texel.x - 1.0).abs()).max((w.texel.y / p.texel.y - 1.0).abs());
-                let pb = prev_basis[i];
+                let pb = *prev_basis;
                 let closed_form = w.texel == p.texel && (fixed || pb == basis) && !opts.probe_drift;
                 let drift = if closed_form && !opts.cell_flips {
                     let ms = closed_form_drift(&p, &w);
@@ -563,7 +563,7 @@ fn along_path_general(
                 st.totals.drift(t, i, size_change, drift, opts);
             }
             st.prev[i] = Some(w);
-            prev_basis[i] = basis;
+            *prev_basis = basis;
         }
     }
     st.totals.finish(opts)
