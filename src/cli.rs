@@ -187,6 +187,15 @@ impl Outcome {
     }
 }
 
+/// Loads a config, with `--preset NAME` (when given) overriding `shadow.preset`.
+fn load_with_preset_flag(path: &Path, preset: Option<&str>) -> Result<Config> {
+    let choice = crate::presets::PresetChoice {
+        name: preset.map(|s| crate::presets::parse_flag("--preset", s)).transpose()?,
+        ..Default::default()
+    };
+    Config::load_with_preset(path, &choice)
+}
+
 /// The default output directory for a config: `reports/<name>/`.
 pub fn default_out_dir(config: &Config) -> PathBuf {
     Path::new("reports").join(&config.name)
@@ -217,15 +226,7 @@ pub fn analyze_exporters() -> Vec<&'static dyn Exporter<crate::analysis::Analysi
 }
 
 fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
-    let choice = crate::presets::PresetChoice {
-        name: args
-            .preset
-            .as_deref()
-            .map(|s| crate::presets::parse_flag("--preset", s))
-            .transpose()?,
-        ..Default::default()
-    };
-    let mut config = Config::load_with_preset(&args.config, &choice)?;
+    let mut config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
     if let Some(p) = args.precision {
         if p == Precision::F32 && config.shadow.preset.is_some() {
             return Err(crate::error::Error::flag(
@@ -261,15 +262,7 @@ fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
 /// Runs a sweep as the CLI does, without printing: (result, rendered files).
 pub fn sweep_files(args: &SweepArgs) -> Result<(crate::report::SweepResult, output::RenderedFiles)> {
     use crate::sweep::{self, Grid, GridOverrides};
-    let choice = crate::presets::PresetChoice {
-        name: args
-            .preset
-            .as_deref()
-            .map(|s| crate::presets::parse_flag("--preset", s))
-            .transpose()?,
-        ..Default::default()
-    };
-    let config = Config::load_with_preset(&args.config, &choice)?;
+    let config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
     let overrides = GridOverrides {
         lambda: args.lambda.as_deref().map(sweep::parse_lambda_spec).transpose()?,
         cascades: args.cascades.as_deref().map(sweep::parse_cascades_spec).transpose()?,
