@@ -10,29 +10,22 @@
 //! [`snapping`]) → [`metrics`], [`shimmer`] → [`analysis`] → [`output`], [`plots`].
 
 pub mod analysis;
-pub mod bench;
-pub mod cascades;
-pub mod check;
 pub mod cli;
-pub mod compare;
+pub mod commands;
 pub mod config;
-pub mod depth_range;
+pub mod core;
 pub mod error;
-pub mod fitting;
-pub mod geometry;
-pub mod metrics;
-pub mod motion;
-pub mod output;
-pub mod plots;
-pub mod precision;
+pub mod figures;
 pub mod presets;
 pub mod report;
-pub mod rng;
-pub mod shimmer;
-pub mod snapping;
-pub mod splits;
-pub mod stress;
-pub mod sweep;
+
+// Short paths for the modules most callers use.
+pub use crate::commands::{bench, check, compare, stress, sweep};
+pub use crate::core::{
+    cascades, depth_range, fitting, geometry, metrics, motion, precision, rng, shimmer, snapping, splits,
+};
+pub use crate::figures as plots;
+pub use crate::report::output;
 
 pub use analysis::{analyze, Analysis, AnalysisOptions, Summary};
 pub use config::Config;

@@ -1,0 +1,457 @@
+//! The `sweep` command as a user runs it.
+
+use crate::common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use common::BASE;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+}
+
+/// A small but real grid: 3 λ × 3 counts × 2 resolutions × 2 fits = 36 configurations.
+fn small_config(dir: &Path) -> PathBuf {
+    let text = format!(
+        "{BASE}\n[sweep]\nlambda = {{ start = 0.5, end = 1.0, step = 0.25 }}\ncascades = [1, 3, 4]\nresolution = [512, 2048]\nfit = [\"sphere\", \"aabb\"]\nmemory_budget_mib = 32\n"
+    );
+    let p = dir.join("small.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn sweep(cfg: &Path, out: &Path, extra: &[&str]) -> Output {
+    bin()
+        .args([
+            "sweep",
+            cfg.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_path(path).unwrap();
+    let header = r.headers().unwrap().iter().map(String::from).collect();
+    let rows = r
+        .records()
+        .map(|x| x.unwrap().iter().map(String::from).collect())
+        .collect();
+    (header, rows)
+}
+
+const FILES: [&str; 12] = [
+    "sweep.csv",
+    "recommendation.json",
+    "heatmap.svg",
+    "heatmap.png",
+    "density_lambda.svg",
+    "density_lambda.png",
+    "shimmer_sweep.svg",
+    "shimmer_sweep.png",
+    "pareto.svg",
+    "pareto.png",
+    "report.html",
+    "report.md",
+];
+
+#[test]
+fn sweep_output_is_byte_identical_at_one_and_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = small_config(dir.path());
+    let a = sweep(&cfg, &dir.path().join("t1"), &["--threads", "1"]);
+    let b = sweep(&cfg, &dir.path().join("t2"), &["--threads", "2"]);
+    assert_eq!(a.status.code(), Some(0), "{}", String::from_utf8_lossy(&a.stderr));
+    assert_eq!(b.status.code(), Some(0));
+    for f in FILES {
+        let x = std::fs::read(dir.path().join("t1").join(f)).unwrap();
+        let y = std::fs::read(dir.path().join("t2").join(f)).unwrap();
+        assert!(x == y, "{f} differs between 1 and 2 threads");
+    }
+}
+
+#[test]
+fn every_sweep_row_equals_what_analyze_reports_for_that_setting() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = small_config(dir.path());
+    let out = dir.path().join("o");
+    assert_eq!(sweep(&cfg, &out, &[]).status.code(), Some(0));
+    let (header, rows) = read_csv(&out.join("sweep.csv"));
+    assert_eq!(
+        header[..15].join(","),
+        "lambda,cascades,resolution,fit,z_lo,z_hi,max_aliasing,mean_aliasing,mean_log_aliasing,undersampled_fraction,shimmer_snapped,shimmer_unsnapped,size_jitter,coverage_violations,memory_bytes"
+    );
+    assert_eq!(rows.len(), 36);
+    let base = csm_lab::Config::load(&cfg).unwrap();
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    for row in &rows {
+        let mut c = base.clone();
+        c.shadow.lambda = row[0].parse().unwrap();
+        c.shadow.cascades = row[1].parse().unwrap();
+        c.shadow.resolution = row[2].parse().unwrap();
+        c.shadow.fit = if row[3] == "sphere" {
+            csm_lab::config::Fit::Sphere
+        } else {
+            csm_lab::config::Fit::Aabb
+        };
+        let a = csm_lab::analyze(&c, &csm_lab::AnalysisOptions::full());
+        let s = &a.summary;
+        for (name, v) in [
+            ("z_lo", s.z_lo),
+            ("z_hi", s.z_hi),
+            ("max_aliasing", s.max_aliasing),
+            ("mean_aliasing", s.mean_aliasing),
+            ("mean_log_aliasing", s.mean_log_aliasing),
+            ("undersampled_fraction", s.undersampled_fraction),
+            ("shimmer_snapped", s.shimmer_snapped),
+            ("shimmer_unsnapped", s.shimmer_unsnapped),
+            ("size_jitter", s.size_jitter),
+        ] {
+            assert_eq!(row[col(name)].parse::<f64>().unwrap(), v, "{name} in {row:?}");
+        }
+        assert_eq!(row[col("coverage_violations")], s.coverage_violations.to_string());
+        assert_eq!(row[col("memory_bytes")], s.memory_bytes.to_string());
+        assert_eq!(
+            s.memory_bytes,
+            c.shadow.cascades as u64 * (c.shadow.resolution as u64).pow(2) * 4
+        );
+    }
+    // And through the binary for one row: analyze's summary.json has the same numbers.
+    let mut text = std::fs::read_to_string(&cfg).unwrap();
+    text = text
+        .replace("cascades = 4\n", "cascades = 3\n")
+        .replace("resolution = 2048\n", "resolution = 512\n");
+    text = text
+        .replace("lambda = 0.75\n", "lambda = 0.5\n")
+        .replace("fit = \"sphere\"\n", "fit = \"aabb\"\n");
+    let single = dir.path().join("single.toml");
+    std::fs::write(&single, text).unwrap();
+    let o = bin()
+        .args(["analyze", single.to_str().unwrap(), "--format", "json", "--out"])
+        .arg(dir.path().join("a"))
+        .output()
+        .unwrap();
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let row = rows
+        .iter()
+        .find(|r| r[0] == "0.5" && r[1] == "3" && r[2] == "512" && r[3] == "aabb")
+        .unwrap();
+    for name in [
+        "max_aliasing",
+        "mean_aliasing",
+        "shimmer_snapped",
+        "shimmer_unsnapped",
+        "size_jitter",
+    ] {
+        assert_eq!(
+            json[name].as_f64().unwrap(),
+            row[col(name)].parse::<f64>().unwrap(),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn pareto_rows_are_non_dominated_and_the_recommendation_fits_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = small_config(dir.path());
+    let out = dir.path().join("o");
+    assert_eq!(sweep(&cfg, &out, &[]).status.code(), Some(0));
+    let (header, rows) = read_csv(&out.join("sweep.csv"));
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let mem = |r: &Vec<String>| r[col("memory_bytes")].parse::<u64>().unwrap();
+    let mean = |r: &Vec<String>| r[col("mean_aliasing")].parse::<f64>().unwrap();
+    let front: Vec<&Vec<String>> = rows.iter().filter(|r| r[col("pareto")] == "true").collect();
+    assert!(!front.is_empty());
+    for f in &front {
+        assert!(!rows
+            .iter()
+            .any(|r| mem(r) <= mem(f) && mean(r) <= mean(f) && (mem(r) < mem(f) || mean(r) < mean(f))));
+    }
+    let rec: Vec<&Vec<String>> = rows.iter().filter(|r| r[col("recommended")] == "true").collect();
+    assert_eq!(rec.len(), 1);
+    assert!(mem(rec[0]) <= 32 * 1024 * 1024);
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("recommendation.json")).unwrap()).unwrap();
+    assert_eq!(json["within_budget"], serde_json::Value::Bool(true));
+    assert_eq!(json["recommended"]["mean_aliasing"].as_f64().unwrap(), mean(rec[0]));
+    // The recommendation is within 1% of the lowest mean aliasing of the acceptable rows within
+    // the budget, and none of those near-ties has a lower max aliasing.
+    let max = |r: &Vec<String>| r[col("max_aliasing")].parse::<f64>().unwrap();
+    let ok: Vec<&Vec<String>> = rows
+        .iter()
+        .filter(|r| {
+            mem(r) <= 32 * 1024 * 1024
+                && r[col("coverage_violations")] == "0"
+                && r[col("shimmer_snapped")].parse::<f64>().unwrap() <= 1e-3
+        })
+        .collect();
+    let best = ok.iter().map(|r| mean(r)).fold(f64::INFINITY, f64::min);
+    assert!(mean(rec[0]) <= best * 1.01);
+    for r in ok.iter().filter(|r| mean(r) <= best * 1.01) {
+        assert!(max(r) >= max(rec[0]), "{r:?} is a near-tie with a lower worst case");
+    }
+}
+
+#[test]
+fn figures_parse_and_the_report_is_self_contained() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = small_config(dir.path());
+    let out = dir.path().join("o");
+    let o = sweep(&cfg, &out, &[]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("recommended"));
+    for f in FILES {
+        let bytes = std::fs::read(out.join(f)).unwrap();
+        if f.ends_with(".svg") {
+            roxmltree::Document::parse(std::str::from_utf8(&bytes).unwrap()).unwrap_or_else(|e| panic!("{f}: {e}"));
+        }
+        if f.ends_with(".png") {
+            let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+            let mut reader = decoder.read_info().unwrap_or_else(|e| panic!("{f}: {e}"));
+            let mut buf = vec![0; reader.output_buffer_size()];
+            let info = reader.next_frame(&mut buf).unwrap();
+            assert!(info.width >= 800 && info.height >= 400, "{f}");
+            // Not blank: some pixels are far from white.
+            assert!(
+                buf.chunks(3).filter(|p| p.iter().all(|&c| c < 128)).count() > 1000,
+                "{f} looks blank"
+            );
+        }
+    }
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let doc = roxmltree::Document::parse_with_options(
+        &html,
+        roxmltree::ParsingOptions {
+            allow_dtd: true,
+            ..Default::default()
+        },
+    )
+    .expect("report.html is well-formed");
+    assert_eq!(doc.root_element().tag_name().name(), "html");
+    assert_eq!(
+        doc.descendants().filter(|n| n.tag_name().name() == "svg").count(),
+        4,
+        "four inline figures"
+    );
+    for n in doc.descendants() {
+        for a in n.attributes() {
+            if a.name() == "xmlns" || a.namespace().is_some() {
+                continue;
+            }
+            let v = a.value();
+            assert!(
+                !(a.name() == "src" || a.name() == "href") || v.starts_with('#'),
+                "external reference {}={v}",
+                a.name()
+            );
+            assert!(
+                !v.contains("http://") && !v.contains("https://"),
+                "external reference {}={v}",
+                a.name()
+            );
+        }
+    }
+    assert!(!html.contains("<link") && !html.contains("<script") && !html.contains("url("));
+    assert!(
+        html.contains("csm-lab sweep") && html.contains("--lambda 0.5:1:0.25"),
+        "reproducing command"
+    );
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("## Recommendation") && md.contains("![") && md.contains("csm-lab sweep"));
+}
+
+#[test]
+fn command_line_axes_override_the_config_and_bad_specs_name_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = small_config(dir.path());
+    let out = dir.path().join("o");
+    let o = sweep(
+        &cfg,
+        &out,
+        &[
+            "--lambda",
+            "0,1",
+            "--cascades",
+            "2..3",
+            "--resolution",
+            "1024",
+            "--fit",
+            "sphere",
+            "--no-plots",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, rows) = read_csv(&out.join("sweep.csv"));
+    assert_eq!(rows.len(), 4);
+    assert!(!out.join("heatmap.svg").exists(), "--no-plots writes no figures");
+    assert!(out.join("report.html").exists());
+    for (flag, value, fragment) in [
+        ("--lambda", "0:1", "start:end:step"),
+        ("--lambda", "0:1:0", "step must be > 0"),
+        ("--lambda", "1:0:0.1", "must be >= start"),
+        ("--lambda", "0,2", "outside [0, 1]"),
+        ("--cascades", "8..1", "before it starts"),
+        ("--cascades", "", "not a whole number"),
+        ("--resolution", "1024,x", "not a whole number"),
+        ("--fit", "box", "not a fit"),
+        ("--threads", "0", "0"),
+    ] {
+        let o = sweep(&cfg, &dir.path().join("bad"), &[flag, value]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{flag} {value}: {err}");
+        assert!(err.contains(flag) && err.contains(fragment), "{flag} {value}: {err}");
+        assert!(!err.contains("panicked"));
+    }
+    assert!(!dir.path().join("bad").exists());
+}
+
+#[test]
+fn bad_sweep_tables_and_oversized_grids_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    for (table, fragment) in [
+        ("cascades = []", "sweep.cascades"),
+        ("lambda = { start = 0.0, end = 1.0, step = 0.0 }", "step must be > 0"),
+        ("lambda = { start = 1.0, end = 0.0, step = 0.1 }", "must be >= start"),
+        ("resolution = [1024.5]", "not a whole number"),
+        ("fit = [\"box\"]", "box"),
+        ("memory_budget_mib = -1", "sweep.memory_budget_mib"),
+        ("colour = 3", "colour"),
+    ] {
+        let p = dir.path().join("bad.toml");
+        std::fs::write(&p, format!("{BASE}\n[sweep]\n{table}\n")).unwrap();
+        let o = sweep(&p, &dir.path().join("o"), &[]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{table}: {err}");
+        assert!(err.contains(fragment), "{table}: {err}");
+    }
+    let p = dir.path().join("big.toml");
+    std::fs::write(&p, format!("{BASE}\n[sweep]\nmax_configs = 100\n")).unwrap();
+    let o = sweep(&p, &dir.path().join("o"), &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        err.contains("672 configurations") && err.contains("max_configs = 100"),
+        "{err}"
+    );
+    assert!(!dir.path().join("o").exists());
+}
+
+#[test]
+fn a_failed_write_leaves_every_file_whole_and_no_temporary_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = small_config(dir.path());
+    let out = dir.path().join("o");
+    std::fs::create_dir_all(out.join("report.md")).unwrap(); // a directory where a file must go
+    std::fs::write(out.join("sweep.csv"), "OLD\n").unwrap();
+    let o = sweep(&cfg, &out, &["--no-plots"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("report.md"));
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    assert!(
+        csv == "OLD\n" || csv.lines().count() == 37,
+        "sweep.csv is old or whole: {csv:.80}"
+    );
+    for e in std::fs::read_dir(&out).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!name.ends_with(".tmp"), "temporary file left behind: {name}");
+    }
+    // An output path under a regular file cannot be created: exit 2, nothing written.
+    let blocker = dir.path().join("file");
+    std::fs::write(&blocker, "x").unwrap();
+    let o = sweep(&cfg, &blocker.join("sub"), &["--no-plots"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cannot write"));
+}
+
+#[test]
+fn a_preset_sweep_varies_only_the_axes_that_engine_has_and_each_row_equals_analyze() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = small_config(dir.path());
+    // EEVEE has a λ (its cascade exponent): λ × counts × resolutions; the fit axis of the
+    // [sweep] table is dropped with a note.
+    let out = dir.path().join("eevee");
+    let o = bin()
+        .args([
+            "sweep",
+            cfg.to_str().unwrap(),
+            "--preset",
+            "eevee",
+            "--resolution",
+            "1024",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("note: sweep.fit"));
+    let (header, rows) = read_csv(&out.join("sweep.csv"));
+    assert_eq!(rows.len(), 3 * 3, "3 λ x 3 counts x 1 resolution");
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let choice = csm_lab::presets::PresetChoice {
+        name: Some(csm_lab::presets::parse_flag("--preset", "eevee").unwrap()),
+        ..Default::default()
+    };
+    let base = csm_lab::Config::load_with_preset(&cfg, &choice).unwrap();
+    for row in &rows {
+        assert_eq!(row[col("preset")], "eevee");
+        let mut c = base.clone();
+        csm_lab::presets::set_lambda(&mut c, row[col("lambda")].parse().unwrap()).unwrap();
+        csm_lab::presets::set_cascades(&mut c, row[col("cascades")].parse().unwrap()).unwrap();
+        csm_lab::presets::set_resolution(&mut c, row[col("resolution")].parse().unwrap()).unwrap();
+        let a = csm_lab::analyze(&c, &csm_lab::AnalysisOptions::full());
+        assert_eq!(
+            row[col("mean_aliasing")].parse::<f64>().unwrap(),
+            a.summary.mean_aliasing,
+            "{row:?}"
+        );
+        assert_eq!(
+            row[col("shimmer_unsnapped")].parse::<f64>().unwrap(),
+            a.summary.shimmer_unsnapped
+        );
+    }
+    let lambdas: std::collections::BTreeSet<String> = rows.iter().map(|r| r[col("lambda")].clone()).collect();
+    assert_eq!(lambdas.len(), 3, "the engine's λ is swept");
+    // Bevy has no λ and at most 4 cascades: the table's λ axis and counts above 4 are dropped.
+    let out = dir.path().join("bevy");
+    let o = bin()
+        .args([
+            "sweep",
+            cfg.to_str().unwrap(),
+            "--preset",
+            "bevy",
+            "--no-plots",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, rows) = read_csv(&out.join("sweep.csv"));
+    assert_eq!(rows.len(), 3 * 2, "1 λ x counts {{1, 3, 4}} x 2 resolutions");
+    // Flags the engine cannot take are errors naming the flag.
+    for (args, fragment) in [
+        (vec!["--preset", "unreal", "--lambda", "0,1"], "--lambda"),
+        (vec!["--preset", "bevy", "--fit", "aabb"], "--fit"),
+        (vec!["--preset", "bevy", "--cascades", "6"], "--cascades"),
+        (vec!["--preset", "bevy", "--resolution", "1000"], "--resolution"),
+        (vec!["--preset", "nope"], "--preset"),
+    ] {
+        let o = bin()
+            .args(["sweep", cfg.to_str().unwrap(), "--quiet", "--out"])
+            .arg(dir.path().join("bad"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(fragment), "{args:?}: {err}");
+    }
+    assert!(!dir.path().join("bad").exists());
+}

@@ -1,0 +1,19 @@
+//! The integration tests, built as one test crate (one link instead of one per file).
+
+mod check_sweep;
+mod cli_accuracy;
+mod cli_analyze;
+mod cli_bench;
+mod cli_check;
+mod cli_compare;
+mod cli_stress;
+mod cli_sweep;
+mod common;
+mod golden_outputs;
+mod precision;
+mod presets;
+mod prop_analysis;
+mod prop_toml;
+mod regressions;
+mod shimmer;
+mod shimmer_fast_paths;

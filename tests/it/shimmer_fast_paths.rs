@@ -1,0 +1,94 @@
+//! The shared-work walk of both snap modes against the plain per-mode, per-corner definitions.
+
+use crate::common;
+
+use common::{config, with};
+use csm_lab::cascades::{LightPose, Rig};
+use csm_lab::motion::camera_path;
+use csm_lab::shimmer::{along_path, along_path_both, probes, ShimmerOptions};
+
+fn all_options() -> [ShimmerOptions; 3] {
+    let o = |cell_flips, probe_drift, frame_rows| ShimmerOptions {
+        cell_flips,
+        probe_drift,
+        frame_rows,
+    };
+    [o(false, false, false), o(true, false, true), o(true, true, true)]
+}
+
+#[test]
+fn both_modes_in_one_walk_equal_two_separate_walks_bit_for_bit() {
+    for (fit, path, step) in [
+        ("sphere", "strafe", "0.37"),
+        ("sphere", "orbit", "0.4"),
+        ("aabb", "yaw", "0.3"),
+        ("aabb", "dolly", "0.9"),
+    ] {
+        let text = with(&[
+            ("shadow.fit", &format!("fit = \"{fit}\"")),
+            ("motion.path", &format!("path = \"{path}\"")),
+            ("motion.step", &format!("step = {step}")),
+        ]);
+        let c = config(&text);
+        let rig = Rig::from_config(&c).unwrap();
+        let poses = camera_path(&c).unwrap();
+        let pr = probes(&rig, &c.camera.pose(), &c.scene, 48);
+        for opts in all_options() {
+            let (s, u) = along_path_both(&rig, &poses, &pr, opts);
+            assert_eq!(s, along_path(&rig, &poses, &pr, true, opts), "{fit} {path} {opts:?}");
+            assert_eq!(u, along_path(&rig, &poses, &pr, false, opts), "{fit} {path} {opts:?}");
+        }
+    }
+}
+
+/// Windows too small for their slices: the walk's coverage (extreme corners first, the
+/// per-corner pass only when something can be outside) against the per-corner definition.
+#[test]
+fn coverage_of_shrunken_windows_matches_a_per_corner_count() {
+    for (fit, path) in [("sphere", "yaw"), ("sphere", "strafe"), ("aabb", "orbit")] {
+        let text = with(&[
+            ("shadow.fit", &format!("fit = \"{fit}\"")),
+            ("motion.path", &format!("path = \"{path}\"")),
+            ("motion.step", "step = 0.7"),
+        ]);
+        let c = config(&text);
+        let mut rig = Rig::from_config(&c).unwrap();
+        // Shrink every sphere window by a different factor, some barely, some a lot.
+        for (i, side) in rig.sphere_side.iter_mut().enumerate() {
+            *side *= [0.999, 0.8, 0.99999, 0.6][i % 4];
+        }
+        let poses = camera_path(&c).unwrap();
+        for snapped in [true, false] {
+            let got = along_path(&rig, &poses, &[], snapped, all_options()[0]).coverage;
+            let m = rig.cascade_count();
+            let (mut count, mut worst, mut slack_min) = (vec![0u64; m], vec![0.0f64; m], vec![f64::INFINITY; m]);
+            let n = rig.resolution as f64;
+            for pose in &poses {
+                let lp = LightPose::new(&rig.light, pose);
+                for i in 0..m {
+                    let w = rig.window(i, &lp, snapped);
+                    let s = &rig.slices[i];
+                    for corner in lp.corners(&rig.lens, s.near, s.far) {
+                        let t = w.texel_coords(corner);
+                        let slack = t.x.min(n - t.x).min(t.y).min(n - t.y);
+                        slack_min[i] = slack_min[i].min(slack);
+                        let tol = 1e-9 + 8.0 * f64::EPSILON * (corner / w.texel).abs().max_element();
+                        if -slack > tol {
+                            count[i] += 1;
+                            worst[i] = worst[i].max(-slack);
+                        }
+                    }
+                }
+            }
+            if fit == "sphere" {
+                assert!(
+                    count.iter().sum::<u64>() > 0,
+                    "{fit} {path}: the shrunken windows must miss corners"
+                );
+            }
+            assert_eq!(got.violations, count, "{fit} {path} {snapped}");
+            assert_eq!(got.worst_texels, worst, "{fit} {path} {snapped}");
+            assert_eq!(got.min_slack_texels, slack_min, "{fit} {path} {snapped}");
+        }
+    }
+}
