@@ -1,11 +1,43 @@
-//! Typed errors. Every variant names what the user should change: the config key (with its
-//! line and column when we can find it), the command-line flag, or the file.
+//! Typed errors, one enum per domain. Every variant names what the user should change: the
+//! config key (with its line and column when we can find it), the command-line flag, or the
+//! file. All of them map to exit code 2 in the binary.
 
 use std::path::{Path, PathBuf};
 
-/// Everything that can go wrong. All of them map to exit code 2 in the binary.
+/// Everything that can go wrong, by domain.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+
+    #[error(transparent)]
+    Grid(#[from] GridError),
+
+    #[error(transparent)]
+    Preset(#[from] PresetError),
+
+    #[error(transparent)]
+    Baseline(#[from] BaselineError),
+
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+
+    #[error(transparent)]
+    Io(#[from] IoError),
+
+    /// A value that would have been written as NaN or infinity. This is a bug guard: it
+    /// should never fire, and if it does no output file is touched.
+    #[error("internal error: {what} is not finite ({value}); no file was written")]
+    NonFinite { what: String, value: f64 },
+
+    /// Not yet given a domain (being migrated).
+    #[error("{0}")]
+    Other(String),
+}
+
+/// A scene or thresholds file: TOML syntax, unknown keys, wrong types, values out of range.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
     /// The TOML text does not parse, or a key is unknown or has the wrong type.
     #[error("{path}:{line}:{column}: {message}")]
     Toml {
@@ -24,15 +56,51 @@ pub enum Error {
         value: String,
         allowed: String,
     },
+}
 
-    /// A command-line value that does not parse or is out of range.
+/// A command-line value (a sweep spec, a count, a flag that does not fit the command).
+#[derive(Debug, thiserror::Error)]
+pub enum GridError {
+    /// A flag's value does not parse or is out of range.
     #[error("{flag} {value:?}: {message}")]
     Flag {
         flag: String,
         value: String,
         message: String,
     },
+}
 
+/// An engine preset that does not exist or cannot do what was asked.
+#[derive(Debug, thiserror::Error)]
+pub enum PresetError {
+    /// A preset name that is not one of the engines.
+    #[error("{key} {value:?}: {message}")]
+    Unknown {
+        /// The flag or config key that named it.
+        key: String,
+        value: String,
+        message: String,
+    },
+}
+
+/// A baseline (`summary.json` or `sweep.csv`) that cannot be compared against.
+#[derive(Debug, thiserror::Error)]
+pub enum BaselineError {
+    /// The baseline does not fit the current run.
+    #[error("{}: {message}", path.display())]
+    Mismatch { path: PathBuf, message: String },
+}
+
+/// A figure that could not be drawn or rasterised.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    #[error("cannot draw {figure}: {message}")]
+    Draw { figure: String, message: String },
+}
+
+/// Files and streams.
+#[derive(Debug, thiserror::Error)]
+pub enum IoError {
     #[error("cannot read {}: {source}", path.display())]
     Read { path: PathBuf, source: std::io::Error },
 
@@ -47,37 +115,53 @@ pub enum Error {
         message: String,
     },
 
-    /// A value that would have been written as NaN or infinity. This is a bug guard: it
-    /// should never fire, and if it does no output file is touched.
-    #[error("internal error: {what} is not finite ({value}); no file was written")]
-    NonFinite { what: String, value: f64 },
-
-    /// Anything else, with a sentence that says what to do.
-    #[error("{0}")]
-    Other(String),
+    #[error("cannot write to standard output: {0}")]
+    Stdout(std::io::Error),
 }
 
 impl Error {
     pub fn read(path: &Path, source: std::io::Error) -> Self {
-        Error::Read {
+        IoError::Read {
             path: path.to_path_buf(),
             source,
         }
+        .into()
     }
 
     pub fn write(path: &Path, source: std::io::Error) -> Self {
-        Error::Write {
+        IoError::Write {
             path: path.to_path_buf(),
             source,
         }
+        .into()
     }
 
     pub fn flag(flag: &str, value: &str, message: impl Into<String>) -> Self {
-        Error::Flag {
+        GridError::Flag {
             flag: flag.to_string(),
             value: value.to_string(),
             message: message.into(),
         }
+        .into()
+    }
+
+    pub fn data_file(path: &Path, line: usize, message: impl Into<String>) -> Self {
+        IoError::DataFile {
+            path: path.to_path_buf(),
+            line,
+            message: message.into(),
+        }
+        .into()
+    }
+
+    pub fn invalid(location: String, key: &str, value: impl std::fmt::Display, allowed: impl Into<String>) -> Self {
+        ConfigError::Invalid {
+            location,
+            key: key.to_string(),
+            value: value.to_string(),
+            allowed: allowed.into(),
+        }
+        .into()
     }
 }
 

@@ -5,6 +5,7 @@
 //! NaN, infinities and out-of-range values are errors that name the key, the value and what
 //! is allowed; TOML syntax and type errors carry the line and column.
 
+use crate::error::ConfigError;
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
@@ -322,12 +323,12 @@ pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
 /// Turn a `toml` deserialisation error into one with the file's line and column.
 pub fn toml_error(path: &str, text: &str, err: &toml::de::Error) -> Error {
     let (line, column) = err.span().map(|span| line_column(text, span.start)).unwrap_or((1, 1));
-    Error::Toml {
+    Error::from(ConfigError::Toml {
         path: path.to_string(),
         line,
         column,
         message: err.message().trim().to_string(),
-    }
+    })
 }
 
 /// Finds where `table.key = ...` is written, for error messages about values that parsed
@@ -376,12 +377,12 @@ impl Validator<'_> {
             (false, None) => format!("{}: ", self.path),
             (true, None) => String::new(),
         };
-        Error::Invalid {
+        Error::from(ConfigError::Invalid {
             location,
             key: key.to_string(),
             value: value.to_string(),
             allowed: allowed.to_string(),
-        }
+        })
     }
 
     pub fn finite(&self, key: &str, v: f64) -> Result<f64> {

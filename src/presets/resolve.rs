@@ -1,6 +1,7 @@
 //! Reading a preset from a config: the engine tables, defaults, `[shadow]` overrides and
 //! validation of every knob.
 
+use crate::error::ConfigError;
 use glam::DVec3;
 use serde::Deserialize;
 
@@ -195,12 +196,12 @@ fn table_error(v: &Validator<'_>, table: PresetName, allowed: String) -> Error {
         None if !v.path.is_empty() => format!("{}: ", v.path),
         None => String::new(),
     };
-    Error::Invalid {
+    Error::from(ConfigError::Invalid {
         location,
         key: format!("[{table}]"),
         value: "(engine table)".to_string(),
         allowed,
-    }
+    })
 }
 
 /// Resolves the preset of a config: picks it (flag over file), checks the engine tables, applies

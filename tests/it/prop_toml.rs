@@ -8,6 +8,7 @@ use crate::common;
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
+use csm_lab::error::ConfigError;
 use csm_lab::{Config, Error};
 use proptest::prelude::*;
 
@@ -335,9 +336,9 @@ fn check(text: &str) -> Result<(), String> {
             }
             match (&e, syntax) {
                 (
-                    Error::Toml {
+                    Error::Config(ConfigError::Toml {
                         line, column, message, ..
-                    },
+                    }),
                     _,
                 ) => {
                     // A real place in the text: an existing line, a column at most one past
@@ -354,7 +355,7 @@ fn check(text: &str) -> Result<(), String> {
                 }
                 // Text a plain parse rejects but the loader read (a too-large integer as a
                 // float) and then refused: the refusal still says where.
-                (Error::Invalid { location, .. }, Some(se)) => {
+                (Error::Config(ConfigError::Invalid { location, .. }), Some(se)) => {
                     if location.starts_with("gen.toml:") && location.matches(':').count() == 3 {
                         Ok(())
                     } else {
@@ -362,7 +363,9 @@ fn check(text: &str) -> Result<(), String> {
                     }
                 }
                 (_, Some(se)) => Err(format!("a syntax error ({se}) reported as {shown}")),
-                (Error::Invalid { key, .. }, None) if key.is_empty() => Err(format!("no key named: {shown}")),
+                (Error::Config(ConfigError::Invalid { key, .. }), None) if key.is_empty() => {
+                    Err(format!("no key named: {shown}"))
+                }
                 _ => Ok(()),
             }
         }
@@ -398,8 +401,8 @@ fn mutations_produce_valid_configs_syntax_errors_and_validation_errors() {
         let text = mutated().new_tree(&mut runner).unwrap().current();
         match Config::from_toml_str(&text, "gen.toml", None) {
             Ok(_) => ok += 1,
-            Err(Error::Toml { .. }) => syntax += 1,
-            Err(Error::Invalid { .. }) => invalid += 1,
+            Err(Error::Config(ConfigError::Toml { .. })) => syntax += 1,
+            Err(Error::Config(ConfigError::Invalid { .. })) => invalid += 1,
             Err(_) => {}
         }
     }

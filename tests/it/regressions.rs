@@ -4,6 +4,7 @@ use crate::common;
 
 use common::{config, with};
 use csm_lab::analysis::{analyze, AnalysisOptions};
+use csm_lab::error::ConfigError;
 use csm_lab::motion::camera_path;
 use csm_lab::{Config, Error};
 
@@ -117,7 +118,7 @@ fn positions_and_paths_beyond_1e9_world_units_are_config_errors() {
         ("motion.file", &format!("file = {:?}", csv.display().to_string())),
     ]);
     match Config::from_toml_str(&text, "t.toml", None) {
-        Err(e @ Error::Invalid { .. }) => {
+        Err(e @ Error::Config(ConfigError::Invalid { .. })) => {
             let msg = e.to_string();
             assert!(msg.contains("motion.file") && msg.contains("row 2"), "{msg}");
         }

@@ -7,6 +7,7 @@
 //! regression; in the better direction, an improvement. Metrics without a worse direction
 //! (`z_lo`, `z_hi`) are reported as changed, never as regressions.
 
+use crate::error::IoError;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -192,10 +193,12 @@ pub fn summary_from_json(value: &serde_json::Value, label: &str) -> Result<BTree
 pub fn read_summary_json(path: &Path) -> Result<BTreeMap<SummaryMetric, f64>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
     let label = path.display().to_string();
-    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::DataFile {
-        path: path.to_path_buf(),
-        line: e.line(),
-        message: format!("not valid JSON ({e}); a summary.json from `csm-lab analyze` is expected"),
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+        Error::from(IoError::DataFile {
+            path: path.to_path_buf(),
+            line: e.line(),
+            message: format!("not valid JSON ({e}); a summary.json from `csm-lab analyze` is expected"),
+        })
     })?;
     summary_from_json(&value, &label)
 }

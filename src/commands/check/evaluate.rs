@@ -19,6 +19,7 @@ use super::depth;
 use super::metric::SummaryMetric;
 use super::thresholds::{CascadeSelection, Rule, Target};
 use crate::analysis::Analysis;
+use crate::error::ConfigError;
 use crate::error::{Error, Result};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -210,16 +211,18 @@ pub fn evaluate(rule: &Rule, a: &Analysis) -> Result<RuleResult> {
         }
         Target::Cascade(m, CascadeSelection::One(i)) => {
             let count = a.cascades.len();
-            let c = a.cascades.get(i).ok_or_else(|| Error::Invalid {
-                location: format!("{}: ", rule.scope_location.as_ref().unwrap_or(&rule.location)),
-                key: format!("rule[{}].cascade", rule.index),
-                value: i.to_string(),
-                allowed: format!(
-                    "a cascade index in 0..={} ({} has {count} cascade{})",
-                    count - 1,
-                    a.config.name,
-                    if count == 1 { "" } else { "s" }
-                ),
+            let c = a.cascades.get(i).ok_or_else(|| {
+                Error::from(ConfigError::Invalid {
+                    location: format!("{}: ", rule.scope_location.as_ref().unwrap_or(&rule.location)),
+                    key: format!("rule[{}].cascade", rule.index),
+                    value: i.to_string(),
+                    allowed: format!(
+                        "a cascade index in 0..={} ({} has {count} cascade{})",
+                        count - 1,
+                        a.config.name,
+                        if count == 1 { "" } else { "s" }
+                    ),
+                })
             })?;
             let v = Located {
                 value: m.value(c),
@@ -265,7 +268,7 @@ pub fn evaluate(rule: &Rule, a: &Analysis) -> Result<RuleResult> {
             let (lo, hi) = range.unwrap_or((z_lo, z_hi));
             let (elo, ehi) = (lo.max(z_lo), hi.min(z_hi));
             if elo > ehi {
-                return Err(Error::Invalid {
+                return Err(Error::from(ConfigError::Invalid {
                     location: format!("{}: ", rule.scope_location.as_ref().unwrap_or(&rule.location)),
                     key: format!("rule[{}].depth", rule.index),
                     value: format!("[{lo}, {hi}]"),
@@ -273,7 +276,7 @@ pub fn evaluate(rule: &Rule, a: &Analysis) -> Result<RuleResult> {
                         "a range that overlaps the split range [{z_lo}, {z_hi}] of {} (nothing outside it is shadowed)",
                         a.config.name
                     ),
-                });
+                }));
             }
             let note = ((elo, ehi) != (lo, hi)).then(|| {
                 format!(

@@ -21,7 +21,7 @@ use std::path::Path;
 use crate::analysis::{analyze, Analysis, AnalysisOptions};
 use crate::cli::{CheckArgs, Format, Outcome};
 use crate::config::Config;
-use crate::error::{Error, Result};
+use crate::error::{Error, IoError, Result};
 use crate::output;
 
 pub use report::{Body, CheckReport};
@@ -161,7 +161,7 @@ pub fn run_check(args: &CheckArgs) -> Result<Outcome> {
     let mut out = std::io::stdout().lock();
     out.write_all(&stdout)
         .and_then(|_| out.flush())
-        .map_err(|e| Error::Other(format!("cannot write to stdout: {e}")))?;
+        .map_err(|e| Error::from(IoError::Stdout(e)))?;
     if let Some(p) = &args.junit {
         eprintln!("wrote {}", p.display());
     }
@@ -175,11 +175,9 @@ pub fn run_check(args: &CheckArgs) -> Result<Outcome> {
 /// Appends a hint to data-file errors about which kind of baseline a mode expects.
 fn with_hint(e: Error, hint: &str) -> Error {
     match e {
-        Error::DataFile { path, line, message } => Error::DataFile {
-            path,
-            line,
-            message: format!("{message} ({hint})"),
-        },
+        Error::Io(IoError::DataFile { path, line, message }) => {
+            Error::data_file(&path, line, format!("{message} ({hint})"))
+        }
         Error::Other(m) => Error::Other(format!("{m} ({hint})")),
         other => other,
     }

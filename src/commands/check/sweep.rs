@@ -9,6 +9,7 @@
 //! same tolerances as a single summary ([`super::baseline`]). Configurations present in only
 //! one of the tables are listed, not judged.
 
+use crate::error::IoError;
 use std::cmp::Ordering;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -193,10 +194,12 @@ pub fn compare_rows(current: &[SweepRow], baseline: &[SweepRow], tol: &Tolerance
 /// Parses `sweep.csv` by column name: the key columns are required, every column named like
 /// a summary metric is read (booleans as 1/0), other columns are ignored.
 pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
-    let data_err = |line: u64, message: String| Error::DataFile {
-        path: path.to_path_buf(),
-        line: line as usize,
-        message,
+    let data_err = |line: u64, message: String| {
+        Error::from(IoError::DataFile {
+            path: path.to_path_buf(),
+            line: line as usize,
+            message,
+        })
     };
     let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(text.as_bytes());
     let headers = reader

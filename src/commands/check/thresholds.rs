@@ -24,6 +24,7 @@
 //! parse but are not allowed (an unknown metric, `min > max`, a non-finite limit) name the key
 //! as `rule[N].key` (1-based, in file order) with its line and column.
 
+use crate::error::ConfigError;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -167,12 +168,12 @@ impl At<'_> {
     }
 
     fn invalid(&self, span: std::ops::Range<usize>, key: &str, value: impl std::fmt::Display, allowed: &str) -> Error {
-        Error::Invalid {
+        Error::from(ConfigError::Invalid {
             location: format!("{}: ", self.location(span)),
             key: key.to_string(),
             value: value.to_string(),
             allowed: allowed.to_string(),
-        }
+        })
     }
 
     fn finite(&self, v: &Spanned<f64>, key: &str) -> Result<f64> {
@@ -367,7 +368,7 @@ fn tolerances(at: &At<'_>, b: &RawBaseline) -> Result<Tolerances> {
         let Some(m) = SummaryMetric::from_name(name.get_ref()) else {
             let key = format!("baseline.metric.{}", name.get_ref());
             let mut err = unknown_metric(at, name.span(), &key, name.get_ref(), &summary_names);
-            if let Error::Invalid { allowed, .. } = &mut err {
+            if let Error::Config(ConfigError::Invalid { allowed, .. }) = &mut err {
                 *allowed = format!("{allowed} (a baseline compares summary metrics only)");
             }
             return Err(err);
