@@ -81,6 +81,34 @@ pub enum PresetError {
         value: String,
         message: String,
     },
+
+    /// A sweep value outside the range of its axis.
+    #[error("{axis} {value} is outside {range}")]
+    OutOfRange {
+        axis: &'static str,
+        value: String,
+        range: &'static str,
+    },
+
+    /// A cascade count outside csm-lab's own range.
+    #[error("{count} cascades is outside 1..=16")]
+    CascadeCount { count: usize },
+
+    /// A λ sweep over a preset whose split rule has no λ.
+    #[error("the {preset} preset has no λ to sweep ({split_rule}); remove the lambda axis")]
+    NoLambda { preset: String, split_rule: String },
+
+    /// A cascade count the preset does not offer.
+    #[error("the {preset} preset does not take {count} cascades (valid: {valid})")]
+    Cascades {
+        preset: String,
+        count: usize,
+        valid: String,
+    },
+
+    /// A map size the preset does not accept.
+    #[error("the {preset} preset takes power-of-two map sizes only, not {size}")]
+    MapSize { preset: String, size: u32 },
 }
 
 /// A baseline (`summary.json` or `sweep.csv`) that cannot be compared against.

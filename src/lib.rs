@@ -16,6 +16,7 @@ pub mod config;
 pub mod core;
 pub mod error;
 pub mod figures;
+mod load;
 pub mod presets;
 pub mod report;
 

@@ -10,86 +10,28 @@ use super::*;
 
 /// The split rule in words.
 pub fn split_rule(k: &Knobs) -> String {
-    match k {
-        Knobs::Dart(d) => format!("practical, λ {} on [near, max_distance], 1..4 cascades", d.lambda),
-        Knobs::Threejs(t) => match t.mode {
-            ThreejsMode::Practical => "practical, λ fixed at 0.5, breaks of min(far, maxFar) (r185)".to_string(),
-            ThreejsMode::Uniform => "uniform breaks of min(far, maxFar) (r185)".to_string(),
-            ThreejsMode::Logarithmic => "logarithmic breaks of min(far, maxFar) (r185)".to_string(),
-        },
-        Knobs::UnitySample(_) => "near + {0.067, 0.2, 0.467}·far, 4 cascades".to_string(),
-        Knobs::Eevee(e) => format!(
-            "practical, λ {} on [near, min(far, max_distance)], fade {} overlap",
-            e.cascade_exponent, e.fade
-        ),
-        Knobs::LearnOpenGl(l) => format!("fixed planes {:?}, off-by-one selection", l.planes),
-        Knobs::Bevy(b) => format!(
-            "geometric from {} to max_distance, cascade 0 from {}, overlap {}",
-            b.first_cascade_far_bound, b.minimum_distance, b.overlap_proportion
-        ),
-        Knobs::Godot(g) => format!(
-            "fractions {:?} of [near, min(far, max_distance)]{}",
-            g.splits,
-            if g.blend_splits { ", blend_splits" } else { "" }
-        ),
-        Knobs::Unreal(u) => format!(
-            "geometric weights, exponent {}, transition {}",
-            u.cascade_distribution_exponent, u.transition_fraction
-        ),
-        Knobs::Unity(u) => format!(
-            "fractions of the shadow distance (2: {:.3}; 4: {:?})",
-            u.cascade2_split, u.cascade4_split
-        ),
-        Knobs::UnityUrp(u) => format!(
-            "fractions of the shadow distance (2: {}; 3: {:?}; 4: {:?})",
-            u.cascade2_split, u.cascade3_split, u.cascade4_split
-        ),
-        Knobs::Filament(f) => match f.split_mode {
-            FilamentSplit::Positions => format!("positions {:?} of [near, shadowFar or far]", f.split_positions),
-            FilamentSplit::Uniform => "uniform helper on [near, shadowFar or far]".to_string(),
-            FilamentSplit::Logarithmic => "logarithmic helper on [near, shadowFar or far]".to_string(),
-            FilamentSplit::Practical => format!("practical helper, λ {}", f.lambda),
-        },
-    }
+    k.engine().split_rule(k)
 }
 
 /// The snapping rule in words.
 pub fn snap_description(k: &Knobs) -> String {
-    if !snaps(k) {
+    let engine = k.engine();
+    if !engine.snaps() {
         return "none".to_string();
     }
-    let r = snap_rule(k);
+    let r = engine.snap_rule(k);
     let mode = match r.mode {
         SnapMode::Round => "round",
         SnapMode::Floor => "floor",
         SnapMode::Trunc => "fmod (toward zero)",
     };
     let unit = if r.step_texels == 1 { "texel" } else { "texels" };
-    let anchor = match k {
-        Knobs::Eevee(_) => "grid through the lamp position",
-        Knobs::Filament(_) => "world origin, basis turns with the camera",
-        _ => "world origin",
-    };
-    format!("{mode}, {} {unit}, {anchor}", r.step_texels)
+    format!("{mode}, {} {unit}, {}", r.step_texels, engine.snap_anchor(k))
 }
 
 /// The light depth rule in words.
 pub fn light_depth_description(k: &Knobs) -> String {
-    match k {
-        Knobs::Dart(_) => "not shown in the seed: modelled as fitted to the scene".to_string(),
-        Knobs::Threejs(t) => format!(
-            "fixed {} to {} from a light {} in front of the slice",
-            t.light_near, t.light_far, t.light_margin
-        ),
-        Knobs::UnitySample(_) => "slice's own z extent; casters in front are lost".to_string(),
-        Knobs::Eevee(e) => format!("lamp clip {} to {}", e.clip_start, e.clip_end),
-        Knobs::LearnOpenGl(l) => format!("mirrored: light-view z ± {} passed as distances", l.pad_z),
-        Knobs::Bevy(_) => "slice's own z extent; casters kept (unclipped depth)".to_string(),
-        Knobs::Godot(g) => format!("sphere ± r, {} toward the light; casters pancaked", g.pancake_size),
-        Knobs::Unreal(_) => "sphere ± max(r, 50 m); casters kept".to_string(),
-        Knobs::Unity(_) | Knobs::UnityUrp(_) => "engine side: modelled as fitted to the scene".to_string(),
-        Knobs::Filament(_) => "from receiver and caster bounds".to_string(),
-    }
+    k.engine().light_depth_rule(k)
 }
 
 /// What an analysis reports about a preset (in `summary.json` and `compare`).

@@ -1,7 +1,7 @@
 //! What a parameter sweep over a preset may vary, and setting one sweep point.
 
 use crate::config::Config;
-use crate::error::{Error, Result};
+use crate::error::{PresetError, Result};
 
 use super::*;
 
@@ -21,21 +21,11 @@ pub struct Axes {
 
 /// The sweep axes of a preset.
 pub fn preset_axes(p: &Preset) -> Axes {
-    let lambda = match &p.knobs {
-        Knobs::Dart(_) => Some("dart.lambda"),
-        Knobs::Eevee(_) => Some("eevee.cascade_exponent"),
-        Knobs::Filament(f) if f.split_mode == FilamentSplit::Practical => Some("filament.lambda"),
-        _ => None,
-    };
-    let cascades = match counts(&p.knobs) {
-        Counts::Clamped(lo, hi) => (lo..=hi).collect(),
-        Counts::Allowed(v) => v,
-        Counts::Fixed(n) => vec![n],
-    };
+    let engine = p.knobs.engine();
     Axes {
-        lambda,
-        cascades,
-        resolution_power_of_two: power_of_two_maps(p.name),
+        lambda: engine.lambda_key(&p.knobs),
+        cascades: engine.counts(&p.knobs).list(),
+        resolution_power_of_two: engine.power_of_two_maps(),
         fit: false,
     }
 }
@@ -56,24 +46,26 @@ pub fn axes(config: &Config) -> Axes {
 /// Sets λ for a sweep point: `shadow.lambda`, or the preset's λ-like knob.
 pub fn set_lambda(config: &mut Config, lambda: f64) -> Result<()> {
     if !(0.0..=1.0).contains(&lambda) {
-        return Err(Error::Other(format!("lambda {lambda} is outside [0, 1]")));
+        return Err(PresetError::OutOfRange {
+            axis: "lambda",
+            value: lambda.to_string(),
+            range: "[0, 1]",
+        }
+        .into());
     }
     let Some(p) = &mut config.shadow.preset else {
         config.shadow.lambda = lambda;
         return Ok(());
     };
-    match &mut p.knobs {
-        Knobs::Dart(d) => d.lambda = lambda,
-        Knobs::Eevee(e) => e.cascade_exponent = lambda,
-        Knobs::Filament(f) if f.split_mode == FilamentSplit::Practical => f.lambda = lambda,
-        _ => {
-            return Err(Error::Other(format!(
-                "the {} preset has no λ to sweep ({}); remove the lambda axis",
-                p.name,
-                split_rule(&p.knobs)
-            )))
+    let engine = p.knobs.engine();
+    if engine.lambda_key(&p.knobs).is_none() {
+        return Err(PresetError::NoLambda {
+            preset: p.name.to_string(),
+            split_rule: split_rule(&p.knobs),
         }
+        .into());
     }
+    engine.set_lambda(&mut p.knobs, lambda);
     config.shadow.lambda = lambda;
     Ok(())
 }
@@ -83,14 +75,15 @@ pub fn set_cascades(config: &mut Config, n: usize) -> Result<()> {
     if let Some(p) = &config.shadow.preset {
         let ax = preset_axes(p);
         if !ax.cascades.contains(&n) {
-            return Err(Error::Other(format!(
-                "the {} preset does not take {n} cascades (valid: {})",
-                p.name,
-                join(&ax.cascades)
-            )));
+            return Err(PresetError::Cascades {
+                preset: p.name.to_string(),
+                count: n,
+                valid: join(&ax.cascades),
+            }
+            .into());
         }
     } else if !(1..=16).contains(&n) {
-        return Err(Error::Other(format!("{n} cascades is outside 1..=16")));
+        return Err(PresetError::CascadeCount { count: n }.into());
     }
     config.shadow.cascades = n;
     Ok(())
@@ -99,14 +92,20 @@ pub fn set_cascades(config: &mut Config, n: usize) -> Result<()> {
 /// Sets the map size for a sweep point, checking the preset accepts it.
 pub fn set_resolution(config: &mut Config, n: u32) -> Result<()> {
     if !(16..=16384).contains(&n) {
-        return Err(Error::Other(format!("resolution {n} is outside 16..=16384")));
+        return Err(PresetError::OutOfRange {
+            axis: "resolution",
+            value: n.to_string(),
+            range: "16..=16384",
+        }
+        .into());
     }
     if let Some(p) = &config.shadow.preset {
-        if power_of_two_maps(p.name) && !n.is_power_of_two() {
-            return Err(Error::Other(format!(
-                "the {} preset takes power-of-two map sizes only, not {n}",
-                p.name
-            )));
+        if p.knobs.engine().power_of_two_maps() && !n.is_power_of_two() {
+            return Err(PresetError::MapSize {
+                preset: p.name.to_string(),
+                size: n,
+            }
+            .into());
         }
     }
     config.shadow.resolution = n;

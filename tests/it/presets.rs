@@ -8,6 +8,9 @@ use csm_lab::config::Config;
 use csm_lab::fitting::{corner_average_sphere, minimal_sphere, slice_diameter};
 use csm_lab::geometry::{CameraPose, Lens, LightBasis};
 use csm_lab::presets::*;
+use csm_lab::presets::{
+    bevy::*, dart::*, eevee::*, filament::*, godot::*, learnopengl::*, threejs::*, unity::*, unreal::*,
+};
 use glam::{DQuat, DVec3};
 
 /// A scene without `[shadow]` settings, so every preset runs at its defaults unless `extra`
@@ -56,7 +59,7 @@ fn preset_config(name: &str, shadow: &str, tables: &str) -> Config {
 
 /// The preset's knobs at their defaults, resolved from a config.
 fn default_knobs(name: &str) -> Knobs {
-    preset_config(name, "", "").shadow.preset.unwrap().knobs
+    preset_config(name, "", "").shadow.preset.unwrap().knobs.clone()
 }
 
 fn assert_close(got: &[f64], want: &[f64], tol: f64, what: &str) {
@@ -129,7 +132,7 @@ fn filament_default_positions_and_practical_helper_give_the_reference_splits() {
     assert_eq!((c.shadow.cascades, c.shadow.resolution), (1, 1024));
     // shadowFar 0: the camera's far plane.
     assert_eq!(c.shadow.max_distance, 1000.0);
-    let k = c.shadow.preset.unwrap().knobs;
+    let k = c.shadow.preset.unwrap().knobs.clone();
     let l = layout(&k, 4, 100.0, 0.1, 1000.0);
     assert_close(
         &bounds(&l),
@@ -187,7 +190,7 @@ fn threejs_practical_breaks_give_the_reference_far_ends() {
         (c.shadow.cascades, c.shadow.resolution, c.shadow.max_distance),
         (3, 2048, 1e5)
     );
-    let k = c.shadow.preset.unwrap().knobs;
+    let k = c.shadow.preset.unwrap().knobs.clone();
     let exact = |n: f64, f: f64, m: usize| -> Vec<f64> {
         (1..=m)
             .map(|i| {
@@ -552,7 +555,7 @@ fn threejs_window_is_the_slice_diameter() {
     let rig = rig_for_layout(
         &k,
         ln,
-        LightBasis::new(DVec3::new(-0.4, -1.0, -0.3)),
+        DVec3::new(-0.4, -1.0, -0.3),
         2048,
         &l,
         0.1,
@@ -609,7 +612,7 @@ fn unreal_window_is_the_minimal_sphere_with_a_four_texel_border() {
 
 #[test]
 fn dart_corner_average_costs_the_reference_overhead_over_the_minimal_sphere() {
-    let light = LightBasis::new(DVec3::new(-0.4, -1.0, -0.3));
+    let light = DVec3::new(-0.4, -1.0, -0.3);
     let splits = vec![0.1, 5.0, 20.0, 80.0, 200.0];
     for (fov, aspect, ratios) in [
         (60.0, 16.0 / 9.0, [1.08311, 1.04948, 1.04948, 1.03194]),
@@ -628,7 +631,7 @@ fn dart_corner_average_costs_the_reference_overhead_over_the_minimal_sphere() {
         .unwrap();
         let builtin = Rig::new(
             ln,
-            light,
+            LightBasis::new(light),
             csm_lab::config::Fit::Sphere,
             2048,
             Default::default(),
@@ -805,7 +808,7 @@ fn bevy_window_misses_the_slice_by_up_to_one_texel_in_the_constructed_case() {
         first_cascade_far_bound: 10.0,
         overlap_proportion: 0.2,
     });
-    let light = LightBasis::new(DVec3::new(0.3, -1.0, 0.2));
+    let light = DVec3::new(0.3, -1.0, 0.2);
     let l = layout(&knobs, 1, far, 8.0, 1000.0);
     let rig = rig_for_layout(&knobs, ln, light, 2048, &l, 8.0, 1000.0).unwrap();
     assert_eq!(rig.sphere_side, vec![40.0], "no slack from the ceil");
@@ -983,7 +986,7 @@ fn shadow_overrides_apply_and_fixed_implementations_say_what_they_ignore() {
         "",
         "[bevy]\nfirst_cascade_far_bound = 5.0\noverlap_proportion = 0.5",
     );
-    let Knobs::Bevy(b) = c.shadow.preset.unwrap().knobs else {
+    let Knobs::Bevy(b) = c.shadow.preset.unwrap().knobs.clone() else {
         panic!()
     };
     assert_eq!((b.first_cascade_far_bound, b.overlap_proportion), (5.0, 0.5));

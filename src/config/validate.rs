@@ -1,0 +1,342 @@
+//! Checking a parsed file: every value finite and in range, degrees turned into radians, the
+//! world offset applied. The checks themselves are the domain's; this only calls them and names
+//! the key when one fails.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use crate::error::Result;
+use crate::geometry::Aabb;
+use crate::precision::{Precision, SnapSpace};
+
+use super::schema::{RawConfig, RawFile};
+use super::*;
+
+fn p_display(path: &MotionPath) -> String {
+    match path {
+        MotionPath::File { path, .. } => path.display().to_string(),
+        other => other.name().to_string(),
+    }
+}
+
+/// Parses and validates config text, without applying a preset (the presets module applies one afterwards).
+/// `label` names the source in messages; `base_dir` resolves a relative motion path file.
+pub fn parse(text: &str, label: &str, base_dir: Option<&Path>) -> Result<Config> {
+    let raw = RawFile::parse(text).map_err(|e| toml_error(label, text, &e))?;
+    let v = Validator { path: label, text };
+    let mut config = validate(raw.config, &v, base_dir)?;
+    config.preset_input.label = label.to_string();
+    config.preset_input.text = Arc::from(text);
+    config.preset_input.other_tables = raw.others;
+    Ok(config)
+}
+
+fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Result<Config> {
+    // The world offset moves everything that has a position, before any other check, so the
+    // rest of the crate only ever sees the moved scene.
+    let world_offset = match raw.scene.world_offset {
+        Some(o) => v.point("scene.world_offset", o)?,
+        None => DVec3::ZERO,
+    };
+
+    let moved = |key: &str, p: [f64; 3]| -> Result<DVec3> {
+        let q = v.point(key, p)? + world_offset;
+        if q.abs().max_element() <= MAX_WORLD {
+            Ok(q)
+        } else {
+            Err(v.invalid(
+                "scene.world_offset",
+                format!("{:?}", world_offset.to_array()),
+                &format!("an offset that keeps {key} within ±1e9 world units ({p:?} + offset)"),
+            ))
+        }
+    };
+
+    // Camera.
+    let position = moved("camera.position", raw.camera.position)?;
+    let target = moved("camera.target", raw.camera.target)?;
+    let up = match raw.camera.up {
+        Some(u) => v.vec3("camera.up", u)?,
+        None => DVec3::Y,
+    };
+    let view = target - position;
+    if view.length() <= 1e-12 * (1.0 + position.length()) {
+        return Err(v.invalid(
+            "camera.target",
+            format!("{:?}", raw.camera.target),
+            if world_offset == DVec3::ZERO {
+                "a point different from camera.position (the view direction is target - position)"
+            } else {
+                "a point different from camera.position once scene.world_offset is added (at this offset \
+                 the two round to the same point)"
+            },
+        ));
+    }
+    if up.length() <= 1e-300 {
+        return Err(v.invalid("camera.up", format!("{up:?}"), "a non-zero vector"));
+    }
+    if view.normalize().cross(up.normalize()).length() < 1e-9 {
+        return Err(v.invalid(
+            "camera.up",
+            format!("{:?}", up.to_array()),
+            "a vector not parallel to the view direction (target - position)",
+        ));
+    }
+    let fov = v.finite("camera.fov_y_deg", raw.camera.fov_y_deg)?;
+    // Strictly between 0 and 180, with a margin: at 1e-300 degrees tan(fov/2) underflows and
+    // the pixel footprint becomes infinite.
+    if !(0.001..=179.999).contains(&fov) {
+        return Err(v.invalid(
+            "camera.fov_y_deg",
+            fov,
+            "degrees strictly between 0 and 180, from 0.001 to 179.999",
+        ));
+    }
+    let near = v.finite("camera.near", raw.camera.near)?;
+    if near <= 0.0 {
+        return Err(v.invalid("camera.near", near, "a number > 0"));
+    }
+    let far = v.finite("camera.far", raw.camera.far)?;
+    if far > MAX_WORLD {
+        return Err(v.invalid("camera.far", far, "a number at most 1e9 world units"));
+    }
+    if far <= near {
+        return Err(v.invalid(
+            "camera.far",
+            far,
+            &format!("a number greater than camera.near ({near})"),
+        ));
+    }
+    // A depth ratio beyond 1e12 overflows the logarithmic split term (1e-308 .. 1000 did).
+    if far / near > 1e12 {
+        return Err(v.invalid(
+            "camera.near",
+            near,
+            &format!(
+                "a number at least camera.far / 1e12 ({:e}): far / near may be at most 1e12",
+                far / 1e12
+            ),
+        ));
+    }
+
+    // Screen.
+    let width = v.int_range("screen.width", raw.screen.width, 1, 1 << 20)? as u32;
+    let height = v.int_range("screen.height", raw.screen.height, 1, 1 << 20)? as u32;
+
+    // Light.
+    let dir_raw = v.vec3("light.direction", raw.light.direction)?;
+    let len = dir_raw.length();
+    if len <= 1e-12 || !len.is_finite() {
+        return Err(v.invalid(
+            "light.direction",
+            format!("{:?}", raw.light.direction),
+            "a non-zero vector (the direction light travels)",
+        ));
+    }
+    let light_direction = dir_raw / len;
+
+    // Scene.
+    let smin = moved("scene.min", raw.scene.min)?;
+    let smax = moved("scene.max", raw.scene.max)?;
+    if smin.cmpgt(smax).any() {
+        return Err(v.invalid(
+            "scene.max",
+            format!("{:?}", raw.scene.max),
+            &format!(
+                "each component >= scene.min {:?} (a zero thickness is allowed)",
+                raw.scene.min
+            ),
+        ));
+    }
+
+    // Shadow.
+    let s = raw.shadow;
+    let written = Written {
+        max_distance: s.max_distance.is_some(),
+        cascades: s.cascades.is_some(),
+        resolution: s.resolution.is_some(),
+        lambda: s.lambda.is_some(),
+        fit: s.fit.is_some(),
+        snap: s.snap.is_some(),
+        fit_depth_to_scene: s.fit_depth_to_scene.is_some(),
+    };
+    let max_distance = match s.max_distance {
+        Some(d) => {
+            let d = v.finite("shadow.max_distance", d)?;
+            if d <= 0.0 {
+                return Err(v.invalid("shadow.max_distance", d, "a number > 0"));
+            }
+            d
+        }
+        None => far,
+    };
+    let cascades = v.int_range("shadow.cascades", s.cascades.unwrap_or(4), 1, 16)? as usize;
+    let lambda = v.finite("shadow.lambda", s.lambda.unwrap_or(0.75))?;
+    if !(0.0..=1.0).contains(&lambda) {
+        return Err(v.invalid("shadow.lambda", lambda, "a number in [0, 1] (0 uniform, 1 logarithmic)"));
+    }
+    let resolution = v.int_range("shadow.resolution", s.resolution.unwrap_or(2048), 16, 16384)? as u32;
+    let precision = match s.precision.as_deref() {
+        None => Precision::F64,
+        Some(name) => Precision::from_name(name)
+            .ok_or_else(|| v.invalid("shadow.precision", format!("{name:?}"), "one of \"f64\", \"f32\""))?,
+    };
+    let snap_space = match s.snap_space.as_deref() {
+        None => SnapSpace::World,
+        Some(name) => SnapSpace::from_name(name).ok_or_else(|| {
+            v.invalid(
+                "shadow.snap_space",
+                format!("{name:?}"),
+                "one of \"world\", \"camera_relative\"",
+            )
+        })?,
+    };
+    let s_preset = s.preset;
+    let shadow = ShadowSettings {
+        max_distance,
+        cascades,
+        lambda,
+        resolution,
+        fit: match &s.fit {
+            Some(f) => v.one_of("shadow.fit", f, &[("sphere", Fit::Sphere), ("aabb", Fit::Aabb)])?,
+            None => Fit::Sphere,
+        },
+        snap: s.snap.unwrap_or(true),
+        fit_depth_to_scene: s.fit_depth_to_scene.unwrap_or(true),
+        precision,
+        snap_space,
+        preset: None,
+    };
+    let camera = CameraSettings {
+        position,
+        target,
+        up,
+        fov_y_deg: fov,
+        near,
+        far,
+    };
+    let scene = Aabb::new(smin, smax);
+
+    // Motion.
+    let m = raw.motion;
+    let frames = v.int_range("motion.frames", m.frames.unwrap_or(240), 2, 1_000_000)? as usize;
+    let step_as_written = v.finite("motion.step", m.step.unwrap_or(0.05))?;
+    let path_name = m.path.unwrap_or_else(|| "strafe".to_string());
+    let (path, step) = match path_name.as_str() {
+        "strafe" => (MotionPath::Strafe, step_as_written),
+        "dolly" => (MotionPath::Dolly, step_as_written),
+        "yaw" => (MotionPath::Yaw, step_as_written.to_radians()),
+        "pitch" => (MotionPath::Pitch, step_as_written.to_radians()),
+        "orbit" => (MotionPath::Orbit, step_as_written.to_radians()),
+        "file" => {
+            let file = m.file.ok_or_else(|| {
+                v.invalid(
+                    "motion.file",
+                    "(missing)",
+                    "a CSV file with columns px,py,pz,tx,ty,tz when motion.path = \"file\"",
+                )
+            })?;
+            let p = PathBuf::from(&file);
+            let p = match base_dir {
+                Some(dir) if p.is_relative() => dir.join(p),
+                _ => p,
+            };
+            let poses = crate::motion::read_path_file(&p)?
+                .into_iter()
+                .map(|(position, target)| (position + world_offset, target + world_offset))
+                .collect();
+            (MotionPath::File { path: p, poses }, 0.0)
+        }
+        other => {
+            return Err(v.invalid(
+                "motion.path",
+                format!("{other:?}"),
+                "one of \"strafe\", \"dolly\", \"yaw\", \"pitch\", \"orbit\", \"file\"",
+            ))
+        }
+    };
+    let frames = match &path {
+        MotionPath::File { poses, .. } => poses.len(),
+        _ => frames,
+    };
+    // Keep the whole path within the world bounds.
+    if path.is_translation() && step_as_written.abs() * (frames - 1) as f64 > MAX_WORLD {
+        return Err(v.invalid(
+            "motion.step",
+            step_as_written,
+            &format!("a step whose {} frames travel at most 1e9 world units", frames),
+        ));
+    }
+    if let MotionPath::File { poses, .. } = &path {
+        if let Some(row) = poses
+            .iter()
+            .position(|(p, t)| p.abs().max(t.abs()).max_element() > MAX_WORLD)
+        {
+            return Err(v.invalid(
+                "motion.file",
+                format!("{} (pose row {})", p_display(&path), row + 1),
+                "positions and targets within ±1e9 world units",
+            ));
+        }
+    }
+
+    let a = raw.analysis;
+    let analysis = AnalysisSettings {
+        density_samples: v.int_range(
+            "analysis.density_samples",
+            a.density_samples.unwrap_or(512),
+            2,
+            1_000_000,
+        )? as usize,
+        probes: v.int_range("analysis.probes", a.probes.unwrap_or(256), 1, 1_000_000)? as usize,
+    };
+
+    let sweep = raw.sweep.map(|s| crate::sweep::validate_raw(s, v)).transpose()?;
+
+    let config = Config {
+        name: "config".to_string(),
+        path: None,
+        camera,
+        screen: Screen { width, height },
+        light_direction,
+        light_direction_as_written: dir_raw,
+        scene,
+        world_offset,
+        shadow,
+        motion: MotionSettings {
+            path,
+            frames,
+            step,
+            step_as_written,
+        },
+        analysis,
+        sweep,
+        preset_input: PresetInput {
+            preset: s_preset,
+            written,
+            ..PresetInput::default()
+        },
+    };
+    // Every pose of the motion path must be a valid camera (pitching through the up vector,
+    // or a path file row with position == target, is a config error, not a panic later).
+    crate::motion::camera_path(&config).map_err(|(frame, why)| {
+        v.invalid(
+            if matches!(config.motion.path, MotionPath::File { .. }) {
+                "motion.file"
+            } else {
+                "motion.step"
+            },
+            format!("{} (frame {frame})", config.motion.step_as_written),
+            &format!("a motion that keeps a valid camera in every frame: {why}"),
+        )
+    })?;
+    // binary32 must be able to hold every texel coordinate the emulated pipeline computes.
+    if config.shadow.precision == Precision::F32 {
+        if let Some(why) = crate::precision::f32_range_problem(&config) {
+            return Err(v.invalid("shadow.precision", "\"f32\"", &why));
+        }
+    }
+    Ok(config)
+}

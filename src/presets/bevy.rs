@@ -1,0 +1,188 @@
+//! Bevy (`bevy_light/src/cascade.rs` at 4805ca792c3e): geometric far bounds with an overlap
+//! band, windows of the slice diameter rounded up to whole units, floor snapping, and the
+//! light's own look-to basis (x mirrored against csm-lab's).
+
+use glam::{DVec2, DVec3};
+use serde::{Deserialize, Serialize};
+
+use crate::cascades::{BasisRule, LightDepthRule, WindowRule};
+use crate::config::Validator;
+use crate::error::Result;
+use crate::fitting::slice_diameter;
+use crate::geometry::LightBasis;
+use crate::snapping::{SnapMode, SnapRule};
+
+use super::*;
+
+pub struct Bevy;
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BevyTable {
+    minimum_distance: Option<f64>,
+    first_cascade_far_bound: Option<f64>,
+    overlap_proportion: Option<f64>,
+}
+
+/// Bevy `CascadeShadowConfigBuilder` (maximum_distance is `shadow.max_distance`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BevyKnobs {
+    pub minimum_distance: f64,
+    pub first_cascade_far_bound: f64,
+    pub overlap_proportion: f64,
+}
+
+/// Bevy far bounds: `first·(max/first)^(i/(N−1))`, or just `max` for one cascade.
+pub fn bevy_far_bounds(cascades: usize, first: f64, max: f64) -> Vec<f64> {
+    if cascades == 1 {
+        return vec![max];
+    }
+    (0..cascades)
+        .map(|i| first * (max / first).powf(i as f64 / (cascades - 1) as f64))
+        .collect()
+}
+
+/// Bevy's window side: the slice diameter rounded up to a whole world unit.
+pub fn bevy_window_side(near: f64, far: f64, k2: f64) -> f64 {
+    slice_diameter(near, far, k2).ceil()
+}
+
+/// The light's basis as Bevy builds it: `Transform::looking_to(direction, Vec3::Y)`, i.e.
+/// back = −direction, right = normalize(Y × back), up = back × right; light-space x = right,
+/// y = up, and csm-lab's z (the way light travels) = direction. Only when Y × back is exactly
+/// zero (the light exactly vertical) does `try_normalize` fail, and Bevy takes
+/// `Y.any_orthonormal_vector()` = (−0, 0, −1) as right (`vertical_fallback` is then set).
+pub fn bevy_light_basis(direction: DVec3) -> LightBasis {
+    let z = direction.normalize();
+    let back = -z;
+    let (right, vertical_fallback) = match DVec3::Y.cross(back).try_normalize() {
+        Some(r) => (r, false),
+        None => (DVec3::Y.any_orthonormal_vector(), true),
+    };
+    LightBasis {
+        x: right,
+        y: back.cross(right),
+        z,
+        vertical_fallback,
+    }
+}
+
+impl Engine for Bevy {
+    type Knobs = BevyKnobs;
+    type Table = BevyTable;
+    const NAME: &'static str = "bevy";
+    const SOURCE: &'static str = "Bevy bevy_light/src/cascade.rs @ 4805ca792c3e";
+    const POWER_OF_TWO_MAPS: bool = true;
+
+    fn knobs(t: &BevyTable, cx: &KnobContext<'_>) -> Result<BevyKnobs> {
+        let v = cx.v;
+        Ok(BevyKnobs {
+            minimum_distance: non_negative(v, "bevy.minimum_distance", t.minimum_distance.unwrap_or(0.1))?,
+            first_cascade_far_bound: positive(
+                v,
+                "bevy.first_cascade_far_bound",
+                t.first_cascade_far_bound.unwrap_or(10.0),
+            )?,
+            overlap_proportion: check_range(
+                v,
+                "bevy.overlap_proportion",
+                t.overlap_proportion.unwrap_or(0.2),
+                0.0,
+                1.0,
+                false,
+                true,
+            )?,
+        })
+    }
+
+    fn defaults(_: &BevyKnobs, _camera_far: f64) -> (usize, f64) {
+        (4, 150.0)
+    }
+
+    fn counts(_: &BevyKnobs) -> Counts {
+        Counts::Allowed(vec![1, 2, 3, 4])
+    }
+
+    /// Bevy's builder checks (min < first far bound when N > 1, max > min), plus increasing far
+    /// bounds (first < max), which the geometric series needs.
+    fn check(k: &BevyKnobs, cascades: usize, max_distance: f64, v: &Validator<'_>) -> Result<()> {
+        if max_distance <= k.minimum_distance {
+            return Err(v.invalid(
+                "shadow.max_distance",
+                max_distance,
+                &format!(
+                    "a number greater than bevy.minimum_distance ({}) for the bevy preset",
+                    k.minimum_distance
+                ),
+            ));
+        }
+        if cascades > 1 && !(k.minimum_distance < k.first_cascade_far_bound && k.first_cascade_far_bound < max_distance)
+        {
+            return Err(v.invalid(
+                "bevy.first_cascade_far_bound",
+                k.first_cascade_far_bound,
+                &format!(
+                    "a number between bevy.minimum_distance ({}) and the maximum distance ({max_distance}) when there is more than one cascade",
+                    k.minimum_distance
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn layout(k: &BevyKnobs, cascades: usize, max_distance: f64, _near: f64, _far: f64) -> Layout {
+        let fars = bevy_far_bounds(cascades, k.first_cascade_far_bound, max_distance);
+        let nears: Vec<f64> = (0..cascades)
+            .map(|i| {
+                if i == 0 {
+                    k.minimum_distance
+                } else {
+                    (1.0 - k.overlap_proportion) * fars[i - 1]
+                }
+            })
+            .collect();
+        // Cascade 0 serves everything nearer than its far bound; in the blend band
+        // [(1 - p) far_i, far_i] the coarser cascade i + 1 counts; nothing beyond the last.
+        let mut selection = vec![f64::NEG_INFINITY];
+        selection.extend_from_slice(&nears[1..]);
+        selection.push(fars[cascades - 1]);
+        Layout {
+            fitted: nears.into_iter().zip(fars).collect(),
+            selection,
+        }
+    }
+
+    fn snap_rule(_: &BevyKnobs) -> SnapRule {
+        SnapRule {
+            mode: SnapMode::Floor,
+            step_texels: 1,
+        }
+    }
+
+    fn light_basis(direction: DVec3) -> LightBasis {
+        bevy_light_basis(direction)
+    }
+
+    fn scheme(_: &BevyKnobs, f: &Fitting<'_>) -> EngineScheme {
+        let k2 = f.lens.k2();
+        EngineScheme {
+            label: "diameter-ceil",
+            window: WindowRule::BoxCentred,
+            sides: f.each(|a, b| bevy_window_side(a, b, k2)),
+            basis: BasisRule::Fixed,
+            anchor: DVec2::ZERO,
+            depth: LightDepthRule::Slice { keeps_casters: true },
+        }
+    }
+
+    fn split_rule(k: &BevyKnobs) -> String {
+        format!(
+            "geometric from {} to max_distance, cascade 0 from {}, overlap {}",
+            k.first_cascade_far_bound, k.minimum_distance, k.overlap_proportion
+        )
+    }
+
+    fn light_depth_rule(_: &BevyKnobs) -> String {
+        "slice's own z extent; casters kept (unclipped depth)".to_string()
+    }
+}

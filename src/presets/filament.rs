@@ -1,0 +1,173 @@
+//! Filament (`ShadowMap.cpp`, `ShadowMapManager.cpp`) in stable mode: split positions of
+//! [near, shadowFar or far], corner-average spheres on mapSize − 2 texels, fmod snapping in a
+//! light basis that turns with the camera.
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+use toml::Spanned;
+
+use crate::cascades::{BasisRule, LightDepthRule};
+use crate::error::Result;
+use crate::fitting::corner_average_sphere;
+use crate::snapping::{SnapMode, SnapRule};
+
+use super::*;
+
+pub struct Filament;
+
+/// Filament split positions: given directly, or from one of the `ShadowCascades` helpers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FilamentSplit {
+    Positions,
+    Uniform,
+    Logarithmic,
+    Practical,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FilamentTable {
+    split_mode: Option<Spanned<String>>,
+    lambda: Option<f64>,
+    split_positions: Option<Vec<f64>>,
+}
+
+/// Filament `ShadowOptions` in stable mode (`shadowFar` is `shadow.max_distance`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FilamentKnobs {
+    pub split_mode: FilamentSplit,
+    /// λ of the practical helper (used with `split_mode = "practical"`).
+    pub lambda: f64,
+    pub split_positions: [f64; 3],
+}
+
+/// Filament split positions in (0, 1) for `cascades`.
+pub fn filament_positions(k: &FilamentKnobs, cascades: usize, near: f64, far: f64) -> Vec<f64> {
+    let m = cascades as f64;
+    (1..cascades)
+        .map(|c| {
+            let c = c as f64;
+            let uniform = c / m;
+            let log = (near * (far / near).powf(c / m) - near) / (far - near);
+            match k.split_mode {
+                FilamentSplit::Positions => k.split_positions[c as usize - 1],
+                FilamentSplit::Uniform => uniform,
+                FilamentSplit::Logarithmic => log,
+                FilamentSplit::Practical => k.lambda * log + (1.0 - k.lambda) * uniform,
+            }
+        })
+        .collect()
+}
+
+impl Engine for Filament {
+    type Knobs = FilamentKnobs;
+    type Table = FilamentTable;
+    const NAME: &'static str = "filament";
+    const SOURCE: &'static str = "Filament ShadowMap.cpp, ShadowMapManager.cpp, stable mode";
+    const POWER_OF_TWO_MAPS: bool = true;
+
+    fn knobs(t: &FilamentTable, cx: &KnobContext<'_>) -> Result<FilamentKnobs> {
+        let v = cx.v;
+        let split_mode = match &t.split_mode {
+            Some(m) => v.one_of(
+                "filament.split_mode",
+                m,
+                &[
+                    ("positions", FilamentSplit::Positions),
+                    ("uniform", FilamentSplit::Uniform),
+                    ("logarithmic", FilamentSplit::Logarithmic),
+                    ("practical", FilamentSplit::Practical),
+                ],
+            )?,
+            None => FilamentSplit::Positions,
+        };
+        Ok(FilamentKnobs {
+            split_mode,
+            lambda: unit(v, "filament.lambda", t.lambda.unwrap_or(0.5))?,
+            split_positions: fractions::<3>(
+                v,
+                "filament.split_positions",
+                t.split_positions.as_ref(),
+                [0.125, 0.25, 0.5],
+            )?,
+        })
+    }
+
+    // shadowFar 0 means "use the camera far plane".
+    fn defaults(_: &FilamentKnobs, camera_far: f64) -> (usize, f64) {
+        (1, camera_far)
+    }
+
+    fn default_resolution(_: &FilamentKnobs, _cascades: usize) -> u32 {
+        1024
+    }
+
+    fn counts(_: &FilamentKnobs) -> Counts {
+        Counts::Allowed(vec![1, 2, 3, 4])
+    }
+
+    fn lambda(k: &FilamentKnobs) -> Option<f64> {
+        match k.split_mode {
+            FilamentSplit::Practical => Some(k.lambda),
+            FilamentSplit::Uniform => Some(0.0),
+            FilamentSplit::Logarithmic => Some(1.0),
+            FilamentSplit::Positions => None,
+        }
+    }
+
+    fn lambda_key(k: &FilamentKnobs) -> Option<&'static str> {
+        (k.split_mode == FilamentSplit::Practical).then_some("filament.lambda")
+    }
+
+    fn set_lambda(k: &mut FilamentKnobs, lambda: f64) {
+        k.lambda = lambda;
+    }
+
+    fn layout(k: &FilamentKnobs, cascades: usize, max_distance: f64, near: f64, _far: f64) -> Layout {
+        let f = max_distance;
+        let p = filament_positions(k, cascades, near, f);
+        let mut s = vec![near];
+        s.extend(p.iter().map(|p| near + (f - near) * p));
+        s.push(f);
+        Layout::contiguous(s)
+    }
+
+    fn snap_rule(_: &FilamentKnobs) -> SnapRule {
+        SnapRule {
+            mode: SnapMode::Trunc,
+            step_texels: 2,
+        }
+    }
+
+    fn scheme(_: &FilamentKnobs, f: &Fitting<'_>) -> EngineScheme {
+        let k2 = f.lens.k2();
+        let s = f.spheres(|a, b| corner_average_sphere(a, b, k2));
+        EngineScheme {
+            label: "sphere-average+border",
+            window: Fitting::axis(&s),
+            // mapSize − 2 usable texels: one texel of border per side.
+            sides: f.on(&s, f.resolution as f64 - 2.0),
+            basis: BasisRule::CameraRight,
+            anchor: DVec2::ZERO,
+            depth: LightDepthRule::Scene,
+        }
+    }
+
+    fn split_rule(k: &FilamentKnobs) -> String {
+        match k.split_mode {
+            FilamentSplit::Positions => format!("positions {:?} of [near, shadowFar or far]", k.split_positions),
+            FilamentSplit::Uniform => "uniform helper on [near, shadowFar or far]".to_string(),
+            FilamentSplit::Logarithmic => "logarithmic helper on [near, shadowFar or far]".to_string(),
+            FilamentSplit::Practical => format!("practical helper, λ {}", k.lambda),
+        }
+    }
+
+    fn snap_anchor(_: &FilamentKnobs) -> &'static str {
+        "world origin, basis turns with the camera"
+    }
+
+    fn light_depth_rule(_: &FilamentKnobs) -> String {
+        "from receiver and caster bounds".to_string()
+    }
+}

@@ -1,0 +1,120 @@
+//! Godot 4 (`renderer_scene_cull.cpp`, `light_3d.cpp`): fractions of [near, max distance],
+//! optional blend splits, corner-average spheres with a texel of border, 2-texel round snap,
+//! a pancaked caster range.
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use crate::cascades::{BasisRule, LightDepthRule};
+use crate::error::Result;
+use crate::fitting::corner_average_sphere;
+use crate::snapping::{SnapMode, SnapRule};
+
+use super::*;
+
+pub struct Godot;
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GodotTable {
+    splits: Option<Vec<f64>>,
+    blend_splits: Option<bool>,
+    pancake_size: Option<f64>,
+}
+
+/// Godot DirectionalLight3D (`max_distance` is `shadow.max_distance`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GodotKnobs {
+    /// split_1, split_2, split_3 (PSSM2 uses split_1 only).
+    pub splits: [f64; 3],
+    pub blend_splits: bool,
+    pub pancake_size: f64,
+}
+
+impl Engine for Godot {
+    type Knobs = GodotKnobs;
+    type Table = GodotTable;
+    const NAME: &'static str = "godot";
+    const SOURCE: &'static str = "Godot 4 renderer_scene_cull.cpp, light_3d.cpp";
+
+    fn knobs(t: &GodotTable, cx: &KnobContext<'_>) -> Result<GodotKnobs> {
+        let v = cx.v;
+        let splits = fractions::<3>(v, "godot.splits", t.splits.as_ref(), [0.1, 0.2, 0.5])?;
+        Ok(GodotKnobs {
+            splits,
+            blend_splits: t.blend_splits.unwrap_or(false),
+            pancake_size: non_negative(v, "godot.pancake_size", t.pancake_size.unwrap_or(20.0))?,
+        })
+    }
+
+    fn defaults(_: &GodotKnobs, _camera_far: f64) -> (usize, f64) {
+        (4, 100.0)
+    }
+
+    fn counts(_: &GodotKnobs) -> Counts {
+        Counts::Allowed(vec![1, 2, 4])
+    }
+
+    fn layout(k: &GodotKnobs, cascades: usize, max_distance: f64, near: f64, far: f64) -> Layout {
+        let max_d = far.min(max_distance).max(near + 0.001);
+        let min_d = near.min(max_d);
+        let used: &[f64] = match cascades {
+            1 => &[],
+            2 => &k.splits[..1],
+            _ => &k.splits[..],
+        };
+        let mut d = vec![min_d];
+        d.extend(used.iter().map(|s| min_d + s * (max_d - min_d)));
+        d.push(max_d);
+        if k.blend_splits {
+            // Each cascade after the first also covers the previous one; the last 10 % of
+            // each interval blends toward the next (coarser) cascade.
+            let m = d.len() - 1;
+            let fitted = (0..m).map(|i| (d[i.saturating_sub(1)], d[i + 1])).collect();
+            let mut selection = vec![d[0]];
+            selection.extend(d[1..m].iter().map(|x| 0.9 * x));
+            selection.push(d[m]);
+            Layout { fitted, selection }
+        } else {
+            Layout::contiguous(d)
+        }
+    }
+
+    fn snap_rule(_: &GodotKnobs) -> SnapRule {
+        SnapRule {
+            mode: SnapMode::Round,
+            step_texels: 2,
+        }
+    }
+
+    fn scheme(k: &GodotKnobs, f: &Fitting<'_>) -> EngineScheme {
+        let k2 = f.lens.k2();
+        let s = f.spheres(|a, b| corner_average_sphere(a, b, k2));
+        // r·T/(T − 2): one texel of border per side.
+        let sides = f.on(&s, f.resolution as f64 - 2.0);
+        EngineScheme {
+            label: "sphere-average+border",
+            window: Fitting::axis(&s),
+            depth: LightDepthRule::Sphere {
+                radius: sides.iter().map(|w| 0.5 * w).collect(),
+                toward_light: k.pancake_size,
+                min_half: 0.0,
+            },
+            sides,
+            basis: BasisRule::Fixed,
+            anchor: DVec2::ZERO,
+        }
+    }
+
+    fn split_rule(k: &GodotKnobs) -> String {
+        format!(
+            "fractions {:?} of [near, min(far, max_distance)]{}",
+            k.splits,
+            if k.blend_splits { ", blend_splits" } else { "" }
+        )
+    }
+
+    fn light_depth_rule(k: &GodotKnobs) -> String {
+        format!("sphere ± r, {} toward the light; casters pancaked", k.pancake_size)
+    }
+}

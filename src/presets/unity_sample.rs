@@ -1,0 +1,92 @@
+//! The Unity C# sample (a blog's cascade code): fixed fractions of the far plane, tight boxes
+//! whose centre is discarded (the window sits on the light axis through the world origin).
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use crate::cascades::{BasisRule, LightDepthRule, WindowRule};
+use crate::config::Fit;
+use crate::error::Result;
+use crate::fitting::minimal_sphere;
+
+use super::*;
+
+pub struct UnitySample;
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UnitySampleTable {
+    centre_on_slice: Option<bool>,
+}
+
+/// `centre_on_slice = true` repairs the discarded window centre (default: reproduce).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct UnitySampleKnobs {
+    pub centre_on_slice: bool,
+}
+
+impl Engine for UnitySample {
+    type Knobs = UnitySampleKnobs;
+    type Table = UnitySampleTable;
+    const NAME: &'static str = "unity-sample";
+    const SOURCE: &'static str = "Unity C# cascade sample (soramamenatan blog #113)";
+    const HAS_DISTANCE: bool = false;
+    const FIT: Fit = Fit::Aabb;
+    const SNAPS: bool = false;
+
+    fn knobs(t: &UnitySampleTable, _cx: &KnobContext<'_>) -> Result<UnitySampleKnobs> {
+        Ok(UnitySampleKnobs {
+            centre_on_slice: t.centre_on_slice.unwrap_or(false),
+        })
+    }
+
+    fn defaults(_: &UnitySampleKnobs, camera_far: f64) -> (usize, f64) {
+        (4, camera_far)
+    }
+
+    fn default_resolution(_: &UnitySampleKnobs, _cascades: usize) -> u32 {
+        1024
+    }
+
+    fn counts(_: &UnitySampleKnobs) -> Counts {
+        Counts::Fixed(4)
+    }
+
+    fn layout(_: &UnitySampleKnobs, _cascades: usize, _max_distance: f64, near: f64, far: f64) -> Layout {
+        // Accumulated in the sample's own order (far * p + ... + near).
+        let (n, f) = (near, far);
+        let e = [
+            f * 0.067 + n,
+            f * 0.133 + f * 0.067 + n,
+            f * 0.267 + f * 0.133 + f * 0.067 + n,
+        ];
+        Layout::contiguous(vec![n, e[0], e[1], e[2], f])
+    }
+
+    fn scheme(k: &UnitySampleKnobs, f: &Fitting<'_>) -> EngineScheme {
+        let k2 = f.lens.k2();
+        EngineScheme {
+            label: if k.centre_on_slice { "aabb" } else { "aabb-at-origin" },
+            window: if k.centre_on_slice {
+                WindowRule::Tight {
+                    pad: 0.0,
+                    border: false,
+                }
+            } else {
+                WindowRule::TightAtOrigin
+            },
+            sides: f.each(|a, b| 2.0 * minimal_sphere(a, b, k2).radius),
+            basis: BasisRule::Fixed,
+            anchor: DVec2::ZERO,
+            depth: LightDepthRule::Slice { keeps_casters: false },
+        }
+    }
+
+    fn split_rule(_: &UnitySampleKnobs) -> String {
+        "near + {0.067, 0.2, 0.467}·far, 4 cascades".to_string()
+    }
+
+    fn light_depth_rule(_: &UnitySampleKnobs) -> String {
+        "slice's own z extent; casters in front are lost".to_string()
+    }
+}

@@ -1,0 +1,147 @@
+//! Unreal Engine (`DirectionalLightComponent.cpp`, `ShadowSetup.cpp`): geometric split weights
+//! with a transition band, Unreal's bounding sphere with a 4-texel border, fmod snapping.
+//! Centimetre constants are converted to metres.
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use crate::cascades::{BasisRule, LightDepthRule};
+use crate::error::Result;
+use crate::fitting::Sphere;
+use crate::geometry::Lens;
+use crate::snapping::{SnapMode, SnapRule};
+
+use super::*;
+
+pub struct Unreal;
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UnrealTable {
+    cascade_distribution_exponent: Option<f64>,
+    transition_fraction: Option<f64>,
+}
+
+/// Unreal directional light (dynamic shadow distance is `shadow.max_distance`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct UnrealKnobs {
+    pub cascade_distribution_exponent: f64,
+    pub transition_fraction: f64,
+}
+
+/// Unreal split distances: `near + (Σ_{k<i} e^k / Σ_{k<N} e^k)·(distance − near)`.
+pub fn unreal_splits(cascades: usize, exponent: f64, near: f64, distance: f64) -> Vec<f64> {
+    let total: f64 = (0..cascades).map(|k| exponent.powi(k as i32)).sum();
+    let mut acc = 0.0;
+    let mut out = vec![near];
+    for i in 1..cascades {
+        acc += exponent.powi(i as i32 - 1);
+        out.push(near + acc / total * (distance - near));
+    }
+    out.push(distance);
+    out
+}
+
+/// Unreal's bounding sphere of a slice: centre depth `far − offset` clamped to the slice, with
+/// `offset = (Db² − Da²)/(2L) + L/2`, radius the largest corner distance, at least 1 cm.
+pub fn unreal_sphere(near: f64, far: f64, lens: &Lens) -> Sphere {
+    let da2 = (lens.tan_h * far).powi(2) + (lens.tan_v * far).powi(2);
+    let db2 = (lens.tan_h * near).powi(2) + (lens.tan_v * near).powi(2);
+    let l = far - near;
+    let offset = (db2 - da2) / (2.0 * l) + 0.5 * l;
+    let c = (far - offset).clamp(near, far);
+    let r_near = (db2 + (c - near).powi(2)).sqrt();
+    let r_far = (da2 + (far - c).powi(2)).sqrt();
+    Sphere {
+        centre_depth: c,
+        radius: r_near.max(r_far).max(0.01),
+    }
+}
+
+/// Unreal's border per side, in texels (modelled as the 4-texel snap step).
+pub const UNREAL_BORDER_TEXELS: f64 = 4.0;
+
+impl Engine for Unreal {
+    type Knobs = UnrealKnobs;
+    type Table = UnrealTable;
+    const NAME: &'static str = "unreal";
+    const SOURCE: &'static str = "Unreal Engine CSM: DirectionalLightComponent.cpp, ShadowSetup.cpp";
+
+    fn knobs(t: &UnrealTable, cx: &KnobContext<'_>) -> Result<UnrealKnobs> {
+        let v = cx.v;
+        let e = t.cascade_distribution_exponent.unwrap_or(3.0);
+        let tr = t.transition_fraction.unwrap_or(0.1);
+        Ok(UnrealKnobs {
+            cascade_distribution_exponent: check_range(
+                v,
+                "unreal.cascade_distribution_exponent",
+                e,
+                0.1,
+                10.0,
+                false,
+                false,
+            )?,
+            transition_fraction: check_range(v, "unreal.transition_fraction", tr, 0.0, 0.3, false, false)?,
+        })
+    }
+
+    fn defaults(_: &UnrealKnobs, _camera_far: f64) -> (usize, f64) {
+        (3, 200.0)
+    }
+
+    fn counts(_: &UnrealKnobs) -> Counts {
+        Counts::Allowed((1..=10).collect())
+    }
+
+    fn layout(k: &UnrealKnobs, cascades: usize, max_distance: f64, near: f64, _far: f64) -> Layout {
+        let s = unreal_splits(cascades, k.cascade_distribution_exponent, near, max_distance);
+        let m = cascades;
+        let fitted = (0..m)
+            .map(|i| {
+                let (a, b) = (s[i], s[i + 1]);
+                // Every far end but the last is extended by the transition band.
+                let ext = if i + 1 < m {
+                    (b - a) * k.transition_fraction
+                } else {
+                    0.0
+                };
+                (a, b + ext)
+            })
+            .collect();
+        Layout { fitted, selection: s }
+    }
+
+    fn snap_rule(_: &UnrealKnobs) -> SnapRule {
+        SnapRule {
+            mode: SnapMode::Trunc,
+            step_texels: 4,
+        }
+    }
+
+    fn scheme(_: &UnrealKnobs, f: &Fitting<'_>) -> EngineScheme {
+        let s = f.spheres(|a, b| unreal_sphere(a, b, &f.lens));
+        EngineScheme {
+            label: "sphere-minimal+border",
+            window: Fitting::axis(&s),
+            sides: f.on(&s, f.resolution as f64 - 2.0 * UNREAL_BORDER_TEXELS),
+            basis: BasisRule::Fixed,
+            anchor: DVec2::ZERO,
+            depth: LightDepthRule::Sphere {
+                radius: s.iter().map(|s| s.radius).collect(),
+                toward_light: 0.0,
+                min_half: 50.0,
+            },
+        }
+    }
+
+    fn split_rule(k: &UnrealKnobs) -> String {
+        format!(
+            "geometric weights, exponent {}, transition {}",
+            k.cascade_distribution_exponent, k.transition_fraction
+        )
+    }
+
+    fn light_depth_rule(_: &UnrealKnobs) -> String {
+        "sphere ± max(r, 50 m); casters kept".to_string()
+    }
+}
