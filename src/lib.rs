@@ -4,7 +4,7 @@
 //! fit, texel snapping) for a camera, a directional light and the scene's bounds, and measures
 //! texel density and perspective aliasing against view depth, shimmer under camera motion,
 //! and coverage. Conventions (handedness, light direction, view depth) are stated once in
-//! [`geometry`]; formulas follow `csm-math.md` of the project's reference material.
+//! [`geometry`]; the formulas and their reference values are stated in `docs/`.
 //!
 //! Pipeline: [`config`] → [`depth_range`] → [`splits`] → [`cascades`] ([`fitting`],
 //! [`snapping`]) → [`metrics`], [`shimmer`] → [`analysis`] → [`output`], [`plots`].

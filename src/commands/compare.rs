@@ -1,6 +1,6 @@
 //! `csm-lab compare`: several engine presets on one scene, side by side.
 //!
-//! Each preset is loaded from the same config file (its `[shadow]` overrides and its own
+//! The config file is read once; each preset is applied to it (its `[shadow]` overrides and its own
 //! engine table apply, unless `--defaults` asks for every preset's own defaults) and analysed
 //! exactly as `analyze` would. The outputs, rendered in memory and then written atomically:
 //!
@@ -58,11 +58,13 @@ fn preset_of(a: &Analysis) -> Option<PresetName> {
     a.config.shadow.preset.as_ref().map(|p| p.name)
 }
 
-/// Loads the config once per preset and analyses each (in parallel, results in input order).
+/// Loads and validates the config once, applies each preset to a copy (its engine table from
+/// the file still applies) and analyses each (in parallel, results in input order).
 pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool) -> Result<Comparison> {
     if presets.is_empty() {
         return Err(Error::flag("--presets", "", "give at least one preset"));
     }
+    let scene = Config::load_scene(path)?;
     let configs = presets
         .iter()
         .map(|p| {
@@ -72,7 +74,9 @@ pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool) -> Result
                 engine_defaults,
                 lenient_overrides: true,
             };
-            Config::load_with_preset(path, &choice)
+            let mut config = scene.clone();
+            crate::presets::apply(&mut config, &choice)?;
+            Ok(config)
         })
         .collect::<Result<Vec<_>>>()?;
     let name = configs[0].name.clone();

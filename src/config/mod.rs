@@ -339,4 +339,3 @@ impl Config {
         self.camera.far.min(self.shadow.max_distance)
     }
 }
-

@@ -6,7 +6,9 @@ use serde::Deserialize;
 use toml::Spanned;
 
 /// csm-lab's own top-level tables.
-pub const SECTIONS: [&str; 8] = ["camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep"];
+pub const SECTIONS: [&str; 8] = [
+    "camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep",
+];
 
 /// The whole file: csm-lab's tables, and every other top-level key (engine tables or unknown).
 #[derive(Debug)]
@@ -20,7 +22,11 @@ impl RawFile {
     pub(crate) fn parse(text: &str) -> Result<RawFile, toml::de::Error> {
         let config: RawConfig = toml::from_str(text)?;
         let table: toml::Table = toml::from_str(text)?;
-        let others = table.keys().filter(|k| !SECTIONS.contains(&k.as_str())).cloned().collect();
+        let others = table
+            .keys()
+            .filter(|k| !SECTIONS.contains(&k.as_str()))
+            .cloned()
+            .collect();
         Ok(RawFile { config, others })
     }
 }

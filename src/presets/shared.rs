@@ -173,7 +173,12 @@ pub fn positive(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
 }
 
 /// `N` fractions strictly increasing inside (0, 1), or `default` when not written.
-pub fn fractions<const N: usize>(v: &Validator<'_>, key: &str, x: Option<&Vec<f64>>, default: [f64; N]) -> Result<[f64; N]> {
+pub fn fractions<const N: usize>(
+    v: &Validator<'_>,
+    key: &str,
+    x: Option<&Vec<f64>>,
+    default: [f64; N],
+) -> Result<[f64; N]> {
     let Some(x) = x else {
         return Ok(default);
     };

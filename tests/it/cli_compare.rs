@@ -127,7 +127,7 @@ fn compare_with_defaults_runs_every_preset_at_its_own_settings() {
         .skip(1)
         .map(|l| l.split(',').map(String::from).collect())
         .collect();
-    // URP: 1 cascade of 2048; seed 004: 3 fixed cascades; Filament: 1 cascade of 1024.
+    // URP: 1 cascade of 2048; learnopengl: 3 fixed cascades; Filament: 1 cascade of 1024.
     let got: Vec<(&str, &str)> = rows.iter().map(|r| (r[2].as_str(), r[3].as_str())).collect();
     assert_eq!(got, [("1", "2048"), ("3", "2048"), ("1", "1024")]);
     let md = std::fs::read_to_string(dir.path().join("out/compare.md")).unwrap();

@@ -1,4 +1,4 @@
-//! Engine presets against the reference split vectors (engines.md section 2), hand computations
+//! Engine presets against the reference split vectors of docs/presets.md, hand computations
 //! of each split rule, the reference window sizes, the snapping behaviour each engine is known
 //! for, the Bevy coverage miss and the three.js fixed light depth range.
 
@@ -86,7 +86,7 @@ fn bounds(l: &Layout) -> Vec<f64> {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Split vectors at the defaults: engines.md section 2 (printed precision) and the exact rule
+// Split vectors at the defaults: the reference vectors of docs/presets.md (printed precision) and the exact rule
 // ---------------------------------------------------------------------------------------------
 
 #[test]
@@ -295,7 +295,7 @@ fn seed_002_and_seed_004_give_their_reference_splits() {
     let c = preset_config("unity-sample", "", "");
     assert_eq!((c.shadow.cascades, c.shadow.resolution), (4, 1024));
     let l = layout(&c.shadow.preset.unwrap().knobs, 4, 0.0, 0.3, 100.0);
-    assert_close(&bounds(&l), &[0.3, 7.0, 20.3, 47.0, 100.0], 1e-9, "seed 002");
+    assert_close(&bounds(&l), &[0.3, 7.0, 20.3, 47.0, 100.0], 1e-9, "unity-sample");
 
     let c = preset_config("learnopengl", "", "");
     assert_eq!(c.shadow.cascades, 3);
@@ -313,9 +313,9 @@ fn dart_defaults_give_the_practical_reference_splits() {
     let c = preset_config("dart", "", "");
     assert_eq!((c.shadow.cascades, c.shadow.max_distance), (4, 1000.0));
     let l = layout(&c.shadow.preset.unwrap().knobs, 4, 200.0, 0.1, 1000.0);
-    // csm-math.md 2.3, range [0.1, 200], lambda 0.5.
+    // reference, range [0.1, 200], lambda 0.5.
     assert_close(&bounds(&l), &[0.1, 25.372, 52.261, 89.966, 200.0], 5e-4, "lambda 0.5");
-    // The last boundary comes from the formula at ratio 1, as in the seed: far up to rounding.
+    // The last boundary comes from the formula at ratio 1, as in the reference code: far up to rounding.
     assert!((bounds(&l)[4] - 200.0).abs() < 1e-12);
 }
 
@@ -469,22 +469,22 @@ fn non_default_splits_follow_each_rule() {
         "urp 3",
     );
 
-    // Seed 002 at two other camera ranges.
+    // The unity-sample preset at two other camera ranges.
     let k = default_knobs("unity-sample");
     assert_close(
         &bounds(&layout(&k, 4, 0.0, 1.0, 1000.0)),
         &[1.0, 68.0, 201.0, 468.0, 1000.0],
         1e-9,
-        "seed 002 a",
+        "unity-sample a",
     );
     assert_close(
         &bounds(&layout(&k, 4, 0.0, 0.1, 50.0)),
         &[0.1, 3.45, 10.1, 23.45, 50.0],
         1e-9,
-        "seed 002 b",
+        "unity-sample b",
     );
 
-    // Seed 004 with other planes: 2 cascades, and 4.
+    // The learnopengl preset with other planes: 2 cascades, and 4.
     let lk = |planes: Vec<f64>| {
         Knobs::LearnOpenGl(LearnOpenGlKnobs {
             planes,
@@ -502,7 +502,7 @@ fn non_default_splits_follow_each_rule() {
         vec![0.5, 1.0, 10.0, 20.0, 60.0]
     );
 
-    // Seed 000: lambda 0 and 1, and the count clamped to 4.
+    // The dart preset: lambda 0 and 1, and the count clamped to 4.
     let dk = |lambda| Knobs::Dart(DartKnobs { lambda });
     assert_close(
         &bounds(&layout(&dk(0.0), 2, 101.0, 1.0, 50.0)),
@@ -552,17 +552,8 @@ fn threejs_window_is_the_slice_diameter() {
     let k = default_knobs("threejs");
     let l = layout(&k, 4, 1e5, 0.1, 200.0);
     let ln = lens(60.0, 16.0 / 9.0);
-    let rig = rig_for_layout(
-        &k,
-        ln,
-        DVec3::new(-0.4, -1.0, -0.3),
-        2048,
-        &l,
-        0.1,
-        200.0,
-    )
-    .unwrap();
-    // csm-math.md 8.3: 59.758 for [0.1, 25.372] at 60 deg, 16:9; texel 0.029179 at 2048.
+    let rig = rig_for_layout(&k, ln, DVec3::new(-0.4, -1.0, -0.3), 2048, &l, 0.1, 200.0).unwrap();
+    // reference: 59.758 for [0.1, 25.372] at 60 deg, 16:9; texel 0.029179 at 2048.
     assert!((rig.sphere_side[0] - 59.758).abs() < 5e-4, "{}", rig.sphere_side[0]);
     assert!((rig.sphere_side[0] / 2048.0 - 0.029179).abs() < 5e-7);
     // By hand: max(far-cap diagonal, body diagonal).
@@ -583,7 +574,7 @@ fn godot_window_is_the_centroid_sphere_with_one_border_texel() {
     assert_eq!(c.shadow.cascades, 1);
     let rig = Rig::from_config(&c2).unwrap();
     assert_eq!((rig.slices[0].near, rig.slices[0].far), (5.0, 20.0));
-    // csm-math.md 8.1: R_avg = 24.71806 for [5, 20] at 60 deg, 16:9; and by hand.
+    // reference: R_avg = 24.71806 for [5, 20] at 60 deg, 16:9; and by hand.
     let ln = lens(60.0, 16.0 / 9.0);
     let r_avg = (ln.k2() * 400.0 + 7.5f64 * 7.5).sqrt();
     assert!((r_avg - 24.71806).abs() < 5e-6);
@@ -600,7 +591,7 @@ fn unreal_window_is_the_minimal_sphere_with_a_four_texel_border() {
     let text = scene("", "[shadow]\npreset = \"unreal\"\ncascades = 1\nmax_distance = 20.0\n")
         .replace("near = 0.1", "near = 5.0");
     let rig = Rig::from_config(&load(&text)).unwrap();
-    // csm-math.md 8.1: R_min = 23.55276 for [5, 20] at 60 deg, 16:9 (far-cap case).
+    // reference: R_min = 23.55276 for [5, 20] at 60 deg, 16:9 (far-cap case).
     assert!((rig.sphere_side[0] - 2.0 * 23.55276 * 2048.0 / 2040.0).abs() < 1e-4);
     // Near+far case: fovY 30 deg, aspect 1, [5, 20]: c = 14.2949, R = 9.48606.
     let s = unreal_sphere(5.0, 20.0, &lens(30.0, 1.0));
@@ -697,7 +688,7 @@ fn each_preset_snaps_as_its_engine_does_under_strafe_and_yaw() {
             }
         }
     }
-    // Repairing seed 002's centring makes the (unsnapped) window follow the slice: it drifts.
+    // Repairing the unity-sample preset's centring makes the (unsnapped) window follow the slice: it drifts.
     let (s, _) = shimmer(
         "unity-sample",
         "strafe",
@@ -766,7 +757,7 @@ fn the_eevee_grid_runs_through_the_lamp_and_stays_stable() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Coverage: the Bevy miss (engines.md 5.1) and seed defects
+// Coverage: the Bevy miss (docs/presets.md, "Coverage") and seed defects
 // ---------------------------------------------------------------------------------------------
 
 /// Uniformly random camera orientations (Shoemake) at random positions.
@@ -822,13 +813,13 @@ fn bevy_window_misses_the_slice_by_up_to_one_texel_in_the_constructed_case() {
         let u = rig.window(0, &lp, false);
         unsnapped_worst = unsnapped_worst.max(rig.coverage(0, &lp, &u).worst_texels);
     }
-    // engines.md: 32 of 20,000 poses, worst 0.82 texel. The floor moves the centre by less
+    // reference: 32 of 20,000 poses, worst 0.82 texel. The floor moves the centre by less
     // than one texel, so no miss can reach a whole texel.
     assert!((10..=100).contains(&misses), "{misses} poses miss");
     assert!(worst > 0.7 && worst < 1.0, "worst miss {worst} texels");
     assert_eq!(unsnapped_worst, 0.0, "centred on the box, the window always covers");
 
-    // The default cascade 1 ([8, 24.66]) keeps about 7 texels of slack (engines.md: 7.10).
+    // The default cascade 1 ([8, 24.66]) keeps about 7 texels of slack (reference: 7.10).
     let knobs = default_knobs("bevy");
     let l = layout(&knobs, 4, 150.0, 0.1, 1000.0);
     let rig = rig_for_layout(&knobs, ln, light, 2048, &l, 0.1, 1000.0).unwrap();
@@ -844,7 +835,7 @@ fn bevy_window_misses_the_slice_by_up_to_one_texel_in_the_constructed_case() {
 
 #[test]
 fn seed_defects_show_up_as_coverage_violations() {
-    // Seed 004: depths in (15, 30) and beyond 100 read cascade 2, fitted to [30, 100].
+    // The learnopengl preset: depths in (15, 30) and beyond 100 read cascade 2, fitted to [30, 100].
     let c = preset_config("learnopengl", "", "");
     let a = analyze(&c, &AnalysisOptions::full());
     let sn = a.configured_path().unwrap();
@@ -853,7 +844,7 @@ fn seed_defects_show_up_as_coverage_violations() {
         "{:?}",
         sn.coverage
     );
-    // Seed 002: windows on the origin axis miss slices far from it; centring repairs it.
+    // The unity-sample preset: windows on the origin axis miss slices far from it; centring repairs it.
     let c = preset_config("unity-sample", "", "");
     assert!(
         analyze(&c, &AnalysisOptions::summary_only())
@@ -1058,7 +1049,147 @@ fn bad_preset_settings_are_errors_naming_the_key() {
         "",
         "[shadow]\npreset = \"threejs\"\n[threejs]\nmode = \"magic\"",
     ));
-    assert!(e.contains("unknown variant"), "{e}");
+    assert!(e.contains("`threejs.mode` = \"magic\" is not allowed"), "{e}");
+}
+
+/// The line and column of the first line of `text` starting with `prefix`, 1-based.
+fn line_of(text: &str, prefix: &str) -> usize {
+    text.lines().position(|l| l.starts_with(prefix)).expect("line present") + 1
+}
+
+#[test]
+fn every_enum_valued_key_names_itself_and_its_values() {
+    let cases: [(&str, &str, &str, &str, &str); 7] = [
+        (
+            "",
+            "[shadow]\nfit = \"ellipse\"",
+            "fit = ",
+            "`shadow.fit` = \"ellipse\"",
+            "one of \"sphere\", \"aabb\"",
+        ),
+        (
+            "",
+            "[shadow]\nprecision = \"f16\"",
+            "precision = ",
+            "`shadow.precision` = \"f16\"",
+            "one of \"f64\", \"f32\"",
+        ),
+        (
+            "",
+            "[shadow]\nsnap_space = \"view\"",
+            "snap_space = ",
+            "`shadow.snap_space` = \"view\"",
+            "one of \"world\", \"camera_relative\"",
+        ),
+        (
+            "",
+            "[shadow]\npreset = \"bevvy\"",
+            "preset = ",
+            "`shadow.preset` = \"bevvy\"",
+            "one of \"dart\", \"threejs\"",
+        ),
+        (
+            "path = \"spin\"",
+            "",
+            "path = ",
+            "`motion.path` = \"spin\"",
+            "one of \"strafe\", \"dolly\", \"yaw\", \"pitch\", \"orbit\", \"file\"",
+        ),
+        (
+            "",
+            "[shadow]\npreset = \"threejs\"\n[threejs]\nmode = \"cubic\"",
+            "mode = ",
+            "`threejs.mode` = \"cubic\"",
+            "one of \"uniform\", \"logarithmic\", \"practical\"",
+        ),
+        (
+            "",
+            "[shadow]\npreset = \"filament\"\n[filament]\nsplit_mode = \"even\"",
+            "split_mode = ",
+            "`filament.split_mode` = \"even\"",
+            "one of \"positions\", \"uniform\", \"logarithmic\", \"practical\"",
+        ),
+    ];
+    for (motion, extra, line_start, what, allowed) in cases {
+        let text = scene(motion, extra);
+        let e = load_err(&text);
+        let line = line_of(&text, line_start);
+        assert!(e.contains(&format!("test.toml:{line}:")), "{e}");
+        assert!(e.contains(&format!("{what} is not allowed: {allowed}")), "{e}");
+    }
+    // Enum values that point at the value itself: the column is the value's.
+    let text = scene("", "[shadow]\nfit = \"ellipse\"");
+    let line = line_of(&text, "fit = ");
+    assert!(load_err(&text).starts_with(&format!("test.toml:{line}:7: ")));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Light basis
+// ---------------------------------------------------------------------------------------------
+
+/// Bevy's look-to basis, computed independently: glam's right-handed look-to view matrix has
+/// rows right, up and −direction.
+fn look_to(d: DVec3) -> (DVec3, DVec3, DVec3) {
+    let m = glam::DMat4::look_to_rh(DVec3::ZERO, d.normalize(), DVec3::Y);
+    (m.row(0).truncate(), m.row(1).truncate(), -m.row(2).truncate())
+}
+
+#[test]
+fn bevy_basis_is_looking_to_with_y_up_and_mirrors_csm_lab_x() {
+    let mut rng = csm_lab::rng::SplitMix64::new(41);
+    let mut n = 0;
+    while n < 20 {
+        let d = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+        if d.length() < 0.1 {
+            continue;
+        }
+        n += 1;
+        let b = bevy_light_basis(d);
+        let (x, y, z) = look_to(d);
+        assert!((b.x - x).length() < 1e-12 && (b.y - y).length() < 1e-12, "{d:?}: {b:?}");
+        assert!((b.z - z).length() < 1e-12);
+        // Against csm-lab's basis: x mirrored, y and z the same.
+        let own = LightBasis::new(d);
+        assert!((b.x + own.x).length() < 1e-12, "{d:?}");
+        assert!((b.y - own.y).length() < 1e-12 && (b.z - own.z).length() < 1e-12);
+        assert!(!b.vertical_fallback);
+    }
+    // Nearly vertical: Bevy keeps +Y as reference where csm-lab has switched to +Z.
+    let d = DVec3::new(1e-9, -1.0, 0.0);
+    assert!(LightBasis::new(d).vertical_fallback && !bevy_light_basis(d).vertical_fallback);
+    assert!((bevy_light_basis(d).x - look_to(d).0).length() < 1e-12);
+    // Exactly vertical: right = any_orthonormal_vector(+Y) = -Z, up = back x right.
+    let b = bevy_light_basis(DVec3::NEG_Y);
+    assert!(b.vertical_fallback);
+    assert_eq!(
+        (b.x, b.y, b.z),
+        (DVec3::new(-0.0, 0.0, -1.0), DVec3::NEG_X, DVec3::NEG_Y)
+    );
+    let b = bevy_light_basis(DVec3::Y);
+    assert_eq!((b.y, b.z), (DVec3::X, DVec3::Y));
+}
+
+#[test]
+fn bevy_floor_snap_moves_windows_toward_minus_bevy_x_which_is_plus_csm_lab_x() {
+    let c = preset_config("bevy", "", "");
+    let rig = Rig::from_config(&c).unwrap();
+    let own = LightBasis::new(c.light_direction);
+    let (mut along_own_x, mut moved) = (0.0f64, 0);
+    for pose in random_poses(9, 200) {
+        let lp = LightPose::new(&rig.light, &pose);
+        for i in 0..rig.cascade_count() {
+            let centre = |w: &csm_lab::fitting::Window| (w.origin_texels + 0.5 * w.resolution as f64) * w.texel;
+            let (s, u) = (rig.window(i, &lp, true), rig.window(i, &lp, false));
+            let shift = centre(&s) - centre(&u);
+            // Floor: never toward +x or +y of Bevy's own basis.
+            assert!(shift.x <= 1e-9 * s.texel.x && shift.y <= 1e-9 * s.texel.y, "{shift:?}");
+            let world = shift.x * rig.light.x + shift.y * rig.light.y;
+            assert!(world.dot(own.x) >= -1e-9, "against csm-lab's x the floor rounds up");
+            along_own_x = along_own_x.max(world.dot(own.x));
+            moved += usize::from(shift.x < 0.0);
+        }
+    }
+    assert!(moved > 0 && along_own_x > 0.0);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1133,7 +1264,7 @@ fn every_preset_analyses_to_finite_numbers_on_every_example_scene() {
     }
 }
 
-/// Seed 004's own scene (engines.md section 4): camera at (15, 20, 20) looking at the origin,
+/// The learnopengl preset's own scene (docs/presets.md): camera at (15, 20, 20) looking at the origin,
 /// fovY 45 deg, 800x600, near 1, far 150; the light orbits the cube at (2.5, 1.5, 0).
 fn seed_004_scene(t: f64) -> (String, DVec3) {
     let a = 1.2 * t;
@@ -1174,7 +1305,7 @@ fn seed_004_mirrored_depth_range_puts_cascades_0_and_2_outside_the_depth_range()
         let lp = LightPose::new(&rig.light, &pose);
         for i in 0..3 {
             let corners = csm_lab::cascades::slice_corners_world(&rig, i, &pose);
-            // The seed's own arithmetic: glm::lookAt from the light to the corners' centroid,
+            // The reference code's own arithmetic: glm::lookAt from the light to the corners' centroid,
             // view z = -(distance along the view direction); glm::ortho(.., minZ - 10, maxZ + 10).
             let centroid = corners.iter().copied().sum::<DVec3>() / 8.0;
             let f = (centroid - eye).normalize();
@@ -1199,7 +1330,7 @@ fn seed_004_mirrored_depth_range_puts_cascades_0_and_2_outside_the_depth_range()
                     assert!(lo >= -1.0 && hi <= 1.0, "t {t}: {lo}..{hi}");
                 }
             } else {
-                // engines.md: "between about 0.8 and 2.6", outside [-1, 1].
+                // reference: "between about 0.8 and 2.6", outside [-1, 1].
                 assert!(lo > 0.7 && hi < 2.7 && hi > 1.5, "t {t} cascade {i}: {lo}..{hi}");
             }
         }
@@ -1208,7 +1339,7 @@ fn seed_004_mirrored_depth_range_puts_cascades_0_and_2_outside_the_depth_range()
 
 /// Over random camera orientations, each snapping rule misses its slice by no more than its
 /// snap shift minus its border allows: no miss with a border at least the shift (Godot, Unreal,
-/// csm-lab's model of Unity), under half a texel with round and no border (seed 000, EEVEE),
+/// csm-lab's model of Unity), under half a texel with round and no border (dart, EEVEE),
 /// under a texel with floor/fmod and too small a border (three.js, Filament); and the metric
 /// finds those misses.
 #[test]
