@@ -291,7 +291,7 @@ fn unity_and_urp_fractions_give_the_reference_splits() {
 }
 
 #[test]
-fn seed_002_and_seed_004_give_their_reference_splits() {
+fn unity_sample_and_learnopengl_give_their_reference_splits() {
     let c = preset_config("unity-sample", "", "");
     assert_eq!((c.shadow.cascades, c.shadow.resolution), (4, 1024));
     let l = layout(&c.shadow.preset.unwrap().knobs, 4, 0.0, 0.3, 100.0);
