@@ -2,10 +2,10 @@
 //! band, windows of the slice diameter rounded up to whole units, floor snapping, and the
 //! light's own look-to basis (x mirrored against csm-lab's).
 
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use crate::cascades::{BasisRule, LightDepthRule, WindowRule};
+use crate::cascades::{LightDepthRule, WindowRule};
 use crate::config::Validator;
 use crate::error::Result;
 use crate::fitting::slice_diameter;
@@ -153,10 +153,7 @@ impl Engine for Bevy {
     }
 
     fn snap_rule(_: &BevyKnobs) -> SnapRule {
-        SnapRule {
-            mode: SnapMode::Floor,
-            step_texels: 1,
-        }
+        snap(SnapMode::Floor, 1)
     }
 
     fn light_basis(direction: DVec3) -> LightBasis {
@@ -165,14 +162,12 @@ impl Engine for Bevy {
 
     fn scheme(_: &BevyKnobs, f: &Fitting<'_>) -> EngineScheme {
         let k2 = f.lens.k2();
-        EngineScheme {
-            label: "diameter-ceil",
-            window: WindowRule::BoxCentred,
-            sides: f.each(|a, b| bevy_window_side(a, b, k2)),
-            basis: BasisRule::Fixed,
-            anchor: DVec2::ZERO,
-            depth: LightDepthRule::Slice { keeps_casters: true },
-        }
+        EngineScheme::fixed(
+            "diameter-ceil",
+            WindowRule::BoxCentred,
+            f.each(|a, b| bevy_window_side(a, b, k2)),
+            LightDepthRule::Slice { keeps_casters: true },
+        )
     }
 
     fn split_rule(k: &BevyKnobs) -> String {

@@ -3,9 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use glam::DVec2;
 
-use crate::cascades::{BasisRule, LightDepthRule};
+use crate::cascades::LightDepthRule;
 use crate::error::Result;
 use crate::fitting::corner_average_sphere;
 
@@ -77,14 +76,12 @@ impl Engine for Dart {
     fn scheme(_: &DartKnobs, f: &Fitting<'_>) -> EngineScheme {
         let k2 = f.lens.k2();
         let s = f.spheres(|a, b| corner_average_sphere(a, b, k2));
-        EngineScheme {
-            label: "sphere-average",
-            window: Fitting::axis(&s),
-            sides: f.on(&s, f.resolution as f64),
-            basis: BasisRule::Fixed,
-            anchor: DVec2::ZERO,
-            depth: LightDepthRule::Scene,
-        }
+        EngineScheme::fixed(
+            "sphere-average",
+            Fitting::axis(&s),
+            f.on(&s, f.resolution as f64),
+            LightDepthRule::Scene,
+        )
     }
 
     fn split_rule(k: &DartKnobs) -> String {

@@ -93,6 +93,25 @@ pub struct EngineScheme {
     pub depth: LightDepthRule,
 }
 
+impl EngineScheme {
+    /// A scheme in the engine's fixed light basis, snapped on the grid through the world origin.
+    pub fn fixed(label: &'static str, window: WindowRule, sides: Vec<f64>, depth: LightDepthRule) -> Self {
+        EngineScheme {
+            label,
+            window,
+            sides,
+            basis: BasisRule::Fixed,
+            anchor: DVec2::ZERO,
+            depth,
+        }
+    }
+}
+
+/// A snap rule: rounding mode and step in texels.
+pub fn snap(mode: SnapMode, step_texels: u32) -> SnapRule {
+    SnapRule { mode, step_texels }
+}
+
 /// One engine's whole cascade set-up. Implemented by a unit struct per engine file.
 pub trait Engine: Sync + 'static {
     /// Resolved knobs (defaults applied, validated).
@@ -147,10 +166,7 @@ pub trait Engine: Sync + 'static {
     fn layout(k: &Self::Knobs, cascades: usize, max_distance: f64, near: f64, far: f64) -> Layout;
     /// Rounding mode and step of the snap.
     fn snap_rule(_k: &Self::Knobs) -> SnapRule {
-        SnapRule {
-            mode: SnapMode::Round,
-            step_texels: 1,
-        }
+        snap(SnapMode::Round, 1)
     }
     /// The light's basis for a unit light direction: csm-lab's unless the engine's own rule
     /// is known (see `docs/presets.md`).

@@ -134,10 +134,7 @@ impl Engine for Filament {
     }
 
     fn snap_rule(_: &FilamentKnobs) -> SnapRule {
-        SnapRule {
-            mode: SnapMode::Trunc,
-            step_texels: 2,
-        }
+        snap(SnapMode::Trunc, 2)
     }
 
     fn scheme(_: &FilamentKnobs, f: &Fitting<'_>) -> EngineScheme {

@@ -2,10 +2,9 @@
 //! optional blend splits, corner-average spheres with a texel of border, 2-texel round snap,
 //! a pancaked caster range.
 
-use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
-use crate::cascades::{BasisRule, LightDepthRule};
+use crate::cascades::LightDepthRule;
 use crate::error::Result;
 use crate::fitting::corner_average_sphere;
 use crate::snapping::{SnapMode, SnapRule};
@@ -81,10 +80,7 @@ impl Engine for Godot {
     }
 
     fn snap_rule(_: &GodotKnobs) -> SnapRule {
-        SnapRule {
-            mode: SnapMode::Round,
-            step_texels: 2,
-        }
+        snap(SnapMode::Round, 2)
     }
 
     fn scheme(k: &GodotKnobs, f: &Fitting<'_>) -> EngineScheme {
@@ -92,18 +88,12 @@ impl Engine for Godot {
         let s = f.spheres(|a, b| corner_average_sphere(a, b, k2));
         // r·T/(T − 2): one texel of border per side.
         let sides = f.on(&s, f.resolution as f64 - 2.0);
-        EngineScheme {
-            label: "sphere-average+border",
-            window: Fitting::axis(&s),
-            depth: LightDepthRule::Sphere {
-                radius: sides.iter().map(|w| 0.5 * w).collect(),
-                toward_light: k.pancake_size,
-                min_half: 0.0,
-            },
-            sides,
-            basis: BasisRule::Fixed,
-            anchor: DVec2::ZERO,
-        }
+        let depth = LightDepthRule::Sphere {
+            radius: sides.iter().map(|w| 0.5 * w).collect(),
+            toward_light: k.pancake_size,
+            min_half: 0.0,
+        };
+        EngineScheme::fixed("sphere-average+border", Fitting::axis(&s), sides, depth)
     }
 
     fn split_rule(k: &GodotKnobs) -> String {

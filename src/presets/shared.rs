@@ -45,15 +45,23 @@ pub fn fraction_splits(near: f64, distance: f64, fractions: &[f64]) -> Vec<f64> 
     s
 }
 
-/// The fractions in use for a cascade count: none for 1, `two` for 2, `three` for 3, `four`
-/// from 4 on.
-pub fn fractions_for<'a>(cascades: usize, two: &'a f64, three: &'a [f64], four: &'a [f64]) -> &'a [f64] {
-    match cascades {
+/// Unity's and URP's layout: boundaries at fractions of the shadow distance min(far, max),
+/// the fractions chosen by count (none for 1, `two` for 2, `three` for 3, `four` from 4 on).
+pub fn distance_fractions(
+    cascades: usize,
+    near: f64,
+    far: f64,
+    max_distance: f64,
+    (two, three, four): (&f64, &[f64], &[f64]),
+) -> Layout {
+    let dist = far.min(max_distance);
+    let fr = match cascades {
         1 => &[],
         2 => std::slice::from_ref(two),
         3 => three,
         _ => four,
-    }
+    };
+    Layout::contiguous(fraction_splits(near, dist, fr))
 }
 
 /// Clips selection boundaries to the visible depths `[near, far]`, keeping them
@@ -235,12 +243,10 @@ pub fn minimal_sphere_scheme(f: &super::Fitting<'_>) -> super::EngineScheme {
         .iter()
         .map(|s| crate::fitting::Window::side_with_border(2.0 * s.radius, f.resolution, f.snap_rule.max_shift_texels()))
         .collect();
-    super::EngineScheme {
-        label: "sphere",
-        window: super::Fitting::axis(&s),
+    super::EngineScheme::fixed(
+        "sphere",
+        super::Fitting::axis(&s),
         sides,
-        basis: crate::cascades::BasisRule::Fixed,
-        anchor: glam::DVec2::ZERO,
-        depth: crate::cascades::LightDepthRule::Scene,
-    }
+        crate::cascades::LightDepthRule::Scene,
+    )
 }

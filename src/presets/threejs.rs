@@ -1,11 +1,10 @@
 //! three.js: the CSM addon (r185 and later): breaks of min(far, maxFar), slice-diameter windows
 //! at the light-space box centre, floor snapping, fixed light near/far with a margin.
 
-use glam::DVec2;
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
-use crate::cascades::{BasisRule, LightDepthRule, WindowRule};
+use crate::cascades::{LightDepthRule, WindowRule};
 use crate::error::Result;
 use crate::fitting::slice_diameter;
 use crate::snapping::{SnapMode, SnapRule};
@@ -142,26 +141,21 @@ impl Engine for Threejs {
     }
 
     fn snap_rule(_: &ThreejsKnobs) -> SnapRule {
-        SnapRule {
-            mode: SnapMode::Floor,
-            step_texels: 1,
-        }
+        snap(SnapMode::Floor, 1)
     }
 
     fn scheme(k: &ThreejsKnobs, f: &Fitting<'_>) -> EngineScheme {
         let k2 = f.lens.k2();
-        EngineScheme {
-            label: "diameter",
-            window: WindowRule::BoxCentred,
-            sides: f.each(|a, b| slice_diameter(a, b, k2)),
-            basis: BasisRule::Fixed,
-            anchor: DVec2::ZERO,
-            depth: LightDepthRule::Margin {
+        EngineScheme::fixed(
+            "diameter",
+            WindowRule::BoxCentred,
+            f.each(|a, b| slice_diameter(a, b, k2)),
+            LightDepthRule::Margin {
                 margin: k.light_margin,
                 near: k.light_near,
                 far: k.light_far,
             },
-        }
+        )
     }
 
     fn split_rule(k: &ThreejsKnobs) -> String {

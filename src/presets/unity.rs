@@ -47,10 +47,9 @@ impl Engine for Unity {
     }
 
     fn layout(k: &UnityKnobs, cascades: usize, max_distance: f64, near: f64, far: f64) -> Layout {
-        let dist = far.min(max_distance);
         // Unity offers 1, 2 or 4 cascades: a count of 3 never reaches here.
-        let fr = fractions_for(cascades, &k.cascade2_split, &k.cascade4_split, &k.cascade4_split);
-        Layout::contiguous(fraction_splits(near, dist, fr))
+        let four = &k.cascade4_split[..];
+        distance_fractions(cascades, near, far, max_distance, (&k.cascade2_split, four, four))
     }
 
     fn scheme(_: &UnityKnobs, f: &Fitting<'_>) -> EngineScheme {

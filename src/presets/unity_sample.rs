@@ -1,10 +1,9 @@
 //! The Unity C# sample (a blog's cascade code): fixed fractions of the far plane, tight boxes
 //! whose centre is discarded (the window sits on the light axis through the world origin).
 
-use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
-use crate::cascades::{BasisRule, LightDepthRule, WindowRule};
+use crate::cascades::{LightDepthRule, WindowRule};
 use crate::config::Fit;
 use crate::error::Result;
 use crate::fitting::minimal_sphere;
@@ -65,9 +64,9 @@ impl Engine for UnitySample {
 
     fn scheme(k: &UnitySampleKnobs, f: &Fitting<'_>) -> EngineScheme {
         let k2 = f.lens.k2();
-        EngineScheme {
-            label: if k.centre_on_slice { "aabb" } else { "aabb-at-origin" },
-            window: if k.centre_on_slice {
+        EngineScheme::fixed(
+            if k.centre_on_slice { "aabb" } else { "aabb-at-origin" },
+            if k.centre_on_slice {
                 WindowRule::Tight {
                     pad: 0.0,
                     border: false,
@@ -75,11 +74,9 @@ impl Engine for UnitySample {
             } else {
                 WindowRule::TightAtOrigin
             },
-            sides: f.each(|a, b| 2.0 * minimal_sphere(a, b, k2).radius),
-            basis: BasisRule::Fixed,
-            anchor: DVec2::ZERO,
-            depth: LightDepthRule::Slice { keeps_casters: false },
-        }
+            f.each(|a, b| 2.0 * minimal_sphere(a, b, k2).radius),
+            LightDepthRule::Slice { keeps_casters: false },
+        )
     }
 
     fn split_rule(_: &UnitySampleKnobs) -> String {

@@ -65,9 +65,8 @@ impl Engine for UnityUrp {
     }
 
     fn layout(k: &UnityUrpKnobs, cascades: usize, max_distance: f64, near: f64, far: f64) -> Layout {
-        let dist = far.min(max_distance);
-        let fr = fractions_for(cascades, &k.cascade2_split, &k.cascade3_split, &k.cascade4_split);
-        Layout::contiguous(fraction_splits(near, dist, fr))
+        let fractions = (&k.cascade2_split, &k.cascade3_split[..], &k.cascade4_split[..]);
+        distance_fractions(cascades, near, far, max_distance, fractions)
     }
 
     fn scheme(_: &UnityUrpKnobs, f: &Fitting<'_>) -> EngineScheme {

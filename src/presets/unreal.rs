@@ -2,10 +2,9 @@
 //! with a transition band, Unreal's bounding sphere with a 4-texel border, fmod snapping.
 //! Centimetre constants are converted to metres.
 
-use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
-use crate::cascades::{BasisRule, LightDepthRule};
+use crate::cascades::LightDepthRule;
 use crate::error::Result;
 use crate::fitting::Sphere;
 use crate::geometry::Lens;
@@ -112,26 +111,21 @@ impl Engine for Unreal {
     }
 
     fn snap_rule(_: &UnrealKnobs) -> SnapRule {
-        SnapRule {
-            mode: SnapMode::Trunc,
-            step_texels: 4,
-        }
+        snap(SnapMode::Trunc, 4)
     }
 
     fn scheme(_: &UnrealKnobs, f: &Fitting<'_>) -> EngineScheme {
         let s = f.spheres(|a, b| unreal_sphere(a, b, &f.lens));
-        EngineScheme {
-            label: "sphere-minimal+border",
-            window: Fitting::axis(&s),
-            sides: f.on(&s, f.resolution as f64 - 2.0 * UNREAL_BORDER_TEXELS),
-            basis: BasisRule::Fixed,
-            anchor: DVec2::ZERO,
-            depth: LightDepthRule::Sphere {
+        EngineScheme::fixed(
+            "sphere-minimal+border",
+            Fitting::axis(&s),
+            f.on(&s, f.resolution as f64 - 2.0 * UNREAL_BORDER_TEXELS),
+            LightDepthRule::Sphere {
                 radius: s.iter().map(|s| s.radius).collect(),
                 toward_light: 0.0,
                 min_half: 50.0,
             },
-        }
+        )
     }
 
     fn split_rule(k: &UnrealKnobs) -> String {
