@@ -1052,6 +1052,31 @@ fn bad_preset_settings_are_errors_naming_the_key() {
     assert!(e.contains("`threejs.mode` = \"magic\" is not allowed"), "{e}");
 }
 
+#[test]
+fn unknown_tables_are_errors_naming_them_with_line_and_column() {
+    let text = scene("", "[bevvy]\noverlap_proportion = 0.1");
+    let e = load_err(&text);
+    let line = line_of(&text, "[bevvy]");
+    assert!(
+        e.starts_with(&format!("test.toml:{line}:1: unknown field `bevvy`")),
+        "{e}"
+    );
+    assert!(
+        e.contains("`camera`") && e.contains("`bevy`") && e.contains("`unity-urp`"),
+        "{e}"
+    );
+    // A wrong type inside an engine table keeps TOML's own line and column.
+    let text = scene(
+        "",
+        "[shadow]\npreset = \"bevy\"\n[bevy]\noverlap_proportion = \"a lot\"",
+    );
+    let e = load_err(&text);
+    assert!(
+        e.starts_with(&format!("test.toml:{}:", line_of(&text, "overlap_proportion"))),
+        "{e}"
+    );
+}
+
 /// The line and column of the first line of `text` starting with `prefix`, 1-based.
 fn line_of(text: &str, prefix: &str) -> usize {
     text.lines().position(|l| l.starts_with(prefix)).expect("line present") + 1
@@ -1485,4 +1510,42 @@ step = 0.7
             }
         }
     }
+}
+
+#[test]
+fn applying_a_preset_to_a_validated_scene_equals_loading_with_it() {
+    let text = scene(
+        "",
+        "[shadow]\ncascades = 4\n[bevy]\noverlap_proportion = 0.1\n[godot]\nsplits = [0.1, 0.3, 0.6]",
+    );
+    let scene = csm_lab::config::parse(&text, "test.toml", None).unwrap();
+    assert!(scene.shadow.preset.is_none());
+    for p in PresetName::ALL {
+        let choice = PresetChoice {
+            name: Some(p),
+            also_allowed: PresetName::ALL.to_vec(),
+            engine_defaults: false,
+            lenient_overrides: true,
+        };
+        let mut applied = scene.clone();
+        apply(&mut applied, &choice).unwrap();
+        let loaded = Config::from_toml_str_with_preset(&text, "test.toml", None, &choice).unwrap();
+        assert_eq!(applied, loaded, "{p}");
+        assert_eq!(applied.shadow.preset.as_ref().unwrap().name, p);
+    }
+    // The engine tables of the file reach their own engine.
+    let mut bevy = scene.clone();
+    apply(
+        &mut bevy,
+        &PresetChoice {
+            name: Some(PresetName::Bevy),
+            also_allowed: PresetName::ALL.to_vec(),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let Some(b) = bevy.shadow.preset.as_ref().unwrap().knobs.get::<Bevy>() else {
+        panic!("bevy knobs");
+    };
+    assert_eq!(b.overlap_proportion, 0.1);
 }
