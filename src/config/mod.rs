@@ -198,7 +198,7 @@ pub struct PresetInput {
     pub text: Arc<str>,
     pub preset: Option<String>,
     pub written: Written,
-    /// Engine tables (or unknown ones), in file order.
+    /// Engine tables (or unknown ones), sorted by name.
     pub other_tables: Vec<String>,
 }
 
