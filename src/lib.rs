@@ -16,8 +16,10 @@ pub mod config;
 pub mod core;
 pub mod error;
 pub mod figures;
+pub mod metric;
 pub mod presets;
 pub mod report;
+pub mod suggest;
 
 // Short paths for the modules most callers use.
 pub use crate::commands::{bench, check, compare, stress, sweep};

@@ -11,9 +11,13 @@ use std::collections::BTreeSet;
 use rayon::prelude::*;
 use serde::Deserialize;
 
+use super::{default_out_dir, load_with_preset_flag, Format, Outcome};
 use crate::analysis::{analyze, AnalysisOptions, Summary};
+use crate::cli::SweepArgs;
 use crate::config::{Config, Fit, Validator};
-use crate::error::{Error, Result};
+use crate::error::{Error, GridError, Result};
+use crate::output;
+use crate::report;
 
 /// One axis: its values in order, and the canonical spec that reproduces it on the CLI.
 #[derive(Debug, Clone, PartialEq)]
@@ -568,15 +572,15 @@ impl Grid {
         };
         let n = grid.len();
         if n > max_configs {
-            return Err(Error::Other(format!(
-                "the sweep grid has {n} configurations ({} λ × {} cascade counts × {} resolutions × {} fits), \
-                 more than sweep.max_configs = {max_configs}; narrow an axis (--lambda, --cascades, --resolution, --fit) \
-                 or raise sweep.max_configs",
-                grid.lambda.values.len(),
-                grid.cascades.values.len(),
-                grid.resolution.values.len(),
-                grid.fit.values.len()
-            )));
+            return Err(GridError::TooLarge {
+                configs: n,
+                lambdas: grid.lambda.values.len(),
+                counts: grid.cascades.values.len(),
+                resolutions: grid.resolution.values.len(),
+                fits: grid.fit.values.len(),
+                max: max_configs,
+            }
+            .into());
         }
         if preset.is_some() {
             // Each axis value must be one the engine accepts: say which axis and which value.
@@ -585,16 +589,16 @@ impl Grid {
             let resolution_source = source(overrides.resolution.is_some(), "--resolution", "sweep.resolution");
             for &v in &grid.cascades.values {
                 crate::presets::set_cascades(&mut c, v)
-                    .map_err(|e| Error::Other(format!("{cascades_source} = {}: {e}", grid.cascades.spec)))?;
+                    .map_err(|e| axis_error(&cascades_source, &grid.cascades.spec, e))?;
             }
             for &v in &grid.resolution.values {
                 crate::presets::set_resolution(&mut c, v)
-                    .map_err(|e| Error::Other(format!("{resolution_source} = {}: {e}", grid.resolution.spec)))?;
+                    .map_err(|e| axis_error(&resolution_source, &grid.resolution.spec, e))?;
             }
             if axes.lambda.is_some() {
                 for &v in &grid.lambda.values {
                     crate::presets::set_lambda(&mut c, v)
-                        .map_err(|e| Error::Other(format!("{lambda_source} = {}: {e}", grid.lambda.spec)))?;
+                        .map_err(|e| axis_error(&lambda_source, &grid.lambda.spec, e))?;
                 }
             }
         }
@@ -838,6 +842,90 @@ pub fn fits_in(rows: &[Row]) -> Vec<Fit> {
         .collect::<BTreeSet<_>>()
         .into_iter()
         .collect()
+}
+
+/// An axis value the engine preset refuses, naming the axis's flag or key and its spec.
+fn axis_error(source_key: &str, spec: &str, e: Error) -> Error {
+    GridError::Axis {
+        source_key: source_key.to_string(),
+        spec: spec.to_string(),
+        message: e.to_string(),
+    }
+    .into()
+}
+
+// ---------------------------------------------------------------------------------------------
+// The command
+// ---------------------------------------------------------------------------------------------
+
+/// Runs a sweep as the CLI does, without printing: (result, rendered files).
+pub fn sweep_files(args: &SweepArgs) -> Result<(report::SweepResult, output::RenderedFiles)> {
+    let config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
+    let overrides = GridOverrides {
+        lambda: args.lambda.as_deref().map(parse_lambda_spec).transpose()?,
+        cascades: args.cascades.as_deref().map(parse_cascades_spec).transpose()?,
+        resolution: args.resolution.as_deref().map(parse_resolution_spec).transpose()?,
+        fit: args.fit.as_deref().map(parse_fit_spec).transpose()?,
+    };
+    let grid = Grid::resolve(&config, &overrides)?;
+    if !args.quiet {
+        for note in &grid.notes {
+            eprintln!("note: {note}");
+        }
+    }
+    let show_progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let bar = if show_progress {
+        let bar = indicatif::ProgressBar::new(grid.len() as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} sweeping {pos}/{len} configurations {wide_bar} {eta}")
+                .expect("valid template"),
+        );
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let start = std::time::Instant::now();
+    let rows = run(&config, &grid, args.threads.map(usize::from), &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    let compute = start.elapsed();
+    let preset = match &config.shadow.preset {
+        Some(p) => format!(" --preset {}", p.name),
+        None => String::new(),
+    };
+    let command = format!(
+        "csm-lab sweep {}{preset} {}",
+        args.config.display(),
+        grid.cli_args(&config)
+    );
+    let result = report::SweepResult::new(config, grid, rows, command);
+    let files = report::render_all(&result, !args.no_plots)?;
+    if !args.quiet {
+        eprintln!(
+            "analysed {} configurations in {:.1} ms",
+            result.rows.len(),
+            compute.as_secs_f64() * 1e3
+        );
+    }
+    Ok((result, files))
+}
+
+/// The `sweep` command.
+pub fn execute(args: &SweepArgs) -> Result<Outcome> {
+    let (result, files) = sweep_files(args)?;
+    let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&result.config));
+    let written = output::write_files(&dir, &files)?;
+    match args.format {
+        Format::Table => {
+            print!("{}", report::stdout_table(&result));
+            println!("wrote {} files to {}", written.len(), dir.display());
+        }
+        Format::Json => {
+            let bytes = output::json_bytes("recommendation", &report::recommendation_value(&result))?;
+            print!("{}", String::from_utf8_lossy(&bytes));
+            eprintln!("wrote {} files to {}", written.len(), dir.display());
+        }
+    }
+    Ok(Outcome::Success)
 }
 
 #[cfg(test)]

@@ -155,21 +155,7 @@ pub fn valid_names() -> String {
     PresetName::ALL.map(|p| p.as_str()).join(", ")
 }
 
-/// Levenshtein distance (for "did you mean").
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let cur = row[j + 1];
-            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
-            prev = cur;
-        }
-    }
-    row[b.len()]
-}
+use crate::suggest::edit_distance;
 
 /// The preset name closest to `s`.
 pub fn closest_name(s: &str) -> PresetName {

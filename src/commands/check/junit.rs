@@ -12,28 +12,7 @@ use std::fmt::Write as _;
 use super::baseline::{Comparison, Verdict};
 use super::evaluate::{short, Bound, RuleResult, Status};
 use super::report::{limit_text, rule_message, Body, CheckReport};
-
-/// Escapes text for XML content and attribute values (both quote kinds, and newlines and
-/// tabs as character references so attribute values keep them).
-pub fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            '\n' => out.push_str("&#10;"),
-            '\r' => out.push_str("&#13;"),
-            '\t' => out.push_str("&#9;"),
-            // XML 1.0 Char: #x9 | #xA | #xD | [#x20-#xD7FF] | [#xE000-#xFFFD] | [#x10000-#x10FFFF].
-            c if (c as u32) < 0x20 || c == '\u{FFFE}' || c == '\u{FFFF}' => out.push('\u{FFFD}'),
-            c => out.push(c),
-        }
-    }
-    out
-}
+use crate::report::html::escape;
 
 /// A test case to write.
 struct Case {

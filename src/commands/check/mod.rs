@@ -18,10 +18,10 @@ pub mod thresholds;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use super::{Format, Outcome};
 use crate::analysis::{analyze, Analysis, AnalysisOptions};
-use crate::cli::{CheckArgs, Format, Outcome};
 use crate::config::Config;
-use crate::error::{Error, IoError, Result};
+use crate::error::{BaselineError, Error, GridError, IoError, Result};
 use crate::output;
 
 pub use report::{Body, CheckReport};
@@ -102,9 +102,25 @@ pub fn write_junit(path: &Path, report: &CheckReport) -> Result<()> {
     output::write_atomic(path, junit::render(report).as_bytes())
 }
 
+/// What `check` was asked to do (the command line's values).
+#[derive(Debug, Clone, Copy)]
+pub struct CheckRequest<'a> {
+    /// Scene and shadow settings.
+    pub config: &'a Path,
+    /// Rules and baseline tolerances.
+    pub thresholds: &'a Path,
+    /// An earlier `summary.json` (or, with `sweep`, `sweep.csv`).
+    pub baseline: Option<&'a Path>,
+    /// Judge sweep rows instead of the one configuration.
+    pub sweep: bool,
+    /// Also write a JUnit XML report here.
+    pub junit: Option<&'a Path>,
+    pub format: Format,
+}
+
 /// The `check` command. Every input is read and validated before anything is analysed, and
 /// nothing is printed or written unless the whole check succeeded.
-pub fn run_check(args: &CheckArgs) -> Result<Outcome> {
+pub fn execute(args: &CheckRequest) -> Result<Outcome> {
     let config = Config::load(&args.config)?;
     let thresholds = Thresholds::load(&args.thresholds)?;
     if thresholds.rules.is_empty() && args.baseline.is_none() {
@@ -130,11 +146,15 @@ pub fn run_check(args: &CheckArgs) -> Result<Outcome> {
             .iter()
             .any(|r| matches!(r.target, thresholds::Target::Summary(_)));
         if !applicable && args.baseline.is_none() {
-            return Err(Error::Other(format!(
-                "--sweep: none of the rules in {} applies to sweep rows (only summary-metric rules do) \
-                 and no --baseline was given: nothing to check",
-                thresholds.label
-            )));
+            return Err(GridError::Unusable {
+                context: "--sweep".to_string(),
+                message: format!(
+                    "none of the rules in {} applies to sweep rows (only summary-metric rules do) \
+                     and no --baseline was given: nothing to check",
+                    thresholds.label
+                ),
+            }
+            .into());
         }
         let label = args.baseline.as_ref().map(|p| p.display().to_string());
         check_rows(&config, &rows, &thresholds, label.as_deref().zip(base_rows.as_deref()))?
@@ -178,7 +198,11 @@ fn with_hint(e: Error, hint: &str) -> Error {
         Error::Io(IoError::DataFile { path, line, message }) => {
             Error::data_file(&path, line, format!("{message} ({hint})"))
         }
-        Error::Other(m) => Error::Other(format!("{m} ({hint})")),
+        Error::Baseline(BaselineError::Invalid { label, message }) => BaselineError::Invalid {
+            label,
+            message: format!("{message} ({hint})"),
+        }
+        .into(),
         other => other,
     }
 }

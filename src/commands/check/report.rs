@@ -131,7 +131,8 @@ impl CheckReport {
                     out.push_str(&comparisons_table(&b.comparisons, "  ", true));
                     out.push_str(&verdict_counts(&b.comparisons));
                     if b.comparisons.iter().any(|x| {
-                        x.metric == super::metric::SummaryMetric::CascadesNeeded && x.verdict == Verdict::Regressed
+                        x.metric == super::metric::SummaryMetric::named("cascades_needed")
+                            && x.verdict == Verdict::Regressed
                     }) {
                         out.push_str(
                             "  note: the scene no longer needs cascades, so every other metric reads 0; \
