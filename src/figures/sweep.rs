@@ -7,6 +7,7 @@ use plotters::prelude::*;
 use super::{colormap, draw_legend, log_range, series_color, texels_per_pixel_chart, Figure, PlotResult, FONT};
 use crate::analysis::{analyze, mib, Analysis, AnalysisOptions};
 use crate::config::Fit;
+use crate::metric::SummaryMetric;
 use crate::report::SweepResult;
 use crate::sweep::{self, Row, Setting};
 
@@ -28,21 +29,18 @@ pub fn significant(v: f64) -> String {
 pub struct HeatmapFigure<'a>(pub &'a SweepResult);
 
 impl HeatmapFigure<'_> {
-    fn rows_of_panels(&self) -> Vec<(Fit, &'static str)> {
+    fn rows_of_panels(&self) -> Vec<(Fit, SummaryMetric)> {
         let mut v = Vec::new();
         for fit in sweep::fits_in(&self.0.rows) {
-            v.push((fit, "max_aliasing"));
-            v.push((fit, "mean_aliasing"));
+            v.push((fit, SummaryMetric::named("max_aliasing")));
+            v.push((fit, SummaryMetric::named("mean_aliasing")));
         }
         v
     }
 }
 
-fn metric_of(row: &Row, metric: &str) -> f64 {
-    match metric {
-        "max_aliasing" => row.summary.max_aliasing,
-        _ => row.summary.mean_aliasing,
-    }
+fn metric_of(row: &Row, metric: &SummaryMetric) -> f64 {
+    metric.value(&row.summary)
 }
 
 impl Figure for HeatmapFigure<'_> {
@@ -88,7 +86,10 @@ impl Figure for HeatmapFigure<'_> {
             for (panel, &res) in panels.iter().zip(resolutions) {
                 let label_every = lambdas.len().div_ceil(6).max(1);
                 let mut chart = ChartBuilder::on(panel)
-                    .caption(format!("{} · {res}² · {fit}", metric.replace('_', " ")), (FONT, 15))
+                    .caption(
+                        format!("{} · {res}² · {fit}", metric.name().replace('_', " ")),
+                        (FONT, 15),
+                    )
                     .margin(6)
                     .x_label_area_size(38)
                     .y_label_area_size(42)

@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use super::html;
+use super::{html, markdown};
 
 use crate::analysis::{mib, Analysis};
 use crate::compare::{coverage_extremes, fit_label, preset_of, Comparison};
@@ -236,7 +236,6 @@ impl Exporter<Comparison> for CompareMd {
     }
 
     fn render(&self, c: &Comparison) -> Result<Vec<u8>> {
-        let cell = |s: &str| s.replace('|', "\\|");
         let (header, rows) = table(c);
         let mut m = String::new();
         let _ = writeln!(m, "# Cascaded shadow maps by engine: {}\n", c.name);
@@ -246,24 +245,7 @@ impl Exporter<Comparison> for CompareMd {
             let _ = writeln!(m, "- {l}");
         }
         let _ = writeln!(m, "\n## Results\n");
-        let _ = writeln!(
-            m,
-            "| {} |",
-            header.iter().map(|h| cell(h)).collect::<Vec<_>>().join(" | ")
-        );
-        let _ = writeln!(
-            m,
-            "|{}|",
-            header
-                .iter()
-                .enumerate()
-                .map(|(i, _)| if i == 0 { "---" } else { "---:" })
-                .collect::<Vec<_>>()
-                .join("|")
-        );
-        for r in &rows {
-            let _ = writeln!(m, "| {} |", r.iter().map(|v| cell(v)).collect::<Vec<_>>().join(" | "));
-        }
+        m.push_str(&markdown::table(&header, &rows, &[0]));
         let _ = writeln!(
             m,
             "\n![texels per pixel against depth](compare_density.svg)\n\n![shimmer and coverage](compare_shimmer.svg)\n"

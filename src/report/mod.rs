@@ -7,6 +7,7 @@ pub mod analyze;
 pub mod bench;
 pub mod compare;
 pub mod html;
+pub mod markdown;
 pub mod output;
 pub mod stress;
 mod sweep;

@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use super::html;
+use super::{html, markdown};
 use crate::analysis::mib;
 use crate::config::Config;
 use crate::error::Result;
@@ -463,22 +463,8 @@ pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> 
             let _ = writeln!(m, "![{caption}]({stem}.svg)\n\n*{caption}* ([PNG]({stem}.png))\n");
         }
     }
-    m.push_str("## Top configurations\n\n|");
-    for c in TABLE_HEAD {
-        let _ = write!(m, " {c} |");
-    }
-    m.push_str("\n|");
-    for _ in TABLE_HEAD {
-        m.push_str("---:|");
-    }
-    m.push('\n');
-    for row in table_rows(r) {
-        m.push('|');
-        for cell in row {
-            let _ = write!(m, " {cell} |");
-        }
-        m.push('\n');
-    }
+    m.push_str("## Top configurations\n\n");
+    m.push_str(&markdown::table(&TABLE_HEAD, &table_rows(r), &[]));
     let _ = writeln!(m, "\n## Reproduce\n\n```sh\n{}\n```", r.command);
     m.into_bytes()
 }
