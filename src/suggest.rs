@@ -26,6 +26,7 @@ pub fn closest<'a>(name: &str, candidates: &[&'a str]) -> Option<&'a str> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::check::metric::all_names;
 
     #[test]
     fn edit_distance_counts_single_edits() {

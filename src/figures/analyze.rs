@@ -4,7 +4,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{draw_legend, draw_message, series_color, texels_per_pixel_chart, Figure, PlotResult, FONT};
+use super::{draw_legend, draw_message, palette, series_color, texels_per_pixel_chart, Figure, PlotResult, FONT};
 use crate::analysis::Analysis;
 use crate::cascades::{bounds_2d, LightPose};
 use crate::error::Result;
@@ -32,7 +32,7 @@ impl Figure for DensityFigure<'_> {
             a.density.iter().map(|d| d.texels_per_pixel),
         )?;
         for (i, s) in rig.splits[1..rig.splits.len() - 1].iter().enumerate() {
-            let style = RGBColor(150, 150, 150).stroke_width(1);
+            let style = palette::SPLIT.stroke_width(1);
             let series = chart.draw_series(DashedLineSeries::new(vec![(*s, y0), (*s, y1)], 5, 4, style))?;
             if i == 0 {
                 series

@@ -6,7 +6,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{
-    draw_legend, draw_message, log_range, preset_color, series_color, short, texels_per_pixel_chart, Figure,
+    draw_legend, draw_message, log_range, palette, preset_color, series_color, short, texels_per_pixel_chart, Figure,
     PlotResult, FONT,
 };
 use crate::analysis::Analysis;
@@ -197,7 +197,7 @@ impl Figure for ShimmerCoverageBars<'_> {
             let i = n - 1 - i;
             let mut bar = Rectangle::new(
                 [(0.0, SegmentValue::Exact(i)), (v, SegmentValue::Exact(i + 1))],
-                RGBColor(214, 39, 40).filled(),
+                palette::MISS.filled(),
             );
             bar.set_margin(6, 6, 0, 0);
             chart.draw_series(std::iter::once(bar))?;

@@ -141,6 +141,28 @@ pub fn short(v: f64) -> String {
 // Palette: every colour a figure uses
 // ---------------------------------------------------------------------------------------------
 
+/// Named colours of single marks.
+pub mod palette {
+    use plotters::style::RGBColor;
+
+    /// A heatmap cell without a value (no cascades needed).
+    pub const NO_DATA: RGBColor = RGBColor(220, 220, 220);
+    /// The outline of the recommended heatmap cell.
+    pub const MARKED: RGBColor = RGBColor(255, 0, 0);
+    /// The recommended point of a scatter plot.
+    pub const RECOMMENDED: RGBColor = RGBColor(200, 0, 0);
+    /// Thin lines between groups of bars.
+    pub const SEPARATOR: RGBColor = RGBColor(200, 200, 200);
+    /// Scatter points that are not singled out.
+    pub const POINT: RGBColor = RGBColor(170, 170, 170);
+    /// Split depths drawn across a chart.
+    pub const SPLIT: RGBColor = RGBColor(150, 150, 150);
+    /// A limit such as the memory budget.
+    pub const LIMIT: RGBColor = RGBColor(120, 120, 120);
+    /// Coverage misses.
+    pub const MISS: RGBColor = RGBColor(214, 39, 40);
+}
+
 /// Distinct, colour-blind-friendly-ish colours for series.
 pub fn series_color(i: usize) -> RGBColor {
     const C: [RGBColor; 8] = [

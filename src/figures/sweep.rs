@@ -4,7 +4,9 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{colormap, draw_legend, log_range, series_color, texels_per_pixel_chart, Figure, PlotResult, FONT};
+use super::{
+    colormap, draw_legend, log_range, palette, series_color, texels_per_pixel_chart, Figure, PlotResult, FONT,
+};
 use crate::analysis::{analyze, mib, Analysis, AnalysisOptions};
 use crate::config::Fit;
 use crate::metric::SummaryMetric;
@@ -132,7 +134,7 @@ impl Figure for HeatmapFigure<'_> {
                     let color = if row.summary.cascades_needed {
                         colormap(t_of(metric_of(row, metric)))
                     } else {
-                        RGBColor(220, 220, 220)
+                        palette::NO_DATA
                     };
                     chart.draw_series(std::iter::once(Rectangle::new(
                         [
@@ -147,7 +149,7 @@ impl Figure for HeatmapFigure<'_> {
                                 (SegmentValue::Exact(i), SegmentValue::Exact(j)),
                                 (SegmentValue::Exact(i + 1), SegmentValue::Exact(j + 1)),
                             ],
-                            RED.stroke_width(3),
+                            palette::MARKED.stroke_width(3),
                         )))?;
                     }
                 }
@@ -327,7 +329,7 @@ impl Figure for ShimmerSweepFigure<'_> {
             if last.is_some() && last != Some(key) {
                 chart.draw_series(std::iter::once(PathElement::new(
                     vec![(i as f64 - 0.5, 0.0), (i as f64 - 0.5, ymax)],
-                    RGBColor(200, 200, 200).stroke_width(1),
+                    palette::SEPARATOR.stroke_width(1),
                 )))?;
             }
             last = Some(key);
@@ -399,12 +401,12 @@ impl Figure for ParetoFigure<'_> {
             .axis_desc_style((FONT, 15))
             .label_style((FONT, 13))
             .draw()?;
-        let grey = RGBColor(170, 170, 170);
+        let grey = palette::POINT;
         chart
             .draw_series(pts.iter().map(|p| Circle::new(*p, 3, grey.filled())))?
             .label("configuration")
             .legend(move |(x, y)| Circle::new((x + 8, y), 3, grey.filled()));
-        let budget = RGBColor(120, 120, 120).stroke_width(2);
+        let budget = palette::LIMIT.stroke_width(2);
         chart
             .draw_series(DashedLineSeries::new(
                 vec![(r.budget_mib, y0), (r.budget_mib, y1)],
@@ -427,7 +429,7 @@ impl Figure for ParetoFigure<'_> {
         chart.draw_series(front.iter().map(|p| Circle::new(*p, 5, orange.filled())))?;
         if let Some(rec) = r.recommended() {
             let p = (mib(rec.summary.memory_bytes), rec.summary.mean_aliasing);
-            let red = RGBColor(200, 0, 0);
+            let red = palette::RECOMMENDED;
             chart
                 .draw_series(std::iter::once(Circle::new(p, 9, red.stroke_width(3))))?
                 .label("recommended")

@@ -336,7 +336,6 @@ pub fn evaluate_values(rule: &Rule, values: &std::collections::BTreeMap<String, 
 /// The summary metric values of an analysis, keyed by name (the shape of a sweep row).
 pub fn summary_map(a: &Analysis) -> std::collections::BTreeMap<String, f64> {
     SummaryMetric::all()
-        .into_iter()
         .map(|m| (m.name().to_string(), m.value(&a.summary)))
         .collect()
 }

@@ -73,6 +73,7 @@ pub fn all_names() -> Vec<&'static str> {
 mod tests {
     use super::*;
     use crate::analysis::{CascadeReport, Summary};
+    use crate::suggest::{closest, edit_distance};
 
     #[test]
     fn closest_name_recovers_single_typos() {

@@ -121,8 +121,8 @@ pub struct CheckRequest<'a> {
 /// The `check` command. Every input is read and validated before anything is analysed, and
 /// nothing is printed or written unless the whole check succeeded.
 pub fn execute(args: &CheckRequest) -> Result<Outcome> {
-    let config = Config::load(&args.config)?;
-    let thresholds = Thresholds::load(&args.thresholds)?;
+    let config = Config::load(args.config)?;
+    let thresholds = Thresholds::load(args.thresholds)?;
     if thresholds.rules.is_empty() && args.baseline.is_none() {
         return Err(Error::flag(
             "--thresholds",

@@ -296,7 +296,6 @@ pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
                 fit: r.setting.fit.name().to_string(),
             },
             metrics: SummaryMetric::all()
-                .into_iter()
                 .map(|m| (m.name().to_string(), m.value(&r.summary)))
                 .collect(),
         })
