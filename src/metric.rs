@@ -264,47 +264,64 @@ pub const SUMMARY: [SummaryDef; 14] = [
     },
 ];
 
-/// A summary metric: a handle on its [`SUMMARY`] entry. Ordered as the registry.
-#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct SummaryMetric(usize);
+/// A copyable handle on one registry entry: ordered, hashed and printed (`Debug`) by its
+/// place and name in the table.
+macro_rules! handle {
+    ($(#[$doc:meta])* $handle:ident, $def:ty, $table:ident, $kind:literal) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+        pub struct $handle(usize);
 
-impl std::fmt::Debug for SummaryMetric {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
+        impl std::fmt::Debug for $handle {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+
+        impl $handle {
+            /// Every metric of this kind, in registry order.
+            pub fn all() -> impl Iterator<Item = $handle> {
+                (0..$table.len()).map($handle)
+            }
+
+            pub fn def(self) -> &'static $def {
+                &$table[self.0]
+            }
+
+            pub fn name(self) -> &'static str {
+                self.def().name
+            }
+
+            pub fn from_name(name: &str) -> Option<Self> {
+                $table.iter().position(|d| d.name == name).map($handle)
+            }
+
+            /// The metric of a name known to be in the registry (panics otherwise: a
+            /// programming error).
+            pub fn named(name: &str) -> Self {
+                Self::from_name(name).unwrap_or_else(|| panic!("no {} metric named {name}", $kind))
+            }
+
+            pub fn direction(self) -> Direction {
+                self.def().direction
+            }
+
+            pub fn description(self) -> &'static str {
+                self.def().help
+            }
+        }
+    };
 }
 
+handle!(
+    /// A summary metric: a handle on its [`SUMMARY`] entry.
+    SummaryMetric,
+    SummaryDef,
+    SUMMARY,
+    "summary"
+);
+
 impl SummaryMetric {
-    /// Every summary metric, in registry order.
-    pub fn all() -> impl Iterator<Item = SummaryMetric> {
-        (0..SUMMARY.len()).map(SummaryMetric)
-    }
-
-    pub fn def(self) -> &'static SummaryDef {
-        &SUMMARY[self.0]
-    }
-
-    pub fn name(self) -> &'static str {
-        self.def().name
-    }
-
-    pub fn from_name(name: &str) -> Option<Self> {
-        SUMMARY.iter().position(|d| d.name == name).map(SummaryMetric)
-    }
-
-    /// The metric of a name known to be in the registry (panics otherwise: a programming error).
-    pub fn named(name: &str) -> Self {
-        Self::from_name(name).unwrap_or_else(|| panic!("no summary metric named {name}"))
-    }
-
-    pub fn direction(self) -> Direction {
-        self.def().direction
-    }
-
-    pub fn description(self) -> &'static str {
-        self.def().help
-    }
-
     /// The typed value.
     pub fn typed(self, s: &Summary) -> Value {
         (self.def().value)(s)
@@ -490,47 +507,15 @@ pub const CASCADE: [CascadeDef; 15] = [
     },
 ];
 
-/// A per-cascade metric: a handle on its [`CASCADE`] entry (cascade 0 is the nearest).
-#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct CascadeMetric(usize);
-
-impl std::fmt::Debug for CascadeMetric {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
+handle!(
+    /// A per-cascade metric: a handle on its [`CASCADE`] entry (cascade 0 is the nearest).
+    CascadeMetric,
+    CascadeDef,
+    CASCADE,
+    "per-cascade"
+);
 
 impl CascadeMetric {
-    /// Every per-cascade metric, in registry order.
-    pub fn all() -> impl Iterator<Item = CascadeMetric> {
-        (0..CASCADE.len()).map(CascadeMetric)
-    }
-
-    pub fn def(self) -> &'static CascadeDef {
-        &CASCADE[self.0]
-    }
-
-    pub fn name(self) -> &'static str {
-        self.def().name
-    }
-
-    pub fn from_name(name: &str) -> Option<Self> {
-        CASCADE.iter().position(|d| d.name == name).map(CascadeMetric)
-    }
-
-    /// The metric of a name known to be in the registry (panics otherwise: a programming error).
-    pub fn named(name: &str) -> Self {
-        Self::from_name(name).unwrap_or_else(|| panic!("no per-cascade metric named {name}"))
-    }
-
-    pub fn direction(self) -> Direction {
-        self.def().direction
-    }
-
-    pub fn description(self) -> &'static str {
-        self.def().help
-    }
-
     pub fn value(self, c: &CascadeReport) -> f64 {
         (self.def().value)(c).as_f64()
     }

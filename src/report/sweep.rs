@@ -386,19 +386,26 @@ const TABLE_HEAD: [&str; 10] = [
     "MiB",
 ];
 
+/// "N configurations: a λ values × b cascade counts × …, each analysed in full".
+fn grid_sentence(r: &SweepResult) -> String {
+    format!(
+        "{} configurations: {} λ values × {} cascade counts × {} resolutions × {} fits, each analysed in full",
+        r.rows.len(),
+        r.grid.lambda.values.len(),
+        r.grid.cascades.values.len(),
+        r.grid.resolution.values.len(),
+        r.grid.fit.values.len()
+    )
+}
+
 /// `report.html`: one self-contained, well-formed (XHTML-compatible) document in the shared
 /// report look ([`html::page`]).
 pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
     let mut h = String::new();
     let _ = writeln!(
         h,
-        "<p>{} configurations: {} λ values × {} cascade counts × {} resolutions × {} fits, each analysed in full \
-         (closed-form aliasing, shimmer with and without snapping along the motion path, coverage).</p>",
-        r.rows.len(),
-        r.grid.lambda.values.len(),
-        r.grid.cascades.values.len(),
-        r.grid.resolution.values.len(),
-        r.grid.fit.values.len()
+        "<p>{} (closed-form aliasing, shimmer with and without snapping along the motion path, coverage).</p>",
+        grid_sentence(r)
     );
     h.push_str("<h2>Scene</h2>\n");
     h.push_str(&html::facts(&scene_facts(&r.config, &r.rows)));
@@ -438,15 +445,7 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
 pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
     let mut m = String::new();
     let _ = writeln!(m, "# Cascaded shadow map sweep: {}\n", r.config.name);
-    let _ = writeln!(
-        m,
-        "{} configurations: {} λ values × {} cascade counts × {} resolutions × {} fits, each analysed in full.\n",
-        r.rows.len(),
-        r.grid.lambda.values.len(),
-        r.grid.cascades.values.len(),
-        r.grid.resolution.values.len(),
-        r.grid.fit.values.len()
-    );
+    let _ = writeln!(m, "{}.\n", grid_sentence(r));
     m.push_str("## Scene\n\n| | |\n|---|---|\n");
     for (k, v) in scene_facts(&r.config, &r.rows) {
         let _ = writeln!(m, "| {k} | {v} |");
