@@ -854,12 +854,80 @@ fn axis_error(source_key: &str, spec: &str, e: Error) -> Error {
     .into()
 }
 
+/// Everything a sweep produced, ready to be written.
+#[derive(Debug, Clone)]
+pub struct SweepResult {
+    pub config: Config,
+    pub grid: Grid,
+    pub rows: Vec<Row>,
+    pub front: Vec<usize>,
+    pub recommendation: Option<Recommendation>,
+    pub budget_mib: f64,
+    /// The command that reproduces the sweep.
+    pub command: String,
+}
+
+impl SweepResult {
+    pub fn new(config: Config, grid: Grid, rows: Vec<Row>, command: String) -> Self {
+        let budget_mib = config
+            .sweep
+            .as_ref()
+            .and_then(|s| s.memory_budget_mib)
+            .unwrap_or(DEFAULT_BUDGET_MIB);
+        let front = pareto_front(&rows);
+        let recommendation = recommend(&rows, budget_mib);
+        SweepResult {
+            config,
+            grid,
+            rows,
+            front,
+            recommendation,
+            budget_mib,
+            command,
+        }
+    }
+
+    pub fn recommended(&self) -> Option<&Row> {
+        self.recommendation.as_ref().map(|r| &self.rows[r.index])
+    }
+
+    /// Rows in objective order (acceptable within budget first), for the "top" tables.
+    pub fn ranked(&self) -> Vec<usize> {
+        let budget = self
+            .recommendation
+            .as_ref()
+            .map_or((self.budget_mib * 1048576.0) as u64, |r| r.budget_bytes);
+        let mut idx: Vec<usize> = (0..self.rows.len())
+            .filter(|&i| self.rows[i].summary.cascades_needed)
+            .collect();
+        let key = |i: usize| {
+            let s = &self.rows[i].summary;
+            let ok = s.coverage_violations == 0 && s.shimmer_snapped <= STABLE_SHIMMER && s.memory_bytes <= budget;
+            (!ok, s.mean_aliasing, s.max_aliasing, s.memory_bytes, i)
+        };
+        idx.sort_by(|&a, &b| {
+            let (ka, kb) = (key(a), key(b));
+            ka.0.cmp(&kb.0)
+                .then(ka.1.total_cmp(&kb.1))
+                .then(ka.2.total_cmp(&kb.2))
+                .then(ka.3.cmp(&kb.3))
+                .then(ka.4.cmp(&kb.4))
+        });
+        // The recommendation heads the table (near-ties in mean are decided by max aliasing).
+        if let Some(r) = &self.recommendation {
+            idx.retain(|&i| i != r.index);
+            idx.insert(0, r.index);
+        }
+        idx
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // The command
 // ---------------------------------------------------------------------------------------------
 
 /// Runs a sweep as the CLI does, without printing: (result, rendered files).
-pub fn sweep_files(args: &SweepArgs) -> Result<(report::SweepResult, output::RenderedFiles)> {
+pub fn sweep_files(args: &SweepArgs) -> Result<(SweepResult, output::RenderedFiles)> {
     let config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
     let overrides = GridOverrides {
         lambda: args.lambda.as_deref().map(parse_lambda_spec).transpose()?,
@@ -897,8 +965,8 @@ pub fn sweep_files(args: &SweepArgs) -> Result<(report::SweepResult, output::Ren
         args.config.display(),
         grid.cli_args(&config)
     );
-    let result = report::SweepResult::new(config, grid, rows, command);
-    let files = report::render_all(&result, !args.no_plots)?;
+    let result = SweepResult::new(config, grid, rows, command);
+    let files = report::sweep::render_all(&result, !args.no_plots)?;
     if !args.quiet {
         eprintln!(
             "analysed {} configurations in {:.1} ms",
@@ -916,11 +984,11 @@ pub fn execute(args: &SweepArgs) -> Result<Outcome> {
     let written = output::write_files(&dir, &files)?;
     match args.format {
         Format::Table => {
-            print!("{}", report::stdout_table(&result));
+            print!("{}", report::sweep::stdout_table(&result));
             println!("wrote {} files to {}", written.len(), dir.display());
         }
         Format::Json => {
-            let bytes = output::json_bytes("recommendation", &report::recommendation_value(&result))?;
+            let bytes = output::json_bytes("recommendation", &report::sweep::recommendation_value(&result))?;
             print!("{}", String::from_utf8_lossy(&bytes));
             eprintln!("wrote {} files to {}", written.len(), dir.display());
         }

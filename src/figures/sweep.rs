@@ -10,8 +10,7 @@ use super::{
 use crate::analysis::{analyze, mib, Analysis, AnalysisOptions};
 use crate::config::Fit;
 use crate::metric::SummaryMetric;
-use crate::report::SweepResult;
-use crate::sweep::{self, Row, Setting};
+use crate::sweep::{self, Row, Setting, SweepResult};
 
 /// A number with 3 significant digits and no trailing zeros ("1000", "12.5", "0.0431").
 pub fn significant(v: f64) -> String {

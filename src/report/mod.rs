@@ -10,6 +10,4 @@ pub mod html;
 pub mod markdown;
 pub mod output;
 pub mod stress;
-mod sweep;
-
-pub use self::sweep::*;
+pub mod sweep;

@@ -12,76 +12,7 @@ use crate::figures::sweep::{HeatmapFigure, LambdaDensityFigure, ParetoFigure, Sh
 use crate::figures::{svg_to_png, Figure};
 use crate::metric;
 use crate::output::{csv_bytes, json_bytes, num};
-use crate::sweep::{self, Grid, Recommendation, Row};
-
-/// Everything a sweep produced, ready to be written.
-#[derive(Debug, Clone)]
-pub struct SweepResult {
-    pub config: Config,
-    pub grid: Grid,
-    pub rows: Vec<Row>,
-    pub front: Vec<usize>,
-    pub recommendation: Option<Recommendation>,
-    pub budget_mib: f64,
-    /// The command that reproduces the sweep.
-    pub command: String,
-}
-
-impl SweepResult {
-    pub fn new(config: Config, grid: Grid, rows: Vec<Row>, command: String) -> Self {
-        let budget_mib = config
-            .sweep
-            .as_ref()
-            .and_then(|s| s.memory_budget_mib)
-            .unwrap_or(sweep::DEFAULT_BUDGET_MIB);
-        let front = sweep::pareto_front(&rows);
-        let recommendation = sweep::recommend(&rows, budget_mib);
-        SweepResult {
-            config,
-            grid,
-            rows,
-            front,
-            recommendation,
-            budget_mib,
-            command,
-        }
-    }
-
-    pub fn recommended(&self) -> Option<&Row> {
-        self.recommendation.as_ref().map(|r| &self.rows[r.index])
-    }
-
-    /// Rows in objective order (acceptable within budget first), for the "top" tables.
-    pub fn ranked(&self) -> Vec<usize> {
-        let budget = self
-            .recommendation
-            .as_ref()
-            .map_or((self.budget_mib * 1048576.0) as u64, |r| r.budget_bytes);
-        let mut idx: Vec<usize> = (0..self.rows.len())
-            .filter(|&i| self.rows[i].summary.cascades_needed)
-            .collect();
-        let key = |i: usize| {
-            let s = &self.rows[i].summary;
-            let ok =
-                s.coverage_violations == 0 && s.shimmer_snapped <= sweep::STABLE_SHIMMER && s.memory_bytes <= budget;
-            (!ok, s.mean_aliasing, s.max_aliasing, s.memory_bytes, i)
-        };
-        idx.sort_by(|&a, &b| {
-            let (ka, kb) = (key(a), key(b));
-            ka.0.cmp(&kb.0)
-                .then(ka.1.total_cmp(&kb.1))
-                .then(ka.2.total_cmp(&kb.2))
-                .then(ka.3.cmp(&kb.3))
-                .then(ka.4.cmp(&kb.4))
-        });
-        // The recommendation heads the table (near-ties in mean are decided by max aliasing).
-        if let Some(r) = &self.recommendation {
-            idx.retain(|&i| i != r.index);
-            idx.insert(0, r.index);
-        }
-        idx
-    }
-}
+use crate::sweep::{self, Row, SweepResult};
 
 /// `sweep.csv`: [`metric::summary_columns`], then these.
 pub const SWEEP_EXTRA_COLUMNS: [&str; 4] = ["cascades_needed", "pareto", "recommended", "preset"];
