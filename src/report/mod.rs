@@ -5,8 +5,10 @@
 
 pub mod analyze;
 pub mod bench;
+pub mod check;
 pub mod compare;
 pub mod html;
+pub mod junit;
 pub mod markdown;
 pub mod output;
 pub mod stress;

@@ -3,13 +3,12 @@
 //! A thresholds file ([`thresholds`]) holds rules on summary, per-cascade and per-depth
 //! metrics ([`metric`]); [`evaluate`] judges them against an analysis (per-depth extremes in
 //! closed form, [`depth`]), [`baseline`] compares the summary metrics with an earlier
-//! `summary.json`, [`sweep`] does both for sweep rows, and [`report`] / [`junit`] render the
-//! outcome. Exit codes: 0 everything passes, 1 a rule failed or a metric regressed, 2 an error.
+//! `summary.json`, [`sweep`] does both for sweep rows, and [`report`] holds the outcome, which
+//! [`crate::report::check`] and [`crate::report::junit`] render. Exit codes: 0 everything passes, 1 a rule failed or a metric regressed, 2 an error.
 
 pub mod baseline;
 pub mod depth;
 pub mod evaluate;
-pub mod junit;
 pub mod metric;
 pub mod report;
 pub mod sweep;
@@ -99,7 +98,7 @@ pub fn write_junit(path: &Path, report: &CheckReport) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         output::ensure_dir(dir)?;
     }
-    output::write_atomic(path, junit::render(report).as_bytes())
+    output::write_atomic(path, crate::report::junit::render(report).as_bytes())
 }
 
 /// What `check` was asked to do (the command line's values).

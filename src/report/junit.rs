@@ -9,10 +9,11 @@
 
 use std::fmt::Write as _;
 
-use super::baseline::{Comparison, Verdict};
-use super::evaluate::{short, Bound, RuleResult, Status};
-use super::report::{limit_text, rule_message, Body, CheckReport};
-use crate::report::html::escape;
+use super::check::{limit_text, rule_message};
+use super::html::escape;
+use crate::check::baseline::{Comparison, Verdict};
+use crate::check::evaluate::{short, Bound, RuleResult, Status};
+use crate::check::report::{Body, CheckReport};
 
 /// A test case to write.
 struct Case {
