@@ -1,7 +1,7 @@
 //! `csm-lab analyze`: one scene and shadow setting, built and measured, written as CSV, JSON
 //! and SVG, with a summary on stdout.
 
-use super::{default_out_dir, load_with_preset_flag, Format, Outcome};
+use super::{default_out_dir, load_with_preset_flag, print_result, Outcome};
 use crate::analysis::{analyze, AnalysisOptions};
 use crate::cli::AnalyzeArgs;
 use crate::error::Result;
@@ -30,16 +30,12 @@ pub fn execute(args: &AnalyzeArgs) -> Result<Outcome> {
     let analysis = analyze(&config, &AnalysisOptions::full());
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&config));
     let written = output::export_all(&dir, &analysis, &report::analyze::exporters())?;
-    match args.format {
-        Format::Table => {
-            print!("{}", report::analyze::summary_table(&analysis));
-            println!("wrote {} files to {}", written.len(), dir.display());
-        }
-        Format::Json => {
-            let bytes = output::json_bytes("summary", &report::analyze::summary_value(&analysis))?;
-            print!("{}", String::from_utf8_lossy(&bytes));
-            eprintln!("wrote {} files to {}", written.len(), dir.display());
-        }
-    }
+    print_result(
+        args.format,
+        || report::analyze::summary_table(&analysis),
+        || output::json_bytes("summary", &report::analyze::summary_value(&analysis)),
+        written.len(),
+        &dir,
+    )?;
     Ok(Outcome::Success)
 }

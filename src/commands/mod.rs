@@ -48,6 +48,29 @@ pub fn load_with_preset_flag(path: &Path, preset: Option<&str>) -> Result<Config
     Config::load_with_preset(path, &choice)
 }
 
+/// Prints a command's result: with `--format table` the table, then the "wrote" line, on
+/// stdout; with `--format json` the JSON document on stdout and the "wrote" line on stderr, so
+/// that stdout is exactly one document.
+fn print_result(
+    format: Format,
+    table: impl FnOnce() -> String,
+    json: impl FnOnce() -> Result<Vec<u8>>,
+    written: usize,
+    dir: &Path,
+) -> Result<()> {
+    match format {
+        Format::Table => {
+            print!("{}", table());
+            println!("wrote {written} files to {}", dir.display());
+        }
+        Format::Json => {
+            print!("{}", String::from_utf8_lossy(&json()?));
+            eprintln!("wrote {written} files to {}", dir.display());
+        }
+    }
+    Ok(())
+}
+
 /// The default output directory for a config: `reports/<name>/`.
 pub fn default_out_dir(config: &Config) -> PathBuf {
     Path::new("reports").join(&config.name)

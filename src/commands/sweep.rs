@@ -11,7 +11,7 @@ use std::collections::BTreeSet;
 use rayon::prelude::*;
 use serde::Deserialize;
 
-use super::{default_out_dir, load_with_preset_flag, Format, Outcome};
+use super::{default_out_dir, load_with_preset_flag, print_result, Outcome};
 use crate::analysis::{analyze, AnalysisOptions, Summary};
 use crate::cli::SweepArgs;
 use crate::config::{Config, Fit, Validator};
@@ -982,17 +982,13 @@ pub fn execute(args: &SweepArgs) -> Result<Outcome> {
     let (result, files) = sweep_files(args)?;
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&result.config));
     let written = output::write_files(&dir, &files)?;
-    match args.format {
-        Format::Table => {
-            print!("{}", report::sweep::stdout_table(&result));
-            println!("wrote {} files to {}", written.len(), dir.display());
-        }
-        Format::Json => {
-            let bytes = output::json_bytes("recommendation", &report::sweep::recommendation_value(&result))?;
-            print!("{}", String::from_utf8_lossy(&bytes));
-            eprintln!("wrote {} files to {}", written.len(), dir.display());
-        }
-    }
+    print_result(
+        args.format,
+        || report::sweep::stdout_table(&result),
+        || output::json_bytes("recommendation", &report::sweep::recommendation_value(&result)),
+        written.len(),
+        &dir,
+    )?;
     Ok(Outcome::Success)
 }
 

@@ -137,10 +137,19 @@ mod tests {
     use super::*;
 
     #[test]
-    fn escape_covers_markup_quotes_and_control_characters() {
-        assert_eq!(escape("a<b>&\"'"), "a&lt;b&gt;&amp;&quot;&apos;");
+    fn escaping_covers_markup_quotes_and_control_characters() {
+        assert_eq!(escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&apos;");
         assert_eq!(escape("x\ny\tz"), "x&#10;y&#9;z");
-        assert_eq!(escape("\u{1}"), "\u{FFFD}");
+        assert_eq!(escape("bell\u{7}"), "bell\u{FFFD}");
+        assert_eq!(escape("ünï"), "ünï");
+        // Whatever goes in comes back from a real parser, minus the unrepresentable ones.
+        let nasty = "]]> <!-- & \"quoted\" 'single' \r\n\u{1} end";
+        let doc = format!("<a b=\"{}\">{}</a>", escape(nasty), escape(nasty));
+        let parsed = roxmltree::Document::parse(&doc).unwrap();
+        let root = parsed.root_element();
+        let expected = nasty.replace('\u{1}', "\u{FFFD}");
+        assert_eq!(root.attribute("b"), Some(expected.as_str()));
+        assert_eq!(root.text(), Some(expected.as_str()));
     }
 
     #[test]
