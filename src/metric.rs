@@ -119,7 +119,7 @@ pub struct SummaryDef {
 }
 
 /// Every summary metric, in the order of `summary.json`'s flat keys and of the CSV columns.
-pub const SUMMARY: [SummaryDef; 14] = [
+pub const SUMMARY: &[SummaryDef] = &[
     SummaryDef {
         name: "cascades_needed",
         unit: "",
@@ -398,7 +398,7 @@ pub struct CascadeDef {
 }
 
 /// Every per-cascade metric, in the order of `cascades.csv` (after `cascade`).
-pub const CASCADE: [CascadeDef; 15] = [
+pub const CASCADE: &[CascadeDef] = &[
     CascadeDef {
         name: "near",
         unit: "world units",
@@ -531,7 +531,7 @@ pub fn cascade_columns() -> Vec<&'static str> {
 /// The fields of [`cascade_columns`] for one cascade.
 pub fn cascade_fields(c: &CascadeReport) -> Result<Vec<String>> {
     let mut fields = vec![c.cascade.to_string()];
-    for d in &CASCADE {
+    for d in CASCADE {
         fields.push((d.value)(c).csv(d.name)?);
     }
     Ok(fields)

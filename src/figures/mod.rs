@@ -10,8 +10,6 @@ pub mod bench;
 pub mod compare;
 pub mod sweep;
 
-pub use self::analyze::{CascadesFigure, CascadesSvg, DensityFigure, DensitySvg, ShimmerFigure, ShimmerSvg};
-
 use std::sync::Once;
 
 use plotters::coord::cartesian::Cartesian2d;

@@ -5,7 +5,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    colormap, draw_legend, log_range, palette, series_color, texels_per_pixel_chart, Figure, PlotResult, FONT,
+    colormap, draw_legend, draw_message, log_range, palette, series_color, texels_per_pixel_chart, Figure, PlotResult,
+    FONT,
 };
 use crate::analysis::{analyze, mib, Analysis, AnalysisOptions};
 use crate::config::Fit;
@@ -223,11 +224,7 @@ impl Figure for LambdaDensityFigure<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
         let r = self.result;
         let Some(rec) = r.recommended() else {
-            return crate::plots::draw_message(
-                root,
-                "Texels per pixel vs depth",
-                "No recommendation: nothing to plot.",
-            );
+            return draw_message(root, "Texels per pixel vs depth", "No recommendation: nothing to plot.");
         };
         let title = format!(
             "Texels per pixel vs depth for several λ: {} cascades × {}², {} fit",
@@ -376,7 +373,7 @@ impl Figure for ParetoFigure<'_> {
             .map(|x| (mib(x.summary.memory_bytes), x.summary.mean_aliasing))
             .collect();
         if pts.is_empty() {
-            return crate::plots::draw_message(root, &title, "No cascades needed for any configuration.");
+            return draw_message(root, &title, "No cascades needed for any configuration.");
         }
         let (xmin, xmax) = pts
             .iter()

@@ -16,9 +16,9 @@ pub fn exporters() -> Vec<&'static dyn Exporter<Analysis>> {
         &DensityCsv,
         &ShimmerCsv,
         &SummaryJson,
-        &figures::DensitySvg,
-        &figures::ShimmerSvg,
-        &figures::CascadesSvg,
+        &figures::analyze::DensitySvg,
+        &figures::analyze::ShimmerSvg,
+        &figures::analyze::CascadesSvg,
     ]
 }
 
