@@ -490,11 +490,11 @@ pub fn execute(args: &BenchArgs) -> Result<Outcome> {
             c
         }
     };
-    let report = run(&config, args.repeats as usize)?;
+    let measured = run(&config, args.repeats as usize)?;
     let dir = args.out.clone().unwrap_or_else(|| Path::new("reports").join("bench"));
     let exporters: [&dyn Exporter<BenchReport>; 2] = [&report::bench::BenchCsv, &report::bench::BenchSvg];
-    let written = output::export_all(&dir, &report, &exporters)?;
-    print!("{}", report::bench::table(&report));
+    let written = output::export_all(&dir, &measured, &exporters)?;
+    print!("{}", report::bench::table(&measured));
     println!("wrote {} files to {}", written.len(), dir.display());
     Ok(Outcome::Success)
 }
