@@ -155,14 +155,12 @@ pub fn valid_names() -> String {
     PresetName::ALL.map(|p| p.as_str()).join(", ")
 }
 
-use crate::suggest::edit_distance;
-
 /// The preset name closest to `s`.
 pub fn closest_name(s: &str) -> PresetName {
     let s = s.to_ascii_lowercase();
     PresetName::ALL
         .into_iter()
-        .min_by_key(|p| edit_distance(&s, p.as_str()))
+        .min_by_key(|p| crate::suggest::edit_distance(&s, p.as_str()))
         .expect("non-empty")
 }
 
