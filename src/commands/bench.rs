@@ -492,7 +492,7 @@ pub fn execute(args: &BenchArgs) -> Result<Outcome> {
     };
     let measured = run(&config, args.repeats as usize)?;
     let dir = args.out.clone().unwrap_or_else(|| Path::new("reports").join("bench"));
-    let exporters: [&dyn Exporter<BenchReport>; 2] = [&report::bench::BenchCsv, &report::bench::BenchSvg];
+    let exporters: [&dyn Exporter<BenchReport>; 2] = [&report::bench::BenchCsv, &crate::figures::bench::BenchSvg];
     let written = output::export_all(&dir, &measured, &exporters)?;
     print!("{}", report::bench::table(&measured));
     println!("wrote {} files to {}", written.len(), dir.display());

@@ -5,6 +5,21 @@ use plotters::prelude::*;
 
 use super::{draw_legend, log_range, series_color, Figure, PlotResult, FONT};
 use crate::bench::{BenchReport, BenchRow, TARGET_ERROR};
+use crate::error::Result;
+use crate::output::Exporter;
+
+/// `bench.svg`: error against time, log-log, one line per metric.
+pub struct BenchSvg;
+
+impl Exporter<BenchReport> for BenchSvg {
+    fn file_name(&self) -> &'static str {
+        "bench.svg"
+    }
+
+    fn render(&self, report: &BenchReport) -> Result<Vec<u8>> {
+        BenchFigure(report).to_svg()
+    }
+}
 
 /// The chart behind `bench.svg`.
 pub struct BenchFigure<'a>(pub &'a BenchReport);

@@ -1,11 +1,9 @@
-//! What `bench` writes: `bench.csv`, the `bench.svg` exporter and the table printed on stdout.
+//! What `bench` writes besides its figure: `bench.csv` and the table printed on stdout.
 
 use std::fmt::Write as _;
 
 use crate::bench::{BenchReport, TARGET_ERROR};
 use crate::error::Result;
-use crate::figures::bench::BenchFigure;
-use crate::figures::Figure;
 use crate::output::{csv_bytes, num, Exporter};
 
 /// The terminal table: per metric, the smallest count reaching [`TARGET_ERROR`] and its
@@ -53,9 +51,6 @@ pub fn table(report: &BenchReport) -> String {
 /// `bench.csv`: one row per metric and sample count.
 pub struct BenchCsv;
 
-/// `bench.svg`: error against time, log-log, one line per metric.
-pub struct BenchSvg;
-
 pub const BENCH_COLUMNS: [&str; 6] = ["metric", "samples", "seconds", "error", "estimate", "reference"];
 
 impl Exporter<BenchReport> for BenchCsv {
@@ -79,15 +74,5 @@ impl Exporter<BenchReport> for BenchCsv {
             })
             .collect::<Result<Vec<_>>>()?;
         csv_bytes(&BENCH_COLUMNS, &rows)
-    }
-}
-
-impl Exporter<BenchReport> for BenchSvg {
-    fn file_name(&self) -> &'static str {
-        "bench.svg"
-    }
-
-    fn render(&self, report: &BenchReport) -> Result<Vec<u8>> {
-        BenchFigure(report).to_svg()
     }
 }
