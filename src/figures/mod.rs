@@ -139,7 +139,7 @@ pub fn short(v: f64) -> String {
 // Palette: every colour a figure uses
 // ---------------------------------------------------------------------------------------------
 
-/// Named colours of single marks.
+/// Every colour a figure uses: named single marks and the categorical lists.
 pub mod palette {
     use plotters::style::RGBColor;
 
@@ -159,11 +159,9 @@ pub mod palette {
     pub const LIMIT: RGBColor = RGBColor(120, 120, 120);
     /// Coverage misses.
     pub const MISS: RGBColor = RGBColor(214, 39, 40);
-}
 
-/// Distinct, colour-blind-friendly-ish colours for series.
-pub fn series_color(i: usize) -> RGBColor {
-    const C: [RGBColor; 8] = [
+    /// Series of a chart, in order.
+    pub const SERIES: [RGBColor; 8] = [
         RGBColor(0, 114, 178),
         RGBColor(213, 94, 0),
         RGBColor(0, 158, 115),
@@ -173,12 +171,9 @@ pub fn series_color(i: usize) -> RGBColor {
         RGBColor(120, 120, 120),
         RGBColor(160, 40, 40),
     ];
-    C[i % C.len()]
-}
 
-/// Eleven distinguishable colours, one per preset.
-pub fn preset_color(i: usize) -> RGBColor {
-    const C: [RGBColor; 11] = [
+    /// Presets of a comparison, in order.
+    pub const PRESETS: [RGBColor; 11] = [
         RGBColor(31, 119, 180),
         RGBColor(255, 127, 14),
         RGBColor(44, 160, 44),
@@ -191,7 +186,16 @@ pub fn preset_color(i: usize) -> RGBColor {
         RGBColor(23, 190, 207),
         RGBColor(0, 0, 128),
     ];
-    C[i % C.len()]
+}
+
+/// Distinct, colour-blind-friendly-ish colours for series.
+pub fn series_color(i: usize) -> RGBColor {
+    palette::SERIES[i % palette::SERIES.len()]
+}
+
+/// One colour per preset (eleven, distinguishable).
+pub fn preset_color(i: usize) -> RGBColor {
+    palette::PRESETS[i % palette::PRESETS.len()]
 }
 
 /// Sequential colour map (viridis-like stops), t in [0, 1].
