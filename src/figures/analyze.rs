@@ -4,7 +4,9 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{draw_legend, draw_message, palette, series_color, texels_per_pixel_chart, Figure, PlotResult, FONT};
+use super::{
+    chart_frame, draw_legend, draw_message, palette, series_color, texels_per_pixel_chart, Figure, PlotResult, FONT,
+};
 use crate::analysis::Analysis;
 use crate::cascades::{bounds_2d, LightPose};
 use crate::error::Result;
@@ -88,12 +90,8 @@ impl Figure for ShimmerFigure<'_> {
         let s_pts = per_frame(sn);
         let u_pts = per_frame(un);
         let ymax = u_pts.iter().chain(&s_pts).map(|p| p.1).fold(0.0f64, f64::max).max(0.05) * 1.15;
-        let mut chart = ChartBuilder::on(root)
-            .caption(&title, (FONT, 22))
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d(0.0..(frames.max(2) - 1) as f64, 0.0..ymax)?;
+        let mut chart =
+            chart_frame(root, &title, 22, 70).build_cartesian_2d(0.0..(frames.max(2) - 1) as f64, 0.0..ymax)?;
         chart
             .configure_mesh()
             .x_desc("frame")

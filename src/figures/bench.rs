@@ -3,7 +3,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{draw_legend, log_range, series_color, Figure, PlotResult, FONT};
+use super::{chart_frame, draw_legend, log_range, series_color, Figure, PlotResult, FONT};
 use crate::bench::{BenchReport, BenchRow, TARGET_ERROR};
 use crate::error::Result;
 use crate::output::Exporter;
@@ -46,15 +46,9 @@ impl Figure for BenchFigure<'_> {
             log_range(tmin, tmax)
         };
         let (y0, y1) = log_range(emin, emax);
-        let mut chart = ChartBuilder::on(root)
-            .caption(
-                format!("Accuracy against run time of the sampled metrics: {}", report.scene),
-                (FONT, 22),
-            )
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+        let title = format!("Accuracy against run time of the sampled metrics: {}", report.scene);
+        let mut chart =
+            chart_frame(root, &title, 22, 80).build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
         chart
             .configure_mesh()
             .x_desc("time per evaluation (seconds, log; best of repeated runs)")

@@ -233,6 +233,22 @@ pub fn draw_message<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &s
     Ok(())
 }
 
+/// The house chart frame: a caption, 14-pixel margins, and room for the axis labels (50 pixels
+/// below, `y_labels` pixels left).
+pub fn chart_frame<'a, 'b, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    caption_size: u32,
+    y_labels: u32,
+) -> ChartBuilder<'a, 'b, DB> {
+    let mut b = ChartBuilder::on(root);
+    b.caption(title, (FONT, caption_size))
+        .margin(14)
+        .x_label_area_size(50)
+        .y_label_area_size(y_labels);
+    b
+}
+
 /// Log-axis range that covers `lo..hi` with a margin and never collapses.
 pub fn log_range(lo: f64, hi: f64) -> (f64, f64) {
     let lo = lo.max(1e-300);
@@ -256,12 +272,8 @@ pub fn texels_per_pixel_chart<'a, DB: DrawingBackend>(
     let (ymin, ymax) = texels_per_pixel.fold((1.0f64, 1.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
     let (y0, y1) = log_range(ymin, ymax);
     let (x0, x1) = depth;
-    let mut chart = ChartBuilder::on(root)
-        .caption(title, (FONT, caption_size))
-        .margin(14)
-        .x_label_area_size(50)
-        .y_label_area_size(70)
-        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+    let mut chart =
+        chart_frame(root, title, caption_size, 70).build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
     chart
         .configure_mesh()
         .x_desc("view depth (world units, log)")

@@ -5,8 +5,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    colormap, draw_legend, draw_message, log_range, palette, series_color, texels_per_pixel_chart, Figure, PlotResult,
-    FONT,
+    chart_frame, colormap, draw_legend, draw_message, log_range, palette, series_color, texels_per_pixel_chart, Figure,
+    PlotResult, FONT,
 };
 use crate::analysis::{analyze, mib, Analysis, AnalysisOptions};
 use crate::config::Fit;
@@ -305,12 +305,8 @@ impl Figure for ShimmerSweepFigure<'_> {
             .fold(0.0f64, f64::max);
         let max_sn = r.rows.iter().map(|x| x.summary.shimmer_snapped).fold(0.0f64, f64::max);
         let ymax = max_un.max(max_sn).max(0.05) * 1.12;
-        let mut chart = ChartBuilder::on(root)
-            .caption(&title, (FONT, 20))
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d(-0.5..(n as f64 - 0.5).max(0.5), 0.0..ymax)?;
+        let mut chart =
+            chart_frame(root, &title, 20, 70).build_cartesian_2d(-0.5..(n as f64 - 0.5).max(0.5), 0.0..ymax)?;
         chart
             .configure_mesh()
             .x_desc("configuration (fit, resolution, cascades; λ varies fastest)")
@@ -383,12 +379,8 @@ impl Figure for ParetoFigure<'_> {
             .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
         let (x0, x1) = log_range(xmin.min(r.budget_mib), xmax.max(r.budget_mib));
         let (y0, y1) = log_range(ymin, ymax);
-        let mut chart = ChartBuilder::on(root)
-            .caption(&title, (FONT, 22))
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+        let mut chart =
+            chart_frame(root, &title, 22, 70).build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
         chart
             .configure_mesh()
             .x_desc("shadow map memory (MiB, log; cascades × resolution² × 4 bytes)")
