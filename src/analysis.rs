@@ -130,6 +130,11 @@ pub fn memory_bytes(cascades: usize, resolution: u32) -> u64 {
     cascades as u64 * resolution as u64 * resolution as u64 * 4
 }
 
+/// Bytes in MiB.
+pub fn mib(bytes: u64) -> f64 {
+    bytes as f64 / (1024.0 * 1024.0)
+}
+
 /// Runs the analysis of one validated config.
 pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
     let rig = Rig::from_config(config);

@@ -1,16 +1,16 @@
-//! Command-line interface: argument types (clap derive) and dispatch. `main.rs` only parses,
-//! calls [`run`] and maps the [`Outcome`] or error to an exit code.
+//! Command-line interface: the argument types (clap derive) and the dispatch to each
+//! command's module in [`crate::commands`]. `main.rs` only parses, calls [`run`] and maps the
+//! [`Outcome`] or error to an exit code.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand};
 
-use crate::analysis::{analyze, AnalysisOptions};
-use crate::config::Config;
+use crate::commands::{analyze, bench, check, compare, stress, sweep};
 use crate::error::Result;
-use crate::output::{self, Exporter};
-use crate::plots;
-use crate::precision::{self, Precision};
+use crate::precision::Precision;
+
+pub use crate::commands::{Format, Outcome};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -39,12 +39,6 @@ pub enum Command {
     Bench(BenchArgs),
     /// Run several engine presets on one scene and compare them (CSV, plots, HTML, Markdown).
     Compare(CompareArgs),
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Format {
-    Table,
-    Json,
 }
 
 #[derive(Debug, Args)]
@@ -169,246 +163,21 @@ pub struct CompareArgs {
     pub out: Option<PathBuf>,
 }
 
-/// How a successful run ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Outcome {
-    /// Exit code 0.
-    Success,
-    /// A quality threshold was violated: exit code 1.
-    ThresholdViolated,
-}
-
-impl Outcome {
-    pub fn exit_code(self) -> i32 {
-        match self {
-            Outcome::Success => 0,
-            Outcome::ThresholdViolated => 1,
-        }
-    }
-}
-
-/// Loads a config, with `--preset NAME` (when given) overriding `shadow.preset`.
-fn load_with_preset_flag(path: &Path, preset: Option<&str>) -> Result<Config> {
-    let choice = crate::presets::PresetChoice {
-        name: preset.map(|s| crate::presets::parse_flag("--preset", s)).transpose()?,
-        ..Default::default()
-    };
-    Config::load_with_preset(path, &choice)
-}
-
-/// The default output directory for a config: `reports/<name>/`.
-pub fn default_out_dir(config: &Config) -> PathBuf {
-    Path::new("reports").join(&config.name)
-}
-
+/// Runs the parsed command.
 pub fn run(cli: Cli) -> Result<Outcome> {
     match cli.command {
-        Command::Analyze(args) => run_analyze(&args),
-        Command::Sweep(args) => run_sweep(&args),
-        Command::Check(args) => crate::check::run_check(&args),
-        Command::Stress(args) => run_stress(&args),
-        Command::Bench(args) => run_bench(&args),
-        Command::Compare(args) => run_compare(&args),
+        Command::Analyze(args) => analyze::execute(&args),
+        Command::Sweep(args) => sweep::execute(&args),
+        Command::Check(args) => check::execute(&check::CheckRequest {
+            config: &args.config,
+            thresholds: &args.thresholds,
+            baseline: args.baseline.as_deref(),
+            sweep: args.sweep,
+            junit: args.junit.as_deref(),
+            format: args.format,
+        }),
+        Command::Stress(args) => stress::execute(&args),
+        Command::Bench(args) => bench::execute(&args),
+        Command::Compare(args) => compare::execute(&args),
     }
-}
-
-/// The exporters `analyze` writes, in order.
-pub fn analyze_exporters() -> Vec<&'static dyn Exporter<crate::analysis::Analysis>> {
-    vec![
-        &output::CascadesCsv,
-        &output::DensityCsv,
-        &output::ShimmerCsv,
-        &output::SummaryJson,
-        &plots::DensitySvg,
-        &plots::ShimmerSvg,
-        &plots::CascadesSvg,
-    ]
-}
-
-fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
-    let mut config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
-    if let Some(p) = args.precision {
-        if p == Precision::F32 && config.shadow.preset.is_some() {
-            return Err(crate::error::Error::flag(
-                "--precision",
-                "f32",
-                "the binary32 emulation models csm-lab's own sphere and aabb pipelines, not engine presets",
-            ));
-        }
-        config.shadow.precision = p;
-        if p == Precision::F32 {
-            if let Some(why) = precision::f32_range_problem(&config) {
-                return Err(crate::error::Error::flag("--precision", "f32", why));
-            }
-        }
-    }
-    let analysis = analyze(&config, &AnalysisOptions::full());
-    let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&config));
-    let written = output::export_all(&dir, &analysis, &analyze_exporters())?;
-    match args.format {
-        Format::Table => {
-            print!("{}", output::summary_table(&analysis));
-            println!("wrote {} files to {}", written.len(), dir.display());
-        }
-        Format::Json => {
-            let bytes = output::json_bytes("summary", &output::summary_value(&analysis))?;
-            print!("{}", String::from_utf8_lossy(&bytes));
-            eprintln!("wrote {} files to {}", written.len(), dir.display());
-        }
-    }
-    Ok(Outcome::Success)
-}
-
-/// Runs a sweep as the CLI does, without printing: (result, rendered files).
-pub fn sweep_files(args: &SweepArgs) -> Result<(crate::report::SweepResult, output::RenderedFiles)> {
-    use crate::sweep::{self, Grid, GridOverrides};
-    let config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
-    let overrides = GridOverrides {
-        lambda: args.lambda.as_deref().map(sweep::parse_lambda_spec).transpose()?,
-        cascades: args.cascades.as_deref().map(sweep::parse_cascades_spec).transpose()?,
-        resolution: args
-            .resolution
-            .as_deref()
-            .map(sweep::parse_resolution_spec)
-            .transpose()?,
-        fit: args.fit.as_deref().map(sweep::parse_fit_spec).transpose()?,
-    };
-    let grid = Grid::resolve(&config, &overrides)?;
-    if !args.quiet {
-        for note in &grid.notes {
-            eprintln!("note: {note}");
-        }
-    }
-    let show_progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let bar = if show_progress {
-        let bar = indicatif::ProgressBar::new(grid.len() as u64);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} sweeping {pos}/{len} configurations {wide_bar} {eta}")
-                .expect("valid template"),
-        );
-        bar
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    let start = std::time::Instant::now();
-    let rows = sweep::run(&config, &grid, args.threads.map(usize::from), &|| bar.inc(1))?;
-    bar.finish_and_clear();
-    let compute = start.elapsed();
-    let preset = match &config.shadow.preset {
-        Some(p) => format!(" --preset {}", p.name),
-        None => String::new(),
-    };
-    let command = format!(
-        "csm-lab sweep {}{preset} {}",
-        args.config.display(),
-        grid.cli_args(&config)
-    );
-    let result = crate::report::SweepResult::new(config, grid, rows, command);
-    let files = crate::report::render_all(&result, !args.no_plots)?;
-    if !args.quiet {
-        eprintln!(
-            "analysed {} configurations in {:.1} ms",
-            result.rows.len(),
-            compute.as_secs_f64() * 1e3
-        );
-    }
-    Ok((result, files))
-}
-
-fn run_sweep(args: &SweepArgs) -> Result<Outcome> {
-    let (result, files) = sweep_files(args)?;
-    let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&result.config));
-    let written = output::write_files(&dir, &files)?;
-    match args.format {
-        Format::Table => {
-            print!("{}", crate::report::stdout_table(&result));
-            println!("wrote {} files to {}", written.len(), dir.display());
-        }
-        Format::Json => {
-            let bytes = output::json_bytes("recommendation", &crate::report::recommendation_value(&result))?;
-            print!("{}", String::from_utf8_lossy(&bytes));
-            eprintln!("wrote {} files to {}", written.len(), dir.display());
-        }
-    }
-    Ok(Outcome::Success)
-}
-
-fn run_stress(args: &StressArgs) -> Result<Outcome> {
-    use crate::error::Error;
-    use crate::stress;
-    if args.cases > 100_000 {
-        return Err(Error::flag(
-            "--cases",
-            &args.cases.to_string(),
-            "at most 100000 random cases",
-        ));
-    }
-    if let Some(limit) = args.max_f32_drift {
-        if !(limit.is_finite() && limit >= 0.0) {
-            return Err(Error::flag(
-                "--max-f32-drift",
-                &limit.to_string(),
-                "a finite number of texels >= 0",
-            ));
-        }
-    }
-    let mut cases = stress::battery();
-    cases.extend(stress::random_cases(args.cases as usize, args.seed));
-    let opts = stress::StressOptions {
-        max_f32_drift: args.max_f32_drift,
-    };
-    let results = stress::run(&cases, &opts);
-    let bytes = stress::csv(&results)?;
-    output::write_files(&args.out, &[("stress.csv", bytes)])?;
-    print!("{}", stress::table(&results));
-    println!("wrote {}", args.out.join("stress.csv").display());
-    Ok(if results.iter().all(|r| r.pass()) {
-        Outcome::Success
-    } else {
-        Outcome::ThresholdViolated
-    })
-}
-
-/// The scene `bench` measures when no `--config` is given.
-pub const DEFAULT_SCENE: &str = include_str!("../configs/default.toml");
-
-fn run_bench(args: &BenchArgs) -> Result<Outcome> {
-    if !(1..=1000).contains(&args.repeats) {
-        return Err(crate::error::Error::flag(
-            "--repeats",
-            &args.repeats.to_string(),
-            "allowed: an integer in 1..=1000",
-        ));
-    }
-    let config = match &args.config {
-        Some(path) => Config::load(path)?,
-        None => {
-            let mut c = Config::from_toml_str(DEFAULT_SCENE, "configs/default.toml (built in)", None)?;
-            c.name = "default".to_string();
-            c
-        }
-    };
-    let report = crate::bench::run(&config, args.repeats as usize)?;
-    let dir = args.out.clone().unwrap_or_else(|| Path::new("reports").join("bench"));
-    let exporters: [&dyn Exporter<crate::bench::BenchReport>; 2] = [&crate::bench::BenchCsv, &crate::bench::BenchSvg];
-    let written = output::export_all(&dir, &report, &exporters)?;
-    print!("{}", report.table());
-    println!("wrote {} files to {}", written.len(), dir.display());
-    Ok(Outcome::Success)
-}
-
-fn run_compare(args: &CompareArgs) -> Result<Outcome> {
-    let presets = match &args.presets {
-        Some(list) => crate::presets::parse_list("--presets", list)?,
-        None => crate::presets::PresetName::ALL.to_vec(),
-    };
-    let comparison = crate::compare::run(&args.config, &presets, args.defaults)?;
-    let dir = args
-        .out
-        .clone()
-        .unwrap_or_else(|| default_out_dir(&comparison.analyses[0].config));
-    let written = output::export_all(&dir, &comparison, &crate::compare::exporters())?;
-    print!("{}", crate::compare::summary_table(&comparison));
-    println!("wrote {} files to {}", written.len(), dir.display());
-    Ok(Outcome::Success)
 }

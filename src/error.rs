@@ -68,6 +68,34 @@ pub enum GridError {
         value: String,
         message: String,
     },
+
+    /// A sweep axis holds a value the engine preset does not accept.
+    #[error("{source_key} = {spec}: {message}")]
+    Axis {
+        /// The flag or config key that gave the axis (`--cascades`, `sweep.cascades`).
+        source_key: String,
+        spec: String,
+        message: String,
+    },
+
+    /// The sweep grid is larger than `sweep.max_configs`.
+    #[error(
+        "the sweep grid has {configs} configurations ({lambdas} λ × {counts} cascade counts × {resolutions} resolutions × {fits} fits), \
+         more than sweep.max_configs = {max}; narrow an axis (--lambda, --cascades, --resolution, --fit) \
+         or raise sweep.max_configs"
+    )]
+    TooLarge {
+        configs: usize,
+        lambdas: usize,
+        counts: usize,
+        resolutions: usize,
+        fits: usize,
+        max: usize,
+    },
+
+    /// The inputs parse but leave the command nothing to do.
+    #[error("{context}: {message}")]
+    Unusable { context: String, message: String },
 }
 
 /// An engine preset that does not exist or cannot do what was asked.
@@ -117,13 +145,30 @@ pub enum BaselineError {
     /// The baseline does not fit the current run.
     #[error("{}: {message}", path.display())]
     Mismatch { path: PathBuf, message: String },
+
+    /// The baseline's content is not what a baseline of this kind holds.
+    #[error("{label}: {message}")]
+    Invalid { label: String, message: String },
+
+    /// A sweep table with two rows for one configuration.
+    #[error("the {which} sweep table has two rows for {key}; each configuration must appear once")]
+    DuplicateRow { which: String, key: String },
 }
 
 /// A figure that could not be drawn or rasterised.
 #[derive(Debug, thiserror::Error)]
 pub enum PlotError {
-    #[error("cannot draw {figure}: {message}")]
-    Draw { figure: String, message: String },
+    /// The plotting backend failed while drawing.
+    #[error("plot: {0}")]
+    Draw(String),
+
+    /// An SVG could not be rasterised.
+    #[error("SVG to PNG: {0}")]
+    Rasterise(String),
+
+    /// The PNG encoder failed.
+    #[error("PNG encoding: {0}")]
+    Png(String),
 }
 
 /// Files and streams.
@@ -145,6 +190,10 @@ pub enum IoError {
 
     #[error("cannot write to standard output: {0}")]
     Stdout(std::io::Error),
+
+    /// A CSV or JSON encoder failed.
+    #[error("{format} encoding failed: {message}")]
+    Encode { format: &'static str, message: String },
 }
 
 impl Error {

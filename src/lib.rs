@@ -4,10 +4,12 @@
 //! fit, texel snapping) for a camera, a directional light and the scene's bounds, and measures
 //! texel density and perspective aliasing against view depth, shimmer under camera motion,
 //! and coverage. Conventions (handedness, light direction, view depth) are stated once in
-//! [`geometry`]; the formulas and their reference values are stated in `docs/`.
+//! [`geometry`]; every formula is stated in `docs/metrics.md`, and every metric is named once,
+//! in the registry [`metric`].
 //!
 //! Pipeline: [`config`] → [`depth_range`] → [`splits`] → [`cascades`] ([`fitting`],
-//! [`snapping`]) → [`metrics`], [`shimmer`] → [`analysis`] → [`output`], [`plots`].
+//! [`snapping`]) → [`metrics`], [`shimmer`] → [`analysis`] → [`report`], [`figures`]; each
+//! command in [`commands`] runs that pipeline and hands its result to the report layer.
 
 pub mod analysis;
 pub mod cli;
@@ -17,8 +19,10 @@ pub mod core;
 pub mod error;
 pub mod figures;
 mod load;
+pub mod metric;
 pub mod presets;
 pub mod report;
+pub mod suggest;
 
 // Short paths for the modules most callers use.
 pub use crate::commands::{bench, check, compare, stress, sweep};

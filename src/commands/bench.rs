@@ -21,18 +21,18 @@
 //! 0) and deterministic; times are the best of several repetitions, per evaluation, and vary
 //! from run to run and machine to machine.
 
+use std::path::Path;
 use std::time::Instant;
 
-use plotters::coord::Shift;
-use plotters::prelude::*;
-
+use super::Outcome;
 use crate::cascades::{LightPose, Rig};
+use crate::cli::BenchArgs;
 use crate::config::{Config, Fit, MotionPath};
-use crate::error::{Error, Result};
+use crate::error::{Error, GridError, Result};
 use crate::metrics::{self, DensitySample};
 use crate::motion;
-use crate::output::{csv_bytes, num, Exporter};
-use crate::plots::{draw_legend, log_range, series_color, Figure, PlotResult, FONT};
+use crate::output::{self, Exporter};
+use crate::report;
 use crate::shimmer::{self, wrap, ShimmerOptions};
 
 /// The relative error the summary table asks each metric to reach.
@@ -170,11 +170,20 @@ fn with_path(config: &Config, path: MotionPath, step_deg: f64, frames: usize, fi
 
 fn poses_of(config: &Config) -> Result<Vec<crate::geometry::CameraPose>> {
     motion::camera_path(config).map_err(|(frame, why)| {
-        Error::Other(format!(
-            "bench: the {} path of this camera is invalid at frame {frame} ({why}); use a camera that is not looking straight up or down",
+        unusable(format!(
+            "the {} path of this camera is invalid at frame {frame} ({why}); use a camera that is not looking straight up or down",
             config.motion.path.name()
         ))
     })
+}
+
+/// A scene `bench` cannot measure.
+fn unusable(message: String) -> Error {
+    GridError::Unusable {
+        context: "bench".to_string(),
+        message,
+    }
+    .into()
 }
 
 const NO_PROBE_OPTIONS: ShimmerOptions = ShimmerOptions {
@@ -376,8 +385,8 @@ fn bench_frames(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Re
 /// motion is set per metric as described in the module documentation).
 pub fn run(config: &Config, repeats: usize) -> Result<BenchReport> {
     let Some(rig) = Rig::from_config(config) else {
-        return Err(Error::Other(format!(
-            "bench: {} needs no cascades (the scene is not visible within the shadow distance), so there is nothing to sample; use a scene the camera sees",
+        return Err(unusable(format!(
+            "{} needs no cascades (the scene is not visible within the shadow distance), so there is nothing to sample; use a scene the camera sees",
             config.name
         )));
     };
@@ -455,162 +464,39 @@ impl BenchReport {
     pub fn at(&self, metric: &str, samples: usize) -> Option<&BenchRow> {
         self.rows_named(metric).into_iter().find(|r| r.samples == samples)
     }
-
-    /// The terminal table: per metric, the smallest count reaching [`TARGET_ERROR`] and its
-    /// time, and the error and time at the current default.
-    pub fn table(&self) -> String {
-        use std::fmt::Write as _;
-        let mut out = String::new();
-        let _ = writeln!(
-            out,
-            "bench ({}): smallest sample count reaching relative error {:.0e}, and the defaults",
-            self.scene, TARGET_ERROR
-        );
-        let _ = writeln!(
-            out,
-            "{:<31} {:<26} {:>8} {:>11} {:>10}   {:>8} {:>10} {:>11}",
-            "metric", "knob", "reaches", "time (s)", "error", "default", "error", "time (s)"
-        );
-        for m in &self.metrics {
-            let (count, time, err) = match self.first_reaching(m.name, TARGET_ERROR) {
-                Some(r) => (
-                    r.samples.to_string(),
-                    format!("{:.3e}", r.seconds),
-                    format!("{:.2e}", r.error),
-                ),
-                None => {
-                    let max = self.rows_of(m.name).map(|r| r.samples).max().unwrap_or(0);
-                    (format!(">{max}"), "-".to_string(), "-".to_string())
-                }
-            };
-            let (derr, dtime) = match self.at(m.name, m.default) {
-                Some(r) => (format!("{:.2e}", r.error), format!("{:.3e}", r.seconds)),
-                None => ("-".to_string(), "-".to_string()),
-            };
-            let _ = writeln!(
-                out,
-                "{:<31} {:<26} {:>8} {:>11} {:>10}   {:>8} {:>10} {:>11}",
-                m.name, m.knob, count, time, err, m.default, derr, dtime
-            );
-        }
-        for m in self.metrics.iter().filter(|m| !m.note.is_empty()) {
-            let _ = writeln!(out, "  {}: {}", m.name, m.note);
-        }
-        out
-    }
 }
 
-/// `bench.csv`: one row per metric and sample count.
-pub struct BenchCsv;
+// ---------------------------------------------------------------------------------------------
+// The command
+// ---------------------------------------------------------------------------------------------
 
-/// `bench.svg`: error against time, log-log, one line per metric.
-pub struct BenchSvg;
+/// The scene `bench` measures when no `--config` is given.
+pub const DEFAULT_SCENE: &str = include_str!("../../configs/default.toml");
 
-pub const BENCH_COLUMNS: [&str; 6] = ["metric", "samples", "seconds", "error", "estimate", "reference"];
-
-impl Exporter<BenchReport> for BenchCsv {
-    fn file_name(&self) -> &'static str {
-        "bench.csv"
+/// The `bench` command.
+pub fn execute(args: &BenchArgs) -> Result<Outcome> {
+    if !(1..=1000).contains(&args.repeats) {
+        return Err(Error::flag(
+            "--repeats",
+            &args.repeats.to_string(),
+            "allowed: an integer in 1..=1000",
+        ));
     }
-
-    fn render(&self, report: &BenchReport) -> Result<Vec<u8>> {
-        let rows = report
-            .rows
-            .iter()
-            .map(|r| {
-                Ok(vec![
-                    r.metric.to_string(),
-                    r.samples.to_string(),
-                    num("seconds", r.seconds)?,
-                    num("error", r.error)?,
-                    num("estimate", r.estimate)?,
-                    num("reference", r.reference)?,
-                ])
-            })
-            .collect::<Result<Vec<_>>>()?;
-        csv_bytes(&BENCH_COLUMNS, &rows)
-    }
-}
-
-impl Exporter<BenchReport> for BenchSvg {
-    fn file_name(&self) -> &'static str {
-        "bench.svg"
-    }
-
-    fn render(&self, report: &BenchReport) -> Result<Vec<u8>> {
-        BenchFigure(report).to_svg()
-    }
-}
-
-/// The chart behind `bench.svg`.
-pub struct BenchFigure<'a>(pub &'a BenchReport);
-
-impl Figure for BenchFigure<'_> {
-    fn size(&self) -> (u32, u32) {
-        (1040, 660)
-    }
-
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
-        let report = self.0;
-        // Exact (zero-error) points have no place on a log axis: they are left out.
-        let plotted = |r: &&BenchRow| r.error > 0.0 && r.seconds > 0.0;
-        let pts: Vec<&BenchRow> = report.rows.iter().filter(plotted).collect();
-        let (tmin, tmax) = pts.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| {
-            (lo.min(r.seconds), hi.max(r.seconds))
-        });
-        let (emin, emax) = pts.iter().fold((TARGET_ERROR, TARGET_ERROR), |(lo, hi), r| {
-            (lo.min(r.error), hi.max(r.error))
-        });
-        let (x0, x1) = if pts.is_empty() {
-            (1e-7, 1.0)
-        } else {
-            log_range(tmin, tmax)
-        };
-        let (y0, y1) = log_range(emin, emax);
-        let mut chart = ChartBuilder::on(root)
-            .caption(
-                format!("Accuracy against run time of the sampled metrics: {}", report.scene),
-                (FONT, 22),
-            )
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc("time per evaluation (seconds, log; best of repeated runs)")
-            .y_desc("relative error (log)")
-            .x_label_formatter(&|v| format!("{v:.0e}"))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 13))
-            .draw()?;
-        let target = BLACK.stroke_width(2);
-        chart
-            .draw_series(DashedLineSeries::new(
-                vec![(x0, TARGET_ERROR), (x1, TARGET_ERROR)],
-                8,
-                5,
-                target,
-            ))?
-            .label(format!("target: relative error {TARGET_ERROR:.0e}"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], target));
-        for (i, m) in report.metrics.iter().enumerate() {
-            let color = series_color(i);
-            let line: Vec<(f64, f64)> = report
-                .rows_of(m.name)
-                .filter(|r| plotted(r))
-                .map(|r| (r.seconds, r.error))
-                .collect();
-            chart.draw_series(line.iter().map(|p| Circle::new(*p, 3, color.filled())))?;
-            chart
-                .draw_series(LineSeries::new(line, color.stroke_width(2)))?
-                .label(format!("{} ({})", m.name, m.unit))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+    let config = match &args.config {
+        Some(path) => Config::load(path)?,
+        None => {
+            let mut c = Config::from_toml_str(DEFAULT_SCENE, "configs/default.toml (built in)", None)?;
+            c.name = "default".to_string();
+            c
         }
-        draw_legend(&mut chart, SeriesLabelPosition::LowerLeft, 13)?;
-        Ok(())
-    }
+    };
+    let measured = run(&config, args.repeats as usize)?;
+    let dir = args.out.clone().unwrap_or_else(|| Path::new("reports").join("bench"));
+    let exporters: [&dyn Exporter<BenchReport>; 2] = [&report::bench::BenchCsv, &crate::figures::bench::BenchSvg];
+    let written = output::export_all(&dir, &measured, &exporters)?;
+    print!("{}", report::bench::table(&measured));
+    println!("wrote {} files to {}", written.len(), dir.display());
+    Ok(Outcome::Success)
 }
 
 #[cfg(test)]

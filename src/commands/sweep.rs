@@ -11,9 +11,13 @@ use std::collections::BTreeSet;
 use rayon::prelude::*;
 use serde::Deserialize;
 
+use super::{default_out_dir, load_with_preset_flag, print_result, Outcome};
 use crate::analysis::{analyze, AnalysisOptions, Summary};
+use crate::cli::SweepArgs;
 use crate::config::{Config, Fit, Validator};
-use crate::error::{Error, Result};
+use crate::error::{Error, GridError, Result};
+use crate::output;
+use crate::report;
 
 /// One axis: its values in order, and the canonical spec that reproduces it on the CLI.
 #[derive(Debug, Clone, PartialEq)]
@@ -568,15 +572,15 @@ impl Grid {
         };
         let n = grid.len();
         if n > max_configs {
-            return Err(Error::Other(format!(
-                "the sweep grid has {n} configurations ({} λ × {} cascade counts × {} resolutions × {} fits), \
-                 more than sweep.max_configs = {max_configs}; narrow an axis (--lambda, --cascades, --resolution, --fit) \
-                 or raise sweep.max_configs",
-                grid.lambda.values.len(),
-                grid.cascades.values.len(),
-                grid.resolution.values.len(),
-                grid.fit.values.len()
-            )));
+            return Err(GridError::TooLarge {
+                configs: n,
+                lambdas: grid.lambda.values.len(),
+                counts: grid.cascades.values.len(),
+                resolutions: grid.resolution.values.len(),
+                fits: grid.fit.values.len(),
+                max: max_configs,
+            }
+            .into());
         }
         if preset.is_some() {
             // Each axis value must be one the engine accepts: say which axis and which value.
@@ -585,16 +589,16 @@ impl Grid {
             let resolution_source = source(overrides.resolution.is_some(), "--resolution", "sweep.resolution");
             for &v in &grid.cascades.values {
                 crate::presets::set_cascades(&mut c, v)
-                    .map_err(|e| Error::Other(format!("{cascades_source} = {}: {e}", grid.cascades.spec)))?;
+                    .map_err(|e| axis_error(&cascades_source, &grid.cascades.spec, e))?;
             }
             for &v in &grid.resolution.values {
                 crate::presets::set_resolution(&mut c, v)
-                    .map_err(|e| Error::Other(format!("{resolution_source} = {}: {e}", grid.resolution.spec)))?;
+                    .map_err(|e| axis_error(&resolution_source, &grid.resolution.spec, e))?;
             }
             if axes.lambda.is_some() {
                 for &v in &grid.lambda.values {
                     crate::presets::set_lambda(&mut c, v)
-                        .map_err(|e| Error::Other(format!("{lambda_source} = {}: {e}", grid.lambda.spec)))?;
+                        .map_err(|e| axis_error(&lambda_source, &grid.lambda.spec, e))?;
                 }
             }
         }
@@ -838,6 +842,154 @@ pub fn fits_in(rows: &[Row]) -> Vec<Fit> {
         .collect::<BTreeSet<_>>()
         .into_iter()
         .collect()
+}
+
+/// An axis value the engine preset refuses, naming the axis's flag or key and its spec.
+fn axis_error(source_key: &str, spec: &str, e: Error) -> Error {
+    GridError::Axis {
+        source_key: source_key.to_string(),
+        spec: spec.to_string(),
+        message: e.to_string(),
+    }
+    .into()
+}
+
+/// Everything a sweep produced, ready to be written.
+#[derive(Debug, Clone)]
+pub struct SweepResult {
+    pub config: Config,
+    pub grid: Grid,
+    pub rows: Vec<Row>,
+    pub front: Vec<usize>,
+    pub recommendation: Option<Recommendation>,
+    pub budget_mib: f64,
+    /// The command that reproduces the sweep.
+    pub command: String,
+}
+
+impl SweepResult {
+    pub fn new(config: Config, grid: Grid, rows: Vec<Row>, command: String) -> Self {
+        let budget_mib = config
+            .sweep
+            .as_ref()
+            .and_then(|s| s.memory_budget_mib)
+            .unwrap_or(DEFAULT_BUDGET_MIB);
+        let front = pareto_front(&rows);
+        let recommendation = recommend(&rows, budget_mib);
+        SweepResult {
+            config,
+            grid,
+            rows,
+            front,
+            recommendation,
+            budget_mib,
+            command,
+        }
+    }
+
+    pub fn recommended(&self) -> Option<&Row> {
+        self.recommendation.as_ref().map(|r| &self.rows[r.index])
+    }
+
+    /// Rows in objective order (acceptable within budget first), for the "top" tables.
+    pub fn ranked(&self) -> Vec<usize> {
+        let budget = self
+            .recommendation
+            .as_ref()
+            .map_or((self.budget_mib * 1048576.0) as u64, |r| r.budget_bytes);
+        let mut idx: Vec<usize> = (0..self.rows.len())
+            .filter(|&i| self.rows[i].summary.cascades_needed)
+            .collect();
+        let key = |i: usize| {
+            let s = &self.rows[i].summary;
+            let ok = s.coverage_violations == 0 && s.shimmer_snapped <= STABLE_SHIMMER && s.memory_bytes <= budget;
+            (!ok, s.mean_aliasing, s.max_aliasing, s.memory_bytes, i)
+        };
+        idx.sort_by(|&a, &b| {
+            let (ka, kb) = (key(a), key(b));
+            ka.0.cmp(&kb.0)
+                .then(ka.1.total_cmp(&kb.1))
+                .then(ka.2.total_cmp(&kb.2))
+                .then(ka.3.cmp(&kb.3))
+                .then(ka.4.cmp(&kb.4))
+        });
+        // The recommendation heads the table (near-ties in mean are decided by max aliasing).
+        if let Some(r) = &self.recommendation {
+            idx.retain(|&i| i != r.index);
+            idx.insert(0, r.index);
+        }
+        idx
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The command
+// ---------------------------------------------------------------------------------------------
+
+/// Runs a sweep as the CLI does, without printing: (result, rendered files).
+pub fn sweep_files(args: &SweepArgs) -> Result<(SweepResult, output::RenderedFiles)> {
+    let config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
+    let overrides = GridOverrides {
+        lambda: args.lambda.as_deref().map(parse_lambda_spec).transpose()?,
+        cascades: args.cascades.as_deref().map(parse_cascades_spec).transpose()?,
+        resolution: args.resolution.as_deref().map(parse_resolution_spec).transpose()?,
+        fit: args.fit.as_deref().map(parse_fit_spec).transpose()?,
+    };
+    let grid = Grid::resolve(&config, &overrides)?;
+    if !args.quiet {
+        for note in &grid.notes {
+            eprintln!("note: {note}");
+        }
+    }
+    let show_progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let bar = if show_progress {
+        let bar = indicatif::ProgressBar::new(grid.len() as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} sweeping {pos}/{len} configurations {wide_bar} {eta}")
+                .expect("valid template"),
+        );
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let start = std::time::Instant::now();
+    let rows = run(&config, &grid, args.threads.map(usize::from), &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    let compute = start.elapsed();
+    let preset = match &config.shadow.preset {
+        Some(p) => format!(" --preset {}", p.name),
+        None => String::new(),
+    };
+    let command = format!(
+        "csm-lab sweep {}{preset} {}",
+        args.config.display(),
+        grid.cli_args(&config)
+    );
+    let result = SweepResult::new(config, grid, rows, command);
+    let files = report::sweep::render_all(&result, !args.no_plots)?;
+    if !args.quiet {
+        eprintln!(
+            "analysed {} configurations in {:.1} ms",
+            result.rows.len(),
+            compute.as_secs_f64() * 1e3
+        );
+    }
+    Ok((result, files))
+}
+
+/// The `sweep` command.
+pub fn execute(args: &SweepArgs) -> Result<Outcome> {
+    let (result, files) = sweep_files(args)?;
+    let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&result.config));
+    let written = output::write_files(&dir, &files)?;
+    print_result(
+        args.format,
+        || report::sweep::stdout_table(&result),
+        || output::json_bytes("recommendation", &report::sweep::recommendation_value(&result)),
+        written.len(),
+        &dir,
+    )?;
+    Ok(Outcome::Success)
 }
 
 #[cfg(test)]

@@ -1,6 +1,14 @@
 //! Charts. A [`Figure`] draws itself on any plotters backend, so the same code yields the SVG
 //! (for reports and the README) and the PNG (for slides). Text is laid out with an embedded
 //! DejaVu Sans font, so nothing depends on the fonts installed on the machine.
+//!
+//! This module holds what every figure shares: the font, SVG and PNG encoding, the palette,
+//! axes and legend helpers. Each command's figures live in their own submodule.
+
+pub mod analyze;
+pub mod bench;
+pub mod compare;
+pub mod sweep;
 
 use std::sync::Once;
 
@@ -9,10 +17,7 @@ use plotters::coord::combinators::LogCoord;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::analysis::Analysis;
-use crate::cascades::{bounds_2d, LightPose};
-use crate::error::{Error, Result};
-use crate::output::Exporter;
+use crate::error::{PlotError, Result};
 
 pub const FONT: &str = "sans-serif";
 
@@ -27,15 +32,15 @@ pub fn init_fonts() {
 
 /// A drawing error from any backend, as text.
 #[derive(Debug)]
-pub struct PlotError(pub String);
+pub struct DrawError(pub String);
 
-impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for PlotError {
+impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for DrawError {
     fn from(e: DrawingAreaErrorKind<E>) -> Self {
-        PlotError(e.to_string())
+        DrawError(e.to_string())
     }
 }
 
-pub type PlotResult = std::result::Result<(), PlotError>;
+pub type PlotResult = std::result::Result<(), DrawError>;
 
 /// Something that can be drawn.
 pub trait Figure {
@@ -50,9 +55,9 @@ pub trait Figure {
         let mut s = String::new();
         {
             let root = SVGBackend::with_string(&mut s, self.size()).into_drawing_area();
-            root.fill(&WHITE).map_err(|e| Error::Other(format!("plot: {e}")))?;
-            self.draw(&root).map_err(|e| Error::Other(format!("plot: {}", e.0)))?;
-            root.present().map_err(|e| Error::Other(format!("plot: {e}")))?;
+            root.fill(&WHITE).map_err(|e| PlotError::Draw(e.to_string()))?;
+            self.draw(&root).map_err(|e| PlotError::Draw(e.0))?;
+            root.present().map_err(|e| PlotError::Draw(e.to_string()))?;
         }
         Ok(s.into_bytes())
     }
@@ -86,14 +91,13 @@ pub fn svg_to_png(svg: &[u8], scale: f32) -> Result<Vec<u8>> {
         fontdb: font_db(),
         ..Default::default()
     };
-    let tree = resvg::usvg::Tree::from_data(svg, &opt).map_err(|e| Error::Other(format!("SVG to PNG: {e}")))?;
+    let tree = resvg::usvg::Tree::from_data(svg, &opt).map_err(|e| PlotError::Rasterise(e.to_string()))?;
     let size = tree.size();
     let (w, h) = (
         (size.width() * scale).ceil() as u32,
         (size.height() * scale).ceil() as u32,
     );
-    let mut pixmap =
-        tiny_skia::Pixmap::new(w, h).ok_or_else(|| Error::Other(format!("SVG to PNG: bad size {w}x{h}")))?;
+    let mut pixmap = tiny_skia::Pixmap::new(w, h).ok_or_else(|| PlotError::Rasterise(format!("bad size {w}x{h}")))?;
     pixmap.fill(tiny_skia::Color::WHITE);
     resvg::render(
         &tree,
@@ -112,19 +116,52 @@ pub fn encode_png(w: u32, h: u32, rgb: &[u8]) -> Result<Vec<u8>> {
         let mut enc = png::Encoder::new(&mut out, w, h);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
-        let mut writer = enc
-            .write_header()
-            .map_err(|e| Error::Other(format!("PNG encoding: {e}")))?;
+        let mut writer = enc.write_header().map_err(|e| PlotError::Png(e.to_string()))?;
         writer
             .write_image_data(rgb)
-            .map_err(|e| Error::Other(format!("PNG encoding: {e}")))?;
+            .map_err(|e| PlotError::Png(e.to_string()))?;
     }
     Ok(out)
 }
 
-/// Distinct, colour-blind-friendly-ish colours for series.
-pub fn series_color(i: usize) -> RGBColor {
-    const C: [RGBColor; 8] = [
+/// Value labels: "0" for exact zeros, 3 significant digits otherwise.
+pub fn short(v: f64) -> String {
+    if v == 0.0 {
+        "0".to_string()
+    } else if (1e-2..1e4).contains(&v.abs()) {
+        format!("{v:.3}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Palette: every colour a figure uses
+// ---------------------------------------------------------------------------------------------
+
+/// Every colour a figure uses: named single marks and the categorical lists.
+pub mod palette {
+    use plotters::style::RGBColor;
+
+    /// A heatmap cell without a value (no cascades needed).
+    pub const NO_DATA: RGBColor = RGBColor(220, 220, 220);
+    /// The outline of the recommended heatmap cell.
+    pub const MARKED: RGBColor = RGBColor(255, 0, 0);
+    /// The recommended point of a scatter plot.
+    pub const RECOMMENDED: RGBColor = RGBColor(200, 0, 0);
+    /// Thin lines between groups of bars.
+    pub const SEPARATOR: RGBColor = RGBColor(200, 200, 200);
+    /// Scatter points that are not singled out.
+    pub const POINT: RGBColor = RGBColor(170, 170, 170);
+    /// Split depths drawn across a chart.
+    pub const SPLIT: RGBColor = RGBColor(150, 150, 150);
+    /// A limit such as the memory budget.
+    pub const LIMIT: RGBColor = RGBColor(120, 120, 120);
+    /// Coverage misses.
+    pub const MISS: RGBColor = RGBColor(214, 39, 40);
+
+    /// Series of a chart, in order.
+    pub const SERIES: [RGBColor; 8] = [
         RGBColor(0, 114, 178),
         RGBColor(213, 94, 0),
         RGBColor(0, 158, 115),
@@ -134,7 +171,49 @@ pub fn series_color(i: usize) -> RGBColor {
         RGBColor(120, 120, 120),
         RGBColor(160, 40, 40),
     ];
-    C[i % C.len()]
+
+    /// Presets of a comparison, in order.
+    pub const PRESETS: [RGBColor; 11] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
+        RGBColor(0, 0, 128),
+    ];
+}
+
+/// Distinct, colour-blind-friendly-ish colours for series.
+pub fn series_color(i: usize) -> RGBColor {
+    palette::SERIES[i % palette::SERIES.len()]
+}
+
+/// One colour per preset (eleven, distinguishable).
+pub fn preset_color(i: usize) -> RGBColor {
+    palette::PRESETS[i % palette::PRESETS.len()]
+}
+
+/// Sequential colour map (viridis-like stops), t in [0, 1].
+pub fn colormap(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] = [
+        (68.0, 1.0, 84.0),
+        (59.0, 82.0, 139.0),
+        (33.0, 145.0, 140.0),
+        (94.0, 201.0, 98.0),
+        (253.0, 231.0, 37.0),
+    ];
+    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
+    let x = t * 4.0;
+    let i = (x.floor() as usize).min(3);
+    let f = x - i as f64;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    let lerp = |p: f64, q: f64| (p + (q - p) * f).round() as u8;
+    RGBColor(lerp(a.0, b.0), lerp(a.1, b.1), lerp(a.2, b.2))
 }
 
 /// A chart that only says why there is nothing to show.
@@ -152,6 +231,22 @@ pub fn draw_message<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &s
     ))?;
     let _ = w;
     Ok(())
+}
+
+/// The house chart frame: a caption, 14-pixel margins, and room for the axis labels (50 pixels
+/// below, `y_labels` pixels left).
+pub fn chart_frame<'a, 'b, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    caption_size: u32,
+    y_labels: u32,
+) -> ChartBuilder<'a, 'b, DB> {
+    let mut b = ChartBuilder::on(root);
+    b.caption(title, (FONT, caption_size))
+        .margin(14)
+        .x_label_area_size(50)
+        .y_label_area_size(y_labels);
+    b
 }
 
 /// Log-axis range that covers `lo..hi` with a margin and never collapses.
@@ -173,16 +268,12 @@ pub fn texels_per_pixel_chart<'a, DB: DrawingBackend>(
     caption_size: u32,
     depth: (f64, f64),
     texels_per_pixel: impl Iterator<Item = f64>,
-) -> Result<(DepthChart<'a, DB>, (f64, f64)), PlotError> {
+) -> Result<(DepthChart<'a, DB>, (f64, f64)), DrawError> {
     let (ymin, ymax) = texels_per_pixel.fold((1.0f64, 1.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
     let (y0, y1) = log_range(ymin, ymax);
     let (x0, x1) = depth;
-    let mut chart = ChartBuilder::on(root)
-        .caption(title, (FONT, caption_size))
-        .margin(14)
-        .x_label_area_size(50)
-        .y_label_area_size(70)
-        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+    let mut chart =
+        chart_frame(root, title, caption_size, 70).build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
     chart
         .configure_mesh()
         .x_desc("view depth (world units, log)")
@@ -212,253 +303,4 @@ pub fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTransl
         .label_font((FONT, font_size))
         .draw()?;
     Ok(())
-}
-
-// ---------------------------------------------------------------------------------------------
-// analyze: density.svg, shimmer.svg, cascades.svg
-// ---------------------------------------------------------------------------------------------
-
-/// Texels per pixel against view depth, log-log, with split lines and the ideal 1.
-pub struct DensityFigure<'a>(pub &'a Analysis);
-
-impl Figure for DensityFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
-        let a = self.0;
-        let title = format!("Shadow texels per screen pixel vs depth: {}", a.config.name);
-        let Some(rig) = &a.rig else {
-            return draw_message(
-                root,
-                &title,
-                "No cascades needed: the scene is not visible within the shadow distance.",
-            );
-        };
-        let (mut chart, (y0, y1)) = texels_per_pixel_chart(
-            root,
-            &title,
-            22,
-            (a.summary.z_lo, a.summary.z_hi),
-            a.density.iter().map(|d| d.texels_per_pixel),
-        )?;
-        for (i, s) in rig.splits[1..rig.splits.len() - 1].iter().enumerate() {
-            let style = RGBColor(150, 150, 150).stroke_width(1);
-            let series = chart.draw_series(DashedLineSeries::new(vec![(*s, y0), (*s, y1)], 5, 4, style))?;
-            if i == 0 {
-                series
-                    .label("split depths")
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
-            }
-        }
-        for (i, c) in a.cascades.iter().enumerate() {
-            let color = series_color(i);
-            let pts: Vec<(f64, f64)> = a
-                .density
-                .iter()
-                .filter(|d| d.cascade == i)
-                .map(|d| (d.depth, d.texels_per_pixel))
-                .collect();
-            chart
-                .draw_series(LineSeries::new(pts, color.stroke_width(3)))?
-                .label(format!(
-                    "cascade {i}: {:.3}..{:.3}, texel {:.4}",
-                    c.near, c.far, c.texel_size
-                ))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3)));
-        }
-        draw_legend(&mut chart, SeriesLabelPosition::LowerRight, 13)?;
-        Ok(())
-    }
-}
-
-/// Per-frame RMS phase drift over all cascades, snapped vs unsnapped.
-pub struct ShimmerFigure<'a>(pub &'a Analysis);
-
-impl Figure for ShimmerFigure<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
-        let a = self.0;
-        let title = format!(
-            "Sub-texel drift per frame ({} path, {} fit): {}",
-            a.config.motion.path.name(),
-            a.config.shadow.fit,
-            a.config.name
-        );
-        let (Some(sn), Some(un)) = (&a.snapped, &a.unsnapped) else {
-            return draw_message(root, &title, "No cascades needed: nothing can shimmer.");
-        };
-        let frames = a.config.motion.frames;
-        let per_frame = |p: &crate::shimmer::PathResult| -> Vec<(f64, f64)> {
-            let m = a.cascades.len().max(1);
-            let mut acc = vec![0.0; frames];
-            for f in &p.frames {
-                acc[f.frame] += f.phase_drift_rms * f.phase_drift_rms / m as f64;
-            }
-            (1..frames).map(|t| (t as f64, acc[t].sqrt())).collect()
-        };
-        let s_pts = per_frame(sn);
-        let u_pts = per_frame(un);
-        let ymax = u_pts.iter().chain(&s_pts).map(|p| p.1).fold(0.0f64, f64::max).max(0.05) * 1.15;
-        let mut chart = ChartBuilder::on(root)
-            .caption(&title, (FONT, 22))
-            .margin(14)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d(0.0..(frames.max(2) - 1) as f64, 0.0..ymax)?;
-        chart
-            .configure_mesh()
-            .x_desc("frame")
-            .y_desc("RMS phase drift over cascades (texels)")
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 13))
-            .draw()?;
-        let red = series_color(1);
-        let blue = series_color(0);
-        chart
-            .draw_series(LineSeries::new(u_pts, red.stroke_width(2)))?
-            .label(format!("unsnapped (RMS {:.3e} texels)", un.stats.rms))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], red.stroke_width(2)));
-        chart
-            .draw_series(LineSeries::new(s_pts, blue.stroke_width(4)))?
-            .label(format!("snapped (RMS {:.3e} texels)", sn.stats.rms))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], blue.stroke_width(4)));
-        draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 14)?;
-        Ok(())
-    }
-}
-
-/// Andrew's monotone chain convex hull, counter-clockwise.
-pub fn convex_hull(mut pts: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
-    pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    pts.dedup();
-    if pts.len() < 3 {
-        return pts;
-    }
-    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0);
-    let mut hull: Vec<(f64, f64)> = Vec::with_capacity(2 * pts.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &(f64, f64)>> = if pass == 0 {
-            Box::new(pts.iter())
-        } else {
-            Box::new(pts.iter().rev())
-        };
-        for &p in iter {
-            while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0 {
-                hull.pop();
-            }
-            hull.push(p);
-        }
-        hull.pop();
-    }
-    hull
-}
-
-/// Top-down view from the light: each slice's footprint and its window (frame 0).
-pub struct CascadesFigure<'a>(pub &'a Analysis);
-
-impl Figure for CascadesFigure<'_> {
-    fn size(&self) -> (u32, u32) {
-        (860, 800)
-    }
-
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
-        let a = self.0;
-        let title = format!("Slices and windows seen from the light: {}", a.config.name);
-        let Some(rig) = &a.rig else {
-            return draw_message(root, &title, "No cascades needed.");
-        };
-        let pose = a.config.camera.pose();
-        let lp = LightPose::new(&rig.light, &pose);
-        let mut all = Vec::new();
-        let mut items = Vec::new();
-        for i in 0..rig.cascade_count() {
-            let w = rig.window(i, &lp, a.config.shadow.snap);
-            let s = &rig.slices[i];
-            // Windows are in each cascade's own basis (the same for all but a few presets).
-            let lpi = LightPose::new(&rig.basis(i, &lp), &pose);
-            let corners = lpi.corners(&rig.lens, s.near, s.far);
-            let lo = w.min();
-            let hi = lo + glam::DVec2::new(w.width(), w.height());
-            all.extend_from_slice(&corners);
-            all.push(lo);
-            all.push(hi);
-            items.push((corners, lo, hi));
-        }
-        all.push(lp.position);
-        let (lo, hi) = bounds_2d(&all);
-        // Equal scales on both axes so shapes are not distorted.
-        let c = 0.5 * (lo + hi);
-        let half = 0.5 * (hi - lo).max_element() * 1.06;
-        let mut chart = ChartBuilder::on(root)
-            .caption(&title, (FONT, 20))
-            .margin(14)
-            .x_label_area_size(48)
-            .y_label_area_size(70)
-            .build_cartesian_2d((c.x - half)..(c.x + half), (c.y - half)..(c.y + half))?;
-        chart
-            .configure_mesh()
-            .x_desc("light-space x (world units)")
-            .y_desc("light-space y (world units)")
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 12))
-            .draw()?;
-        for (i, (corners, wlo, whi)) in items.iter().enumerate().rev() {
-            let color = series_color(i);
-            let hull = convex_hull(corners.iter().map(|p| (p.x, p.y)).collect());
-            chart.draw_series(std::iter::once(Polygon::new(hull.clone(), color.mix(0.25).filled())))?;
-            let mut outline = hull.clone();
-            outline.push(hull[0]);
-            chart.draw_series(std::iter::once(PathElement::new(outline, color.stroke_width(1))))?;
-            chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [(wlo.x, wlo.y), (whi.x, whi.y)],
-                    color.stroke_width(2),
-                )))?
-                .label(format!(
-                    "cascade {i}: window {:.3} x {:.3}",
-                    whi.x - wlo.x,
-                    whi.y - wlo.y
-                ))
-                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], color.mix(0.5).filled()));
-        }
-        chart
-            .draw_series(std::iter::once(Circle::new(
-                (lp.position.x, lp.position.y),
-                5,
-                BLACK.filled(),
-            )))?
-            .label("camera")
-            .legend(|(x, y)| Circle::new((x + 8, y), 4, BLACK.filled()));
-        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft, 13)?;
-        Ok(())
-    }
-}
-
-pub struct DensitySvg;
-pub struct ShimmerSvg;
-pub struct CascadesSvg;
-
-impl Exporter<Analysis> for DensitySvg {
-    fn file_name(&self) -> &'static str {
-        "density.svg"
-    }
-    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
-        DensityFigure(a).to_svg()
-    }
-}
-
-impl Exporter<Analysis> for ShimmerSvg {
-    fn file_name(&self) -> &'static str {
-        "shimmer.svg"
-    }
-    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
-        ShimmerFigure(a).to_svg()
-    }
-}
-
-impl Exporter<Analysis> for CascadesSvg {
-    fn file_name(&self) -> &'static str {
-        "cascades.svg"
-    }
-    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
-        CascadesFigure(a).to_svg()
-    }
 }

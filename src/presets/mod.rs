@@ -158,28 +158,12 @@ pub fn valid_names() -> String {
     PresetName::ALL.map(|p| p.as_str()).join(", ")
 }
 
-/// Levenshtein distance (for "did you mean").
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let cur = row[j + 1];
-            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
-            prev = cur;
-        }
-    }
-    row[b.len()]
-}
-
 /// The preset name closest to `s`.
 pub fn closest_name(s: &str) -> PresetName {
     let s = s.to_ascii_lowercase();
     PresetName::ALL
         .into_iter()
-        .min_by_key(|p| edit_distance(&s, p.as_str()))
+        .min_by_key(|p| crate::suggest::edit_distance(&s, p.as_str()))
         .expect("non-empty")
 }
 

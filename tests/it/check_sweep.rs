@@ -131,7 +131,7 @@ sphere,0.9,2048,4,6,2,12,1,0,0.4,0,0,67108864,0.1,150,2.0
             absolute: 1e-9,
         },
         per_metric: BTreeMap::from([(
-            SummaryMetric::CoverageViolations,
+            SummaryMetric::named("coverage_violations"),
             Tolerance {
                 relative: 0.0,
                 absolute: 1.0,
@@ -166,7 +166,7 @@ sphere,0.9,2048,4,6,2,12,1,0,0.4,0,0,67108864,0.1,150,2.0
     let c = cmp.matched[1]
         .comparisons
         .iter()
-        .find(|c| c.metric == SummaryMetric::MaxAliasing)
+        .find(|c| c.metric == SummaryMetric::named("max_aliasing"))
         .unwrap();
     assert_eq!((c.baseline, c.current), (Some(8.0), Some(8.1)));
     assert!((c.tolerance - 0.16).abs() < 1e-15);
@@ -208,8 +208,8 @@ fn sweep_rows_are_the_sweep_grid_each_equal_to_its_own_analysis() {
         };
         let full = analyze(&c, &AnalysisOptions::full());
         let values = row.summary_values();
-        assert_eq!(values.len(), SummaryMetric::ALL.len());
-        for m in SummaryMetric::ALL {
+        assert_eq!(values.len(), SummaryMetric::all().count());
+        for m in SummaryMetric::all() {
             assert_eq!(values[&m], m.value(&full.summary), "{} {}", row.key.label(), m.name());
         }
     }

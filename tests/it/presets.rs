@@ -1282,7 +1282,7 @@ fn every_preset_analyses_to_finite_numbers_on_every_example_scene() {
             ] {
                 assert!(v.is_finite(), "{file} {p}: {s:?}");
             }
-            let json = csm_lab::output::summary_value(&a);
+            let json = csm_lab::report::analyze::summary_value(&a);
             csm_lab::output::check_json_finite("summary", &json).unwrap_or_else(|e| panic!("{file} {p}: {e}"));
             assert_eq!(json["preset"]["name"], p.as_str());
         }
@@ -1497,7 +1497,7 @@ step = 0.7
                 }
             };
             let a = analyze(&c, &AnalysisOptions::full());
-            let json = csm_lab::output::summary_value(&a);
+            let json = csm_lab::report::analyze::summary_value(&a);
             prop_assert!(csm_lab::output::check_json_finite("summary", &json).is_ok(), "{}", json);
             if let Some(rig) = &a.rig {
                 prop_assert!(rig.splits.windows(2).all(|w| w[0] <= w[1]), "{:?}", rig.splits);

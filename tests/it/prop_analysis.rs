@@ -8,7 +8,8 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use csm_lab::analysis::{analyze, AnalysisOptions};
 use csm_lab::config::Fit;
-use csm_lab::output::{self, Exporter};
+use csm_lab::output::Exporter;
+use csm_lab::report::analyze as analyze_files;
 use csm_lab::Config;
 use proptest::prelude::*;
 
@@ -232,10 +233,10 @@ fn check(c: &Config) -> Result<(), String> {
     }
     // Every file analyze writes renders (a non-finite value would be an error here).
     let exporters: [&dyn Exporter<_>; 4] = [
-        &output::CascadesCsv,
-        &output::DensityCsv,
-        &output::ShimmerCsv,
-        &output::SummaryJson,
+        &analyze_files::CascadesCsv,
+        &analyze_files::DensityCsv,
+        &analyze_files::ShimmerCsv,
+        &analyze_files::SummaryJson,
     ];
     for e in exporters {
         e.render(&a).map_err(|err| format!("{}: {err}", e.file_name()))?;

@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use super::metric::SummaryMetric;
-use crate::error::{Error, Result};
+use crate::error::{BaselineError, Error, Result};
 
 /// How much a metric may change before it counts.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -138,15 +138,14 @@ pub fn compare_one(metric: SummaryMetric, baseline: Option<f64>, current: Option
     }
 }
 
-/// Compares every summary metric, in [`SummaryMetric::ALL`] order. The maps need not hold
+/// Compares every summary metric, in registry order. The maps need not hold
 /// every metric: a missing value gives [`Verdict::NotInBaseline`] / [`Verdict::NotInCurrent`].
 pub fn compare(
     current: &BTreeMap<SummaryMetric, f64>,
     baseline: &BTreeMap<SummaryMetric, f64>,
     tol: &Tolerances,
 ) -> Vec<Comparison> {
-    SummaryMetric::ALL
-        .into_iter()
+    SummaryMetric::all()
         .filter(|m| current.contains_key(m) || baseline.contains_key(m))
         .map(|m| compare_one(m, baseline.get(&m).copied(), current.get(&m).copied(), tol))
         .collect()
@@ -157,23 +156,28 @@ pub fn compare(
 /// are absent from the map (an older file); a metric with a non-numeric value, or a document
 /// with none of the metrics, is an error.
 pub fn summary_from_json(value: &serde_json::Value, label: &str) -> Result<BTreeMap<SummaryMetric, f64>> {
+    let invalid = |message: String| -> Error {
+        BaselineError::Invalid {
+            label: label.to_string(),
+            message,
+        }
+        .into()
+    };
     let obj = value.as_object().ok_or_else(|| {
-        Error::Other(format!(
-            "{label}: the baseline is not a summary.json object (write one with `csm-lab analyze`)"
-        ))
+        invalid("the baseline is not a summary.json object (write one with `csm-lab analyze`)".to_string())
     })?;
     let mut out = BTreeMap::new();
-    for m in SummaryMetric::ALL {
+    for m in SummaryMetric::all() {
         let Some(v) = obj.get(m.name()) else { continue };
         let x = match v {
             serde_json::Value::Bool(b) => f64::from(u8::from(*b)),
             serde_json::Value::Number(n) => n
                 .as_f64()
                 .filter(|x| x.is_finite())
-                .ok_or_else(|| Error::Other(format!("{label}: `{}` = {n} is not a finite number", m.name())))?,
+                .ok_or_else(|| invalid(format!("`{}` = {n} is not a finite number", m.name())))?,
             other => {
-                return Err(Error::Other(format!(
-                    "{label}: `{}` = {other} is not a number; a summary.json from `csm-lab analyze` is expected",
+                return Err(invalid(format!(
+                    "`{}` = {other} is not a number; a summary.json from `csm-lab analyze` is expected",
                     m.name()
                 )))
             }
@@ -181,9 +185,9 @@ pub fn summary_from_json(value: &serde_json::Value, label: &str) -> Result<BTree
         out.insert(m, x);
     }
     if out.is_empty() {
-        return Err(Error::Other(format!(
-            "{label}: none of the summary metrics ({}) is in this JSON; a summary.json from `csm-lab analyze` is expected",
-            SummaryMetric::ALL.map(|m| m.name()).join(", ")
+        return Err(invalid(format!(
+            "none of the summary metrics ({}) is in this JSON; a summary.json from `csm-lab analyze` is expected",
+            SummaryMetric::all().map(|m| m.name()).collect::<Vec<_>>().join(", ")
         )));
     }
     Ok(out)
@@ -218,40 +222,46 @@ mod tests {
     fn verdicts_follow_direction_and_tolerance() {
         let t = tol(0.1, 0.01);
         // Higher is worse: +20 % regresses, -20 % improves, +5 % is within 10 %.
-        let m = SummaryMetric::MaxAliasing;
+        let m = SummaryMetric::named("max_aliasing");
         assert_eq!(compare_one(m, Some(10.0), Some(12.0), &t).verdict, Verdict::Regressed);
         assert_eq!(compare_one(m, Some(10.0), Some(8.0), &t).verdict, Verdict::Improved);
         assert_eq!(compare_one(m, Some(10.0), Some(10.5), &t).verdict, Verdict::Unchanged);
         assert_eq!(compare_one(m, Some(10.0), Some(11.0), &t).tolerance, 1.0);
         // Lower is worse.
-        let m = SummaryMetric::CascadesNeeded;
+        let m = SummaryMetric::named("cascades_needed");
         assert_eq!(compare_one(m, Some(1.0), Some(0.0), &t).verdict, Verdict::Regressed);
         assert_eq!(compare_one(m, Some(0.0), Some(1.0), &t).verdict, Verdict::Improved);
         // A zero baseline falls back to the absolute tolerance.
-        let m = SummaryMetric::ShimmerSnapped;
+        let m = SummaryMetric::named("shimmer_snapped");
         assert_eq!(compare_one(m, Some(0.0), Some(0.005), &t).verdict, Verdict::Unchanged);
         assert_eq!(compare_one(m, Some(0.0), Some(0.02), &t).verdict, Verdict::Regressed);
         // No direction: changed, never regressed.
-        let m = SummaryMetric::ZHi;
+        let m = SummaryMetric::named("z_hi");
         assert_eq!(compare_one(m, Some(100.0), Some(50.0), &t).verdict, Verdict::Changed);
         assert_eq!(compare_one(m, Some(100.0), Some(101.0), &t).verdict, Verdict::Unchanged);
-        let c = compare_one(SummaryMetric::MeanAliasing, Some(2.0), Some(3.0), &t);
+        let c = compare_one(SummaryMetric::named("mean_aliasing"), Some(2.0), Some(3.0), &t);
         assert_eq!((c.change(), c.relative_change()), (Some(1.0), Some(0.5)));
     }
 
     #[test]
     fn missing_values_are_reported_not_compared() {
         let t = Tolerances::default();
-        let cur = BTreeMap::from([(SummaryMetric::MaxAliasing, 1.0), (SummaryMetric::SizeJitter, 0.0)]);
-        let base = BTreeMap::from([(SummaryMetric::MaxAliasing, 1.0), (SummaryMetric::MemoryBytes, 4.0)]);
+        let cur = BTreeMap::from([
+            (SummaryMetric::named("max_aliasing"), 1.0),
+            (SummaryMetric::named("size_jitter"), 0.0),
+        ]);
+        let base = BTreeMap::from([
+            (SummaryMetric::named("max_aliasing"), 1.0),
+            (SummaryMetric::named("memory_bytes"), 4.0),
+        ]);
         let c = compare(&cur, &base, &t);
         let got: Vec<(SummaryMetric, Verdict)> = c.iter().map(|c| (c.metric, c.verdict)).collect();
         assert_eq!(
             got,
             vec![
-                (SummaryMetric::MaxAliasing, Verdict::Unchanged),
-                (SummaryMetric::SizeJitter, Verdict::NotInBaseline),
-                (SummaryMetric::MemoryBytes, Verdict::NotInCurrent),
+                (SummaryMetric::named("max_aliasing"), Verdict::Unchanged),
+                (SummaryMetric::named("size_jitter"), Verdict::NotInBaseline),
+                (SummaryMetric::named("memory_bytes"), Verdict::NotInCurrent),
             ]
         );
     }
@@ -260,9 +270,9 @@ mod tests {
     fn summary_json_reading_accepts_booleans_and_rejects_strings() {
         let v = serde_json::json!({"cascades_needed": true, "max_aliasing": 2.5, "memory_bytes": 64, "name": "x"});
         let m = summary_from_json(&v, "b.json").unwrap();
-        assert_eq!(m[&SummaryMetric::CascadesNeeded], 1.0);
-        assert_eq!(m[&SummaryMetric::MaxAliasing], 2.5);
-        assert_eq!(m[&SummaryMetric::MemoryBytes], 64.0);
+        assert_eq!(m[&SummaryMetric::named("cascades_needed")], 1.0);
+        assert_eq!(m[&SummaryMetric::named("max_aliasing")], 2.5);
+        assert_eq!(m[&SummaryMetric::named("memory_bytes")], 64.0);
         assert_eq!(m.len(), 3);
         let e = summary_from_json(&serde_json::json!({"max_aliasing": "2"}), "b.json").unwrap_err();
         assert!(e.to_string().contains("max_aliasing"), "{e}");

@@ -335,8 +335,7 @@ pub fn evaluate_values(rule: &Rule, values: &std::collections::BTreeMap<String, 
 
 /// The summary metric values of an analysis, keyed by name (the shape of a sweep row).
 pub fn summary_map(a: &Analysis) -> std::collections::BTreeMap<String, f64> {
-    SummaryMetric::ALL
-        .into_iter()
+    SummaryMetric::all()
         .map(|m| (m.name().to_string(), m.value(&a.summary)))
         .collect()
 }
@@ -359,7 +358,11 @@ mod tests {
 
     #[test]
     fn judging_picks_the_tighter_limit_and_signs_the_margin() {
-        let r = rule(Target::Summary(SummaryMetric::MaxAliasing), Some(1.0), Some(10.0));
+        let r = rule(
+            Target::Summary(SummaryMetric::named("max_aliasing")),
+            Some(1.0),
+            Some(10.0),
+        );
         let (s, j) = judge(&r, Located::bare(9.0), Located::bare(9.0));
         assert_eq!((s, j.bound, j.margin), (Status::Pass, Bound::Max, 1.0));
         let (s, j) = judge(&r, Located::bare(2.0), Located::bare(2.0));
@@ -368,7 +371,11 @@ mod tests {
         assert_eq!((s, j.bound, j.margin), (Status::Fail, Bound::Max, -2.0));
         let (s, j) = judge(&r, Located::bare(10.0), Located::bare(10.0));
         assert_eq!((s, j.margin), (Status::Pass, 0.0), "equal to the limit passes");
-        let r = rule(Target::Summary(SummaryMetric::CascadesNeeded), Some(1.0), None);
+        let r = rule(
+            Target::Summary(SummaryMetric::named("cascades_needed")),
+            Some(1.0),
+            None,
+        );
         let (s, j) = judge(&r, Located::bare(0.0), Located::bare(0.0));
         assert_eq!((s, j.bound, j.limit, j.margin), (Status::Fail, Bound::Min, 1.0, -1.0));
     }
@@ -377,19 +384,19 @@ mod tests {
     fn sweep_values_judge_only_summary_rules() {
         let values = std::collections::BTreeMap::from([("max_aliasing".to_string(), 3.0)]);
         let r = evaluate_values(
-            &rule(Target::Summary(SummaryMetric::MaxAliasing), None, Some(2.0)),
+            &rule(Target::Summary(SummaryMetric::named("max_aliasing")), None, Some(2.0)),
             &values,
         );
         assert_eq!(r.status, Status::Fail);
         assert_eq!(r.judgement.unwrap().margin, -1.0);
         let r = evaluate_values(
-            &rule(Target::Summary(SummaryMetric::SizeJitter), None, Some(2.0)),
+            &rule(Target::Summary(SummaryMetric::named("size_jitter")), None, Some(2.0)),
             &values,
         );
         assert_eq!(r.status, Status::NotApplicable);
         let r = evaluate_values(
             &rule(
-                Target::Cascade(CascadeMetric::TexelSize, CascadeSelection::All),
+                Target::Cascade(CascadeMetric::named("texel_size"), CascadeSelection::All),
                 None,
                 Some(2.0),
             ),

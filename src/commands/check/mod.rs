@@ -3,13 +3,12 @@
 //! A thresholds file ([`thresholds`]) holds rules on summary, per-cascade and per-depth
 //! metrics ([`metric`]); [`evaluate`] judges them against an analysis (per-depth extremes in
 //! closed form, [`depth`]), [`baseline`] compares the summary metrics with an earlier
-//! `summary.json`, [`sweep`] does both for sweep rows, and [`report`] / [`junit`] render the
-//! outcome. Exit codes: 0 everything passes, 1 a rule failed or a metric regressed, 2 an error.
+//! `summary.json`, [`sweep`] does both for sweep rows, and [`report`] holds the outcome, which
+//! [`crate::report::check`] and [`crate::report::junit`] render. Exit codes: 0 everything passes, 1 a rule failed or a metric regressed, 2 an error.
 
 pub mod baseline;
 pub mod depth;
 pub mod evaluate;
-pub mod junit;
 pub mod metric;
 pub mod report;
 pub mod sweep;
@@ -18,10 +17,10 @@ pub mod thresholds;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use super::{Format, Outcome};
 use crate::analysis::{analyze, Analysis, AnalysisOptions};
-use crate::cli::{CheckArgs, Format, Outcome};
 use crate::config::Config;
-use crate::error::{Error, IoError, Result};
+use crate::error::{BaselineError, Error, GridError, IoError, Result};
 use crate::output;
 
 pub use report::{Body, CheckReport};
@@ -99,14 +98,30 @@ pub fn write_junit(path: &Path, report: &CheckReport) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         output::ensure_dir(dir)?;
     }
-    output::write_atomic(path, junit::render(report).as_bytes())
+    output::write_atomic(path, crate::report::junit::render(report).as_bytes())
+}
+
+/// What `check` was asked to do (the command line's values).
+#[derive(Debug, Clone, Copy)]
+pub struct CheckRequest<'a> {
+    /// Scene and shadow settings.
+    pub config: &'a Path,
+    /// Rules and baseline tolerances.
+    pub thresholds: &'a Path,
+    /// An earlier `summary.json` (or, with `sweep`, `sweep.csv`).
+    pub baseline: Option<&'a Path>,
+    /// Judge sweep rows instead of the one configuration.
+    pub sweep: bool,
+    /// Also write a JUnit XML report here.
+    pub junit: Option<&'a Path>,
+    pub format: Format,
 }
 
 /// The `check` command. Every input is read and validated before anything is analysed, and
 /// nothing is printed or written unless the whole check succeeded.
-pub fn run_check(args: &CheckArgs) -> Result<Outcome> {
-    let config = Config::load(&args.config)?;
-    let thresholds = Thresholds::load(&args.thresholds)?;
+pub fn execute(args: &CheckRequest) -> Result<Outcome> {
+    let config = Config::load(args.config)?;
+    let thresholds = Thresholds::load(args.thresholds)?;
     if thresholds.rules.is_empty() && args.baseline.is_none() {
         return Err(Error::flag(
             "--thresholds",
@@ -130,11 +145,15 @@ pub fn run_check(args: &CheckArgs) -> Result<Outcome> {
             .iter()
             .any(|r| matches!(r.target, thresholds::Target::Summary(_)));
         if !applicable && args.baseline.is_none() {
-            return Err(Error::Other(format!(
-                "--sweep: none of the rules in {} applies to sweep rows (only summary-metric rules do) \
-                 and no --baseline was given: nothing to check",
-                thresholds.label
-            )));
+            return Err(GridError::Unusable {
+                context: "--sweep".to_string(),
+                message: format!(
+                    "none of the rules in {} applies to sweep rows (only summary-metric rules do) \
+                     and no --baseline was given: nothing to check",
+                    thresholds.label
+                ),
+            }
+            .into());
         }
         let label = args.baseline.as_ref().map(|p| p.display().to_string());
         check_rows(&config, &rows, &thresholds, label.as_deref().zip(base_rows.as_deref()))?
@@ -178,7 +197,11 @@ fn with_hint(e: Error, hint: &str) -> Error {
         Error::Io(IoError::DataFile { path, line, message }) => {
             Error::data_file(&path, line, format!("{message} ({hint})"))
         }
-        Error::Other(m) => Error::Other(format!("{m} ({hint})")),
+        Error::Baseline(BaselineError::Invalid { label, message }) => BaselineError::Invalid {
+            label,
+            message: format!("{message} ({hint})"),
+        }
+        .into(),
         other => other,
     }
 }

@@ -19,7 +19,7 @@ use super::evaluate::{evaluate_values, RuleResult, Status};
 use super::metric::SummaryMetric;
 use super::thresholds::Rule;
 use crate::config::Config;
-use crate::error::{Error, Result};
+use crate::error::{BaselineError, Error, Result};
 
 /// The columns that identify a configuration in `sweep.csv`.
 pub const KEY_COLUMNS: [&str; 4] = ["lambda", "cascades", "resolution", "fit"];
@@ -156,10 +156,11 @@ fn index_rows<'a>(rows: &'a [SweepRow], which: &str) -> Result<BTreeMap<&'a Swee
     let mut map = BTreeMap::new();
     for row in rows {
         if map.insert(&row.key, row).is_some() {
-            return Err(Error::Other(format!(
-                "the {which} sweep table has two rows for {}; each configuration must appear once",
-                row.key.label()
-            )));
+            return Err(BaselineError::DuplicateRow {
+                which: which.to_string(),
+                key: row.key.label(),
+            }
+            .into());
         }
     }
     Ok(map)
@@ -294,8 +295,7 @@ pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
                 resolution: r.setting.resolution,
                 fit: r.setting.fit.name().to_string(),
             },
-            metrics: SummaryMetric::ALL
-                .into_iter()
+            metrics: SummaryMetric::all()
                 .map(|m| (m.name().to_string(), m.value(&r.summary)))
                 .collect(),
         })

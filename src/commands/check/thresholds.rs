@@ -32,9 +32,10 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::baseline::{Tolerance, Tolerances};
-use super::metric::{all_names, closest, CascadeMetric, DepthMetric, SummaryMetric};
+use super::metric::{all_names, CascadeMetric, DepthMetric, SummaryMetric};
 use crate::config::{line_column, toml_error};
 use crate::error::{Error, Result};
+use crate::suggest::closest;
 
 /// Which cascades a per-cascade rule looks at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -362,7 +363,7 @@ fn tolerances(at: &At<'_>, b: &RawBaseline) -> Result<Tolerances> {
         absolute: b.absolute.clone(),
     };
     let default = tolerance(at, "baseline", &top, Tolerances::default().default)?;
-    let summary_names: Vec<&str> = SummaryMetric::ALL.iter().map(|m| m.name()).collect();
+    let summary_names: Vec<&str> = SummaryMetric::all().map(|m| m.name()).collect();
     let mut per_metric = BTreeMap::new();
     for (name, raw) in &b.metric {
         let Some(m) = SummaryMetric::from_name(name.get_ref()) else {
@@ -424,10 +425,10 @@ min = 0.25
         assert_eq!(
             targets,
             vec![
-                Target::Summary(SummaryMetric::MaxAliasing),
-                Target::Cascade(CascadeMetric::MaxAliasing, CascadeSelection::One(2)),
-                Target::Cascade(CascadeMetric::TexelSize, CascadeSelection::All),
-                Target::Cascade(CascadeMetric::CoverageViolations, CascadeSelection::All),
+                Target::Summary(SummaryMetric::named("max_aliasing")),
+                Target::Cascade(CascadeMetric::named("max_aliasing"), CascadeSelection::One(2)),
+                Target::Cascade(CascadeMetric::named("texel_size"), CascadeSelection::All),
+                Target::Cascade(CascadeMetric::named("coverage_violations"), CascadeSelection::All),
                 Target::Depth(DepthMetric::Aliasing, Some((5.0, 60.0))),
                 Target::Depth(DepthMetric::TexelsPerPixel, None),
             ]
@@ -461,20 +462,20 @@ absolute = 0
             }
         );
         assert_eq!(
-            tol.for_metric(SummaryMetric::MaxAliasing),
+            tol.for_metric(SummaryMetric::named("max_aliasing")),
             Tolerance {
                 relative: 0.3,
                 absolute: 0.5
             }
         );
         assert_eq!(
-            tol.for_metric(SummaryMetric::MemoryBytes),
+            tol.for_metric(SummaryMetric::named("memory_bytes")),
             Tolerance {
                 relative: 0.1,
                 absolute: 0.0
             }
         );
-        assert_eq!(tol.for_metric(SummaryMetric::MeanAliasing), tol.default);
+        assert_eq!(tol.for_metric(SummaryMetric::named("mean_aliasing")), tol.default);
     }
 
     #[test]

@@ -9,31 +9,11 @@
 
 use std::fmt::Write as _;
 
-use super::baseline::{Comparison, Verdict};
-use super::evaluate::{short, Bound, RuleResult, Status};
-use super::report::{limit_text, rule_message, Body, CheckReport};
-
-/// Escapes text for XML content and attribute values (both quote kinds, and newlines and
-/// tabs as character references so attribute values keep them).
-pub fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            '\n' => out.push_str("&#10;"),
-            '\r' => out.push_str("&#13;"),
-            '\t' => out.push_str("&#9;"),
-            // XML 1.0 Char: #x9 | #xA | #xD | [#x20-#xD7FF] | [#xE000-#xFFFD] | [#x10000-#x10FFFF].
-            c if (c as u32) < 0x20 || c == '\u{FFFE}' || c == '\u{FFFF}' => out.push('\u{FFFD}'),
-            c => out.push(c),
-        }
-    }
-    out
-}
+use super::check::{limit_text, rule_message};
+use super::html::escape;
+use crate::check::baseline::{Comparison, Verdict};
+use crate::check::evaluate::{short, Bound, RuleResult, Status};
+use crate::check::report::{Body, CheckReport};
 
 /// A test case to write.
 struct Case {
@@ -256,25 +236,4 @@ pub fn render(report: &CheckReport) -> String {
     }
     x.push_str("</testsuites>\n");
     x
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn escaping_covers_markup_quotes_and_control_characters() {
-        assert_eq!(escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&apos;");
-        assert_eq!(escape("x\ny\tz"), "x&#10;y&#9;z");
-        assert_eq!(escape("bell\u{7}"), "bell\u{FFFD}");
-        assert_eq!(escape("ünï"), "ünï");
-        // Whatever goes in comes back from a real parser, minus the unrepresentable ones.
-        let nasty = "]]> <!-- & \"quoted\" 'single' \r\n\u{1} end";
-        let doc = format!("<a b=\"{}\">{}</a>", escape(nasty), escape(nasty));
-        let parsed = roxmltree::Document::parse(&doc).unwrap();
-        let root = parsed.root_element();
-        let expected = nasty.replace('\u{1}', "\u{FFFD}");
-        assert_eq!(root.attribute("b"), Some(expected.as_str()));
-        assert_eq!(root.text(), Some(expected.as_str()));
-    }
 }

@@ -1,0 +1,587 @@
+//! The metric registry: one table per kind of metric says, for each metric, its name, unit,
+//! which direction is worse, what it means and how to read it from a result.
+//!
+//! Everything that lists metrics is generated from these tables: the summary columns of
+//! `sweep.csv` and `compare.csv`, the summary keys of `summary.json` and `recommendation.json`,
+//! `analyze`'s summary on stdout, `check`'s metric names, lookup and "did you mean"
+//! suggestions, and the metric tables of README.md and docs/check.md ([`markdown_table`], kept
+//! in step by a test). Adding a metric means adding its computation and one entry here.
+
+use crate::analysis::{CascadeReport, Summary};
+use crate::error::Result;
+use crate::output::num;
+
+/// Which way a metric gets worse.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Direction {
+    HigherIsWorse,
+    LowerIsWorse,
+    /// A position, not a quality: changes are reported, never as regressions.
+    Neither,
+}
+
+impl Direction {
+    pub fn describe(self) -> &'static str {
+        match self {
+            Direction::HigherIsWorse => "higher is worse",
+            Direction::LowerIsWorse => "lower is worse",
+            Direction::Neither => "neither (a position, not a quality)",
+        }
+    }
+
+    /// The word of the docs tables' "worse" column.
+    pub fn word(self) -> &'static str {
+        match self {
+            Direction::HigherIsWorse => "higher",
+            Direction::LowerIsWorse => "lower",
+            Direction::Neither => "neither",
+        }
+    }
+
+    /// How much worse `current` is than `baseline`, in the metric's units (negative when it
+    /// improved); None for [`Direction::Neither`].
+    pub fn worsening(self, baseline: f64, current: f64) -> Option<f64> {
+        match self {
+            Direction::HigherIsWorse => Some(current - baseline),
+            Direction::LowerIsWorse => Some(baseline - current),
+            Direction::Neither => None,
+        }
+    }
+}
+
+/// A metric's value with its type: how it is written in CSV and JSON.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Value {
+    Flag(bool),
+    Count(u64),
+    Real(f64),
+}
+
+impl Value {
+    /// Booleans read 1 (true) or 0 (false), counts their value.
+    pub fn as_f64(self) -> f64 {
+        match self {
+            Value::Flag(b) => f64::from(u8::from(b)),
+            Value::Count(n) => n as f64,
+            Value::Real(x) => x,
+        }
+    }
+
+    pub fn json(self) -> serde_json::Value {
+        match self {
+            Value::Flag(b) => b.into(),
+            Value::Count(n) => n.into(),
+            Value::Real(x) => serde_json::json!(x),
+        }
+    }
+
+    /// The CSV field; a non-finite real is refused (named `what`).
+    pub fn csv(self, what: &str) -> Result<String> {
+        match self {
+            Value::Flag(b) => Ok(b.to_string()),
+            Value::Count(n) => Ok(n.to_string()),
+            Value::Real(x) => num(what, x),
+        }
+    }
+}
+
+/// How `analyze`'s summary on stdout shows a metric.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shown {
+    /// Not in the table.
+    Never,
+    /// Always, fixed with 4 decimals.
+    Fixed,
+    /// Always, in scientific notation with 3 decimals.
+    Scientific,
+    /// Always, as a whole number.
+    Whole,
+    /// Only with `precision = "f32"`, in scientific notation.
+    F32Scientific,
+}
+
+/// One summary metric.
+#[derive(Debug, Clone, Copy)]
+pub struct SummaryDef {
+    pub name: &'static str,
+    /// Unit of the value ("" for pure ratios and flags).
+    pub unit: &'static str,
+    pub direction: Direction,
+    /// What it means, for `check`, the docs and the JSON of `check`.
+    pub help: &'static str,
+    /// The shorter wording of `analyze`'s stdout summary.
+    pub brief: &'static str,
+    pub shown: Shown,
+    /// A column of the per-configuration tables (`sweep.csv`, `compare.csv`).
+    pub in_rows: bool,
+    pub value: fn(&Summary) -> Value,
+}
+
+/// Every summary metric, in the order of `summary.json`'s flat keys and of the CSV columns.
+pub const SUMMARY: &[SummaryDef] = &[
+    SummaryDef {
+        name: "cascades_needed",
+        unit: "",
+        // Losing the cascades means the scene left the shadowed range; every other metric
+        // then reads 0, which must not pass for an improvement.
+        direction: Direction::LowerIsWorse,
+        help: "1 when the scene is visible within the shadow distance, else 0",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: false,
+        value: |s| Value::Flag(s.cascades_needed),
+    },
+    SummaryDef {
+        name: "z_lo",
+        unit: "world units",
+        direction: Direction::Neither,
+        help: "near end of the split range (world units of view depth)",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: true,
+        value: |s| Value::Real(s.z_lo),
+    },
+    SummaryDef {
+        name: "z_hi",
+        unit: "world units",
+        direction: Direction::Neither,
+        help: "far end of the split range (world units of view depth)",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: true,
+        value: |s| Value::Real(s.z_hi),
+    },
+    SummaryDef {
+        name: "max_aliasing",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "worst texel-to-pixel size ratio anywhere (at a cascade's near edge)",
+        brief: "worst texel/pixel ratio (at a cascade's near edge)",
+        shown: Shown::Fixed,
+        in_rows: true,
+        value: |s| Value::Real(s.max_aliasing),
+    },
+    SummaryDef {
+        name: "mean_aliasing",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "aliasing ratio averaged over view depth",
+        brief: "mean over depth",
+        shown: Shown::Fixed,
+        in_rows: true,
+        value: |s| Value::Real(s.mean_aliasing),
+    },
+    SummaryDef {
+        name: "mean_log_aliasing",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "aliasing ratio averaged over log depth (every doubling of distance counts the same)",
+        brief: "mean over log depth",
+        shown: Shown::Fixed,
+        in_rows: true,
+        value: |s| Value::Real(s.mean_log_aliasing),
+    },
+    SummaryDef {
+        name: "undersampled_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "share of the depth range where aliasing > 1",
+        brief: "share of depth with aliasing > 1",
+        shown: Shown::Fixed,
+        in_rows: true,
+        value: |s| Value::Real(s.undersampled_fraction),
+    },
+    SummaryDef {
+        name: "shimmer_snapped",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "RMS sub-texel drift (S3) of world-fixed points per frame with snapping (texels)",
+        brief: "RMS sub-texel drift per frame, snapped (texels)",
+        shown: Shown::Scientific,
+        in_rows: true,
+        value: |s| Value::Real(s.shimmer_snapped),
+    },
+    SummaryDef {
+        name: "shimmer_unsnapped",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "RMS sub-texel drift per frame without snapping (texels)",
+        brief: "the same without snapping",
+        shown: Shown::Scientific,
+        in_rows: true,
+        value: |s| Value::Real(s.shimmer_unsnapped),
+    },
+    SummaryDef {
+        name: "size_jitter",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "largest relative texel-size change between frames (S1); snapping cannot remove it",
+        brief: "largest texel-size change between frames",
+        shown: Shown::Scientific,
+        in_rows: true,
+        value: |s| Value::Real(s.size_jitter),
+    },
+    SummaryDef {
+        name: "coverage_violations",
+        unit: "count",
+        direction: Direction::HigherIsWorse,
+        help: "slice corners outside their window, all cascades and frames; 0 means every slice is covered",
+        brief: "slice corners outside their window",
+        shown: Shown::Whole,
+        in_rows: true,
+        value: |s| Value::Count(s.coverage_violations),
+    },
+    SummaryDef {
+        name: "memory_bytes",
+        unit: "bytes",
+        direction: Direction::HigherIsWorse,
+        help: "cascades x resolution^2 x 4 bytes",
+        brief: "cascades x resolution^2 x 4",
+        shown: Shown::Whole,
+        in_rows: true,
+        value: |s| Value::Count(s.memory_bytes),
+    },
+    SummaryDef {
+        name: "lookup_error_max",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "largest static f32 lookup error S7 (texels; 0 in f64)",
+        brief: "S7: largest |s_f32 - s_exact| lookup error (texels)",
+        shown: Shown::F32Scientific,
+        in_rows: false,
+        value: |s| Value::Real(s.lookup_error_max),
+    },
+    SummaryDef {
+        name: "lookup_error_rms",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "RMS static f32 lookup error S7 (texels; 0 in f64)",
+        brief: "RMS of S7 (texels)",
+        shown: Shown::F32Scientific,
+        in_rows: false,
+        value: |s| Value::Real(s.lookup_error_rms),
+    },
+];
+
+/// A copyable handle on one registry entry: ordered, hashed and printed (`Debug`) by its
+/// place and name in the table.
+macro_rules! handle {
+    ($(#[$doc:meta])* $handle:ident, $def:ty, $table:ident, $kind:literal) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+        pub struct $handle(usize);
+
+        impl std::fmt::Debug for $handle {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+
+        impl $handle {
+            /// Every metric of this kind, in registry order.
+            pub fn all() -> impl Iterator<Item = $handle> {
+                (0..$table.len()).map($handle)
+            }
+
+            pub fn def(self) -> &'static $def {
+                &$table[self.0]
+            }
+
+            pub fn name(self) -> &'static str {
+                self.def().name
+            }
+
+            pub fn from_name(name: &str) -> Option<Self> {
+                $table.iter().position(|d| d.name == name).map($handle)
+            }
+
+            /// The metric of a name known to be in the registry (panics otherwise: a
+            /// programming error).
+            pub fn named(name: &str) -> Self {
+                Self::from_name(name).unwrap_or_else(|| panic!("no {} metric named {name}", $kind))
+            }
+
+            pub fn direction(self) -> Direction {
+                self.def().direction
+            }
+
+            pub fn description(self) -> &'static str {
+                self.def().help
+            }
+        }
+    };
+}
+
+handle!(
+    /// A summary metric: a handle on its [`SUMMARY`] entry.
+    SummaryMetric,
+    SummaryDef,
+    SUMMARY,
+    "summary"
+);
+
+impl SummaryMetric {
+    /// The typed value.
+    pub fn typed(self, s: &Summary) -> Value {
+        (self.def().value)(s)
+    }
+
+    /// The value as a number; booleans read 1 (true) or 0 (false), counts as their value.
+    pub fn value(self, s: &Summary) -> f64 {
+        self.typed(s).as_f64()
+    }
+}
+
+/// Every summary metric of a summary, by name, in registry order.
+pub fn summary_values(s: &Summary) -> Vec<(SummaryMetric, f64)> {
+    SummaryMetric::all().map(|m| (m, m.value(s))).collect()
+}
+
+/// The summary as flat JSON keys, in registry order (`summary.json`, `recommendation.json`).
+pub fn summary_json(s: &Summary) -> Vec<(&'static str, serde_json::Value)> {
+    SUMMARY.iter().map(|d| (d.name, (d.value)(s).json())).collect()
+}
+
+/// The setting columns every per-configuration table starts with.
+pub const SETTING_COLUMNS: [&str; 4] = ["lambda", "cascades", "resolution", "fit"];
+
+/// The columns every per-configuration table shares (`sweep.csv`, `compare.csv`): the setting,
+/// then the summary metrics marked `in_rows`. A contract: users' scripts and CI baselines read
+/// them by name.
+pub fn summary_columns() -> Vec<&'static str> {
+    SETTING_COLUMNS
+        .into_iter()
+        .chain(SUMMARY.iter().filter(|d| d.in_rows).map(|d| d.name))
+        .collect()
+}
+
+/// The fields of [`summary_columns`] for one configuration (`lambda` may be empty where a
+/// split rule has none).
+pub fn summary_fields(lambda: String, cascades: usize, resolution: u32, fit: &str, s: &Summary) -> Result<Vec<String>> {
+    let mut fields = vec![lambda, cascades.to_string(), resolution.to_string(), fit.to_string()];
+    for d in SUMMARY.iter().filter(|d| d.in_rows) {
+        fields.push((d.value)(s).csv(d.name)?);
+    }
+    Ok(fields)
+}
+
+/// The lines of `analyze`'s stdout summary for the metrics shown with `f32` on or off:
+/// (name, formatted value, brief).
+pub fn summary_lines(s: &Summary, f32_block: bool) -> Vec<(&'static str, String, &'static str)> {
+    SUMMARY
+        .iter()
+        .filter_map(|d| {
+            let v = (d.value)(s);
+            let text = match (d.shown, f32_block) {
+                (Shown::Fixed, false) => format!("{:.4}", v.as_f64()),
+                (Shown::Scientific, false) | (Shown::F32Scientific, true) => format!("{:.3e}", v.as_f64()),
+                (Shown::Whole, false) => match v {
+                    Value::Count(n) => n.to_string(),
+                    other => format!("{}", other.as_f64()),
+                },
+                _ => return None,
+            };
+            Some((d.name, text, d.brief))
+        })
+        .collect()
+}
+
+/// One per-cascade metric.
+#[derive(Debug, Clone, Copy)]
+pub struct CascadeDef {
+    pub name: &'static str,
+    pub unit: &'static str,
+    pub direction: Direction,
+    pub help: &'static str,
+    pub value: fn(&CascadeReport) -> Value,
+}
+
+/// Every per-cascade metric, in the order of `cascades.csv` (after `cascade`).
+pub const CASCADE: &[CascadeDef] = &[
+    CascadeDef {
+        name: "near",
+        unit: "world units",
+        direction: Direction::Neither,
+        help: "view depth where the cascade starts (world units)",
+        value: |c| Value::Real(c.near),
+    },
+    CascadeDef {
+        name: "far",
+        unit: "world units",
+        direction: Direction::Neither,
+        help: "view depth where the cascade ends (world units)",
+        value: |c| Value::Real(c.far),
+    },
+    CascadeDef {
+        name: "radius",
+        unit: "world units",
+        direction: Direction::HigherIsWorse,
+        help: "minimal bounding-sphere radius of the slice (world units)",
+        value: |c| Value::Real(c.radius),
+    },
+    CascadeDef {
+        name: "width",
+        unit: "world units",
+        direction: Direction::HigherIsWorse,
+        help: "window width in light space (world units)",
+        value: |c| Value::Real(c.width),
+    },
+    CascadeDef {
+        name: "height",
+        unit: "world units",
+        direction: Direction::HigherIsWorse,
+        help: "window height in light space (world units)",
+        value: |c| Value::Real(c.height),
+    },
+    CascadeDef {
+        name: "texel_size",
+        unit: "world units",
+        direction: Direction::HigherIsWorse,
+        help: "world size of one shadow texel",
+        value: |c| Value::Real(c.texel_size),
+    },
+    CascadeDef {
+        name: "light_near",
+        unit: "world units",
+        direction: Direction::Neither,
+        help: "light-space depth where the cascade's render starts",
+        value: |c| Value::Real(c.light_near),
+    },
+    CascadeDef {
+        name: "light_far",
+        unit: "world units",
+        direction: Direction::Neither,
+        help: "light-space depth where the cascade's render ends",
+        value: |c| Value::Real(c.light_far),
+    },
+    CascadeDef {
+        name: "coverage_violations",
+        unit: "count",
+        direction: Direction::HigherIsWorse,
+        help: "slice corners outside the window over the path",
+        value: |c| Value::Count(c.coverage_violations),
+    },
+    CascadeDef {
+        name: "coverage_worst_texels",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "farthest a slice corner got outside the window (texels)",
+        value: |c| Value::Real(c.coverage_worst_texels),
+    },
+    CascadeDef {
+        name: "min_slack_texels",
+        unit: "texels",
+        // Less room between the slice and its window edge: closer to a coverage hole.
+        direction: Direction::LowerIsWorse,
+        help: "smallest margin between a slice corner and the window edge (texels)",
+        value: |c| Value::Real(c.min_slack_texels),
+    },
+    CascadeDef {
+        name: "max_aliasing",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "aliasing ratio at the cascade's near edge",
+        value: |c| Value::Real(c.max_aliasing),
+    },
+    CascadeDef {
+        name: "min_aliasing",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "aliasing ratio at the cascade's far edge",
+        value: |c| Value::Real(c.min_aliasing),
+    },
+    CascadeDef {
+        name: "lookup_error_max",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "largest static f32 lookup error S7 in this cascade (texels)",
+        value: |c| Value::Real(c.lookup_error_max),
+    },
+    CascadeDef {
+        name: "lookup_error_rms",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "RMS static f32 lookup error S7 in this cascade (texels)",
+        value: |c| Value::Real(c.lookup_error_rms),
+    },
+];
+
+handle!(
+    /// A per-cascade metric: a handle on its [`CASCADE`] entry (cascade 0 is the nearest).
+    CascadeMetric,
+    CascadeDef,
+    CASCADE,
+    "per-cascade"
+);
+
+impl CascadeMetric {
+    pub fn value(self, c: &CascadeReport) -> f64 {
+        (self.def().value)(c).as_f64()
+    }
+}
+
+/// The columns of `cascades.csv`.
+pub fn cascade_columns() -> Vec<&'static str> {
+    std::iter::once("cascade")
+        .chain(CASCADE.iter().map(|d| d.name))
+        .collect()
+}
+
+/// The fields of [`cascade_columns`] for one cascade.
+pub fn cascade_fields(c: &CascadeReport) -> Result<Vec<String>> {
+    let mut fields = vec![c.cascade.to_string()];
+    for d in CASCADE {
+        fields.push((d.value)(c).csv(d.name)?);
+    }
+    Ok(fields)
+}
+
+/// The Markdown table of a set of metrics, as README.md and docs/check.md show it.
+fn table<'a>(rows: impl Iterator<Item = (&'a str, &'a str, &'a str, Direction)>) -> String {
+    let mut out = String::from("| metric | unit | meaning | worse |\n|---|---|---|---|\n");
+    for (name, unit, help, direction) in rows {
+        let unit = if unit.is_empty() { "-" } else { unit };
+        out.push_str(&format!("| `{name}` | {unit} | {help} | {} |\n", direction.word()));
+    }
+    out
+}
+
+/// The docs' table of summary metrics (README.md, docs/check.md).
+pub fn markdown_table() -> String {
+    table(SUMMARY.iter().map(|d| (d.name, d.unit, d.help, d.direction)))
+}
+
+/// The docs' table of per-cascade metrics (docs/check.md).
+pub fn markdown_cascade_table() -> String {
+    table(CASCADE.iter().map(|d| (d.name, d.unit, d.help, d.direction)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_within_a_kind() {
+        for names in [
+            SUMMARY.iter().map(|d| d.name).collect::<Vec<_>>(),
+            CASCADE.iter().map(|d| d.name).collect::<Vec<_>>(),
+        ] {
+            let mut dedup = names.clone();
+            dedup.sort_unstable();
+            dedup.dedup();
+            assert_eq!(dedup.len(), names.len());
+        }
+    }
+
+    #[test]
+    fn the_docs_show_the_registry() {
+        let readme = include_str!("../README.md");
+        let check = include_str!("../docs/check.md");
+        let summary = markdown_table();
+        assert!(readme.contains(&summary), "README.md: paste\n{summary}");
+        assert!(check.contains(&summary), "docs/check.md: paste\n{summary}");
+        let cascade = markdown_cascade_table();
+        assert!(check.contains(&cascade), "docs/check.md: paste\n{cascade}");
+    }
+}

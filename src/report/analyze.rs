@@ -1,0 +1,296 @@
+//! What `analyze` writes besides its figures: `cascades.csv`, `density.csv`, `shimmer.csv`,
+//! `summary.json`, and the summary printed on stdout.
+
+use std::fmt::Write as _;
+
+use crate::analysis::Analysis;
+use crate::error::Result;
+use crate::figures;
+use crate::metric;
+use crate::output::{csv_bytes, json_bytes, num, Exporter};
+
+/// The files `analyze` writes, in order: its tables, its summary and its figures.
+pub fn exporters() -> Vec<&'static dyn Exporter<Analysis>> {
+    vec![
+        &CascadesCsv,
+        &DensityCsv,
+        &ShimmerCsv,
+        &SummaryJson,
+        &figures::analyze::DensitySvg,
+        &figures::analyze::ShimmerSvg,
+        &figures::analyze::CascadesSvg,
+    ]
+}
+
+pub struct CascadesCsv;
+pub struct DensityCsv;
+pub struct ShimmerCsv;
+pub struct SummaryJson;
+
+impl Exporter<Analysis> for CascadesCsv {
+    fn file_name(&self) -> &'static str {
+        "cascades.csv"
+    }
+
+    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
+        let rows = a
+            .cascades
+            .iter()
+            .map(metric::cascade_fields)
+            .collect::<Result<Vec<_>>>()?;
+        csv_bytes(&metric::cascade_columns(), &rows)
+    }
+}
+
+impl Exporter<Analysis> for DensityCsv {
+    fn file_name(&self) -> &'static str {
+        "density.csv"
+    }
+
+    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
+        let rows = a
+            .density
+            .iter()
+            .map(|d| {
+                Ok(vec![
+                    num("depth", d.depth)?,
+                    d.cascade.to_string(),
+                    num("texel_size", d.texel_size)?,
+                    num("pixel_size", d.pixel_size)?,
+                    num("texels_per_pixel", d.texels_per_pixel)?,
+                    num("aliasing", d.aliasing)?,
+                ])
+            })
+            .collect::<Result<Vec<_>>>()?;
+        csv_bytes(
+            &[
+                "depth",
+                "cascade",
+                "texel_size",
+                "pixel_size",
+                "texels_per_pixel",
+                "aliasing",
+            ],
+            &rows,
+        )
+    }
+}
+
+impl Exporter<Analysis> for ShimmerCsv {
+    fn file_name(&self) -> &'static str {
+        "shimmer.csv"
+    }
+
+    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
+        let mut rows = Vec::new();
+        for path in [&a.snapped, &a.unsnapped].into_iter().flatten() {
+            for f in &path.frames {
+                rows.push(vec![
+                    f.frame.to_string(),
+                    f.cascade.to_string(),
+                    f.snapped.to_string(),
+                    num("size_change", f.size_change)?,
+                    num("phase_drift_rms", f.phase_drift_rms)?,
+                    num("phase_drift_max", f.phase_drift_max)?,
+                    match f.cell_flips {
+                        Some(v) => num("cell_flips", v)?,
+                        None => String::new(),
+                    },
+                ]);
+            }
+        }
+        csv_bytes(
+            &[
+                "frame",
+                "cascade",
+                "snap",
+                "size_change",
+                "phase_drift_rms",
+                "phase_drift_max",
+                "cell_flips",
+            ],
+            &rows,
+        )
+    }
+}
+
+/// The JSON document of `summary.json` (also what `--format json` prints).
+pub fn summary_value(a: &Analysis) -> serde_json::Value {
+    let s = &a.summary;
+    let mut v = serde_json::json!({
+        "tool": format!("csm-lab {}", env!("CARGO_PKG_VERSION")),
+        "config": a.config.path.as_ref().map(|p| p.display().to_string()),
+        "name": a.config.name,
+        "inputs": a.config.echo(),
+        "cascades_needed": s.cascades_needed,
+    });
+    let obj = v.as_object_mut().expect("object");
+    if obj.get("config").is_some_and(|c| c.is_null()) {
+        obj.remove("config");
+    }
+    if let Some(p) = &a.preset {
+        obj.insert("preset".into(), serde_json::to_value(p).expect("plain struct"));
+    }
+    for (k, x) in metric::summary_json(s) {
+        obj.insert(k.into(), x);
+    }
+    if !s.cascades_needed {
+        obj.insert(
+            "message".into(),
+            "no cascades needed: the scene bounds are not visible between the near plane and the shadow distance"
+                .into(),
+        );
+        obj.insert("splits".into(), serde_json::json!([]));
+        obj.insert("cascades".into(), serde_json::json!([]));
+        return v;
+    }
+    let rig = a.rig.as_ref().expect("cascades needed");
+    let agg = a.aggregates.as_ref().expect("cascades needed");
+    obj.insert("splits".into(), serde_json::json!(rig.splits));
+    obj.insert("split_jumps".into(), serde_json::json!(agg.split_jumps));
+    obj.insert(
+        "cascades".into(),
+        serde_json::to_value(&a.cascades).expect("plain struct"),
+    );
+    let path_json = |p: &Option<crate::shimmer::PathResult>| {
+        p.as_ref().map(|p| {
+            serde_json::json!({
+                "rms": p.stats.rms,
+                "max": p.stats.max,
+                "size_jitter": p.stats.size_jitter,
+                "cell_flip_rate": p.stats.cell_flip_rate,
+                "coverage_violations": p.coverage.total(),
+                "coverage_worst_texels": p.coverage.worst_texels.iter().cloned().fold(0.0, f64::max),
+                "min_slack_texels": p.coverage.min_slack_texels.iter().cloned().fold(f64::INFINITY, f64::min),
+            })
+        })
+    };
+    obj.insert(
+        "shimmer".into(),
+        serde_json::json!({
+            "frames": a.config.motion.frames,
+            "path": a.config.motion.path.name(),
+            "snapped": path_json(&a.snapped),
+            "unsnapped": path_json(&a.unsnapped),
+        }),
+    );
+    obj.insert(
+        "light_basis_vertical_fallback".into(),
+        rig.light.vertical_fallback.into(),
+    );
+    v
+}
+
+impl Exporter<Analysis> for SummaryJson {
+    fn file_name(&self) -> &'static str {
+        "summary.json"
+    }
+
+    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
+        json_bytes("summary", &summary_value(a))
+    }
+}
+
+/// The terminal summary of one analysis.
+pub fn summary_table(a: &Analysis) -> String {
+    let mut out = String::new();
+    let s = &a.summary;
+    let c = &a.config;
+    if let Some(p) = &a.preset {
+        let _ = writeln!(
+            out,
+            "{}: preset {}: {} cascades x {}^2, shadow distance {}",
+            c.name, p.name, c.shadow.cascades, c.shadow.resolution, c.shadow.max_distance
+        );
+        let _ = writeln!(out, "  split: {}", p.split_rule);
+        let _ = writeln!(out, "  fit: {}; snap: {}", p.fit, p.snap);
+        let _ = writeln!(out, "  light depth: {}", p.light_depth_rule);
+        for n in &p.notes {
+            let _ = writeln!(out, "  note: {n}");
+        }
+    } else {
+        let _ = writeln!(
+            out,
+            "{}: {} cascades x {}^2, lambda {}, fit {}, snap {}",
+            c.name,
+            c.shadow.cascades,
+            c.shadow.resolution,
+            c.shadow.lambda,
+            c.shadow.fit,
+            if c.shadow.snap { "on" } else { "off" }
+        );
+    }
+    if !s.cascades_needed {
+        let _ = writeln!(
+            out,
+            "no cascades needed: the scene bounds are not visible between near = {} and the shadow distance {}",
+            c.camera.near,
+            c.shadow_far()
+        );
+        return out;
+    }
+    let _ = writeln!(
+        out,
+        "depth range {:.4} .. {:.4}{}",
+        s.z_lo,
+        s.z_hi,
+        if a.preset.is_some() {
+            " (the view depths that read the preset's cascades)"
+        } else if c.shadow.fit_depth_to_scene {
+            " (clipped to the scene bounds)"
+        } else {
+            ""
+        }
+    );
+    let _ = writeln!(
+        out,
+        "{:>7} {:>10} {:>10} {:>10} {:>10} {:>11} {:>11} {:>9}",
+        "cascade", "near", "far", "width", "texel", "max alias", "min alias", "coverage"
+    );
+    for r in &a.cascades {
+        let _ = writeln!(
+            out,
+            "{:>7} {:>10.4} {:>10.4} {:>10.4} {:>10.6} {:>11.4} {:>11.4} {:>9}",
+            r.cascade, r.near, r.far, r.width, r.texel_size, r.max_aliasing, r.min_aliasing, r.coverage_violations
+        );
+    }
+    let f32_block = c.shadow.precision == crate::precision::Precision::F32;
+    for (k, v, what) in metric::summary_lines(s, false) {
+        let _ = writeln!(out, "  {k:<22} {v:>12}  {what}");
+    }
+    if f32_block {
+        let _ = writeln!(
+            out,
+            "  precision f32, snap_space {}: shimmer, size jitter and coverage above measure the emulated binary32 pipeline",
+            c.shadow.snap_space
+        );
+        for (k, v, what) in metric::summary_lines(s, true) {
+            let _ = writeln!(out, "  {k:<22} {v:>12}  {what}");
+        }
+    }
+    if let Some(p) = &a.preset {
+        let worst = a
+            .configured_path()
+            .map_or(0.0, |r| r.coverage.worst_texels.iter().cloned().fold(0.0, f64::max));
+        for (k, v, what) in [
+            (
+                "coverage_worst_texels",
+                format!("{worst:.4}"),
+                "how far the worst corner lies outside its window",
+            ),
+            (
+                "receivers_outside_depth",
+                format!("{:.4}", p.receivers_outside_depth),
+                "receiver depth outside the light depth range (world units)",
+            ),
+            (
+                "casters_outside_depth",
+                format!("{:.4}", p.casters_outside_depth),
+                "caster depth lost in front of the light depth range",
+            ),
+        ] {
+            let _ = writeln!(out, "  {k:<22} {v:>12}  {what}");
+        }
+    }
+    out
+}

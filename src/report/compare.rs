@@ -1,0 +1,324 @@
+//! What `compare` writes besides its figures: `compare.csv`, `compare.html`, `compare.md`
+//! and the table printed on stdout.
+
+use std::fmt::Write as _;
+
+use super::{html, markdown};
+
+use crate::analysis::{mib, Analysis};
+use crate::compare::{coverage_extremes, fit_label, preset_of, Comparison};
+use crate::error::Result;
+use crate::figures::compare::{DensityOverlay, DensityPng, DensitySvg, ShimmerCoverageBars, ShimmerPng, ShimmerSvg};
+use crate::figures::{short, Figure};
+use crate::metric;
+use crate::output::{csv_bytes, num, Exporter};
+use crate::presets::{is_generic_note, lambda_value};
+
+/// `compare.csv`: `preset`, the sweep columns ([`metric::summary_columns`]), then these
+/// extra findings.
+pub const EXTRA_COLUMNS: [&str; 5] = [
+    "snaps",
+    "coverage_worst_texels",
+    "min_slack_texels",
+    "receivers_outside_depth",
+    "casters_outside_depth",
+];
+
+/// The header of `compare.csv`.
+pub fn columns() -> Vec<&'static str> {
+    std::iter::once("preset")
+        .chain(metric::summary_columns())
+        .chain(EXTRA_COLUMNS)
+        .collect()
+}
+
+/// One CSV row per preset.
+pub fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
+    c.analyses
+        .iter()
+        .map(|a| {
+            let s = &a.summary;
+            let p = a.preset.as_ref();
+            let (worst, slack) = coverage_extremes(a);
+            let lambda = match a.config.shadow.preset.as_ref().and_then(|p| lambda_value(&p.knobs)) {
+                Some(l) => num("lambda", l)?,
+                None => String::new(),
+            };
+            let cascades = a.rig.as_ref().map_or(a.config.shadow.cascades, |r| r.cascade_count());
+            let mut fields = vec![preset_of(a).map_or_else(String::new, |p| p.to_string())];
+            fields.extend(metric::summary_fields(
+                lambda,
+                cascades,
+                a.config.shadow.resolution,
+                &fit_label(a),
+                s,
+            )?);
+            fields.extend([
+                a.config.shadow.snap.to_string(),
+                num("coverage_worst_texels", worst)?,
+                num("min_slack_texels", slack)?,
+                num("receivers_outside_depth", p.map_or(0.0, |p| p.receivers_outside_depth))?,
+                num("casters_outside_depth", p.map_or(0.0, |p| p.casters_outside_depth))?,
+            ]);
+            Ok(fields)
+        })
+        .collect()
+}
+
+pub struct CompareCsv;
+
+impl Exporter<Comparison> for CompareCsv {
+    fn file_name(&self) -> &'static str {
+        "compare.csv"
+    }
+
+    fn render(&self, c: &Comparison) -> Result<Vec<u8>> {
+        csv_bytes(&columns(), &rows(c)?)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reports
+// ---------------------------------------------------------------------------------------------
+
+/// The scene in one paragraph (shared by the HTML and Markdown reports).
+fn scene_lines(c: &Comparison) -> Vec<String> {
+    let cfg = &c.analyses[0].config;
+    let cam = &cfg.camera;
+    vec![
+        format!(
+            "Camera at {:?} looking at {:?}, vertical field of view {}°, near {}, far {}, screen {}×{}.",
+            cam.position.to_array(),
+            cam.target.to_array(),
+            cam.fov_y_deg,
+            cam.near,
+            cam.far,
+            cfg.screen.width,
+            cfg.screen.height
+        ),
+        format!(
+            "Light travelling along {:?}; scene bounds {:?} to {:?}.",
+            cfg.light_direction_as_written.to_array(),
+            cfg.scene.min.to_array(),
+            cfg.scene.max.to_array()
+        ),
+        format!(
+            "Shimmer measured along a {} path of {} frames (step {}).",
+            cfg.motion.path.name(),
+            cfg.motion.frames,
+            cfg.motion.step_as_written
+        ),
+        "csm-lab's own [shadow] lambda, fit, snap and fit_depth_to_scene do not apply: each preset has its own rules."
+            .to_string(),
+        if c.engine_defaults {
+            "Every preset runs at its own defaults (--defaults).".to_string()
+        } else {
+            "[shadow] cascades, resolution and max_distance of the file override each preset's defaults where the preset has them."
+                .to_string()
+        },
+    ]
+}
+
+/// Table cells shared by both reports: (header, per-row values).
+fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
+    let header = vec![
+        "preset",
+        "cascades × map",
+        "fit",
+        "snap",
+        "max aliasing",
+        "mean aliasing",
+        "shimmer snapped",
+        "shimmer unsnapped",
+        "coverage misses (worst, texels)",
+        "receivers / casters outside light depth",
+        "memory (MiB)",
+    ];
+    let rows = c
+        .analyses
+        .iter()
+        .map(|a| {
+            let s = &a.summary;
+            let p = a.preset.as_ref();
+            let (worst, _) = coverage_extremes(a);
+            vec![
+                preset_of(a).map_or_else(String::new, |p| p.to_string()),
+                format!(
+                    "{} × {}",
+                    a.rig.as_ref().map_or(0, |r| r.cascade_count()),
+                    a.config.shadow.resolution
+                ),
+                fit_label(a),
+                p.map_or_else(String::new, |p| p.snap.clone()),
+                format!("{:.3}", s.max_aliasing),
+                format!("{:.3}", s.mean_aliasing),
+                short(s.shimmer_snapped),
+                short(s.shimmer_unsnapped),
+                format!("{} ({})", s.coverage_violations, short(worst)),
+                format!(
+                    "{} / {}",
+                    short(p.map_or(0.0, |p| p.receivers_outside_depth)),
+                    short(p.map_or(0.0, |p| p.casters_outside_depth))
+                ),
+                format!("{:.1}", mib(s.memory_bytes)),
+            ]
+        })
+        .collect();
+    (header, rows)
+}
+
+/// Per-preset description lines: rules, source, notes.
+fn preset_lines(a: &Analysis) -> Vec<String> {
+    let Some(p) = &a.preset else {
+        return Vec::new();
+    };
+    let mut out = vec![
+        format!("split: {}", p.split_rule),
+        format!("fit: {}; snap: {}", p.fit, p.snap),
+        format!("light depth: {}", p.light_depth_rule),
+        format!("source: {}", p.source),
+    ];
+    if !a.summary.cascades_needed {
+        out.push("no visible depth reads any cascade: nothing to measure".to_string());
+    }
+    out.extend(
+        p.notes
+            .iter()
+            .filter(|n| !is_generic_note(n))
+            .map(|n| format!("note: {n}")),
+    );
+    out
+}
+
+pub struct CompareHtml;
+
+impl Exporter<Comparison> for CompareHtml {
+    fn file_name(&self) -> &'static str {
+        "compare.html"
+    }
+
+    fn render(&self, c: &Comparison) -> Result<Vec<u8>> {
+        let (header, rows) = table(c);
+        let mut h = String::new();
+        let _ = writeln!(h, "<p>Reproduce: <code>{}</code></p>", html::escape(&c.command()));
+        h.push_str("<h2>Scene</h2>\n");
+        h.push_str(&html::list(&scene_lines(c), None));
+        h.push_str("<h2>Results</h2>\n");
+        h.push_str(&html::table(&header, &rows, &[0, 2, 3], None));
+        let _ = writeln!(h, "<p>{}</p>", html::escape(RESULTS_NOTE));
+        h.push_str(&html::figure(&DensityOverlay(c).to_svg()?, DENSITY_CAPTION));
+        h.push_str(&html::figure(&ShimmerCoverageBars(c).to_svg()?, SHIMMER_CAPTION));
+        h.push_str("<h2>Presets</h2>\n");
+        for a in &c.analyses {
+            let _ = writeln!(h, "<h3>{}</h3>", html::escape(preset_of(a).map_or("?", |p| p.as_str())));
+            h.push_str(&html::list(&preset_lines(a), Some("notes")));
+        }
+        Ok(html::page(
+            &format!("csm-lab compare: {}", c.name),
+            &format!("Cascaded shadow maps by engine: {}", c.name),
+            &h,
+            "",
+        ))
+    }
+}
+
+/// What the columns of the results table measure.
+const RESULTS_NOTE: &str = "Aliasing is shadow texel size over screen pixel size at each view depth (above 1: blocky), over the depths that read each preset's cascades. Shimmer is the RMS sub-texel drift of world-fixed points per frame. Coverage counts slice corners (fitted slice and selection interval) outside their window over the path; those points read \"lit\". docs/metrics.md gives the formulas.";
+
+const DENSITY_CAPTION: &str = "Texels per pixel against view depth, one line per preset";
+const SHIMMER_CAPTION: &str = "Shimmer snapped and unsnapped, and coverage misses, per preset";
+
+pub struct CompareMd;
+
+impl Exporter<Comparison> for CompareMd {
+    fn file_name(&self) -> &'static str {
+        "compare.md"
+    }
+
+    fn render(&self, c: &Comparison) -> Result<Vec<u8>> {
+        let (header, rows) = table(c);
+        let mut m = String::new();
+        let _ = writeln!(m, "# Cascaded shadow maps by engine: {}\n", c.name);
+        let _ = writeln!(m, "Reproduce: `{}`\n", c.command());
+        let _ = writeln!(m, "## Scene\n");
+        for l in scene_lines(c) {
+            let _ = writeln!(m, "- {l}");
+        }
+        let _ = writeln!(m, "\n## Results\n");
+        m.push_str(&markdown::table(&header, &rows, &[0]));
+        let _ = writeln!(
+            m,
+            "\n![texels per pixel against depth](compare_density.svg)\n\n![shimmer and coverage](compare_shimmer.svg)\n"
+        );
+        let _ = writeln!(m, "## Presets\n");
+        for a in &c.analyses {
+            let _ = writeln!(m, "### {}\n", preset_of(a).map_or("?", |p| p.as_str()));
+            for l in preset_lines(a) {
+                let _ = writeln!(m, "- {l}");
+            }
+            let _ = writeln!(m);
+        }
+        Ok(m.into_bytes())
+    }
+}
+
+/// The exporters `compare` writes, in order.
+pub fn exporters() -> Vec<&'static dyn Exporter<Comparison>> {
+    vec![
+        &CompareCsv,
+        &DensitySvg,
+        &DensityPng,
+        &ShimmerSvg,
+        &ShimmerPng,
+        &CompareHtml,
+        &CompareMd,
+    ]
+}
+
+/// The terminal summary of a comparison.
+pub fn summary_table(c: &Comparison) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{}: {} presets{}",
+        c.name,
+        c.analyses.len(),
+        if c.engine_defaults {
+            " at their own defaults"
+        } else {
+            ""
+        }
+    );
+    let _ = writeln!(
+        out,
+        "{:<13} {:>11} {:<22} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>10}",
+        "preset", "cascades", "fit", "max alias", "mean", "shim snap", "shim raw", "coverage", "worst", "depth out"
+    );
+    for a in &c.analyses {
+        let s = &a.summary;
+        let (worst, _) = coverage_extremes(a);
+        let depth_out = a
+            .preset
+            .as_ref()
+            .map_or(0.0, |p| p.receivers_outside_depth.max(p.casters_outside_depth));
+        let _ = writeln!(
+            out,
+            "{:<13} {:>11} {:<22} {:>10.3} {:>9.3} {:>10.2e} {:>10.2e} {:>9} {:>8.3} {:>10.3}",
+            preset_of(a).map_or("?", |p| p.as_str()),
+            format!(
+                "{}x{}",
+                a.rig.as_ref().map_or(0, |r| r.cascade_count()),
+                a.config.shadow.resolution
+            ),
+            fit_label(a),
+            s.max_aliasing,
+            s.mean_aliasing,
+            s.shimmer_snapped,
+            s.shimmer_unsnapped,
+            s.coverage_violations,
+            worst,
+            depth_out
+        );
+    }
+    out
+}

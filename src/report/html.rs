@@ -1,0 +1,175 @@
+//! The one HTML look of csm-lab's reports (`report.html` of `sweep`, `compare.html` of
+//! `compare`): a page shell with one stylesheet, tables, inline figures, and the escaping that
+//! HTML and XML outputs (JUnit included) share.
+//!
+//! Pages are self-contained (inline CSS and SVG, nothing fetched) and well-formed XML, so they
+//! open offline and parse with an XML reader.
+
+use std::fmt::Write as _;
+
+/// The stylesheet of every report page.
+const CSS: &str = "body{font-family:'DejaVu Sans',Helvetica,Arial,sans-serif;max-width:1320px;margin:2em auto;padding:0 1em;color:#222;line-height:1.45}\
+h1{font-size:1.6em}h2{margin-top:1.8em;border-bottom:1px solid #ddd}\
+table{border-collapse:collapse;font-size:0.92em;margin:1em 0}td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}\
+th{background:#f3f3f3}td.l,th.l{text-align:left}tr.rec{background:#ffecec;font-weight:bold}\
+.rec-box{background:#f6fbf6;border-left:5px solid #2a9d4a;padding:0.8em 1em}\
+figure{margin:1.5em 0}figure svg{max-width:100%;height:auto;border:1px solid #eee}figcaption{color:#555;font-size:0.92em}\
+pre,code{background:#f5f5f5}pre{padding:0.8em;overflow-x:auto}code{padding:2px 4px}\
+ul.notes{font-size:0.92em}p.footer{color:#555;font-size:0.92em}";
+
+/// Escapes text for HTML and XML content and attribute values: markup characters, both
+/// quote kinds, newlines and tabs as character references (attribute values keep them), and
+/// characters XML 1.0 cannot carry replaced by U+FFFD.
+pub fn escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            '\n' => out.push_str("&#10;"),
+            '\r' => out.push_str("&#13;"),
+            '\t' => out.push_str("&#9;"),
+            // XML 1.0 Char: #x9 | #xA | #xD | [#x20-#xD7FF] | [#xE000-#xFFFD] | [#x10000-#x10FFFF].
+            c if (c as u32) < 0x20 || c == '\u{FFFE}' || c == '\u{FFFF}' => out.push('\u{FFFD}'),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// An SVG document made fit for inlining in a page: no XML declaration, no namespace URIs
+/// (an HTML parser places `<svg>` in the SVG namespace by itself).
+pub fn inline_svg(svg: &[u8]) -> String {
+    let text = String::from_utf8_lossy(svg);
+    let text = match text.find("<svg") {
+        Some(i) => &text[i..],
+        None => &text[..],
+    };
+    text.trim()
+        .replace(" xmlns=\"http://www.w3.org/2000/svg\"", "")
+        .replace(" xmlns:xlink=\"http://www.w3.org/1999/xlink\"", "")
+}
+
+/// A figure: the inline SVG and its caption.
+pub fn figure(svg: &[u8], caption: &str) -> String {
+    format!(
+        "<figure>{}<figcaption>{}</figcaption></figure>\n",
+        inline_svg(svg),
+        escape(caption)
+    )
+}
+
+/// A table of already formatted cells. Columns listed in `left` are left-aligned (text),
+/// the others right-aligned (numbers); the row at `highlight` is marked as the recommended one.
+pub fn table<S: AsRef<str>>(header: &[&str], rows: &[Vec<S>], left: &[usize], highlight: Option<usize>) -> String {
+    let class = |j: usize| if left.contains(&j) { " class=\"l\"" } else { "" };
+    let mut h = String::from("<table>\n<tr>");
+    for (j, c) in header.iter().enumerate() {
+        let _ = write!(h, "<th{}>{}</th>", class(j), escape(c));
+    }
+    h.push_str("</tr>\n");
+    for (k, row) in rows.iter().enumerate() {
+        let _ = write!(h, "<tr{}>", if highlight == Some(k) { " class=\"rec\"" } else { "" });
+        for (j, cell) in row.iter().enumerate() {
+            let _ = write!(h, "<td{}>{}</td>", class(j), escape(cell.as_ref()));
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</table>\n");
+    h
+}
+
+/// A two-column table of labelled facts.
+pub fn facts<K: AsRef<str>, V: AsRef<str>>(pairs: &[(K, V)]) -> String {
+    let mut h = String::from("<table>\n");
+    for (k, v) in pairs {
+        let _ = writeln!(
+            h,
+            "<tr><th class=\"l\">{}</th><td class=\"l\">{}</td></tr>",
+            escape(k.as_ref()),
+            escape(v.as_ref())
+        );
+    }
+    h.push_str("</table>\n");
+    h
+}
+
+/// A bulleted list of text lines.
+pub fn list<S: AsRef<str>>(lines: &[S], class: Option<&str>) -> String {
+    let mut h = match class {
+        Some(c) => format!("<ul class=\"{}\">\n", escape(c)),
+        None => String::from("<ul>\n"),
+    };
+    for l in lines {
+        let _ = writeln!(h, "<li>{}</li>", escape(l.as_ref()));
+    }
+    h.push_str("</ul>\n");
+    h
+}
+
+/// A whole page: `title` for the browser tab, `heading` as the `<h1>`, then `body` (already
+/// markup) and a footer naming the csm-lab version, with `footer_note` (markup) after it.
+pub fn page(title: &str, heading: &str, body: &str, footer_note: &str) -> Vec<u8> {
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"/>\
+         <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"/>\
+         <title>{}</title><style>{CSS}</style></head><body>\n<h1>{}</h1>\n",
+        escape(title),
+        escape(heading)
+    );
+    h.push_str(body);
+    let _ = writeln!(
+        h,
+        "<p class=\"footer\">Generated by csm-lab {}.{}{footer_note}</p>\n</body></html>",
+        env!("CARGO_PKG_VERSION"),
+        if footer_note.is_empty() { "" } else { " " }
+    );
+    h.into_bytes()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn escaping_covers_markup_quotes_and_control_characters() {
+        assert_eq!(escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&apos;");
+        assert_eq!(escape("x\ny\tz"), "x&#10;y&#9;z");
+        assert_eq!(escape("bell\u{7}"), "bell\u{FFFD}");
+        assert_eq!(escape("ünï"), "ünï");
+        // Whatever goes in comes back from a real parser, minus the unrepresentable ones.
+        let nasty = "]]> <!-- & \"quoted\" 'single' \r\n\u{1} end";
+        let doc = format!("<a b=\"{}\">{}</a>", escape(nasty), escape(nasty));
+        let parsed = roxmltree::Document::parse(&doc).unwrap();
+        let root = parsed.root_element();
+        let expected = nasty.replace('\u{1}', "\u{FFFD}");
+        assert_eq!(root.attribute("b"), Some(expected.as_str()));
+        assert_eq!(root.text(), Some(expected.as_str()));
+    }
+
+    #[test]
+    fn inline_svg_drops_the_declaration_and_namespaces() {
+        let svg = b"<?xml version=\"1.0\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"2\"></svg>\n";
+        assert_eq!(inline_svg(svg), "<svg width=\"2\"></svg>");
+    }
+
+    #[test]
+    fn a_page_is_well_formed_xml() {
+        let body = table(&["a", "b"], &[vec!["1".to_string(), "<2>".to_string()]], &[0], Some(0));
+        let page = page("t & t", "h", &body, "");
+        let text = String::from_utf8(page).unwrap();
+        roxmltree::Document::parse_with_options(
+            &text,
+            roxmltree::ParsingOptions {
+                allow_dtd: true,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    }
+}
