@@ -6,7 +6,6 @@ use crate::config::Config;
 use crate::depth_range::{self, DepthRange};
 use crate::geometry::CameraPose;
 use crate::metrics::{self, Aggregates, DensitySample};
-use crate::motion;
 use crate::precision::{self, LookupError, Precision};
 use crate::shimmer::{self, PathResult, ShimmerOptions};
 
@@ -130,12 +129,29 @@ pub fn memory_bytes(cascades: usize, resolution: u32) -> u64 {
     cascades as u64 * resolution as u64 * resolution as u64 * 4
 }
 
+/// The rig of a config: its engine preset's, or csm-lab's own pipeline built from the
+/// config's domain values. None when the scene needs no cascades.
+pub fn rig(config: &Config) -> Option<Rig> {
+    match &config.shadow.preset {
+        Some(preset) => crate::presets::rig(config, preset),
+        None => Rig::for_setup(&config.setup()),
+    }
+}
+
+/// Why a config cannot run with the binary32 pipeline (completes "use precision = ..."), or
+/// None; see [`precision::f32_range_problem`].
+pub fn f32_range_problem(config: &Config) -> Option<String> {
+    let rig = rig(config)?;
+    let poses = config.camera_path().ok()?;
+    precision::f32_range_problem(&rig, &poses, &config.scene, config.shadow.snap_space)
+}
+
 /// Runs the analysis of one validated config.
 pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
-    let rig = Rig::from_config(config);
+    let rig = rig(config);
     // A preset has its own range (no scene clipping): the view depths that read its cascades.
     let range = match (&config.shadow.preset, &rig) {
-        (None, _) => depth_range::for_config(config),
+        (None, _) => depth_range::for_setup(&config.setup()),
         (Some(_), Some(r)) => DepthRange::Range {
             z_lo: r.splits[0],
             z_hi: r.splits[r.cascade_count()],
@@ -201,7 +217,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         Vec::new()
     };
 
-    let poses = motion::camera_path(config).expect("validated when the config was loaded");
+    let poses = config.camera_path().expect("validated when the config was loaded");
     let sopts = ShimmerOptions {
         cell_flips: opts.cell_flips,
         probe_drift: false,

@@ -10,7 +10,7 @@ use crate::config::Config;
 use crate::error::Result;
 use crate::output::{self, Exporter};
 use crate::plots;
-use crate::precision::{self, Precision};
+use crate::precision::Precision;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -59,7 +59,7 @@ pub struct AnalyzeArgs {
     pub format: Format,
     /// Arithmetic of the cascade pipeline, overriding `[shadow] precision`: f64 (exact) or f32
     /// (an engine's binary32 pipeline, emulated; see `snap_space`).
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = precision_parser())]
     pub precision: Option<Precision>,
     /// Reproduce an engine's cascades instead of csm-lab's own (overrides shadow.preset):
     /// dart, threejs, unity-sample, eevee, learnopengl, bevy, godot, unreal, unity, unity-urp, filament.
@@ -225,6 +225,16 @@ pub fn analyze_exporters() -> Vec<&'static dyn Exporter<crate::analysis::Analysi
     ]
 }
 
+/// `--precision`: the core's [`Precision`], listed with a line of help per value.
+fn precision_parser() -> impl clap::builder::TypedValueParser<Value = Precision> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new([
+        PossibleValue::new("f64").help("Exact: texel-unit windows, snapped shimmer exactly 0 at any world offset"),
+        PossibleValue::new("f32").help("An engine's binary32 pipeline, emulated operation by operation"),
+    ])
+    .map(|s| Precision::from_name(&s).expect("one of the listed values"))
+}
+
 fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
     let mut config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
     if let Some(p) = args.precision {
@@ -237,7 +247,7 @@ fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
         }
         config.shadow.precision = p;
         if p == Precision::F32 {
-            if let Some(why) = precision::f32_range_problem(&config) {
+            if let Some(why) = crate::analysis::f32_range_problem(&config) {
                 return Err(crate::error::Error::flag("--precision", "f32", why));
             }
         }

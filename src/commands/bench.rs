@@ -30,7 +30,6 @@ use crate::cascades::{LightPose, Rig};
 use crate::config::{Config, Fit, MotionPath};
 use crate::error::{Error, Result};
 use crate::metrics::{self, DensitySample};
-use crate::motion;
 use crate::output::{csv_bytes, num, Exporter};
 use crate::plots::{draw_legend, log_range, series_color, Figure, PlotResult, FONT};
 use crate::shimmer::{self, wrap, ShimmerOptions};
@@ -169,7 +168,7 @@ fn with_path(config: &Config, path: MotionPath, step_deg: f64, frames: usize, fi
 }
 
 fn poses_of(config: &Config) -> Result<Vec<crate::geometry::CameraPose>> {
-    motion::camera_path(config).map_err(|(frame, why)| {
+    config.camera_path().map_err(|(frame, why)| {
         Error::Other(format!(
             "bench: the {} path of this camera is invalid at frame {frame} ({why}); use a camera that is not looking straight up or down",
             config.motion.path.name()
@@ -199,7 +198,7 @@ pub fn crossing_resolution(config: &Config) -> u32 {
     for k in 4..=14 {
         let mut c = config.clone();
         c.shadow.resolution = 1 << k;
-        if let Some(rig) = Rig::from_config(&c) {
+        if let Some(rig) = crate::analysis::rig(&c) {
             let k_px = rig.lens.pixels_per_unit_slope(c.screen.height);
             let f = metrics::aggregates(&rig.splits, &frame0_texels(&c, &rig), k_px).undersampled_fraction;
             if (f - 0.5).abs() < best.0 {
@@ -219,7 +218,7 @@ fn bench_density(config: &Config, crossing: u32, repeats: usize, rows: &mut Vec<
         (config, &["density_mean_aliasing", "density_mean_log_aliasing"][..]),
         (&at_crossing, &["density_undersampled_fraction"][..]),
     ] {
-        let rig = Rig::from_config(c).expect("checked by the caller");
+        let rig = crate::analysis::rig(c).expect("checked by the caller");
         let texel = frame0_texels(c, &rig);
         let k = rig.lens.pixels_per_unit_slope(c.screen.height);
         let agg = metrics::aggregates(&rig.splits, &texel, k);
@@ -260,7 +259,7 @@ fn bench_cell_flips(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -
     c.motion.path = MotionPath::Strafe;
     c.motion.step = step;
     c.motion.step_as_written = step;
-    let rig = Rig::from_config(&c).expect("checked by the caller");
+    let rig = crate::analysis::rig(&c).expect("checked by the caller");
     let poses = poses_of(&c)?;
     // Closed form per frame pair and cascade, from the window origins alone.
     let m = rig.cascade_count();
@@ -307,7 +306,7 @@ fn bench_cell_flips(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -
 /// S3 RMS and max of the snapped tight AABB fit under a yaw, against a dense probe run.
 fn bench_aabb_drift(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Result<()> {
     let c = with_path(config, MotionPath::Yaw, YAW_STEP_DEG, config.motion.frames, Fit::Aabb);
-    let rig = Rig::from_config(&c).expect("checked by the caller");
+    let rig = crate::analysis::rig(&c).expect("checked by the caller");
     let poses = poses_of(&c)?;
     let pose0 = c.camera.pose();
     let measure = |n: usize| {
@@ -344,7 +343,7 @@ fn bench_frames(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Re
         REFERENCE_TURNS * turn + 1,
         Fit::Sphere,
     );
-    let rig = Rig::from_config(&long).expect("checked by the caller");
+    let rig = crate::analysis::rig(&long).expect("checked by the caller");
     let reference = {
         let poses = poses_of(&long)?;
         shimmer::along_path(&rig, &poses, &[], false, NO_PROBE_OPTIONS)
@@ -375,7 +374,7 @@ fn bench_frames(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Re
 /// Runs every measurement on `config` (its camera, light, scene and shadow settings; the
 /// motion is set per metric as described in the module documentation).
 pub fn run(config: &Config, repeats: usize) -> Result<BenchReport> {
-    let Some(rig) = Rig::from_config(config) else {
+    let Some(rig) = crate::analysis::rig(config) else {
         return Err(Error::Other(format!(
             "bench: {} needs no cascades (the scene is not visible within the shadow distance), so there is nothing to sample; use a scene the camera sees",
             config.name

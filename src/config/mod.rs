@@ -12,42 +12,19 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, CameraPose};
-use crate::precision::{Precision, SnapSpace};
+mod path_file;
+
+pub use crate::fitting::Fit;
+pub use crate::motion::MotionPath;
+pub use crate::precision::{Precision, SnapSpace};
 use crate::presets::PresetChoice;
+pub use path_file::read_path_file;
 
 /// Largest world coordinate or distance accepted, in world units: far beyond any real world
 /// (engines re-centre long before), and small enough that every derived quantity (texel
 /// coordinates, squared radii) stays finite. Found necessary by the property tests: a camera
 /// strafing 1e305 units per frame turned the shimmer metrics into NaN.
 pub const MAX_WORLD: f64 = 1e9;
-
-/// How the window of a cascade is fitted around its slice of the view frustum.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Fit {
-    /// Minimal bounding sphere of the slice (closed form): a square window whose size depends
-    /// only on the lens and the split depths, so it never changes as the camera moves or turns.
-    /// Costs about 2x the texel area of a tight box on average, buys exact stability.
-    Sphere,
-    /// Tight light-space bounding box of the slice's 8 corners, refitted every frame. Sharper
-    /// (smaller texels) but its size changes whenever the camera turns, which snapping cannot fix.
-    Aabb,
-}
-
-impl Fit {
-    pub fn name(self) -> &'static str {
-        match self {
-            Fit::Sphere => "sphere",
-            Fit::Aabb => "aabb",
-        }
-    }
-}
-
-impl std::fmt::Display for Fit {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
 
 /// The camera as configured (frame 0 of the motion path).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -117,41 +94,6 @@ pub struct ShadowSettings {
     /// whether it snaps, `fit` the family of its fit, and `fit_depth_to_scene` is false.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub preset: Option<crate::presets::Preset>,
-}
-
-/// Which way the camera moves along the shimmer path, one pose per frame.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MotionPath {
-    /// Sideways along the camera's right axis, `step` world units per frame.
-    Strafe,
-    /// Along the view direction, `step` world units per frame.
-    Dolly,
-    /// Turning about the camera's up vector, `step` radians per frame.
-    Yaw,
-    /// Tilting about the camera's right axis, `step` radians per frame.
-    Pitch,
-    /// Circling the target about the up vector, `step` radians per frame.
-    Orbit,
-    /// Poses read from a CSV file: (position, target) per frame.
-    File { path: PathBuf, poses: Vec<(DVec3, DVec3)> },
-}
-
-impl MotionPath {
-    pub fn name(&self) -> &'static str {
-        match self {
-            MotionPath::Strafe => "strafe",
-            MotionPath::Dolly => "dolly",
-            MotionPath::Yaw => "yaw",
-            MotionPath::Pitch => "pitch",
-            MotionPath::Orbit => "orbit",
-            MotionPath::File { .. } => "file",
-        }
-    }
-
-    /// True when every frame differs from the previous one by a pure translation.
-    pub fn is_translation(&self) -> bool {
-        matches!(self, MotionPath::Strafe | MotionPath::Dolly)
-    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -491,6 +433,49 @@ impl Config {
     pub fn shadow_far(&self) -> f64 {
         self.camera.far.min(self.shadow.max_distance)
     }
+
+    /// The validated settings as the core's plain domain values (radians, unit light
+    /// direction, world offset already applied).
+    pub fn setup(&self) -> crate::scene::Setup {
+        use crate::scene::{Camera, Motion, Setup, ShadowParams};
+        let s = &self.shadow;
+        Setup {
+            camera: Camera {
+                position: self.camera.position,
+                target: self.camera.target,
+                up: self.camera.up,
+                fov_y: self.camera.fov_y(),
+                aspect: self.screen.aspect(),
+                near: self.camera.near,
+                far: self.camera.far,
+                screen_height: self.screen.height,
+            },
+            light_direction: self.light_direction,
+            bounds: self.scene,
+            shadow: ShadowParams {
+                max_distance: s.max_distance,
+                cascades: s.cascades,
+                lambda: s.lambda,
+                resolution: s.resolution,
+                fit: s.fit,
+                snap: s.snap,
+                fit_depth_to_scene: s.fit_depth_to_scene,
+                precision: s.precision,
+                snap_space: s.snap_space,
+            },
+            motion: Motion {
+                path: self.motion.path.clone(),
+                frames: self.motion.frames,
+                step: self.motion.step,
+            },
+        }
+    }
+
+    /// Camera poses of every frame of the motion path, or the first invalid frame and why.
+    pub fn camera_path(&self) -> std::result::Result<Vec<CameraPose>, (usize, String)> {
+        let setup = self.setup();
+        crate::motion::camera_path(&setup.camera, &setup.motion)
+    }
 }
 
 fn p_display(path: &MotionPath) -> String {
@@ -737,7 +722,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>, choice: 
                 Some(dir) if p.is_relative() => dir.join(p),
                 _ => p,
             };
-            let poses = crate::motion::read_path_file(&p)?
+            let poses = read_path_file(&p)?
                 .into_iter()
                 .map(|(position, target)| (position + world_offset, target + world_offset))
                 .collect();
@@ -810,7 +795,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>, choice: 
     };
     // Every pose of the motion path must be a valid camera (pitching through the up vector,
     // or a path file row with position == target, is a config error, not a panic later).
-    crate::motion::camera_path(&config).map_err(|(frame, why)| {
+    config.camera_path().map_err(|(frame, why)| {
         v.invalid(
             if matches!(config.motion.path, MotionPath::File { .. }) {
                 "motion.file"
@@ -823,7 +808,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>, choice: 
     })?;
     // binary32 must be able to hold every texel coordinate the emulated pipeline computes.
     if config.shadow.precision == Precision::F32 {
-        if let Some(why) = crate::precision::f32_range_problem(&config) {
+        if let Some(why) = crate::analysis::f32_range_problem(&config) {
             return Err(v.invalid("shadow.precision", "\"f32\"", &why));
         }
     }

@@ -10,7 +10,7 @@
 //! one a view depth in `[splits[i], splits[i+1])` reads (in a blend band, the coarser of the two
 //! cascades counts, the worst case of csm-math.md 3.5). `slices` are the *fitted* intervals the
 //! windows are built around. csm-lab's own pipeline uses one for the other; engine presets
-//! (see [`crate::presets`]) may overlap their fitted slices (blend bands, Bevy's overlap, EEVEE's
+//! (built above the core, in the presets layer) may overlap their fitted slices (blend bands, Bevy's overlap, EEVEE's
 //! fade) or select differently from how they fit (three.js, seed 004).
 //!
 //! **Scheme.** How a window is sized, centred and snapped, which light basis a cascade uses,
@@ -20,10 +20,10 @@
 
 use glam::{DVec2, DVec3};
 
-use crate::config::{Config, Fit};
 use crate::depth_range::{self, DepthRange};
-use crate::fitting::{minimal_sphere, Sphere, Window};
-use crate::geometry::{intersection_range, Aabb, CameraPose, Hexahedron, Lens, LightBasis, Plane};
+use crate::fitting::{minimal_sphere, Fit, Sphere, Window};
+use crate::geometry::{intersection_range, Aabb, CameraPose, Corner, Hexahedron, Lens, LightBasis, Plane};
+use crate::scene::Setup;
 use crate::snapping::SnapRule;
 use crate::splits;
 
@@ -57,10 +57,8 @@ impl LightPose {
 
     /// Light-space x/y of the 8 corners of the slice `[near, far]`.
     pub fn corners(&self, lens: &Lens, near: f64, far: f64) -> [DVec2; 8] {
-        std::array::from_fn(|i| {
-            let sx = if i & 1 == 0 { -lens.tan_h } else { lens.tan_h };
-            let sy = if i & 2 == 0 { -lens.tan_v } else { lens.tan_v };
-            let z = if i & 4 == 0 { near } else { far };
+        Corner::ALL.map(|c| {
+            let (sx, sy, z) = c.of_slice(lens, near, far);
             self.point(sx, sy, z)
         })
     }
@@ -191,21 +189,17 @@ pub struct Rig {
 }
 
 impl Rig {
-    /// Builds the rig for a config (csm-lab's pipeline or the config's preset), or None when
-    /// the scene needs no cascades.
-    pub fn from_config(config: &Config) -> Option<Rig> {
-        if let Some(preset) = &config.shadow.preset {
-            return crate::presets::rig(config, preset);
-        }
-        let DepthRange::Range { z_lo, z_hi } = depth_range::for_config(config) else {
+    /// csm-lab's own rig for a set-up (practical splits over its depth range), or None when
+    /// the scene needs no cascades. (Engine presets build theirs with [`Rig::with_scheme`].)
+    pub fn for_setup(setup: &Setup) -> Option<Rig> {
+        let DepthRange::Range { z_lo, z_hi } = depth_range::for_setup(setup) else {
             return None;
         };
-        let s = &config.shadow;
+        let s = &setup.shadow;
         let splits = splits::practical(z_lo, z_hi, s.cascades, s.lambda);
-        let lens = Lens::new(config.camera.fov_y(), config.screen.aspect());
         Some(Rig::new(
-            lens,
-            LightBasis::new(config.light_direction),
+            setup.camera.lens(),
+            LightBasis::new(setup.light_direction),
             s.fit,
             s.resolution,
             SnapRule::default(),
@@ -546,12 +540,7 @@ fn depth_needs(
     let z0 = scene_lo.min(slice_lo) - 1.0;
     let z1 = scene_hi.max(slice_hi) + 1.0;
     let prism = Hexahedron {
-        vertices: std::array::from_fn(|c| {
-            let x = if c & 1 == 0 { lo.x } else { hi.x };
-            let y = if c & 2 == 0 { lo.y } else { hi.y };
-            let z = if c & 4 == 0 { z0 } else { z1 };
-            l.x * x + l.y * y + l.z * z
-        }),
+        vertices: Corner::ALL.map(|c| l.x * c.x(lo.x, hi.x) + l.y * c.y(lo.y, hi.y) + l.z * c.z(z0, z1)),
         planes: [
             Plane::new(-l.x, -lo.x),
             Plane::new(l.x, hi.x),

@@ -6,8 +6,8 @@
 //! linear, so the extremes sit at vertices of the (convex) intersection; see
 //! [`crate::geometry::intersection_range`]. Without it the range is `[near, min(far, max_distance)]`.
 
-use crate::config::Config;
 use crate::geometry::{intersection_range, Aabb, CameraPose, Lens};
+use crate::scene::Setup;
 
 /// Where cascades are needed along the view axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -70,16 +70,18 @@ pub fn receiver_range(
     }
 }
 
-/// The split range of a config's own camera (frame 0).
-pub fn for_config(config: &Config) -> DepthRange {
-    let lens = Lens::new(config.camera.fov_y(), config.screen.aspect());
+/// The split range of a set-up's own camera (frame 0); Empty when its camera is invalid.
+pub fn for_setup(setup: &Setup) -> DepthRange {
+    let Some(pose) = setup.camera.pose() else {
+        return DepthRange::Empty;
+    };
     receiver_range(
-        &config.camera.pose(),
-        &lens,
-        config.camera.near,
-        config.shadow_far(),
-        &config.scene,
-        config.shadow.fit_depth_to_scene,
+        &pose,
+        &setup.camera.lens(),
+        setup.camera.near,
+        setup.shadow_far(),
+        &setup.bounds,
+        setup.shadow.fit_depth_to_scene,
     )
 }
 

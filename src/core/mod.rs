@@ -11,6 +11,7 @@ pub mod metrics;
 pub mod motion;
 pub mod precision;
 pub mod rng;
+pub mod scene;
 pub mod shimmer;
 pub mod snapping;
 pub mod splits;

@@ -160,7 +160,7 @@ pub struct PathResult {
 /// cascade in the [`Rig`] (never recomputed per frame), so its S3 always has the closed form
 /// and needs no probes; callers may then pass empty probe lists.
 pub fn needs_probes(rig: &Rig, opts: ShimmerOptions) -> bool {
-    opts.cell_flips || opts.probe_drift || rig.fit != crate::config::Fit::Sphere || !fast_walk_applies(rig)
+    opts.cell_flips || opts.probe_drift || rig.fit != crate::fitting::Fit::Sphere || !fast_walk_applies(rig)
 }
 
 /// Whether the shared two-mode walk serves this rig: a fixed light basis, and each cascade's

@@ -7,8 +7,9 @@ use common::{config, with};
 use csm_lab::analysis::{analyze, AnalysisOptions};
 use csm_lab::cascades::{LightPose, Rig};
 use csm_lab::config::Fit;
+use csm_lab::drift_table::drift_table;
 use csm_lab::geometry::{Aabb, CameraPose, Lens, LightBasis};
-use csm_lab::precision::{self, along_path, drift_table, ulp32, EmulatedPath, EnginePipeline, Precision, SnapSpace};
+use csm_lab::precision::{self, along_path, ulp32, EmulatedPath, EnginePipeline, Precision, SnapSpace};
 use csm_lab::shimmer::{probes, ShimmerOptions};
 use csm_lab::snapping::{SnapMode, SnapRule};
 use glam::DVec3;
@@ -95,8 +96,8 @@ fn the_f64_twin_of_the_engine_pipeline_reproduces_the_rig_windows() {
                         &format!("world_offset = [{offset:?}, {:?}, 0.0]", -offset),
                     ),
                 ]));
-                let base = Rig::from_config(&c).unwrap();
-                let poses = csm_lab::motion::camera_path(&c).unwrap();
+                let base = csm_lab::analysis::rig(&c).unwrap();
+                let poses = c.camera_path().unwrap();
                 let pr = probes(&base, &poses[0], &c.scene, 40);
                 for (mode, steps) in [(SnapMode::Round, 1), (SnapMode::Floor, 2), (SnapMode::Trunc, 4)] {
                     let rig = Rig::new(
@@ -174,8 +175,8 @@ fn f64_stabilised_shimmer_stays_below_1e_9_at_every_world_offset() {
             assert_eq!(a.summary.lookup_error_max, 0.0, "S7 is 0 in f64");
             // The per-probe evaluation agrees with the closed form at this offset.
             let c = config(&text);
-            let rig = Rig::from_config(&c).unwrap();
-            let poses = csm_lab::motion::camera_path(&c).unwrap();
+            let rig = csm_lab::analysis::rig(&c).unwrap();
+            let poses = c.camera_path().unwrap();
             let pr = probes(&rig, &poses[0], &c.scene, 64);
             let r = csm_lab::shimmer::along_path(&rig, &poses, &pr, true, OPTS);
             assert!(r.stats.max < 1e-9, "{offset} {path}: probes {}", r.stats.max);
@@ -346,8 +347,8 @@ fn the_analysis_in_f32_reports_the_emulated_pipeline() {
     assert_eq!(c.shadow.precision, Precision::F32);
     assert_eq!(c.shadow.snap_space, SnapSpace::World, "default snap space");
     let a = analyze(&c, &AnalysisOptions::full());
-    let rig = Rig::from_config(&c).unwrap();
-    let poses = csm_lab::motion::camera_path(&c).unwrap();
+    let rig = csm_lab::analysis::rig(&c).unwrap();
+    let poses = c.camera_path().unwrap();
     let pr = probes(&rig, &poses[0], &c.scene, c.analysis.probes);
     let s = along_path(&rig, &poses, &pr, SnapSpace::World, true, OPTS);
     let u = along_path(&rig, &poses, &pr, SnapSpace::World, false, OPTS);
@@ -486,9 +487,9 @@ fn bad_precision_settings_name_the_key_the_value_and_what_is_allowed() {
     c.camera.near = 1e-35;
     c.shadow.lambda = 1.0;
     c.shadow.cascades = 16;
-    let why = precision::f32_range_problem(&c).unwrap();
+    let why = csm_lab::analysis::f32_range_problem(&c).unwrap();
     assert!(why.contains("binary32") && why.contains("2^-100"), "{why}");
-    assert!(precision::f32_range_problem(&config(&with(&[]))).is_none());
+    assert!(csm_lab::analysis::f32_range_problem(&config(&with(&[]))).is_none());
 }
 
 /// The library function behind the table in docs/accuracy.md.
@@ -501,8 +502,8 @@ fn the_drift_table_shows_f64_exact_world_f32_growing_and_camera_relative_flat() 
             .find(|r| (r.window - w).abs() < 1e-9 * w && r.offset == o && r.precision == p && r.snap_space == s)
             .unwrap_or_else(|| panic!("row {w} {o} {p} {s}"))
     };
-    for w in precision::DRIFT_WINDOWS {
-        for o in precision::DRIFT_OFFSETS {
+    for w in csm_lab::drift_table::DRIFT_WINDOWS {
+        for o in csm_lab::drift_table::DRIFT_OFFSETS {
             let f = get(w, o, Precision::F64, SnapSpace::World);
             assert!(f.drift_max < 1e-9 && f.lookup_error_max == 0.0, "f64 {w} {o}");
             // Bounds as in camera_relative_f32_stays_near_zero_at_every_offset.
@@ -517,7 +518,7 @@ fn the_drift_table_shows_f64_exact_world_f32_growing_and_camera_relative_flat() 
         }
         // World-anchored f32: flat while k*T is representable, then a large fraction of a
         // texel; S7 grows with the offset like ulp32/T.
-        let world: Vec<_> = precision::DRIFT_OFFSETS
+        let world: Vec<_> = csm_lab::drift_table::DRIFT_OFFSETS
             .iter()
             .map(|&o| get(w, o, Precision::F32, SnapSpace::World))
             .collect();
@@ -536,7 +537,7 @@ fn the_drift_table_shows_f64_exact_world_f32_growing_and_camera_relative_flat() 
     let world_20_1e5 = get(20.0, 1e5, Precision::F32, SnapSpace::World);
     assert!(world_20_1e5.drift_max > 0.25, "{world_20_1e5:?}");
     // The Markdown lists one line per window and offset.
-    let md = precision::drift_table_markdown(&rows);
+    let md = csm_lab::drift_table::drift_table_markdown(&rows);
     assert_eq!(md.lines().count(), 2 + 10);
     assert!(md.contains("| 20 (9.77 mm texels) | 1e5 |"), "{md}");
 }

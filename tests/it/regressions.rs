@@ -4,7 +4,6 @@ use crate::common;
 
 use common::{config, with};
 use csm_lab::analysis::{analyze, AnalysisOptions};
-use csm_lab::motion::camera_path;
 use csm_lab::{Config, Error};
 
 fn rejected(text: &str) -> String {
@@ -25,7 +24,7 @@ fn a_full_orbit_and_a_full_yaw_are_valid_motions() {
             ("motion.frames", "frames = 200"),
         ]);
         let c = config(&text);
-        let poses = camera_path(&c).unwrap();
+        let poses = c.camera_path().unwrap();
         assert_eq!(poses.len(), 200);
         // 180 frames of 2 degrees is a whole turn: back to the start.
         let d = (poses[180].forward - poses[0].forward).length();

@@ -3,8 +3,7 @@
 use crate::common;
 
 use common::{config, with};
-use csm_lab::cascades::{LightPose, Rig};
-use csm_lab::motion::camera_path;
+use csm_lab::cascades::LightPose;
 use csm_lab::shimmer::{along_path, along_path_both, probes, ShimmerOptions};
 
 fn all_options() -> [ShimmerOptions; 3] {
@@ -30,8 +29,8 @@ fn both_modes_in_one_walk_equal_two_separate_walks_bit_for_bit() {
             ("motion.step", &format!("step = {step}")),
         ]);
         let c = config(&text);
-        let rig = Rig::from_config(&c).unwrap();
-        let poses = camera_path(&c).unwrap();
+        let rig = csm_lab::analysis::rig(&c).unwrap();
+        let poses = c.camera_path().unwrap();
         let pr = probes(&rig, &c.camera.pose(), &c.scene, 48);
         for opts in all_options() {
             let (s, u) = along_path_both(&rig, &poses, &pr, opts);
@@ -52,12 +51,12 @@ fn coverage_of_shrunken_windows_matches_a_per_corner_count() {
             ("motion.step", "step = 0.7"),
         ]);
         let c = config(&text);
-        let mut rig = Rig::from_config(&c).unwrap();
+        let mut rig = csm_lab::analysis::rig(&c).unwrap();
         // Shrink every sphere window by a different factor, some barely, some a lot.
         for (i, side) in rig.sphere_side.iter_mut().enumerate() {
             *side *= [0.999, 0.8, 0.99999, 0.6][i % 4];
         }
-        let poses = camera_path(&c).unwrap();
+        let poses = c.camera_path().unwrap();
         for snapped in [true, false] {
             let got = along_path(&rig, &poses, &[], snapped, all_options()[0]).coverage;
             let m = rig.cascade_count();
