@@ -238,8 +238,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         }
         Precision::F32 => {
             let space = config.shadow.snap_space;
-            let s = precision::along_path(&rig, &poses, &probes, space, true, sopts);
-            let u = precision::along_path(&rig, &poses, &probes, space, false, sopts);
+            let (s, u) = precision::along_path_both(&rig, &poses, &probes, space, sopts);
             let lookup = if config.shadow.snap { s.lookup } else { u.lookup };
             (s.path, u.path, Some(lookup))
         }

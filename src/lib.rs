@@ -23,7 +23,7 @@ pub mod report;
 // Short paths for the modules most callers use.
 pub use crate::commands::{bench, check, compare, stress, sweep};
 pub use crate::core::{
-    cascades, depth_range, fitting, geometry, metrics, motion, precision, rng, scene, shimmer, snapping, splits,
+    cascades, depth_range, fitting, geometry, metrics, motion, precision, rng, scene, shimmer, snapping, splits, walk,
 };
 pub use crate::figures as plots;
 pub use crate::report::output;

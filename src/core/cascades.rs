@@ -158,15 +158,7 @@ pub struct LightDepth {
     pub casters_outside: f64,
 }
 
-/// Slice corners outside a window in one frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FrameCoverage {
-    pub violations: u64,
-    /// How far outside the worst corner lies, in texels (0 when all are inside).
-    pub worst_texels: f64,
-    /// The smallest margin between a corner and the window edge, in texels (negative outside).
-    pub min_slack_texels: f64,
-}
+pub use crate::walk::FrameCoverage;
 
 /// Everything fixed over a motion path.
 #[derive(Debug, Clone)]
@@ -331,8 +323,8 @@ impl Rig {
         }
     }
 
-    /// The window given the camera frame in the cascade's own basis.
-    fn window_in(&self, i: usize, lp: &LightPose, snapped: bool) -> Window {
+    /// The window given the camera frame `lp` in the cascade's own basis.
+    pub fn window_in(&self, i: usize, lp: &LightPose, snapped: bool) -> Window {
         let slice = &self.slices[i];
         let snap = (snapped && self.scheme.snaps).then_some(self.snap_rule);
         match &self.scheme.window {
@@ -385,41 +377,32 @@ impl Rig {
     /// slices and the window are convex, so a slice's light-space footprint is the hull of its
     /// corners and checking the corners is exact.
     pub fn coverage(&self, i: usize, lp: &LightPose, w: &Window) -> FrameCoverage {
-        let local;
-        let lp = if self.fixed_basis() {
-            lp
+        if self.fixed_basis() {
+            self.coverage_in(i, lp, w)
         } else {
-            local = LightPose::new(&self.basis(i, lp), &lp.pose);
-            &local
-        };
-        let mut out = FrameCoverage {
-            violations: 0,
-            worst_texels: 0.0,
-            min_slack_texels: f64::INFINITY,
-        };
-        let s = &self.slices[i];
-        self.cover(&mut out, &lp.corners(&self.lens, s.near, s.far), w);
-        let (a, b) = self.selection(i);
-        if b > a && (a < s.near || b > s.far) {
-            self.cover(&mut out, &lp.corners(&self.lens, a, b), w);
+            self.coverage_in(i, &LightPose::new(&self.basis(i, lp), &lp.pose), w)
+        }
+    }
+
+    /// [`Rig::coverage`] given the camera frame `lp` in the cascade's own basis.
+    pub fn coverage_in(&self, i: usize, lp: &LightPose, w: &Window) -> FrameCoverage {
+        let mut out = FrameCoverage::default();
+        let n = self.resolution as f64;
+        for (near, far) in self.covered_intervals(i) {
+            for c in lp.corners(&self.lens, near, far) {
+                out.corner(w.texel_coords(c), n, (c / w.texel).abs().max_element());
+            }
         }
         out
     }
 
-    #[inline]
-    fn cover(&self, out: &mut FrameCoverage, corners: &[DVec2; 8], w: &Window) {
-        let n = self.resolution as f64;
-        for &c in corners {
-            let s = w.texel_coords(c);
-            let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
-            out.min_slack_texels = out.min_slack_texels.min(slack);
-            // Rounding tolerance: a few ulps of the texel coordinate's magnitude.
-            let tol = 1e-9 + 8.0 * f64::EPSILON * (c / w.texel).abs().max_element();
-            if -slack > tol {
-                out.violations += 1;
-                out.worst_texels = out.worst_texels.max(-slack);
-            }
-        }
+    /// The depth intervals cascade `i`'s window must cover: its fitted slice, and its
+    /// selection interval where that reaches outside the fitted slice.
+    pub fn covered_intervals(&self, i: usize) -> impl Iterator<Item = (f64, f64)> {
+        let s = &self.slices[i];
+        let (a, b) = self.selection(i);
+        let outside = b > a && (a < s.near || b > s.far);
+        std::iter::once((s.near, s.far)).chain(outside.then_some((a, b)))
     }
 
     /// Light-space depth range the cascade must render: near far enough toward the light to

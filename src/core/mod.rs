@@ -15,3 +15,4 @@ pub mod scene;
 pub mod shimmer;
 pub mod snapping;
 pub mod splits;
+pub mod walk;
