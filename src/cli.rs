@@ -238,13 +238,6 @@ fn precision_parser() -> impl clap::builder::TypedValueParser<Value = Precision>
 fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
     let mut config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
     if let Some(p) = args.precision {
-        if p == Precision::F32 && config.shadow.preset.is_some() {
-            return Err(crate::error::Error::flag(
-                "--precision",
-                "f32",
-                "the binary32 emulation models csm-lab's own sphere and aabb pipelines, not engine presets",
-            ));
-        }
         config.shadow.precision = p;
         if p == Precision::F32 {
             if let Some(why) = crate::analysis::f32_range_problem(&config) {

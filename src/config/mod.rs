@@ -13,6 +13,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, CameraPose};
 mod path_file;
+mod with;
 
 pub use crate::fitting::Fit;
 pub use crate::motion::MotionPath;
@@ -689,15 +690,6 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>, choice: 
         scene: &scene,
     };
     crate::presets::resolve(cx, &mut shadow, v)?;
-    if shadow.preset.is_some() && shadow.precision == Precision::F32 {
-        return Err(v.invalid(
-            "shadow.precision",
-            "\"f32\"",
-            "\"f64\" with an engine preset (the binary32 emulation models csm-lab's own sphere and aabb \
-             pipelines, not the presets' windows)",
-        ));
-    }
-
     // Motion.
     let m = raw.motion;
     let frames = v.int_range("motion.frames", m.frames.unwrap_or(240), 2, 1_000_000)? as usize;
@@ -793,6 +785,13 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>, choice: 
         analysis,
         sweep,
     };
+    cross_checks(&config, v)?;
+    Ok(config)
+}
+
+/// The checks that involve several settings at once, run when a file is read and again by
+/// every constructor that changes a validated config ([`Config::with_lambda`] and friends).
+fn cross_checks(config: &Config, v: &Validator<'_>) -> Result<()> {
     // Every pose of the motion path must be a valid camera (pitching through the up vector,
     // or a path file row with position == target, is a config error, not a panic later).
     config.camera_path().map_err(|(frame, why)| {
@@ -812,5 +811,5 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>, choice: 
             return Err(v.invalid("shadow.precision", "\"f32\"", &why));
         }
     }
-    Ok(config)
+    Ok(())
 }

@@ -375,7 +375,14 @@ impl<R: Real> EnginePipeline<R> {
 
     /// The light-space bounds of cascade `i`'s 8 slice corners, each corner built and
     /// transformed in `R`.
-    fn corner_bounds(&self, i: usize, rows: &[[R; 3]; 2], p: &[R; 3], f: &[R; 3], pose: &CameraPose) -> ([R; 2], [R; 2]) {
+    fn corner_bounds(
+        &self,
+        i: usize,
+        rows: &[[R; 3]; 2],
+        p: &[R; 3],
+        f: &[R; 3],
+        pose: &CameraPose,
+    ) -> ([R; 2], [R; 2]) {
         let c = &self.consts[i];
         let r: [R; 3] = v3(pose.right);
         let u: [R; 3] = v3(pose.up);
@@ -401,7 +408,14 @@ impl<R: Real> EnginePipeline<R> {
     }
 
     /// [`EnginePipeline::window`] with the cascade's rows given.
-    fn window_with(&self, i: usize, rows: &[[R; 3]; 2], pose: &CameraPose, anchor: DVec3, snapped: bool) -> EngineWindow<R> {
+    fn window_with(
+        &self,
+        i: usize,
+        rows: &[[R; 3]; 2],
+        pose: &CameraPose,
+        anchor: DVec3,
+        snapped: bool,
+    ) -> EngineWindow<R> {
         let c = &self.consts[i];
         let p: [R; 3] = v3(pose.position - anchor);
         let f: [R; 3] = v3(pose.forward);
@@ -656,7 +670,14 @@ impl PathModel for EnginePath<'_> {
         None
     }
 
-    fn land(&self, i: usize, sh: &EngineShared, w: &EngineWin, out: &mut Vec<Option<Landing>>, totals: &mut PathTotals) {
+    fn land(
+        &self,
+        i: usize,
+        sh: &EngineShared,
+        w: &EngineWin,
+        out: &mut Vec<Option<Landing>>,
+        totals: &mut PathTotals,
+    ) {
         let n = self.rig.resolution as f64;
         let [row_x, row_y] = sh.rows_f64;
         let probes = self.probes.get(i).map_or(&[][..], |v| &v[..]);

@@ -368,7 +368,14 @@ impl PathModel for RigPath<'_> {
             .then(|| closed_form_drift(p.window.origin_texels, w.window.origin_texels))
     }
 
-    fn land(&self, i: usize, _shared: &RigShared, w: &RigWindow, out: &mut Vec<Option<Landing>>, _totals: &mut PathTotals) {
+    fn land(
+        &self,
+        i: usize,
+        _shared: &RigShared,
+        w: &RigWindow,
+        out: &mut Vec<Option<Landing>>,
+        _totals: &mut PathTotals,
+    ) {
         let (win, b) = (&w.window, &w.basis);
         let centre = |s: DVec2| (win.origin_texels + s.floor() + 0.5) * win.texel;
         if self.fixed {

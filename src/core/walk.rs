@@ -51,7 +51,14 @@ pub trait PathModel {
     fn closed_form(&self, p: &Self::Win, w: &Self::Win) -> Option<f64>;
     /// Where each of cascade `i`'s probes lands in `w` (None for a probe `w` does not serve),
     /// into `out`, which arrives empty. May add per-probe errors (S7) to `totals`.
-    fn land(&self, i: usize, shared: &Self::Shared, w: &Self::Win, out: &mut Vec<Option<Landing>>, totals: &mut PathTotals);
+    fn land(
+        &self,
+        i: usize,
+        shared: &Self::Shared,
+        w: &Self::Win,
+        out: &mut Vec<Option<Landing>>,
+        totals: &mut PathTotals,
+    );
     /// The sampled-texel centre of a landing in an earlier window, in `w`'s light space.
     fn centre_in(&self, w: &Self::Win, earlier: &Landing) -> DVec2;
 }
@@ -185,7 +192,14 @@ impl PathTotals {
 
     /// S1, S3 and S4 of one frame pair: S3 as (mean square, largest square), S4 as a share.
     #[inline]
-    fn pair(&mut self, t: usize, i: usize, size_change: f64, (ms, mx_sq, flips): (f64, f64, Option<f64>), opts: ShimmerOptions) {
+    fn pair(
+        &mut self,
+        t: usize,
+        i: usize,
+        size_change: f64,
+        (ms, mx_sq, flips): (f64, f64, Option<f64>),
+        opts: ShimmerOptions,
+    ) {
         if let Some(f) = flips {
             self.flip_sum += f;
         }
@@ -281,6 +295,24 @@ struct ModeState<M: PathModel> {
     spare: Vec<Option<Landing>>,
 }
 
+/// The one loop along a path: for every frame (in order) and every cascade, calls
+/// `f(model, t, i, shared)` with the values of cascade `i` in frame `t` that every snap mode
+/// shares.
+pub fn each_cascade_frame<M: PathModel>(
+    model: &mut M,
+    poses: &[CameraPose],
+    mut f: impl FnMut(&M, usize, usize, &mut M::Shared),
+) {
+    let m = model.cascade_count();
+    for (t, pose) in poses.iter().enumerate() {
+        model.begin_frame(t, pose);
+        for i in 0..m {
+            let mut shared = model.shared(i);
+            f(model, t, i, &mut shared);
+        }
+    }
+}
+
 /// Walks `poses` once with `model`, for each snap mode in `modes` (`true` = snapped), and
 /// returns each mode's totals. Per frame and cascade, the values the modes share are computed
 /// once; probes are landed only when the options need them.
@@ -297,54 +329,50 @@ pub fn walk<M: PathModel, const K: usize>(
         prev: (0..m).map(|_| None).collect(),
         spare: Vec::new(),
     });
-    for (t, pose) in poses.iter().enumerate() {
-        model.begin_frame(t, pose);
-        for i in 0..m {
-            let mut shared = model.shared(i);
-            for st in &mut states {
-                let w = model.window(i, &mut shared, st.totals.snapped);
-                model.cover(i, &mut shared, &w, &mut st.totals);
-                let mut landings = std::mem::take(&mut st.spare);
-                landings.clear();
-                if probes {
-                    model.land(i, &shared, &w, &mut landings, &mut st.totals);
-                }
-                if let Some((p, pl)) = &st.prev[i] {
-                    let (pt, wt) = (M::texel(p), M::texel(&w));
-                    // x / x is exactly 1, so an unchanged size gives exactly 0 without the divisions.
-                    let size_change = if wt == pt {
-                        0.0
-                    } else {
-                        ((wt.x / pt.x - 1.0).abs()).max((wt.y / pt.y - 1.0).abs())
-                    };
-                    let closed = if opts.probe_drift {
-                        None
-                    } else {
-                        model.closed_form(p, &w)
-                    };
-                    st.totals.jitter = st.totals.jitter.max(size_change);
-                    let drift = match closed {
-                        Some(ms) if !opts.cell_flips => Some((ms, ms, None)),
-                        _ => {
-                            let (ss, mx_sq, flipped, served) = probe_kernel(model, &w, pl, &landings);
-                            if M::SKIP_UNSERVED && served == 0 {
-                                None
-                            } else {
-                                let count = served.max(1) as f64;
-                                let (ms, mx_sq) = closed.map_or((ss / count, mx_sq), |ms| (ms, ms));
-                                Some((ms, mx_sq, opts.cell_flips.then(|| flipped as f64 / count)))
-                            }
+    each_cascade_frame(model, poses, |model, t, i, shared| {
+        for st in &mut states {
+            let w = model.window(i, shared, st.totals.snapped);
+            model.cover(i, shared, &w, &mut st.totals);
+            let mut landings = std::mem::take(&mut st.spare);
+            landings.clear();
+            if probes {
+                model.land(i, shared, &w, &mut landings, &mut st.totals);
+            }
+            if let Some((p, pl)) = &st.prev[i] {
+                let (pt, wt) = (M::texel(p), M::texel(&w));
+                // x / x is exactly 1, so an unchanged size gives exactly 0 without the divisions.
+                let size_change = if wt == pt {
+                    0.0
+                } else {
+                    ((wt.x / pt.x - 1.0).abs()).max((wt.y / pt.y - 1.0).abs())
+                };
+                let closed = if opts.probe_drift {
+                    None
+                } else {
+                    model.closed_form(p, &w)
+                };
+                st.totals.jitter = st.totals.jitter.max(size_change);
+                let drift = match closed {
+                    Some(ms) if !opts.cell_flips => Some((ms, ms, None)),
+                    _ => {
+                        let (ss, mx_sq, flipped, served) = probe_kernel(model, &w, pl, &landings);
+                        if M::SKIP_UNSERVED && served == 0 {
+                            None
+                        } else {
+                            let count = served.max(1) as f64;
+                            let (ms, mx_sq) = closed.map_or((ss / count, mx_sq), |ms| (ms, ms));
+                            Some((ms, mx_sq, opts.cell_flips.then(|| flipped as f64 / count)))
                         }
-                    };
-                    if let Some(d) = drift {
-                        st.totals.pair(t, i, size_change, d, opts);
                     }
-                }
-                if let Some((_, old)) = st.prev[i].replace((w, landings)) {
-                    st.spare = old;
+                };
+                if let Some(d) = drift {
+                    st.totals.pair(t, i, size_change, d, opts);
                 }
             }
+            if let Some((_, old)) = st.prev[i].replace((w, landings)) {
+                st.spare = old;
+            }
         }
-    }
+    });
     states.map(|st| st.totals)
 }

@@ -59,7 +59,7 @@ pub fn set_lambda(config: &mut Config, lambda: f64) -> Result<()> {
         return Err(Error::Other(format!("lambda {lambda} is outside [0, 1]")));
     }
     let Some(p) = &mut config.shadow.preset else {
-        config.shadow.lambda = lambda;
+        *config = config.with_lambda(lambda)?;
         return Ok(());
     };
     match &mut p.knobs {
@@ -75,6 +75,9 @@ pub fn set_lambda(config: &mut Config, lambda: f64) -> Result<()> {
         }
     }
     config.shadow.lambda = lambda;
+    // TODO(presets): a validating constructor for preset knobs; until then the cross-checks
+    // (camera path, binary32 range) run on the changed config here.
+    *config = config.with_lambda(lambda)?;
     Ok(())
 }
 
@@ -92,7 +95,7 @@ pub fn set_cascades(config: &mut Config, n: usize) -> Result<()> {
     } else if !(1..=16).contains(&n) {
         return Err(Error::Other(format!("{n} cascades is outside 1..=16")));
     }
-    config.shadow.cascades = n;
+    *config = config.with_cascades(n)?;
     Ok(())
 }
 
@@ -109,6 +112,6 @@ pub fn set_resolution(config: &mut Config, n: u32) -> Result<()> {
             )));
         }
     }
-    config.shadow.resolution = n;
+    *config = config.with_resolution(n)?;
     Ok(())
 }
