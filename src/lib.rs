@@ -4,10 +4,11 @@
 //! fit, texel snapping) for a camera, a directional light and the scene's bounds, and measures
 //! texel density and perspective aliasing against view depth, shimmer under camera motion,
 //! and coverage. Conventions (handedness, light direction, view depth) are stated once in
-//! [`geometry`]; formulas follow `csm-math.md` of the project's reference material.
+//! [`geometry`]; each formula is stated in the module that implements it.
 //!
-//! Pipeline: [`config`] → [`depth_range`] → [`splits`] → [`cascades`] ([`fitting`],
-//! [`snapping`]) → [`metrics`], [`shimmer`] → [`analysis`] → [`output`], [`plots`].
+//! Pipeline: [`config`] → [`scene`] (plain domain values) → [`depth_range`] → [`splits`] →
+//! [`cascades`] ([`fitting`], [`snapping`]) → [`metrics`], [`walk`] ([`shimmer`], [`precision`])
+//! → [`analysis`] → [`output`], [`plots`]. The core (`src/core/`) sees only the domain values.
 
 pub mod analysis;
 pub mod cli;

@@ -40,7 +40,8 @@ use crate::output::{self, Exporter};
 use crate::precision::{Precision, SnapSpace};
 use crate::rng::SplitMix64;
 
-/// The largest f64 stabilised drift accepted (texels per frame): csm-math.md §13.2.
+/// The largest f64 stabilised drift accepted (texels per frame): snapped texel-unit origins
+/// differ by exact integers, so anything above rounding noise is a bug.
 pub const STABILISED_LIMIT: f64 = 1e-9;
 
 /// Everything a case writes into its config file.

@@ -8,7 +8,7 @@
 //!
 //! **Selection vs fitted slices.** `splits` are the *selection* boundaries: cascade `i` is the
 //! one a view depth in `[splits[i], splits[i+1])` reads (in a blend band, the coarser of the two
-//! cascades counts, the worst case of csm-math.md 3.5). `slices` are the *fitted* intervals the
+//! cascades counts, since it is the blurrier of the two a pixel may read). `slices` are the *fitted* intervals the
 //! windows are built around. csm-lab's own pipeline uses one for the other; engine presets
 //! (built above the core, in the presets layer) may overlap their fitted slices (blend bands, Bevy's overlap, EEVEE's
 //! fade) or select differently from how they fit (three.js, seed 004).
