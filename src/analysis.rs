@@ -101,26 +101,74 @@ pub struct CascadeReport {
 pub struct Analysis {
     pub config: Config,
     pub range: DepthRange,
-    pub rig: Option<Rig>,
+    /// Per cascade, frame 0 (empty when no cascade is needed).
     pub cascades: Vec<CascadeReport>,
-    pub aggregates: Option<Aggregates>,
+    /// The density profile (empty when not asked for, or when no cascade is needed).
     pub density: Vec<DensitySample>,
-    pub snapped: Option<PathResult>,
-    pub unsnapped: Option<PathResult>,
-    /// S7 for the configured snap setting, when precision = "f32".
-    pub lookup_error: Option<LookupError>,
+    /// What was measured: cascades, or the scene needs none.
+    pub outcome: Outcome,
+    /// The flat metrics; all zero (except the memory) when no cascade is needed.
     pub summary: Summary,
     /// The preset's split/fit/snap rules, selection and light-depth findings (None without a preset).
     pub preset: Option<crate::presets::PresetReport>,
 }
 
+/// The result of an analysis: the scene is not visible within the shadow distance, or the
+/// cascades were built and measured.
+#[derive(Debug, Clone)]
+pub enum Outcome {
+    NoCascades,
+    Cascades(Box<Measured>),
+}
+
+/// Everything measured about the cascades of a scene that needs them.
+#[derive(Debug, Clone)]
+pub struct Measured {
+    pub rig: Rig,
+    pub aggregates: Aggregates,
+    pub snapped: PathResult,
+    pub unsnapped: PathResult,
+    /// S7 for the configured snap setting, when precision = "f32".
+    pub lookup_error: Option<LookupError>,
+}
+
 impl Analysis {
+    /// The cascades' measurements, or None when the scene needs no cascade.
+    pub fn measured(&self) -> Option<&Measured> {
+        match &self.outcome {
+            Outcome::Cascades(m) => Some(m),
+            Outcome::NoCascades => None,
+        }
+    }
+
+    pub fn rig(&self) -> Option<&Rig> {
+        self.measured().map(|m| &m.rig)
+    }
+
+    pub fn aggregates(&self) -> Option<&Aggregates> {
+        self.measured().map(|m| &m.aggregates)
+    }
+
+    /// The path with snapping.
+    pub fn snapped(&self) -> Option<&PathResult> {
+        self.measured().map(|m| &m.snapped)
+    }
+
+    /// The path without snapping.
+    pub fn unsnapped(&self) -> Option<&PathResult> {
+        self.measured().map(|m| &m.unsnapped)
+    }
+
+    pub fn lookup_error(&self) -> Option<&LookupError> {
+        self.measured().and_then(|m| m.lookup_error.as_ref())
+    }
+
     /// The path result of the configured snap mode.
     pub fn configured_path(&self) -> Option<&PathResult> {
         if self.config.shadow.snap {
-            self.snapped.as_ref()
+            self.snapped()
         } else {
-            self.unsnapped.as_ref()
+            self.unsnapped()
         }
     }
 }
@@ -166,13 +214,9 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         return Analysis {
             config: config.clone(),
             range,
-            rig: None,
             cascades: Vec::new(),
-            aggregates: None,
             density: Vec::new(),
-            snapped: None,
-            unsnapped: None,
-            lookup_error: None,
+            outcome: Outcome::NoCascades,
             summary: Summary {
                 cascades_needed: false,
                 z_lo: 0.0,
@@ -312,13 +356,15 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         config: config.clone(),
         range,
         preset,
-        rig: Some(rig),
         cascades,
-        aggregates: Some(aggregates),
         density,
-        snapped: Some(snapped),
-        unsnapped: Some(unsnapped),
-        lookup_error,
+        outcome: Outcome::Cascades(Box::new(Measured {
+            rig,
+            aggregates,
+            snapped,
+            unsnapped,
+            lookup_error,
+        })),
         summary,
     }
 }

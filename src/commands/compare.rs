@@ -121,8 +121,7 @@ fn coverage_extremes(a: &Analysis) -> (f64, f64) {
 }
 
 fn fit_label(a: &Analysis) -> String {
-    a.rig
-        .as_ref()
+    a.rig()
         .map_or_else(|| a.config.shadow.fit.to_string(), |r| r.scheme.fit_label.clone())
 }
 
@@ -138,7 +137,7 @@ pub fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
                 Some(l) => num("lambda", l)?,
                 None => String::new(),
             };
-            let cascades = a.rig.as_ref().map_or(a.config.shadow.cascades, |r| r.cascade_count());
+            let cascades = a.rig().map_or(a.config.shadow.cascades, |r| r.cascade_count());
             let mut fields = vec![preset_of(a).map_or_else(String::new, |p| p.to_string())];
             fields.extend(crate::report::summary_fields(
                 lambda,
@@ -214,7 +213,7 @@ impl Figure for DensityOverlay<'_> {
                 .label(format!(
                     "{}: {} x {}, max aliasing {:.3}",
                     preset_of(a).map_or("?", |p| p.as_str()),
-                    a.rig.as_ref().map_or(0, |r| r.cascade_count()),
+                    a.rig().map_or(0, |r| r.cascade_count()),
                     a.config.shadow.resolution,
                     a.summary.max_aliasing
                 ))
@@ -493,7 +492,7 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
                 preset_of(a).map_or_else(String::new, |p| p.to_string()),
                 format!(
                     "{} × {}",
-                    a.rig.as_ref().map_or(0, |r| r.cascade_count()),
+                    a.rig().map_or(0, |r| r.cascade_count()),
                     a.config.shadow.resolution
                 ),
                 fit_label(a),
@@ -727,7 +726,7 @@ pub fn summary_table(c: &Comparison) -> String {
             preset_of(a).map_or("?", |p| p.as_str()),
             format!(
                 "{}x{}",
-                a.rig.as_ref().map_or(0, |r| r.cascade_count()),
+                a.rig().map_or(0, |r| r.cascade_count()),
                 a.config.shadow.resolution
             ),
             fit_label(a),

@@ -571,7 +571,7 @@ pub fn count_nonfinite(a: &Analysis) -> usize {
     for d in &a.density {
         n += bad(&[d.depth, d.texel_size, d.pixel_size, d.texels_per_pixel, d.aliasing]);
     }
-    for p in [&a.snapped, &a.unsnapped].into_iter().flatten() {
+    for p in [a.snapped(), a.unsnapped()].into_iter().flatten() {
         for f in &p.frames {
             n += bad(&[
                 f.size_change,
@@ -649,7 +649,7 @@ pub struct StressOptions {
 
 fn f32_residual(a: &Analysis) -> F32Residual {
     F32Residual {
-        drift_max: a.snapped.as_ref().map_or(0.0, |p| p.stats.max),
+        drift_max: a.snapped().map_or(0.0, |p| p.stats.max),
         lookup_error_max: a.summary.lookup_error_max,
         coverage_violations: a.summary.coverage_violations,
     }
@@ -685,7 +685,7 @@ pub fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
     let mut nonfinite = count_nonfinite(&a);
     let mut notes = render_errors(&a);
 
-    if let Some(rig) = &a.rig {
+    if let Some(rig) = a.rig() {
         result.checks.push(check_splits_increasing(&rig.splits));
         result
             .checks
@@ -711,7 +711,7 @@ pub fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
     }
     let stabilised = sphere.as_ref().unwrap_or(&a);
     if inputs.preset.is_none() {
-        if let Some(p) = &stabilised.snapped {
+        if let Some(p) = stabilised.snapped() {
             result.checks.push(check_stabilised_shimmer(p.stats.max));
         }
         result.checks.push(check_coverage(violations));
@@ -973,7 +973,10 @@ mod tests {
         a.summary.max_aliasing = f64::NAN;
         assert_eq!(count_nonfinite(&a), 1);
         a.density[3].aliasing = f64::INFINITY;
-        a.snapped.as_mut().unwrap().frames[0].phase_drift_max = f64::NAN;
+        let crate::analysis::Outcome::Cascades(m) = &mut a.outcome else {
+            panic!("the baseline needs cascades")
+        };
+        m.snapped.frames[0].phase_drift_max = f64::NAN;
         a.cascades[1].light_far = f64::NEG_INFINITY;
         assert_eq!(count_nonfinite(&a), 4);
         let errors = render_errors(&a);

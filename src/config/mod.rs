@@ -807,7 +807,7 @@ fn cross_checks(config: &Config, v: &Validator<'_>) -> Result<()> {
     })?;
     // binary32 must be able to hold every texel coordinate the emulated pipeline computes.
     if config.shadow.precision == Precision::F32 {
-        if let Some(why) = crate::analysis::f32_range_problem(&config) {
+        if let Some(why) = crate::analysis::f32_range_problem(config) {
             return Err(v.invalid("shadow.precision", "\"f32\"", &why));
         }
     }

@@ -287,10 +287,13 @@ fn probe_kernel<M: PathModel>(
     (ss, mx_sq, flipped, served)
 }
 
+/// A cascade's window in one frame and where its probes landed in it.
+type Landed<W> = (W, Vec<Option<Landing>>);
+
 /// One snap mode of a walk: its totals, each cascade's previous window and landings.
 struct ModeState<M: PathModel> {
     totals: PathTotals,
-    prev: Vec<Option<(M::Win, Vec<Option<Landing>>)>>,
+    prev: Vec<Option<Landed<M::Win>>>,
     /// A spare landing buffer, reused frame to frame.
     spare: Vec<Option<Landing>>,
 }

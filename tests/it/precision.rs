@@ -169,7 +169,7 @@ fn f64_stabilised_shimmer_stays_below_1e_9_at_every_world_offset() {
                 ("motion.step", &format!("step = {step}")),
             ]);
             let a = analyze(&config(&text), &AnalysisOptions::full());
-            let s = a.snapped.as_ref().unwrap();
+            let s = a.snapped().unwrap();
             assert!(s.stats.max < 1e-9, "{offset} {path}: {}", s.stats.max);
             assert_eq!(a.summary.coverage_violations, 0);
             assert_eq!(a.summary.lookup_error_max, 0.0, "S7 is 0 in f64");
@@ -365,7 +365,7 @@ fn the_analysis_in_f32_reports_the_emulated_pipeline() {
     let mut c64 = c.clone();
     c64.shadow.precision = Precision::F64;
     let a64 = analyze(&c64, &AnalysisOptions::full());
-    assert!(a64.snapped.unwrap().stats.max < 1e-9);
+    assert!(a64.snapped().unwrap().stats.max < 1e-9);
     assert_eq!((a64.summary.lookup_error_max, a64.summary.lookup_error_rms), (0.0, 0.0));
     // Camera-relative: near zero.
     let rel = config(&with(&[
@@ -411,7 +411,7 @@ fn the_world_offset_moves_camera_target_scene_and_path_file_together() {
     // rounding of coordinates near 1e5 (relative 1e-16 * 1e5 / 0.1 near plane ~ 1e-10).
     let a0 = analyze(&plain, &AnalysisOptions::full());
     let a1 = analyze(&moved, &AnalysisOptions::full());
-    for (x, y) in a0.rig.unwrap().splits.iter().zip(&a1.rig.unwrap().splits) {
+    for (x, y) in a0.rig().unwrap().splits.iter().zip(&a1.rig().unwrap().splits) {
         assert!((x - y).abs() <= 1e-8 * y, "{x} {y}");
     }
     assert!((a0.summary.max_aliasing - a1.summary.max_aliasing).abs() <= 1e-8 * a0.summary.max_aliasing);

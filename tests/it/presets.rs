@@ -1340,7 +1340,7 @@ step = 0.7
             let a = analyze(&c, &AnalysisOptions::full());
             let json = csm_lab::output::summary_value(&a);
             prop_assert!(csm_lab::output::check_json_finite("summary", &json).is_ok(), "{}", json);
-            if let Some(rig) = &a.rig {
+            if let Some(rig) = a.rig() {
                 prop_assert!(rig.splits.windows(2).all(|w| w[0] <= w[1]), "{:?}", rig.splits);
                 prop_assert_eq!(rig.splits[0], c.camera.near);
                 prop_assert!(*rig.splits.last().unwrap() <= c.camera.far);

@@ -51,7 +51,7 @@ fn a_shadow_distance_before_the_near_plane_needs_no_cascades() {
     ]);
     let a = analyze(&config(&text), &AnalysisOptions::full());
     assert!(!a.summary.cascades_needed);
-    assert!(a.rig.is_none());
+    assert!(a.rig().is_none());
 }
 
 /// fov_y_deg = 2.2e-308 passed "strictly between 0 and 180"; tan(fov/2) underflowed and the

@@ -236,7 +236,7 @@ proptest! {
     fn windows_cover_their_slices_for_random_cameras_lights_and_fits(text in arb_scene()) {
         let c = config(&text);
         let a = analyze(&c, &AnalysisOptions::summary_only());
-        if let (Some(s), Some(u)) = (&a.snapped, &a.unsnapped) {
+        if let (Some(s), Some(u)) = (a.snapped(), a.unsnapped()) {
             prop_assert_eq!(s.coverage.total(), 0);
             prop_assert_eq!(u.coverage.total(), 0);
             if c.shadow.fit == csm_lab::config::Fit::Sphere {
