@@ -14,6 +14,12 @@ impl Config {
             .map_or_else(|| self.name.clone(), |p| p.display().to_string())
     }
 
+    /// The "value not allowed" error for `key`, located at this config's file.
+    fn refuse(&self, key: &str, value: impl std::fmt::Display, allowed: &str) -> crate::error::Error {
+        let label = self.label();
+        Validator { path: &label, text: "" }.invalid(key, value, allowed)
+    }
+
     fn checked(self) -> Result<Config> {
         let label = self.label();
         cross_checks(&self, &Validator { path: &label, text: "" })?;
@@ -22,9 +28,7 @@ impl Config {
 
     fn set_lambda(&mut self, lambda: f64) -> Result<()> {
         if !(0.0..=1.0).contains(&lambda) {
-            let label = self.label();
-            let v = Validator { path: &label, text: "" };
-            return Err(v.invalid("shadow.lambda", lambda, "a number in [0, 1] (0 uniform, 1 logarithmic)"));
+            return Err(self.refuse("shadow.lambda", lambda, "a number in [0, 1] (0 uniform, 1 logarithmic)"));
         }
         self.shadow.lambda = lambda;
         Ok(())
@@ -32,9 +36,7 @@ impl Config {
 
     fn set_cascades(&mut self, n: usize) -> Result<()> {
         if !(1..=16).contains(&n) {
-            let label = self.label();
-            let v = Validator { path: &label, text: "" };
-            return Err(v.invalid("shadow.cascades", n, "an integer in 1..=16"));
+            return Err(self.refuse("shadow.cascades", n, "an integer in 1..=16"));
         }
         self.shadow.cascades = n;
         Ok(())
@@ -42,9 +44,7 @@ impl Config {
 
     fn set_resolution(&mut self, n: u32) -> Result<()> {
         if !(16..=16384).contains(&n) {
-            let label = self.label();
-            let v = Validator { path: &label, text: "" };
-            return Err(v.invalid("shadow.resolution", n, "an integer in 16..=16384"));
+            return Err(self.refuse("shadow.resolution", n, "an integer in 16..=16384"));
         }
         self.shadow.resolution = n;
         Ok(())
@@ -99,26 +99,25 @@ impl Config {
     /// The config with a generated motion path (not a path file): `frames` poses, `step` as a
     /// config file would write it (world units per frame, or degrees for the rotations).
     pub fn with_motion(&self, path: MotionPath, frames: usize, step_as_written: f64) -> Result<Config> {
-        let label = self.label();
-        let v = Validator { path: &label, text: "" };
+        let v = |key: &str, value: &dyn std::fmt::Display, allowed: &str| self.refuse(key, value, allowed);
         if matches!(path, MotionPath::File { .. }) {
-            return Err(v.invalid(
+            return Err(v(
                 "motion.path",
-                "\"file\"",
+                &"\"file\"",
                 "a generated path (strafe, dolly, yaw, pitch, orbit)",
             ));
         }
         if !(2..=1_000_000).contains(&frames) {
-            return Err(v.invalid("motion.frames", frames, "an integer in 2..=1000000"));
+            return Err(v("motion.frames", &frames, "an integer in 2..=1000000"));
         }
         if !step_as_written.is_finite() {
-            return Err(v.invalid("motion.step", step_as_written, "a finite number"));
+            return Err(v("motion.step", &step_as_written, "a finite number"));
         }
         let step = if path.is_translation() {
             if step_as_written.abs() * (frames - 1) as f64 > super::MAX_WORLD {
-                return Err(v.invalid(
+                return Err(v(
                     "motion.step",
-                    step_as_written,
+                    &step_as_written,
                     &format!("a step whose {frames} frames travel at most 1e9 world units"),
                 ));
             }

@@ -313,6 +313,29 @@ impl Rig {
         }
     }
 
+    /// Cascade `i`'s basis in the frame of `lp`, and the camera frame expressed in it.
+    pub fn cascade_pose(&self, i: usize, lp: &LightPose) -> (LightBasis, LightPose) {
+        if self.fixed_basis() {
+            (self.light, *lp)
+        } else {
+            let b = self.basis(i, lp);
+            (b, LightPose::new(&b, &lp.pose))
+        }
+    }
+
+    /// With a fixed basis, each probe's light-space x/y (the same in every frame); empty
+    /// otherwise.
+    pub fn fixed_probe_xy(&self, probes: &[Vec<DVec3>]) -> Vec<Vec<DVec2>> {
+        if self.fixed_basis() {
+            probes
+                .iter()
+                .map(|ps| ps.iter().map(|p| self.light.to_light_xy(*p)).collect())
+                .collect()
+        } else {
+            Vec::new()
+        }
+    }
+
     /// Cascade `i`'s window for a camera frame, in the cascade's basis ([`Rig::basis`]). Both
     /// snap modes use the same window size, so comparing them isolates the effect of snapping.
     pub fn window(&self, i: usize, lp: &LightPose, snapped: bool) -> Window {

@@ -570,19 +570,11 @@ pub struct EngineWin {
 
 impl<'a> EnginePath<'a> {
     pub fn new(rig: &'a Rig, probes: &'a [Vec<DVec3>], space: SnapSpace) -> Self {
-        let probe_xy = if rig.fixed_basis() {
-            probes
-                .iter()
-                .map(|ps| ps.iter().map(|p| rig.light.to_light_xy(*p)).collect())
-                .collect()
-        } else {
-            Vec::new()
-        };
         EnginePath {
             rig,
             engine: EnginePipeline::new(rig),
             probes,
-            probe_xy,
+            probe_xy: rig.fixed_probe_xy(probes),
             space,
             pose: None,
             lp: None,
@@ -613,12 +605,7 @@ impl PathModel for EnginePath<'_> {
     fn shared(&self, i: usize) -> EngineShared {
         let lp = self.lp.expect("begin_frame first");
         let anchor = self.anchors[i];
-        let (basis, lp) = if self.rig.fixed_basis() {
-            (self.rig.light, lp)
-        } else {
-            let b = self.rig.basis(i, &lp);
-            (b, LightPose::new(&b, &lp.pose))
-        };
+        let (basis, lp) = self.rig.cascade_pose(i, &lp);
         let rows = self.engine.rows_of(i, &lp.pose);
         EngineShared {
             anchor,

@@ -258,20 +258,11 @@ pub struct RigShared {
 
 impl<'a> RigPath<'a> {
     pub fn new(rig: &'a Rig, probes: &'a [Vec<DVec3>]) -> Self {
-        let fixed = rig.fixed_basis();
-        let probe_xy = if fixed {
-            probes
-                .iter()
-                .map(|ps| ps.iter().map(|p| rig.light.to_light_xy(*p)).collect())
-                .collect()
-        } else {
-            Vec::new()
-        };
         RigPath {
             rig,
             probes,
-            probe_xy,
-            fixed,
+            probe_xy: rig.fixed_probe_xy(probes),
+            fixed: rig.fixed_basis(),
             fast: fast_walk_applies(rig),
             lp: None,
         }
@@ -298,12 +289,7 @@ impl PathModel for RigPath<'_> {
     fn shared(&self, i: usize) -> RigShared {
         let rig = self.rig;
         let lp = self.lp.expect("begin_frame first");
-        let (basis, lp) = if self.fixed {
-            (rig.light, lp)
-        } else {
-            let b = rig.basis(i, &lp);
-            (b, LightPose::new(&b, &lp.pose))
-        };
+        let (basis, lp) = rig.cascade_pose(i, &lp);
         let (corners, bounds) = if self.fast {
             let s = &rig.slices[i];
             let corners = lp.corners(&rig.lens, s.near, s.far);

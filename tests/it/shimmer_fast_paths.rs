@@ -61,22 +61,16 @@ fn coverage_of_shrunken_windows_matches_a_per_corner_count() {
             let got = along_path(&rig, &poses, &[], snapped, all_options()[0]).coverage;
             let m = rig.cascade_count();
             let (mut count, mut worst, mut slack_min) = (vec![0u64; m], vec![0.0f64; m], vec![f64::INFINITY; m]);
-            let n = rig.resolution as f64;
+            // The per-corner test of `Rig::coverage`, frame by frame, against the walk's
+            // extremes-first shortcut.
             for pose in &poses {
                 let lp = LightPose::new(&rig.light, pose);
                 for i in 0..m {
                     let w = rig.window(i, &lp, snapped);
-                    let s = &rig.slices[i];
-                    for corner in lp.corners(&rig.lens, s.near, s.far) {
-                        let t = w.texel_coords(corner);
-                        let slack = t.x.min(n - t.x).min(t.y).min(n - t.y);
-                        slack_min[i] = slack_min[i].min(slack);
-                        let tol = 1e-9 + 8.0 * f64::EPSILON * (corner / w.texel).abs().max_element();
-                        if -slack > tol {
-                            count[i] += 1;
-                            worst[i] = worst[i].max(-slack);
-                        }
-                    }
+                    let f = rig.coverage(i, &lp, &w);
+                    count[i] += f.violations;
+                    worst[i] = worst[i].max(f.worst_texels);
+                    slack_min[i] = slack_min[i].min(f.min_slack_texels);
                 }
             }
             if fit == "sphere" {
