@@ -1,5 +1,8 @@
 //! Scene-aware depth range: split only the depths where the scene can be seen.
 //!
+//! Depths are view depths (world units along the camera's forward axis, see
+//! [`crate::geometry`]).
+//!
 //! With `fit_depth_to_scene`, the scene's bounding box is intersected with the view frustum
 //! (clipped at `min(far, max_distance)`) and the split range is the view-depth extent of that
 //! intersection: `z_lo = max(near, nearest)`, `z_hi = min(far, max_distance, farthest)`. View depth is
