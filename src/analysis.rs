@@ -85,6 +85,17 @@ pub struct CascadeReport {
     pub width: f64,
     pub height: f64,
     pub texel_size: f64,
+    /// The window's centre in the cascade's light space (frame 0, snapped as configured):
+    /// world units along light x and y, and the same in texels (centre / texel size), so a
+    /// window can be compared with an engine's directly. (CSV only.)
+    #[serde(skip)]
+    pub centre_x: f64,
+    #[serde(skip)]
+    pub centre_y: f64,
+    #[serde(skip)]
+    pub centre_x_texels: f64,
+    #[serde(skip)]
+    pub centre_y_texels: f64,
     pub light_near: f64,
     pub light_far: f64,
     pub coverage_violations: u64,
@@ -318,6 +329,10 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
                 width: w.width(),
                 height: w.height(),
                 texel_size: w.texel_size(),
+                centre_x: w.centre().x,
+                centre_y: w.centre().y,
+                centre_x_texels: w.origin_texels.x + 0.5 * w.resolution as f64,
+                centre_y_texels: w.origin_texels.y + 0.5 * w.resolution as f64,
                 light_near,
                 light_far,
                 coverage_violations: configured.coverage.violations[i],

@@ -131,7 +131,7 @@ pub struct DensityCsv;
 pub struct ShimmerCsv;
 pub struct SummaryJson;
 
-pub const CASCADES_COLUMNS: [&str; 16] = [
+pub const CASCADES_COLUMNS: [&str; 20] = [
     "cascade",
     "near",
     "far",
@@ -139,6 +139,10 @@ pub const CASCADES_COLUMNS: [&str; 16] = [
     "width",
     "height",
     "texel_size",
+    "centre_x",
+    "centre_y",
+    "centre_x_texels",
+    "centre_y_texels",
     "light_near",
     "light_far",
     "coverage_violations",
@@ -168,6 +172,10 @@ impl Exporter<Analysis> for CascadesCsv {
                     num("width", c.width)?,
                     num("height", c.height)?,
                     num("texel_size", c.texel_size)?,
+                    num("centre_x", c.centre_x)?,
+                    num("centre_y", c.centre_y)?,
+                    num("centre_x_texels", c.centre_x_texels)?,
+                    num("centre_y_texels", c.centre_y_texels)?,
                     num("light_near", c.light_near)?,
                     num("light_far", c.light_far)?,
                     c.coverage_violations.to_string(),
