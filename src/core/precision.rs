@@ -4,16 +4,22 @@
 //! window sits on an exact integer and its shimmer is exactly zero at any distance from the
 //! world origin. Engines do not: they build the light matrix, the sphere centre, the snapped
 //! window and the shader lookup in binary32 (`f32`) at absolute world coordinates. This module
-//! redoes those steps the way an engine writes them, each `+ - * /` rounded to f32:
+//! redoes those steps the way an engine writes them, each `+ - * /` rounded to f32, for the
+//! rig's own [`crate::cascades::Scheme`] (csm-lab's fits and every engine preset alike):
 //!
-//! 1. `light_from_world` rows (the light x/y axes) stored in f32;
-//! 2. the camera position and unit axes stored in f32; sphere fit: the centre
-//!    `C = P + forward * c` in f32; AABB fit: the 8 slice corners `P + forward*z + right*(sx*z)
-//!    + up*(sy*z)` in f32, transformed and bounded in f32;
+//! 1. `light_from_world` rows (the light x/y axes) stored in f32: the rig's fixed basis, or
+//!    the basis the scheme derives from the camera that frame (computed in f64, then stored);
+//! 2. the camera position and unit axes stored in f32; an axis-centred window (any sphere
+//!    fit): the centre `C = P + forward * c` in f32; a box-shaped window (tight box, padded
+//!    box, box-centred square, box at the world origin): the 8 slice corners
+//!    `P + forward*z + right*(sx*z) + up*(sy*z)` in f32, transformed and bounded in f32, the
+//!    size from the bounds (plus padding and snapping border) or the scheme's constant side;
 //! 3. the light-space centre `c = light_from_world * C` (dot products, left to right);
 //! 4. the texel size `T = W / N` in f32;
 //! 5. snapping in world units: `round(c / (T*step)) * (T*step)` with the rig's
-//!    [`crate::snapping::SnapRule`] (round, floor or trunc). `k*T` is rarely representable in
+//!    [`crate::snapping::SnapRule`] (round, floor or trunc), on a grid through the world origin
+//!    or through the scheme's snap anchor (EEVEE's lamp), and only if the scheme snaps at all.
+//!    `k*T` is rarely representable in
 //!    f32, so the snapped centre is off the grid by up to half an ulp of `c`, differently every
 //!    frame: this is the engine bug the emulation reproduces;
 //! 6. the window origin `o = snapped - W/2` in f32;

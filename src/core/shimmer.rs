@@ -22,6 +22,9 @@
 //! **Moving bases.** A few engine presets derive the light basis from the camera (Filament's
 //! look-to with the camera's right axis, seed 004's look-at from a light position). Then the
 //! grid rotates between frames and every probe is read through each frame's own basis.
+//!
+//! The walk along the path is [`crate::walk::walk`]; [`RigPath`] is the exact f64 rig as a
+//! [`crate::walk::PathModel`], the binary32 pipeline is the other ([`crate::precision`]).
 
 use glam::{DVec2, DVec3};
 
