@@ -76,7 +76,9 @@ fn analyze_writes_every_file_and_prints_the_table() {
     }
     let header = std::fs::read_to_string(o.join("cascades.csv")).unwrap();
     assert!(
-        header.starts_with("cascade,near,far,radius,width,height,texel_size,light_near,light_far,coverage_violations")
+        header.starts_with(
+        "cascade,near,far,radius,width,height,texel_size,centre_x,centre_y,centre_x_texels,centre_y_texels,light_near,light_far,coverage_violations"
+    )
     );
     let header = std::fs::read_to_string(o.join("density.csv")).unwrap();
     assert!(header.starts_with("depth,cascade,texel_size,pixel_size,texels_per_pixel,aliasing\n"));
