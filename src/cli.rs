@@ -238,12 +238,11 @@ fn precision_parser() -> impl clap::builder::TypedValueParser<Value = Precision>
 fn run_analyze(args: &AnalyzeArgs) -> Result<Outcome> {
     let mut config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
     if let Some(p) = args.precision {
-        config.shadow.precision = p;
-        if p == Precision::F32 {
-            if let Some(why) = crate::analysis::f32_range_problem(&config) {
-                return Err(crate::error::Error::flag("--precision", "f32", why));
-            }
-        }
+        // Through the validating constructor; a refusal names the flag that asked for it.
+        config = config.with_precision(p).map_err(|e| match e {
+            crate::error::Error::Invalid { allowed, .. } => crate::error::Error::flag("--precision", p.name(), allowed),
+            other => other,
+        })?;
     }
     let analysis = analyze(&config, &AnalysisOptions::full());
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&config));
