@@ -74,9 +74,9 @@ pub fn set_lambda(config: &mut Config, lambda: f64) -> Result<()> {
             )))
         }
     }
-    config.shadow.lambda = lambda;
-    // TODO(presets): a validating constructor for preset knobs; until then the cross-checks
-    // (camera path, binary32 range) run on the changed config here.
+    // TODO(presets): a validating constructor for preset knobs; until then the knob is set
+    // above and `with_lambda` sets shadow.lambda and re-runs the cross-checks (camera path,
+    // binary32 range) on the changed config.
     *config = config.with_lambda(lambda)?;
     Ok(())
 }
