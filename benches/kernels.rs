@@ -24,7 +24,7 @@ fn default_config() -> Config {
 
 fn cascade_build(c: &mut Criterion) {
     let config = default_config();
-    let (z_lo, z_hi) = depth_range::for_config(&config)
+    let (z_lo, z_hi) = depth_range::for_setup(&config.setup())
         .bounds()
         .expect("default scene needs cascades");
     let lens = Lens::new(config.camera.fov_y(), config.screen.aspect());
@@ -60,7 +60,7 @@ fn cascade_build(c: &mut Criterion) {
     });
 
     // The per-frame part alone: the camera's light-space frame and one snapped window.
-    let rig = Rig::from_config(&config).expect("default scene needs cascades");
+    let rig = csm_lab::analysis::rig(&config).expect("default scene needs cascades");
     let pose = config.camera.pose();
     c.bench_function("cascade_build/window_per_frame", |b| {
         b.iter(|| {

@@ -2,8 +2,8 @@
 //! Run: `cargo run --release --example drift_table`.
 
 fn main() {
-    match csm_lab::precision::drift_table() {
-        Ok(rows) => print!("{}", csm_lab::precision::drift_table_markdown(&rows)),
+    match csm_lab::drift_table::drift_table() {
+        Ok(rows) => print!("{}", csm_lab::drift_table::drift_table_markdown(&rows)),
         Err(e) => {
             eprintln!("error: {e}");
             std::process::exit(2);

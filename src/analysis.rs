@@ -6,7 +6,6 @@ use crate::config::Config;
 use crate::depth_range::{self, DepthRange};
 use crate::geometry::CameraPose;
 use crate::metrics::{self, Aggregates, DensitySample};
-use crate::motion;
 use crate::precision::{self, LookupError, Precision};
 use crate::shimmer::{self, PathResult, ShimmerOptions};
 
@@ -86,6 +85,13 @@ pub struct CascadeReport {
     pub width: f64,
     pub height: f64,
     pub texel_size: f64,
+    /// The window's centre in the cascade's light space (frame 0, snapped as configured):
+    /// world units along light x and y, and the same in texels (centre / texel size), so a
+    /// window can be compared with an engine's directly.
+    pub centre_x: f64,
+    pub centre_y: f64,
+    pub centre_x_texels: f64,
+    pub centre_y_texels: f64,
     pub light_near: f64,
     pub light_far: f64,
     pub coverage_violations: u64,
@@ -102,26 +108,74 @@ pub struct CascadeReport {
 pub struct Analysis {
     pub config: Config,
     pub range: DepthRange,
-    pub rig: Option<Rig>,
+    /// Per cascade, frame 0 (empty when no cascade is needed).
     pub cascades: Vec<CascadeReport>,
-    pub aggregates: Option<Aggregates>,
+    /// The density profile (empty when not asked for, or when no cascade is needed).
     pub density: Vec<DensitySample>,
-    pub snapped: Option<PathResult>,
-    pub unsnapped: Option<PathResult>,
-    /// S7 for the configured snap setting, when precision = "f32".
-    pub lookup_error: Option<LookupError>,
+    /// What was measured: cascades, or the scene needs none.
+    pub outcome: Outcome,
+    /// The flat metrics; all zero (except the memory) when no cascade is needed.
     pub summary: Summary,
     /// The preset's split/fit/snap rules, selection and light-depth findings (None without a preset).
     pub preset: Option<crate::presets::PresetReport>,
 }
 
+/// The result of an analysis: the scene is not visible within the shadow distance, or the
+/// cascades were built and measured.
+#[derive(Debug, Clone)]
+pub enum Outcome {
+    NoCascades,
+    Cascades(Box<Measured>),
+}
+
+/// Everything measured about the cascades of a scene that needs them.
+#[derive(Debug, Clone)]
+pub struct Measured {
+    pub rig: Rig,
+    pub aggregates: Aggregates,
+    pub snapped: PathResult,
+    pub unsnapped: PathResult,
+    /// S7 for the configured snap setting, when precision = "f32".
+    pub lookup_error: Option<LookupError>,
+}
+
 impl Analysis {
+    /// The cascades' measurements, or None when the scene needs no cascade.
+    pub fn measured(&self) -> Option<&Measured> {
+        match &self.outcome {
+            Outcome::Cascades(m) => Some(m),
+            Outcome::NoCascades => None,
+        }
+    }
+
+    pub fn rig(&self) -> Option<&Rig> {
+        self.measured().map(|m| &m.rig)
+    }
+
+    pub fn aggregates(&self) -> Option<&Aggregates> {
+        self.measured().map(|m| &m.aggregates)
+    }
+
+    /// The path with snapping.
+    pub fn snapped(&self) -> Option<&PathResult> {
+        self.measured().map(|m| &m.snapped)
+    }
+
+    /// The path without snapping.
+    pub fn unsnapped(&self) -> Option<&PathResult> {
+        self.measured().map(|m| &m.unsnapped)
+    }
+
+    pub fn lookup_error(&self) -> Option<&LookupError> {
+        self.measured().and_then(|m| m.lookup_error.as_ref())
+    }
+
     /// The path result of the configured snap mode.
     pub fn configured_path(&self) -> Option<&PathResult> {
         if self.config.shadow.snap {
-            self.snapped.as_ref()
+            self.snapped()
         } else {
-            self.unsnapped.as_ref()
+            self.unsnapped()
         }
     }
 }
@@ -135,12 +189,29 @@ pub fn mib(bytes: u64) -> f64 {
     bytes as f64 / (1024.0 * 1024.0)
 }
 
+/// The rig of a config: its engine preset's, or csm-lab's own pipeline built from the
+/// config's domain values. None when the scene needs no cascades.
+pub fn rig(config: &Config) -> Option<Rig> {
+    match &config.shadow.preset {
+        Some(preset) => crate::presets::rig(config, preset),
+        None => Rig::for_setup(&config.setup()),
+    }
+}
+
+/// Why a config cannot run with the binary32 pipeline (completes "use precision = ..."), or
+/// None; see [`precision::f32_range_problem`].
+pub fn f32_range_problem(config: &Config) -> Option<String> {
+    let rig = rig(config)?;
+    let poses = config.camera_path().ok()?;
+    precision::f32_range_problem(&rig, &poses, &config.scene, config.shadow.snap_space)
+}
+
 /// Runs the analysis of one validated config.
 pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
-    let rig = Rig::from_config(config);
+    let rig = rig(config);
     // A preset has its own range (no scene clipping): the view depths that read its cascades.
     let range = match (&config.shadow.preset, &rig) {
-        (None, _) => depth_range::for_config(config),
+        (None, _) => depth_range::for_setup(&config.setup()),
         (Some(_), Some(r)) => DepthRange::Range {
             z_lo: r.splits[0],
             z_hi: r.splits[r.cascade_count()],
@@ -155,13 +226,9 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         return Analysis {
             config: config.clone(),
             range,
-            rig: None,
             cascades: Vec::new(),
-            aggregates: None,
             density: Vec::new(),
-            snapped: None,
-            unsnapped: None,
-            lookup_error: None,
+            outcome: Outcome::NoCascades,
             summary: Summary {
                 cascades_needed: false,
                 z_lo: 0.0,
@@ -206,7 +273,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         Vec::new()
     };
 
-    let poses = motion::camera_path(config).expect("validated when the config was loaded");
+    let poses = config.camera_path().expect("validated when the config was loaded");
     let sopts = ShimmerOptions {
         cell_flips: opts.cell_flips,
         probe_drift: false,
@@ -227,8 +294,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         }
         Precision::F32 => {
             let space = config.shadow.snap_space;
-            let s = precision::along_path(&rig, &poses, &probes, space, true, sopts);
-            let u = precision::along_path(&rig, &poses, &probes, space, false, sopts);
+            let (s, u) = precision::along_path_both(&rig, &poses, &probes, space, sopts);
             let lookup = if config.shadow.snap { s.lookup } else { u.lookup };
             (s.path, u.path, Some(lookup))
         }
@@ -264,6 +330,10 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
                 width: w.width(),
                 height: w.height(),
                 texel_size: w.texel_size(),
+                centre_x: w.centre().x,
+                centre_y: w.centre().y,
+                centre_x_texels: w.origin_texels.x + 0.5 * w.resolution as f64,
+                centre_y_texels: w.origin_texels.y + 0.5 * w.resolution as f64,
                 light_near,
                 light_far,
                 coverage_violations: configured.coverage.violations[i],
@@ -302,13 +372,15 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         config: config.clone(),
         range,
         preset,
-        rig: Some(rig),
         cascades,
-        aggregates: Some(aggregates),
         density,
-        snapped: Some(snapped),
-        unsnapped: Some(unsnapped),
-        lookup_error,
+        outcome: Outcome::Cascades(Box::new(Measured {
+            rig,
+            aggregates,
+            snapped,
+            unsnapped,
+            lookup_error,
+        })),
         summary,
     }
 }

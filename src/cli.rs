@@ -53,7 +53,7 @@ pub struct AnalyzeArgs {
     pub format: Format,
     /// Arithmetic of the cascade pipeline, overriding `[shadow] precision`: f64 (exact) or f32
     /// (an engine's binary32 pipeline, emulated; see `snap_space`).
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = precision_parser())]
     pub precision: Option<Precision>,
     /// Reproduce an engine's cascades instead of csm-lab's own (overrides shadow.preset):
     /// dart, threejs, unity-sample, eevee, learnopengl, bevy, godot, unreal, unity, unity-urp, filament.
@@ -180,4 +180,14 @@ pub fn run(cli: Cli) -> Result<Outcome> {
         Command::Bench(args) => bench::execute(&args),
         Command::Compare(args) => compare::execute(&args),
     }
+}
+
+/// `--precision`: the core's [`Precision`], listed with a line of help per value.
+fn precision_parser() -> impl clap::builder::TypedValueParser<Value = Precision> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new([
+        PossibleValue::new("f64").help("Exact: texel-unit windows, snapped shimmer exactly 0 at any world offset"),
+        PossibleValue::new("f32").help("An engine's binary32 pipeline, emulated operation by operation"),
+    ])
+    .map(|s| Precision::from_name(&s).expect("one of the listed values"))
 }

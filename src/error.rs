@@ -96,6 +96,10 @@ pub enum GridError {
     /// The inputs parse but leave the command nothing to do.
     #[error("{context}: {message}")]
     Unusable { context: String, message: String },
+
+    /// One point of a sweep that its config cannot hold.
+    #[error("sweep point {point}: {source}")]
+    Point { point: String, source: Box<Error> },
 }
 
 /// An engine preset that does not exist or cannot do what was asked.

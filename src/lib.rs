@@ -7,18 +7,20 @@
 //! [`geometry`]; every formula is stated in `docs/metrics.md`, and every metric is named once,
 //! in the registry [`metric`].
 //!
-//! Pipeline: [`config`] → [`depth_range`] → [`splits`] → [`cascades`] ([`fitting`],
-//! [`snapping`]) → [`metrics`], [`shimmer`] → [`analysis`] → [`report`], [`figures`]; each
-//! command in [`commands`] runs that pipeline and hands its result to the report layer.
+//! Pipeline: [`config`] → [`scene`] (plain domain values) → [`depth_range`] → [`splits`] →
+//! [`cascades`] ([`fitting`], [`snapping`]) → [`metrics`], [`walk`] ([`shimmer`], [`precision`])
+//! → [`analysis`] → [`report`], [`figures`]. The core (`src/core/`) sees only the domain values;
+//! each command in [`commands`] runs that pipeline and hands its result to the report layer.
 
 pub mod analysis;
 pub mod cli;
 pub mod commands;
 pub mod config;
 pub mod core;
+pub mod drift_table;
 pub mod error;
 pub mod figures;
-mod load;
+pub mod load;
 pub mod metric;
 pub mod presets;
 pub mod report;
@@ -27,7 +29,7 @@ pub mod suggest;
 // Short paths for the modules most callers use.
 pub use crate::commands::{bench, check, compare, stress, sweep};
 pub use crate::core::{
-    cascades, depth_range, fitting, geometry, metrics, motion, precision, rng, shimmer, snapping, splits,
+    cascades, depth_range, fitting, geometry, metrics, motion, precision, rng, scene, shimmer, snapping, splits, walk,
 };
 pub use crate::figures as plots;
 pub use crate::report::output;

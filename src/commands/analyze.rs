@@ -4,28 +4,19 @@
 use super::{default_out_dir, load_with_preset_flag, print_result, Outcome};
 use crate::analysis::{analyze, AnalysisOptions};
 use crate::cli::AnalyzeArgs;
-use crate::error::Result;
+use crate::error::{ConfigError, Error, Result};
 use crate::output;
-use crate::precision::{self, Precision};
 use crate::report;
 
 /// The `analyze` command.
 pub fn execute(args: &AnalyzeArgs) -> Result<Outcome> {
     let mut config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
     if let Some(p) = args.precision {
-        if p == Precision::F32 && config.shadow.preset.is_some() {
-            return Err(crate::error::Error::flag(
-                "--precision",
-                "f32",
-                "the binary32 emulation models csm-lab's own sphere and aabb pipelines, not engine presets",
-            ));
-        }
-        config.shadow.precision = p;
-        if p == Precision::F32 {
-            if let Some(why) = precision::f32_range_problem(&config) {
-                return Err(crate::error::Error::flag("--precision", "f32", why));
-            }
-        }
+        // Through the validating constructor; a refusal names the flag that asked for it.
+        config = config.with_precision(p).map_err(|e| match e {
+            Error::Config(ConfigError::Invalid { allowed, .. }) => Error::flag("--precision", p.name(), allowed),
+            other => other,
+        })?;
     }
     let analysis = analyze(&config, &AnalysisOptions::full());
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&config));

@@ -30,10 +30,10 @@ use crate::cli::BenchArgs;
 use crate::config::{Config, Fit, MotionPath};
 use crate::error::{Error, GridError, Result};
 use crate::metrics::{self, DensitySample};
-use crate::motion;
 use crate::output::{self, Exporter};
 use crate::report;
 use crate::shimmer::{self, wrap, ShimmerOptions};
+use crate::walk::PathModel;
 
 /// The relative error the summary table asks each metric to reach.
 pub const TARGET_ERROR: f64 = 1e-3;
@@ -158,18 +158,14 @@ fn counts(lo: u32, hi: u32, default: usize) -> Vec<usize> {
     out
 }
 
-fn with_path(config: &Config, path: MotionPath, step_deg: f64, frames: usize, fit: Fit) -> Config {
-    let mut c = config.clone();
-    c.motion.path = path;
-    c.motion.step_as_written = step_deg;
-    c.motion.step = step_deg.to_radians();
-    c.motion.frames = frames;
-    c.shadow.fit = fit;
-    c
+/// The config moving along `path` (a rotation of `step_deg` degrees per frame) with `fit`,
+/// through the validating constructors.
+fn with_path(config: &Config, path: MotionPath, step_deg: f64, frames: usize, fit: Fit) -> Result<Config> {
+    config.with_fit(fit)?.with_motion(path, frames, step_deg)
 }
 
 fn poses_of(config: &Config) -> Result<Vec<crate::geometry::CameraPose>> {
-    motion::camera_path(config).map_err(|(frame, why)| {
+    config.camera_path().map_err(|(frame, why)| {
         unusable(format!(
             "the {} path of this camera is invalid at frame {frame} ({why}); use a camera that is not looking straight up or down",
             config.motion.path.name()
@@ -206,9 +202,10 @@ fn frame0_texels(config: &Config, rig: &Rig) -> Vec<f64> {
 pub fn crossing_resolution(config: &Config) -> u32 {
     let mut best = (f64::INFINITY, config.shadow.resolution);
     for k in 4..=14 {
-        let mut c = config.clone();
-        c.shadow.resolution = 1 << k;
-        if let Some(rig) = Rig::from_config(&c) {
+        let Ok(c) = config.with_resolution(1 << k) else {
+            continue;
+        };
+        if let Some(rig) = crate::analysis::rig(&c) {
             let k_px = rig.lens.pixels_per_unit_slope(c.screen.height);
             let f = metrics::aggregates(&rig.splits, &frame0_texels(&c, &rig), k_px).undersampled_fraction;
             if (f - 0.5).abs() < best.0 {
@@ -221,14 +218,13 @@ pub fn crossing_resolution(config: &Config) -> u32 {
 
 /// Density-profile metrics: mean and mean-log aliasing at the config's settings, the
 /// under-sampled fraction at [`crossing_resolution`].
-fn bench_density(config: &Config, crossing: u32, repeats: usize, rows: &mut Vec<BenchRow>) {
-    let mut at_crossing = config.clone();
-    at_crossing.shadow.resolution = crossing;
+fn bench_density(config: &Config, crossing: u32, repeats: usize, rows: &mut Vec<BenchRow>) -> Result<()> {
+    let at_crossing = config.with_resolution(crossing)?;
     for (c, metrics_here) in [
         (config, &["density_mean_aliasing", "density_mean_log_aliasing"][..]),
         (&at_crossing, &["density_undersampled_fraction"][..]),
     ] {
-        let rig = Rig::from_config(c).expect("checked by the caller");
+        let rig = crate::analysis::rig(c).expect("checked by the caller");
         let texel = frame0_texels(c, &rig);
         let k = rig.lens.pixels_per_unit_slope(c.screen.height);
         let agg = metrics::aggregates(&rig.splits, &texel, k);
@@ -256,6 +252,7 @@ fn bench_density(config: &Config, crossing: u32, repeats: usize, rows: &mut Vec<
             }
         }
     }
+    Ok(())
 }
 
 /// S4 under the config's camera strafing unsnapped, against its closed form.
@@ -265,30 +262,25 @@ fn bench_cell_flips(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -
         MotionPath::Strafe => config.motion.step,
         _ => 0.05,
     };
-    let mut c = config.clone();
-    c.motion.path = MotionPath::Strafe;
-    c.motion.step = step;
-    c.motion.step_as_written = step;
-    let rig = Rig::from_config(&c).expect("checked by the caller");
+    let c = config.with_motion(MotionPath::Strafe, config.motion.frames, step)?;
+    let rig = crate::analysis::rig(&c).expect("checked by the caller");
     let poses = poses_of(&c)?;
     // Closed form per frame pair and cascade, from the window origins alone.
     let m = rig.cascade_count();
     let mut sum = 0.0;
     let mut pairs = 0usize;
     let mut prev: Vec<Option<crate::fitting::Window>> = vec![None; m];
-    for pose in &poses {
-        let lp = LightPose::new(&rig.light, pose);
-        for (i, slot) in prev.iter_mut().enumerate() {
-            let w = rig.window(i, &lp, false);
-            if let Some(p) = slot {
-                let dx = wrap(p.origin_texels.x - w.origin_texels.x).abs();
-                let dy = wrap(p.origin_texels.y - w.origin_texels.y).abs();
-                sum += dx + dy - dx * dy;
-                pairs += 1;
-            }
-            *slot = Some(w);
+    let mut model = shimmer::RigPath::new(&rig, &[]);
+    crate::walk::each_cascade_frame(&mut model, &poses, |model, _t, i, shared| {
+        let w = model.window(i, shared, false).window;
+        if let Some(p) = prev[i] {
+            let dx = wrap(p.origin_texels.x - w.origin_texels.x).abs();
+            let dy = wrap(p.origin_texels.y - w.origin_texels.y).abs();
+            sum += dx + dy - dx * dy;
+            pairs += 1;
         }
-    }
+        prev[i] = Some(w);
+    });
     let reference = sum / pairs as f64;
     let opts = ShimmerOptions {
         cell_flips: true,
@@ -315,8 +307,8 @@ fn bench_cell_flips(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -
 
 /// S3 RMS and max of the snapped tight AABB fit under a yaw, against a dense probe run.
 fn bench_aabb_drift(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Result<()> {
-    let c = with_path(config, MotionPath::Yaw, YAW_STEP_DEG, config.motion.frames, Fit::Aabb);
-    let rig = Rig::from_config(&c).expect("checked by the caller");
+    let c = with_path(config, MotionPath::Yaw, YAW_STEP_DEG, config.motion.frames, Fit::Aabb)?;
+    let rig = crate::analysis::rig(&c).expect("checked by the caller");
     let poses = poses_of(&c)?;
     let pose0 = c.camera.pose();
     let measure = |n: usize| {
@@ -352,8 +344,8 @@ fn bench_frames(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Re
         YAW_STEP_DEG,
         REFERENCE_TURNS * turn + 1,
         Fit::Sphere,
-    );
-    let rig = Rig::from_config(&long).expect("checked by the caller");
+    )?;
+    let rig = crate::analysis::rig(&long).expect("checked by the caller");
     let reference = {
         let poses = poses_of(&long)?;
         shimmer::along_path(&rig, &poses, &[], false, NO_PROBE_OPTIONS)
@@ -361,7 +353,7 @@ fn bench_frames(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Re
             .rms
     };
     for n in counts(1, 14, config.motion.frames) {
-        let c = with_path(config, MotionPath::Yaw, YAW_STEP_DEG, n, Fit::Sphere);
+        let c = with_path(config, MotionPath::Yaw, YAW_STEP_DEG, n, Fit::Sphere)?;
         let (seconds, estimate) = best_time(repeats, || -> Result<f64> {
             let poses = poses_of(&c)?;
             Ok(shimmer::along_path(&rig, &poses, &[], false, NO_PROBE_OPTIONS)
@@ -384,7 +376,7 @@ fn bench_frames(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Re
 /// Runs every measurement on `config` (its camera, light, scene and shadow settings; the
 /// motion is set per metric as described in the module documentation).
 pub fn run(config: &Config, repeats: usize) -> Result<BenchReport> {
-    let Some(rig) = Rig::from_config(config) else {
+    let Some(rig) = crate::analysis::rig(config) else {
         return Err(unusable(format!(
             "{} needs no cascades (the scene is not visible within the shadow distance), so there is nothing to sample; use a scene the camera sees",
             config.name
@@ -393,7 +385,7 @@ pub fn run(config: &Config, repeats: usize) -> Result<BenchReport> {
     drop(rig);
     let crossing = crossing_resolution(config);
     let mut rows = Vec::new();
-    bench_density(config, crossing, repeats, &mut rows);
+    bench_density(config, crossing, repeats, &mut rows)?;
     bench_cell_flips(config, repeats, &mut rows)?;
     bench_aabb_drift(config, repeats, &mut rows)?;
     bench_frames(config, repeats, &mut rows)?;

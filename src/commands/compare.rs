@@ -74,7 +74,7 @@ pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool) -> Result
                 lenient_overrides: true,
             };
             let mut config = scene.clone();
-            crate::presets::apply(&mut config, &choice)?;
+            crate::load::apply_preset(&mut config, &choice)?;
             Ok(config)
         })
         .collect::<Result<Vec<_>>>()?;
@@ -107,8 +107,7 @@ pub fn coverage_extremes(a: &Analysis) -> (f64, f64) {
 
 /// The fit as the preset names it (csm-lab's own fit without a preset).
 pub fn fit_label(a: &Analysis) -> String {
-    a.rig
-        .as_ref()
+    a.rig()
         .map_or_else(|| a.config.shadow.fit.to_string(), |r| r.scheme.fit_label.clone())
 }
 

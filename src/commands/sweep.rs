@@ -667,20 +667,17 @@ impl Setting {
     /// engine's; [`Grid::resolve`] has already checked every point, so this does not fail for
     /// a resolved grid.
     pub fn apply(&self, base: &Config) -> Result<Config> {
-        let mut c = base.clone();
-        if c.shadow.preset.is_some() {
-            if crate::presets::axes(&c).lambda.is_some() {
-                crate::presets::set_lambda(&mut c, self.lambda)?;
-            }
-            crate::presets::set_cascades(&mut c, self.cascades)?;
-            crate::presets::set_resolution(&mut c, self.resolution)?;
-        } else {
-            c.shadow.lambda = self.lambda;
-            c.shadow.cascades = self.cascades;
-            c.shadow.resolution = self.resolution;
-            c.shadow.fit = self.fit;
+        if base.shadow.preset.is_none() {
+            return base.with_sweep_point(self.lambda, self.cascades, self.resolution, self.fit);
         }
-        Ok(c)
+        let mut c = base.clone();
+        if crate::presets::axes(&c).lambda.is_some() {
+            crate::presets::set_lambda(&mut c, self.lambda)?;
+        }
+        crate::presets::set_cascades(&mut c, self.cascades)?;
+        crate::presets::set_resolution(&mut c, self.resolution)?;
+        // The engine checked its own knobs; the set-up as a whole is checked again here.
+        c.rechecked()
     }
 
     pub fn label(&self) -> String {
@@ -702,11 +699,25 @@ pub struct Row {
 /// pool; `on_done` is called once per finished configuration (progress bars).
 pub fn run(base: &Config, grid: &Grid, threads: Option<usize>, on_done: &(dyn Fn() + Sync)) -> Result<Vec<Row>> {
     let settings = grid.settings();
+    // Every point is built and checked before any analysis runs: a setting the config could
+    // not hold (an f32 window that collapses at this fit, say) is refused like the file would be.
+    let configs = settings
+        .iter()
+        .map(|s| {
+            s.apply(base).map_err(|e| {
+                Error::from(GridError::Point {
+                    point: s.label(),
+                    source: Box::new(e),
+                })
+            })
+        })
+        .collect::<Result<Vec<Config>>>()?;
     let work = || {
         settings
             .par_iter()
-            .map(|s| {
-                let a = analyze(&s.apply(base)?, &AnalysisOptions::summary_only());
+            .zip(&configs)
+            .map(|(s, c)| {
+                let a = analyze(c, &AnalysisOptions::summary_only());
                 on_done();
                 Ok(Row {
                     setting: *s,

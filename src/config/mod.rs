@@ -7,56 +7,32 @@
 //! result in [`ShadowSettings::preset`].
 
 mod location;
+mod path_file;
 mod schema;
 mod validate;
 
 pub use location::{line_column, locate_key, locate_table, toml_error, Validator};
 pub use schema::SECTIONS;
-pub use validate::parse;
+pub use validate::{check_camera_path, parse};
 
 use std::any::Any;
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::DVec3;
-use serde::Deserialize;
 
 use crate::geometry::{Aabb, CameraPose};
-use crate::precision::{Precision, SnapSpace};
+
+pub use crate::fitting::Fit;
+pub use crate::motion::MotionPath;
+pub use crate::precision::{Precision, SnapSpace};
+pub use path_file::read_path_file;
 
 /// Largest world coordinate or distance accepted, in world units: far beyond any real world
 /// (engines re-centre long before), and small enough that every derived quantity (texel
 /// coordinates, squared radii) stays finite. Found necessary by the property tests: a camera
 /// strafing 1e305 units per frame turned the shimmer metrics into NaN.
 pub const MAX_WORLD: f64 = 1e9;
-
-/// How the window of a cascade is fitted around its slice of the view frustum.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Fit {
-    /// Minimal bounding sphere of the slice (closed form): a square window whose size depends
-    /// only on the lens and the split depths, so it never changes as the camera moves or turns.
-    /// Costs about 2x the texel area of a tight box on average, buys exact stability.
-    Sphere,
-    /// Tight light-space bounding box of the slice's 8 corners, refitted every frame. Sharper
-    /// (smaller texels) but its size changes whenever the camera turns, which snapping cannot fix.
-    Aabb,
-}
-
-impl Fit {
-    pub fn name(self) -> &'static str {
-        match self {
-            Fit::Sphere => "sphere",
-            Fit::Aabb => "aabb",
-        }
-    }
-}
-
-impl std::fmt::Display for Fit {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
 
 /// The camera as configured (frame 0 of the motion path).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -212,41 +188,6 @@ impl PresetInput {
     }
 }
 
-/// Which way the camera moves along the shimmer path, one pose per frame.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MotionPath {
-    /// Sideways along the camera's right axis, `step` world units per frame.
-    Strafe,
-    /// Along the view direction, `step` world units per frame.
-    Dolly,
-    /// Turning about the camera's up vector, `step` radians per frame.
-    Yaw,
-    /// Tilting about the camera's right axis, `step` radians per frame.
-    Pitch,
-    /// Circling the target about the up vector, `step` radians per frame.
-    Orbit,
-    /// Poses read from a CSV file: (position, target) per frame.
-    File { path: PathBuf, poses: Vec<(DVec3, DVec3)> },
-}
-
-impl MotionPath {
-    pub fn name(&self) -> &'static str {
-        match self {
-            MotionPath::Strafe => "strafe",
-            MotionPath::Dolly => "dolly",
-            MotionPath::Yaw => "yaw",
-            MotionPath::Pitch => "pitch",
-            MotionPath::Orbit => "orbit",
-            MotionPath::File { .. } => "file",
-        }
-    }
-
-    /// True when every frame differs from the previous one by a pure translation.
-    pub fn is_translation(&self) -> bool {
-        matches!(self, MotionPath::Strafe | MotionPath::Dolly)
-    }
-}
-
 #[derive(Debug, Clone, PartialEq)]
 pub struct MotionSettings {
     pub path: MotionPath,
@@ -337,5 +278,48 @@ impl Config {
     /// Effective far end of the shadow range before scene clipping: min(far, max_distance).
     pub fn shadow_far(&self) -> f64 {
         self.camera.far.min(self.shadow.max_distance)
+    }
+
+    /// The validated settings as the core's plain domain values (radians, unit light
+    /// direction, world offset already applied).
+    pub fn setup(&self) -> crate::scene::Setup {
+        use crate::scene::{Camera, Motion, Setup, ShadowParams};
+        let s = &self.shadow;
+        Setup {
+            camera: Camera {
+                position: self.camera.position,
+                target: self.camera.target,
+                up: self.camera.up,
+                fov_y: self.camera.fov_y(),
+                aspect: self.screen.aspect(),
+                near: self.camera.near,
+                far: self.camera.far,
+                screen_height: self.screen.height,
+            },
+            light_direction: self.light_direction,
+            bounds: self.scene,
+            shadow: ShadowParams {
+                max_distance: s.max_distance,
+                cascades: s.cascades,
+                lambda: s.lambda,
+                resolution: s.resolution,
+                fit: s.fit,
+                snap: s.snap,
+                fit_depth_to_scene: s.fit_depth_to_scene,
+                precision: s.precision,
+                snap_space: s.snap_space,
+            },
+            motion: Motion {
+                path: self.motion.path.clone(),
+                frames: self.motion.frames,
+                step: self.motion.step,
+            },
+        }
+    }
+
+    /// Camera poses of every frame of the motion path, or the first invalid frame and why.
+    pub fn camera_path(&self) -> std::result::Result<Vec<CameraPose>, (usize, String)> {
+        let setup = self.setup();
+        crate::motion::camera_path(&setup.camera, &setup.motion)
     }
 }

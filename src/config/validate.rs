@@ -243,7 +243,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
                 Some(dir) if p.is_relative() => dir.join(p),
                 _ => p,
             };
-            let poses = crate::motion::read_path_file(&p)?
+            let poses = super::read_path_file(&p)?
                 .into_iter()
                 .map(|(position, target)| (position + world_offset, target + world_offset))
                 .collect();
@@ -319,9 +319,16 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             ..PresetInput::default()
         },
     };
-    // Every pose of the motion path must be a valid camera (pitching through the up vector,
-    // or a path file row with position == target, is a config error, not a panic later).
-    crate::motion::camera_path(&config).map_err(|(frame, why)| {
+    check_camera_path(&config, v)?;
+    // The binary32 range check needs the cascades, which an engine preset may change: it runs
+    // once the preset is applied (`crate::load`).
+    Ok(config)
+}
+
+/// Every pose of the motion path must be a valid camera (pitching through the up vector, or a
+/// path file row with position == target, is a config error, not a panic later).
+pub fn check_camera_path(config: &Config, v: &Validator<'_>) -> Result<()> {
+    config.camera_path().map(|_| ()).map_err(|(frame, why)| {
         v.invalid(
             if matches!(config.motion.path, MotionPath::File { .. }) {
                 "motion.file"
@@ -331,12 +338,5 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             format!("{} (frame {frame})", config.motion.step_as_written),
             &format!("a motion that keeps a valid camera in every frame: {why}"),
         )
-    })?;
-    // binary32 must be able to hold every texel coordinate the emulated pipeline computes.
-    if config.shadow.precision == Precision::F32 {
-        if let Some(why) = crate::precision::f32_range_problem(&config) {
-            return Err(v.invalid("shadow.precision", "\"f32\"", &why));
-        }
-    }
-    Ok(config)
+    })
 }

@@ -8,9 +8,9 @@
 //!
 //! **Selection vs fitted slices.** `splits` are the *selection* boundaries: cascade `i` is the
 //! one a view depth in `[splits[i], splits[i+1])` reads (in a blend band, the coarser of the two
-//! cascades counts, the worst case of csm-math.md 3.5). `slices` are the *fitted* intervals the
+//! cascades counts, since it is the blurrier of the two a pixel may read). `slices` are the *fitted* intervals the
 //! windows are built around. csm-lab's own pipeline uses one for the other; engine presets
-//! (see [`crate::presets`]) may overlap their fitted slices (blend bands, Bevy's overlap, EEVEE's
+//! (built above the core, in the presets layer) may overlap their fitted slices (blend bands, Bevy's overlap, EEVEE's
 //! fade) or select differently from how they fit (three.js, seed 004).
 //!
 //! **Scheme.** How a window is sized, centred and snapped, which light basis a cascade uses,
@@ -20,10 +20,10 @@
 
 use glam::{DVec2, DVec3};
 
-use crate::config::{Config, Fit};
 use crate::depth_range::{self, DepthRange};
-use crate::fitting::{minimal_sphere, Sphere, Window};
-use crate::geometry::{intersection_range, Aabb, CameraPose, Hexahedron, Lens, LightBasis, Plane};
+use crate::fitting::{minimal_sphere, Fit, Sphere, Window};
+use crate::geometry::{intersection_range, Aabb, CameraPose, Corner, Hexahedron, Lens, LightBasis, Plane};
+use crate::scene::Setup;
 use crate::snapping::SnapRule;
 use crate::splits;
 
@@ -57,10 +57,8 @@ impl LightPose {
 
     /// Light-space x/y of the 8 corners of the slice `[near, far]`.
     pub fn corners(&self, lens: &Lens, near: f64, far: f64) -> [DVec2; 8] {
-        std::array::from_fn(|i| {
-            let sx = if i & 1 == 0 { -lens.tan_h } else { lens.tan_h };
-            let sy = if i & 2 == 0 { -lens.tan_v } else { lens.tan_v };
-            let z = if i & 4 == 0 { near } else { far };
+        Corner::ALL.map(|c| {
+            let (sx, sy, z) = c.of_slice(lens, near, far);
             self.point(sx, sy, z)
         })
     }
@@ -160,15 +158,7 @@ pub struct LightDepth {
     pub casters_outside: f64,
 }
 
-/// Slice corners outside a window in one frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FrameCoverage {
-    pub violations: u64,
-    /// How far outside the worst corner lies, in texels (0 when all are inside).
-    pub worst_texels: f64,
-    /// The smallest margin between a corner and the window edge, in texels (negative outside).
-    pub min_slack_texels: f64,
-}
+pub use crate::walk::FrameCoverage;
 
 /// Everything fixed over a motion path.
 #[derive(Debug, Clone)]
@@ -191,21 +181,17 @@ pub struct Rig {
 }
 
 impl Rig {
-    /// Builds the rig for a config (csm-lab's pipeline or the config's preset), or None when
-    /// the scene needs no cascades.
-    pub fn from_config(config: &Config) -> Option<Rig> {
-        if let Some(preset) = &config.shadow.preset {
-            return crate::presets::rig(config, preset);
-        }
-        let DepthRange::Range { z_lo, z_hi } = depth_range::for_config(config) else {
+    /// csm-lab's own rig for a set-up (practical splits over its depth range), or None when
+    /// the scene needs no cascades. (Engine presets build theirs with [`Rig::with_scheme`].)
+    pub fn for_setup(setup: &Setup) -> Option<Rig> {
+        let DepthRange::Range { z_lo, z_hi } = depth_range::for_setup(setup) else {
             return None;
         };
-        let s = &config.shadow;
+        let s = &setup.shadow;
         let splits = splits::practical(z_lo, z_hi, s.cascades, s.lambda);
-        let lens = Lens::new(config.camera.fov_y(), config.screen.aspect());
         Some(Rig::new(
-            lens,
-            LightBasis::new(config.light_direction),
+            setup.camera.lens(),
+            LightBasis::new(setup.light_direction),
             s.fit,
             s.resolution,
             SnapRule::default(),
@@ -327,6 +313,29 @@ impl Rig {
         }
     }
 
+    /// Cascade `i`'s basis in the frame of `lp`, and the camera frame expressed in it.
+    pub fn cascade_pose(&self, i: usize, lp: &LightPose) -> (LightBasis, LightPose) {
+        if self.fixed_basis() {
+            (self.light, *lp)
+        } else {
+            let b = self.basis(i, lp);
+            (b, LightPose::new(&b, &lp.pose))
+        }
+    }
+
+    /// With a fixed basis, each probe's light-space x/y (the same in every frame); empty
+    /// otherwise.
+    pub fn fixed_probe_xy(&self, probes: &[Vec<DVec3>]) -> Vec<Vec<DVec2>> {
+        if self.fixed_basis() {
+            probes
+                .iter()
+                .map(|ps| ps.iter().map(|p| self.light.to_light_xy(*p)).collect())
+                .collect()
+        } else {
+            Vec::new()
+        }
+    }
+
     /// Cascade `i`'s window for a camera frame, in the cascade's basis ([`Rig::basis`]). Both
     /// snap modes use the same window size, so comparing them isolates the effect of snapping.
     pub fn window(&self, i: usize, lp: &LightPose, snapped: bool) -> Window {
@@ -337,8 +346,8 @@ impl Rig {
         }
     }
 
-    /// The window given the camera frame in the cascade's own basis.
-    fn window_in(&self, i: usize, lp: &LightPose, snapped: bool) -> Window {
+    /// The window given the camera frame `lp` in the cascade's own basis.
+    pub fn window_in(&self, i: usize, lp: &LightPose, snapped: bool) -> Window {
         let slice = &self.slices[i];
         let snap = (snapped && self.scheme.snaps).then_some(self.snap_rule);
         match &self.scheme.window {
@@ -391,41 +400,32 @@ impl Rig {
     /// slices and the window are convex, so a slice's light-space footprint is the hull of its
     /// corners and checking the corners is exact.
     pub fn coverage(&self, i: usize, lp: &LightPose, w: &Window) -> FrameCoverage {
-        let local;
-        let lp = if self.fixed_basis() {
-            lp
+        if self.fixed_basis() {
+            self.coverage_in(i, lp, w)
         } else {
-            local = LightPose::new(&self.basis(i, lp), &lp.pose);
-            &local
-        };
-        let mut out = FrameCoverage {
-            violations: 0,
-            worst_texels: 0.0,
-            min_slack_texels: f64::INFINITY,
-        };
-        let s = &self.slices[i];
-        self.cover(&mut out, &lp.corners(&self.lens, s.near, s.far), w);
-        let (a, b) = self.selection(i);
-        if b > a && (a < s.near || b > s.far) {
-            self.cover(&mut out, &lp.corners(&self.lens, a, b), w);
+            self.coverage_in(i, &LightPose::new(&self.basis(i, lp), &lp.pose), w)
+        }
+    }
+
+    /// [`Rig::coverage`] given the camera frame `lp` in the cascade's own basis.
+    pub fn coverage_in(&self, i: usize, lp: &LightPose, w: &Window) -> FrameCoverage {
+        let mut out = FrameCoverage::default();
+        let n = self.resolution as f64;
+        for (near, far) in self.covered_intervals(i) {
+            for c in lp.corners(&self.lens, near, far) {
+                out.corner(w.texel_coords(c), n, (c / w.texel).abs().max_element());
+            }
         }
         out
     }
 
-    #[inline]
-    fn cover(&self, out: &mut FrameCoverage, corners: &[DVec2; 8], w: &Window) {
-        let n = self.resolution as f64;
-        for &c in corners {
-            let s = w.texel_coords(c);
-            let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
-            out.min_slack_texels = out.min_slack_texels.min(slack);
-            // Rounding tolerance: a few ulps of the texel coordinate's magnitude.
-            let tol = 1e-9 + 8.0 * f64::EPSILON * (c / w.texel).abs().max_element();
-            if -slack > tol {
-                out.violations += 1;
-                out.worst_texels = out.worst_texels.max(-slack);
-            }
-        }
+    /// The depth intervals cascade `i`'s window must cover: its fitted slice, and its
+    /// selection interval where that reaches outside the fitted slice.
+    pub fn covered_intervals(&self, i: usize) -> impl Iterator<Item = (f64, f64)> {
+        let s = &self.slices[i];
+        let (a, b) = self.selection(i);
+        let outside = b > a && (a < s.near || b > s.far);
+        std::iter::once((s.near, s.far)).chain(outside.then_some((a, b)))
     }
 
     /// Light-space depth range the cascade must render: near far enough toward the light to
@@ -546,12 +546,7 @@ fn depth_needs(
     let z0 = scene_lo.min(slice_lo) - 1.0;
     let z1 = scene_hi.max(slice_hi) + 1.0;
     let prism = Hexahedron {
-        vertices: std::array::from_fn(|c| {
-            let x = if c & 1 == 0 { lo.x } else { hi.x };
-            let y = if c & 2 == 0 { lo.y } else { hi.y };
-            let z = if c & 4 == 0 { z0 } else { z1 };
-            l.x * x + l.y * y + l.z * z
-        }),
+        vertices: Corner::ALL.map(|c| l.x * c.x(lo.x, hi.x) + l.y * c.y(lo.y, hi.y) + l.z * c.z(z0, z1)),
         planes: [
             Plane::new(-l.x, -lo.x),
             Plane::new(l.x, hi.x),

@@ -1,13 +1,16 @@
 //! Scene-aware depth range: split only the depths where the scene can be seen.
 //!
+//! Depths are view depths (world units along the camera's forward axis, see
+//! [`crate::geometry`]).
+//!
 //! With `fit_depth_to_scene`, the scene's bounding box is intersected with the view frustum
 //! (clipped at `min(far, max_distance)`) and the split range is the view-depth extent of that
 //! intersection: `z_lo = max(near, nearest)`, `z_hi = min(far, max_distance, farthest)`. View depth is
 //! linear, so the extremes sit at vertices of the (convex) intersection; see
 //! [`crate::geometry::intersection_range`]. Without it the range is `[near, min(far, max_distance)]`.
 
-use crate::config::Config;
 use crate::geometry::{intersection_range, Aabb, CameraPose, Lens};
+use crate::scene::Setup;
 
 /// Where cascades are needed along the view axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -70,16 +73,18 @@ pub fn receiver_range(
     }
 }
 
-/// The split range of a config's own camera (frame 0).
-pub fn for_config(config: &Config) -> DepthRange {
-    let lens = Lens::new(config.camera.fov_y(), config.screen.aspect());
+/// The split range of a set-up's own camera (frame 0); Empty when its camera is invalid.
+pub fn for_setup(setup: &Setup) -> DepthRange {
+    let Some(pose) = setup.camera.pose() else {
+        return DepthRange::Empty;
+    };
     receiver_range(
-        &config.camera.pose(),
-        &lens,
-        config.camera.near,
-        config.shadow_far(),
-        &config.scene,
-        config.shadow.fit_depth_to_scene,
+        &pose,
+        &setup.camera.lens(),
+        setup.camera.near,
+        setup.shadow_far(),
+        &setup.bounds,
+        setup.shadow.fit_depth_to_scene,
     )
 }
 

@@ -16,6 +16,68 @@
 
 use glam::{DMat3, DVec2, DVec3};
 
+/// One of the 8 corners of a box or a frustum slice, and the single place that decodes its
+/// index: bit 0 picks the low (0) or high (1) side of the first axis (light or world x, or
+/// the image slope along the camera's right), bit 1 of the second axis (y, or the slope along
+/// up), bit 2 of the third (z, or the slice's near (0) or far (1) depth).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Corner(pub usize);
+
+impl Corner {
+    /// Every corner, in index order.
+    pub const ALL: [Corner; 8] = [
+        Corner(0),
+        Corner(1),
+        Corner(2),
+        Corner(3),
+        Corner(4),
+        Corner(5),
+        Corner(6),
+        Corner(7),
+    ];
+
+    /// `lo` or `hi` along the first axis.
+    #[inline]
+    pub fn x<T>(self, lo: T, hi: T) -> T {
+        if self.0 & 1 == 0 {
+            lo
+        } else {
+            hi
+        }
+    }
+
+    /// `lo` or `hi` along the second axis.
+    #[inline]
+    pub fn y<T>(self, lo: T, hi: T) -> T {
+        if self.0 & 2 == 0 {
+            lo
+        } else {
+            hi
+        }
+    }
+
+    /// `near` or `far` along the third axis.
+    #[inline]
+    pub fn z<T>(self, near: T, far: T) -> T {
+        if self.0 & 4 == 0 {
+            near
+        } else {
+            far
+        }
+    }
+
+    /// The corner's image slopes `(sx, sy)` and depth of the slice `[near, far]` seen through
+    /// `lens`: `(+-tanH, +-tanV, near or far)`.
+    #[inline]
+    pub fn of_slice(self, lens: &Lens, near: f64, far: f64) -> (f64, f64, f64) {
+        (
+            self.x(-lens.tan_h, lens.tan_h),
+            self.y(-lens.tan_v, lens.tan_v),
+            self.z(near, far),
+        )
+    }
+}
+
 /// Axis-aligned box in world space.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Aabb {
@@ -29,10 +91,11 @@ impl Aabb {
     }
 
     pub fn corner(&self, i: usize) -> DVec3 {
+        let c = Corner(i);
         DVec3::new(
-            if i & 1 == 0 { self.min.x } else { self.max.x },
-            if i & 2 == 0 { self.min.y } else { self.max.y },
-            if i & 4 == 0 { self.min.z } else { self.max.z },
+            c.x(self.min.x, self.max.x),
+            c.y(self.min.y, self.max.y),
+            c.z(self.min.z, self.max.z),
         )
     }
 
@@ -141,10 +204,8 @@ impl CameraPose {
 
     /// The 8 corners of the frustum slice between depths `near` and `far`.
     pub fn slice_corners(&self, lens: &Lens, near: f64, far: f64) -> [DVec3; 8] {
-        std::array::from_fn(|i| {
-            let sx = if i & 1 == 0 { -lens.tan_h } else { lens.tan_h };
-            let sy = if i & 2 == 0 { -lens.tan_v } else { lens.tan_v };
-            let z = if i & 4 == 0 { near } else { far };
+        Corner::ALL.map(|c| {
+            let (sx, sy, z) = c.of_slice(lens, near, far);
             self.point(sx, sy, z)
         })
     }

@@ -147,7 +147,7 @@ mod tests {
         (s, t, lens.pixels_per_unit_slope(1080))
     }
 
-    /// csm-math.md section 5 reference table (W_i = 2 R_i, N = 2048, H = 1080).
+    /// Hand-computed aggregates (W_i = 2 R_i, N = 2048, H = 1080).
     #[test]
     fn aggregates_match_the_reference_table() {
         let rows: [(f64, f64, f64, f64, f64, f64); 10] = [

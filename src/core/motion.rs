@@ -1,29 +1,65 @@
 //! Camera paths for the shimmer metrics: one camera pose per frame, frame 0 being the
-//! configured camera. Translations are in world units per frame, rotations in radians per
-//! frame (converted from degrees in [`crate::config`]).
+//! configured camera.
+//!
+//! Translations are in world units per frame, rotations in radians per frame (degrees exist
+//! only in the config file and are converted when it is read). Rotations follow the right-hand
+//! rule about their axis: yaw and orbit about the camera's up vector, pitch about its right
+//! axis. A path given as explicit poses (position, target per frame) is used as is.
 
-use crate::error::IoError;
-use std::path::Path;
+use std::path::PathBuf;
 
 use glam::{DQuat, DVec3};
 
-use crate::config::{Config, MotionPath};
-use crate::error::{Error, Result};
 use crate::geometry::CameraPose;
+use crate::scene::{Camera, Motion};
 
-/// Poses for every frame of the config's motion path, or the first frame whose camera is
+/// Which way the camera moves along the shimmer path, one pose per frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MotionPath {
+    /// Sideways along the camera's right axis, `step` world units per frame.
+    Strafe,
+    /// Along the view direction, `step` world units per frame.
+    Dolly,
+    /// Turning about the camera's up vector, `step` radians per frame.
+    Yaw,
+    /// Tilting about the camera's right axis, `step` radians per frame.
+    Pitch,
+    /// Circling the target about the up vector, `step` radians per frame.
+    Orbit,
+    /// Poses read from a CSV file: (position, target) per frame.
+    File { path: PathBuf, poses: Vec<(DVec3, DVec3)> },
+}
+
+impl MotionPath {
+    pub fn name(&self) -> &'static str {
+        match self {
+            MotionPath::Strafe => "strafe",
+            MotionPath::Dolly => "dolly",
+            MotionPath::Yaw => "yaw",
+            MotionPath::Pitch => "pitch",
+            MotionPath::Orbit => "orbit",
+            MotionPath::File { .. } => "file",
+        }
+    }
+
+    /// True when every frame differs from the previous one by a pure translation.
+    pub fn is_translation(&self) -> bool {
+        matches!(self, MotionPath::Strafe | MotionPath::Dolly)
+    }
+}
+
+/// Poses for every frame of a motion path, or the first frame whose camera is
 /// invalid (up parallel to the view direction, position equal to target) and why.
-pub fn camera_path(config: &Config) -> std::result::Result<Vec<CameraPose>, (usize, String)> {
-    let cam = &config.camera;
+pub fn camera_path(cam: &Camera, motion: &Motion) -> std::result::Result<Vec<CameraPose>, (usize, String)> {
     let up = cam.up;
-    let frames = config.motion.frames;
-    let step = config.motion.step;
+    let frames = motion.frames;
+    let step = motion.step;
     let pose0 = CameraPose::look_at(cam.position, cam.target, up)
         .ok_or((0, "camera.up is parallel to the view direction".to_string()))?;
     let dir0 = cam.target - cam.position;
     let bad = |t: usize| (t, "the view direction becomes parallel to camera.up".to_string());
     let mut poses = Vec::with_capacity(frames);
-    match &config.motion.path {
+    match &motion.path {
         MotionPath::File { poses: rows, .. } => {
             for (t, (p, target)) in rows.iter().enumerate() {
                 let pose = CameraPose::look_at(*p, *target, up).ok_or((
@@ -71,69 +107,4 @@ pub fn camera_path(config: &Config) -> std::result::Result<Vec<CameraPose>, (usi
         }
     }
     Ok(poses)
-}
-
-/// Reads a camera path CSV: a header `px,py,pz,tx,ty,tz` and one row per frame
-/// (camera position, then the point it looks at). At least two rows.
-pub fn read_path_file(path: &Path) -> Result<Vec<(DVec3, DVec3)>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(true)
-        .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
-    let expected = ["px", "py", "pz", "tx", "ty", "tz"];
-    let headers = reader.headers().map_err(|e| {
-        Error::from(IoError::DataFile {
-            path: path.to_path_buf(),
-            line: 1,
-            message: e.to_string(),
-        })
-    })?;
-    if headers.iter().collect::<Vec<_>>() != expected {
-        return Err(Error::from(IoError::DataFile {
-            path: path.to_path_buf(),
-            line: 1,
-            message: format!(
-                "header is {:?}; expected the columns px,py,pz,tx,ty,tz",
-                headers.iter().collect::<Vec<_>>().join(",")
-            ),
-        }));
-    }
-    let mut rows = Vec::new();
-    for (i, record) in reader.records().enumerate() {
-        let line = i + 2;
-        let record = record.map_err(|e| {
-            Error::from(IoError::DataFile {
-                path: path.to_path_buf(),
-                line,
-                message: e.to_string(),
-            })
-        })?;
-        if record.len() != 6 {
-            return Err(Error::from(IoError::DataFile {
-                path: path.to_path_buf(),
-                line,
-                message: format!("{} values; expected 6 (px,py,pz,tx,ty,tz)", record.len()),
-            }));
-        }
-        let mut v = [0.0; 6];
-        for (j, field) in record.iter().enumerate() {
-            v[j] = field.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-                Error::from(IoError::DataFile {
-                    path: path.to_path_buf(),
-                    line,
-                    message: format!("column {} = {field:?} is not a finite number", expected[j]),
-                })
-            })?;
-        }
-        rows.push((DVec3::new(v[0], v[1], v[2]), DVec3::new(v[3], v[4], v[5])));
-    }
-    if rows.len() < 2 {
-        return Err(Error::from(IoError::DataFile {
-            path: path.to_path_buf(),
-            line: rows.len() + 1,
-            message: format!("{} pose rows; a path needs at least 2 frames", rows.len()),
-        }));
-    }
-    Ok(rows)
 }

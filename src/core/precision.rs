@@ -4,16 +4,22 @@
 //! window sits on an exact integer and its shimmer is exactly zero at any distance from the
 //! world origin. Engines do not: they build the light matrix, the sphere centre, the snapped
 //! window and the shader lookup in binary32 (`f32`) at absolute world coordinates. This module
-//! redoes those steps the way an engine writes them, each `+ - * /` rounded to f32:
+//! redoes those steps the way an engine writes them, each `+ - * /` rounded to f32, for the
+//! rig's own [`crate::cascades::Scheme`] (csm-lab's fits and every engine preset alike):
 //!
-//! 1. `light_from_world` rows (the light x/y axes) stored in f32;
-//! 2. the camera position and unit axes stored in f32; sphere fit: the centre
-//!    `C = P + forward * c` in f32; AABB fit: the 8 slice corners `P + forward*z + right*(sx*z)
-//!    + up*(sy*z)` in f32, transformed and bounded in f32;
+//! 1. `light_from_world` rows (the light x/y axes) stored in f32: the rig's fixed basis, or
+//!    the basis the scheme derives from the camera that frame (computed in f64, then stored);
+//! 2. the camera position and unit axes stored in f32; an axis-centred window (any sphere
+//!    fit): the centre `C = P + forward * c` in f32; a box-shaped window (tight box, padded
+//!    box, box-centred square, box at the world origin): the 8 slice corners
+//!    `P + forward*z + right*(sx*z) + up*(sy*z)` in f32, transformed and bounded in f32, the
+//!    size from the bounds (plus padding and snapping border) or the scheme's constant side;
 //! 3. the light-space centre `c = light_from_world * C` (dot products, left to right);
 //! 4. the texel size `T = W / N` in f32;
 //! 5. snapping in world units: `round(c / (T*step)) * (T*step)` with the rig's
-//!    [`crate::snapping::SnapRule`] (round, floor or trunc). `k*T` is rarely representable in
+//!    [`crate::snapping::SnapRule`] (round, floor or trunc), on a grid through the world origin
+//!    or through the scheme's snap anchor (EEVEE's lamp), and only if the scheme snaps at all.
+//!    `k*T` is rarely representable in
 //!    f32, so the snapped centre is off the grid by up to half an ulp of `c`, differently every
 //!    frame: this is the engine bug the emulation reproduces;
 //! 6. the window origin `o = snapped - W/2` in f32;
@@ -64,14 +70,15 @@ use std::ops::{Add, Div, Mul, Sub};
 
 use glam::{DVec2, DVec3};
 
-use crate::cascades::{LightPose, Rig};
-use crate::config::{Config, Fit};
-use crate::geometry::CameraPose;
-use crate::shimmer::{wrap, PathResult, PathTotals, ShimmerOptions};
+use crate::cascades::{LightPose, Rig, WindowRule};
+use crate::fitting::Window;
+use crate::geometry::{Aabb, CameraPose, Corner, LightBasis};
+use crate::shimmer::{PathResult, ShimmerOptions};
 use crate::snapping::SnapMode;
+use crate::walk::{walk, Landing, PathModel, PathTotals};
 
 /// Arithmetic of the cascade pipeline (`[shadow] precision`, `--precision`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Precision {
     /// Exact: texel-unit windows, snapped shimmer exactly 0 at any world offset.
@@ -95,6 +102,14 @@ impl Precision {
             "f32" => Some(Precision::F32),
             _ => None,
         }
+    }
+}
+
+impl std::str::FromStr for Precision {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Precision::from_name(s).ok_or_else(|| format!("{s:?} is not one of f64, f32"))
     }
 }
 
@@ -231,46 +246,60 @@ impl<R: Real> EngineWindow<R> {
 /// Per-cascade constants, converted once (they are bit-identical every frame in an engine).
 #[derive(Debug, Clone)]
 struct CascadeConsts<R> {
-    /// Sphere fit: window side (with the snapping border) and centre depth.
+    /// Constant-size windows: side (border included).
     side: R,
+    /// Axis-centred windows: view depth of the window centre.
     centre_depth: R,
-    /// AABB fit: slice depths.
+    /// Box-shaped windows: the fitted slice's depths.
     near: R,
     far: R,
 }
 
-/// The cascade pipeline of a [`Rig`], written as an engine writes it, in arithmetic `R`.
+/// The cascade pipeline of a [`Rig`] under its [`crate::cascades::Scheme`], written as an
+/// engine writes it, in arithmetic `R`: the scheme's light basis, window centre and size
+/// (axis-centred, box-centred, tight box with its padding and border, tight box at the world
+/// origin), its snap rule (round, floor or trunc, grid step) on its snap anchor, and the lookup.
+/// A light basis that follows the camera is derived in f64 each frame and stored in `R`, as an
+/// engine stores the matrix it computed.
 #[derive(Debug, Clone)]
 pub struct EnginePipeline<R> {
-    /// Rows of `light_from_world` for light x and y.
+    rig: Rig,
+    /// Rows of `light_from_world` for light x and y of the rig's fixed basis.
     rows: [[R; 3]; 2],
     resolution: R,
-    /// `N - 2*shift`: the AABB side is `extent * N / (N - 2 shift)` (snapping border).
+    /// `N - 2*shift`: a bordered box's side is `extent * N / (N - 2 shift)` (snapping border).
     border_denominator: R,
     step_texels: R,
     mode: SnapMode,
-    fit: Fit,
     tan_h: R,
     tan_v: R,
     half: R,
+    /// Twice a tight box's padding per side (world units).
+    pad2: R,
     consts: Vec<CascadeConsts<R>>,
 }
 
 /// Per-cascade anchors of one frame: the world origin, or (camera-relative) the frame's camera
-/// position moved along light x/y onto each cascade's snap grid of that frame, in f64.
+/// position moved along the cascade's light x/y onto its snap grid of that frame, in f64.
 pub fn frame_anchors(rig: &Rig, pose: &CameraPose, space: SnapSpace) -> Vec<DVec3> {
     match space {
         SnapSpace::World => vec![DVec3::ZERO; rig.cascade_count()],
         SnapSpace::CameraRelative => {
             let lp = LightPose::new(&rig.light, pose);
             let a = pose.position;
-            let axy = lp.position;
             let step = rig.snap_rule.step_texels as f64;
+            let g = rig.scheme.snap_anchor;
             (0..rig.cascade_count())
                 .map(|i| {
+                    let b = rig.basis(i, &lp);
+                    let axy = b.to_light_xy(a);
                     let t = rig.window(i, &lp, true).texel * step;
-                    let d = (axy / t).round() * t - axy;
-                    a + rig.light.x * d.x + rig.light.y * d.y
+                    let d = if g == DVec2::ZERO {
+                        (axy / t).round() * t - axy
+                    } else {
+                        ((axy - g) / t).round() * t + g - axy
+                    };
+                    a + b.x * d.x + b.y * d.y
                 })
                 .collect()
         }
@@ -280,46 +309,61 @@ pub fn frame_anchors(rig: &Rig, pose: &CameraPose, space: SnapSpace) -> Vec<DVec
 impl<R: Real> EnginePipeline<R> {
     pub fn new(rig: &Rig) -> Self {
         let n = rig.resolution as f64;
+        let centre_depth = |i: usize| match &rig.scheme.window {
+            WindowRule::AxisCentred { centre_depth } => centre_depth[i],
+            _ => rig.slices[i].sphere.centre_depth,
+        };
         let consts = rig
             .slices
             .iter()
             .zip(&rig.sphere_side)
-            .map(|(s, &side)| CascadeConsts {
+            .enumerate()
+            .map(|(i, (s, &side))| CascadeConsts {
                 side: R::of(side),
-                centre_depth: R::of(s.sphere.centre_depth),
+                centre_depth: R::of(centre_depth(i)),
                 near: R::of(s.near),
                 far: R::of(s.far),
             })
             .collect();
+        let pad = match rig.scheme.window {
+            WindowRule::Tight { pad, .. } => pad,
+            _ => 0.0,
+        };
         EnginePipeline {
+            rig: rig.clone(),
             rows: [v3(rig.light.x), v3(rig.light.y)],
             resolution: R::of(n),
             border_denominator: R::of(n - 2.0 * rig.snap_rule.max_shift_texels()),
             step_texels: R::of(rig.snap_rule.step_texels as f64),
             mode: rig.snap_rule.mode,
-            fit: rig.fit,
             tan_h: R::of(rig.lens.tan_h),
             tan_v: R::of(rig.lens.tan_v),
             half: R::of(0.5),
+            pad2: R::of(2.0 * pad),
             consts,
         }
     }
 
-    /// The light x/y rows as stored, exactly as f64 (for exact evaluations of the same map).
+    /// The light x/y rows of the fixed basis as stored, exactly as f64 (for exact evaluations
+    /// of the same map).
     pub fn rows_f64(&self) -> [DVec3; 2] {
-        self.rows
-            .map(|r| DVec3::new(r[0].to_f64(), r[1].to_f64(), r[2].to_f64()))
+        rows_as_f64(&self.rows)
     }
 
-    /// `light_from_world * p`, x and y.
-    fn light_xy(&self, p: &[R; 3]) -> [R; 2] {
-        [dot3(&self.rows[0], p), dot3(&self.rows[1], p)]
+    /// Cascade `i`'s `light_from_world` x/y rows in the frame of `pose`, as stored.
+    pub fn rows_of(&self, i: usize, pose: &CameraPose) -> [[R; 3]; 2] {
+        if self.rig.fixed_basis() {
+            self.rows
+        } else {
+            let b = self.rig.basis(i, &LightPose::new(&self.rig.light, pose));
+            [v3(b.x), v3(b.y)]
+        }
     }
 
     /// A world point as the engine stores it: relative to `anchor` (subtracted in f64), then
-    /// rounded to `R`; returns its light-space x/y computed in `R`.
+    /// rounded to `R`; returns its light-space x/y in the fixed basis, computed in `R`.
     pub fn probe(&self, anchor: DVec3, x: DVec3) -> [R; 2] {
-        self.light_xy(&v3(x - anchor))
+        light_xy(&self.rows, &v3(x - anchor))
     }
 
     fn snap(&self, q: R) -> R {
@@ -332,60 +376,110 @@ impl<R: Real> EnginePipeline<R> {
 
     /// Cascade `i`'s window for a camera pose, in coordinates relative to `anchor`.
     pub fn window(&self, i: usize, pose: &CameraPose, anchor: DVec3, snapped: bool) -> EngineWindow<R> {
+        self.window_with(i, &self.rows_of(i, pose), pose, anchor, snapped)
+    }
+
+    /// The light-space bounds of cascade `i`'s 8 slice corners, each corner built and
+    /// transformed in `R`.
+    fn corner_bounds(
+        &self,
+        i: usize,
+        rows: &[[R; 3]; 2],
+        p: &[R; 3],
+        f: &[R; 3],
+        pose: &CameraPose,
+    ) -> ([R; 2], [R; 2]) {
+        let c = &self.consts[i];
+        let r: [R; 3] = v3(pose.right);
+        let u: [R; 3] = v3(pose.up);
+        let mut lo = [R::of(f64::INFINITY); 2];
+        let mut hi = [R::of(f64::NEG_INFINITY); 2];
+        for corner in Corner::ALL {
+            let sx = corner.x(R::of(0.0) - self.tan_h, self.tan_h);
+            let sy = corner.y(R::of(0.0) - self.tan_v, self.tan_v);
+            let z = corner.z(c.near, c.far);
+            let (sxz, syz) = (sx * z, sy * z);
+            let world: [R; 3] = std::array::from_fn(|k| p[k] + f[k] * z + r[k] * sxz + u[k] * syz);
+            let xy = light_xy(rows, &world);
+            for a in 0..2 {
+                if xy[a] < lo[a] {
+                    lo[a] = xy[a];
+                }
+                if xy[a] > hi[a] {
+                    hi[a] = xy[a];
+                }
+            }
+        }
+        (lo, hi)
+    }
+
+    /// [`EnginePipeline::window`] with the cascade's rows given.
+    fn window_with(
+        &self,
+        i: usize,
+        rows: &[[R; 3]; 2],
+        pose: &CameraPose,
+        anchor: DVec3,
+        snapped: bool,
+    ) -> EngineWindow<R> {
         let c = &self.consts[i];
         let p: [R; 3] = v3(pose.position - anchor);
         let f: [R; 3] = v3(pose.forward);
-        let (centre, size) = match self.fit {
-            Fit::Sphere => {
+        let mid = |lo: [R; 2], hi: [R; 2]| [(lo[0] + hi[0]) * self.half, (lo[1] + hi[1]) * self.half];
+        let (centre, size) = match &self.rig.scheme.window {
+            WindowRule::AxisCentred { .. } => {
                 let world = [
                     p[0] + f[0] * c.centre_depth,
                     p[1] + f[1] * c.centre_depth,
                     p[2] + f[2] * c.centre_depth,
                 ];
-                (self.light_xy(&world), [c.side, c.side])
+                (light_xy(rows, &world), [c.side, c.side])
             }
-            Fit::Aabb => {
-                let r: [R; 3] = v3(pose.right);
-                let u: [R; 3] = v3(pose.up);
-                let mut lo = [R::of(f64::INFINITY); 2];
-                let mut hi = [R::of(f64::NEG_INFINITY); 2];
-                for corner in 0..8 {
-                    let sx = if corner & 1 == 0 {
-                        R::of(0.0) - self.tan_h
+            WindowRule::BoxCentred => {
+                let (lo, hi) = self.corner_bounds(i, rows, &p, &f, pose);
+                (mid(lo, hi), [c.side, c.side])
+            }
+            WindowRule::Tight { pad, border } => {
+                let (lo, hi) = self.corner_bounds(i, rows, &p, &f, pose);
+                let extent = |a: usize| {
+                    if *pad == 0.0 {
+                        hi[a] - lo[a]
                     } else {
-                        self.tan_h
-                    };
-                    let sy = if corner & 2 == 0 {
-                        R::of(0.0) - self.tan_v
-                    } else {
-                        self.tan_v
-                    };
-                    let z = if corner & 4 == 0 { c.near } else { c.far };
-                    let (sxz, syz) = (sx * z, sy * z);
-                    let world: [R; 3] = std::array::from_fn(|k| p[k] + f[k] * z + r[k] * sxz + u[k] * syz);
-                    let xy = self.light_xy(&world);
-                    for a in 0..2 {
-                        if xy[a] < lo[a] {
-                            lo[a] = xy[a];
-                        }
-                        if xy[a] > hi[a] {
-                            hi[a] = xy[a];
-                        }
+                        hi[a] - lo[a] + self.pad2
                     }
-                }
-                let side = |a: usize| (hi[a] - lo[a]) * self.resolution / self.border_denominator;
-                (
-                    [(lo[0] + hi[0]) * self.half, (lo[1] + hi[1]) * self.half],
-                    [side(0), side(1)],
-                )
+                };
+                let side = |a: usize| {
+                    if *border {
+                        extent(a) * self.resolution / self.border_denominator
+                    } else {
+                        extent(a)
+                    }
+                };
+                (mid(lo, hi), [side(0), side(1)])
+            }
+            WindowRule::TightAtOrigin => {
+                let (lo, hi) = self.corner_bounds(i, rows, &p, &f, pose);
+                // The light-space axis through the world origin, relative to the anchor.
+                (light_xy(rows, &v3(-anchor)), [hi[0] - lo[0], hi[1] - lo[1]])
             }
         };
         let texel = [size[0] / self.resolution, size[1] / self.resolution];
+        // The grid's own anchor (EEVEE's lamp) relative to the pipeline's anchor, or None for
+        // a grid through the world origin.
+        let g = self.rig.scheme.snap_anchor;
+        let grid = (g != DVec2::ZERO).then(|| {
+            let rel = g - self.rig.light.to_light_xy(anchor);
+            [R::of(rel.x), R::of(rel.y)]
+        });
+        let snaps = snapped && self.rig.scheme.snaps;
         let origin: [R; 2] = std::array::from_fn(|a| {
-            let centre = if snapped {
+            let centre = if snaps {
                 // World-unit snapping: k*step is generally not representable in f32.
                 let step = texel[a] * self.step_texels;
-                self.snap(centre[a] / step) * step
+                match grid {
+                    None => self.snap(centre[a] / step) * step,
+                    Some(g) => self.snap((centre[a] - g[a]) / step) * step + g[a],
+                }
             } else {
                 centre[a]
             };
@@ -393,6 +487,15 @@ impl<R: Real> EnginePipeline<R> {
         });
         EngineWindow { origin, texel }
     }
+}
+
+fn rows_as_f64<R: Real>(rows: &[[R; 3]; 2]) -> [DVec3; 2] {
+    rows.map(|r| DVec3::new(r[0].to_f64(), r[1].to_f64(), r[2].to_f64()))
+}
+
+/// `light_from_world * p`, x and y.
+fn light_xy<R: Real>(rows: &[[R; 3]; 2], p: &[R; 3]) -> [R; 2] {
+    [dot3(&rows[0], p), dot3(&rows[1], p)]
 }
 
 /// S7 over a path: the largest and the RMS static lookup error, in texels.
@@ -404,6 +507,27 @@ pub struct LookupError {
     pub cascade_rms: Vec<f64>,
 }
 
+impl LookupError {
+    fn of(totals: &PathTotals) -> Self {
+        let total: usize = totals.lookup_count.iter().sum();
+        LookupError {
+            max: totals.lookup_max.iter().cloned().fold(0.0, f64::max),
+            rms: if total > 0 {
+                (totals.lookup_sq.iter().sum::<f64>() / total as f64).sqrt()
+            } else {
+                0.0
+            },
+            cascade_rms: totals
+                .lookup_sq
+                .iter()
+                .zip(&totals.lookup_count)
+                .map(|(s, &c)| if c > 0 { (s / c as f64).sqrt() } else { 0.0 })
+                .collect(),
+            cascade_max: totals.lookup_max.clone(),
+        }
+    }
+}
+
 /// One pass of the emulated f32 pipeline along a path, for one snap setting.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EmulatedPath {
@@ -413,8 +537,176 @@ pub struct EmulatedPath {
     pub lookup: LookupError,
 }
 
-/// Walks the path with the binary32 pipeline. Always per probe: in f32 the drift differs from
+/// The binary32 pipeline as a [`PathModel`]. Always per probe: in f32 the drift differs from
 /// probe to probe, so there is no closed form.
+pub struct EnginePath<'a> {
+    rig: &'a Rig,
+    engine: EnginePipeline<f32>,
+    probes: &'a [Vec<DVec3>],
+    /// Fixed basis: each probe's exact light-space x/y, computed once.
+    probe_xy: Vec<Vec<DVec2>>,
+    space: SnapSpace,
+    pose: Option<CameraPose>,
+    lp: Option<LightPose>,
+    anchors: Vec<DVec3>,
+}
+
+/// Per frame and cascade: the anchor, the cascade's basis (exact and as stored in f32) and
+/// the camera frame in that basis.
+pub struct EngineShared {
+    anchor: DVec3,
+    anchor_xy: DVec2,
+    basis: LightBasis,
+    rows: [[f32; 3]; 2],
+    rows_f64: [DVec3; 2],
+    lp: LightPose,
+}
+
+/// A window of the binary32 pipeline: as the engine holds it, its origin and texel size
+/// exactly as f64, the origin in world-anchored light space, and the exact window the engine
+/// means to build (which decides the probes it serves).
+#[derive(Debug, Clone, Copy)]
+pub struct EngineWin {
+    engine: EngineWindow<f32>,
+    origin: DVec2,
+    texel: DVec2,
+    origin_world: DVec2,
+    intended: Window,
+}
+
+impl<'a> EnginePath<'a> {
+    pub fn new(rig: &'a Rig, probes: &'a [Vec<DVec3>], space: SnapSpace) -> Self {
+        EnginePath {
+            rig,
+            engine: EnginePipeline::new(rig),
+            probes,
+            probe_xy: rig.fixed_probe_xy(probes),
+            space,
+            pose: None,
+            lp: None,
+            anchors: Vec::new(),
+        }
+    }
+}
+
+impl PathModel for EnginePath<'_> {
+    type Shared = EngineShared;
+    type Win = EngineWin;
+    const SKIP_UNSERVED: bool = true;
+
+    fn cascade_count(&self) -> usize {
+        self.rig.cascade_count()
+    }
+
+    fn probes_needed(&self, _opts: ShimmerOptions) -> bool {
+        true
+    }
+
+    fn begin_frame(&mut self, _t: usize, pose: &CameraPose) {
+        self.pose = Some(*pose);
+        self.lp = Some(LightPose::new(&self.rig.light, pose));
+        self.anchors = frame_anchors(self.rig, pose, self.space);
+    }
+
+    fn shared(&self, i: usize) -> EngineShared {
+        let lp = self.lp.expect("begin_frame first");
+        let anchor = self.anchors[i];
+        let (basis, lp) = self.rig.cascade_pose(i, &lp);
+        let rows = self.engine.rows_of(i, &lp.pose);
+        EngineShared {
+            anchor,
+            anchor_xy: basis.to_light_xy(anchor),
+            basis,
+            rows,
+            rows_f64: rows_as_f64(&rows),
+            lp,
+        }
+    }
+
+    fn window(&self, i: usize, sh: &mut EngineShared, snapped: bool) -> EngineWin {
+        let pose = &sh.lp.pose;
+        let w = self.engine.window_with(i, &sh.rows, pose, sh.anchor, snapped);
+        let (origin, texel) = (w.origin_f64(), w.texel_f64());
+        EngineWin {
+            engine: w,
+            origin,
+            texel,
+            // The origin in world-anchored light space, so frames with different anchors
+            // compare (f64; the anchor is on the grid, so this only adds a whole number of
+            // steps).
+            origin_world: origin + sh.anchor_xy,
+            intended: self.rig.window_in(i, &sh.lp, snapped),
+        }
+    }
+
+    fn texel(w: &EngineWin) -> DVec2 {
+        w.texel
+    }
+
+    fn cover(&self, i: usize, sh: &mut EngineShared, w: &EngineWin, totals: &mut PathTotals) {
+        // Coverage of the exact slice by the f32 window, evaluated exactly (f64) from the
+        // window's f32 origin and texel size.
+        let n = self.rig.resolution as f64;
+        for (near, far) in self.rig.covered_intervals(i) {
+            for c in sh.lp.corners(&self.rig.lens, near, far) {
+                totals.corner(
+                    i,
+                    (c - sh.anchor_xy - w.origin) / w.texel,
+                    n,
+                    (c / w.texel).abs().max_element(),
+                );
+            }
+        }
+    }
+
+    fn closed_form(&self, _p: &EngineWin, _w: &EngineWin) -> Option<f64> {
+        None
+    }
+
+    fn land(
+        &self,
+        i: usize,
+        sh: &EngineShared,
+        w: &EngineWin,
+        out: &mut Vec<Option<Landing>>,
+        totals: &mut PathTotals,
+    ) {
+        let n = self.rig.resolution as f64;
+        let [row_x, row_y] = sh.rows_f64;
+        let probes = self.probes.get(i).map_or(&[][..], |v| &v[..]);
+        for (j, x) in probes.iter().enumerate() {
+            let xy = match self.probe_xy.get(i) {
+                Some(v) => v[j],
+                None => sh.basis.to_light_xy(*x),
+            };
+            // Served: the probe lies in the window the engine means to build (the exact one),
+            // whatever the f32 window and lookup did with it. Probes the camera has left
+            // behind are looked up in another cascade by an engine.
+            let se = w.intended.texel_coords(xy);
+            if !(se.cmpge(DVec2::ZERO).all() && se.cmple(DVec2::splat(n)).all()) {
+                out.push(None);
+                continue;
+            }
+            // S7: the shader's lookup against the exact lookup in the same window.
+            let rel = *x - sh.anchor;
+            let exact = (DVec2::new(row_x.dot(rel), row_y.dot(rel)) - w.origin) / w.texel;
+            let s = w.engine.lookup(light_xy(&sh.rows, &v3(rel)));
+            let s = DVec2::new(s[0] as f64, s[1] as f64);
+            totals.lookup_error(i, (s - exact).abs().max_element());
+            out.push(Some(Landing {
+                s,
+                centre: w.origin_world + (s.floor() + 0.5) * w.texel,
+                world: DVec3::ZERO,
+            }));
+        }
+    }
+
+    fn centre_in(&self, _w: &EngineWin, earlier: &Landing) -> DVec2 {
+        earlier.centre
+    }
+}
+
+/// Walks the path with the binary32 pipeline for one snap setting.
 pub fn along_path(
     rig: &Rig,
     poses: &[CameraPose],
@@ -423,114 +715,27 @@ pub fn along_path(
     snapped: bool,
     opts: ShimmerOptions,
 ) -> EmulatedPath {
-    let m = rig.cascade_count();
-    let engine: EnginePipeline<f32> = EnginePipeline::new(rig);
-    let [row_x, row_y] = engine.rows_f64();
-    let n = rig.resolution as f64;
-    let probe_xy: Vec<Vec<DVec2>> = probes
-        .iter()
-        .map(|ps| ps.iter().map(|p| rig.light.to_light_xy(*p)).collect())
-        .collect();
+    let [t] = walk(&mut EnginePath::new(rig, probes, space), poses, [snapped], opts);
+    emulated(t, opts)
+}
 
-    let mut totals = PathTotals::new(snapped, m);
-    // Previous frame per cascade: window origin (world-anchored light space, f64), texel size
-    // and the probes' texel coordinates (None outside the window).
-    type Frame = (DVec2, DVec2, Vec<Option<DVec2>>);
-    let mut prev: Vec<Option<Frame>> = vec![None; m];
-    let mut err_sq = vec![0.0; m];
-    let mut err_max = vec![0.0f64; m];
-    let mut err_count = vec![0usize; m];
+/// Both snap settings in one walk, `(snapped, unsnapped)`: the same results as two calls of
+/// [`along_path`].
+pub fn along_path_both(
+    rig: &Rig,
+    poses: &[CameraPose],
+    probes: &[Vec<DVec3>],
+    space: SnapSpace,
+    opts: ShimmerOptions,
+) -> (EmulatedPath, EmulatedPath) {
+    let [s, u] = walk(&mut EnginePath::new(rig, probes, space), poses, [true, false], opts);
+    (emulated(s, opts), emulated(u, opts))
+}
 
-    for (t, pose) in poses.iter().enumerate() {
-        let lp = LightPose::new(&rig.light, pose);
-        let anchors = frame_anchors(rig, pose, space);
-        for i in 0..m {
-            let anchor = anchors[i];
-            let anchor_xy = rig.light.to_light_xy(anchor);
-            let w = engine.window(i, pose, anchor, snapped);
-            let (o, tx) = (w.origin_f64(), w.texel_f64());
-            // Coverage of the exact slice by the f32 window, evaluated exactly (f64) from the
-            // window's f32 origin and texel size.
-            let slice = &rig.slices[i];
-            for c in lp.corners(&rig.lens, slice.near, slice.far) {
-                totals.corner(i, (c - anchor_xy - o) / tx, n, (c / tx).abs().max_element());
-            }
-            // The shader's lookups, and S7 against the exact lookup in the same window, for the
-            // probes this window serves (None for probes the camera has left behind: an
-            // engine looks them up in another cascade, and their distance would only
-            // measure how far the camera went).
-            let mut s32: Vec<Option<DVec2>> = Vec::with_capacity(probes[i].len());
-            let intended = rig.window(i, &lp, snapped);
-            for (x, xy) in probes[i].iter().zip(&probe_xy[i]) {
-                // Served: the probe lies in the window the engine means to build (the exact
-                // one), whatever the f32 window and lookup did with it.
-                let se = intended.texel_coords(*xy);
-                if !(se.cmpge(DVec2::ZERO).all() && se.cmple(DVec2::splat(n)).all()) {
-                    s32.push(None);
-                    continue;
-                }
-                let rel = *x - anchor;
-                let exact = (DVec2::new(row_x.dot(rel), row_y.dot(rel)) - o) / tx;
-                let s = w.lookup(engine.probe(anchor, *x));
-                let s = DVec2::new(s[0] as f64, s[1] as f64);
-                let e = (s - exact).abs().max_element();
-                err_sq[i] += e * e;
-                err_max[i] = err_max[i].max(e);
-                err_count[i] += 1;
-                s32.push(Some(s));
-            }
-            // The origin in world-anchored light space, so frames with different anchors
-            // compare (f64; the anchor is on the grid, so this only adds a whole number of
-            // steps).
-            let o_world = o + anchor_xy;
-            if let Some((po, ptx, ps)) = &prev[i] {
-                let size_change = (tx.x / ptx.x - 1.0).abs().max((tx.y / ptx.y - 1.0).abs());
-                totals.size_change(size_change);
-                let (mut ss, mut mx_sq, mut flipped, mut served) = (0.0, 0.0f64, 0usize, 0usize);
-                let both = s32.iter().zip(ps).filter_map(|(a, b)| a.zip(*b));
-                for (s1, s0) in both {
-                    served += 1;
-                    let d = DVec2::new(wrap(s1.x - s0.x), wrap(s1.y - s0.y));
-                    ss += d.length_squared();
-                    mx_sq = mx_sq.max(d.length_squared());
-                    if opts.cell_flips {
-                        // Sampled texel centres and how far they moved, in texels of the
-                        // current window.
-                        let c0 = *po + (s0.floor() + 0.5) * *ptx;
-                        let c1 = o_world + (s1.floor() + 0.5) * tx;
-                        let moved = ((c1 - c0) / tx).abs();
-                        if moved.x >= 0.5 || moved.y >= 0.5 {
-                            flipped += 1;
-                        }
-                    }
-                }
-                // Frame pairs in which the cascade serves no probe say nothing about drift.
-                if served > 0 {
-                    let count = served as f64;
-                    let flips = opts.cell_flips.then_some(flipped as f64 / count);
-                    totals.drift(t, i, size_change, (ss / count, mx_sq, flips), opts);
-                }
-            }
-            prev[i] = Some((o_world, tx, s32));
-        }
-    }
-    let total: usize = err_count.iter().sum();
-    let lookup = LookupError {
-        max: err_max.iter().cloned().fold(0.0, f64::max),
-        rms: if total > 0 {
-            (err_sq.iter().sum::<f64>() / total as f64).sqrt()
-        } else {
-            0.0
-        },
-        cascade_rms: err_sq
-            .iter()
-            .zip(&err_count)
-            .map(|(s, &c)| if c > 0 { (s / c as f64).sqrt() } else { 0.0 })
-            .collect(),
-        cascade_max: err_max,
-    };
+fn emulated(t: PathTotals, opts: ShimmerOptions) -> EmulatedPath {
+    let lookup = LookupError::of(&t);
     EmulatedPath {
-        path: totals.finish(opts),
+        path: t.finish(opts),
         lookup,
     }
 }
@@ -540,23 +745,22 @@ pub fn along_path(
 /// overflow and 2^-126 underflow.
 pub const F32_LIMIT: f64 = 1.2676506002282294e30; // 2^100
 
-/// Why a config cannot run in binary32, or None. Checks the texel sizes of frame 0 and the
-/// largest world coordinate the pipeline handles (camera positions along the path plus the
-/// farthest slice point, and the scene bounds) against [`F32_LIMIT`], on absolute coordinates
-/// (conservative for `camera_relative`); then builds every frame's f32 windows in the
-/// configured snap space and refuses one that collapses or is not finite.
-pub fn f32_range_problem(config: &Config) -> Option<String> {
-    let rig = Rig::from_config(config)?;
-    let poses = crate::motion::camera_path(config).ok()?;
+/// Why a rig cannot run in binary32 along `poses`, or None. Checks the texel sizes of frame 0
+/// and the largest world coordinate the pipeline handles (camera positions along the path plus
+/// the farthest slice point, and the scene bounds `bounds`) against [`F32_LIMIT`], on absolute
+/// coordinates (conservative for `camera_relative`); then builds every frame's f32 windows in
+/// snap space `space` and refuses one that collapses or is not finite. The message completes
+/// "use precision = ...".
+pub fn f32_range_problem(rig: &Rig, poses: &[CameraPose], bounds: &Aabb, space: SnapSpace) -> Option<String> {
     let reach = rig
         .slices
         .iter()
         .map(|s| s.sphere.centre_depth + s.sphere.radius)
         .fold(0.0, f64::max);
     let camera = poses.iter().map(|p| p.position.abs().max_element()).fold(0.0, f64::max);
-    let scene = config.scene.min.abs().max(config.scene.max.abs()).max_element();
+    let scene = bounds.min.abs().max(bounds.max.abs()).max_element();
     let coord = (camera + reach).max(scene);
-    let lp0 = LightPose::new(&rig.light, &poses[0]);
+    let lp0 = LightPose::new(&rig.light, poses.first()?);
     let texel = (0..rig.cascade_count())
         .map(|i| rig.window(i, &lp0, true).texel.min_element())
         .fold(f64::INFINITY, f64::min);
@@ -580,11 +784,10 @@ pub fn f32_range_problem(config: &Config) -> Option<String> {
     // The windows themselves, built in binary32 as the analysis will build them: a slice
     // thinner than one f32 step at its coordinates collapses an AABB window to zero size (an
     // engine would divide by zero), which no metric can describe.
-    let space = config.shadow.snap_space;
-    let engine: EnginePipeline<f32> = EnginePipeline::new(&rig);
+    let engine: EnginePipeline<f32> = EnginePipeline::new(rig);
     let smallest = (1.0 / F32_LIMIT) as f32;
     for (t, pose) in poses.iter().enumerate() {
-        let anchors = frame_anchors(&rig, pose, space);
+        let anchors = frame_anchors(rig, pose, space);
         for (i, anchor) in anchors.iter().enumerate() {
             for snapped in [true, false] {
                 let w = engine.window(i, pose, *anchor, snapped);
@@ -610,174 +813,4 @@ pub fn f32_range_problem(config: &Config) -> Option<String> {
         }
     }
     None
-}
-
-// ---------------------------------------------------------------------------------------------
-// Drift against world offset: the table in docs/accuracy.md
-// ---------------------------------------------------------------------------------------------
-
-/// World offsets of the drift table (world units, along +x).
-pub const DRIFT_OFFSETS: [f64; 5] = [0.0, 1e3, 1e4, 1e5, 1e6];
-/// Window sides of the drift table (world units, snapping border included), at 2048².
-pub const DRIFT_WINDOWS: [f64; 2] = [20.0, 200.0];
-/// Camera strafe per frame (world units) and path length of the drift table.
-pub const DRIFT_STEP: f64 = 0.0137;
-pub const DRIFT_FRAMES: usize = 120;
-pub const DRIFT_PROBES: usize = 256;
-const DRIFT_RESOLUTION: u32 = 2048;
-
-/// One row of the drift table: one window size, world offset and arithmetic.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct DriftRow {
-    /// Window side (world units) and texel size.
-    pub window: f64,
-    pub texel: f64,
-    pub offset: f64,
-    pub precision: Precision,
-    pub snap_space: SnapSpace,
-    /// Snapped S3 over the path: largest and RMS per-frame drift (texels).
-    pub drift_max: f64,
-    pub drift_rms: f64,
-    /// S7 largest (texels; 0 in f64).
-    pub lookup_error_max: f64,
-    /// `ulp32(|u|)/T` with `u` the camera's light-space x/y (larger axis): the expected scale.
-    pub ulp32_over_texel: f64,
-    pub coverage_violations: u64,
-}
-
-/// The drift-table scene as config text: the default outdoor camera strafing
-/// [`DRIFT_STEP`] per frame, one sphere-fit cascade from 0.1 to a far distance chosen so
-/// that its snapped window is `window` units wide at 2048², everything moved by
-/// `[offset, 0, 0]`.
-pub fn drift_scene_toml(window: f64, offset: f64, precision: Precision, space: SnapSpace) -> String {
-    let lens = crate::geometry::Lens::new(60f64.to_radians(), 1920.0 / 1080.0);
-    let n = DRIFT_RESOLUTION as f64;
-    // Far-cap case of the minimal sphere (c = f, R = k f, which holds for k^2 >= 1), and the
-    // round rule's border W = 2R N / (N - 1): solve for the far distance.
-    let far = window * (n - 1.0) / (2.0 * lens.k2().sqrt() * n);
-    format!(
-        r#"[camera]
-position = [0.0, 10.0, 0.0]
-target = [0.0, 0.0, -50.0]
-fov_y_deg = 60.0
-near = 0.1
-far = 1000.0
-
-[screen]
-width = 1920
-height = 1080
-
-[light]
-direction = [-0.4, -1.0, -0.3]
-
-[scene]
-min = [-1000.0, -1000.0, -1000.0]
-max = [1000.0, 1000.0, 1000.0]
-world_offset = [{offset:?}, 0.0, 0.0]
-
-[shadow]
-max_distance = {far:?}
-cascades = 1
-resolution = {DRIFT_RESOLUTION}
-fit = "sphere"
-snap = true
-fit_depth_to_scene = false
-precision = "{precision}"
-snap_space = "{space}"
-
-[motion]
-path = "strafe"
-frames = {DRIFT_FRAMES}
-step = {DRIFT_STEP:?}
-
-[analysis]
-probes = {DRIFT_PROBES}
-"#
-    )
-}
-
-/// Measures one drift-table row through the ordinary config and analysis path.
-pub fn drift_row(window: f64, offset: f64, precision: Precision, space: SnapSpace) -> crate::Result<DriftRow> {
-    let text = drift_scene_toml(window, offset, precision, space);
-    let config = Config::from_toml_str(&text, "drift-table", None)?;
-    let a = crate::analysis::analyze(&config, &crate::analysis::AnalysisOptions::summary_only());
-    let rig = a
-        .rig
-        .as_ref()
-        .ok_or_else(|| crate::Error::Other("drift table: the scene needs no cascade".into()))?;
-    let snapped = a.snapped.as_ref().expect("a rig implies a path");
-    let texel = rig.sphere_side[0] / rig.resolution as f64;
-    let u = rig.light.to_light_xy(config.camera.position).abs().max_element();
-    Ok(DriftRow {
-        window: rig.sphere_side[0],
-        texel,
-        offset,
-        precision,
-        snap_space: space,
-        drift_max: snapped.stats.max,
-        drift_rms: snapped.stats.rms,
-        lookup_error_max: a.summary.lookup_error_max,
-        ulp32_over_texel: ulp32(u) / texel,
-        coverage_violations: a.summary.coverage_violations,
-    })
-}
-
-/// Every row of the table: windows x offsets x {f64, f32 world, f32 camera-relative}, in that
-/// order (computed in parallel, collected in order).
-pub fn drift_table() -> crate::Result<Vec<DriftRow>> {
-    use rayon::prelude::*;
-    let mut specs = Vec::new();
-    for &w in &DRIFT_WINDOWS {
-        for &o in &DRIFT_OFFSETS {
-            for (p, s) in [
-                (Precision::F64, SnapSpace::World),
-                (Precision::F32, SnapSpace::World),
-                (Precision::F32, SnapSpace::CameraRelative),
-            ] {
-                specs.push((w, o, p, s));
-            }
-        }
-    }
-    specs.par_iter().map(|&(w, o, p, s)| drift_row(w, o, p, s)).collect()
-}
-
-/// The table as Markdown: one line per window and offset.
-pub fn drift_table_markdown(rows: &[DriftRow]) -> String {
-    use std::fmt::Write as _;
-    let mut out = String::from(
-        "| window | offset | ulp32/T | f64 drift max | f32 world drift max (RMS) | f32 world S7 max \
-         | f32 camera-relative drift max (RMS) | f32 camera-relative S7 max |\n\
-         |---|---|---|---|---|---|---|---|\n",
-    );
-    let find = |w: f64, o: f64, p: Precision, s: SnapSpace| {
-        rows.iter()
-            .find(|r| r.window == w && r.offset == o && r.precision == p && r.snap_space == s)
-    };
-    let mut keys: Vec<(f64, f64)> = Vec::new();
-    for r in rows {
-        if !keys.contains(&(r.window, r.offset)) {
-            keys.push((r.window, r.offset));
-        }
-    }
-    let g = |v: f64| if v == 0.0 { "0".to_string() } else { format!("{v:.2e}") };
-    for (w, o) in keys {
-        let f64r = find(w, o, Precision::F64, SnapSpace::World);
-        let wr = find(w, o, Precision::F32, SnapSpace::World);
-        let cr = find(w, o, Precision::F32, SnapSpace::CameraRelative);
-        let cell = |r: Option<&DriftRow>, f: &dyn Fn(&DriftRow) -> String| r.map_or("–".to_string(), f);
-        let _ = writeln!(
-            out,
-            "| {:.0} ({:.2} mm texels) | {} | {} | {} | {} | {} | {} | {} |",
-            w,
-            1000.0 * w / DRIFT_RESOLUTION as f64,
-            if o == 0.0 { "0".to_string() } else { format!("{o:.0e}") },
-            cell(wr.or(f64r), &|r| format!("{:.3}", r.ulp32_over_texel)),
-            cell(f64r, &|r| g(r.drift_max)),
-            cell(wr, &|r| format!("{} ({})", g(r.drift_max), g(r.drift_rms))),
-            cell(wr, &|r| g(r.lookup_error_max)),
-            cell(cr, &|r| format!("{} ({})", g(r.drift_max), g(r.drift_rms))),
-            cell(cr, &|r| g(r.lookup_error_max)),
-        );
-    }
-    out
 }

@@ -1,5 +1,6 @@
 //! A tiny deterministic generator (SplitMix64) and the Halton sequence. Results depend only
-//! on the seed, never on the platform, crate versions or thread count.
+//! on the seed, never on the platform, crate versions or thread count. Used to place probes
+//! (Halton points in a slice) and to draw the random stress cases.
 
 #[derive(Debug, Clone)]
 pub struct SplitMix64 {

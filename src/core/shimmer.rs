@@ -22,13 +22,17 @@
 //! **Moving bases.** A few engine presets derive the light basis from the camera (Filament's
 //! look-to with the camera's right axis, seed 004's look-at from a light position). Then the
 //! grid rotates between frames and every probe is read through each frame's own basis.
+//!
+//! The walk along the path is [`crate::walk::walk`]; [`RigPath`] is the exact f64 rig as a
+//! [`crate::walk::PathModel`], the binary32 pipeline is the other ([`crate::precision`]).
 
 use glam::{DVec2, DVec3};
 
-use crate::cascades::{LightPose, Rig};
-use crate::fitting::Window;
+use crate::cascades::{bounds_2d, LightPose, Rig};
+use crate::fitting::{Fit, Window};
 use crate::geometry::{Aabb, CameraPose, LightBasis};
 use crate::rng::halton;
+use crate::walk::{closed_form_drift, walk, Landing, PathModel, PathTotals};
 
 /// `x - round(x)`, in [-0.5, 0.5].
 pub fn wrap(x: f64) -> f64 {
@@ -160,12 +164,12 @@ pub struct PathResult {
 /// cascade in the [`Rig`] (never recomputed per frame), so its S3 always has the closed form
 /// and needs no probes; callers may then pass empty probe lists.
 pub fn needs_probes(rig: &Rig, opts: ShimmerOptions) -> bool {
-    opts.cell_flips || opts.probe_drift || rig.fit != crate::config::Fit::Sphere || !fast_walk_applies(rig)
+    opts.cell_flips || opts.probe_drift || rig.fit != Fit::Sphere || !fast_walk_applies(rig)
 }
 
-/// Whether the shared two-mode walk serves this rig: a fixed light basis, and each cascade's
+/// Whether the fast coverage test serves this rig: a fixed light basis, and each cascade's
 /// selection interval inside its fitted slice (so the slice corners decide coverage). True for
-/// csm-lab's own fits and most engine presets; the others take [`along_path_general`].
+/// csm-lab's own fits and most engine presets; the others are checked with [`Rig::coverage`].
 fn fast_walk_applies(rig: &Rig) -> bool {
     rig.fixed_basis()
         && (0..rig.cascade_count()).all(|i| {
@@ -183,12 +187,8 @@ pub fn along_path(
     snapped: bool,
     opts: ShimmerOptions,
 ) -> PathResult {
-    if fast_walk_applies(rig) {
-        let [r] = walk(rig, poses, probes, [snapped], opts);
-        r
-    } else {
-        along_path_general(rig, poses, probes, snapped, opts)
-    }
+    let [r] = walk(&mut RigPath::new(rig, probes), poses, [snapped], opts);
+    r.finish(opts)
 }
 
 /// Both snap modes in one walk, `(snapped, unsnapped)`: the same results as two calls of
@@ -199,15 +199,8 @@ pub fn along_path_both(
     probes: &[Vec<DVec3>],
     opts: ShimmerOptions,
 ) -> (PathResult, PathResult) {
-    if fast_walk_applies(rig) {
-        let [s, u] = walk(rig, poses, probes, [true, false], opts);
-        (s, u)
-    } else {
-        (
-            along_path_general(rig, poses, probes, true, opts),
-            along_path_general(rig, poses, probes, false, opts),
-        )
-    }
+    let [s, u] = walk(&mut RigPath::new(rig, probes), poses, [true, false], opts);
+    (s.finish(opts), u.finish(opts))
 }
 
 /// The extremes of one cascade's slice corners in texel units (`corner / T`, before the
@@ -228,150 +221,119 @@ impl CornerTexels {
             // `texel_coords` call computes), for 2 divisions instead of 8.
             (bounds.0 / texel, bounds.1 / texel)
         } else {
-            crate::cascades::bounds_2d(&corners.map(|c| c / texel))
+            bounds_2d(&corners.map(|c| c / texel))
         };
         CornerTexels { texel, lo, hi }
     }
 }
 
-/// Running totals of one snap mode along a path: coverage, S1, S3, S4 and the per-frame rows.
-/// Every walk (the shared two-mode walk, the general walk for engine presets, the binary32
-/// emulation in [`crate::precision`]) accumulates into one of these.
-pub(crate) struct PathTotals {
-    snapped: bool,
-    coverage: Coverage,
-    sum_ms: f64,
-    pairs: usize,
-    /// Largest squared S3: `sqrt` is monotone, so the largest drift is its root (one
-    /// square root per path instead of one per frame pair, bit-identical).
-    max_drift_sq: f64,
-    jitter: f64,
-    flip_sum: f64,
-    frames: Vec<FrameShimmer>,
+/// The exact f64 [`Rig`] as a [`PathModel`]. With a fixed light basis a static probe has the
+/// same light-space x/y in every frame and same-size windows have the closed-form drift; with
+/// a basis that follows the camera each frame reads the probes through its own basis.
+pub struct RigPath<'a> {
+    rig: &'a Rig,
+    probes: &'a [Vec<DVec3>],
+    /// Fixed basis: each probe's light-space x/y, computed once.
+    probe_xy: Vec<Vec<DVec2>>,
+    fixed: bool,
+    /// Fixed basis and selection inside the fitted slices: coverage from the slice corners'
+    /// extremes, shared by the snap modes.
+    fast: bool,
+    lp: Option<LightPose>,
 }
 
-impl PathTotals {
-    pub(crate) fn new(snapped: bool, m: usize) -> Self {
-        PathTotals {
-            snapped,
-            coverage: Coverage {
-                violations: vec![0; m],
-                worst_texels: vec![0.0; m],
-                min_slack_texels: vec![f64::INFINITY; m],
-            },
-            sum_ms: 0.0,
-            pairs: 0,
-            max_drift_sq: 0.0,
-            jitter: 0.0,
-            flip_sum: 0.0,
-            frames: Vec::new(),
+/// One cascade's window of a [`RigPath`] and the light basis it is expressed in.
+#[derive(Debug, Clone, Copy)]
+pub struct RigWindow {
+    pub window: Window,
+    pub basis: LightBasis,
+}
+
+/// Per frame and cascade: the camera frame in the cascade's basis, and (fast coverage) the
+/// slice corners, their bounds and their texel-unit extremes.
+pub struct RigShared {
+    basis: LightBasis,
+    lp: LightPose,
+    corners: [DVec2; 8],
+    bounds: (DVec2, DVec2),
+    texels: Option<CornerTexels>,
+}
+
+impl<'a> RigPath<'a> {
+    pub fn new(rig: &'a Rig, probes: &'a [Vec<DVec3>]) -> Self {
+        RigPath {
+            rig,
+            probes,
+            probe_xy: rig.fixed_probe_xy(probes),
+            fixed: rig.fixed_basis(),
+            fast: fast_walk_applies(rig),
+            lp: None,
         }
     }
+}
 
-    /// One slice corner of cascade `i` at texel coordinates `s` in a window of `n` texels;
-    /// `magnitude` is the size of the coordinate before the origin was subtracted, which sets
-    /// the rounding tolerance (a few ulps of it, at least 1e-9 texel).
-    #[inline]
-    pub(crate) fn corner(&mut self, i: usize, s: DVec2, n: f64, magnitude: f64) {
-        let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
-        let cov = &mut self.coverage;
-        cov.min_slack_texels[i] = cov.min_slack_texels[i].min(slack);
-        let tol = 1e-9 + 8.0 * f64::EPSILON * magnitude;
-        if -slack > tol {
-            cov.violations[i] += 1;
-            cov.worst_texels[i] = cov.worst_texels[i].max(-slack);
-        }
+impl PathModel for RigPath<'_> {
+    type Shared = RigShared;
+    type Win = RigWindow;
+    const SKIP_UNSERVED: bool = false;
+
+    fn cascade_count(&self) -> usize {
+        self.rig.cascade_count()
     }
 
-    /// One frame's coverage of cascade `i` as [`Rig::coverage`] measured it.
-    pub(crate) fn add_coverage(&mut self, i: usize, cov: crate::cascades::FrameCoverage) {
-        let c = &mut self.coverage;
-        c.violations[i] += cov.violations;
-        c.worst_texels[i] = c.worst_texels[i].max(cov.worst_texels);
-        c.min_slack_texels[i] = c.min_slack_texels[i].min(cov.min_slack_texels);
+    fn probes_needed(&self, opts: ShimmerOptions) -> bool {
+        needs_probes(self.rig, opts)
     }
 
-    /// S1 of one frame pair.
-    #[inline]
-    pub(crate) fn size_change(&mut self, size_change: f64) {
-        self.jitter = self.jitter.max(size_change);
+    fn begin_frame(&mut self, _t: usize, pose: &CameraPose) {
+        self.lp = Some(LightPose::new(&self.rig.light, pose));
     }
 
-    /// S3 and S4 of one frame pair: (mean square drift, largest square drift, flip share).
-    #[inline]
-    pub(crate) fn drift(
-        &mut self,
-        t: usize,
-        i: usize,
-        size_change: f64,
-        (ms, mx_sq, flips): (f64, f64, Option<f64>),
-        opts: ShimmerOptions,
-    ) {
-        if let Some(f) = flips {
-            self.flip_sum += f;
-        }
-        self.sum_ms += ms;
-        self.pairs += 1;
-        self.max_drift_sq = self.max_drift_sq.max(mx_sq);
-        if opts.frame_rows {
-            self.frames.push(FrameShimmer {
-                frame: t,
-                cascade: i,
-                snapped: self.snapped,
-                size_change,
-                phase_drift_rms: ms.sqrt(),
-                phase_drift_max: mx_sq.sqrt(),
-                cell_flips: flips,
-            });
-        }
-    }
-
-    pub(crate) fn finish(mut self, opts: ShimmerOptions) -> PathResult {
-        for s in &mut self.coverage.min_slack_texels {
-            if !s.is_finite() {
-                *s = 0.0;
-            }
-        }
-        let pairs = self.pairs;
-        let stats = ShimmerStats {
-            rms: if pairs > 0 {
-                (self.sum_ms / pairs as f64).sqrt()
-            } else {
-                0.0
-            },
-            max: self.max_drift_sq.sqrt(),
-            size_jitter: self.jitter,
-            cell_flip_rate: opts
-                .cell_flips
-                .then(|| if pairs > 0 { self.flip_sum / pairs as f64 } else { 0.0 }),
+    fn shared(&self, i: usize) -> RigShared {
+        let rig = self.rig;
+        let lp = self.lp.expect("begin_frame first");
+        let (basis, lp) = rig.cascade_pose(i, &lp);
+        let (corners, bounds) = if self.fast {
+            let s = &rig.slices[i];
+            let corners = lp.corners(&rig.lens, s.near, s.far);
+            (corners, bounds_2d(&corners))
+        } else {
+            ([DVec2::ZERO; 8], (DVec2::ZERO, DVec2::ZERO))
         };
-        PathResult {
-            stats,
-            coverage: self.coverage,
-            frames: self.frames,
-        }
-    }
-}
-
-/// One snap mode of a walk: its totals and each cascade's previous window.
-struct ModeState {
-    totals: PathTotals,
-    prev: Vec<Option<Window>>,
-}
-
-impl ModeState {
-    fn new(snapped: bool, m: usize) -> Self {
-        ModeState {
-            totals: PathTotals::new(snapped, m),
-            prev: vec![None; m],
+        RigShared {
+            basis,
+            lp,
+            corners,
+            bounds,
+            texels: None,
         }
     }
 
-    /// Coverage: the slice and the window are convex, so the slice's light-space footprint is
-    /// the hull of its corners; checking the 8 corners is exact.
-    #[inline]
-    fn cover(&mut self, i: usize, w: &Window, corners: &[DVec2; 8], ct: &CornerTexels, resolution: u32) {
-        let n = resolution as f64;
+    fn window(&self, i: usize, shared: &mut RigShared, snapped: bool) -> RigWindow {
+        RigWindow {
+            window: self.rig.window_in(i, &shared.lp, snapped),
+            basis: shared.basis,
+        }
+    }
+
+    fn texel(w: &RigWindow) -> DVec2 {
+        w.window.texel
+    }
+
+    fn cover(&self, i: usize, shared: &mut RigShared, w: &RigWindow, totals: &mut PathTotals) {
+        let w = &w.window;
+        if !self.fast {
+            totals.add_coverage(i, self.rig.coverage_in(i, &shared.lp, w));
+            return;
+        }
+        if matches!(&shared.texels, Some(ct) if ct.texel != w.texel) {
+            shared.texels = None;
+        }
+        let (corners, bounds) = (&shared.corners, shared.bounds);
+        let ct = shared
+            .texels
+            .get_or_insert_with(|| CornerTexels::new(corners, bounds, w.texel));
+        let n = self.rig.resolution as f64;
         let o = w.origin_texels;
         // Smallest margin over the corners, from the extreme corners alone: `x - o` and
         // `n - x` are monotone in x under round-to-nearest, so the extreme of the rounded
@@ -380,230 +342,61 @@ impl ModeState {
             .min(n - (ct.hi.x - o.x))
             .min(ct.lo.y - o.y)
             .min(n - (ct.hi.y - o.y));
-        let cov = &mut self.totals.coverage;
-        cov.min_slack_texels[i] = cov.min_slack_texels[i].min(slack);
+        totals.slack(i, slack);
         // Every corner's tolerance is at least 1e-9, so unless the worst margin is below
         // -1e-9 no corner can count as outside and the per-corner pass is skipped.
         if -slack > 1e-9 {
-            for c in corners {
-                self.totals
-                    .corner(i, w.texel_coords(*c), n, (*c / w.texel).abs().max_element());
+            for c in &shared.corners {
+                totals.corner(i, w.texel_coords(*c), n, (*c / w.texel).abs().max_element());
             }
         }
     }
 
-    /// Shimmer between this cascade's previous window and `w`.
-    #[inline]
-    fn shimmer(&mut self, t: usize, i: usize, w: &Window, probe_xy: &[DVec2], opts: ShimmerOptions) {
-        let Some(p) = self.prev[i] else {
-            return;
-        };
-        let same_size = w.texel == p.texel;
-        // x / x is exactly 1, so an unchanged size gives exactly 0 without the divisions.
-        let size_change = if same_size {
-            0.0
+    fn closed_form(&self, p: &RigWindow, w: &RigWindow) -> Option<f64> {
+        (w.window.texel == p.window.texel && (self.fixed || p.basis == w.basis))
+            .then(|| closed_form_drift(p.window.origin_texels, w.window.origin_texels))
+    }
+
+    fn land(
+        &self,
+        i: usize,
+        _shared: &RigShared,
+        w: &RigWindow,
+        out: &mut Vec<Option<Landing>>,
+        _totals: &mut PathTotals,
+    ) {
+        let (win, b) = (&w.window, &w.basis);
+        let centre = |s: DVec2| (win.origin_texels + s.floor() + 0.5) * win.texel;
+        if self.fixed {
+            // A cascade without probes measures 0 wherever probes are needed.
+            let xy = self.probe_xy.get(i).map_or(&[][..], |v| &v[..]);
+            out.extend(xy.iter().map(|q| {
+                let s = win.texel_coords(*q);
+                Some(Landing {
+                    s,
+                    centre: centre(s),
+                    world: DVec3::ZERO,
+                })
+            }));
         } else {
-            ((w.texel.x / p.texel.x - 1.0).abs()).max((w.texel.y / p.texel.y - 1.0).abs())
-        };
-        let closed_form = same_size && !opts.probe_drift;
-        let (ms, mx_sq, flips) = if closed_form && !opts.cell_flips {
-            let ms = closed_form_drift(&p, w);
-            (ms, ms, None)
+            let ps = self.probes.get(i).map_or(&[][..], |v| &v[..]);
+            out.extend(ps.iter().map(|q| {
+                let s = win.texel_coords(b.to_light_xy(*q));
+                let c = centre(s);
+                // The sampled texel's centre line along the light, at the probe's depth.
+                let world = b.x * c.x + b.y * c.y + b.z * b.z.dot(*q);
+                Some(Landing { s, centre: c, world })
+            }));
+        }
+    }
+
+    fn centre_in(&self, w: &RigWindow, earlier: &Landing) -> DVec2 {
+        if self.fixed {
+            earlier.centre
         } else {
-            per_probe(&p, w, probe_xy, closed_form, opts.cell_flips)
-        };
-        self.totals.size_change(size_change);
-        self.totals.drift(t, i, size_change, (ms, mx_sq, flips), opts);
-    }
-}
-
-/// S3 of a same-size window pair without probes: the grid translates, so every point drifts
-/// by the wrapped origin difference. Returns the squared drift.
-#[inline]
-fn closed_form_drift(p: &Window, w: &Window) -> f64 {
-    let d = DVec2::new(
-        wrap(p.origin_texels.x - w.origin_texels.x),
-        wrap(p.origin_texels.y - w.origin_texels.y),
-    );
-    d.length_squared()
-}
-
-/// S3 between windows `p` and `w` as (mean square, largest square) over the probes, or from
-/// the closed form when `closed_form` says it holds; with `cell_flips`, S4 too. (Squares
-/// throughout: `DVec2::length` is the root of `length_squared`, taken once at the end.)
-#[inline(never)]
-fn per_probe(
-    p: &Window,
-    w: &Window,
-    probe_xy: &[DVec2],
-    closed_form: bool,
-    cell_flips: bool,
-) -> (f64, f64, Option<f64>) {
-    let (mut ss, mut pmx_sq, mut flipped) = (0.0, 0.0f64, 0usize);
-    for q in probe_xy {
-        let s0 = p.texel_coords(*q);
-        let s1 = w.texel_coords(*q);
-        let d = DVec2::new(wrap(s1.x - s0.x), wrap(s1.y - s0.y));
-        let d2 = d.length_squared();
-        ss += d2;
-        pmx_sq = pmx_sq.max(d2);
-        // Sampled texel centres in light space, and how far they moved in texels of the
-        // current window.
-        let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
-        let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
-        let moved = ((c1 - c0) / w.texel).abs();
-        if moved.x >= 0.5 || moved.y >= 0.5 {
-            flipped += 1;
+            w.basis.to_light_xy(earlier.world)
         }
     }
-    let count = probe_xy.len().max(1) as f64;
-    let (ms, mx_sq) = if closed_form {
-        let ms = closed_form_drift(p, w);
-        (ms, ms)
-    } else {
-        (ss / count, pmx_sq)
-    };
-    (ms, mx_sq, cell_flips.then(|| flipped as f64 / count))
-}
-
-/// The walk behind [`along_path`] and [`along_path_both`]: per frame, the camera's light-space
-/// frame and each slice's corners are computed once for all modes; so are the corners' texel
-/// coordinates whenever the modes' windows have the same texel size (always, in the [`Rig`]).
-fn walk<const K: usize>(
-    rig: &Rig,
-    poses: &[CameraPose],
-    probes: &[Vec<DVec3>],
-    modes: [bool; K],
-    opts: ShimmerOptions,
-) -> [PathResult; K] {
-    let m = rig.cascade_count();
-    let mut probe_xy: Vec<Vec<DVec2>> = if needs_probes(rig, opts) {
-        probes
-            .iter()
-            .map(|ps| ps.iter().map(|p| rig.light.to_light_xy(*p)).collect())
-            .collect()
-    } else {
-        Vec::new()
-    };
-    // A cascade without probes measures 0 wherever probes are needed.
-    probe_xy.resize(m, Vec::new());
-    let mut states = modes.map(|snapped| ModeState::new(snapped, m));
-    for (t, pose) in poses.iter().enumerate() {
-        let lp = LightPose::new(&rig.light, pose);
-        for (i, (slice, probe_xy)) in rig.slices.iter().zip(&probe_xy).enumerate() {
-            let corners = lp.corners(&rig.lens, slice.near, slice.far);
-            let bounds = crate::cascades::bounds_2d(&corners);
-            let mut shared: Option<CornerTexels> = None;
-            for st in &mut states {
-                let w = rig.window(i, &lp, st.totals.snapped);
-                if matches!(&shared, Some(ct) if ct.texel != w.texel) {
-                    shared = None;
-                }
-                let ct = shared.get_or_insert_with(|| CornerTexels::new(&corners, bounds, w.texel));
-                st.cover(i, &w, &corners, ct, rig.resolution);
-                st.shimmer(t, i, &w, probe_xy, opts);
-                st.prev[i] = Some(w);
-            }
-        }
-    }
-    states.map(|st| st.totals.finish(opts))
-}
-
-/// One snap mode along the path for any rig, including engine presets whose light basis moves
-/// with the camera (each probe is read through each frame's basis) or whose selection interval
-/// reaches outside the fitted slice (coverage then checks both, via [`Rig::coverage`]).
-fn along_path_general(
-    rig: &Rig,
-    poses: &[CameraPose],
-    probes: &[Vec<DVec3>],
-    snapped: bool,
-    opts: ShimmerOptions,
-) -> PathResult {
-    let m = rig.cascade_count();
-    // With a fixed basis a static probe has the same light-space x/y in every frame.
-    let fixed = rig.fixed_basis();
-    let probe_xy: Vec<Vec<DVec2>> = if fixed {
-        probes
-            .iter()
-            .map(|ps| ps.iter().map(|p| rig.light.to_light_xy(*p)).collect())
-            .collect()
-    } else {
-        Vec::new()
-    };
-    let no_probes: Vec<DVec3> = Vec::new();
-    // Each cascade's basis in the previous frame (only tracked when it can change).
-    let mut prev_basis: Vec<LightBasis> = vec![rig.light; m];
-    let mut st = ModeState::new(snapped, m);
-    for (t, pose) in poses.iter().enumerate() {
-        let lp = LightPose::new(&rig.light, pose);
-        for (i, prev_basis) in prev_basis.iter_mut().enumerate() {
-            let w = rig.window(i, &lp, snapped);
-            st.totals.add_coverage(i, rig.coverage(i, &lp, &w));
-            let basis = if fixed { rig.light } else { rig.basis(i, &lp) };
-            if let Some(p) = st.prev[i] {
-                let size_change = ((w.texel.x / p.texel.x - 1.0).abs()).max((w.texel.y / p.texel.y - 1.0).abs());
-                let pb = *prev_basis;
-                let closed_form = w.texel == p.texel && (fixed || pb == basis) && !opts.probe_drift;
-                let drift = if closed_form && !opts.cell_flips {
-                    let ms = closed_form_drift(&p, &w);
-                    (ms, ms, None)
-                } else if fixed {
-                    per_probe(
-                        &p,
-                        &w,
-                        probe_xy.get(i).map_or(&[][..], |v| &v[..]),
-                        closed_form,
-                        opts.cell_flips,
-                    )
-                } else {
-                    let ps = probes.get(i).unwrap_or(&no_probes);
-                    per_probe_moving_basis(&p, &w, ps, (&pb, &basis), closed_form, opts.cell_flips)
-                };
-                st.totals.size_change(size_change);
-                st.totals.drift(t, i, size_change, drift, opts);
-            }
-            st.prev[i] = Some(w);
-            *prev_basis = basis;
-        }
-    }
-    st.totals.finish(opts)
-}
-
-/// [`per_probe`] for a basis that moved between the frames: each frame reads a probe through
-/// its own basis. The previous texel centre is a line along the previous light direction; its
-/// point at the probe's depth is measured against the current texel centre in the current basis.
-fn per_probe_moving_basis(
-    p: &Window,
-    w: &Window,
-    probes: &[DVec3],
-    (pb, basis): (&LightBasis, &LightBasis),
-    closed_form: bool,
-    cell_flips: bool,
-) -> (f64, f64, Option<f64>) {
-    let (mut ss, mut pmx_sq, mut flipped) = (0.0, 0.0f64, 0usize);
-    for q in probes {
-        let s0 = p.texel_coords(pb.to_light_xy(*q));
-        let s1 = w.texel_coords(basis.to_light_xy(*q));
-        let d = DVec2::new(wrap(s1.x - s0.x), wrap(s1.y - s0.y));
-        let d2 = d.length_squared();
-        ss += d2;
-        pmx_sq = pmx_sq.max(d2);
-        let c0 = (p.origin_texels + s0.floor() + 0.5) * p.texel;
-        let c1 = (w.origin_texels + s1.floor() + 0.5) * w.texel;
-        let c0_world = pb.x * c0.x + pb.y * c0.y + pb.z * pb.z.dot(*q);
-        let moved = ((c1 - basis.to_light_xy(c0_world)) / w.texel).abs();
-        if moved.x >= 0.5 || moved.y >= 0.5 {
-            flipped += 1;
-        }
-    }
-    let count = probes.len().max(1) as f64;
-    let (ms, mx_sq) = if closed_form {
-        let ms = closed_form_drift(p, w);
-        (ms, ms)
-    } else {
-        (ss / count, pmx_sq)
-    };
-    (ms, mx_sq, cell_flips.then(|| flipped as f64 / count))
 }
 
 #[cfg(test)]

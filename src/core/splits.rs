@@ -47,7 +47,7 @@ mod tests {
     use super::*;
     use approx::assert_relative_eq;
 
-    /// Reference table of csm-math.md section 2.3 (values to the printed precision).
+    /// Known split depths of the practical scheme (near 0.1, far 1000), to the printed precision.
     #[test]
     fn practical_splits_match_the_reference_table() {
         let cases: [(f64, f64, f64, [f64; 5], f64); 7] = [

@@ -19,7 +19,7 @@ impl Figure for DensityFigure<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
         let a = self.0;
         let title = format!("Shadow texels per screen pixel vs depth: {}", a.config.name);
-        let Some(rig) = &a.rig else {
+        let Some(rig) = a.rig() else {
             return draw_message(
                 root,
                 &title,
@@ -75,7 +75,7 @@ impl Figure for ShimmerFigure<'_> {
             a.config.shadow.fit,
             a.config.name
         );
-        let (Some(sn), Some(un)) = (&a.snapped, &a.unsnapped) else {
+        let (Some(sn), Some(un)) = (a.snapped(), a.unsnapped()) else {
             return draw_message(root, &title, "No cascades needed: nothing can shimmer.");
         };
         let frames = a.config.motion.frames;
@@ -152,7 +152,7 @@ impl Figure for CascadesFigure<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
         let a = self.0;
         let title = format!("Slices and windows seen from the light: {}", a.config.name);
-        let Some(rig) = &a.rig else {
+        let Some(rig) = a.rig() else {
             return draw_message(root, &title, "No cascades needed.");
         };
         let pose = a.config.camera.pose();

@@ -53,7 +53,7 @@ impl Figure for DensityOverlay<'_> {
                 .label(format!(
                     "{}: {} x {}, max aliasing {:.3}",
                     preset_of(a).map_or("?", |p| p.as_str()),
-                    a.rig.as_ref().map_or(0, |r| r.cascade_count()),
+                    a.rig().map_or(0, |r| r.cascade_count()),
                     a.config.shadow.resolution,
                     a.summary.max_aliasing
                 ))

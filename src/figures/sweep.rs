@@ -269,7 +269,7 @@ impl Figure for LambdaDensityFigure<'_> {
                 }
             }
             // Split depths as short ticks at the bottom, in the λ's colour.
-            if let Some(rig) = &a.rig {
+            if let Some(rig) = a.rig() {
                 for s in &rig.splits[1..rig.splits.len() - 1] {
                     chart.draw_series(std::iter::once(PathElement::new(
                         vec![(*s, y0), (*s, y0 * (y1 / y0).powf(0.06))],

@@ -3,7 +3,6 @@
 
 use crate::config::{Config, PresetInput, Validator, Written};
 use crate::error::{ConfigError, Error, Result};
-use crate::precision::Precision;
 
 use super::*;
 
@@ -103,14 +102,6 @@ pub fn apply(config: &mut Config, choice: &PresetChoice) -> Result<()> {
         return Ok(());
     };
     let preset = resolve(name, config, &input, choice, &v)?;
-    if config.shadow.precision == Precision::F32 {
-        return Err(v.invalid(
-            "shadow.precision",
-            "\"f32\"",
-            "\"f64\" with an engine preset (the binary32 emulation models csm-lab's own sphere and aabb \
-             pipelines, not the presets' windows)",
-        ));
-    }
     config.shadow.preset = Some(preset.into());
     Ok(())
 }

@@ -83,7 +83,7 @@ impl Exporter<Analysis> for ShimmerCsv {
 
     fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
         let mut rows = Vec::new();
-        for path in [&a.snapped, &a.unsnapped].into_iter().flatten() {
+        for path in [a.snapped(), a.unsnapped()].into_iter().flatten() {
             for f in &path.frames {
                 rows.push(vec![
                     f.frame.to_string(),
@@ -144,16 +144,16 @@ pub fn summary_value(a: &Analysis) -> serde_json::Value {
         obj.insert("cascades".into(), serde_json::json!([]));
         return v;
     }
-    let rig = a.rig.as_ref().expect("cascades needed");
-    let agg = a.aggregates.as_ref().expect("cascades needed");
+    let rig = a.rig().expect("cascades needed");
+    let agg = a.aggregates().expect("cascades needed");
     obj.insert("splits".into(), serde_json::json!(rig.splits));
     obj.insert("split_jumps".into(), serde_json::json!(agg.split_jumps));
     obj.insert(
         "cascades".into(),
         serde_json::to_value(&a.cascades).expect("plain struct"),
     );
-    let path_json = |p: &Option<crate::shimmer::PathResult>| {
-        p.as_ref().map(|p| {
+    let path_json = |p: Option<&crate::shimmer::PathResult>| {
+        p.map(|p| {
             serde_json::json!({
                 "rms": p.stats.rms,
                 "max": p.stats.max,
@@ -170,8 +170,8 @@ pub fn summary_value(a: &Analysis) -> serde_json::Value {
         serde_json::json!({
             "frames": a.config.motion.frames,
             "path": a.config.motion.path.name(),
-            "snapped": path_json(&a.snapped),
-            "unsnapped": path_json(&a.unsnapped),
+            "snapped": path_json(a.snapped()),
+            "unsnapped": path_json(a.unsnapped()),
         }),
     );
     obj.insert(

@@ -44,7 +44,7 @@ pub fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
                 Some(l) => num("lambda", l)?,
                 None => String::new(),
             };
-            let cascades = a.rig.as_ref().map_or(a.config.shadow.cascades, |r| r.cascade_count());
+            let cascades = a.rig().map_or(a.config.shadow.cascades, |r| r.cascade_count());
             let mut fields = vec![preset_of(a).map_or_else(String::new, |p| p.to_string())];
             fields.extend(metric::summary_fields(
                 lambda,
@@ -145,7 +145,7 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
                 preset_of(a).map_or_else(String::new, |p| p.to_string()),
                 format!(
                     "{} × {}",
-                    a.rig.as_ref().map_or(0, |r| r.cascade_count()),
+                    a.rig().map_or(0, |r| r.cascade_count()),
                     a.config.shadow.resolution
                 ),
                 fit_label(a),
@@ -307,7 +307,7 @@ pub fn summary_table(c: &Comparison) -> String {
             preset_of(a).map_or("?", |p| p.as_str()),
             format!(
                 "{}x{}",
-                a.rig.as_ref().map_or(0, |r| r.cascade_count()),
+                a.rig().map_or(0, |r| r.cascade_count()),
                 a.config.shadow.resolution
             ),
             fit_label(a),

@@ -303,7 +303,7 @@ max = {pass_alias}
 /// The largest and smallest aliasing over [lo, hi] by dense sampling, with each split
 /// approached from the near side as well.
 fn sampled_aliasing(a: &csm_lab::Analysis, lo: f64, hi: f64) -> (f64, f64) {
-    let rig = a.rig.as_ref().unwrap();
+    let rig = a.rig().unwrap();
     let k = rig.lens.pixels_per_unit_slope(a.config.screen.height);
     let t: Vec<f64> = a.cascades.iter().map(|c| c.texel_size).collect();
     let mut depths: Vec<f64> = (0..=200_000).map(|j| lo + (hi - lo) * j as f64 / 200_000.0).collect();

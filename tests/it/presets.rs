@@ -531,7 +531,7 @@ fn lens(fov_deg: f64, aspect: f64) -> Lens {
 fn bevy_windows_are_the_ceiled_diameters_of_the_reference() {
     let text = scene("", "[shadow]\npreset = \"bevy\"\n").replace("fov_y_deg = 60.0", "fov_y_deg = 45.0");
     let c = load(&text);
-    let rig = Rig::from_config(&c).unwrap();
+    let rig = csm_lab::analysis::rig(&c).unwrap();
     assert_eq!(rig.sphere_side, vec![17.0, 42.0, 103.0, 254.0]);
     let lp = LightPose::new(&rig.light, &c.camera.pose());
     let texel_mm: Vec<f64> = (0..4).map(|i| rig.window(i, &lp, true).texel_size() * 1000.0).collect();
@@ -572,7 +572,7 @@ fn godot_window_is_the_centroid_sphere_with_one_border_texel() {
         .replace("near = 0.1", "near = 5.0");
     let c2 = load(&text);
     assert_eq!(c.shadow.cascades, 1);
-    let rig = Rig::from_config(&c2).unwrap();
+    let rig = csm_lab::analysis::rig(&c2).unwrap();
     assert_eq!((rig.slices[0].near, rig.slices[0].far), (5.0, 20.0));
     // reference: R_avg = 24.71806 for [5, 20] at 60 deg, 16:9; and by hand.
     let ln = lens(60.0, 16.0 / 9.0);
@@ -590,7 +590,7 @@ fn godot_window_is_the_centroid_sphere_with_one_border_texel() {
 fn unreal_window_is_the_minimal_sphere_with_a_four_texel_border() {
     let text = scene("", "[shadow]\npreset = \"unreal\"\ncascades = 1\nmax_distance = 20.0\n")
         .replace("near = 0.1", "near = 5.0");
-    let rig = Rig::from_config(&load(&text)).unwrap();
+    let rig = csm_lab::analysis::rig(&load(&text)).unwrap();
     // reference: R_min = 23.55276 for [5, 20] at 60 deg, 16:9 (far-cap case).
     assert!((rig.sphere_side[0] - 2.0 * 23.55276 * 2048.0 / 2040.0).abs() < 1e-4);
     // Near+far case: fovY 30 deg, aspect 1, [5, 20]: c = 14.2949, R = 9.48606.
@@ -714,9 +714,9 @@ fn a_camera_oriented_basis_is_evaluated_probe_by_probe() {
             "[shadow]\npreset = \"filament\"\ncascades = 3",
         );
         let c = load(&text);
-        let rig = Rig::from_config(&c).unwrap();
+        let rig = csm_lab::analysis::rig(&c).unwrap();
         assert!(!rig.fixed_basis());
-        let poses = csm_lab::motion::camera_path(&c).unwrap();
+        let poses = c.camera_path().unwrap();
         let pr = probes(&rig, &c.camera.pose(), &c.scene, 128);
         let r = along_path(&rig, &poses, &pr, true, every);
         if stable {
@@ -740,7 +740,7 @@ fn the_eevee_grid_runs_through_the_lamp_and_stays_stable() {
         "[shadow]\npreset = \"eevee\"\n[eevee]\nlamp_position = [13.37, 42.0, -7.77]",
     );
     let c = load(&text);
-    let rig = Rig::from_config(&c).unwrap();
+    let rig = csm_lab::analysis::rig(&c).unwrap();
     let lamp = rig.light.to_light_xy(DVec3::new(13.37, 42.0, -7.77));
     let lp = LightPose::new(&rig.light, &c.camera.pose());
     for i in 0..rig.cascade_count() {
@@ -1197,7 +1197,7 @@ fn bevy_basis_is_looking_to_with_y_up_and_mirrors_csm_lab_x() {
 #[test]
 fn bevy_floor_snap_moves_windows_toward_minus_bevy_x_which_is_plus_csm_lab_x() {
     let c = preset_config("bevy", "", "");
-    let rig = Rig::from_config(&c).unwrap();
+    let rig = csm_lab::analysis::rig(&c).unwrap();
     let own = LightBasis::new(c.light_direction);
     let (mut along_own_x, mut moved) = (0.0f64, 0);
     for pose in random_poses(9, 200) {
@@ -1238,7 +1238,7 @@ fn sweep_axes_follow_each_preset_and_set_its_own_knobs() {
     // A lambda sweep point changes the preset's splits exactly as its rule says.
     let mut c = preset_config("dart", "max_distance = 200.0", "");
     set_lambda(&mut c, 1.0).unwrap();
-    let rig = Rig::from_config(&c).unwrap();
+    let rig = csm_lab::analysis::rig(&c).unwrap();
     let want: Vec<f64> = (0..=4).map(|i| 0.1 * 2000f64.powf(i as f64 / 4.0)).collect();
     assert_close(&rig.splits, &want, 1e-9, "dart at lambda 1");
     let mut c = preset_config("threejs", "", "");
@@ -1246,7 +1246,7 @@ fn sweep_axes_follow_each_preset_and_set_its_own_knobs() {
     let mut c = preset_config("godot", "", "");
     assert!(set_cascades(&mut c, 3).is_err());
     set_cascades(&mut c, 2).unwrap();
-    assert_eq!(Rig::from_config(&c).unwrap().cascade_count(), 2);
+    assert_eq!(csm_lab::analysis::rig(&c).unwrap().cascade_count(), 2);
     let mut c = preset_config("bevy", "", "");
     assert!(set_resolution(&mut c, 1000).is_err());
     set_resolution(&mut c, 4096).unwrap();
@@ -1325,7 +1325,7 @@ fn seed_004_mirrored_depth_range_puts_cascades_0_and_2_outside_the_depth_range()
     for t in [0.0, 1.0, 2.5] {
         let (text, eye) = seed_004_scene(t);
         let c = load(&text);
-        let rig = Rig::from_config(&c).unwrap();
+        let rig = csm_lab::analysis::rig(&c).unwrap();
         let pose = c.camera.pose();
         let lp = LightPose::new(&rig.light, &pose);
         for i in 0..3 {
@@ -1388,7 +1388,7 @@ fn coverage_misses_stay_within_each_snap_rule_bound() {
             ..Default::default()
         };
         let c = Config::from_toml_str_with_preset(&text, "default.toml", None, &choice).unwrap();
-        let rig = Rig::from_config(&c).unwrap();
+        let rig = csm_lab::analysis::rig(&c).unwrap();
         let (mut misses, mut worst) = (0, 0.0f64);
         for pose in &poses {
             let lp = LightPose::new(&rig.light, pose);
@@ -1499,7 +1499,7 @@ step = 0.7
             let a = analyze(&c, &AnalysisOptions::full());
             let json = csm_lab::report::analyze::summary_value(&a);
             prop_assert!(csm_lab::output::check_json_finite("summary", &json).is_ok(), "{}", json);
-            if let Some(rig) = &a.rig {
+            if let Some(rig) = a.rig() {
                 prop_assert!(rig.splits.windows(2).all(|w| w[0] <= w[1]), "{:?}", rig.splits);
                 prop_assert_eq!(rig.splits[0], c.camera.near);
                 prop_assert!(*rig.splits.last().unwrap() <= c.camera.far);

@@ -241,7 +241,7 @@ fn check(c: &Config) -> Result<(), String> {
     for e in exporters {
         e.render(&a).map_err(|err| format!("{}: {err}", e.file_name()))?;
     }
-    let Some(rig) = &a.rig else {
+    let Some(rig) = a.rig() else {
         return if s.cascades_needed {
             Err("cascades needed but no rig".into())
         } else {
@@ -258,7 +258,7 @@ fn check(c: &Config) -> Result<(), String> {
     if s.z_lo < c.camera.near || s.z_hi > c.shadow_far() {
         return Err(format!("range [{}, {}] outside [near, shadow far]", s.z_lo, s.z_hi));
     }
-    for (mode, p) in [("snapped", &a.snapped), ("unsnapped", &a.unsnapped)] {
+    for (mode, p) in [("snapped", a.snapped()), ("unsnapped", a.unsnapped())] {
         let p = p.as_ref().ok_or("missing path result")?;
         if p.coverage.total() != 0 {
             return Err(format!(
@@ -268,7 +268,7 @@ fn check(c: &Config) -> Result<(), String> {
         }
     }
     if c.shadow.fit == Fit::Sphere {
-        let sn = a.snapped.as_ref().unwrap();
+        let sn = a.snapped().unwrap();
         if !(s.shimmer_snapped < 1e-9 && sn.stats.max < 1e-9 && s.size_jitter == 0.0) {
             return Err(format!("stabilised sphere shimmers: {:?}", sn.stats));
         }

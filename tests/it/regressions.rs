@@ -5,7 +5,6 @@ use crate::common;
 use common::{config, with};
 use csm_lab::analysis::{analyze, AnalysisOptions};
 use csm_lab::error::ConfigError;
-use csm_lab::motion::camera_path;
 use csm_lab::{Config, Error};
 
 fn rejected(text: &str) -> String {
@@ -26,7 +25,7 @@ fn a_full_orbit_and_a_full_yaw_are_valid_motions() {
             ("motion.frames", "frames = 200"),
         ]);
         let c = config(&text);
-        let poses = camera_path(&c).unwrap();
+        let poses = c.camera_path().unwrap();
         assert_eq!(poses.len(), 200);
         // 180 frames of 2 degrees is a whole turn: back to the start.
         let d = (poses[180].forward - poses[0].forward).length();
@@ -53,7 +52,7 @@ fn a_shadow_distance_before_the_near_plane_needs_no_cascades() {
     ]);
     let a = analyze(&config(&text), &AnalysisOptions::full());
     assert!(!a.summary.cascades_needed);
-    assert!(a.rig.is_none());
+    assert!(a.rig().is_none());
 }
 
 /// fov_y_deg = 2.2e-308 passed "strictly between 0 and 180"; tan(fov/2) underflowed and the
@@ -139,4 +138,90 @@ fn the_undersampled_fraction_never_exceeds_one() {
     let config = csm_lab::Config::load_with_preset(&path, &choice).unwrap();
     let a = csm_lab::analyze(&config, &csm_lab::AnalysisOptions::summary_only());
     assert_eq!(a.summary.undersampled_fraction, 1.0);
+}
+
+/// The bundled default scene moved 1e8 units along +x, in binary32, with the given fit.
+fn far_f32(fit: &str) -> String {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/default.toml")).unwrap();
+    let text = text
+        .split("[sweep]")
+        .next()
+        .unwrap()
+        .replace("frames = 240", "frames = 60");
+    let text = text.replace("[scene]\n", "[scene]\nworld_offset = [1e8, 0.0, 0.0]\n");
+    let text = text.replace("[shadow]\n", "[shadow]\nprecision = \"f32\"\n");
+    text.replace("fit = \"sphere\"", &format!("fit = \"{fit}\""))
+        .replace("cascades = 4", "cascades = 3")
+        .replace("lambda = 0.75", "lambda = 1.0")
+        .replace("resolution = 2048", "resolution = 512")
+}
+
+/// `sweep --fit aabb` on an f32 scene far from the origin applied the fit after validation,
+/// skipped the binary32 range check that `analyze` makes, and ended in "internal error:
+/// shimmer_snapped is not finite". Sweep points are now built by validating constructors.
+#[test]
+fn sweeping_to_a_fit_binary32_cannot_hold_is_refused_naming_the_key_before_any_work() {
+    use csm_lab::sweep::{parse_cascades_spec, parse_fit_spec, parse_lambda_spec, parse_resolution_spec};
+    use csm_lab::sweep::{run, Grid, GridOverrides};
+    // analyze refuses the AABB version of the file outright.
+    let why = rejected(&far_f32("aabb"));
+    assert!(why.contains("shadow.precision") && why.contains("collapses"), "{why}");
+    // The sphere version is fine, and a sweep of it to the AABB fit is refused the same way.
+    let base = config(&far_f32("sphere"));
+    let overrides = GridOverrides {
+        lambda: Some(parse_lambda_spec("1").unwrap()),
+        cascades: Some(parse_cascades_spec("3").unwrap()),
+        resolution: Some(parse_resolution_spec("512").unwrap()),
+        fit: Some(parse_fit_spec("aabb").unwrap()),
+    };
+    let grid = Grid::resolve(&base, &overrides).unwrap();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let err = run(&base, &grid, Some(1), &|| {
+        done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("shadow.precision") && err.contains("collapses"), "{err}");
+    assert!(!err.contains("internal error"), "{err}");
+    assert_eq!(done.into_inner(), 0, "no configuration may be analysed");
+    // The constructor itself refuses it, and accepts the fit the file was validated with.
+    assert!(base.with_fit(csm_lab::config::Fit::Aabb).is_err());
+    assert!(base.with_fit(csm_lab::config::Fit::Sphere).is_ok());
+}
+
+/// `precision::along_path` indexed the probe list per cascade and panicked on an empty one,
+/// which the f64 walk accepted. Every path model now shares one walk.
+#[test]
+fn an_empty_probe_list_is_measured_by_every_path_model() {
+    use csm_lab::precision::{self, SnapSpace};
+    use csm_lab::shimmer::{self, ShimmerOptions};
+    let opts = ShimmerOptions {
+        cell_flips: true,
+        probe_drift: true,
+        frame_rows: true,
+    };
+    // csm-lab's sphere and box fits (fixed basis), Filament (basis follows the camera),
+    // LearnOpenGL (a look-at basis per cascade, selection beyond the fitted slices).
+    let texts = [
+        with(&[]),
+        with(&[("shadow.fit", "fit = \"aabb\"")]),
+        with(&[("shadow.preset", "preset = \"filament\"")]),
+        with(&[("shadow.preset", "preset = \"learnopengl\"")]),
+    ];
+    for text in &texts {
+        let c = config(text);
+        let rig = csm_lab::analysis::rig(&c).unwrap();
+        let poses = c.camera_path().unwrap();
+        for snapped in [true, false] {
+            let r = shimmer::along_path(&rig, &poses, &[], snapped, opts);
+            assert!(r.stats.rms.is_finite() && r.stats.max.is_finite());
+            for space in [SnapSpace::World, SnapSpace::CameraRelative] {
+                let e = precision::along_path(&rig, &poses, &[], space, snapped, opts);
+                assert!(e.path.stats.rms.is_finite());
+                assert_eq!(e.lookup.max, 0.0);
+            }
+        }
+        let (s, u) = shimmer::along_path_both(&rig, &poses, &[], opts);
+        assert!(s.stats.rms.is_finite() && u.stats.rms.is_finite());
+    }
 }

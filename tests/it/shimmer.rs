@@ -4,8 +4,7 @@ use crate::common;
 
 use common::{config, with};
 use csm_lab::analysis::{analyze, AnalysisOptions};
-use csm_lab::cascades::{LightPose, Rig};
-use csm_lab::motion::camera_path;
+use csm_lab::cascades::LightPose;
 use csm_lab::shimmer::{along_path, probes, wrap, ShimmerOptions};
 use proptest::prelude::*;
 
@@ -17,8 +16,8 @@ const PROBE_EVERYTHING: ShimmerOptions = ShimmerOptions {
 
 fn path_result(text: &str, snapped: bool) -> csm_lab::shimmer::PathResult {
     let c = config(text);
-    let rig = Rig::from_config(&c).unwrap();
-    let poses = camera_path(&c).unwrap();
+    let rig = csm_lab::analysis::rig(&c).unwrap();
+    let poses = c.camera_path().unwrap();
     let pr = probes(&rig, &c.camera.pose(), &c.scene, 200);
     along_path(&rig, &poses, &pr, snapped, PROBE_EVERYTHING)
 }
@@ -55,7 +54,7 @@ fn unsnapped_strafe_drift_equals_the_closed_form_per_axis() {
     let step = 0.0137;
     let text = with(&[("motion.step", &format!("step = {step}"))]);
     let c = config(&text);
-    let rig = Rig::from_config(&c).unwrap();
+    let rig = csm_lab::analysis::rig(&c).unwrap();
     let pose = c.camera.pose();
     let delta = pose.right * step;
     let r = path_result(&text, false);
@@ -140,8 +139,8 @@ fn dense_face_samples_never_find_a_miss_the_corner_check_missed() {
             ("motion.path", "path = \"yaw\""),
         ]);
         let c = config(&text);
-        let rig = Rig::from_config(&c).unwrap();
-        for pose in camera_path(&c).unwrap().iter().step_by(7) {
+        let rig = csm_lab::analysis::rig(&c).unwrap();
+        for pose in c.camera_path().unwrap().iter().step_by(7) {
             let lp = LightPose::new(&rig.light, pose);
             for (i, s) in rig.slices.iter().enumerate() {
                 let w = rig.window(i, &lp, true);
@@ -237,7 +236,7 @@ proptest! {
     fn windows_cover_their_slices_for_random_cameras_lights_and_fits(text in arb_scene()) {
         let c = config(&text);
         let a = analyze(&c, &AnalysisOptions::summary_only());
-        if let (Some(s), Some(u)) = (&a.snapped, &a.unsnapped) {
+        if let (Some(s), Some(u)) = (a.snapped(), a.unsnapped()) {
             prop_assert_eq!(s.coverage.total(), 0);
             prop_assert_eq!(u.coverage.total(), 0);
             if c.shadow.fit == csm_lab::config::Fit::Sphere {

@@ -3,8 +3,7 @@
 use crate::common;
 
 use common::{config, with};
-use csm_lab::cascades::{LightPose, Rig};
-use csm_lab::motion::camera_path;
+use csm_lab::cascades::LightPose;
 use csm_lab::shimmer::{along_path, along_path_both, probes, ShimmerOptions};
 
 fn all_options() -> [ShimmerOptions; 3] {
@@ -30,8 +29,8 @@ fn both_modes_in_one_walk_equal_two_separate_walks_bit_for_bit() {
             ("motion.step", &format!("step = {step}")),
         ]);
         let c = config(&text);
-        let rig = Rig::from_config(&c).unwrap();
-        let poses = camera_path(&c).unwrap();
+        let rig = csm_lab::analysis::rig(&c).unwrap();
+        let poses = c.camera_path().unwrap();
         let pr = probes(&rig, &c.camera.pose(), &c.scene, 48);
         for opts in all_options() {
             let (s, u) = along_path_both(&rig, &poses, &pr, opts);
@@ -52,32 +51,26 @@ fn coverage_of_shrunken_windows_matches_a_per_corner_count() {
             ("motion.step", "step = 0.7"),
         ]);
         let c = config(&text);
-        let mut rig = Rig::from_config(&c).unwrap();
+        let mut rig = csm_lab::analysis::rig(&c).unwrap();
         // Shrink every sphere window by a different factor, some barely, some a lot.
         for (i, side) in rig.sphere_side.iter_mut().enumerate() {
             *side *= [0.999, 0.8, 0.99999, 0.6][i % 4];
         }
-        let poses = camera_path(&c).unwrap();
+        let poses = c.camera_path().unwrap();
         for snapped in [true, false] {
             let got = along_path(&rig, &poses, &[], snapped, all_options()[0]).coverage;
             let m = rig.cascade_count();
             let (mut count, mut worst, mut slack_min) = (vec![0u64; m], vec![0.0f64; m], vec![f64::INFINITY; m]);
-            let n = rig.resolution as f64;
+            // The per-corner test of `Rig::coverage`, frame by frame, against the walk's
+            // extremes-first shortcut.
             for pose in &poses {
                 let lp = LightPose::new(&rig.light, pose);
                 for i in 0..m {
                     let w = rig.window(i, &lp, snapped);
-                    let s = &rig.slices[i];
-                    for corner in lp.corners(&rig.lens, s.near, s.far) {
-                        let t = w.texel_coords(corner);
-                        let slack = t.x.min(n - t.x).min(t.y).min(n - t.y);
-                        slack_min[i] = slack_min[i].min(slack);
-                        let tol = 1e-9 + 8.0 * f64::EPSILON * (corner / w.texel).abs().max_element();
-                        if -slack > tol {
-                            count[i] += 1;
-                            worst[i] = worst[i].max(-slack);
-                        }
-                    }
+                    let f = rig.coverage(i, &lp, &w);
+                    count[i] += f.violations;
+                    worst[i] = worst[i].max(f.worst_texels);
+                    slack_min[i] = slack_min[i].min(f.min_slack_texels);
                 }
             }
             if fit == "sphere" {

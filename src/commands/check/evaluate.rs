@@ -263,7 +263,7 @@ pub fn evaluate(rule: &Rule, a: &Analysis) -> Result<RuleResult> {
             })
         }
         Target::Depth(m, range) => {
-            let rig = a.rig.as_ref().expect("cascades needed implies a rig");
+            let rig = a.rig().expect("cascades needed implies a rig");
             let (z_lo, z_hi) = (a.summary.z_lo, a.summary.z_hi);
             let (lo, hi) = range.unwrap_or((z_lo, z_hi));
             let (elo, ehi) = (lo.max(z_lo), hi.min(z_hi));

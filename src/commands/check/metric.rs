@@ -145,6 +145,11 @@ mod tests {
             width: 4.0,
             height: 5.0,
             texel_size: 6.0,
+            // Window centres: positions, reported beside the metrics.
+            centre_x: 0.25,
+            centre_y: 0.5,
+            centre_x_texels: 0.75,
+            centre_y_texels: 1.25,
             light_near: 7.0,
             light_far: 8.0,
             coverage_violations: 9,

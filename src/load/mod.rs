@@ -1,9 +1,13 @@
-//! Loading a scene file: parse and validate it ([`crate::config`]), then apply the file's or
-//! the command line's engine preset ([`crate::presets`]).
+//! Loading a scene file: parse and validate it ([`crate::config`]), apply the file's or the
+//! command line's engine preset ([`crate::presets`]), then run the checks that need the
+//! finished cascade set-up (binary32 range). [`Config::with_lambda`] and the other
+//! constructors in `with` change a loaded config through the same checks.
+
+mod with;
 
 use std::path::Path;
 
-use crate::config::Config;
+use crate::config::{Config, Precision, Validator};
 use crate::error::{Error, Result};
 use crate::presets::PresetChoice;
 
@@ -31,7 +35,7 @@ impl Config {
     /// [`Config::load`] with the preset chosen (or overridden) as in `choice`.
     pub fn load_with_preset(path: &Path, choice: &PresetChoice) -> Result<Config> {
         let mut config = Config::load_scene(path)?;
-        crate::presets::apply(&mut config, choice)?;
+        apply_preset(&mut config, choice)?;
         Ok(config)
     }
 
@@ -49,7 +53,32 @@ impl Config {
         choice: &PresetChoice,
     ) -> Result<Config> {
         let mut config = crate::config::parse(text, label, base_dir)?;
-        crate::presets::apply(&mut config, choice)?;
+        apply_preset(&mut config, choice)?;
         Ok(config)
     }
+}
+
+/// Applies the preset chosen in `choice` (or the file's) to a parsed scene and checks the
+/// result: the one way a preset reaches a config.
+pub fn apply_preset(config: &mut Config, choice: &PresetChoice) -> Result<()> {
+    crate::presets::apply(config, choice)?;
+    let input = config.preset_input.clone();
+    binary32_range(config, &input.validator())
+}
+
+/// binary32 must be able to hold every texel coordinate the emulated pipeline computes.
+fn binary32_range(config: &Config, v: &Validator<'_>) -> Result<()> {
+    if config.shadow.precision == Precision::F32 {
+        if let Some(why) = crate::analysis::f32_range_problem(config) {
+            return Err(v.invalid("shadow.precision", "\"f32\"", &why));
+        }
+    }
+    Ok(())
+}
+
+/// The checks that involve several settings at once, run again by every constructor that
+/// changes a loaded config: a valid camera in every frame, and the binary32 range.
+fn cross_checks(config: &Config, v: &Validator<'_>) -> Result<()> {
+    crate::config::check_camera_path(config, v)?;
+    binary32_range(config, v)
 }

@@ -1,0 +1,60 @@
+//! Camera path files: the poses of `motion.path = "file"`.
+
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::error::{Error, Result};
+
+/// Reads a camera path CSV: a header `px,py,pz,tx,ty,tz` and one row per frame
+/// (camera position, then the point it looks at). At least two rows.
+pub fn read_path_file(path: &Path) -> Result<Vec<(DVec3, DVec3)>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let expected = ["px", "py", "pz", "tx", "ty", "tz"];
+    let headers = reader.headers().map_err(|e| Error::data_file(path, 1, e.to_string()))?;
+    if headers.iter().collect::<Vec<_>>() != expected {
+        return Err(Error::data_file(
+            path,
+            1,
+            format!(
+                "header is {:?}; expected the columns px,py,pz,tx,ty,tz",
+                headers.iter().collect::<Vec<_>>().join(",")
+            ),
+        ));
+    }
+    let mut rows = Vec::new();
+    for (i, record) in reader.records().enumerate() {
+        let line = i + 2;
+        let record = record.map_err(|e| Error::data_file(path, line, e.to_string()))?;
+        if record.len() != 6 {
+            return Err(Error::data_file(
+                path,
+                line,
+                format!("{} values; expected 6 (px,py,pz,tx,ty,tz)", record.len()),
+            ));
+        }
+        let mut v = [0.0; 6];
+        for (j, field) in record.iter().enumerate() {
+            v[j] = field.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
+                Error::data_file(
+                    path,
+                    line,
+                    format!("column {} = {field:?} is not a finite number", expected[j]),
+                )
+            })?;
+        }
+        rows.push((DVec3::new(v[0], v[1], v[2]), DVec3::new(v[3], v[4], v[5])));
+    }
+    if rows.len() < 2 {
+        return Err(Error::data_file(
+            path,
+            rows.len() + 1,
+            format!("{} pose rows; a path needs at least 2 frames", rows.len()),
+        ));
+    }
+    Ok(rows)
+}

@@ -1,0 +1,88 @@
+//! The set-up being measured, as plain values: camera, light, scene bounds, shadow parameters
+//! and camera motion.
+//!
+//! These are the core's inputs. They carry no file names, no key names and no degrees: the
+//! config layer validates a file and builds a [`Setup`], and every function of the core takes
+//! these types (or parts of them). Lengths are world units, angles radians, the light direction
+//! is the unit vector along which light travels (conventions in [`crate::geometry`]).
+
+use glam::DVec3;
+
+use crate::fitting::Fit;
+use crate::geometry::{Aabb, CameraPose, Lens};
+use crate::motion::MotionPath;
+use crate::precision::{Precision, SnapSpace};
+
+/// The camera of frame 0 and its lens.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera {
+    pub position: DVec3,
+    pub target: DVec3,
+    pub up: DVec3,
+    /// Vertical field of view, radians.
+    pub fov_y: f64,
+    /// Width over height of the screen.
+    pub aspect: f64,
+    /// Near and far clip planes, world units of view depth.
+    pub near: f64,
+    pub far: f64,
+    /// Screen height in pixels (the pixel footprint of the aliasing metrics).
+    pub screen_height: u32,
+}
+
+impl Camera {
+    /// The camera's frame, or None when position equals target or up is parallel to the view.
+    pub fn pose(&self) -> Option<CameraPose> {
+        CameraPose::look_at(self.position, self.target, self.up)
+    }
+
+    pub fn lens(&self) -> Lens {
+        Lens::new(self.fov_y, self.aspect)
+    }
+}
+
+/// csm-lab's own cascade parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadowParams {
+    /// Shadow distance: cascades end at `min(camera far, max_distance)`.
+    pub max_distance: f64,
+    pub cascades: usize,
+    /// Practical split weight in [0, 1].
+    pub lambda: f64,
+    /// Texels per side of each map.
+    pub resolution: u32,
+    pub fit: Fit,
+    pub snap: bool,
+    /// Split only the depths where the scene bounds are visible.
+    pub fit_depth_to_scene: bool,
+    pub precision: Precision,
+    pub snap_space: SnapSpace,
+}
+
+/// The camera's motion: a path kind with its frame count and step (world units or radians
+/// per frame), or explicit poses.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Motion {
+    pub path: MotionPath,
+    pub frames: usize,
+    pub step: f64,
+}
+
+/// Everything the core measures, in one value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Setup {
+    pub camera: Camera,
+    /// Unit direction in which light travels.
+    pub light_direction: DVec3,
+    /// World-space bounds of everything that casts or receives shadows.
+    pub bounds: Aabb,
+    pub shadow: ShadowParams,
+    pub motion: Motion,
+}
+
+impl Setup {
+    /// Far end of the shadow range before scene clipping: `min(camera far, max_distance)`.
+    pub fn shadow_far(&self) -> f64 {
+        self.camera.far.min(self.shadow.max_distance)
+    }
+}

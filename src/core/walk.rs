@@ -1,0 +1,381 @@
+//! The one walk along a camera path: every shimmer and coverage measurement goes through it.
+//!
+//! A pipeline (the exact f64 rig with a fixed light basis, a rig whose basis follows the
+//! camera, the emulated binary32 pipeline) implements [`PathModel`]: where cascade `i`'s window
+//! is in a frame, whether a slice corner lies inside it, and where a world-fixed probe lands in
+//! it (its texel coordinates and the centre of the texel it samples). [`walk`] runs the model
+//! over the poses for one or several snap modes at once and accumulates, per mode, one
+//! [`PathTotals`]: coverage, S1 size change, S3 sub-texel drift, S4 cell flips and, for the
+//! binary32 pipeline, S7 lookup error. The metric definitions are in [`crate::shimmer`] and
+//! [`crate::precision`]; units are texels throughout.
+
+use glam::DVec2;
+
+use crate::geometry::CameraPose;
+use crate::shimmer::{wrap, Coverage, FrameShimmer, PathResult, ShimmerOptions, ShimmerStats};
+
+/// Where one probe lands in one window: its texel coordinates `s` (0 at the window's minimum
+/// edge, N at the maximum) and the centre of the texel it samples, in the model's light-space
+/// x/y of that frame. `world` is that centre moved back to world space at the probe's light
+/// depth, for models whose basis turns between frames (zero otherwise).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Landing {
+    pub s: DVec2,
+    pub centre: DVec2,
+    pub world: glam::DVec3,
+}
+
+/// A cascade pipeline as the walker sees it.
+pub trait PathModel {
+    /// Values of one cascade in one frame that every snap mode shares (slice corners, the
+    /// cascade's light basis, ...), computed once per frame and cascade.
+    type Shared;
+    /// One cascade's window in one frame, as the pipeline holds it.
+    type Win: Clone;
+    /// True when a frame pair in which no probe is served in both frames says nothing about
+    /// drift (it is skipped); false when such a pair counts as zero drift.
+    const SKIP_UNSERVED: bool;
+
+    fn cascade_count(&self) -> usize;
+    /// Whether [`PathModel::land`] must run with these options (S3 or S4 per probe).
+    fn probes_needed(&self, opts: ShimmerOptions) -> bool;
+    /// Starts frame `t` at camera pose `pose`.
+    fn begin_frame(&mut self, t: usize, pose: &CameraPose);
+    fn shared(&self, i: usize) -> Self::Shared;
+    fn window(&self, i: usize, shared: &mut Self::Shared, snapped: bool) -> Self::Win;
+    /// The window's texel size along light x and y (world units).
+    fn texel(w: &Self::Win) -> DVec2;
+    /// Coverage of cascade `i`'s slice corners by `w`, added to `totals`.
+    fn cover(&self, i: usize, shared: &mut Self::Shared, w: &Self::Win, totals: &mut PathTotals);
+    /// Squared S3 of the pair `(p, w)` without probes, when the grid only translated.
+    fn closed_form(&self, p: &Self::Win, w: &Self::Win) -> Option<f64>;
+    /// Where each of cascade `i`'s probes lands in `w` (None for a probe `w` does not serve),
+    /// into `out`, which arrives empty. May add per-probe errors (S7) to `totals`.
+    fn land(
+        &self,
+        i: usize,
+        shared: &Self::Shared,
+        w: &Self::Win,
+        out: &mut Vec<Option<Landing>>,
+        totals: &mut PathTotals,
+    );
+    /// The sampled-texel centre of a landing in an earlier window, in `w`'s light space.
+    fn centre_in(&self, w: &Self::Win, earlier: &Landing) -> DVec2;
+}
+
+/// Running totals of one snap mode along a path: coverage, S1, S3, S4, S7 and the per-frame
+/// rows.
+#[derive(Debug, Clone)]
+pub struct PathTotals {
+    snapped: bool,
+    coverage: Coverage,
+    sum_ms: f64,
+    pairs: usize,
+    /// Largest squared S3: `sqrt` is monotone, so the largest drift is its root (one square
+    /// root per path instead of one per frame pair, bit-identical).
+    max_drift_sq: f64,
+    jitter: f64,
+    flip_sum: f64,
+    frames: Vec<FrameShimmer>,
+    /// S7 per cascade: sum of squares, largest, count.
+    pub(crate) lookup_sq: Vec<f64>,
+    pub(crate) lookup_max: Vec<f64>,
+    pub(crate) lookup_count: Vec<usize>,
+}
+
+/// Slice corners outside a window, accumulated over corners (and frames).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameCoverage {
+    pub violations: u64,
+    /// How far outside the worst corner lies, in texels (0 when all are inside).
+    pub worst_texels: f64,
+    /// The smallest margin between a corner and the window edge, in texels (negative outside).
+    pub min_slack_texels: f64,
+}
+
+impl Default for FrameCoverage {
+    fn default() -> Self {
+        FrameCoverage {
+            violations: 0,
+            worst_texels: 0.0,
+            min_slack_texels: f64::INFINITY,
+        }
+    }
+}
+
+impl FrameCoverage {
+    /// The one corner test: a corner at texel coordinates `s` in a window of `n` texels.
+    /// `magnitude` is the size of the coordinate before the window origin was subtracted,
+    /// which sets the rounding tolerance (a few ulps of it, at least 1e-9 texel).
+    #[inline]
+    pub fn corner(&mut self, s: DVec2, n: f64, magnitude: f64) {
+        let slack = s.x.min(n - s.x).min(s.y).min(n - s.y);
+        self.min_slack_texels = self.min_slack_texels.min(slack);
+        let tol = 1e-9 + 8.0 * f64::EPSILON * magnitude;
+        if -slack > tol {
+            self.violations += 1;
+            self.worst_texels = self.worst_texels.max(-slack);
+        }
+    }
+}
+
+impl PathTotals {
+    pub fn new(snapped: bool, m: usize) -> Self {
+        PathTotals {
+            snapped,
+            coverage: Coverage {
+                violations: vec![0; m],
+                worst_texels: vec![0.0; m],
+                min_slack_texels: vec![f64::INFINITY; m],
+            },
+            sum_ms: 0.0,
+            pairs: 0,
+            max_drift_sq: 0.0,
+            jitter: 0.0,
+            flip_sum: 0.0,
+            frames: Vec::new(),
+            lookup_sq: vec![0.0; m],
+            lookup_max: vec![0.0; m],
+            lookup_count: vec![0; m],
+        }
+    }
+
+    pub fn snapped(&self) -> bool {
+        self.snapped
+    }
+
+    /// One slice corner of cascade `i` (see [`FrameCoverage::corner`]).
+    #[inline]
+    pub fn corner(&mut self, i: usize, s: DVec2, n: f64, magnitude: f64) {
+        let mut c = self.frame_coverage(i);
+        c.corner(s, n, magnitude);
+        self.set_coverage(i, c);
+    }
+
+    /// Cascade `i`'s coverage so far, as one [`FrameCoverage`].
+    fn frame_coverage(&self, i: usize) -> FrameCoverage {
+        FrameCoverage {
+            violations: self.coverage.violations[i],
+            worst_texels: self.coverage.worst_texels[i],
+            min_slack_texels: self.coverage.min_slack_texels[i],
+        }
+    }
+
+    fn set_coverage(&mut self, i: usize, c: FrameCoverage) {
+        self.coverage.violations[i] = c.violations;
+        self.coverage.worst_texels[i] = c.worst_texels;
+        self.coverage.min_slack_texels[i] = c.min_slack_texels;
+    }
+
+    /// A smallest margin found without the per-corner test (see the f64 fixed-basis model).
+    #[inline]
+    pub(crate) fn slack(&mut self, i: usize, slack: f64) {
+        let m = &mut self.coverage.min_slack_texels[i];
+        *m = m.min(slack);
+    }
+
+    /// One frame's coverage of cascade `i`, measured separately.
+    pub fn add_coverage(&mut self, i: usize, cov: FrameCoverage) {
+        let c = &mut self.coverage;
+        c.violations[i] += cov.violations;
+        c.worst_texels[i] = c.worst_texels[i].max(cov.worst_texels);
+        c.min_slack_texels[i] = c.min_slack_texels[i].min(cov.min_slack_texels);
+    }
+
+    /// S7 of one probe of cascade `i` (texels).
+    #[inline]
+    pub(crate) fn lookup_error(&mut self, i: usize, e: f64) {
+        self.lookup_sq[i] += e * e;
+        self.lookup_max[i] = self.lookup_max[i].max(e);
+        self.lookup_count[i] += 1;
+    }
+
+    /// S1, S3 and S4 of one frame pair: S3 as (mean square, largest square), S4 as a share.
+    #[inline]
+    fn pair(
+        &mut self,
+        t: usize,
+        i: usize,
+        size_change: f64,
+        (ms, mx_sq, flips): (f64, f64, Option<f64>),
+        opts: ShimmerOptions,
+    ) {
+        if let Some(f) = flips {
+            self.flip_sum += f;
+        }
+        self.sum_ms += ms;
+        self.pairs += 1;
+        self.max_drift_sq = self.max_drift_sq.max(mx_sq);
+        if opts.frame_rows {
+            self.frames.push(FrameShimmer {
+                frame: t,
+                cascade: i,
+                snapped: self.snapped,
+                size_change,
+                phase_drift_rms: ms.sqrt(),
+                phase_drift_max: mx_sq.sqrt(),
+                cell_flips: flips,
+            });
+        }
+    }
+
+    pub fn finish(mut self, opts: ShimmerOptions) -> PathResult {
+        for s in &mut self.coverage.min_slack_texels {
+            if !s.is_finite() {
+                *s = 0.0;
+            }
+        }
+        let pairs = self.pairs;
+        let stats = ShimmerStats {
+            rms: if pairs > 0 {
+                (self.sum_ms / pairs as f64).sqrt()
+            } else {
+                0.0
+            },
+            max: self.max_drift_sq.sqrt(),
+            size_jitter: self.jitter,
+            cell_flip_rate: opts
+                .cell_flips
+                .then(|| if pairs > 0 { self.flip_sum / pairs as f64 } else { 0.0 }),
+        };
+        PathResult {
+            stats,
+            coverage: self.coverage,
+            frames: self.frames,
+        }
+    }
+}
+
+/// Squared S3 of a same-size window pair whose grid only translated: every point drifts by
+/// the wrapped difference of the window origins (texel units).
+#[inline]
+pub fn closed_form_drift(p_origin_texels: DVec2, w_origin_texels: DVec2) -> f64 {
+    let d = DVec2::new(
+        wrap(p_origin_texels.x - w_origin_texels.x),
+        wrap(p_origin_texels.y - w_origin_texels.y),
+    );
+    d.length_squared()
+}
+
+/// The per-probe kernel: over the probes landed in both windows, the sum and the largest of
+/// the squared wrapped texel-coordinate change (S3), and how many sampled texel centres moved
+/// by half a texel or more along either axis, in texels of the current window (S4).
+/// Returns `(sum of squares, largest square, flipped, served)`.
+#[inline(never)]
+fn probe_kernel<M: PathModel>(
+    model: &M,
+    w: &M::Win,
+    prev: &[Option<Landing>],
+    cur: &[Option<Landing>],
+) -> (f64, f64, usize, usize) {
+    let texel = M::texel(w);
+    let (mut ss, mut mx_sq, mut flipped, mut served) = (0.0, 0.0f64, 0usize, 0usize);
+    for (a, b) in prev.iter().zip(cur) {
+        let (Some(a), Some(b)) = (a, b) else {
+            continue;
+        };
+        served += 1;
+        let d = DVec2::new(wrap(b.s.x - a.s.x), wrap(b.s.y - a.s.y));
+        let d2 = d.length_squared();
+        ss += d2;
+        mx_sq = mx_sq.max(d2);
+        let moved = ((b.centre - model.centre_in(w, a)) / texel).abs();
+        if moved.x >= 0.5 || moved.y >= 0.5 {
+            flipped += 1;
+        }
+    }
+    (ss, mx_sq, flipped, served)
+}
+
+/// A cascade's window in one frame and where its probes landed in it.
+type Landed<W> = (W, Vec<Option<Landing>>);
+
+/// One snap mode of a walk: its totals, each cascade's previous window and landings.
+struct ModeState<M: PathModel> {
+    totals: PathTotals,
+    prev: Vec<Option<Landed<M::Win>>>,
+    /// A spare landing buffer, reused frame to frame.
+    spare: Vec<Option<Landing>>,
+}
+
+/// The one loop along a path: for every frame (in order) and every cascade, calls
+/// `f(model, t, i, shared)` with the values of cascade `i` in frame `t` that every snap mode
+/// shares.
+pub fn each_cascade_frame<M: PathModel>(
+    model: &mut M,
+    poses: &[CameraPose],
+    mut f: impl FnMut(&M, usize, usize, &mut M::Shared),
+) {
+    let m = model.cascade_count();
+    for (t, pose) in poses.iter().enumerate() {
+        model.begin_frame(t, pose);
+        for i in 0..m {
+            let mut shared = model.shared(i);
+            f(model, t, i, &mut shared);
+        }
+    }
+}
+
+/// Walks `poses` once with `model`, for each snap mode in `modes` (`true` = snapped), and
+/// returns each mode's totals. Per frame and cascade, the values the modes share are computed
+/// once; probes are landed only when the options need them.
+pub fn walk<M: PathModel, const K: usize>(
+    model: &mut M,
+    poses: &[CameraPose],
+    modes: [bool; K],
+    opts: ShimmerOptions,
+) -> [PathTotals; K] {
+    let m = model.cascade_count();
+    let probes = model.probes_needed(opts);
+    let mut states: [ModeState<M>; K] = modes.map(|snapped| ModeState {
+        totals: PathTotals::new(snapped, m),
+        prev: (0..m).map(|_| None).collect(),
+        spare: Vec::new(),
+    });
+    each_cascade_frame(model, poses, |model, t, i, shared| {
+        for st in &mut states {
+            let w = model.window(i, shared, st.totals.snapped);
+            model.cover(i, shared, &w, &mut st.totals);
+            let mut landings = std::mem::take(&mut st.spare);
+            landings.clear();
+            if probes {
+                model.land(i, shared, &w, &mut landings, &mut st.totals);
+            }
+            if let Some((p, pl)) = &st.prev[i] {
+                let (pt, wt) = (M::texel(p), M::texel(&w));
+                // x / x is exactly 1, so an unchanged size gives exactly 0 without the divisions.
+                let size_change = if wt == pt {
+                    0.0
+                } else {
+                    ((wt.x / pt.x - 1.0).abs()).max((wt.y / pt.y - 1.0).abs())
+                };
+                let closed = if opts.probe_drift {
+                    None
+                } else {
+                    model.closed_form(p, &w)
+                };
+                st.totals.jitter = st.totals.jitter.max(size_change);
+                let drift = match closed {
+                    Some(ms) if !opts.cell_flips => Some((ms, ms, None)),
+                    _ => {
+                        let (ss, mx_sq, flipped, served) = probe_kernel(model, &w, pl, &landings);
+                        if M::SKIP_UNSERVED && served == 0 {
+                            None
+                        } else {
+                            let count = served.max(1) as f64;
+                            let (ms, mx_sq) = closed.map_or((ss / count, mx_sq), |ms| (ms, ms));
+                            Some((ms, mx_sq, opts.cell_flips.then(|| flipped as f64 / count)))
+                        }
+                    }
+                };
+                if let Some(d) = drift {
+                    st.totals.pair(t, i, size_change, d, opts);
+                }
+            }
+            if let Some((_, old)) = st.prev[i].replace((w, landings)) {
+                st.spare = old;
+            }
+        }
+    });
+    states.map(|st| st.totals)
+}

@@ -1,0 +1,142 @@
+//! Changing a validated [`Config`]: every constructor checks the new value as the file's
+//! validation would, re-runs the checks that involve several settings (a valid camera in every
+//! frame, binary32 range), and returns a new config or the error naming the key. Sweeps and
+//! `bench` build their variants through these, so no unchecked setting reaches the core.
+
+use super::cross_checks;
+use crate::config::{Config, Fit, MotionPath, Precision, Validator, MAX_WORLD};
+use crate::error::Result;
+
+impl Config {
+    /// How errors about this config name it: its file, or its name.
+    fn label(&self) -> String {
+        self.path
+            .as_ref()
+            .map_or_else(|| self.name.clone(), |p| p.display().to_string())
+    }
+
+    /// The "value not allowed" error for `key`, located at this config's file.
+    fn refuse(&self, key: &str, value: impl std::fmt::Display, allowed: &str) -> crate::error::Error {
+        let label = self.label();
+        Validator { path: &label, text: "" }.invalid(key, value, allowed)
+    }
+
+    /// The config after changes made outside these constructors (an engine's sweep knobs),
+    /// checked as a whole again.
+    pub fn rechecked(self) -> Result<Config> {
+        self.checked()
+    }
+
+    fn checked(self) -> Result<Config> {
+        let label = self.label();
+        cross_checks(&self, &Validator { path: &label, text: "" })?;
+        Ok(self)
+    }
+
+    fn set_lambda(&mut self, lambda: f64) -> Result<()> {
+        if !(0.0..=1.0).contains(&lambda) {
+            return Err(self.refuse("shadow.lambda", lambda, "a number in [0, 1] (0 uniform, 1 logarithmic)"));
+        }
+        self.shadow.lambda = lambda;
+        Ok(())
+    }
+
+    fn set_cascades(&mut self, n: usize) -> Result<()> {
+        if !(1..=16).contains(&n) {
+            return Err(self.refuse("shadow.cascades", n, "an integer in 1..=16"));
+        }
+        self.shadow.cascades = n;
+        Ok(())
+    }
+
+    fn set_resolution(&mut self, n: u32) -> Result<()> {
+        if !(16..=16384).contains(&n) {
+            return Err(self.refuse("shadow.resolution", n, "an integer in 16..=16384"));
+        }
+        self.shadow.resolution = n;
+        Ok(())
+    }
+
+    /// The config with `shadow.lambda` set.
+    pub fn with_lambda(&self, lambda: f64) -> Result<Config> {
+        let mut c = self.clone();
+        c.set_lambda(lambda)?;
+        c.checked()
+    }
+
+    /// The config with `shadow.cascades` set.
+    pub fn with_cascades(&self, n: usize) -> Result<Config> {
+        let mut c = self.clone();
+        c.set_cascades(n)?;
+        c.checked()
+    }
+
+    /// The config with `shadow.resolution` set.
+    pub fn with_resolution(&self, n: u32) -> Result<Config> {
+        let mut c = self.clone();
+        c.set_resolution(n)?;
+        c.checked()
+    }
+
+    /// The config with `shadow.fit` set.
+    pub fn with_fit(&self, fit: Fit) -> Result<Config> {
+        let mut c = self.clone();
+        c.shadow.fit = fit;
+        c.checked()
+    }
+
+    /// The config with `shadow.precision` set.
+    pub fn with_precision(&self, precision: Precision) -> Result<Config> {
+        let mut c = self.clone();
+        c.shadow.precision = precision;
+        c.checked()
+    }
+
+    /// One point of a sweep of csm-lab's own pipeline: λ, cascade count, map size and fit,
+    /// checked together (one cross-check for the four).
+    pub fn with_sweep_point(&self, lambda: f64, cascades: usize, resolution: u32, fit: Fit) -> Result<Config> {
+        let mut c = self.clone();
+        c.set_lambda(lambda)?;
+        c.set_cascades(cascades)?;
+        c.set_resolution(resolution)?;
+        c.shadow.fit = fit;
+        c.checked()
+    }
+
+    /// The config with a generated motion path (not a path file): `frames` poses, `step` as a
+    /// config file would write it (world units per frame, or degrees for the rotations).
+    pub fn with_motion(&self, path: MotionPath, frames: usize, step_as_written: f64) -> Result<Config> {
+        let v = |key: &str, value: &dyn std::fmt::Display, allowed: &str| self.refuse(key, value, allowed);
+        if matches!(path, MotionPath::File { .. }) {
+            return Err(v(
+                "motion.path",
+                &"\"file\"",
+                "a generated path (strafe, dolly, yaw, pitch, orbit)",
+            ));
+        }
+        if !(2..=1_000_000).contains(&frames) {
+            return Err(v("motion.frames", &frames, "an integer in 2..=1000000"));
+        }
+        if !step_as_written.is_finite() {
+            return Err(v("motion.step", &step_as_written, "a finite number"));
+        }
+        let step = if path.is_translation() {
+            if step_as_written.abs() * (frames - 1) as f64 > MAX_WORLD {
+                return Err(v(
+                    "motion.step",
+                    &step_as_written,
+                    &format!("a step whose {frames} frames travel at most 1e9 world units"),
+                ));
+            }
+            step_as_written
+        } else {
+            step_as_written.to_radians()
+        };
+        let mut c = self.clone();
+        c.motion.path = path;
+        c.motion.frames = frames;
+        c.motion.step = step;
+        c.motion.step_as_written = step_as_written;
+        c.checked()
+    }
+}
