@@ -166,8 +166,26 @@ pub struct CompareArgs {
 /// Runs the parsed command.
 pub fn run(cli: Cli) -> Result<Outcome> {
     match cli.command {
-        Command::Analyze(args) => analyze::execute(&args),
-        Command::Sweep(args) => sweep::execute(&args),
+        Command::Analyze(args) => analyze::execute(&analyze::AnalyzeRequest {
+            config: args.config,
+            out: args.out,
+            format: args.format,
+            precision: args.precision,
+            preset: args.preset,
+        }),
+        Command::Sweep(args) => sweep::execute(&sweep::SweepRequest {
+            config: args.config,
+            out: args.out,
+            lambda: args.lambda,
+            cascades: args.cascades,
+            resolution: args.resolution,
+            fit: args.fit,
+            threads: args.threads,
+            quiet: args.quiet,
+            no_plots: args.no_plots,
+            preset: args.preset,
+            format: args.format,
+        }),
         Command::Check(args) => check::execute(&check::CheckRequest {
             config: &args.config,
             thresholds: &args.thresholds,
@@ -176,9 +194,23 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             junit: args.junit.as_deref(),
             format: args.format,
         }),
-        Command::Stress(args) => stress::execute(&args),
-        Command::Bench(args) => bench::execute(&args),
-        Command::Compare(args) => compare::execute(&args),
+        Command::Stress(args) => stress::execute(&stress::StressRequest {
+            out: args.out,
+            cases: args.cases,
+            seed: args.seed,
+            max_f32_drift: args.max_f32_drift,
+        }),
+        Command::Bench(args) => bench::execute(&bench::BenchRequest {
+            out: args.out,
+            config: args.config,
+            repeats: args.repeats,
+        }),
+        Command::Compare(args) => compare::execute(&compare::CompareRequest {
+            config: args.config,
+            presets: args.presets,
+            defaults: args.defaults,
+            out: args.out,
+        }),
     }
 }
 

@@ -90,9 +90,12 @@ pub fn drift_row(window: f64, offset: f64, precision: Precision, space: SnapSpac
     let text = drift_scene_toml(window, offset, precision, space);
     let config = Config::from_toml_str(&text, "drift-table", None)?;
     let a = crate::analysis::analyze(&config, &crate::analysis::AnalysisOptions::summary_only());
-    let rig = a
-        .rig()
-        .ok_or_else(|| crate::Error::Other("drift table: the scene needs no cascade".into()))?;
+    let rig = a.rig().ok_or_else(|| {
+        crate::error::Error::from(crate::error::GridError::Unusable {
+            context: "drift table".into(),
+            message: "the scene needs no cascade".into(),
+        })
+    })?;
     let snapped = a.snapped().expect("a rig implies a path");
     let texel = rig.sphere_side[0] / rig.resolution as f64;
     let u = rig.light.to_light_xy(config.camera.position).abs().max_element();

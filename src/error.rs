@@ -29,10 +29,6 @@ pub enum Error {
     /// should never fire, and if it does no output file is touched.
     #[error("internal error: {what} is not finite ({value}); no file was written")]
     NonFinite { what: String, value: f64 },
-
-    /// Not yet given a domain (being migrated).
-    #[error("{0}")]
-    Other(String),
 }
 
 /// A scene or thresholds file: TOML syntax, unknown keys, wrong types, values out of range.

@@ -1,15 +1,26 @@
 //! `csm-lab analyze`: one scene and shadow setting, built and measured, written as CSV, JSON
 //! and SVG, with a summary on stdout.
 
-use super::{default_out_dir, load_with_preset_flag, print_result, Outcome};
+use super::{default_out_dir, load_with_preset_flag, print_result, Format, Outcome};
 use crate::analysis::{analyze, AnalysisOptions};
-use crate::cli::AnalyzeArgs;
 use crate::error::{ConfigError, Error, Result};
 use crate::output;
+use crate::precision::Precision;
 use crate::report;
+use std::path::PathBuf;
+
+/// What `analyze` was asked to do (the command line's flags, as plain values).
+#[derive(Debug, Clone)]
+pub struct AnalyzeRequest {
+    pub config: PathBuf,
+    pub out: Option<PathBuf>,
+    pub format: Format,
+    pub precision: Option<Precision>,
+    pub preset: Option<String>,
+}
 
 /// The `analyze` command.
-pub fn execute(args: &AnalyzeArgs) -> Result<Outcome> {
+pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
     let mut config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
     if let Some(p) = args.precision {
         // Through the validating constructor; a refusal names the flag that asked for it.

@@ -22,11 +22,11 @@
 //! from run to run and machine to machine.
 
 use std::path::Path;
+use std::path::PathBuf;
 use std::time::Instant;
 
 use super::Outcome;
 use crate::cascades::{LightPose, Rig};
-use crate::cli::BenchArgs;
 use crate::config::{Config, Fit, MotionPath};
 use crate::error::{Error, GridError, Result};
 use crate::metrics::{self, DensitySample};
@@ -465,8 +465,16 @@ impl BenchReport {
 /// The scene `bench` measures when no `--config` is given.
 pub const DEFAULT_SCENE: &str = include_str!("../../configs/default.toml");
 
+/// What `bench` was asked to do (the command line's flags, as plain values).
+#[derive(Debug, Clone)]
+pub struct BenchRequest {
+    pub out: Option<PathBuf>,
+    pub config: Option<PathBuf>,
+    pub repeats: u32,
+}
+
 /// The `bench` command.
-pub fn execute(args: &BenchArgs) -> Result<Outcome> {
+pub fn execute(args: &BenchRequest) -> Result<Outcome> {
     if !(1..=1000).contains(&args.repeats) {
         return Err(Error::flag(
             "--repeats",

@@ -17,7 +17,6 @@ use rayon::prelude::*;
 
 use super::{default_out_dir, Outcome};
 use crate::analysis::{analyze, Analysis, AnalysisOptions};
-use crate::cli::CompareArgs;
 use crate::config::Config;
 use crate::error::{Error, Result};
 use crate::output;
@@ -115,8 +114,17 @@ pub fn fit_label(a: &Analysis) -> String {
 // The command
 // ---------------------------------------------------------------------------------------------
 
+/// What `compare` was asked to do (the command line's flags, as plain values).
+#[derive(Debug, Clone)]
+pub struct CompareRequest {
+    pub config: PathBuf,
+    pub presets: Option<String>,
+    pub defaults: bool,
+    pub out: Option<PathBuf>,
+}
+
 /// The `compare` command.
-pub fn execute(args: &CompareArgs) -> Result<Outcome> {
+pub fn execute(args: &CompareRequest) -> Result<Outcome> {
     let presets = match &args.presets {
         Some(list) => crate::presets::parse_list("--presets", list)?,
         None => crate::presets::PresetName::ALL.to_vec(),

@@ -32,10 +32,10 @@
 
 use glam::DVec3;
 use rayon::prelude::*;
+use std::path::PathBuf;
 
 use super::Outcome;
 use crate::analysis::{analyze, Analysis, AnalysisOptions};
-use crate::cli::StressArgs;
 use crate::config::{Config, Fit};
 use crate::error::Error;
 use crate::error::Result;
@@ -762,8 +762,17 @@ pub fn run(cases: &[StressCase], opts: &StressOptions) -> Vec<CaseResult> {
 // The command
 // ---------------------------------------------------------------------------------------------
 
+/// What `stress` was asked to do (the command line's flags, as plain values).
+#[derive(Debug, Clone)]
+pub struct StressRequest {
+    pub out: PathBuf,
+    pub cases: u64,
+    pub seed: u64,
+    pub max_f32_drift: Option<f64>,
+}
+
 /// The `stress` command.
-pub fn execute(args: &StressArgs) -> Result<Outcome> {
+pub fn execute(args: &StressRequest) -> Result<Outcome> {
     if args.cases > 100_000 {
         return Err(Error::flag(
             "--cases",

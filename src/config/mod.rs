@@ -9,6 +9,7 @@
 mod location;
 mod path_file;
 mod schema;
+pub mod sweep_spec;
 mod validate;
 
 pub use location::{line_column, locate_key, locate_table, toml_error, Validator};
@@ -239,7 +240,7 @@ pub struct Config {
     pub motion: MotionSettings,
     pub analysis: AnalysisSettings,
     /// The `[sweep]` table, if any.
-    pub sweep: Option<crate::sweep::SweepSpec>,
+    pub sweep: Option<sweep_spec::SweepSpec>,
     /// What [`crate::presets`] reads to apply the file's engine preset.
     pub preset_input: PresetInput,
 }

@@ -43,7 +43,7 @@ pub(crate) struct RawConfig {
     pub(crate) motion: RawMotion,
     #[serde(default)]
     pub(crate) analysis: RawAnalysis,
-    pub(crate) sweep: Option<crate::sweep::RawSweep>,
+    pub(crate) sweep: Option<super::sweep_spec::RawSweep>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -293,7 +293,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         probes: v.int_range("analysis.probes", a.probes.unwrap_or(256), 1, 1_000_000)? as usize,
     };
 
-    let sweep = raw.sweep.map(|s| crate::sweep::validate_raw(s, v)).transpose()?;
+    let sweep = raw.sweep.map(|s| super::sweep_spec::validate_raw(s, v)).transpose()?;
 
     let config = Config {
         name: "config".to_string(),
