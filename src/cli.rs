@@ -6,11 +6,11 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
-use crate::commands::{analyze, bench, check, compare, stress, sweep};
+use crate::app::{analyze, bench, check, compare, stress, sweep};
 use crate::error::Result;
 use crate::precision::Precision;
 
-pub use crate::commands::{Format, Outcome};
+pub use crate::app::{Format, Outcome};
 
 #[derive(Debug, Parser)]
 #[command(

@@ -13,6 +13,7 @@
 //! each command in [`commands`] runs that pipeline and hands its result to the report layer.
 
 pub mod analysis;
+pub mod app;
 pub mod cli;
 pub mod commands;
 pub mod config;
@@ -22,6 +23,7 @@ pub mod error;
 pub mod figures;
 pub mod load;
 pub mod metric;
+pub mod output;
 pub mod presets;
 pub mod report;
 pub mod suggest;
@@ -32,7 +34,6 @@ pub use crate::core::{
     cascades, depth_range, fitting, geometry, metrics, motion, precision, rng, scene, shimmer, snapping, splits, walk,
 };
 pub use crate::figures as plots;
-pub use crate::report::output;
 
 pub use analysis::{analyze, Analysis, AnalysisOptions, Summary};
 pub use config::Config;

@@ -21,17 +21,12 @@
 //! 0) and deterministic; times are the best of several repetitions, per evaluation, and vary
 //! from run to run and machine to machine.
 
-use std::path::Path;
-use std::path::PathBuf;
 use std::time::Instant;
 
-use super::Outcome;
 use crate::cascades::{LightPose, Rig};
 use crate::config::{Config, Fit, MotionPath};
 use crate::error::{Error, GridError, Result};
 use crate::metrics::{self, DensitySample};
-use crate::output::{self, Exporter};
-use crate::report;
 use crate::shimmer::{self, wrap, ShimmerOptions};
 use crate::walk::PathModel;
 
@@ -458,46 +453,8 @@ impl BenchReport {
     }
 }
 
-// ---------------------------------------------------------------------------------------------
-// The command
-// ---------------------------------------------------------------------------------------------
-
 /// The scene `bench` measures when no `--config` is given.
 pub const DEFAULT_SCENE: &str = include_str!("../../configs/default.toml");
-
-/// What `bench` was asked to do (the command line's flags, as plain values).
-#[derive(Debug, Clone)]
-pub struct BenchRequest {
-    pub out: Option<PathBuf>,
-    pub config: Option<PathBuf>,
-    pub repeats: u32,
-}
-
-/// The `bench` command.
-pub fn execute(args: &BenchRequest) -> Result<Outcome> {
-    if !(1..=1000).contains(&args.repeats) {
-        return Err(Error::flag(
-            "--repeats",
-            &args.repeats.to_string(),
-            "allowed: an integer in 1..=1000",
-        ));
-    }
-    let config = match &args.config {
-        Some(path) => Config::load(path)?,
-        None => {
-            let mut c = Config::from_toml_str(DEFAULT_SCENE, "configs/default.toml (built in)", None)?;
-            c.name = "default".to_string();
-            c
-        }
-    };
-    let measured = run(&config, args.repeats as usize)?;
-    let dir = args.out.clone().unwrap_or_else(|| Path::new("reports").join("bench"));
-    let exporters: [&dyn Exporter<BenchReport>; 2] = [&report::bench::BenchCsv, &crate::figures::bench::BenchSvg];
-    let written = output::export_all(&dir, &measured, &exporters)?;
-    print!("{}", report::bench::table(&measured));
-    println!("wrote {} files to {}", written.len(), dir.display());
-    Ok(Outcome::Success)
-}
 
 #[cfg(test)]
 mod tests {

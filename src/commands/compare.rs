@@ -15,13 +15,10 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use super::{default_out_dir, Outcome};
 use crate::analysis::{analyze, Analysis, AnalysisOptions};
 use crate::config::Config;
 use crate::error::{Error, Result};
-use crate::output;
 use crate::presets::{PresetChoice, PresetName};
-use crate::report;
 
 /// The presets compared and their analyses, in the order given.
 #[derive(Debug, Clone)]
@@ -108,34 +105,4 @@ pub fn coverage_extremes(a: &Analysis) -> (f64, f64) {
 pub fn fit_label(a: &Analysis) -> String {
     a.rig()
         .map_or_else(|| a.config.shadow.fit.to_string(), |r| r.scheme.fit_label.clone())
-}
-
-// ---------------------------------------------------------------------------------------------
-// The command
-// ---------------------------------------------------------------------------------------------
-
-/// What `compare` was asked to do (the command line's flags, as plain values).
-#[derive(Debug, Clone)]
-pub struct CompareRequest {
-    pub config: PathBuf,
-    pub presets: Option<String>,
-    pub defaults: bool,
-    pub out: Option<PathBuf>,
-}
-
-/// The `compare` command.
-pub fn execute(args: &CompareRequest) -> Result<Outcome> {
-    let presets = match &args.presets {
-        Some(list) => crate::presets::parse_list("--presets", list)?,
-        None => crate::presets::PresetName::ALL.to_vec(),
-    };
-    let comparison = run(&args.config, &presets, args.defaults)?;
-    let dir = args
-        .out
-        .clone()
-        .unwrap_or_else(|| default_out_dir(&comparison.analyses[0].config));
-    let written = output::export_all(&dir, &comparison, &report::compare::exporters())?;
-    print!("{}", report::compare::summary_table(&comparison));
-    println!("wrote {} files to {}", written.len(), dir.display());
-    Ok(Outcome::Success)
 }

@@ -1,77 +1,11 @@
-//! One module per command. Each command's `execute` does what the command does: load the
-//! config, compute the result, hand it to the report layer ([`crate::report`],
-//! [`crate::figures`]), print, and say how the run ended. `cli` only parses and dispatches.
+//! What each command computes, as plain results: a sweep's grid, rows, Pareto front and
+//! recommendation; a comparison of presets; the stress battery's case results; the bench
+//! measurements; check's rule results and baseline comparisons. Nothing here writes a file or
+//! prints: [`crate::app`] runs a command and hands its result to [`crate::report`] and
+//! [`crate::figures`].
 
-pub mod analyze;
 pub mod bench;
 pub mod check;
 pub mod compare;
 pub mod stress;
 pub mod sweep;
-
-use std::path::{Path, PathBuf};
-
-use crate::config::Config;
-use crate::error::Result;
-
-/// What a command prints on stdout.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Format {
-    Table,
-    Json,
-}
-
-/// How a successful run ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Outcome {
-    /// Exit code 0.
-    Success,
-    /// A quality threshold was violated: exit code 1.
-    ThresholdViolated,
-}
-
-impl Outcome {
-    pub fn exit_code(self) -> i32 {
-        match self {
-            Outcome::Success => 0,
-            Outcome::ThresholdViolated => 1,
-        }
-    }
-}
-
-/// Loads a config, with `--preset NAME` (when given) overriding `shadow.preset`.
-pub fn load_with_preset_flag(path: &Path, preset: Option<&str>) -> Result<Config> {
-    let choice = crate::presets::PresetChoice {
-        name: preset.map(|s| crate::presets::parse_flag("--preset", s)).transpose()?,
-        ..Default::default()
-    };
-    Config::load_with_preset(path, &choice)
-}
-
-/// Prints a command's result: with `--format table` the table, then the "wrote" line, on
-/// stdout; with `--format json` the JSON document on stdout and the "wrote" line on stderr, so
-/// that stdout is exactly one document.
-fn print_result(
-    format: Format,
-    table: impl FnOnce() -> String,
-    json: impl FnOnce() -> Result<Vec<u8>>,
-    written: usize,
-    dir: &Path,
-) -> Result<()> {
-    match format {
-        Format::Table => {
-            print!("{}", table());
-            println!("wrote {written} files to {}", dir.display());
-        }
-        Format::Json => {
-            print!("{}", String::from_utf8_lossy(&json()?));
-            eprintln!("wrote {written} files to {}", dir.display());
-        }
-    }
-    Ok(())
-}
-
-/// The default output directory for a config: `reports/<name>/`.
-pub fn default_out_dir(config: &Config) -> PathBuf {
-    Path::new("reports").join(&config.name)
-}

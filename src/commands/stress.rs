@@ -32,16 +32,11 @@
 
 use glam::DVec3;
 use rayon::prelude::*;
-use std::path::PathBuf;
 
-use super::Outcome;
 use crate::analysis::{analyze, Analysis, AnalysisOptions};
 use crate::config::{Config, Fit};
-use crate::error::Error;
 use crate::error::Result;
-use crate::output::{self, Exporter};
 use crate::precision::{Precision, SnapSpace};
-use crate::report;
 use crate::rng::SplitMix64;
 
 /// The largest f64 stabilised drift accepted (texels per frame): rounding residue of an exact
@@ -557,21 +552,11 @@ pub fn check_clear_rejection(error: Option<&str>, key: &str) -> Check {
     }
 }
 
-/// Counts NaN and infinities in everything an analysis outputs: the summary document (splits,
-/// cascades, shimmer statistics, inputs), the density profile and the per-frame rows. A
-/// non-finite number turns into `null` in the JSON value, so nulls are counted too.
+/// Counts NaN and infinities in what an analysis computes beyond its written summary: the
+/// density profile and the per-frame rows.
 pub fn count_nonfinite(a: &Analysis) -> usize {
-    fn walk(v: &serde_json::Value) -> usize {
-        match v {
-            serde_json::Value::Null => 1,
-            serde_json::Value::Number(n) => n.as_f64().map_or(0, |x| usize::from(!x.is_finite())),
-            serde_json::Value::Array(a) => a.iter().map(walk).sum(),
-            serde_json::Value::Object(o) => o.values().map(walk).sum(),
-            _ => 0,
-        }
-    }
     let bad = |xs: &[f64]| xs.iter().filter(|x| !x.is_finite()).count();
-    let mut n = walk(&report::analyze::summary_value(a));
+    let mut n = 0;
     for d in &a.density {
         n += bad(&[d.depth, d.texel_size, d.pixel_size, d.texels_per_pixel, d.aliasing]);
     }
@@ -589,19 +574,10 @@ pub fn count_nonfinite(a: &Analysis) -> usize {
     n
 }
 
-/// Renders the CSV and JSON files `analyze` writes; they refuse non-finite values.
-fn render_errors(a: &Analysis) -> Vec<String> {
-    let exporters: [&dyn Exporter<Analysis>; 4] = [
-        &report::analyze::CascadesCsv,
-        &report::analyze::DensityCsv,
-        &report::analyze::ShimmerCsv,
-        &report::analyze::SummaryJson,
-    ];
-    exporters
-        .iter()
-        .filter_map(|e| e.render(a).err().map(|err| format!("{}: {err}", e.file_name())))
-        .collect()
-}
+/// What the files of `analyze` would say about an analysis: the non-finite numbers in its
+/// summary document and the files that refuse to render. Supplied by the caller (the report
+/// layer knows the files), so this module computes without depending on it.
+pub type OutputCheck = fn(&Analysis) -> (usize, Vec<String>);
 
 // ---------------------------------------------------------------------------------------------
 // Running cases
@@ -645,10 +621,12 @@ impl CaseResult {
 }
 
 /// Options of a stress run.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy)]
 pub struct StressOptions {
     /// Fail a case whose f32 drift (either snap space) exceeds this many texels.
     pub max_f32_drift: Option<f64>,
+    /// Renders what `analyze` would write and reports what is not finite.
+    pub outputs: OutputCheck,
 }
 
 fn f32_residual(a: &Analysis) -> F32Residual {
@@ -686,8 +664,11 @@ pub fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
     let full = AnalysisOptions::full();
     let a = analyze(&config, &full);
     result.cascades_needed = Some(a.summary.cascades_needed);
-    let mut nonfinite = count_nonfinite(&a);
-    let mut notes = render_errors(&a);
+    let check_outputs = |a: &Analysis| {
+        let (n, notes) = (opts.outputs)(a);
+        (n + count_nonfinite(a), notes)
+    };
+    let (mut nonfinite, mut notes) = check_outputs(&a);
 
     if let Some(rig) = a.rig() {
         result.checks.push(check_splits_increasing(&rig.splits));
@@ -709,8 +690,9 @@ pub fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
         }
     };
     if let Some(s) = &sphere {
-        nonfinite += count_nonfinite(s);
-        notes.extend(render_errors(s));
+        let (n, more) = check_outputs(s);
+        nonfinite += n;
+        notes.extend(more);
         violations += s.summary.coverage_violations;
     }
     let stabilised = sphere.as_ref().unwrap_or(&a);
@@ -726,8 +708,9 @@ pub fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
         match inputs.parse(Precision::F32, space, inputs.fit) {
             Ok(c) => {
                 let f = analyze(&c, &full);
-                nonfinite += count_nonfinite(&f);
-                notes.extend(render_errors(&f));
+                let (n, more) = check_outputs(&f);
+                nonfinite += n;
+                notes.extend(more);
                 if f.summary.cascades_needed {
                     let r = Some(f32_residual(&f));
                     match space {
@@ -758,57 +741,17 @@ pub fn run(cases: &[StressCase], opts: &StressOptions) -> Vec<CaseResult> {
     cases.par_iter().map(|c| run_case(c, opts)).collect()
 }
 
-// ---------------------------------------------------------------------------------------------
-// The command
-// ---------------------------------------------------------------------------------------------
-
-/// What `stress` was asked to do (the command line's flags, as plain values).
-#[derive(Debug, Clone)]
-pub struct StressRequest {
-    pub out: PathBuf,
-    pub cases: u64,
-    pub seed: u64,
-    pub max_f32_drift: Option<f64>,
-}
-
-/// The `stress` command.
-pub fn execute(args: &StressRequest) -> Result<Outcome> {
-    if args.cases > 100_000 {
-        return Err(Error::flag(
-            "--cases",
-            &args.cases.to_string(),
-            "at most 100000 random cases",
-        ));
-    }
-    if let Some(limit) = args.max_f32_drift {
-        if !(limit.is_finite() && limit >= 0.0) {
-            return Err(Error::flag(
-                "--max-f32-drift",
-                &limit.to_string(),
-                "a finite number of texels >= 0",
-            ));
-        }
-    }
-    let mut cases = battery();
-    cases.extend(random_cases(args.cases as usize, args.seed));
-    let opts = StressOptions {
-        max_f32_drift: args.max_f32_drift,
-    };
-    let results = run(&cases, &opts);
-    let bytes = report::stress::csv(&results)?;
-    output::write_files(&args.out, &[("stress.csv", bytes)])?;
-    print!("{}", report::stress::table(&results));
-    println!("wrote {}", args.out.join("stress.csv").display());
-    Ok(if results.iter().all(|r| r.pass()) {
-        Outcome::Success
-    } else {
-        Outcome::ThresholdViolated
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::report::analyze::output_problems;
+
+    fn test_options() -> StressOptions {
+        StressOptions {
+            max_f32_drift: None,
+            outputs: output_problems,
+        }
+    }
 
     #[test]
     fn each_check_fails_on_a_deliberately_broken_value() {
@@ -839,26 +782,29 @@ mod tests {
             .parse(Precision::F64, SnapSpace::World, Fit::Sphere)
             .unwrap();
         let good = analyze(&config, &AnalysisOptions::full());
-        assert_eq!(count_nonfinite(&good), 0);
-        assert!(render_errors(&good).is_empty());
+        let all = |a: &Analysis| {
+            let (n, errors) = output_problems(a);
+            (n + count_nonfinite(a), errors)
+        };
+        assert_eq!(all(&good), (0, vec![]));
         let mut a = good.clone();
         a.summary.max_aliasing = f64::NAN;
-        assert_eq!(count_nonfinite(&a), 1);
+        assert_eq!(all(&a).0, 1);
         a.density[3].aliasing = f64::INFINITY;
         let crate::analysis::Outcome::Cascades(m) = &mut a.outcome else {
             panic!("the baseline needs cascades")
         };
         m.snapped.frames[0].phase_drift_max = f64::NAN;
         a.cascades[1].light_far = f64::NEG_INFINITY;
-        assert_eq!(count_nonfinite(&a), 4);
-        let errors = render_errors(&a);
+        let (n, errors) = all(&a);
+        assert_eq!(n, 4);
         assert_eq!(errors.len(), 4, "every exporter refuses: {errors:?}");
-        assert!(!check_finite(count_nonfinite(&a)).pass);
+        assert!(!check_finite(n).pass);
     }
 
     #[test]
     fn run_case_checks_every_invariant_and_detects_a_wrong_expectation() {
-        let r = run_case(&battery()[0], &StressOptions::default());
+        let r = run_case(&battery()[0], &test_options());
         let names: Vec<_> = r.checks.iter().map(|c| c.invariant).collect();
         assert_eq!(
             names,
@@ -879,7 +825,7 @@ mod tests {
             inputs: StressInputs::baseline(),
             expect: Expect::Rejected { key: "camera.near" },
         };
-        let r = run_case(&wrong, &StressOptions::default());
+        let r = run_case(&wrong, &test_options());
         assert!(!r.pass() && r.failed() == ["clear_rejection"]);
         // An opt-in f32 limit of zero fails a case at 1e5 (world f32 drifts there).
         let far = case("far", |i| i.world_offset = [1e5, 0.0, 0.0]);
@@ -887,6 +833,7 @@ mod tests {
             &far,
             &StressOptions {
                 max_f32_drift: Some(0.0),
+                ..test_options()
             },
         );
         assert_eq!(r.failed(), ["f32_drift_limit"]);

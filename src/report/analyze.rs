@@ -294,3 +294,24 @@ pub fn summary_table(a: &Analysis) -> String {
     }
     out
 }
+
+/// The non-finite numbers in an analysis's summary document (a non-finite number becomes
+/// `null` there, so nulls count too) and the files of `analyze` that refuse to render (they
+/// refuse non-finite values): what `stress` checks of every case.
+pub fn output_problems(a: &Analysis) -> (usize, Vec<String>) {
+    fn walk(v: &serde_json::Value) -> usize {
+        match v {
+            serde_json::Value::Null => 1,
+            serde_json::Value::Number(n) => n.as_f64().map_or(0, |x| usize::from(!x.is_finite())),
+            serde_json::Value::Array(a) => a.iter().map(walk).sum(),
+            serde_json::Value::Object(o) => o.values().map(walk).sum(),
+            _ => 0,
+        }
+    }
+    let exporters: [&dyn Exporter<Analysis>; 4] = [&CascadesCsv, &DensityCsv, &ShimmerCsv, &SummaryJson];
+    let errors = exporters
+        .iter()
+        .filter_map(|e| e.render(a).err().map(|err| format!("{}: {err}", e.file_name())))
+        .collect();
+    (walk(&summary_value(a)), errors)
+}

@@ -1,7 +1,7 @@
 //! The report layer: everything that turns a computed result into files or terminal text.
-//! [`output`] holds the exporter trait, CSV/JSON encoding and the one atomic writer; [`html`]
-//! the one page shell, stylesheet and escaping; one module per command renders that command's
-//! result (figures are in [`crate::figures`]).
+//! [`html`] holds the one page shell, stylesheet and escaping; one module per command renders
+//! that command's result. Figures are in [`crate::figures`]; the exporter trait, CSV/JSON
+//! encoding and the one atomic writer in [`crate::output`].
 
 pub mod analyze;
 pub mod bench;
@@ -10,6 +10,5 @@ pub mod compare;
 pub mod html;
 pub mod junit;
 pub mod markdown;
-pub mod output;
 pub mod stress;
 pub mod sweep;

@@ -1,0 +1,44 @@
+//! `csm-lab bench`: run time against error of every sampled quantity.
+
+use std::path::{Path, PathBuf};
+
+use super::Outcome;
+use crate::commands::bench::*;
+use crate::config::Config;
+use crate::error::{Error, Result};
+use crate::output::{self, Exporter};
+use crate::report;
+
+/// What `bench` was asked to do (the command line's flags, as plain values).
+#[derive(Debug, Clone)]
+pub struct BenchRequest {
+    pub out: Option<PathBuf>,
+    pub config: Option<PathBuf>,
+    pub repeats: u32,
+}
+
+/// The `bench` command.
+pub fn execute(args: &BenchRequest) -> Result<Outcome> {
+    if !(1..=1000).contains(&args.repeats) {
+        return Err(Error::flag(
+            "--repeats",
+            &args.repeats.to_string(),
+            "allowed: an integer in 1..=1000",
+        ));
+    }
+    let config = match &args.config {
+        Some(path) => Config::load(path)?,
+        None => {
+            let mut c = Config::from_toml_str(DEFAULT_SCENE, "configs/default.toml (built in)", None)?;
+            c.name = "default".to_string();
+            c
+        }
+    };
+    let measured = run(&config, args.repeats as usize)?;
+    let dir = args.out.clone().unwrap_or_else(|| Path::new("reports").join("bench"));
+    let exporters: [&dyn Exporter<BenchReport>; 2] = [&report::bench::BenchCsv, &crate::figures::bench::BenchSvg];
+    let written = output::export_all(&dir, &measured, &exporters)?;
+    print!("{}", report::bench::table(&measured));
+    println!("wrote {} files to {}", written.len(), dir.display());
+    Ok(Outcome::Success)
+}

@@ -1,0 +1,35 @@
+//! `csm-lab compare`: engine presets side by side on one scene.
+
+use std::path::PathBuf;
+
+use super::{default_out_dir, Outcome};
+use crate::commands::compare::*;
+use crate::error::Result;
+use crate::output;
+use crate::report;
+
+/// What `compare` was asked to do (the command line's flags, as plain values).
+#[derive(Debug, Clone)]
+pub struct CompareRequest {
+    pub config: PathBuf,
+    pub presets: Option<String>,
+    pub defaults: bool,
+    pub out: Option<PathBuf>,
+}
+
+/// The `compare` command.
+pub fn execute(args: &CompareRequest) -> Result<Outcome> {
+    let presets = match &args.presets {
+        Some(list) => crate::presets::parse_list("--presets", list)?,
+        None => crate::presets::PresetName::ALL.to_vec(),
+    };
+    let comparison = run(&args.config, &presets, args.defaults)?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out_dir(&comparison.analyses[0].config));
+    let written = output::export_all(&dir, &comparison, &report::compare::exporters())?;
+    print!("{}", report::compare::summary_table(&comparison));
+    println!("wrote {} files to {}", written.len(), dir.display());
+    Ok(Outcome::Success)
+}

@@ -1,0 +1,54 @@
+//! `csm-lab stress`: the battery of pathological inputs and its invariants, as `stress.csv`.
+
+use std::path::PathBuf;
+
+use super::Outcome;
+use crate::commands::stress::*;
+use crate::error::{Error, Result};
+use crate::output;
+use crate::report;
+
+/// What `stress` was asked to do (the command line's flags, as plain values).
+#[derive(Debug, Clone)]
+pub struct StressRequest {
+    pub out: PathBuf,
+    pub cases: u64,
+    pub seed: u64,
+    pub max_f32_drift: Option<f64>,
+}
+
+/// The `stress` command.
+pub fn execute(args: &StressRequest) -> Result<Outcome> {
+    if args.cases > 100_000 {
+        return Err(Error::flag(
+            "--cases",
+            &args.cases.to_string(),
+            "at most 100000 random cases",
+        ));
+    }
+    if let Some(limit) = args.max_f32_drift {
+        if !(limit.is_finite() && limit >= 0.0) {
+            return Err(Error::flag(
+                "--max-f32-drift",
+                &limit.to_string(),
+                "a finite number of texels >= 0",
+            ));
+        }
+    }
+    let mut cases = battery();
+    cases.extend(random_cases(args.cases as usize, args.seed));
+    let opts = StressOptions {
+        max_f32_drift: args.max_f32_drift,
+        outputs: report::analyze::output_problems,
+    };
+    let results = run(&cases, &opts);
+    let bytes = report::stress::csv(&results)?;
+    output::write_files(&args.out, &[("stress.csv", bytes)])?;
+    print!("{}", report::stress::table(&results));
+    println!("wrote {}", args.out.join("stress.csv").display());
+    Ok(if results.iter().all(|r| r.pass()) {
+        Outcome::Success
+    } else {
+        Outcome::ThresholdViolated
+    })
+}
