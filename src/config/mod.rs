@@ -23,6 +23,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::geometry::{Aabb, CameraPose};
+pub use crate::scene::ShadowParams;
 
 pub use crate::fitting::Fit;
 pub use crate::motion::MotionPath;
@@ -72,37 +73,31 @@ impl Screen {
     }
 }
 
-/// Shadow settings: the knobs an engine exposes.
+/// Shadow settings: csm-lab's own cascade parameters (what each does to quality is documented
+/// on [`ShadowParams`]) and the engine preset applied on top, if any. Reads as the parameters
+/// (`config.shadow.cascades`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ShadowSettings {
-    /// Shadow distance: cascades end at min(camera far, max_distance). Larger spreads the same
-    /// texels over more depth (blurrier); smaller cuts shadows off sooner.
-    pub max_distance: f64,
-    /// Number of cascades (1..=16). More cascades lower the worst-case aliasing at the cost of
-    /// memory and draw calls; returns diminish beyond about 4.
-    pub cascades: usize,
-    /// Practical split weight: 0 uniform (starves the near cascades), 1 logarithmic (equal worst
-    /// case in every cascade, but a tiny first cascade when near is small).
-    pub lambda: f64,
-    /// Texels per side of each cascade's map (16..=16384). Texel size scales as 1/resolution.
-    pub resolution: u32,
-    pub fit: Fit,
-    /// Move each window in whole texels on a world-anchored grid. Removes shimmer under camera
-    /// translation (and rotation, for the sphere fit).
-    pub snap: bool,
-    /// Clip the split range to where the scene's bounds are visible; skips empty depth.
-    pub fit_depth_to_scene: bool,
-    /// Arithmetic of the cascade pipeline: exact f64, or an engine's binary32 emulated
-    /// operation by operation (see [`crate::precision`]).
-    pub precision: Precision,
-    /// Where the binary32 pipeline computes: at absolute world coordinates, or relative to a
-    /// camera-near anchor. Only matters with `precision = "f32"`.
-    pub snap_space: SnapSpace,
+    #[serde(flatten)]
+    pub params: ShadowParams,
     /// An engine's whole cascade set-up instead of csm-lab's own ([`crate::presets`]). When set,
     /// `cascades`, `resolution` and `max_distance` hold the preset's effective values, `snap`
     /// whether it snaps, `fit` the family of its fit, and `fit_depth_to_scene` is false.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub preset: Option<AppliedPreset>,
+}
+
+impl std::ops::Deref for ShadowSettings {
+    type Target = ShadowParams;
+    fn deref(&self) -> &ShadowParams {
+        &self.params
+    }
+}
+
+impl std::ops::DerefMut for ShadowSettings {
+    fn deref_mut(&mut self) -> &mut ShadowParams {
+        &mut self.params
+    }
 }
 
 /// A value stored in [`AppliedPreset`]: what the settings need to clone, compare, print and
@@ -284,7 +279,7 @@ impl Config {
     /// The validated settings as the core's plain domain values (radians, unit light
     /// direction, world offset already applied).
     pub fn setup(&self) -> crate::scene::Setup {
-        use crate::scene::{Camera, Motion, Setup, ShadowParams};
+        use crate::scene::{Camera, Motion, Setup};
         let s = &self.shadow;
         Setup {
             camera: Camera {
@@ -299,17 +294,7 @@ impl Config {
             },
             light_direction: self.light_direction,
             bounds: self.scene,
-            shadow: ShadowParams {
-                max_distance: s.max_distance,
-                cascades: s.cascades,
-                lambda: s.lambda,
-                resolution: s.resolution,
-                fit: s.fit,
-                snap: s.snap,
-                fit_depth_to_scene: s.fit_depth_to_scene,
-                precision: s.precision,
-                snap_space: s.snap_space,
-            },
+            shadow: s.params,
             motion: Motion {
                 path: self.motion.path.clone(),
                 frames: self.motion.frames,

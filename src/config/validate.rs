@@ -195,18 +195,20 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     };
     let s_preset = s.preset;
     let shadow = ShadowSettings {
-        max_distance,
-        cascades,
-        lambda,
-        resolution,
-        fit: match &s.fit {
-            Some(f) => v.one_of("shadow.fit", f, &[("sphere", Fit::Sphere), ("aabb", Fit::Aabb)])?,
-            None => Fit::Sphere,
+        params: ShadowParams {
+            max_distance,
+            cascades,
+            lambda,
+            resolution,
+            fit: match &s.fit {
+                Some(f) => v.one_of("shadow.fit", f, &[("sphere", Fit::Sphere), ("aabb", Fit::Aabb)])?,
+                None => Fit::Sphere,
+            },
+            snap: s.snap.unwrap_or(true),
+            fit_depth_to_scene: s.fit_depth_to_scene.unwrap_or(true),
+            precision,
+            snap_space,
         },
-        snap: s.snap.unwrap_or(true),
-        fit_depth_to_scene: s.fit_depth_to_scene.unwrap_or(true),
-        precision,
-        snap_space,
         preset: None,
     };
     let camera = CameraSettings {
@@ -225,11 +227,11 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let step_as_written = v.finite("motion.step", m.step.unwrap_or(0.05))?;
     let path_name = m.path.unwrap_or_else(|| "strafe".to_string());
     let (path, step) = match path_name.as_str() {
-        "strafe" => (MotionPath::Strafe, step_as_written),
-        "dolly" => (MotionPath::Dolly, step_as_written),
-        "yaw" => (MotionPath::Yaw, step_as_written.to_radians()),
-        "pitch" => (MotionPath::Pitch, step_as_written.to_radians()),
-        "orbit" => (MotionPath::Orbit, step_as_written.to_radians()),
+        name if MotionPath::generated(name).is_some() => {
+            let path = MotionPath::generated(name).expect("just matched");
+            let step = path.step_from_written(step_as_written);
+            (path, step)
+        }
         "file" => {
             let file = m.file.ok_or_else(|| {
                 v.invalid(
@@ -253,7 +255,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             return Err(v.invalid(
                 "motion.path",
                 format!("{other:?}"),
-                "one of \"strafe\", \"dolly\", \"yaw\", \"pitch\", \"orbit\", \"file\"",
+                &format!("one of {}", MotionPath::names_quoted()),
             ))
         }
     };

@@ -31,6 +31,38 @@ pub enum MotionPath {
 }
 
 impl MotionPath {
+    /// The paths generated from the configured camera, by name: a new path is a variant here,
+    /// its name in [`MotionPath::name`] and its poses in [`camera_path`], nothing else.
+    pub const GENERATED: [MotionPath; 5] = [
+        MotionPath::Strafe,
+        MotionPath::Dolly,
+        MotionPath::Yaw,
+        MotionPath::Pitch,
+        MotionPath::Orbit,
+    ];
+
+    /// The generated path of a name (`"strafe"`, ...); None for `"file"` and unknown names.
+    pub fn generated(name: &str) -> Option<MotionPath> {
+        Self::GENERATED.into_iter().find(|p| p.name() == name)
+    }
+
+    /// Every name a config may give, quoted, for error messages.
+    pub fn names_quoted() -> String {
+        let mut names: Vec<String> = Self::GENERATED.iter().map(|p| format!("{:?}", p.name())).collect();
+        names.push("\"file\"".to_string());
+        names.join(", ")
+    }
+
+    /// The per-frame step as used from the step as written: world units for translations,
+    /// degrees converted to radians for rotations (degrees exist only in the config).
+    pub fn step_from_written(&self, written: f64) -> f64 {
+        if self.is_translation() {
+            written
+        } else {
+            written.to_radians()
+        }
+    }
+
     pub fn name(&self) -> &'static str {
         match self {
             MotionPath::Strafe => "strafe",

@@ -41,21 +41,33 @@ impl Camera {
     }
 }
 
-/// csm-lab's own cascade parameters.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// csm-lab's own cascade parameters: the knobs an engine exposes, and what each does to quality.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct ShadowParams {
-    /// Shadow distance: cascades end at `min(camera far, max_distance)`.
+    /// Shadow distance, world units: cascades end at `min(camera far, max_distance)`. Larger
+    /// spreads the same texels over more depth (blurrier); smaller cuts shadows off sooner.
     pub max_distance: f64,
+    /// Number of cascades (1..=16). More cascades lower the worst-case aliasing at the cost of
+    /// memory and draw calls; returns diminish beyond about 4.
     pub cascades: usize,
-    /// Practical split weight in [0, 1].
+    /// Practical split weight in [0, 1]: 0 uniform (starves the near cascades), 1 logarithmic
+    /// (equal worst case in every cascade, but a tiny first cascade when near is small).
     pub lambda: f64,
-    /// Texels per side of each map.
+    /// Texels per side of each cascade's map (16..=16384). Texel size scales as 1/resolution.
     pub resolution: u32,
+    /// How a window is fitted around its slice: a sphere never changes size (stable), a tight
+    /// box is sharper but changes size as the camera turns.
     pub fit: Fit,
+    /// Move each window in whole texels on a world-anchored grid. Removes shimmer under camera
+    /// translation (and rotation, for the sphere fit).
     pub snap: bool,
-    /// Split only the depths where the scene bounds are visible.
+    /// Split only the depths where the scene bounds are visible; skips empty depth.
     pub fit_depth_to_scene: bool,
+    /// Arithmetic of the cascade pipeline: exact f64, or an engine's binary32 emulated
+    /// operation by operation.
     pub precision: Precision,
+    /// Where the binary32 pipeline computes: at absolute world coordinates, or relative to a
+    /// camera-near anchor. Only matters with binary32.
     pub snap_space: SnapSpace,
 }
 

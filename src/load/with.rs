@@ -111,7 +111,10 @@ impl Config {
             return Err(v(
                 "motion.path",
                 &"\"file\"",
-                "a generated path (strafe, dolly, yaw, pitch, orbit)",
+                &format!(
+                    "a generated path ({})",
+                    MotionPath::GENERATED.map(|p| p.name()).join(", ")
+                ),
             ));
         }
         if !(2..=1_000_000).contains(&frames) {
@@ -120,18 +123,14 @@ impl Config {
         if !step_as_written.is_finite() {
             return Err(v("motion.step", &step_as_written, "a finite number"));
         }
-        let step = if path.is_translation() {
-            if step_as_written.abs() * (frames - 1) as f64 > MAX_WORLD {
-                return Err(v(
-                    "motion.step",
-                    &step_as_written,
-                    &format!("a step whose {frames} frames travel at most 1e9 world units"),
-                ));
-            }
-            step_as_written
-        } else {
-            step_as_written.to_radians()
-        };
+        if path.is_translation() && step_as_written.abs() * (frames - 1) as f64 > MAX_WORLD {
+            return Err(v(
+                "motion.step",
+                &step_as_written,
+                &format!("a step whose {frames} frames travel at most 1e9 world units"),
+            ));
+        }
+        let step = path.step_from_written(step_as_written);
         let mut c = self.clone();
         c.motion.path = path;
         c.motion.frames = frames;

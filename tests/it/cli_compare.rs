@@ -258,3 +258,45 @@ fn analyze_with_a_preset_prints_its_rules_and_writes_them_to_the_summary() {
         serde_json::from_slice(&std::fs::read(dir.path().join("p/summary.json")).unwrap()).unwrap();
     assert!(summary.get("preset").is_none() && summary["inputs"]["shadow"].get("preset").is_none());
 }
+
+#[test]
+fn compare_shows_every_engine_in_binary32_far_from_the_origin() {
+    let text = common::with(&[
+        ("shadow.precision", "precision = \"f32\""),
+        ("scene.world_offset", "world_offset = [1e5, 0.0, 0.0]"),
+    ]);
+    let all: Vec<&str> = csm_lab::presets::PresetName::ALL.iter().map(|p| p.as_str()).collect();
+    let (out, dir) = compare(&text, &["--presets", &all.join(",")]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let csv = std::fs::read_to_string(dir.path().join("out/compare.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), all.len(), "one row per engine");
+    for (row, name) in rows.iter().zip(&all) {
+        assert_eq!(row[0], *name);
+        for (h, cell) in header.iter().zip(row).skip(1) {
+            if let Ok(x) = cell.parse::<f64>() {
+                assert!(x.is_finite(), "{name}: {h} = {cell}");
+            }
+        }
+        // The same engine analysed alone: its binary32 lookup is off by a measurable, finite
+        // amount at 1e5 units (exactly 0 in f64).
+        let choice = csm_lab::presets::PresetChoice {
+            name: csm_lab::presets::PresetName::parse(name),
+            ..Default::default()
+        };
+        let config = csm_lab::Config::from_toml_str_with_preset(&text, "scene.toml", None, &choice).unwrap();
+        let a = csm_lab::analyze(&config, &csm_lab::AnalysisOptions::summary_only());
+        let lookup = a.summary.lookup_error_max;
+        if *name == "unity-sample" {
+            // Its windows stay on the light-space axis through the origin: 1e5 units away no
+            // receiver falls inside one, so there is no lookup to be wrong, and the slices
+            // are not covered.
+            assert_eq!(lookup, 0.0);
+            assert!(a.summary.coverage_violations > 0);
+        } else {
+            assert!(lookup.is_finite() && lookup > 0.1, "{name}: lookup error {lookup}");
+        }
+    }
+}

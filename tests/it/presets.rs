@@ -969,7 +969,7 @@ fn shadow_overrides_apply_and_fixed_implementations_say_what_they_ignore() {
         lenient_overrides: false,
     };
     let c = Config::from_toml_str_with_preset(&text, "t.toml", None, &choice).unwrap();
-    let p = c.shadow.preset.unwrap();
+    let p = c.shadow.preset.clone().unwrap();
     assert_eq!((p.name, c.shadow.cascades), (PresetName::Godot, 4));
     // Knob tables reach the preset.
     let c = preset_config(
