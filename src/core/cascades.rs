@@ -57,7 +57,7 @@ impl LightPose {
 
     /// Light-space x/y of the 8 corners of the slice `[near, far]`.
     pub fn corners(&self, lens: &Lens, near: f64, far: f64) -> [DVec2; 8] {
-        Corner::ALL.map(|c| {
+        Corner::each(|c| {
             let (sx, sy, z) = c.of_slice(lens, near, far);
             self.point(sx, sy, z)
         })
@@ -531,7 +531,7 @@ fn depth_needs(
     let z0 = scene_lo.min(slice_lo) - 1.0;
     let z1 = scene_hi.max(slice_hi) + 1.0;
     let prism = Hexahedron {
-        vertices: Corner::ALL.map(|c| l.x * c.x(lo.x, hi.x) + l.y * c.y(lo.y, hi.y) + l.z * c.z(z0, z1)),
+        vertices: Corner::each(|c| l.x * c.x(lo.x, hi.x) + l.y * c.y(lo.y, hi.y) + l.z * c.z(z0, z1)),
         planes: [
             Plane::new(-l.x, -lo.x),
             Plane::new(l.x, hi.x),

@@ -239,21 +239,27 @@ pub struct RigPath<'a> {
     /// Fixed basis and selection inside the fitted slices: coverage from the slice corners'
     /// extremes, shared by the snap modes.
     fast: bool,
+    /// The camera frame in the rig's light basis, this frame.
     lp: Option<LightPose>,
+    /// A basis that follows the camera: each cascade's basis and camera frame in it, this
+    /// frame, and each cascade's basis in the previous frame. Kept here rather than in every
+    /// window so that the fixed-basis walk copies no basis per frame.
+    frame: Vec<(LightBasis, LightPose)>,
+    prev_basis: Vec<Option<LightBasis>>,
 }
 
-/// One cascade's window of a [`RigPath`] and the light basis it is expressed in.
+/// One cascade's window of a [`RigPath`]: the window in its cascade's basis, which cascade it
+/// belongs to, and whether that basis is the one of the previous frame.
 #[derive(Debug, Clone, Copy)]
 pub struct RigWindow {
     pub window: Window,
-    pub basis: LightBasis,
+    cascade: usize,
+    same_basis: bool,
 }
 
-/// Per frame and cascade: the camera frame in the cascade's basis, and (fast coverage) the
-/// slice corners, their bounds and their texel-unit extremes.
+/// Per frame and cascade (fast coverage): the slice corners in the light basis, their bounds
+/// and their texel-unit extremes.
 pub struct RigShared {
-    basis: LightBasis,
-    lp: LightPose,
     corners: [DVec2; 8],
     bounds: (DVec2, DVec2),
     texels: Option<CornerTexels>,
@@ -268,6 +274,26 @@ impl<'a> RigPath<'a> {
             fixed: rig.fixed_basis(),
             fast: fast_walk_applies(rig),
             lp: None,
+            frame: Vec::new(),
+            prev_basis: vec![None; rig.cascade_count()],
+        }
+    }
+
+    /// Cascade `i`'s camera frame in its own basis, this frame.
+    fn lp_of(&self, i: usize) -> &LightPose {
+        if self.fixed {
+            self.lp.as_ref().expect("begin_frame first")
+        } else {
+            &self.frame[i].1
+        }
+    }
+
+    /// Cascade `i`'s basis this frame.
+    fn basis_of(&self, i: usize) -> &LightBasis {
+        if self.fixed {
+            &self.rig.light
+        } else {
+            &self.frame[i].0
         }
     }
 }
@@ -285,45 +311,55 @@ impl PathModel for RigPath<'_> {
         needs_probes(self.rig, opts)
     }
 
+    #[inline]
     fn begin_frame(&mut self, _t: usize, pose: &CameraPose) {
-        self.lp = Some(LightPose::new(&self.rig.light, pose));
+        let lp = LightPose::new(&self.rig.light, pose);
+        self.lp = Some(lp);
+        if !self.fixed {
+            for (prev, (b, _)) in self.prev_basis.iter_mut().zip(&self.frame) {
+                *prev = Some(*b);
+            }
+            let rig = self.rig;
+            self.frame = (0..rig.cascade_count()).map(|i| rig.cascade_pose(i, &lp)).collect();
+        }
     }
 
+    #[inline]
     fn shared(&self, i: usize) -> RigShared {
         let rig = self.rig;
-        let lp = self.lp.expect("begin_frame first");
-        let (basis, lp) = rig.cascade_pose(i, &lp);
         let (corners, bounds) = if self.fast {
             let s = &rig.slices[i];
-            let corners = lp.corners(&rig.lens, s.near, s.far);
+            let corners = self.lp_of(i).corners(&rig.lens, s.near, s.far);
             (corners, bounds_2d(&corners))
         } else {
             ([DVec2::ZERO; 8], (DVec2::ZERO, DVec2::ZERO))
         };
         RigShared {
-            basis,
-            lp,
             corners,
             bounds,
             texels: None,
         }
     }
 
-    fn window(&self, i: usize, shared: &mut RigShared, snapped: bool) -> RigWindow {
+    #[inline]
+    fn window(&self, i: usize, _shared: &mut RigShared, snapped: bool) -> RigWindow {
         RigWindow {
-            window: self.rig.window_in(i, &shared.lp, snapped),
-            basis: shared.basis,
+            window: self.rig.window_in(i, self.lp_of(i), snapped),
+            cascade: i,
+            same_basis: self.fixed || self.prev_basis[i].as_ref() == Some(&self.frame[i].0),
         }
     }
 
+    #[inline]
     fn texel(w: &RigWindow) -> DVec2 {
         w.window.texel
     }
 
+    #[inline]
     fn cover(&self, i: usize, shared: &mut RigShared, w: &RigWindow, totals: &mut PathTotals) {
         let w = &w.window;
         if !self.fast {
-            totals.add_coverage(i, self.rig.coverage_in(i, &shared.lp, w));
+            totals.add_coverage(i, self.rig.coverage_in(i, self.lp_of(i), w));
             return;
         }
         if matches!(&shared.texels, Some(ct) if ct.texel != w.texel) {
@@ -352,8 +388,10 @@ impl PathModel for RigPath<'_> {
         }
     }
 
+    #[inline]
     fn closed_form(&self, p: &RigWindow, w: &RigWindow) -> Option<f64> {
-        (w.window.texel == p.window.texel && (self.fixed || p.basis == w.basis))
+        // `p` is the same cascade's window one frame earlier (the walker's previous window).
+        (w.window.texel == p.window.texel && w.same_basis)
             .then(|| closed_form_drift(p.window.origin_texels, w.window.origin_texels))
     }
 
@@ -365,7 +403,7 @@ impl PathModel for RigPath<'_> {
         out: &mut Vec<Option<Landing>>,
         _totals: &mut PathTotals,
     ) {
-        let (win, b) = (&w.window, &w.basis);
+        let win = &w.window;
         let centre = |s: DVec2| (win.origin_texels + s.floor() + 0.5) * win.texel;
         if self.fixed {
             // A cascade without probes measures 0 wherever probes are needed.
@@ -379,6 +417,7 @@ impl PathModel for RigPath<'_> {
                 })
             }));
         } else {
+            let b = self.basis_of(i);
             let ps = self.probes.get(i).map_or(&[][..], |v| &v[..]);
             out.extend(ps.iter().map(|q| {
                 let s = win.texel_coords(b.to_light_xy(*q));
@@ -390,11 +429,12 @@ impl PathModel for RigPath<'_> {
         }
     }
 
+    #[inline]
     fn centre_in(&self, w: &RigWindow, earlier: &Landing) -> DVec2 {
         if self.fixed {
             earlier.centre
         } else {
-            w.basis.to_light_xy(earlier.world)
+            self.basis_of(w.cascade).to_light_xy(earlier.world)
         }
     }
 }

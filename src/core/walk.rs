@@ -287,15 +287,15 @@ fn probe_kernel<M: PathModel>(
     (ss, mx_sq, flipped, served)
 }
 
-/// A cascade's window in one frame and where its probes landed in it.
-type Landed<W> = (W, Vec<Option<Landing>>);
-
 /// One snap mode of a walk: its totals, each cascade's previous window and landings.
 struct ModeState<M: PathModel> {
     totals: PathTotals,
-    prev: Vec<Option<Landed<M::Win>>>,
-    /// A spare landing buffer, reused frame to frame.
-    spare: Vec<Option<Landing>>,
+    /// Each cascade's window in the previous frame (None before the first frame)...
+    prev: Vec<Option<M::Win>>,
+    /// ... and where the probes landed in it. Swapped with `current` each frame, so the
+    /// buffers are reused and nothing larger than a window moves per frame.
+    prev_landings: Vec<Vec<Option<Landing>>>,
+    current: Vec<Option<Landing>>,
 }
 
 /// The one loop along a path: for every frame (in order) and every cascade, calls
@@ -330,18 +330,20 @@ pub fn walk<M: PathModel, const K: usize>(
     let mut states: [ModeState<M>; K] = modes.map(|snapped| ModeState {
         totals: PathTotals::new(snapped, m),
         prev: (0..m).map(|_| None).collect(),
-        spare: Vec::new(),
+        prev_landings: vec![Vec::new(); m],
+        current: Vec::new(),
     });
     each_cascade_frame(model, poses, |model, t, i, shared| {
         for st in &mut states {
             let w = model.window(i, shared, st.totals.snapped);
             model.cover(i, shared, &w, &mut st.totals);
-            let mut landings = std::mem::take(&mut st.spare);
+            let landings = &mut st.current;
             landings.clear();
             if probes {
-                model.land(i, shared, &w, &mut landings, &mut st.totals);
+                model.land(i, shared, &w, landings, &mut st.totals);
             }
-            if let Some((p, pl)) = &st.prev[i] {
+            if let Some(p) = &st.prev[i] {
+                let pl = &st.prev_landings[i];
                 let (pt, wt) = (M::texel(p), M::texel(&w));
                 // x / x is exactly 1, so an unchanged size gives exactly 0 without the divisions.
                 let size_change = if wt == pt {
@@ -358,7 +360,7 @@ pub fn walk<M: PathModel, const K: usize>(
                 let drift = match closed {
                     Some(ms) if !opts.cell_flips => Some((ms, ms, None)),
                     _ => {
-                        let (ss, mx_sq, flipped, served) = probe_kernel(model, &w, pl, &landings);
+                        let (ss, mx_sq, flipped, served) = probe_kernel(model, &w, pl, landings);
                         if M::SKIP_UNSERVED && served == 0 {
                             None
                         } else {
@@ -372,9 +374,8 @@ pub fn walk<M: PathModel, const K: usize>(
                     st.totals.pair(t, i, size_change, d, opts);
                 }
             }
-            if let Some((_, old)) = st.prev[i].replace((w, landings)) {
-                st.spare = old;
-            }
+            st.prev[i] = Some(w);
+            std::mem::swap(&mut st.prev_landings[i], &mut st.current);
         }
     });
     states.map(|st| st.totals)
