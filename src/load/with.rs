@@ -3,7 +3,7 @@
 //! frame, binary32 range), and returns a new config or the error naming the key. Sweeps and
 //! `bench` build their variants through these, so no unchecked setting reaches the core.
 
-use super::cross_checks;
+use super::{binary32_range, cross_checks};
 use crate::config::{Config, Fit, MotionPath, Precision, Validator, MAX_WORLD};
 use crate::error::Result;
 
@@ -21,13 +21,23 @@ impl Config {
         Validator { path: &label, text: "" }.invalid(key, value, allowed)
     }
 
-    /// The config after changes made outside these constructors (an engine's sweep knobs),
-    /// checked as a whole again.
+    /// The config after changes made outside these constructors (an engine's sweep knobs,
+    /// which never move the camera), checked again.
     pub fn rechecked(self) -> Result<Config> {
         self.checked()
     }
 
+    /// The checks that involve several settings, for a change that kept the camera path:
+    /// only the binary32 range can be affected (a loaded config's path is already valid, and
+    /// checking it again cost a sweep one path of poses per point).
     fn checked(self) -> Result<Config> {
+        let label = self.label();
+        binary32_range(&self, &Validator { path: &label, text: "" })?;
+        Ok(self)
+    }
+
+    /// The checks for a change of the camera path.
+    fn checked_with_path(self) -> Result<Config> {
         let label = self.label();
         cross_checks(&self, &Validator { path: &label, text: "" })?;
         Ok(self)
@@ -136,6 +146,6 @@ impl Config {
         c.motion.frames = frames;
         c.motion.step = step;
         c.motion.step_as_written = step_as_written;
-        c.checked()
+        c.checked_with_path()
     }
 }
