@@ -1,5 +1,6 @@
 //! The integration tests, built as one test crate (one link instead of one per file).
 
+mod bad_inputs;
 mod check_sweep;
 mod cli_accuracy;
 mod cli_analyze;

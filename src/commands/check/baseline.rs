@@ -195,7 +195,7 @@ pub fn summary_from_json(value: &serde_json::Value, label: &str) -> Result<BTree
 
 /// Reads a `summary.json` baseline.
 pub fn read_summary_json(path: &Path) -> Result<BTreeMap<SummaryMetric, f64>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
+    let text = crate::config::read_bounded(path, 256 << 20, "a baseline file")?;
     let label = path.display().to_string();
     let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
         Error::from(IoError::DataFile {

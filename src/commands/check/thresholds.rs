@@ -198,7 +198,7 @@ impl At<'_> {
 
 impl Thresholds {
     pub fn load(path: &Path) -> Result<Thresholds> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
+        let text = crate::config::read_bounded(path, crate::config::MAX_TEXT_FILE_BYTES, "a thresholds file")?;
         Thresholds::from_toml_str(&text, &path.display().to_string())
     }
 

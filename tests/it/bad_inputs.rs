@@ -1,0 +1,281 @@
+//! Issue #13's bad inputs: each is a clear error (exit 2) naming the key, flag or file,
+//! never a panic, a silent change or an "internal error".
+
+use crate::common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use common::{with, BASE};
+use csm_lab::config::sweep_spec::{decimal_range, MAX_RANGE_VALUES};
+use csm_lab::Config;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+}
+
+fn rejected(text: &str) -> String {
+    match Config::from_toml_str(text, "t.toml", None) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// Exit code 2 and stderr, with no panic and no internal error.
+fn fails_with_2(out: &Output) -> String {
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
+    assert!(!err.contains("panicked") && !err.contains("internal error"), "{err}");
+    err
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+#[test]
+fn a_range_whose_step_dwarfs_its_span_is_one_value_not_a_panic() {
+    assert_eq!(decimal_range(1e-35, 1000.0, 709347840558070.0).unwrap(), vec![1e-35]);
+    let c = common::config(&with(&[(
+        "sweep.lambda",
+        "lambda = { start = 1e-35, end = 1000.0, step = 709347840558070.0 }",
+    )]));
+    assert_eq!(c.sweep.unwrap().lambda.unwrap().values, vec![1e-35]);
+}
+
+#[test]
+fn a_lambda_range_far_above_one_is_rejected_not_wrapped_into_range() {
+    assert_eq!(decimal_range(10209.0, 10209.0, 1e-35).unwrap(), vec![10209.0]);
+    let err = rejected(&with(&[(
+        "sweep.lambda",
+        "lambda = { start = 10209.0, end = 10209.0, step = 1e-35 }",
+    )]));
+    assert!(
+        err.contains("sweep.lambda") && err.contains("10209 is outside [0, 1]"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_range_of_too_many_values_is_refused_from_its_spec() {
+    let err = decimal_range(0.0, 1.0, 0.00000001).map(|v| v.len()).unwrap_err();
+    assert!(err.contains("at most 10000000"), "{err}");
+    let err = decimal_range(-1e300, 1e300, 1e-300).unwrap_err();
+    assert!(err.contains("at most"), "{err}");
+    // Exactly at the limit's edge: 0..=9_999_999 is allowed, one more is not.
+    assert_eq!(
+        decimal_range(0.0, (MAX_RANGE_VALUES - 1) as f64, 1.0).unwrap().len(),
+        10_000_000
+    );
+    assert!(decimal_range(0.0, MAX_RANGE_VALUES as f64, 1.0).is_err());
+}
+
+#[test]
+fn decimal_ranges_stay_exact() {
+    let v = decimal_range(0.0, 1.0, 0.05).unwrap();
+    assert_eq!(v.len(), 21);
+    assert_eq!(v[20], 1.0);
+    assert_eq!(v[3], 0.15);
+    assert_eq!(decimal_range(1e-35, 3e-35, 1e-35).unwrap(), vec![1e-35, 2e-35, 3e-35]);
+    assert_eq!(
+        decimal_range(-0.5, 0.5, 0.25).unwrap(),
+        vec![-0.5, -0.25, 0.0, 0.25, 0.5]
+    );
+}
+
+#[test]
+fn a_sweep_axis_of_the_wrong_shape_names_no_internal_type() {
+    let err = rejected(&with(&[("sweep.lambda", "lambda = \"all\"")]));
+    assert!(!err.contains("RawAxis") && !err.contains("untagged"), "{err}");
+    assert!(err.contains("a list of numbers") && err.starts_with("t.toml:"), "{err}");
+    let err = rejected(&with(&[("sweep.lambda", "lambda = { start = 0.0, end = 1.0 }")]));
+    assert!(err.contains("no step"), "{err}");
+}
+
+#[test]
+fn a_three_vector_with_extra_elements_is_rejected() {
+    for (key, line) in [
+        ("camera.position", "position = [0, 10, 0, 1]"),
+        ("camera.position", "position = [0, 10, 0, 1, 2, \"x\", true]"),
+        ("camera.up", "up = [0, 1, 0, 0]"),
+        ("light.direction", "direction = [-0.4, -1.0, -0.3, 9]"),
+        ("scene.min", "min = [-200.0, 0.0, -200.0, 1]"),
+        ("scene.world_offset", "world_offset = [1, 2, 3, 4]"),
+    ] {
+        let err = rejected(&with(&[(key, line)]));
+        assert!(err.contains("exactly three numbers"), "{line}: {err}");
+        let n = common::with(&[(key, line)]).lines().position(|l| l == line).unwrap() + 1;
+        assert!(err.starts_with(&format!("t.toml:{n}:")), "{line}: {err}");
+    }
+    let err = rejected(&with(&[("camera.position", "position = [0, 10]")]));
+    assert!(err.contains("exactly three numbers"), "{err}");
+}
+
+#[test]
+fn a_zero_up_vector_is_printed_as_numbers_not_as_an_internal_type() {
+    let err = rejected(&with(&[("camera.up", "up = [0.0, 0.0, 0.0]")]));
+    assert!(err.contains("camera.up") && err.contains("[0.0, 0.0, 0.0]"), "{err}");
+    assert!(!err.contains("DVec3"), "{err}");
+}
+
+#[test]
+fn a_motion_file_without_the_file_path_is_rejected() {
+    let err = rejected(&with(&[("motion.file", "file = \"poses.csv\"")]));
+    assert!(err.contains("motion.file") && err.contains("path = \"file\""), "{err}");
+}
+
+#[test]
+fn a_zero_motion_step_is_rejected() {
+    let err = rejected(&with(&[("motion.step", "step = 0.0")]));
+    assert!(err.contains("motion.step") && err.contains("non-zero"), "{err}");
+}
+
+#[test]
+fn a_bad_motion_file_row_names_the_file_and_its_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("poses.csv");
+    std::fs::write(&csv, "px,py,pz,tx,ty,tz\n0,10,0,0,0,-50\n0,10,0,0,10,0\n").unwrap();
+    let text = BASE.replace(
+        "path = \"strafe\"\nframes = 60\nstep = 0.05",
+        &format!("path = \"file\"\nfile = {:?}", csv.to_str().unwrap()),
+    );
+    let err = rejected(&text);
+    assert!(err.contains("poses.csv line 3 (frame 1)"), "{err}");
+    assert!(!err.contains("0.05"), "{err}");
+}
+
+#[test]
+fn a_motion_file_of_too_many_rows_is_refused_while_it_streams() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("long.csv");
+    let mut text = String::from("px,py,pz,tx,ty,tz\n");
+    for i in 0..1_000_001 {
+        text.push_str(&format!("{},1,0,0,0,-5\n", i % 7));
+    }
+    std::fs::write(&csv, text).unwrap();
+    let err = csm_lab::config::read_path_file(&csv).unwrap_err().to_string();
+    assert!(
+        err.contains("long.csv:1000002") && err.contains("at most 1000000"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_config_larger_than_the_limit_is_refused_before_it_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let big = format!("{BASE}\n{}", "# padding\n".repeat(500_000));
+    let p = write(dir.path(), "big.toml", &big);
+    let out = bin().args(["analyze", &p]).output().unwrap();
+    let err = fails_with_2(&out);
+    assert!(
+        err.contains("big.toml") && err.contains("too large for a config file"),
+        "{err}"
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn dev_zero_as_a_config_fails_at_once() {
+    let t = std::time::Instant::now();
+    let out = bin().args(["analyze", "/dev/zero"]).output().unwrap();
+    let err = fails_with_2(&out);
+    assert!(err.contains("/dev/zero"), "{err}");
+    assert!(t.elapsed().as_secs() < 10);
+}
+
+#[test]
+fn flags_given_negative_numbers_name_the_flag() {
+    let out = bin()
+        .args(["sweep", "configs/default.toml", "--lambda", "-0.5"])
+        .output()
+        .unwrap();
+    assert!(fails_with_2(&out).contains("--lambda"));
+    let out = bin()
+        .args(["sweep", "configs/default.toml", "--cascades", "-1"])
+        .output()
+        .unwrap();
+    assert!(fails_with_2(&out).contains("--cascades"));
+    let out = bin()
+        .args(["sweep", "configs/default.toml", "--threads", "-1"])
+        .output()
+        .unwrap();
+    assert!(fails_with_2(&out).contains("--threads"));
+    let out = bin().args(["stress", "--cases", "-1"]).output().unwrap();
+    assert!(fails_with_2(&out).contains("--cases"));
+}
+
+#[test]
+fn thread_counts_beyond_256_are_refused() {
+    let out = bin()
+        .args(["sweep", "configs/default.toml", "--threads", "10000"])
+        .output()
+        .unwrap();
+    let err = fails_with_2(&out);
+    assert!(err.contains("--threads") && err.contains("1..=256"), "{err}");
+}
+
+#[test]
+fn a_config_named_dots_toml_writes_beside_itself_not_into_the_working_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "...toml", BASE);
+    let out = bin()
+        .args(["analyze", &p, "--format", "json"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    names.sort();
+    for n in &names {
+        assert!(n == "...toml" || dir.path().join(n).is_dir(), "{names:?}");
+    }
+    assert!(dir.path().join("reports/config").is_dir(), "{names:?}");
+}
+
+#[test]
+fn stress_with_no_random_cases_or_the_largest_seed_writes_no_non_finite_text() {
+    for args in [
+        ["--cases", "0", "--seed", "1"],
+        ["--cases", "3", "--seed", "18446744073709551615"],
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = bin()
+            .arg("stress")
+            .args(args)
+            .args(["--out", dir.path().to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+        let mut r = csv::Reader::from_path(dir.path().join("stress.csv")).unwrap();
+        let note = r.headers().unwrap().iter().position(|h| h == "note").unwrap();
+        for row in r.records() {
+            let row = row.unwrap();
+            for (i, cell) in row.iter().enumerate() {
+                if i == note {
+                    continue;
+                }
+                if let Ok(x) = cell.parse::<f64>() {
+                    assert!(x.is_finite(), "{args:?}: {cell} in {row:?}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_committed_stress_csv_holds_no_non_finite_number() {
+    let text = std::fs::read_to_string("reports/stress/stress.csv").unwrap();
+    let mut r = csv::Reader::from_reader(text.as_bytes());
+    for row in r.records() {
+        for cell in row.unwrap().iter() {
+            if let Ok(x) = cell.parse::<f64>() {
+                assert!(x.is_finite(), "{cell}");
+            }
+        }
+    }
+}
