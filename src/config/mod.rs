@@ -294,6 +294,37 @@ pub struct Config {
 }
 
 impl Config {
+    /// A hash of the scene (camera, screen, light, scene bounds, motion; not the shadow or
+    /// analysis settings, which a baseline comparison is meant to vary), as 16 hex digits:
+    /// FNV-1a over the canonical JSON of those inputs (and a motion file's poses, not its
+    /// path). `summary.json` carries it; `check --baseline` refuses a baseline of another scene.
+    pub fn scene_hash(&self) -> String {
+        let mut echo = self.echo();
+        if let Some(obj) = echo.as_object_mut() {
+            obj.remove("shadow");
+            obj.remove("analysis");
+            if let Some(m) = obj.get_mut("motion").and_then(|m| m.as_object_mut()) {
+                m.remove("file");
+            }
+        }
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |bytes: &[u8]| {
+            for b in bytes {
+                h ^= u64::from(*b);
+                h = h.wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        eat(echo.to_string().as_bytes());
+        if let MotionPath::File { poses, .. } = &self.motion.path {
+            for (p, t) in poses {
+                for x in p.to_array().into_iter().chain(t.to_array()) {
+                    eat(&x.to_bits().to_le_bytes());
+                }
+            }
+        }
+        format!("{h:016x}")
+    }
+
     /// The inputs as used, for `summary.json`.
     pub fn echo(&self) -> serde_json::Value {
         let motion_step_unit = match self.motion.path {

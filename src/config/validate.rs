@@ -165,8 +165,8 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let max_distance = match s.max_distance {
         Some(d) => {
             let d = v.finite("shadow.max_distance", d)?;
-            if d <= 0.0 {
-                return Err(v.invalid("shadow.max_distance", d, "a number > 0"));
+            if d <= 0.0 || d > MAX_WORLD {
+                return Err(v.invalid("shadow.max_distance", d, "a number > 0 and at most 1e9 world units"));
             }
             d
         }

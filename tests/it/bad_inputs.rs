@@ -279,3 +279,128 @@ fn the_committed_stress_csv_holds_no_non_finite_number() {
         }
     }
 }
+
+fn analyze_into(config: &str, out: &Path) {
+    let o = bin()
+        .args(["analyze", config, "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn a_baseline_of_another_scene_is_an_error_not_a_regression() {
+    let dir = tempfile::tempdir().unwrap();
+    analyze_into("configs/indoor.toml", dir.path());
+    let base = dir.path().join("summary.json");
+    let text = std::fs::read_to_string(&base).unwrap();
+    assert!(text.contains("\"scene_hash\""), "{text}");
+    let out = bin()
+        .args([
+            "check",
+            "configs/default.toml",
+            "--thresholds",
+            "configs/thresholds.toml",
+            "--baseline",
+        ])
+        .arg(&base)
+        .output()
+        .unwrap();
+    let err = fails_with_2(&out);
+    assert!(err.contains("summary.json") && err.contains("another scene"), "{err}");
+    // Its own baseline is accepted (and, unchanged, passes).
+    let t = dir.path().join("t.toml");
+    std::fs::write(&t, "[[rule]]\nmetric = \"max_aliasing\"\nmax = 1000.0\n").unwrap();
+    let out = bin()
+        .args(["check", "configs/indoor.toml", "--thresholds"])
+        .arg(&t)
+        .arg("--baseline")
+        .arg(&base)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
+fn a_baseline_holding_1e308_is_an_error_not_a_regression() {
+    let dir = tempfile::tempdir().unwrap();
+    analyze_into("configs/default.toml", dir.path());
+    let base = dir.path().join("summary.json");
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&base).unwrap()).unwrap();
+    v["max_aliasing"] = serde_json::json!(1e308);
+    std::fs::write(&base, v.to_string()).unwrap();
+    let out = bin()
+        .args([
+            "check",
+            "configs/default.toml",
+            "--thresholds",
+            "configs/thresholds.toml",
+            "--baseline",
+        ])
+        .arg(&base)
+        .output()
+        .unwrap();
+    let err = fails_with_2(&out);
+    assert!(
+        err.contains("1e308") || err.contains("1e+308") || err.contains("100000000"),
+        "{err}"
+    );
+}
+
+fn rules(n: usize) -> String {
+    (0..n)
+        .map(|i| format!("[[rule]]\nmetric = \"max_aliasing\"\nmax = {}.0\n", 1000 + i))
+        .collect()
+}
+
+#[test]
+fn a_thresholds_file_of_ten_thousand_rules_is_read_in_linear_time() {
+    use csm_lab::check::thresholds::{Thresholds, MAX_RULES};
+    let t = std::time::Instant::now();
+    let th = Thresholds::from_toml_str(&rules(MAX_RULES), "t.toml").unwrap();
+    assert_eq!(th.rules.len(), 10_000);
+    // Quadratic location lookups took minutes at 40,000 rules; this is well under a second
+    // in release and a few seconds in a debug build.
+    assert!(t.elapsed().as_secs() < 30, "{:?}", t.elapsed());
+    // An error in the last rule still names its line.
+    let mut text = rules(MAX_RULES - 1);
+    text.push_str("[[rule]]\nmetric = \"max_aliasng\"\nmax = 1.0\n");
+    let err = Thresholds::from_toml_str(&text, "t.toml").unwrap_err().to_string();
+    assert!(err.contains(&format!("t.toml:{}:10", 3 * MAX_RULES - 1)), "{err}");
+}
+
+#[test]
+fn a_thresholds_file_of_more_rules_than_the_limit_is_refused_before_validation() {
+    use csm_lab::check::thresholds::{Thresholds, MAX_RULES};
+    let err = Thresholds::from_toml_str(&rules(MAX_RULES + 1), "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("t.toml") && err.contains("rule") && err.contains("at most 10000"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_shadow_distance_beyond_the_world_bound_is_rejected_with_every_preset() {
+    let text = with(&[("shadow.max_distance", "max_distance = 1e155")]);
+    let err = rejected(&text);
+    assert!(
+        err.contains("shadow.max_distance") && err.contains("at most 1e9"),
+        "{err}"
+    );
+}
+
+#[test]
+fn an_engine_distance_knob_beyond_the_world_bound_is_rejected_by_name() {
+    let text = format!(
+        "{}\n[learnopengl]\npad_xy = 1e300\n",
+        with(&[("shadow.preset", "preset = \"learnopengl\"")])
+    );
+    let err = rejected(&text);
+    assert!(
+        err.contains("learnopengl.pad_xy") && err.contains("[0, 1000000000]"),
+        "{err}"
+    );
+    assert!(!err.contains("internal error"), "{err}");
+}
