@@ -14,6 +14,7 @@ mod golden_outputs;
 mod precision;
 mod presets;
 mod prop_analysis;
+mod prop_specs;
 mod prop_toml;
 mod regressions;
 mod shimmer;
