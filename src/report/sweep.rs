@@ -409,9 +409,18 @@ pub fn render_all(r: &SweepResult, plots: bool) -> Result<crate::output::Rendere
         ),
     ];
     let figures = if plots { render_figures(r)? } else { Vec::new() };
-    for (stem, _, svg) in &figures {
+    // Rasterising is most of the time of a small sweep: the figures go to PNG in parallel
+    // (rayon keeps their order, so the files are the same at any thread count).
+    let pngs = {
+        use rayon::prelude::*;
+        figures
+            .par_iter()
+            .map(|(_, _, svg)| svg_to_png(svg, 2.0))
+            .collect::<Result<Vec<_>>>()?
+    };
+    for ((stem, _, svg), png) in figures.iter().zip(pngs) {
         files.push((format!("{stem}.svg"), svg.clone()));
-        files.push((format!("{stem}.png"), svg_to_png(svg, 2.0)?));
+        files.push((format!("{stem}.png"), png));
     }
     files.push(("report.html".to_string(), report_html(r, &figures)));
     files.push(("report.md".to_string(), report_md(r, &figures)));
