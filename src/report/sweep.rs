@@ -257,26 +257,31 @@ const TOP: usize = 15;
 
 /// The figures of a sweep as (file stem, title, SVG bytes), rendered once.
 pub fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, &'static str, Vec<u8>)>> {
+    // The four figures are independent: drawn concurrently (the first error in this order wins).
+    let ((heatmap, density), (shimmer, pareto)) = rayon::join(
+        || rayon::join(|| HeatmapFigure(r).to_svg(), || LambdaDensityFigure::new(r).to_svg()),
+        || rayon::join(|| ShimmerSweepFigure(r).to_svg(), || ParetoFigure(r).to_svg()),
+    );
     Ok(vec![
         (
             "heatmap",
             "Max and mean aliasing over λ × cascade count, per resolution",
-            HeatmapFigure(r).to_svg()?,
+            heatmap?,
         ),
         (
             "density_lambda",
             "Texels per pixel against depth for several λ at the recommended count and resolution",
-            LambdaDensityFigure::new(r).to_svg()?,
+            density?,
         ),
         (
             "shimmer_sweep",
             "Shimmer snapped vs unsnapped for every configuration",
-            ShimmerSweepFigure(r).to_svg()?,
+            shimmer?,
         ),
         (
             "pareto",
             "Pareto front of memory against mean aliasing",
-            ParetoFigure(r).to_svg()?,
+            pareto?,
         ),
     ])
 }
