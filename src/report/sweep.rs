@@ -278,11 +278,7 @@ pub fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, &'static str
             "Shimmer snapped vs unsnapped for every configuration",
             shimmer?,
         ),
-        (
-            "pareto",
-            "Pareto front of memory against mean aliasing",
-            pareto?,
-        ),
+        ("pareto", "Pareto front of memory against mean aliasing", pareto?),
     ])
 }
 
