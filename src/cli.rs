@@ -67,10 +67,10 @@ pub struct StressArgs {
     #[arg(long, default_value = "reports/stress")]
     pub out: PathBuf,
     /// Random cases added to the fixed battery (0..=100000).
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = 32, allow_negative_numbers = true)]
     pub cases: u64,
     /// Seed of the random cases (same seed, same cases, same file).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
     /// Also fail a case whose f32 drift (texels per frame, either snap space) exceeds this.
     /// By default f32 residuals are reported, not judged.
@@ -86,19 +86,19 @@ pub struct SweepArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// λ axis: start:end:step (0:1:0.05) or a list (0,0.5,1).
-    #[arg(long, value_name = "SPEC")]
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub lambda: Option<String>,
     /// Cascade counts: a range (1..8) or a list (2,4).
-    #[arg(long, value_name = "SPEC")]
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub cascades: Option<String>,
     /// Resolutions: a list (1024,2048).
-    #[arg(long, value_name = "SPEC")]
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub resolution: Option<String>,
     /// Fits: sphere, aabb or sphere,aabb.
-    #[arg(long, value_name = "SPEC")]
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub fit: Option<String>,
-    /// Worker threads [default: one per core]. Results are identical at any count.
-    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    /// Worker threads, 1..=256 [default: one per core]. Results are identical at any count.
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u16).range(1..=256))]
     pub threads: Option<u16>,
     /// No progress bar.
     #[arg(long)]
@@ -144,7 +144,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Timed repetitions per point; the best is kept (1..=1000).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, allow_negative_numbers = true)]
     pub repeats: u32,
 }
 

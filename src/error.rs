@@ -188,6 +188,15 @@ pub enum IoError {
         message: String,
     },
 
+    /// A file larger than what its kind may be: refused before it is read.
+    #[error("{}: {size} bytes is too large for {what} (at most {max} bytes); nothing was read", path.display())]
+    TooLarge {
+        path: PathBuf,
+        what: &'static str,
+        size: u64,
+        max: u64,
+    },
+
     #[error("cannot write to standard output: {0}")]
     Stdout(std::io::Error),
 

@@ -45,6 +45,35 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// Whether `entry` is a temporary file [`write_atomic`] makes for `name`:
+/// `.{name}.XXXXXX.tmp`, with six ASCII letters or digits.
+pub fn is_temporary_of(entry: &str, name: &str) -> bool {
+    entry
+        .strip_prefix('.')
+        .and_then(|r| r.strip_prefix(name))
+        .and_then(|r| r.strip_prefix('.'))
+        .and_then(|r| r.strip_suffix(".tmp"))
+        .is_some_and(|mid| mid.len() == 6 && mid.bytes().all(|b| b.is_ascii_alphanumeric()))
+}
+
+/// Removes from `dir` the temporaries a killed run left for the files `names` (only files
+/// matching [`is_temporary_of`] one of them; nothing else is touched). Returns how many.
+/// Best effort: a file that cannot be removed is left, and the write goes on.
+pub fn remove_stale_temporaries(dir: &Path, names: &[&str]) -> usize {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    entries
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+        .filter(|e| {
+            let entry = e.file_name().to_string_lossy().into_owned();
+            names.iter().any(|n| is_temporary_of(&entry, n))
+        })
+        .filter(|e| std::fs::remove_file(e.path()).is_ok())
+        .count()
+}
+
 /// Creates `dir` (and parents) with a message that names it.
 pub fn ensure_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))
@@ -63,10 +92,22 @@ pub fn export_all<T: ?Sized>(dir: &Path, data: &T, exporters: &[&dyn Exporter<T>
 pub type RenderedFiles = Vec<(String, Vec<u8>)>;
 
 /// Writes already-rendered files atomically into `dir`.
-pub fn write_files<N: AsRef<str>>(dir: &Path, files: &[(N, Vec<u8>)]) -> Result<Vec<PathBuf>> {
+pub fn write_files<N: AsRef<str> + Sync>(dir: &Path, files: &[(N, Vec<u8>)]) -> Result<Vec<PathBuf>> {
     ensure_dir(dir)?;
+    let names: Vec<&str> = files.iter().map(|(n, _)| n.as_ref()).collect();
+    let removed = remove_stale_temporaries(dir, &names);
+    if removed > 0 {
+        eprintln!(
+            "removed {removed} stale temporary file{} (left by an interrupted run) from {}",
+            if removed == 1 { "" } else { "s" },
+            dir.display()
+        );
+    }
+    // Each file is written, synced and renamed on its own; in parallel, the syncs overlap
+    // (they were most of the wall time of a small sweep). Paths come back in order.
+    use rayon::prelude::*;
     files
-        .iter()
+        .par_iter()
         .map(|(name, bytes)| {
             let path = dir.join(name.as_ref());
             write_atomic(&path, bytes)?;

@@ -76,7 +76,8 @@ pub fn execute(args: &CheckRequest) -> Result<Outcome> {
     } else {
         let base = match &args.baseline {
             Some(p) => Some(
-                baseline::read_summary_json(p).map_err(|e| with_hint(e, "to compare with a sweep.csv, add --sweep"))?,
+                baseline::read_summary_json_for(p, &config.scene_hash())
+                    .map_err(|e| with_hint(e, "to compare with a sweep.csv, add --sweep"))?,
             ),
             None => None,
         };

@@ -62,7 +62,7 @@ pub fn parse_lambda_spec(spec: &str) -> Result<Axis<f64>> {
 
 fn parse_int_list<T>(flag: &str, spec: &str, allowed: &str, ok: impl Fn(T) -> bool, ranges: bool) -> Result<Axis<T>>
 where
-    T: std::str::FromStr + Copy + PartialEq + std::fmt::Display + TryFrom<u64>,
+    T: std::str::FromStr + Copy + PartialOrd + std::fmt::Display + TryFrom<u64>,
 {
     let err = |m: String| Error::flag(flag, spec, m);
     let one = |s: &str| {

@@ -36,6 +36,54 @@ pub use path_file::read_path_file;
 /// strafing 1e305 units per frame turned the shimmer metrics into NaN.
 pub const MAX_WORLD: f64 = 1e9;
 
+/// A config or thresholds file larger than this is refused before it is read.
+pub const MAX_TEXT_FILE_BYTES: u64 = 4 << 20;
+
+/// Opens `path` for reading if it is a regular file of at most `max` bytes (checked before a
+/// byte is read: `/dev/zero` or a 50 MB file fails at once, naming the file and the limit).
+/// Reads through a `take(max + 1)` as well, in case the file grows or is not regular.
+pub fn open_bounded(
+    path: &std::path::Path,
+    max: u64,
+    what: &'static str,
+) -> crate::Result<std::io::Take<std::fs::File>> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| crate::Error::read(path, e))?;
+    let meta = file.metadata().map_err(|e| crate::Error::read(path, e))?;
+    let too_large = |size: u64| -> crate::Error {
+        crate::error::IoError::TooLarge {
+            path: path.to_path_buf(),
+            what,
+            size,
+            max,
+        }
+        .into()
+    };
+    if meta.is_file() && meta.len() > max {
+        return Err(too_large(meta.len()));
+    }
+    Ok(file.take(max + 1))
+}
+
+/// The whole text of a file of at most `max` bytes (see [`open_bounded`]).
+pub fn read_bounded(path: &std::path::Path, max: u64, what: &'static str) -> crate::Result<String> {
+    use std::io::Read;
+    let mut text = String::new();
+    open_bounded(path, max, what)?
+        .read_to_string(&mut text)
+        .map_err(|e| crate::Error::read(path, e))?;
+    if text.len() as u64 > max {
+        return Err(crate::error::IoError::TooLarge {
+            path: path.to_path_buf(),
+            what,
+            size: text.len() as u64,
+            max,
+        }
+        .into());
+    }
+    Ok(text)
+}
+
 /// The camera as configured (frame 0 of the motion path).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CameraSettings {
@@ -241,6 +289,37 @@ pub struct Config {
 }
 
 impl Config {
+    /// A hash of the scene (camera, screen, light, scene bounds, motion; not the shadow or
+    /// analysis settings, which a baseline comparison is meant to vary), as 16 hex digits:
+    /// FNV-1a over the canonical JSON of those inputs (and a motion file's poses, not its
+    /// path). `summary.json` carries it; `check --baseline` refuses a baseline of another scene.
+    pub fn scene_hash(&self) -> String {
+        let mut echo = self.echo();
+        if let Some(obj) = echo.as_object_mut() {
+            obj.remove("shadow");
+            obj.remove("analysis");
+            if let Some(m) = obj.get_mut("motion").and_then(|m| m.as_object_mut()) {
+                m.remove("file");
+            }
+        }
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |bytes: &[u8]| {
+            for b in bytes {
+                h ^= u64::from(*b);
+                h = h.wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        eat(echo.to_string().as_bytes());
+        if let MotionPath::File { poses, .. } = &self.motion.path {
+            for (p, t) in poses {
+                for x in p.to_array().into_iter().chain(t.to_array()) {
+                    eat(&x.to_bits().to_le_bytes());
+                }
+            }
+        }
+        format!("{h:016x}")
+    }
+
     /// The inputs as used, for `summary.json`.
     pub fn echo(&self) -> serde_json::Value {
         let motion_step_unit = match self.motion.path {

@@ -6,14 +6,20 @@ use glam::DVec3;
 
 use crate::error::{Error, Result};
 
+/// At most this many pose rows (the `motion.frames` limit), counted as the file streams.
+pub const MAX_PATH_ROWS: usize = 1_000_000;
+/// A path file larger than this is refused before it is read (a 10⁶-row file of long numbers
+/// is well under it).
+pub const MAX_PATH_FILE_BYTES: u64 = 256 << 20;
+
 /// Reads a camera path CSV: a header `px,py,pz,tx,ty,tz` and one row per frame
 /// (camera position, then the point it looks at). At least two rows.
 pub fn read_path_file(path: &Path) -> Result<Vec<(DVec3, DVec3)>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
+    let file = crate::config::open_bounded(path, MAX_PATH_FILE_BYTES, "a motion path file")?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
+        .from_reader(std::io::BufReader::new(file));
     let expected = ["px", "py", "pz", "tx", "ty", "tz"];
     let headers = reader.headers().map_err(|e| Error::data_file(path, 1, e.to_string()))?;
     if headers.iter().collect::<Vec<_>>() != expected {
@@ -29,6 +35,13 @@ pub fn read_path_file(path: &Path) -> Result<Vec<(DVec3, DVec3)>> {
     let mut rows = Vec::new();
     for (i, record) in reader.records().enumerate() {
         let line = i + 2;
+        if i >= MAX_PATH_ROWS {
+            return Err(Error::data_file(
+                path,
+                line,
+                format!("more than {MAX_PATH_ROWS} pose rows; a path has at most {MAX_PATH_ROWS} frames (motion.frames' limit)"),
+            ));
+        }
         let record = record.map_err(|e| Error::data_file(path, line, e.to_string()))?;
         if record.len() != 6 {
             return Err(Error::data_file(

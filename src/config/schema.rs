@@ -31,6 +31,38 @@ impl RawFile {
     }
 }
 
+/// Exactly three numbers: `[0, 10, 0, 1]` is an error, not a silently dropped fourth number.
+fn vec3<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+    struct V;
+    impl<'de> serde::de::Visitor<'de> for V {
+        type Value = [f64; 3];
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("an array of exactly three numbers [x, y, z]")
+        }
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<[f64; 3], A::Error> {
+            let mut out = [0.0; 3];
+            for (i, slot) in out.iter_mut().enumerate() {
+                *slot = seq
+                    .next_element::<f64>()?
+                    .ok_or_else(|| serde::de::Error::invalid_length(i, &self))?;
+            }
+            let mut n = 3;
+            while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                n += 1;
+            }
+            if n != 3 {
+                return Err(serde::de::Error::invalid_length(n, &self));
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_seq(V)
+}
+
+fn opt_vec3<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]>, D::Error> {
+    vec3(d).map(Some)
+}
+
 #[derive(Debug, Deserialize)]
 pub(crate) struct RawConfig {
     pub(crate) camera: RawCamera,
@@ -49,8 +81,11 @@ pub(crate) struct RawConfig {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawCamera {
+    #[serde(deserialize_with = "vec3")]
     pub(crate) position: [f64; 3],
+    #[serde(deserialize_with = "vec3")]
     pub(crate) target: [f64; 3],
+    #[serde(default, deserialize_with = "opt_vec3")]
     pub(crate) up: Option<[f64; 3]>,
     pub(crate) fov_y_deg: f64,
     pub(crate) near: f64,
@@ -67,14 +102,18 @@ pub(crate) struct RawScreen {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawLight {
+    #[serde(deserialize_with = "vec3")]
     pub(crate) direction: [f64; 3],
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawScene {
+    #[serde(deserialize_with = "vec3")]
     pub(crate) min: [f64; 3],
+    #[serde(deserialize_with = "vec3")]
     pub(crate) max: [f64; 3],
+    #[serde(default, deserialize_with = "opt_vec3")]
     pub(crate) world_offset: Option<[f64; 3]>,
 }
 

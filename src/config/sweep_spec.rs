@@ -35,25 +35,36 @@ pub const DEFAULT_BUDGET_MIB: f64 = 64.0;
 // Decimal-exact ranges
 // ---------------------------------------------------------------------------------------------
 
-/// A finite f64 as an exact decimal `mantissa * 10^-scale`, from its shortest round-trip
-/// representation ("0.05" -> (5, 2)). None when it needs more digits than an i128 holds.
-fn to_decimal(x: f64) -> Option<(i128, u32)> {
-    let s = format!("{x}");
-    let (neg, s) = match s.strip_prefix('-') {
+/// Most values one range may expand to (the largest `max_configs`); checked from the spec,
+/// before anything is expanded.
+pub const MAX_RANGE_VALUES: u64 = 10_000_000;
+
+/// A finite f64 as an exact decimal `mantissa * 10^exponent`, from its shortest round-trip
+/// representation ("0.05" -> (5, -2), "1e-35" -> (1, -35)). At most 17 significant digits.
+fn to_decimal(x: f64) -> (i128, i32) {
+    let s = format!("{x:e}");
+    let (mant, exp) = s.split_once('e').unwrap_or((s.as_str(), "0"));
+    let exp: i32 = exp.parse().unwrap_or(0);
+    let (neg, mant) = match mant.strip_prefix('-') {
         Some(r) => (true, r),
-        None => (false, s.as_str()),
+        None => (false, mant),
     };
-    let (int, frac) = s.split_once('.').unwrap_or((s, ""));
-    if int.len() + frac.len() > 36 {
-        return None;
-    }
-    let digits: i128 = format!("{int}{frac}").parse().ok()?;
-    Some((if neg { -digits } else { digits }, frac.len() as u32))
+    let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
+    let digits: i128 = format!("{int}{frac}").parse().unwrap_or(0);
+    (if neg { -digits } else { digits }, exp - frac.len() as i32)
+}
+
+/// `m * 10^k` for k >= 0, or None when it does not fit an i128.
+fn scaled(m: i128, k: i32) -> Option<i128> {
+    10i128.checked_pow(u32::try_from(k).ok()?)?.checked_mul(m)
 }
 
 /// `start, start + step, ...` up to and including `end` when it is on the grid, computed in
 /// decimal so that 0:1:0.05 has 21 values ending exactly at 1.0. Each value is the f64 nearest
 /// to the exact decimal, i.e. the same number a user would get by typing it.
+///
+/// All arithmetic is checked integer arithmetic: no input panics or wraps. The number of values
+/// is known (and bounded by [`MAX_RANGE_VALUES`]) before any is produced.
 pub fn decimal_range(start: f64, end: f64, step: f64) -> std::result::Result<Vec<f64>, String> {
     if !(start.is_finite() && end.is_finite() && step.is_finite()) {
         return Err("start, end and step must be finite numbers".into());
@@ -64,27 +75,46 @@ pub fn decimal_range(start: f64, end: f64, step: f64) -> std::result::Result<Vec
     if end < start {
         return Err(format!("end ({end}) must be >= start ({start})"));
     }
-    let approx_count = ((end - start) / step).floor() + 1.0;
-    if approx_count > 1e7 {
-        return Err(format!("{approx_count} values is far too many"));
+    if end == start {
+        return Ok(vec![start]);
     }
-    match (to_decimal(start), to_decimal(end), to_decimal(step)) {
-        (Some((s, ds)), Some((e, de)), Some((p, dp))) => {
-            let d = ds.max(de).max(dp);
-            let scale = |m: i128, k: u32| m * 10i128.pow(d - k);
-            let (s, e, p) = (scale(s, ds), scale(e, de), scale(p, dp));
-            let n = (e - s) / p;
-            Ok((0..=n)
+    let (s, es) = to_decimal(start);
+    let (e, ee) = to_decimal(end);
+    let (p, ep) = to_decimal(step);
+    let d = es.min(ee).min(ep);
+    let exact = (|| {
+        let (s, e, p) = (scaled(s, es - d)?, scaled(e, ee - d)?, scaled(p, ep - d)?);
+        Some((s, e.checked_sub(s)? / p, p))
+    })();
+    let too_many = |n: String| {
+        Err(format!(
+            "the range has {n} values; at most {MAX_RANGE_VALUES} (use a larger step)"
+        ))
+    };
+    match exact {
+        Some((s, n, p)) => {
+            if n >= MAX_RANGE_VALUES as i128 {
+                return too_many(format!("{}", n.saturating_add(1)));
+            }
+            (0..=n)
                 .map(|i| {
                     let m = s + i * p;
-                    format!("{m}e-{d}").parse::<f64>().expect("a decimal literal parses")
+                    format!("{m}e{d}")
+                        .parse::<f64>()
+                        .map_err(|_| format!("{m}e{d} is not a number"))
                 })
-                .collect())
+                .collect()
         }
-        // Numbers too long for exact decimals: fall back to multiplication (no accumulation).
-        _ => {
-            let n = approx_count as i64;
-            Ok((0..n).map(|i| (start + i as f64 * step).min(end)).collect())
+        // The three numbers' magnitudes are more than ~20 decades apart, so the exact form
+        // does not fit an i128: the count is then either 1 (a step beyond the span) or huge.
+        None => {
+            let approx = ((end - start) / step).floor();
+            if approx.is_nan() || approx >= MAX_RANGE_VALUES as f64 {
+                return too_many(format!("{approx:e}"));
+            }
+            Ok((0..=approx as u64)
+                .map(|i| (start + i as f64 * step).min(end))
+                .collect())
         }
     }
 }
@@ -94,18 +124,57 @@ pub fn decimal_range(start: f64, end: f64, step: f64) -> std::result::Result<Vec
 // ---------------------------------------------------------------------------------------------
 
 #[derive(Debug, Deserialize)]
-#[serde(untagged)]
+#[serde(try_from = "toml::Value")]
 pub(crate) enum RawAxis {
     List(Vec<f64>),
     Range(RawRange),
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug)]
 pub(crate) struct RawRange {
     start: f64,
     end: f64,
     step: f64,
+}
+
+const AXIS_FORMS: &str =
+    "a list of numbers such as [0.5, 0.75] or a range such as { start = 0.0, end = 1.0, step = 0.05 }";
+
+fn number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+impl TryFrom<toml::Value> for RawAxis {
+    type Error = String;
+    fn try_from(v: toml::Value) -> std::result::Result<RawAxis, String> {
+        match v {
+            toml::Value::Array(items) => items
+                .iter()
+                .map(|x| number(x).ok_or_else(|| format!("{x} is not a number; expected {AXIS_FORMS}")))
+                .collect::<std::result::Result<Vec<f64>, String>>()
+                .map(RawAxis::List),
+            toml::Value::Table(t) => {
+                if let Some(k) = t.keys().find(|k| !["start", "end", "step"].contains(&k.as_str())) {
+                    return Err(format!("unknown key {k:?} in a range; a range has start, end and step"));
+                }
+                let get = |k: &str| {
+                    t.get(k)
+                        .ok_or_else(|| format!("the range has no {k}; a range has start, end and step"))
+                        .and_then(|x| number(x).ok_or_else(|| format!("{k} = {x} is not a number")))
+                };
+                Ok(RawAxis::Range(RawRange {
+                    start: get("start")?,
+                    end: get("end")?,
+                    step: get("step")?,
+                }))
+            }
+            other => Err(format!("{other} is not {AXIS_FORMS}")),
+        }
+    }
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -124,7 +193,7 @@ pub fn fmt_list<T: std::fmt::Display>(v: &[T]) -> String {
 }
 
 /// Checks an axis' values: not empty, no duplicates, each allowed.
-pub fn check_values<T: PartialEq + Copy + std::fmt::Display>(
+pub fn check_values<T: PartialOrd + Copy + std::fmt::Display>(
     values: &[T],
     allowed: &str,
     ok: impl Fn(T) -> bool,
@@ -135,10 +204,21 @@ pub fn check_values<T: PartialEq + Copy + std::fmt::Display>(
     if let Some(bad) = values.iter().find(|v| !ok(**v)) {
         return Err(format!("{bad} is outside {allowed}"));
     }
-    for (i, a) in values.iter().enumerate() {
-        if values[..i].contains(a) {
-            return Err(format!("{a} is listed twice"));
-        }
+    // O(n log n): a sorted copy's neighbours (a 10⁷-value range is checked in a second).
+    let mut sorted: Vec<(usize, T)> = values.iter().copied().enumerate().collect();
+    sorted.sort_by(|a, b| {
+        a.1.partial_cmp(&b.1)
+            .unwrap_or(std::cmp::Ordering::Equal)
+            .then(a.0.cmp(&b.0))
+    });
+    // The first value (in the user's order) that repeats an earlier one.
+    if let Some(dup) = sorted
+        .windows(2)
+        .filter(|w| w[0].1 == w[1].1)
+        .map(|w| w[1])
+        .min_by_key(|d| d.0)
+    {
+        return Err(format!("{} is listed twice", dup.1));
     }
     Ok(())
 }
@@ -190,7 +270,7 @@ fn raw_ints(raw: RawAxis) -> std::result::Result<Vec<i64>, String> {
     }
 }
 
-fn int_axis<T: TryFrom<i64> + Copy + PartialEq + std::fmt::Display>(
+fn int_axis<T: TryFrom<i64> + Copy + PartialOrd + std::fmt::Display>(
     raw: RawAxis,
     allowed: &str,
     ok: impl Fn(T) -> bool,

@@ -75,7 +75,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         ));
     }
     if up.length() <= 1e-300 {
-        return Err(v.invalid("camera.up", format!("{up:?}"), "a non-zero vector"));
+        return Err(v.invalid("camera.up", format!("{:?}", up.to_array()), "a non-zero vector"));
     }
     if view.normalize().cross(up.normalize()).length() < 1e-9 {
         return Err(v.invalid(
@@ -165,8 +165,8 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let max_distance = match s.max_distance {
         Some(d) => {
             let d = v.finite("shadow.max_distance", d)?;
-            if d <= 0.0 {
-                return Err(v.invalid("shadow.max_distance", d, "a number > 0"));
+            if d <= 0.0 || d > MAX_WORLD {
+                return Err(v.invalid("shadow.max_distance", d, "a number > 0 and at most 1e9 world units"));
             }
             d
         }
@@ -226,6 +226,25 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let frames = v.int_range("motion.frames", m.frames.unwrap_or(240), 2, 1_000_000)? as usize;
     let step_as_written = v.finite("motion.step", m.step.unwrap_or(0.05))?;
     let path_name = m.path.unwrap_or_else(|| "strafe".to_string());
+    if path_name != "file" {
+        if let Some(file) = &m.file {
+            return Err(v.invalid(
+                "motion.file",
+                format!("{file:?}"),
+                &format!(
+                    "motion.file only together with motion.path = \"file\" (motion.path is {path_name:?}); \
+                     set motion.path = \"file\" or remove motion.file"
+                ),
+            ));
+        }
+        if step_as_written == 0.0 {
+            return Err(v.invalid(
+                "motion.step",
+                step_as_written,
+                "a non-zero step (world units or degrees per frame); a zero step does not move the camera",
+            ));
+        }
+    }
     let (path, step) = match path_name.as_str() {
         name if MotionPath::generated(name).is_some() => {
             let path = MotionPath::generated(name).expect("just matched");
@@ -330,15 +349,19 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
 /// Every pose of the motion path must be a valid camera (pitching through the up vector, or a
 /// path file row with position == target, is a config error, not a panic later).
 pub fn check_camera_path(config: &Config, v: &Validator<'_>) -> Result<()> {
-    config.camera_path().map(|_| ()).map_err(|(frame, why)| {
-        v.invalid(
-            if matches!(config.motion.path, MotionPath::File { .. }) {
-                "motion.file"
-            } else {
-                "motion.step"
-            },
-            format!("{} (frame {frame})", config.motion.step_as_written),
-            &format!("a motion that keeps a valid camera in every frame: {why}"),
-        )
-    })
+    config
+        .camera_path()
+        .map(|_| ())
+        .map_err(|(frame, why)| match &config.motion.path {
+            MotionPath::File { path, .. } => v.invalid(
+                "motion.file",
+                format!("{} line {} (frame {frame})", path.display(), frame + 2),
+                &format!("rows that each give a valid camera: {why}"),
+            ),
+            _ => v.invalid(
+                "motion.step",
+                format!("{} (frame {frame})", config.motion.step_as_written),
+                &format!("a motion that keeps a valid camera in every frame: {why}"),
+            ),
+        })
 }

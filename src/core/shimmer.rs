@@ -104,6 +104,16 @@ impl Coverage {
 }
 
 /// What to compute along the path.
+/// Per-frame rows kept for a path of this many frames at most: a longer path keeps every
+/// `frame_row_stride(frames)`-th frame, so its rows (and `shimmer.csv`, and the figure) stay
+/// bounded whatever the frame count. Summaries always use every frame.
+pub const MAX_FRAME_ROWS: usize = 10_000;
+
+/// 1 up to [`MAX_FRAME_ROWS`] frames; then the smallest stride that keeps at most that many.
+pub fn frame_row_stride(frames: usize) -> usize {
+    frames.div_ceil(MAX_FRAME_ROWS).max(1)
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShimmerOptions {
     /// Evaluate S4 (cell flips) per probe.

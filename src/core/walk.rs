@@ -198,7 +198,7 @@ impl PathTotals {
         i: usize,
         size_change: f64,
         (ms, mx_sq, flips): (f64, f64, Option<f64>),
-        opts: ShimmerOptions,
+        keep_row: bool,
     ) {
         if let Some(f) = flips {
             self.flip_sum += f;
@@ -206,7 +206,7 @@ impl PathTotals {
         self.sum_ms += ms;
         self.pairs += 1;
         self.max_drift_sq = self.max_drift_sq.max(mx_sq);
-        if opts.frame_rows {
+        if keep_row {
             self.frames.push(FrameShimmer {
                 frame: t,
                 cascade: i,
@@ -327,6 +327,7 @@ pub fn walk<M: PathModel, const K: usize>(
 ) -> [PathTotals; K] {
     let m = model.cascade_count();
     let probes = model.probes_needed(opts);
+    let stride = crate::shimmer::frame_row_stride(poses.len());
     let mut states: [ModeState<M>; K] = modes.map(|snapped| ModeState {
         totals: PathTotals::new(snapped, m),
         prev: (0..m).map(|_| None).collect(),
@@ -371,7 +372,7 @@ pub fn walk<M: PathModel, const K: usize>(
                     }
                 };
                 if let Some(d) = drift {
-                    st.totals.pair(t, i, size_change, d, opts);
+                    st.totals.pair(t, i, size_change, d, opts.frame_rows && t % stride == 0);
                 }
             }
             st.prev[i] = Some(w);

@@ -85,7 +85,12 @@ impl Figure for ShimmerFigure<'_> {
             for f in &p.frames {
                 acc[f.frame] += f.phase_drift_rms * f.phase_drift_rms / m as f64;
             }
-            (1..frames).map(|t| (t as f64, acc[t].sqrt())).collect()
+            // Long paths keep every stride-th frame's rows (see `frame_row_stride`).
+            let stride = crate::shimmer::frame_row_stride(frames);
+            (1..frames)
+                .filter(|t| t % stride == 0)
+                .map(|t| (t as f64, acc[t].sqrt()))
+                .collect()
         };
         let s_pts = per_frame(sn);
         let u_pts = per_frame(un);

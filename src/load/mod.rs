@@ -8,7 +8,7 @@ mod with;
 use std::path::Path;
 
 use crate::config::{Config, Precision, Validator};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::presets::PresetChoice;
 
 impl Config {
@@ -21,10 +21,13 @@ impl Config {
     /// Reads and validates a config file without applying a preset: apply one (or several, to
     /// clones) with [`crate::presets::apply`].
     pub fn load_scene(path: &Path) -> Result<Config> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
+        let text = crate::config::read_bounded(path, crate::config::MAX_TEXT_FILE_BYTES, "a config file")?;
         let name = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
+            // The name becomes a directory under the output root: a stem of only dots
+            // (`...toml` has the stem `..`) would climb out of it.
+            .filter(|s| !s.trim_matches('.').is_empty())
             .unwrap_or_else(|| "config".to_string());
         let mut config = crate::config::parse(&text, &path.display().to_string(), path.parent())?;
         config.name = name;

@@ -170,14 +170,15 @@ pub fn unit(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
     check_range(v, key, x, 0.0, 1.0, false, false)
 }
 
-/// A number >= 0.
+/// A distance >= 0, at most 1e9 world units (the world's bound: beyond it the arithmetic of
+/// the fit can no longer carry the value, e.g. `pad_xy = 1e300`).
 pub fn non_negative(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
-    check_range(v, key, x, 0.0, f64::INFINITY, false, true)
+    check_range(v, key, x, 0.0, crate::config::MAX_WORLD, false, false)
 }
 
-/// A number > 0.
+/// A distance > 0, at most 1e9 world units.
 pub fn positive(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
-    check_range(v, key, x, 0.0, f64::INFINITY, true, true)
+    check_range(v, key, x, 0.0, crate::config::MAX_WORLD, true, false)
 }
 
 /// `N` fractions strictly increasing inside (0, 1), or `default` when not written.

@@ -121,6 +121,7 @@ pub fn summary_value(a: &Analysis) -> serde_json::Value {
         "tool": format!("csm-lab {}", env!("CARGO_PKG_VERSION")),
         "config": a.config.path.as_ref().map(|p| p.display().to_string()),
         "name": a.config.name,
+        "scene_hash": a.config.scene_hash(),
         "inputs": a.config.echo(),
         "cascades_needed": s.cascades_needed,
     });

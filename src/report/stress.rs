@@ -75,9 +75,14 @@ fn cell(v: f64) -> String {
     }
 }
 
-/// Input values as written into the TOML (invalid-by-design NaN/inf spelled as TOML does).
+/// Input values as written into the TOML. An invalid-by-design NaN or infinity is spelled
+/// `non-finite` (the case name says which), so no cell of the file reads as a non-finite number.
 fn input_cell(v: f64) -> String {
-    toml_f64(v)
+    if v.is_finite() {
+        toml_f64(v)
+    } else {
+        "non-finite".into()
+    }
 }
 
 fn row(r: &CaseResult) -> Vec<String> {

@@ -257,27 +257,28 @@ const TOP: usize = 15;
 
 /// The figures of a sweep as (file stem, title, SVG bytes), rendered once.
 pub fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, &'static str, Vec<u8>)>> {
+    // The four figures are independent: drawn concurrently (the first error in this order wins).
+    let ((heatmap, density), (shimmer, pareto)) = rayon::join(
+        || rayon::join(|| HeatmapFigure(r).to_svg(), || LambdaDensityFigure::new(r).to_svg()),
+        || rayon::join(|| ShimmerSweepFigure(r).to_svg(), || ParetoFigure(r).to_svg()),
+    );
     Ok(vec![
         (
             "heatmap",
             "Max and mean aliasing over λ × cascade count, per resolution",
-            HeatmapFigure(r).to_svg()?,
+            heatmap?,
         ),
         (
             "density_lambda",
             "Texels per pixel against depth for several λ at the recommended count and resolution",
-            LambdaDensityFigure::new(r).to_svg()?,
+            density?,
         ),
         (
             "shimmer_sweep",
             "Shimmer snapped vs unsnapped for every configuration",
-            ShimmerSweepFigure(r).to_svg()?,
+            shimmer?,
         ),
-        (
-            "pareto",
-            "Pareto front of memory against mean aliasing",
-            ParetoFigure(r).to_svg()?,
-        ),
+        ("pareto", "Pareto front of memory against mean aliasing", pareto?),
     ])
 }
 
@@ -409,9 +410,18 @@ pub fn render_all(r: &SweepResult, plots: bool) -> Result<crate::output::Rendere
         ),
     ];
     let figures = if plots { render_figures(r)? } else { Vec::new() };
-    for (stem, _, svg) in &figures {
+    // Rasterising is most of the time of a small sweep: the figures go to PNG in parallel
+    // (rayon keeps their order, so the files are the same at any thread count).
+    let pngs = {
+        use rayon::prelude::*;
+        figures
+            .par_iter()
+            .map(|(_, _, svg)| svg_to_png(svg, 2.0))
+            .collect::<Result<Vec<_>>>()?
+    };
+    for ((stem, _, svg), png) in figures.iter().zip(pngs) {
         files.push((format!("{stem}.svg"), svg.clone()));
-        files.push((format!("{stem}.png"), svg_to_png(svg, 2.0)?));
+        files.push((format!("{stem}.png"), png));
     }
     files.push(("report.html".to_string(), report_html(r, &figures)));
     files.push(("report.md".to_string(), report_md(r, &figures)));

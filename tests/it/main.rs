@@ -1,6 +1,7 @@
 //! The integration tests, built as one test crate (one link instead of one per file).
 
 mod architecture;
+mod bad_inputs;
 mod check_sweep;
 mod cli_accuracy;
 mod cli_analyze;
@@ -14,6 +15,7 @@ mod golden_outputs;
 mod precision;
 mod presets;
 mod prop_analysis;
+mod prop_specs;
 mod prop_toml;
 mod regressions;
 mod shimmer;

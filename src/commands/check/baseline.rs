@@ -173,8 +173,13 @@ pub fn summary_from_json(value: &serde_json::Value, label: &str) -> Result<BTree
             serde_json::Value::Bool(b) => f64::from(u8::from(*b)),
             serde_json::Value::Number(n) => n
                 .as_f64()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| invalid(format!("`{}` = {n} is not a finite number", m.name())))?,
+                .filter(|x| x.is_finite() && x.abs() <= MAX_BASELINE_VALUE)
+                .ok_or_else(|| {
+                    invalid(format!(
+                        "`{}` = {n} is not a number csm-lab writes (finite, at most {MAX_BASELINE_VALUE:e} in magnitude)",
+                        m.name()
+                    ))
+                })?,
             other => {
                 return Err(invalid(format!(
                     "`{}` = {other} is not a number; a summary.json from `csm-lab analyze` is expected",
@@ -193,9 +198,45 @@ pub fn summary_from_json(value: &serde_json::Value, label: &str) -> Result<BTree
     Ok(out)
 }
 
+/// No summary metric csm-lab writes comes near this; a larger baseline value was edited or
+/// corrupted, and comparing with it would overflow the tolerance arithmetic.
+pub const MAX_BASELINE_VALUE: f64 = 1e100;
+
+/// The `scene_hash` of a `summary.json` document, if it has one (files written before the
+/// hash existed have none).
+pub fn scene_hash_of(value: &serde_json::Value) -> Option<&str> {
+    value.get("scene_hash").and_then(|h| h.as_str())
+}
+
+/// Reads a `summary.json` baseline, refusing one made from a scene other than `scene_hash`'s.
+pub fn read_summary_json_for(path: &Path, scene_hash: &str) -> Result<BTreeMap<SummaryMetric, f64>> {
+    let text = crate::config::read_bounded(path, 256 << 20, "a baseline file")?;
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+        Error::from(IoError::DataFile {
+            path: path.to_path_buf(),
+            line: e.line(),
+            message: format!("not valid JSON ({e}); a summary.json from `csm-lab analyze` is expected"),
+        })
+    })?;
+    if let Some(h) = scene_hash_of(&value) {
+        if h != scene_hash {
+            return Err(BaselineError::Mismatch {
+                path: path.to_path_buf(),
+                message: format!(
+                    "this baseline was made from another scene (scene_hash {h}; this config's is {scene_hash}): \
+                     camera, screen, light, scene bounds or motion differ. Write a baseline from this config \
+                     with `csm-lab analyze`"
+                ),
+            }
+            .into());
+        }
+    }
+    summary_from_json(&value, &path.display().to_string())
+}
+
 /// Reads a `summary.json` baseline.
 pub fn read_summary_json(path: &Path) -> Result<BTreeMap<SummaryMetric, f64>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
+    let text = crate::config::read_bounded(path, 256 << 20, "a baseline file")?;
     let label = path.display().to_string();
     let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
         Error::from(IoError::DataFile {

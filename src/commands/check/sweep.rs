@@ -276,7 +276,7 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
 
 /// Reads a `sweep.csv`.
 pub fn read_sweep_csv(path: &Path) -> Result<Vec<SweepRow>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
+    let text = crate::config::read_bounded(path, 256 << 20, "a sweep CSV")?;
     parse_sweep_csv(&text, path)
 }
 

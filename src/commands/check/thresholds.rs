@@ -33,7 +33,7 @@ use toml::Spanned;
 
 use super::baseline::{Tolerance, Tolerances};
 use super::metric::{all_names, CascadeMetric, DepthMetric, SummaryMetric};
-use crate::config::{line_column, toml_error};
+use crate::config::toml_error;
 use crate::error::{Error, Result};
 use crate::suggest::closest;
 
@@ -160,11 +160,28 @@ struct RawTolerance {
 struct At<'a> {
     label: &'a str,
     text: &'a str,
+    /// Byte offset of each line's start: a location is a binary search, so a file of many
+    /// rules is read in O(n log n), not O(n²).
+    line_starts: Vec<usize>,
 }
 
-impl At<'_> {
+impl<'a> At<'a> {
+    fn new(label: &'a str, text: &'a str) -> At<'a> {
+        let line_starts = std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+            .collect();
+        At {
+            label,
+            text,
+            line_starts,
+        }
+    }
+
     fn location(&self, span: std::ops::Range<usize>) -> String {
-        let (line, column) = line_column(self.text, span.start);
+        let offset = span.start.min(self.text.len());
+        let line = self.line_starts.partition_point(|&s| s <= offset).max(1);
+        let start = self.line_starts[line - 1];
+        let column = self.text.get(start..offset).map_or(1, |t| t.chars().count() + 1);
         format!("{}:{line}:{column}", self.label)
     }
 
@@ -196,16 +213,28 @@ impl At<'_> {
     }
 }
 
+/// Most `[[rule]]` entries a thresholds file may hold (checked before any is validated).
+pub const MAX_RULES: usize = 10_000;
+
 impl Thresholds {
     pub fn load(path: &Path) -> Result<Thresholds> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::read(path, e))?;
+        let text = crate::config::read_bounded(path, crate::config::MAX_TEXT_FILE_BYTES, "a thresholds file")?;
         Thresholds::from_toml_str(&text, &path.display().to_string())
     }
 
     /// Parses and validates thresholds text; `label` names the source in messages.
     pub fn from_toml_str(text: &str, label: &str) -> Result<Thresholds> {
         let raw: RawThresholds = toml::from_str(text).map_err(|e| toml_error(label, text, &e))?;
-        let at = At { label, text };
+        if raw.rule.len() > MAX_RULES {
+            return Err(ConfigError::Invalid {
+                location: format!("{label}: "),
+                key: "rule".to_string(),
+                value: format!("{} rules", raw.rule.len()),
+                allowed: format!("at most {MAX_RULES} [[rule]] entries"),
+            }
+            .into());
+        }
+        let at = At::new(label, text);
         let rules = raw
             .rule
             .iter()
