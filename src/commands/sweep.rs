@@ -1086,6 +1086,7 @@ mod tests {
                 memory_bytes: memory,
                 lookup_error_max: 0.0,
                 lookup_error_rms: 0.0,
+                screen: None,
             },
         }
     }

@@ -6,6 +6,7 @@
 //! An engine preset is applied afterwards by [`crate::presets`]; this module only carries the
 //! result in [`ShadowSettings::preset`].
 
+mod gltf_file;
 mod location;
 mod path_file;
 mod schema;
@@ -26,6 +27,7 @@ use crate::geometry::{Aabb, CameraPose};
 pub use crate::fitting::Fit;
 pub use crate::motion::MotionPath;
 pub use crate::precision::{Precision, SnapSpace};
+pub use gltf_file::read_gltf;
 pub use path_file::read_path_file;
 
 /// Largest world coordinate or distance accepted, in world units: far beyond any real world
@@ -91,6 +93,9 @@ pub struct ShadowSettings {
     pub snap: bool,
     /// Clip the split range to where the scene's bounds are visible; skips empty depth.
     pub fit_depth_to_scene: bool,
+    /// Place the splits on the view-depth range of the visible geometry (needs geometry).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub fit_depth_to_visible: bool,
     /// Arithmetic of the cascade pipeline: exact f64, or an engine's binary32 emulated
     /// operation by operation (see [`crate::precision`]).
     pub precision: Precision,
@@ -206,6 +211,20 @@ pub struct AnalysisSettings {
     pub density_samples: usize,
     /// World-fixed probe points per cascade for the shimmer metrics S3/S4.
     pub probes: usize,
+    /// `[analysis] screen_scale` as written: the fraction of the screen's width and height
+    /// sampled by the visibility pass (see [`AnalysisSettings::screen_scale`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub screen_scale: Option<f64>,
+}
+
+/// The visibility pass samples a quarter of the screen's width and height by default.
+pub const DEFAULT_SCREEN_SCALE: f64 = 0.25;
+
+impl AnalysisSettings {
+    /// The sampling scale in effect.
+    pub fn screen_scale(&self) -> f64 {
+        self.screen_scale.unwrap_or(DEFAULT_SCREEN_SCALE)
+    }
 }
 
 impl Default for AnalysisSettings {
@@ -213,7 +232,31 @@ impl Default for AnalysisSettings {
         AnalysisSettings {
             density_samples: 512,
             probes: 256,
+            screen_scale: None,
         }
+    }
+}
+
+/// The scene's geometry as configured: where it came from, and the triangles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GeometrySettings {
+    /// `[scene] ground`, after the world offset.
+    pub ground: Option<f64>,
+    /// `[[scene.box]]` entries, after the world offset.
+    pub boxes: Vec<Aabb>,
+    /// `[scene] gltf`, resolved against the config's folder.
+    pub gltf: Option<PathBuf>,
+    pub scene: Arc<crate::visibility::SceneGeometry>,
+}
+
+impl GeometrySettings {
+    pub fn echo(&self) -> serde_json::Value {
+        serde_json::json!({
+            "ground": self.ground,
+            "boxes": self.boxes.iter().map(|b| serde_json::json!({"min": b.min, "max": b.max})).collect::<Vec<_>>(),
+            "gltf": self.gltf.as_ref().map(|p| p.display().to_string()),
+            "triangles": self.scene.mesh.triangles.len(),
+        })
     }
 }
 
@@ -232,6 +275,8 @@ pub struct Config {
     pub light_direction_as_written: DVec3,
     /// World-space bounds of everything that casts or receives shadows.
     pub scene: Aabb,
+    /// Scene geometry (ground, boxes, glTF), or None in the bounds-only mode.
+    pub geometry: Option<GeometrySettings>,
     /// `[scene] world_offset`: already added to the camera, target, scene bounds and path-file
     /// poses above; kept for the echo.
     pub world_offset: DVec3,
@@ -261,6 +306,11 @@ impl Config {
         if let MotionPath::File { path, .. } = &self.motion.path {
             motion["file"] = serde_json::Value::String(path.display().to_string());
         }
+        let mut scene =
+            serde_json::json!({ "min": self.scene.min, "max": self.scene.max, "world_offset": self.world_offset });
+        if let Some(g) = &self.geometry {
+            scene["geometry"] = g.echo();
+        }
         serde_json::json!({
             "camera": self.camera,
             "screen": self.screen,
@@ -268,7 +318,7 @@ impl Config {
                 "direction": self.light_direction_as_written,
                 "direction_normalised": self.light_direction,
             },
-            "scene": { "min": self.scene.min, "max": self.scene.max, "world_offset": self.world_offset },
+            "scene": scene,
             "shadow": self.shadow,
             "motion": motion,
             "analysis": self.analysis,
@@ -283,7 +333,7 @@ impl Config {
     /// The validated settings as the core's plain domain values (radians, unit light
     /// direction, world offset already applied).
     pub fn setup(&self) -> crate::scene::Setup {
-        use crate::scene::{Camera, Motion, Setup, ShadowParams};
+        use crate::scene::{Camera, Geometry, Motion, Setup, ShadowParams};
         let s = &self.shadow;
         Setup {
             camera: Camera {
@@ -298,6 +348,11 @@ impl Config {
             },
             light_direction: self.light_direction,
             bounds: self.scene,
+            geometry: self.geometry.as_ref().map(|g| Geometry {
+                scene: g.scene.clone(),
+                screen_width: self.screen.width,
+                screen_scale: self.analysis.screen_scale(),
+            }),
             shadow: ShadowParams {
                 max_distance: s.max_distance,
                 cascades: s.cascades,
@@ -306,6 +361,7 @@ impl Config {
                 fit: s.fit,
                 snap: s.snap,
                 fit_depth_to_scene: s.fit_depth_to_scene,
+                fit_depth_to_visible: s.fit_depth_to_visible,
                 precision: s.precision,
                 snap_space: s.snap_space,
             },

@@ -38,7 +38,7 @@ impl Exporter<Analysis> for CascadesCsv {
             .iter()
             .map(metric::cascade_fields)
             .collect::<Result<Vec<_>>>()?;
-        csv_bytes(&metric::cascade_columns(), &rows)
+        csv_bytes(&metric::cascade_columns(a.config.geometry.is_some()), &rows)
     }
 }
 

@@ -49,7 +49,7 @@ pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
             Ok(fields)
         })
         .collect::<Result<Vec<_>>>()?;
-    let header: Vec<&str> = metric::summary_columns()
+    let header: Vec<&str> = metric::summary_columns(r.config.geometry.is_some())
         .into_iter()
         .chain(SWEEP_EXTRA_COLUMNS)
         .collect();
