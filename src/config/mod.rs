@@ -251,12 +251,17 @@ pub struct GeometrySettings {
 
 impl GeometrySettings {
     pub fn echo(&self) -> serde_json::Value {
-        serde_json::json!({
-            "ground": self.ground,
+        let mut v = serde_json::json!({
             "boxes": self.boxes.iter().map(|b| serde_json::json!({"min": b.min, "max": b.max})).collect::<Vec<_>>(),
-            "gltf": self.gltf.as_ref().map(|p| p.display().to_string()),
             "triangles": self.scene.mesh.triangles.len(),
-        })
+        });
+        if let Some(y) = self.ground {
+            v["ground"] = y.into();
+        }
+        if let Some(p) = &self.gltf {
+            v["gltf"] = p.display().to_string().into();
+        }
+        v
     }
 }
 
