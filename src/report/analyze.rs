@@ -224,7 +224,11 @@ pub fn summary_table(a: &Analysis) -> String {
         let _ = writeln!(
             out,
             "no cascades needed: the scene {} not visible between near = {} and the shadow distance {}",
-            if c.shadow.fit_depth_to_visible { "geometry is" } else { "bounds are" },
+            if c.shadow.fit_depth_to_visible {
+                "geometry is"
+            } else {
+                "bounds are"
+            },
             c.camera.near,
             c.shadow_far()
         );
@@ -328,6 +332,10 @@ fn screen_heading(a: &Analysis, st: &crate::screen::ScreenStats) -> String {
         c.screen.height,
         st.visible_z_lo,
         st.visible_z_hi,
-        if c.shadow.fit_depth_to_visible { ", splits fitted to it" } else { "" }
+        if c.shadow.fit_depth_to_visible {
+            ", splits fitted to it"
+        } else {
+            ""
+        }
     )
 }
