@@ -303,6 +303,15 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     };
 
     let sweep = raw.sweep.map(|s| crate::sweep::validate_raw(s, v)).transpose()?;
+    if let Some(m) = sweep.as_ref().and_then(|s| s.objective) {
+        if m.def().screen && geometry.is_none() {
+            return Err(v.invalid(
+                "sweep.objective",
+                format!("{:?}", m.name()),
+                "a metric of the bounds-only mode: screen metrics need scene geometry (scene.ground, [[scene.box]] or scene.gltf)",
+            ));
+        }
+    }
 
     let config = Config {
         name: "config".to_string(),
