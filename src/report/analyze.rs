@@ -22,6 +22,17 @@ pub fn exporters() -> Vec<&'static dyn Exporter<Analysis>> {
     ]
 }
 
+/// The files `analyze` writes for one analysis: [`exporters`], plus the two camera-view
+/// images when the scene has geometry.
+pub fn exporters_for(a: &Analysis) -> Vec<&'static dyn Exporter<Analysis>> {
+    let mut v = exporters();
+    if a.config.geometry.is_some() {
+        v.push(&figures::screen::ScreenAliasingPng);
+        v.push(&figures::screen::ScreenCascadesPng);
+    }
+    v
+}
+
 pub struct CascadesCsv;
 pub struct DensityCsv;
 pub struct ShimmerCsv;

@@ -220,17 +220,17 @@ fn why_text(r: &SweepResult) -> String {
         )
     } else {
         format!(
-        "{} cascades of {}² texels, λ = {}, {} fit: mean aliasing {:.3}, worst {:.3} at a cascade's near edge, \
+            "{} cascades of {}² texels, λ = {}, {} fit: mean aliasing {:.3}, worst {:.3} at a cascade's near edge, \
          {:.0}% of the depth range under-sampled, {} MiB. ",
-        rec.setting.cascades,
-        rec.setting.resolution,
-        rec.setting.lambda,
-        rec.setting.fit,
-        s.mean_aliasing,
-        s.max_aliasing,
-        100.0 * s.undersampled_fraction,
-        mib(s.memory_bytes)
-    )
+            rec.setting.cascades,
+            rec.setting.resolution,
+            rec.setting.lambda,
+            rec.setting.fit,
+            s.mean_aliasing,
+            s.max_aliasing,
+            100.0 * s.undersampled_fraction,
+            mib(s.memory_bytes)
+        )
     };
     if r.recommendation.as_ref().is_some_and(|x| x.within_budget) {
         let _ = write!(
