@@ -222,3 +222,21 @@ impl Exporter<Analysis> for ScreenCascadesPng {
         cascades_png(a)
     }
 }
+
+/// Both images of an analysis with their captions (empty without geometry or on a failure to
+/// draw, which only leaves them out of a page).
+pub fn captioned(a: &Analysis, label: &str) -> Vec<(Vec<u8>, String)> {
+    if a.config.geometry.is_none() {
+        return Vec::new();
+    }
+    match (aliasing_png(a), cascades_png(a)) {
+        (Ok(m), Ok(c)) => vec![
+            (m, format!("{label}: per-pixel aliasing m on screen (log scale)")),
+            (
+                c,
+                format!("{label}: the cascade serving each pixel, with the split lines"),
+            ),
+        ],
+        _ => Vec::new(),
+    }
+}

@@ -215,6 +215,11 @@ impl Exporter<Comparison> for CompareHtml {
         for a in &c.analyses {
             let _ = writeln!(h, "<h3>{}</h3>", html::escape(preset_of(a).map_or("?", |p| p.as_str())));
             h.push_str(&html::list(&preset_lines(a), Some("notes")));
+            let label = preset_of(a).map_or("?", |p| p.as_str());
+            let images = crate::figures::screen::captioned(a, label);
+            if !images.is_empty() {
+                h.push_str(&html::png_figures(&images));
+            }
         }
         Ok(html::page(
             &format!("csm-lab compare: {}", c.name),

@@ -375,6 +375,14 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
         "<p><em>Objective:</em> {}.</p></div>",
         html::escape(&sweep::objective_text(r.objective))
     );
+    // The camera view of the recommended configuration, with scene geometry.
+    if let (Some(rec), Some(_)) = (r.recommended(), &r.config.geometry) {
+        if let Ok(cfg) = rec.setting.apply(&r.config) {
+            let a = crate::analysis::analyze(&cfg, &crate::analysis::AnalysisOptions::summary_only());
+            let images = crate::figures::screen::captioned(&a, &format!("recommended ({})", rec.setting.label()));
+            h.push_str(&html::png_figures(&images));
+        }
+    }
     if !figures.is_empty() {
         h.push_str("<h2>Plots</h2>\n");
         for (_, caption, svg) in figures {
