@@ -299,23 +299,6 @@ fn bad_geometry_input_names_the_key() {
     assert!(e.contains("shadow.fit_depth_to_visible"), "{e}");
 }
 
-/// Standard base64 with padding.
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
-        for i in 0..4 {
-            if i <= c.len() {
-                out.push(A[(n >> (18 - 6 * i) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
-
 #[test]
 fn gltf_triangles_carry_their_node_transforms() {
     let dir = tempfile::tempdir().unwrap();
@@ -328,7 +311,7 @@ fn gltf_triangles_carry_their_node_transforms() {
         "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 0.0, 1.0]}}],
         "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
         "buffers": [{{"byteLength": 36, "uri": "data:application/octet-stream;base64,{}"}}]}}"#,
-        base64(&bytes)
+        csm_lab::report::html::base64(&bytes)
     );
     let path = dir.path().join("tri.gltf");
     std::fs::write(&path, json).unwrap();
