@@ -101,9 +101,9 @@ impl View {
 /// What one sampled pixel sees.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
-    /// View depth of the hit (world units).
+    /// View depth of the hit (world units); the hit point is `C + t d` with `t` this depth
+    /// and `d` the pixel's ray ([`Visibility::position`]).
     pub depth: f64,
-    pub position: DVec3,
     /// The hit's normal points toward the light.
     pub lit: bool,
     /// `g`: the per-pixel aliasing is `m = T g` for texel size `T` (pixels per world unit).
@@ -129,6 +129,13 @@ pub struct Visibility {
 impl Visibility {
     pub fn sample_count(&self) -> usize {
         self.samples.len()
+    }
+
+    /// World position of the hit of sample `k` (row-major) at view depth `depth`.
+    pub fn position(&self, k: usize, depth: f64) -> DVec3 {
+        let cols = self.cols as usize;
+        let (u, v) = self.view.pixel_centre((k % cols) as u32, (k / cols) as u32);
+        self.view.pose.position + self.view.ray(u, v) * depth
     }
 }
 
@@ -247,7 +254,7 @@ impl SceneGeometry {
             .filter(|s| s.lit)
             .map(|s| (s.depth, s.factor))
             .collect();
-        receivers.sort_by(|a, b| a.0.total_cmp(&b.0));
+        receivers.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
         let self_shadowed = samples.iter().flatten().filter(|s| !s.lit).count();
         let depth_range = samples.iter().flatten().fold(None, |r: Option<(f64, f64)>, s| {
             Some(r.map_or((s.depth, s.depth), |(lo, hi)| (lo.min(s.depth), hi.max(s.depth))))
@@ -293,7 +300,6 @@ impl SceneGeometry {
         let factor = geometric_factor(view, light, n, d, t);
         Some(Sample {
             depth: t,
-            position: origin + d * t,
             lit,
             factor,
         })
