@@ -217,8 +217,8 @@ pub struct AnalysisSettings {
     pub screen_scale: Option<f64>,
 }
 
-/// The visibility pass samples a quarter of the screen's width and height by default.
-pub const DEFAULT_SCREEN_SCALE: f64 = 0.25;
+/// The visibility pass samples an eighth of the screen's width and height by default.
+pub const DEFAULT_SCREEN_SCALE: f64 = 0.125;
 
 impl AnalysisSettings {
     /// The sampling scale in effect.

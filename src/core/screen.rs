@@ -40,14 +40,37 @@ pub struct ScreenStats {
     pub cascade_pixels: Vec<f64>,
 }
 
+/// The 0-based index of the nearest-rank percentile `p` (0..=100) among `n` sorted values.
+pub fn rank_index(p: f64, n: usize) -> usize {
+    ((p / 100.0 * n as f64).ceil() as usize).clamp(1, n) - 1
+}
+
 /// Nearest-rank percentile `p` (0..=100) of values, reordering them; 0 for no values.
 pub fn percentile(values: &mut [f64], p: f64) -> f64 {
     let n = values.len();
     if n == 0 {
         return 0.0;
     }
-    let rank = ((p / 100.0 * n as f64).ceil() as usize).clamp(1, n);
-    *values.select_nth_unstable_by(rank - 1, f64::total_cmp).1
+    *values.select_nth_unstable_by(rank_index(p, n), f64::total_cmp).1
+}
+
+/// Nearest-rank percentiles at increasing `ps` of non-negative finite values given as their
+/// bit patterns (which order like the values), reordering them. Each selection works only on
+/// the part at and above the previous one.
+fn percentiles_of_bits(bits: &mut [u64], ps: &[f64]) -> Vec<f64> {
+    let n = bits.len();
+    if n == 0 {
+        return vec![0.0; ps.len()];
+    }
+    let mut start = 0;
+    ps.iter()
+        .map(|&p| {
+            let r = rank_index(p, n).max(start);
+            let x = *bits[start..].select_nth_unstable(r - start).1;
+            start = r;
+            f64::from_bits(x)
+        })
+        .collect()
 }
 
 /// The visible depth range clipped to `[lo, hi]`, or None when nothing visible lies in it.
@@ -88,21 +111,26 @@ pub fn served_aliasing(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<
 pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f64, f64)>) -> ScreenStats {
     let total = vis.sample_count().max(1) as f64;
     let receivers = vis.receivers.len();
-    let (mut values, counts) = served_aliasing(vis, splits, texel);
+    let (values, counts) = served_aliasing(vis, splits, texel);
     let n = values.len();
-    let (mean, max, under) = if n == 0 {
-        (0.0, 0.0, 0.0)
+    let (mut sum, mut max, mut under) = (0.0, 0.0f64, 0usize);
+    // m is finite and positive, so its bit pattern orders like its value (a faster selection).
+    let mut bits: Vec<u64> = values
+        .iter()
+        .map(|&m| {
+            sum += m;
+            max = max.max(m);
+            under += usize::from(m > 1.0);
+            m.to_bits()
+        })
+        .collect();
+    let (mean, under) = if n == 0 {
+        (0.0, 0.0)
     } else {
-        let sum: f64 = values.iter().sum();
-        let max = values.iter().copied().fold(0.0, f64::max);
-        let under = values.iter().filter(|&&x| x > 1.0).count();
-        (sum / n as f64, max, under as f64 / n as f64)
+        (sum / n as f64, under as f64 / n as f64)
     };
-    let (p50, p95, p99) = (
-        percentile(&mut values, 50.0),
-        percentile(&mut values, 95.0),
-        percentile(&mut values, 99.0),
-    );
+    let p = percentiles_of_bits(&mut bits, &[50.0, 95.0, 99.0]);
+    let (p50, p95, p99) = (p[0], p[1], p[2]);
     let (visible_z_lo, visible_z_hi) = visible.unwrap_or((0.0, 0.0));
     ScreenStats {
         receiver_fraction: receivers as f64 / total,
@@ -140,5 +168,8 @@ mod tests {
         assert_eq!(percentile(&mut v, 99.0), 20.0);
         assert_eq!(percentile(&mut v, 0.0), 1.0);
         assert_eq!(percentile(&mut [], 50.0), 0.0);
+        let mut bits: Vec<u64> = (1..=20).rev().map(|x| f64::from(x).to_bits()).collect();
+        assert_eq!(percentiles_of_bits(&mut bits, &[50.0, 95.0, 99.0]), vec![10.0, 19.0, 20.0]);
+        assert_eq!(percentiles_of_bits(&mut [], &[50.0]), vec![0.0]);
     }
 }
