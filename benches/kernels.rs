@@ -108,8 +108,15 @@ fn default_sweep(c: &mut Criterion) {
 fn terrain(n: usize) -> Mesh {
     let mut m = Mesh::default();
     let p = |i: usize, j: usize| {
-        let (x, z) = (-200.0 + 400.0 * i as f64 / n as f64, -200.0 + 400.0 * j as f64 / n as f64);
-        DVec3::new(x, 0.6 * (x * 0.05).sin() * (z * 0.07).cos() + 0.3 * (x * 0.13 + z * 0.11).sin(), z)
+        let (x, z) = (
+            -200.0 + 400.0 * i as f64 / n as f64,
+            -200.0 + 400.0 * j as f64 / n as f64,
+        );
+        DVec3::new(
+            x,
+            0.6 * (x * 0.05).sin() * (z * 0.07).cos() + 0.3 * (x * 0.13 + z * 0.11).sin(),
+            z,
+        )
     };
     for j in 0..n {
         for i in 0..n {
@@ -123,7 +130,11 @@ fn terrain(n: usize) -> Mesh {
 fn visibility_pass(c: &mut Criterion) {
     let config = default_config();
     let mut setup = config.setup();
-    setup.geometry.as_mut().expect("default scene has geometry").screen_scale = 1.0;
+    setup
+        .geometry
+        .as_mut()
+        .expect("default scene has geometry")
+        .screen_scale = 1.0;
     let view = setup.view().expect("a view");
     let mesh = setup.geometry.as_ref().unwrap().scene.mesh.clone();
     let mut group = c.benchmark_group("visibility");

@@ -169,7 +169,10 @@ mod tests {
         assert_eq!(percentile(&mut v, 0.0), 1.0);
         assert_eq!(percentile(&mut [], 50.0), 0.0);
         let mut bits: Vec<u64> = (1..=20).rev().map(|x| f64::from(x).to_bits()).collect();
-        assert_eq!(percentiles_of_bits(&mut bits, &[50.0, 95.0, 99.0]), vec![10.0, 19.0, 20.0]);
+        assert_eq!(
+            percentiles_of_bits(&mut bits, &[50.0, 95.0, 99.0]),
+            vec![10.0, 19.0, 20.0]
+        );
         assert_eq!(percentiles_of_bits(&mut [], &[50.0]), vec![0.0]);
     }
 }

@@ -298,11 +298,7 @@ impl SceneGeometry {
         }
         let lit = n.dot(-view.light) > 0.0;
         let factor = geometric_factor(view, light, n, d, t);
-        Some(Sample {
-            depth: t,
-            lit,
-            factor,
-        })
+        Some(Sample { depth: t, lit, factor })
     }
 }
 
