@@ -156,7 +156,7 @@ pub fn sigma_min_2x2(a: f64, b: f64, c: f64, d: f64) -> f64 {
     let det = (a * d - b * c).abs();
     let disc = (e * e - 4.0 * det * det).max(0.0).sqrt();
     let smax = ((e + disc) * 0.5).sqrt();
-    if !(smax > 0.0) || !smax.is_finite() {
+    if smax.is_nan() || smax <= 0.0 || !smax.is_finite() {
         return f64::MIN_POSITIVE;
     }
     (det / smax).max(smax / MAX_ANISOTROPY)

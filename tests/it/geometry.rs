@@ -124,7 +124,11 @@ fn brute_hit(tris: &[[DVec3; 3]], o: DVec3, d: DVec3, near: f64, far: f64) -> Op
         if a < 0.0 || b < 0.0 || a + b > 1.0 || tt < near || tt > far {
             continue;
         }
-        if best.is_none_or(|(bt, _)| tt < bt) {
+        let nearer = match best {
+            Some((bt, _)) => tt < bt,
+            None => true,
+        };
+        if nearer {
             best = Some((tt, e1.cross(e2).normalize()));
         }
     }
