@@ -459,9 +459,12 @@ impl SummaryMetric {
     }
 }
 
-/// Every summary metric of a summary, by name, in registry order.
+/// Every summary metric of a summary (the screen metrics only with geometry), in registry order.
 pub fn summary_values(s: &Summary) -> Vec<(SummaryMetric, f64)> {
-    SummaryMetric::all().map(|m| (m, m.value(s))).collect()
+    SummaryMetric::all()
+        .filter(|m| shown_for(m.def().screen, s))
+        .map(|m| (m, m.value(s)))
+        .collect()
 }
 
 /// The summary as flat JSON keys, in registry order (`summary.json`, `recommendation.json`).

@@ -540,6 +540,21 @@ fn golden(group: &str, cases: Vec<Case>) {
     }
 }
 
+/// A small sweep of `g.toml` (8 configurations).
+const SMALL_GEO_SWEEP: [&str; 11] = [
+    "sweep",
+    "g.toml",
+    "--quiet",
+    "--out",
+    "out",
+    "--cascades",
+    "2,4",
+    "--resolution",
+    "1024,2048",
+    "--lambda",
+    "0.5,0.75",
+];
+
 /// Scene geometry: ground, boxes, glTF, splits fitted to the visible depths, a camera that sees
 /// nothing, sweeps and compare with screen metrics, and the errors of bad geometry input.
 fn geometry_runs() -> Vec<Case> {
@@ -578,36 +593,12 @@ fn geometry_runs() -> Vec<Case> {
         case(
             "geo_sweep_small",
             vec![("g.toml".to_string(), geometry_base())],
-            &[
-                "sweep",
-                "g.toml",
-                "--quiet",
-                "--out",
-                "out",
-                "--cascades",
-                "2,4",
-                "--resolution",
-                "1024,2048",
-                "--lambda",
-                "0.5,0.75",
-            ],
+            &SMALL_GEO_SWEEP,
         ),
         case(
             "geo_sweep_fitted_small",
             vec![("g.toml".to_string(), edit(&geometry_base(), &fitted))],
-            &[
-                "sweep",
-                "g.toml",
-                "--quiet",
-                "--out",
-                "out",
-                "--cascades",
-                "2,4",
-                "--resolution",
-                "1024,2048",
-                "--lambda",
-                "0.5,0.75",
-            ],
+            &SMALL_GEO_SWEEP,
         ),
         case(
             "geo_compare",
