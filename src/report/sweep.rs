@@ -474,12 +474,22 @@ pub fn stdout_table(r: &SweepResult) -> String {
         );
         return out;
     }
-    let _ = writeln!(out, "Pareto front (memory against mean aliasing):");
-    let _ = writeln!(
+    let screen = r.objective.name() != "mean_aliasing";
+    if screen {
+        let _ = writeln!(out, "Pareto front (memory against {}):", r.objective.name());
+    } else {
+        let _ = writeln!(out, "Pareto front (memory against mean aliasing):");
+    }
+    let _ = write!(
         out,
         "  {:>9} {:>8} {:>6} {:>6} {:>6} {:>10} {:>10} {:>10}",
         "MiB", "cascades", "res", "λ", "fit", "mean", "max", "shimmer"
     );
+    let _ = if screen {
+        writeln!(out, " {:>10}", "objective")
+    } else {
+        writeln!(out)
+    };
     let rec = r.recommendation.as_ref().map(|x| x.index);
     for &i in &r.front {
         let x = &r.rows[i];
@@ -497,6 +507,10 @@ pub fn stdout_table(r: &SweepResult) -> String {
             s.max_aliasing,
             s.shimmer_snapped
         );
+        if screen {
+            out.pop();
+            let _ = writeln!(out, " {:>10.4}", r.objective.value(s));
+        }
     }
     let _ = writeln!(out, "recommended (budget {} MiB): {}", r.budget_mib, why_text(r));
     out
