@@ -327,3 +327,19 @@ fn gltf_triangles_carry_their_node_transforms() {
     assert_eq!(c.scene.min, DVec3::new(10.0, 2.0, -5.0));
     assert_eq!(c.scene.max, DVec3::new(12.0, 2.0, -3.0));
 }
+
+#[test]
+fn a_screen_rule_on_a_bounds_only_scene_is_not_applicable() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("scene.toml");
+    std::fs::write(&cfg, crate::common::BASE).unwrap();
+    let t = dir.path().join("t.toml");
+    std::fs::write(&t, "[[rule]]\nmetric = \"screen_aliasing_p95\"\nmax = 4\n").unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+        .args(["check", cfg.to_str().unwrap(), "--thresholds", t.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("needs scene geometry"), "{stdout}");
+}
