@@ -1,11 +1,12 @@
-//! Criterion benchmarks of the kernels: one cascade build, one configuration's analysis and the
-//! default sweep's compute. Run with `cargo bench --bench kernels`; figures are in docs/speed.md.
+//! Criterion benchmarks of the kernels: one cascade build, one configuration's analysis, the
+//! default sweep's compute (with and without the screen metrics) and the visibility pass.
+//! Run with `cargo bench --bench kernels`; figures are in docs/speed.md and the README.
 
 use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 
 use csm_lab::analysis::{analyze, AnalysisOptions};
 use csm_lab::cascades::{LightPose, Rig};
@@ -13,9 +14,11 @@ use csm_lab::config::Config;
 use csm_lab::depth_range;
 use csm_lab::fitting::{minimal_sphere, Window};
 use csm_lab::geometry::{Lens, LightBasis};
+use csm_lab::mesh::Mesh;
 use csm_lab::snapping::SnapRule;
 use csm_lab::splits;
 use csm_lab::sweep::{self, Grid, GridOverrides};
+use csm_lab::visibility::SceneGeometry;
 
 fn default_config() -> Config {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/default.toml");
@@ -92,8 +95,61 @@ fn default_sweep(c: &mut Criterion) {
     group.bench_function("default_672_configs_one_thread", |b| {
         b.iter(|| black_box(sweep::run(&base, &grid, Some(1), &|| {}).expect("sweep runs")))
     });
+    // The same grid with and without scene geometry: the cost of the screen metrics.
+    let mut bounds_only = base.clone();
+    bounds_only.geometry = None;
+    group.bench_function("default_672_configs_bounds_only", |b| {
+        b.iter(|| black_box(sweep::run(&bounds_only, &grid, None, &|| {}).expect("sweep runs")))
+    });
     group.finish();
 }
 
-criterion_group!(benches, cascade_build, one_analysis, default_sweep);
+/// A heightfield over [-200, 200]^2 with `n` x `n` cells (2 n^2 triangles).
+fn terrain(n: usize) -> Mesh {
+    let mut m = Mesh::default();
+    let p = |i: usize, j: usize| {
+        let (x, z) = (
+            -200.0 + 400.0 * i as f64 / n as f64,
+            -200.0 + 400.0 * j as f64 / n as f64,
+        );
+        DVec3::new(
+            x,
+            0.6 * (x * 0.05).sin() * (z * 0.07).cos() + 0.3 * (x * 0.13 + z * 0.11).sin(),
+            z,
+        )
+    };
+    for j in 0..n {
+        for i in 0..n {
+            m.push([p(i, j), p(i, j + 1), p(i + 1, j + 1)]);
+            m.push([p(i, j), p(i + 1, j + 1), p(i + 1, j)]);
+        }
+    }
+    m
+}
+
+fn visibility_pass(c: &mut Criterion) {
+    let config = default_config();
+    let mut setup = config.setup();
+    setup
+        .geometry
+        .as_mut()
+        .expect("default scene has geometry")
+        .screen_scale = 1.0;
+    let view = setup.view().expect("a view");
+    let mesh = setup.geometry.as_ref().unwrap().scene.mesh.clone();
+    let mut group = c.benchmark_group("visibility");
+    group.sample_size(10);
+    // One full-HD pass (1920 x 1080 rays), the BVH build included.
+    group.bench_function("default_scene_full_hd", |b| {
+        b.iter(|| black_box(SceneGeometry::new(mesh.clone()).cast(&view).receivers.len()))
+    });
+    let big = terrain(224);
+    assert!(big.triangles.len() >= 100_000);
+    group.bench_function("terrain_100k_triangles_full_hd", |b| {
+        b.iter(|| black_box(SceneGeometry::new(big.clone()).cast(&view).receivers.len()))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, cascade_build, one_analysis, default_sweep, visibility_pass);
 criterion_main!(benches);

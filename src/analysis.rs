@@ -7,7 +7,10 @@ use crate::depth_range::{self, DepthRange};
 use crate::geometry::CameraPose;
 use crate::metrics::{self, Aggregates, DensitySample};
 use crate::precision::{self, LookupError, Precision};
+use crate::screen::{self, ScreenStats};
 use crate::shimmer::{self, PathResult, ShimmerOptions};
+use crate::visibility::Visibility;
+use glam::DVec2;
 
 /// Which optional parts to compute. The summary metrics are always computed and never depend
 /// on these switches, so a sweep row equals what `analyze` reports for the same config.
@@ -72,6 +75,10 @@ pub struct Summary {
     pub lookup_error_max: f64,
     /// RMS of S7 over the same set (texels; 0 with precision = "f64").
     pub lookup_error_rms: f64,
+    /// The screen metrics (per-pixel aliasing of the visible receivers); None in the
+    /// bounds-only mode, and then absent from every output.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub screen: Option<ScreenStats>,
 }
 
 /// One cascade as built for the configured camera (frame 0).
@@ -102,6 +109,18 @@ pub struct CascadeReport {
     /// S7 of this cascade over the path (texels; 0 with precision = "f64").
     pub lookup_error_max: f64,
     pub lookup_error_rms: f64,
+    /// With scene geometry: the share of receiver pixels this cascade serves, and the area of
+    /// the light-space rectangle around its receiver points over its window's area.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub screen: Option<CascadeScreen>,
+}
+
+/// The per-cascade screen metrics (scene geometry only).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct CascadeScreen {
+    pub pixels: f64,
+    /// 0 when not computed (sweeps) or when the cascade serves no receiver pixel.
+    pub texel_utilization: f64,
 }
 
 #[derive(Debug, Clone)]
@@ -222,6 +241,16 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         Some(r) => memory_bytes(r.cascade_count(), r.resolution),
         None => memory_bytes(config.shadow.cascades, config.shadow.resolution),
     };
+    let setup = config.setup();
+    let visibility = setup.visibility();
+    // The visible depths within the bounds' range (the same range with or without fitting
+    // the splits to them).
+    let visible = visibility.as_ref().and_then(|vis| {
+        let mut bounds_only = setup.clone();
+        bounds_only.shadow.fit_depth_to_visible = false;
+        let (lo, hi) = depth_range::for_setup(&bounds_only).bounds()?;
+        screen::visible_range(vis, lo, hi)
+    });
     let Some(rig) = rig else {
         return Analysis {
             config: config.clone(),
@@ -244,6 +273,9 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
                 memory_bytes: memory,
                 lookup_error_max: 0.0,
                 lookup_error_rms: 0.0,
+                screen: visibility
+                    .as_ref()
+                    .map(|vis| screen::stats(vis, &[0.0, 0.0], &[0.0], visible)),
             },
             preset: config
                 .shadow
@@ -300,6 +332,13 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         }
     };
     let configured = if config.shadow.snap { &snapped } else { &unsnapped };
+    let screen_stats = visibility
+        .as_ref()
+        .map(|vis| screen::stats(vis, &rig.splits, &texel, visible));
+    let utilization = match (&visibility, opts.light_depth) {
+        (Some(vis), true) => texel_utilization(vis, &rig, &lp0, &windows0),
+        _ => vec![0.0; rig.cascade_count()],
+    };
     let cascade_lookup = |i: usize| {
         lookup_error
             .as_ref()
@@ -343,6 +382,10 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
                 min_aliasing: aggregates.cascade_min_aliasing[i],
                 lookup_error_max: cascade_lookup(i).0,
                 lookup_error_rms: cascade_lookup(i).1,
+                screen: screen_stats.as_ref().map(|st| CascadeScreen {
+                    pixels: st.cascade_pixels[i],
+                    texel_utilization: utilization[i],
+                }),
             }
         })
         .collect();
@@ -362,6 +405,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         memory_bytes: memory,
         lookup_error_max: lookup_error.as_ref().map_or(0.0, |l| l.max),
         lookup_error_rms: lookup_error.as_ref().map_or(0.0, |l| l.rms),
+        screen: screen_stats,
     };
     let preset = config
         .shadow
@@ -383,4 +427,38 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         })),
         summary,
     }
+}
+
+/// Per cascade: the area of the light-space bounding rectangle of the lit-facing receiver
+/// points it serves (clipped to its window) over the window's area; 0 when it serves none.
+pub fn texel_utilization(vis: &Visibility, rig: &Rig, lp: &LightPose, windows: &[crate::fitting::Window]) -> Vec<f64> {
+    let m = rig.cascade_count();
+    let bases: Vec<_> = (0..m).map(|i| rig.basis(i, lp)).collect();
+    let mut lo = vec![DVec2::splat(f64::INFINITY); m];
+    let mut hi = vec![DVec2::splat(f64::NEG_INFINITY); m];
+    let (z_lo, z_hi) = (rig.splits[0], rig.splits[m]);
+    for (k, s) in vis.samples.iter().enumerate() {
+        let Some(s) = s.filter(|s| s.lit && s.depth >= z_lo && s.depth <= z_hi) else {
+            continue;
+        };
+        let i = metrics::cascade_at(&rig.splits, s.depth);
+        let p = vis.position(k, s.depth);
+        let q = DVec2::new(bases[i].x.dot(p), bases[i].y.dot(p));
+        lo[i] = lo[i].min(q);
+        hi[i] = hi[i].max(q);
+    }
+    (0..m)
+        .map(|i| {
+            let w = &windows[i];
+            let wmin = w.min();
+            let wmax = wmin + w.texel * w.resolution as f64;
+            let size = (hi[i].min(wmax) - lo[i].max(wmin)).max(DVec2::ZERO);
+            let area = w.width() * w.height();
+            if lo[i].x.is_finite() && area > 0.0 {
+                (size.x * size.y / area).min(1.0)
+            } else {
+                0.0
+            }
+        })
+        .collect()
 }

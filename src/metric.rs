@@ -115,6 +115,8 @@ pub struct SummaryDef {
     pub shown: Shown,
     /// A column of the per-configuration tables (`sweep.csv`, `compare.csv`).
     pub in_rows: bool,
+    /// A screen metric: only with scene geometry (absent from every output without it).
+    pub screen: bool,
     pub value: fn(&Summary) -> Value,
 }
 
@@ -130,6 +132,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "",
         shown: Shown::Never,
         in_rows: false,
+        screen: false,
         value: |s| Value::Flag(s.cascades_needed),
     },
     SummaryDef {
@@ -140,6 +143,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "",
         shown: Shown::Never,
         in_rows: true,
+        screen: false,
         value: |s| Value::Real(s.z_lo),
     },
     SummaryDef {
@@ -150,6 +154,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "",
         shown: Shown::Never,
         in_rows: true,
+        screen: false,
         value: |s| Value::Real(s.z_hi),
     },
     SummaryDef {
@@ -160,6 +165,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "worst texel/pixel ratio (at a cascade's near edge)",
         shown: Shown::Fixed,
         in_rows: true,
+        screen: false,
         value: |s| Value::Real(s.max_aliasing),
     },
     SummaryDef {
@@ -170,6 +176,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "mean over depth",
         shown: Shown::Fixed,
         in_rows: true,
+        screen: false,
         value: |s| Value::Real(s.mean_aliasing),
     },
     SummaryDef {
@@ -180,6 +187,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "mean over log depth",
         shown: Shown::Fixed,
         in_rows: true,
+        screen: false,
         value: |s| Value::Real(s.mean_log_aliasing),
     },
     SummaryDef {
@@ -190,6 +198,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "share of depth with aliasing > 1",
         shown: Shown::Fixed,
         in_rows: true,
+        screen: false,
         value: |s| Value::Real(s.undersampled_fraction),
     },
     SummaryDef {
@@ -200,6 +209,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "RMS sub-texel drift per frame, snapped (texels)",
         shown: Shown::Scientific,
         in_rows: true,
+        screen: false,
         value: |s| Value::Real(s.shimmer_snapped),
     },
     SummaryDef {
@@ -210,6 +220,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "the same without snapping",
         shown: Shown::Scientific,
         in_rows: true,
+        screen: false,
         value: |s| Value::Real(s.shimmer_unsnapped),
     },
     SummaryDef {
@@ -220,6 +231,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "largest texel-size change between frames",
         shown: Shown::Scientific,
         in_rows: true,
+        screen: false,
         value: |s| Value::Real(s.size_jitter),
     },
     SummaryDef {
@@ -230,6 +242,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "slice corners outside their window",
         shown: Shown::Whole,
         in_rows: true,
+        screen: false,
         value: |s| Value::Count(s.coverage_violations),
     },
     SummaryDef {
@@ -240,6 +253,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "cascades x resolution^2 x 4",
         shown: Shown::Whole,
         in_rows: true,
+        screen: false,
         value: |s| Value::Count(s.memory_bytes),
     },
     SummaryDef {
@@ -250,6 +264,7 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "S7: largest |s_f32 - s_exact| lookup error (texels)",
         shown: Shown::F32Scientific,
         in_rows: false,
+        screen: false,
         value: |s| Value::Real(s.lookup_error_max),
     },
     SummaryDef {
@@ -260,7 +275,118 @@ pub const SUMMARY: &[SummaryDef] = &[
         brief: "RMS of S7 (texels)",
         shown: Shown::F32Scientific,
         in_rows: false,
+        screen: false,
         value: |s| Value::Real(s.lookup_error_rms),
+    },
+    SummaryDef {
+        name: "screen_receiver_fraction",
+        unit: "",
+        direction: Direction::LowerIsWorse,
+        help: "share of sampled screen pixels that see a lit-facing receiver (a surface whose normal points toward the light)",
+        brief: "share of pixels on lit-facing receivers",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.receiver_fraction)),
+    },
+    SummaryDef {
+        name: "screen_self_shadowed_fraction",
+        unit: "",
+        direction: Direction::Neither,
+        help: "share of sampled screen pixels that see a surface facing away from the light (self-shadowed whatever the map holds)",
+        brief: "share of pixels facing away from the light",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.self_shadowed_fraction)),
+    },
+    SummaryDef {
+        name: "screen_aliasing_mean",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "per-pixel aliasing m = 1/sigma_min(J) averaged over the served lit-facing receiver pixels",
+        brief: "mean per-pixel aliasing m on screen",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.aliasing_mean)),
+    },
+    SummaryDef {
+        name: "screen_aliasing_p50",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "median (nearest rank) of the per-pixel aliasing m over the served receiver pixels",
+        brief: "median m on screen",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.aliasing_p50)),
+    },
+    SummaryDef {
+        name: "screen_aliasing_p95",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "95th percentile (nearest rank) of the per-pixel aliasing m over the served receiver pixels",
+        brief: "95th percentile of m on screen",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.aliasing_p95)),
+    },
+    SummaryDef {
+        name: "screen_aliasing_p99",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "99th percentile (nearest rank) of the per-pixel aliasing m over the served receiver pixels",
+        brief: "99th percentile of m on screen",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.aliasing_p99)),
+    },
+    SummaryDef {
+        name: "screen_aliasing_max",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "largest per-pixel aliasing m over the served receiver pixels (finite: grazing light is clamped)",
+        brief: "largest m on screen",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.aliasing_max)),
+    },
+    SummaryDef {
+        name: "screen_undersampled_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "share of the served receiver pixels with m > 1 (blocky shadows)",
+        brief: "share of receiver pixels with m > 1",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.undersampled_fraction)),
+    },
+    SummaryDef {
+        name: "visible_z_lo",
+        unit: "world units",
+        direction: Direction::Neither,
+        help: "nearest view depth of the visible geometry, within the bounds' split range",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.visible_z_lo)),
+    },
+    SummaryDef {
+        name: "visible_z_hi",
+        unit: "world units",
+        direction: Direction::Neither,
+        help: "farthest view depth of the visible geometry, within the bounds' split range",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.visible_z_hi)),
     },
 ];
 
@@ -333,14 +459,26 @@ impl SummaryMetric {
     }
 }
 
-/// Every summary metric of a summary, by name, in registry order.
+/// Every summary metric of a summary (the screen metrics only with geometry), in registry order.
 pub fn summary_values(s: &Summary) -> Vec<(SummaryMetric, f64)> {
-    SummaryMetric::all().map(|m| (m, m.value(s))).collect()
+    SummaryMetric::all()
+        .filter(|m| shown_for(m.def().screen, s))
+        .map(|m| (m, m.value(s)))
+        .collect()
 }
 
 /// The summary as flat JSON keys, in registry order (`summary.json`, `recommendation.json`).
 pub fn summary_json(s: &Summary) -> Vec<(&'static str, serde_json::Value)> {
-    SUMMARY.iter().map(|d| (d.name, (d.value)(s).json())).collect()
+    SUMMARY
+        .iter()
+        .filter(|d| shown_for(d.screen, s))
+        .map(|d| (d.name, (d.value)(s).json()))
+        .collect()
+}
+
+/// Whether a metric belongs in the outputs of a summary: screen metrics only with geometry.
+fn shown_for(screen_metric: bool, s: &Summary) -> bool {
+    !screen_metric || s.screen.is_some()
 }
 
 /// The setting columns every per-configuration table starts with.
@@ -348,11 +486,16 @@ pub const SETTING_COLUMNS: [&str; 4] = ["lambda", "cascades", "resolution", "fit
 
 /// The columns every per-configuration table shares (`sweep.csv`, `compare.csv`): the setting,
 /// then the summary metrics marked `in_rows`. A contract: users' scripts and CI baselines read
-/// them by name.
-pub fn summary_columns() -> Vec<&'static str> {
+/// them by name. The screen metrics are columns only with scene geometry (`screen`).
+pub fn summary_columns(screen: bool) -> Vec<&'static str> {
     SETTING_COLUMNS
         .into_iter()
-        .chain(SUMMARY.iter().filter(|d| d.in_rows).map(|d| d.name))
+        .chain(
+            SUMMARY
+                .iter()
+                .filter(|d| d.in_rows && (screen || !d.screen))
+                .map(|d| d.name),
+        )
         .collect()
 }
 
@@ -360,7 +503,7 @@ pub fn summary_columns() -> Vec<&'static str> {
 /// split rule has none).
 pub fn summary_fields(lambda: String, cascades: usize, resolution: u32, fit: &str, s: &Summary) -> Result<Vec<String>> {
     let mut fields = vec![lambda, cascades.to_string(), resolution.to_string(), fit.to_string()];
-    for d in SUMMARY.iter().filter(|d| d.in_rows) {
+    for d in SUMMARY.iter().filter(|d| d.in_rows && shown_for(d.screen, s)) {
         fields.push((d.value)(s).csv(d.name)?);
     }
     Ok(fields)
@@ -371,6 +514,7 @@ pub fn summary_fields(lambda: String, cascades: usize, resolution: u32, fit: &st
 pub fn summary_lines(s: &Summary, f32_block: bool) -> Vec<(&'static str, String, &'static str)> {
     SUMMARY
         .iter()
+        .filter(|d| shown_for(d.screen, s))
         .filter_map(|d| {
             let v = (d.value)(s);
             let text = match (d.shown, f32_block) {
@@ -394,6 +538,8 @@ pub struct CascadeDef {
     pub unit: &'static str,
     pub direction: Direction,
     pub help: &'static str,
+    /// A screen metric: only with scene geometry (absent from every output without it).
+    pub screen: bool,
     pub value: fn(&CascadeReport) -> Value,
 }
 
@@ -404,6 +550,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "world units",
         direction: Direction::Neither,
         help: "view depth where the cascade starts (world units)",
+        screen: false,
         value: |c| Value::Real(c.near),
     },
     CascadeDef {
@@ -411,6 +558,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "world units",
         direction: Direction::Neither,
         help: "view depth where the cascade ends (world units)",
+        screen: false,
         value: |c| Value::Real(c.far),
     },
     CascadeDef {
@@ -418,6 +566,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "world units",
         direction: Direction::HigherIsWorse,
         help: "minimal bounding-sphere radius of the slice (world units)",
+        screen: false,
         value: |c| Value::Real(c.radius),
     },
     CascadeDef {
@@ -425,6 +574,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "world units",
         direction: Direction::HigherIsWorse,
         help: "window width in light space (world units)",
+        screen: false,
         value: |c| Value::Real(c.width),
     },
     CascadeDef {
@@ -432,6 +582,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "world units",
         direction: Direction::HigherIsWorse,
         help: "window height in light space (world units)",
+        screen: false,
         value: |c| Value::Real(c.height),
     },
     CascadeDef {
@@ -439,6 +590,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "world units",
         direction: Direction::HigherIsWorse,
         help: "world size of one shadow texel",
+        screen: false,
         value: |c| Value::Real(c.texel_size),
     },
     CascadeDef {
@@ -446,6 +598,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "world units",
         direction: Direction::Neither,
         help: "window centre along the light's x axis at frame 0 (world units)",
+        screen: false,
         value: |c| Value::Real(c.centre_x),
     },
     CascadeDef {
@@ -453,6 +606,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "world units",
         direction: Direction::Neither,
         help: "window centre along the light's y axis at frame 0 (world units)",
+        screen: false,
         value: |c| Value::Real(c.centre_y),
     },
     CascadeDef {
@@ -460,6 +614,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "texels",
         direction: Direction::Neither,
         help: "window centre along the light's x axis at frame 0, in texels of this cascade",
+        screen: false,
         value: |c| Value::Real(c.centre_x_texels),
     },
     CascadeDef {
@@ -467,6 +622,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "texels",
         direction: Direction::Neither,
         help: "window centre along the light's y axis at frame 0, in texels of this cascade",
+        screen: false,
         value: |c| Value::Real(c.centre_y_texels),
     },
     CascadeDef {
@@ -474,6 +630,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "world units",
         direction: Direction::Neither,
         help: "light-space depth where the cascade's render starts",
+        screen: false,
         value: |c| Value::Real(c.light_near),
     },
     CascadeDef {
@@ -481,6 +638,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "world units",
         direction: Direction::Neither,
         help: "light-space depth where the cascade's render ends",
+        screen: false,
         value: |c| Value::Real(c.light_far),
     },
     CascadeDef {
@@ -488,6 +646,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "count",
         direction: Direction::HigherIsWorse,
         help: "slice corners outside the window over the path",
+        screen: false,
         value: |c| Value::Count(c.coverage_violations),
     },
     CascadeDef {
@@ -495,6 +654,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "texels",
         direction: Direction::HigherIsWorse,
         help: "farthest a slice corner got outside the window (texels)",
+        screen: false,
         value: |c| Value::Real(c.coverage_worst_texels),
     },
     CascadeDef {
@@ -503,6 +663,7 @@ pub const CASCADE: &[CascadeDef] = &[
         // Less room between the slice and its window edge: closer to a coverage hole.
         direction: Direction::LowerIsWorse,
         help: "smallest margin between a slice corner and the window edge (texels)",
+        screen: false,
         value: |c| Value::Real(c.min_slack_texels),
     },
     CascadeDef {
@@ -510,6 +671,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "texel / pixel",
         direction: Direction::HigherIsWorse,
         help: "aliasing ratio at the cascade's near edge",
+        screen: false,
         value: |c| Value::Real(c.max_aliasing),
     },
     CascadeDef {
@@ -517,6 +679,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "texel / pixel",
         direction: Direction::HigherIsWorse,
         help: "aliasing ratio at the cascade's far edge",
+        screen: false,
         value: |c| Value::Real(c.min_aliasing),
     },
     CascadeDef {
@@ -524,6 +687,7 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "texels",
         direction: Direction::HigherIsWorse,
         help: "largest static f32 lookup error S7 in this cascade (texels)",
+        screen: false,
         value: |c| Value::Real(c.lookup_error_max),
     },
     CascadeDef {
@@ -531,7 +695,24 @@ pub const CASCADE: &[CascadeDef] = &[
         unit: "texels",
         direction: Direction::HigherIsWorse,
         help: "RMS static f32 lookup error S7 in this cascade (texels)",
+        screen: false,
         value: |c| Value::Real(c.lookup_error_rms),
+    },
+    CascadeDef {
+        name: "screen_pixels",
+        unit: "",
+        direction: Direction::Neither,
+        help: "share of the lit-facing receiver pixels this cascade serves",
+        screen: true,
+        value: |c| Value::Real(c.screen.map_or(0.0, |x| x.pixels)),
+    },
+    CascadeDef {
+        name: "texel_utilization",
+        unit: "",
+        direction: Direction::LowerIsWorse,
+        help: "area of the light-space rectangle around the cascade's receiver points over its window's area",
+        screen: true,
+        value: |c| Value::Real(c.screen.map_or(0.0, |x| x.texel_utilization)),
     },
 ];
 
@@ -549,17 +730,17 @@ impl CascadeMetric {
     }
 }
 
-/// The columns of `cascades.csv`.
-pub fn cascade_columns() -> Vec<&'static str> {
+/// The columns of `cascades.csv` (the screen columns only with scene geometry).
+pub fn cascade_columns(screen: bool) -> Vec<&'static str> {
     std::iter::once("cascade")
-        .chain(CASCADE.iter().map(|d| d.name))
+        .chain(CASCADE.iter().filter(|d| screen || !d.screen).map(|d| d.name))
         .collect()
 }
 
 /// The fields of [`cascade_columns`] for one cascade.
 pub fn cascade_fields(c: &CascadeReport) -> Result<Vec<String>> {
     let mut fields = vec![c.cascade.to_string()];
-    for d in CASCADE {
+    for d in CASCADE.iter().filter(|d| !d.screen || c.screen.is_some()) {
         fields.push((d.value)(c).csv(d.name)?);
     }
     Ok(fields)

@@ -31,7 +31,7 @@ pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
     }
     let analysis = analyze(&config, &AnalysisOptions::full());
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&config));
-    let written = output::export_all(&dir, &analysis, &report::analyze::exporters())?;
+    let written = output::export_all(&dir, &analysis, &report::analyze::exporters_for(&analysis))?;
     print_result(
         args.format,
         || report::analyze::summary_table(&analysis),

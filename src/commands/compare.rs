@@ -75,6 +75,10 @@ pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool) -> Result
         })
         .collect::<Result<Vec<_>>>()?;
     let name = configs[0].name.clone();
+    // One visibility pass, made before the parallel part and shared by every preset.
+    for c in &configs {
+        let _ = c.setup().visibility();
+    }
     let analyses = configs
         .par_iter()
         .map(|c| analyze(c, &AnalysisOptions::full()))

@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use crate::analysis::{analyze, AnalysisOptions, Summary};
 use crate::config::{Config, Fit};
 use crate::error::{Error, GridError, Result};
+use crate::metric::SummaryMetric;
 
 pub use crate::config::sweep_spec::{
     cascades_ok, check_values, decimal_range, fmt_list, lambda_ok, resolution_ok, Axis, SweepSpec, DEFAULT_BUDGET_MIB,
@@ -443,6 +444,10 @@ pub fn run(base: &Config, grid: &Grid, threads: Option<usize>, on_done: &(dyn Fn
             })
         })
         .collect::<Result<Vec<Config>>>()?;
+    // The visibility pass is made once, before the parallel part, and shared by every row.
+    for c in &configs {
+        let _ = c.setup().visibility();
+    }
     let work = || {
         settings
             .par_iter()
@@ -480,18 +485,23 @@ pub fn run(base: &Config, grid: &Grid, threads: Option<usize>, on_done: &(dyn Fn
 /// ordered by memory. Among exact ties the first row in grid order is kept. Rows whose scene
 /// needs no cascades are left out.
 pub fn pareto_front(rows: &[Row]) -> Vec<usize> {
+    pareto_front_by(rows, SummaryMetric::named("mean_aliasing"))
+}
+
+/// [`pareto_front`] of memory against any objective metric.
+pub fn pareto_front_by(rows: &[Row], objective: SummaryMetric) -> Vec<usize> {
     let mut idx: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed).collect();
     idx.sort_by(|&a, &b| {
         let (ra, rb) = (&rows[a].summary, &rows[b].summary);
         ra.memory_bytes
             .cmp(&rb.memory_bytes)
-            .then(ra.mean_aliasing.total_cmp(&rb.mean_aliasing))
+            .then(objective.value(ra).total_cmp(&objective.value(rb)))
             .then(a.cmp(&b))
     });
     let mut front = Vec::new();
     let mut best = f64::INFINITY;
     for i in idx {
-        let m = rows[i].summary.mean_aliasing;
+        let m = objective.value(&rows[i].summary);
         if m < best {
             best = m;
             front.push(i);
@@ -508,6 +518,34 @@ pub const OBJECTIVE: &str = "lowest mean aliasing (the average shadow-texel-to-p
 among configurations that fit the memory budget, cover every slice (coverage_violations = 0) and are stable when \
 snapped (shimmer_snapped <= 1e-3 texel); means within 1% of the lowest count as equal, and among those the lowest \
 max aliasing wins, then less memory, then fewer cascades";
+
+/// The objective of a sweep: `[sweep] objective` if written, else the 95th percentile of the
+/// per-pixel aliasing on screen when the scene has geometry, else the mean aliasing over depth.
+pub fn default_objective(config: &Config) -> SummaryMetric {
+    // The name was checked against the registry when the file was loaded.
+    if let Some(m) = config.sweep.as_ref().and_then(|s| s.objective.as_deref()) {
+        return SummaryMetric::named(m);
+    }
+    SummaryMetric::named(if config.geometry.is_some() {
+        "screen_aliasing_p95"
+    } else {
+        "mean_aliasing"
+    })
+}
+
+/// [`OBJECTIVE`] for the mean aliasing; the same rule in words for any other objective.
+pub fn objective_text(objective: SummaryMetric) -> String {
+    if objective.name() == "mean_aliasing" {
+        return OBJECTIVE.to_string();
+    }
+    format!(
+        "lowest {} ({}) among configurations that fit the memory budget, cover every slice \
+         (coverage_violations = 0) and are stable when snapped (shimmer_snapped <= 1e-3 texel); values within 1% of \
+         the lowest count as equal, and among those the lowest max aliasing wins, then less memory, then fewer cascades",
+        objective.name(),
+        objective.description()
+    )
+}
 
 /// Mean aliasing within this fraction of the best counts as equal: a 0.2% better mean is not
 /// worth a 20% worse worst case, so near-ties are decided by max aliasing.
@@ -529,6 +567,11 @@ fn acceptable(r: &Row) -> bool {
 /// Picks the recommendation by [`OBJECTIVE`]. None when no row needs cascades or none is
 /// acceptable.
 pub fn recommend(rows: &[Row], budget_mib: f64) -> Option<Recommendation> {
+    recommend_by(rows, budget_mib, SummaryMetric::named("mean_aliasing"))
+}
+
+/// [`recommend`] minimising any objective metric.
+pub fn recommend_by(rows: &[Row], budget_mib: f64, objective: SummaryMetric) -> Option<Recommendation> {
     let budget_bytes = (budget_mib * 1024.0 * 1024.0).floor() as u64;
     let ok: Vec<usize> = (0..rows.len()).filter(|&i| acceptable(&rows[i])).collect();
     let within: Vec<usize> = ok
@@ -536,7 +579,7 @@ pub fn recommend(rows: &[Row], budget_mib: f64) -> Option<Recommendation> {
         .copied()
         .filter(|&i| rows[i].summary.memory_bytes <= budget_bytes)
         .collect();
-    if let Some(index) = pick(rows, &within) {
+    if let Some(index) = pick(rows, &within, objective) {
         return Some(Recommendation {
             index,
             budget_bytes,
@@ -549,7 +592,7 @@ pub fn recommend(rows: &[Row], budget_mib: f64) -> Option<Recommendation> {
         .into_iter()
         .filter(|&i| rows[i].summary.memory_bytes == cheapest)
         .collect();
-    pick(rows, &cheap).map(|index| Recommendation {
+    pick(rows, &cheap, objective).map(|index| Recommendation {
         index,
         budget_bytes,
         within_budget: false,
@@ -558,15 +601,15 @@ pub fn recommend(rows: &[Row], budget_mib: f64) -> Option<Recommendation> {
 
 /// The best of `candidates` by [`OBJECTIVE`]: the shortlist within [`MEAN_TOLERANCE`] of the
 /// lowest mean aliasing, then the lowest max aliasing, less memory, fewer cascades, grid order.
-fn pick(rows: &[Row], candidates: &[usize]) -> Option<usize> {
+fn pick(rows: &[Row], candidates: &[usize], objective: SummaryMetric) -> Option<usize> {
     let best = candidates
         .iter()
-        .map(|&i| rows[i].summary.mean_aliasing)
+        .map(|&i| objective.value(&rows[i].summary))
         .min_by(f64::total_cmp)?;
     candidates
         .iter()
         .copied()
-        .filter(|&i| rows[i].summary.mean_aliasing <= best * (1.0 + MEAN_TOLERANCE))
+        .filter(|&i| objective.value(&rows[i].summary) <= best * (1.0 + MEAN_TOLERANCE))
         .min_by(|&a, &b| {
             let (x, y) = (&rows[a].summary, &rows[b].summary);
             x.max_aliasing
@@ -607,6 +650,8 @@ pub struct SweepResult {
     pub budget_mib: f64,
     /// The command that reproduces the sweep.
     pub command: String,
+    /// The metric the recommendation minimises ([`default_objective`]).
+    pub objective: SummaryMetric,
 }
 
 impl SweepResult {
@@ -616,9 +661,11 @@ impl SweepResult {
             .as_ref()
             .and_then(|s| s.memory_budget_mib)
             .unwrap_or(DEFAULT_BUDGET_MIB);
-        let front = pareto_front(&rows);
-        let recommendation = recommend(&rows, budget_mib);
+        let objective = default_objective(&config);
+        let front = pareto_front_by(&rows, objective);
+        let recommendation = recommend_by(&rows, budget_mib, objective);
         SweepResult {
+            objective,
             config,
             grid,
             rows,
@@ -645,7 +692,7 @@ impl SweepResult {
         let key = |i: usize| {
             let s = &self.rows[i].summary;
             let ok = s.coverage_violations == 0 && s.shimmer_snapped <= STABLE_SHIMMER && s.memory_bytes <= budget;
-            (!ok, s.mean_aliasing, s.max_aliasing, s.memory_bytes, i)
+            (!ok, self.objective.value(s), s.max_aliasing, s.memory_bytes, i)
         };
         idx.sort_by(|&a, &b| {
             let (ka, kb) = (key(a), key(b));
@@ -747,6 +794,7 @@ mod tests {
                 memory_bytes: memory,
                 lookup_error_max: 0.0,
                 lookup_error_rms: 0.0,
+                screen: None,
             },
         }
     }

@@ -6,6 +6,7 @@
 //! An engine preset is applied afterwards by [`crate::presets`]; this module only carries the
 //! result in [`ShadowSettings::preset`].
 
+mod gltf_file;
 mod location;
 mod path_file;
 mod schema;
@@ -28,6 +29,7 @@ pub use crate::scene::ShadowParams;
 pub use crate::fitting::Fit;
 pub use crate::motion::MotionPath;
 pub use crate::precision::{Precision, SnapSpace};
+pub use gltf_file::read_gltf;
 pub use path_file::read_path_file;
 
 /// Largest world coordinate or distance accepted, in world units: far beyond any real world
@@ -250,6 +252,20 @@ pub struct AnalysisSettings {
     pub density_samples: usize,
     /// World-fixed probe points per cascade for the shimmer metrics S3/S4.
     pub probes: usize,
+    /// `[analysis] screen_scale` as written: the fraction of the screen's width and height
+    /// sampled by the visibility pass (see [`AnalysisSettings::screen_scale`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub screen_scale: Option<f64>,
+}
+
+/// The visibility pass samples an eighth of the screen's width and height by default.
+pub const DEFAULT_SCREEN_SCALE: f64 = 0.125;
+
+impl AnalysisSettings {
+    /// The sampling scale in effect.
+    pub fn screen_scale(&self) -> f64 {
+        self.screen_scale.unwrap_or(DEFAULT_SCREEN_SCALE)
+    }
 }
 
 impl Default for AnalysisSettings {
@@ -257,7 +273,36 @@ impl Default for AnalysisSettings {
         AnalysisSettings {
             density_samples: 512,
             probes: 256,
+            screen_scale: None,
         }
+    }
+}
+
+/// The scene's geometry as configured: where it came from, and the triangles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GeometrySettings {
+    /// `[scene] ground`, after the world offset.
+    pub ground: Option<f64>,
+    /// `[[scene.box]]` entries, after the world offset.
+    pub boxes: Vec<Aabb>,
+    /// `[scene] gltf`, resolved against the config's folder.
+    pub gltf: Option<PathBuf>,
+    pub scene: Arc<crate::visibility::SceneGeometry>,
+}
+
+impl GeometrySettings {
+    pub fn echo(&self) -> serde_json::Value {
+        let mut v = serde_json::json!({
+            "boxes": self.boxes.iter().map(|b| serde_json::json!({"min": b.min, "max": b.max})).collect::<Vec<_>>(),
+            "triangles": self.scene.mesh.triangles.len(),
+        });
+        if let Some(y) = self.ground {
+            v["ground"] = y.into();
+        }
+        if let Some(p) = &self.gltf {
+            v["gltf"] = p.display().to_string().into();
+        }
+        v
     }
 }
 
@@ -276,6 +321,8 @@ pub struct Config {
     pub light_direction_as_written: DVec3,
     /// World-space bounds of everything that casts or receives shadows.
     pub scene: Aabb,
+    /// Scene geometry (ground, boxes, glTF), or None in the bounds-only mode.
+    pub geometry: Option<GeometrySettings>,
     /// `[scene] world_offset`: already added to the camera, target, scene bounds and path-file
     /// poses above; kept for the echo.
     pub world_offset: DVec3,
@@ -336,6 +383,11 @@ impl Config {
         if let MotionPath::File { path, .. } = &self.motion.path {
             motion["file"] = serde_json::Value::String(path.display().to_string());
         }
+        let mut scene =
+            serde_json::json!({ "min": self.scene.min, "max": self.scene.max, "world_offset": self.world_offset });
+        if let Some(g) = &self.geometry {
+            scene["geometry"] = g.echo();
+        }
         serde_json::json!({
             "camera": self.camera,
             "screen": self.screen,
@@ -343,7 +395,7 @@ impl Config {
                 "direction": self.light_direction_as_written,
                 "direction_normalised": self.light_direction,
             },
-            "scene": { "min": self.scene.min, "max": self.scene.max, "world_offset": self.world_offset },
+            "scene": scene,
             "shadow": self.shadow,
             "motion": motion,
             "analysis": self.analysis,
@@ -358,7 +410,7 @@ impl Config {
     /// The validated settings as the core's plain domain values (radians, unit light
     /// direction, world offset already applied).
     pub fn setup(&self) -> crate::scene::Setup {
-        use crate::scene::{Camera, Motion, Setup};
+        use crate::scene::{Camera, Geometry, Motion, Setup};
         let s = &self.shadow;
         Setup {
             camera: Camera {
@@ -373,6 +425,11 @@ impl Config {
             },
             light_direction: self.light_direction,
             bounds: self.scene,
+            geometry: self.geometry.as_ref().map(|g| Geometry {
+                scene: g.scene.clone(),
+                screen_width: self.screen.width,
+                screen_scale: self.analysis.screen_scale(),
+            }),
             shadow: s.params,
             motion: Motion {
                 path: self.motion.path.clone(),

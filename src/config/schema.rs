@@ -109,12 +109,26 @@ pub(crate) struct RawLight {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawScene {
+    #[serde(default, deserialize_with = "opt_vec3")]
+    pub(crate) min: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "opt_vec3")]
+    pub(crate) max: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "opt_vec3")]
+    pub(crate) world_offset: Option<[f64; 3]>,
+    pub(crate) ground: Option<f64>,
+    #[serde(rename = "box")]
+    pub(crate) boxes: Option<Vec<RawBox>>,
+    pub(crate) gltf: Option<String>,
+}
+
+/// One `[[scene.box]]`: a solid box.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawBox {
     #[serde(deserialize_with = "vec3")]
     pub(crate) min: [f64; 3],
     #[serde(deserialize_with = "vec3")]
     pub(crate) max: [f64; 3],
-    #[serde(default, deserialize_with = "opt_vec3")]
-    pub(crate) world_offset: Option<[f64; 3]>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -127,6 +141,7 @@ pub(crate) struct RawShadow {
     pub(crate) fit: Option<Spanned<String>>,
     pub(crate) snap: Option<bool>,
     pub(crate) fit_depth_to_scene: Option<bool>,
+    pub(crate) fit_depth_to_visible: Option<bool>,
     pub(crate) precision: Option<String>,
     pub(crate) snap_space: Option<String>,
     pub(crate) preset: Option<String>,
@@ -146,4 +161,5 @@ pub(crate) struct RawMotion {
 pub(crate) struct RawAnalysis {
     pub(crate) density_samples: Option<i64>,
     pub(crate) probes: Option<i64>,
+    pub(crate) screen_scale: Option<f64>,
 }

@@ -25,6 +25,9 @@ pub struct SweepSpec {
     pub memory_budget_mib: Option<f64>,
     /// A larger grid is an error, not an out-of-memory.
     pub max_configs: usize,
+    /// `objective`: the name of the summary metric the recommendation minimises (None: the
+    /// default). The name is checked against the metric registry when the file is loaded.
+    pub objective: Option<String>,
 }
 
 pub const DEFAULT_MAX_CONFIGS: usize = 100_000;
@@ -186,6 +189,7 @@ pub(crate) struct RawSweep {
     fit: Option<Vec<Fit>>,
     memory_budget_mib: Option<f64>,
     max_configs: Option<i64>,
+    objective: Option<String>,
 }
 
 pub fn fmt_list<T: std::fmt::Display>(v: &[T]) -> String {
@@ -353,5 +357,6 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>) -> Result<SweepSpec
         fit,
         memory_budget_mib,
         max_configs,
+        objective: raw.objective,
     })
 }

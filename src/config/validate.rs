@@ -137,19 +137,8 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     }
     let light_direction = dir_raw / len;
 
-    // Scene.
-    let smin = moved("scene.min", raw.scene.min)?;
-    let smax = moved("scene.max", raw.scene.max)?;
-    if smin.cmpgt(smax).any() {
-        return Err(v.invalid(
-            "scene.max",
-            format!("{:?}", raw.scene.max),
-            &format!(
-                "each component >= scene.min {:?} (a zero thickness is allowed)",
-                raw.scene.min
-            ),
-        ));
-    }
+    // Scene: bounds, geometry, and the bounds defaulting to the geometry's.
+    let (scene, geometry) = scene(&raw.scene, v, base_dir, world_offset, &moved)?;
 
     // Shadow.
     let s = raw.shadow;
@@ -206,6 +195,17 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             },
             snap: s.snap.unwrap_or(true),
             fit_depth_to_scene: s.fit_depth_to_scene.unwrap_or(true),
+            fit_depth_to_visible: match s.fit_depth_to_visible {
+                Some(true) if geometry.is_none() => {
+                    return Err(v.invalid(
+                        "shadow.fit_depth_to_visible",
+                        true,
+                        "false without scene geometry: add scene.ground, [[scene.box]] or scene.gltf \
+                         (the bounds alone show no visible depth)",
+                    ))
+                }
+                f => f.unwrap_or(false),
+            },
             precision,
             snap_space,
         },
@@ -219,7 +219,6 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         near,
         far,
     };
-    let scene = Aabb::new(smin, smax);
 
     // Motion.
     let m = raw.motion;
@@ -312,6 +311,16 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             1_000_000,
         )? as usize,
         probes: v.int_range("analysis.probes", a.probes.unwrap_or(256), 1, 1_000_000)? as usize,
+        screen_scale: match a.screen_scale {
+            Some(x) if !(x > 0.0 && x <= 1.0) => {
+                return Err(v.invalid(
+                    "analysis.screen_scale",
+                    x,
+                    "a number in (0, 1]: the fraction of the screen's width and height sampled (1 = every pixel)",
+                ))
+            }
+            x => x,
+        },
     };
 
     let sweep = raw.sweep.map(|s| super::sweep_spec::validate_raw(s, v)).transpose()?;
@@ -324,6 +333,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         light_direction,
         light_direction_as_written: dir_raw,
         scene,
+        geometry,
         world_offset,
         shadow,
         motion: MotionSettings {
@@ -364,4 +374,125 @@ pub fn check_camera_path(config: &Config, v: &Validator<'_>) -> Result<()> {
                 &format!("a motion that keeps a valid camera in every frame: {why}"),
             ),
         })
+}
+
+/// The scene's bounds and geometry. Without geometry `min` and `max` are required; with it
+/// they default to the geometry's bounds (the ground spans the bounds' x/z extent, so it needs
+/// either written bounds or other geometry to take them from).
+fn scene(
+    raw: &super::schema::RawScene,
+    v: &Validator<'_>,
+    base_dir: Option<&Path>,
+    world_offset: DVec3,
+    moved: &dyn Fn(&str, [f64; 3]) -> Result<DVec3>,
+) -> Result<(Aabb, Option<GeometrySettings>)> {
+    let written = match (raw.min, raw.max) {
+        (Some(lo), Some(hi)) => {
+            let smin = moved("scene.min", lo)?;
+            let smax = moved("scene.max", hi)?;
+            if smin.cmpgt(smax).any() {
+                return Err(v.invalid(
+                    "scene.max",
+                    format!("{hi:?}"),
+                    &format!("each component >= scene.min {lo:?} (a zero thickness is allowed)"),
+                ));
+            }
+            Some(Aabb::new(smin, smax))
+        }
+        (None, None) => None,
+        (Some(_), None) => return Err(v.invalid("scene.max", "(missing)", "a point, given with scene.min")),
+        (None, Some(_)) => return Err(v.invalid("scene.min", "(missing)", "a point, given with scene.max")),
+    };
+    let has_geometry = raw.ground.is_some() || raw.boxes.is_some() || raw.gltf.is_some();
+    if !has_geometry {
+        let bounds = written.ok_or_else(|| {
+            v.invalid(
+                "scene.min",
+                "(missing)",
+                "scene.min and scene.max, or scene geometry (scene.ground, [[scene.box]], scene.gltf)",
+            )
+        })?;
+        return Ok((bounds, None));
+    }
+    let mut mesh = crate::mesh::Mesh::default();
+    let mut boxes = Vec::new();
+    for (i, b) in raw.boxes.iter().flatten().enumerate() {
+        let lo = moved("scene.box.min", b.min)?;
+        let hi = moved("scene.box.max", b.max)?;
+        if lo.cmpgt(hi).any() {
+            return Err(v.invalid(
+                "scene.box.max",
+                format!("{:?} (box {})", b.max, i + 1),
+                &format!("each component >= that box's min {:?}", b.min),
+            ));
+        }
+        let aabb = Aabb::new(lo, hi);
+        mesh.add_box(&aabb);
+        boxes.push(aabb);
+    }
+    let gltf = match &raw.gltf {
+        Some(name) => {
+            let p = PathBuf::from(name);
+            let p = match base_dir {
+                Some(dir) if p.is_relative() => dir.join(p),
+                _ => p,
+            };
+            let allowed = |why: &str| format!("a readable glTF 2.0 file (.gltf or .glb) with triangles: {why}");
+            let tris =
+                super::read_gltf(&p).map_err(|why| v.invalid("scene.gltf", format!("{name:?}"), &allowed(&why)))?;
+            if tris.is_empty() {
+                return Err(v.invalid(
+                    "scene.gltf",
+                    format!("{name:?}"),
+                    &allowed("its default scene has no triangles"),
+                ));
+            }
+            for t in tris {
+                let t = t.map(|p| p + world_offset);
+                if t.iter().any(|p| p.abs().max_element() > MAX_WORLD) {
+                    return Err(v.invalid(
+                        "scene.gltf",
+                        format!("{name:?}"),
+                        "vertices within ±1e9 world units (after scene.world_offset)",
+                    ));
+                }
+                mesh.push(t);
+            }
+            Some(p)
+        }
+        None => None,
+    };
+    let ground = match raw.ground {
+        Some(y) => {
+            let y = v.finite("scene.ground", y)? + world_offset.y;
+            if y.abs() > MAX_WORLD {
+                return Err(v.invalid("scene.ground", y, "a height within ±1e9 world units"));
+            }
+            let extent = written.or_else(|| mesh.bounds()).ok_or_else(|| {
+                v.invalid(
+                    "scene.ground",
+                    y,
+                    "a ground with an extent: give scene.min and scene.max, or boxes or a glTF to take it from",
+                )
+            })?;
+            mesh.add_ground(y, extent.min.x, extent.max.x, extent.min.z, extent.max.z);
+            Some(y)
+        }
+        None => None,
+    };
+    let Some(mesh_bounds) = mesh.bounds() else {
+        return Err(v.invalid(
+            "scene.box",
+            "(only boxes of zero volume and area)",
+            "at least one box with a face of non-zero area",
+        ));
+    };
+    let bounds = written.unwrap_or(mesh_bounds);
+    let geometry = GeometrySettings {
+        ground,
+        boxes,
+        gltf,
+        scene: Arc::new(crate::visibility::SceneGeometry::new(mesh)),
+    };
+    Ok((bounds, Some(geometry)))
 }

@@ -8,6 +8,9 @@
 //! intersection: `z_lo = max(near, nearest)`, `z_hi = min(far, max_distance, farthest)`. View depth is
 //! linear, so the extremes sit at vertices of the (convex) intersection; see
 //! [`crate::geometry::intersection_range`]. Without it the range is `[near, min(far, max_distance)]`.
+//!
+//! With `fit_depth_to_visible` (scene geometry only), the range is then narrowed to the view
+//! depths of the geometry the visibility pass sees (what SDSM reads from the depth buffer).
 
 use crate::geometry::{intersection_range, Aabb, CameraPose, Lens};
 use crate::scene::Setup;
@@ -78,14 +81,25 @@ pub fn for_setup(setup: &Setup) -> DepthRange {
     let Some(pose) = setup.camera.pose() else {
         return DepthRange::Empty;
     };
-    receiver_range(
+    let bounds = receiver_range(
         &pose,
         &setup.camera.lens(),
         setup.camera.near,
         setup.shadow_far(),
         &setup.bounds,
         setup.shadow.fit_depth_to_scene,
-    )
+    );
+    if !setup.shadow.fit_depth_to_visible {
+        return bounds;
+    }
+    // Fitted to what is visible: the visible geometry's depth extent within the bounds' range.
+    let (Some((lo, hi)), Some(vis)) = (bounds.bounds(), setup.visibility()) else {
+        return DepthRange::Empty;
+    };
+    match crate::screen::visible_range(&vis, lo, hi) {
+        Some((z_lo, z_hi)) if z_hi > z_lo * (1.0 + 1e-9) => DepthRange::Range { z_lo, z_hi },
+        _ => DepthRange::Empty,
+    }
 }
 
 #[cfg(test)]

@@ -6,12 +6,15 @@
 //! these types (or parts of them). Lengths are world units, angles radians, the light direction
 //! is the unit vector along which light travels (conventions in [`crate::geometry`]).
 
+use std::sync::Arc;
+
 use glam::DVec3;
 
 use crate::fitting::Fit;
 use crate::geometry::{Aabb, CameraPose, Lens};
 use crate::motion::MotionPath;
 use crate::precision::{Precision, SnapSpace};
+use crate::visibility::{SceneGeometry, View, Visibility};
 
 /// The camera of frame 0 and its lens.
 #[derive(Debug, Clone, PartialEq)]
@@ -63,6 +66,9 @@ pub struct ShadowParams {
     pub snap: bool,
     /// Split only the depths where the scene bounds are visible; skips empty depth.
     pub fit_depth_to_scene: bool,
+    /// Split only the view depths where geometry is visible (needs [`Setup::geometry`]).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub fit_depth_to_visible: bool,
     /// Arithmetic of the cascade pipeline: exact f64, or an engine's binary32 emulated
     /// operation by operation.
     pub precision: Precision,
@@ -80,6 +86,16 @@ pub struct Motion {
     pub step: f64,
 }
 
+/// Scene geometry with the screen sampling of the visibility pass.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Geometry {
+    pub scene: Arc<SceneGeometry>,
+    /// Screen width in pixels (the height is [`Camera::screen_height`]).
+    pub screen_width: u32,
+    /// Fraction of the width and height sampled, in (0, 1].
+    pub screen_scale: f64,
+}
+
 /// Everything the core measures, in one value.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Setup {
@@ -88,6 +104,8 @@ pub struct Setup {
     pub light_direction: DVec3,
     /// World-space bounds of everything that casts or receives shadows.
     pub bounds: Aabb,
+    /// The scene's triangles and how the screen is sampled; None in the bounds-only mode.
+    pub geometry: Option<Geometry>,
     pub shadow: ShadowParams,
     pub motion: Motion,
 }
@@ -96,5 +114,26 @@ impl Setup {
     /// Far end of the shadow range before scene clipping: `min(camera far, max_distance)`.
     pub fn shadow_far(&self) -> f64 {
         self.camera.far.min(self.shadow.max_distance)
+    }
+
+    /// What the visibility pass of frame 0 depends on; None without geometry or camera.
+    pub fn view(&self) -> Option<View> {
+        let g = self.geometry.as_ref()?;
+        Some(View {
+            pose: self.camera.pose()?,
+            lens: self.camera.lens(),
+            near: self.camera.near,
+            far: self.camera.far,
+            width: g.screen_width,
+            height: self.camera.screen_height,
+            scale: g.screen_scale,
+            light: self.light_direction,
+        })
+    }
+
+    /// The visibility pass of frame 0 (made once per view and shared), or None without geometry.
+    pub fn visibility(&self) -> Option<Arc<Visibility>> {
+        let view = self.view()?;
+        Some(self.geometry.as_ref()?.scene.visibility(&view))
     }
 }

@@ -8,6 +8,7 @@
 pub mod analyze;
 pub mod bench;
 pub mod compare;
+pub mod screen;
 pub mod sweep;
 
 use std::sync::Once;
@@ -85,6 +86,12 @@ fn font_db() -> std::sync::Arc<resvg::usvg::fontdb::Database> {
 
 /// Rasterises SVG bytes to an opaque PNG on a white background, `scale` pixels per SVG unit.
 pub fn svg_to_png(svg: &[u8], scale: f32) -> Result<Vec<u8>> {
+    let (w, h, rgb) = svg_to_rgb(svg, scale)?;
+    encode_png(w, h, &rgb)
+}
+
+/// Rasterises SVG bytes to RGB8 pixels on a white background: (width, height, pixels).
+pub fn svg_to_rgb(svg: &[u8], scale: f32) -> Result<(u32, u32, Vec<u8>)> {
     use resvg::tiny_skia;
     let opt = resvg::usvg::Options {
         font_family: "DejaVu Sans".to_string(),
@@ -106,7 +113,7 @@ pub fn svg_to_png(svg: &[u8], scale: f32) -> Result<Vec<u8>> {
     );
     // Opaque background, so premultiplied RGBA equals straight RGBA: drop alpha.
     let rgb: Vec<u8> = pixmap.data().chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
-    encode_png(w, h, &rgb)
+    Ok((w, h, rgb))
 }
 
 /// RGB8 pixels to PNG bytes.

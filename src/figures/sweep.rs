@@ -355,18 +355,24 @@ impl Figure for ShimmerSweepFigure<'_> {
     }
 }
 
-/// Pareto front of memory against mean aliasing.
+/// Pareto front of memory against the sweep's objective (mean aliasing without geometry).
 pub struct ParetoFigure<'a>(pub &'a SweepResult);
 
 impl Figure for ParetoFigure<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
         let r = self.0;
-        let title = format!("Memory against mean aliasing: {}", r.config.name);
+        let obj = r.objective;
+        let bounds_only = obj.name() == "mean_aliasing";
+        let title = if bounds_only {
+            format!("Memory against mean aliasing: {}", r.config.name)
+        } else {
+            format!("Memory against {}: {}", obj.name(), r.config.name)
+        };
         let pts: Vec<(f64, f64)> = r
             .rows
             .iter()
             .filter(|x| x.summary.cascades_needed)
-            .map(|x| (mib(x.summary.memory_bytes), x.summary.mean_aliasing))
+            .map(|x| (mib(x.summary.memory_bytes), obj.value(&x.summary)))
             .collect();
         if pts.is_empty() {
             return draw_message(root, &title, "No cascades needed for any configuration.");
@@ -384,7 +390,11 @@ impl Figure for ParetoFigure<'_> {
         chart
             .configure_mesh()
             .x_desc("shadow map memory (MiB, log; cascades × resolution² × 4 bytes)")
-            .y_desc("mean aliasing (texel/pixel, log; lower is better)")
+            .y_desc(if bounds_only {
+                "mean aliasing (texel/pixel, log; lower is better)".to_string()
+            } else {
+                format!("{} (log; lower is better)", obj.name())
+            })
             .max_light_lines(3)
             .axis_desc_style((FONT, 15))
             .label_style((FONT, 13))
@@ -408,7 +418,7 @@ impl Figure for ParetoFigure<'_> {
         let front: Vec<(f64, f64)> = r
             .front
             .iter()
-            .map(|&i| (mib(r.rows[i].summary.memory_bytes), r.rows[i].summary.mean_aliasing))
+            .map(|&i| (mib(r.rows[i].summary.memory_bytes), obj.value(&r.rows[i].summary)))
             .collect();
         chart
             .draw_series(LineSeries::new(front.clone(), orange.stroke_width(3)))?
@@ -416,7 +426,7 @@ impl Figure for ParetoFigure<'_> {
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], orange.stroke_width(3)));
         chart.draw_series(front.iter().map(|p| Circle::new(*p, 5, orange.filled())))?;
         if let Some(rec) = r.recommended() {
-            let p = (mib(rec.summary.memory_bytes), rec.summary.mean_aliasing);
+            let p = (mib(rec.summary.memory_bytes), obj.value(&rec.summary));
             let red = palette::RECOMMENDED;
             chart
                 .draw_series(std::iter::once(Circle::new(p, 9, red.stroke_width(3))))?

@@ -66,7 +66,40 @@ impl Config {
 pub fn apply_preset(config: &mut Config, choice: &PresetChoice) -> Result<()> {
     crate::presets::apply(config, choice)?;
     let input = config.preset_input.clone();
-    binary32_range(config, &input.validator())
+    let v = input.validator();
+    sweep_objective(config, &v)?;
+    binary32_range(config, &v)
+}
+
+/// `[sweep] objective` names a summary metric of the registry that is worse when higher, and
+/// a screen metric only when the scene has geometry.
+fn sweep_objective(config: &Config, v: &Validator<'_>) -> Result<()> {
+    use crate::metric::{Direction, SummaryMetric};
+    let Some(name) = config.sweep.as_ref().and_then(|s| s.objective.as_deref()) else {
+        return Ok(());
+    };
+    let allowed: Vec<&str> = SummaryMetric::all()
+        .filter(|m| m.direction() == Direction::HigherIsWorse)
+        .map(|m| m.name())
+        .collect();
+    match SummaryMetric::from_name(name) {
+        Some(m) if allowed.contains(&m.name()) => {
+            if m.def().screen && config.geometry.is_none() {
+                return Err(v.invalid(
+                    "sweep.objective",
+                    format!("{name:?}"),
+                    "a metric of the bounds-only mode: screen metrics need scene geometry (scene.ground, \
+                     [[scene.box]] or scene.gltf)",
+                ));
+            }
+            Ok(())
+        }
+        _ => Err(v.invalid(
+            "sweep.objective",
+            format!("{name:?}"),
+            &format!("the name of a metric to minimise, one of {}", allowed.join(", ")),
+        )),
+    }
 }
 
 /// binary32 must be able to hold every texel coordinate the emulated pipeline computes.

@@ -22,6 +22,17 @@ pub fn exporters() -> Vec<&'static dyn Exporter<Analysis>> {
     ]
 }
 
+/// The files `analyze` writes for one analysis: [`exporters`], plus the two camera-view
+/// images when the scene has geometry.
+pub fn exporters_for(a: &Analysis) -> Vec<&'static dyn Exporter<Analysis>> {
+    let mut v = exporters();
+    if a.config.geometry.is_some() {
+        v.push(&figures::screen::ScreenAliasingPng);
+        v.push(&figures::screen::ScreenCascadesPng);
+    }
+    v
+}
+
 pub struct CascadesCsv;
 pub struct DensityCsv;
 pub struct ShimmerCsv;
@@ -38,7 +49,7 @@ impl Exporter<Analysis> for CascadesCsv {
             .iter()
             .map(metric::cascade_fields)
             .collect::<Result<Vec<_>>>()?;
-        csv_bytes(&metric::cascade_columns(), &rows)
+        csv_bytes(&metric::cascade_columns(a.config.geometry.is_some()), &rows)
     }
 }
 
@@ -224,7 +235,12 @@ pub fn summary_table(a: &Analysis) -> String {
     if !s.cascades_needed {
         let _ = writeln!(
             out,
-            "no cascades needed: the scene bounds are not visible between near = {} and the shadow distance {}",
+            "no cascades needed: the scene {} not visible between near = {} and the shadow distance {}",
+            if c.shadow.fit_depth_to_visible {
+                "geometry is"
+            } else {
+                "bounds are"
+            },
             c.camera.near,
             c.shadow_far()
         );
@@ -237,6 +253,8 @@ pub fn summary_table(a: &Analysis) -> String {
         s.z_hi,
         if a.preset.is_some() {
             " (the view depths that read the preset's cascades)"
+        } else if c.shadow.fit_depth_to_visible {
+            " (fitted to the visible geometry)"
         } else if c.shadow.fit_depth_to_scene {
             " (clipped to the scene bounds)"
         } else {
@@ -256,8 +274,19 @@ pub fn summary_table(a: &Analysis) -> String {
         );
     }
     let f32_block = c.shadow.precision == crate::precision::Precision::F32;
+    let screen_line = |k: &str| metric::SummaryMetric::named(k).def().screen;
     for (k, v, what) in metric::summary_lines(s, false) {
-        let _ = writeln!(out, "  {k:<22} {v:>12}  {what}");
+        if !screen_line(k) {
+            let _ = writeln!(out, "  {k:<22} {v:>12}  {what}");
+        }
+    }
+    if let Some(st) = &s.screen {
+        let _ = writeln!(out, "{}", screen_heading(a, st));
+        for (k, v, what) in metric::summary_lines(s, false) {
+            if screen_line(k) {
+                let _ = writeln!(out, "  {k:<29} {v:>12}  {what}");
+            }
+        }
     }
     if f32_block {
         let _ = writeln!(
@@ -315,4 +344,31 @@ pub fn output_problems(a: &Analysis) -> (usize, Vec<String>) {
         .filter_map(|e| e.render(a).err().map(|err| format!("{}: {err}", e.file_name())))
         .collect();
     (walk(&summary_value(a)), errors)
+}
+
+/// The heading of the screen block: what was sampled and the visible depths, or why the
+/// block is all zero.
+fn screen_heading(a: &Analysis, st: &crate::screen::ScreenStats) -> String {
+    let c = &a.config;
+    let view = c.setup().view();
+    let (cols, rows) = view.map_or((0, 0), |v| v.grid());
+    if st.visible_z_hi <= 0.0 {
+        return format!(
+            "screen ({cols} x {rows} sampled pixels of {} x {}): the camera sees no scene geometry \
+             within the shadow distance; every screen metric is 0",
+            c.screen.width, c.screen.height
+        );
+    }
+    format!(
+        "screen ({cols} x {rows} sampled pixels of {} x {}; visible geometry at depth {:.4} .. {:.4}{}):",
+        c.screen.width,
+        c.screen.height,
+        st.visible_z_lo,
+        st.visible_z_hi,
+        if c.shadow.fit_depth_to_visible {
+            ", splits fitted to it"
+        } else {
+            ""
+        }
+    )
 }

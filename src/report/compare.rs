@@ -25,9 +25,9 @@ pub const EXTRA_COLUMNS: [&str; 5] = [
 ];
 
 /// The header of `compare.csv`.
-pub fn columns() -> Vec<&'static str> {
+pub fn columns(screen: bool) -> Vec<&'static str> {
     std::iter::once("preset")
-        .chain(metric::summary_columns())
+        .chain(metric::summary_columns(screen))
         .chain(EXTRA_COLUMNS)
         .collect()
 }
@@ -73,7 +73,10 @@ impl Exporter<Comparison> for CompareCsv {
     }
 
     fn render(&self, c: &Comparison) -> Result<Vec<u8>> {
-        csv_bytes(&columns(), &rows(c)?)
+        csv_bytes(
+            &columns(c.analyses.iter().any(|a| a.config.geometry.is_some())),
+            &rows(c)?,
+        )
     }
 }
 
@@ -212,6 +215,11 @@ impl Exporter<Comparison> for CompareHtml {
         for a in &c.analyses {
             let _ = writeln!(h, "<h3>{}</h3>", html::escape(preset_of(a).map_or("?", |p| p.as_str())));
             h.push_str(&html::list(&preset_lines(a), Some("notes")));
+            let label = preset_of(a).map_or("?", |p| p.as_str());
+            let images = crate::figures::screen::captioned(a, label);
+            if !images.is_empty() {
+                h.push_str(&html::png_figures(&images));
+            }
         }
         Ok(html::page(
             &format!("csm-lab compare: {}", c.name),

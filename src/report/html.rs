@@ -62,6 +62,38 @@ pub fn figure(svg: &[u8], caption: &str) -> String {
     )
 }
 
+/// Raster images side by side (PNG bytes embedded as base64 data URIs), each with its caption.
+pub fn png_figures(images: &[(Vec<u8>, String)]) -> String {
+    let mut out = String::from("<div style=\"display: flex; flex-wrap: wrap; gap: 1em\">");
+    for (png, caption) in images {
+        out.push_str(&format!(
+            "<figure style=\"flex: 1 1 420px; margin: 0\"><img style=\"width: 100%\" alt=\"{0}\" src=\"data:image/png;base64,{1}\"/><figcaption>{0}</figcaption></figure>",
+            escape(caption),
+            base64(png)
+        ));
+    }
+    out.push_str("</div>\n");
+    out
+}
+
+/// Standard base64 with padding.
+pub fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
+        let n = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
+        for i in 0..4 {
+            if i <= chunk.len() {
+                out.push(ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
 /// A table of already formatted cells. Columns listed in `left` are left-aligned (text),
 /// the others right-aligned (numbers); the row at `highlight` is marked as the recommended one.
 pub fn table<S: AsRef<str>>(header: &[&str], rows: &[Vec<S>], left: &[usize], highlight: Option<usize>) -> String {

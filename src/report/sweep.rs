@@ -49,7 +49,7 @@ pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
             Ok(fields)
         })
         .collect::<Result<Vec<_>>>()?;
-    let header: Vec<&str> = metric::summary_columns()
+    let header: Vec<&str> = metric::summary_columns(r.config.geometry.is_some())
         .into_iter()
         .chain(SWEEP_EXTRA_COLUMNS)
         .collect();
@@ -75,7 +75,7 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
         "name": r.config.name,
         "command": r.command,
         "configurations": r.rows.len(),
-        "objective": sweep::OBJECTIVE,
+        "objective": sweep::objective_text(r.objective),
         "memory_budget_mib": r.budget_mib,
         "within_budget": r.recommendation.as_ref().map(|x| x.within_budget),
         "recommended": r.recommended().map(row_json),
@@ -202,26 +202,45 @@ fn why_text(r: &SweepResult) -> String {
                 && x.summary.memory_bytes as f64 <= r.budget_mib * 1048576.0
         })
         .count();
-    let mut t = format!(
-        "{} cascades of {}² texels, λ = {}, {} fit: mean aliasing {:.3}, worst {:.3} at a cascade's near edge, \
+    let screen = r.objective.name() != "mean_aliasing";
+    let mut t = if let Some(st) = s.screen.as_ref().filter(|_| screen) {
+        format!(
+            "{} cascades of {}² texels, λ = {}, {} fit: {} {:.3} on screen (per-pixel aliasing: median {:.3}, \
+             worst {:.3}; {:.0}% of the receiver pixels under-sampled), {} MiB. ",
+            rec.setting.cascades,
+            rec.setting.resolution,
+            rec.setting.lambda,
+            rec.setting.fit,
+            r.objective.name(),
+            r.objective.value(s),
+            st.aliasing_p50,
+            st.aliasing_max,
+            100.0 * st.undersampled_fraction,
+            mib(s.memory_bytes)
+        )
+    } else {
+        format!(
+            "{} cascades of {}² texels, λ = {}, {} fit: mean aliasing {:.3}, worst {:.3} at a cascade's near edge, \
          {:.0}% of the depth range under-sampled, {} MiB. ",
-        rec.setting.cascades,
-        rec.setting.resolution,
-        rec.setting.lambda,
-        rec.setting.fit,
-        s.mean_aliasing,
-        s.max_aliasing,
-        100.0 * s.undersampled_fraction,
-        mib(s.memory_bytes)
-    );
+            rec.setting.cascades,
+            rec.setting.resolution,
+            rec.setting.lambda,
+            rec.setting.fit,
+            s.mean_aliasing,
+            s.max_aliasing,
+            100.0 * s.undersampled_fraction,
+            mib(s.memory_bytes)
+        )
+    };
     if r.recommendation.as_ref().is_some_and(|x| x.within_budget) {
         let _ = write!(
             t,
             "Of {} configurations, {} fit the {} MiB budget, cover every slice and are stable when snapped; \
-             this one has the lowest mean aliasing among them (within 1%, the lowest worst case).",
+             this one has the lowest {} among them (within 1%, the lowest worst case).",
             r.rows.len(),
             acceptable_within,
-            r.budget_mib
+            r.budget_mib,
+            if screen { r.objective.name() } else { "mean aliasing" }
         );
     } else {
         let _ = write!(
@@ -237,7 +256,16 @@ fn why_text(r: &SweepResult) -> String {
             && x.setting.fit == r.config.shadow.fit
     });
     if let Some(o) = own {
-        if o.setting != rec.setting {
+        if o.setting != rec.setting && screen {
+            let _ = write!(
+                t,
+                " The configured setting ({}) has {} {:.3}, {} MiB.",
+                o.setting.label(),
+                r.objective.name(),
+                r.objective.value(&o.summary),
+                mib(o.summary.memory_bytes)
+            );
+        } else if o.setting != rec.setting {
             let _ = write!(
                 t,
                 " The configured setting ({}) has mean aliasing {:.3}, worst {:.3}, {} MiB.",
@@ -346,8 +374,16 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
     let _ = writeln!(
         h,
         "<p><em>Objective:</em> {}.</p></div>",
-        html::escape(sweep::OBJECTIVE)
+        html::escape(&sweep::objective_text(r.objective))
     );
+    // The camera view of the recommended configuration, with scene geometry.
+    if let (Some(rec), Some(_)) = (r.recommended(), &r.config.geometry) {
+        if let Ok(cfg) = rec.setting.apply(&r.config) {
+            let a = crate::analysis::analyze(&cfg, &crate::analysis::AnalysisOptions::summary_only());
+            let images = crate::figures::screen::captioned(&a, &format!("recommended ({})", rec.setting.label()));
+            h.push_str(&html::png_figures(&images));
+        }
+    }
     if !figures.is_empty() {
         h.push_str("<h2>Plots</h2>\n");
         for (_, caption, svg) in figures {
@@ -386,7 +422,7 @@ pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> 
         m,
         "\n## Recommendation\n\n{}\n\n*Objective:* {}.\n",
         why_text(r),
-        sweep::OBJECTIVE
+        sweep::objective_text(r.objective)
     );
     if !figures.is_empty() {
         m.push_str("## Plots\n\n");
@@ -448,12 +484,22 @@ pub fn stdout_table(r: &SweepResult) -> String {
         );
         return out;
     }
-    let _ = writeln!(out, "Pareto front (memory against mean aliasing):");
-    let _ = writeln!(
+    let screen = r.objective.name() != "mean_aliasing";
+    if screen {
+        let _ = writeln!(out, "Pareto front (memory against {}):", r.objective.name());
+    } else {
+        let _ = writeln!(out, "Pareto front (memory against mean aliasing):");
+    }
+    let _ = write!(
         out,
         "  {:>9} {:>8} {:>6} {:>6} {:>6} {:>10} {:>10} {:>10}",
         "MiB", "cascades", "res", "λ", "fit", "mean", "max", "shimmer"
     );
+    let _ = if screen {
+        writeln!(out, " {:>10}", "objective")
+    } else {
+        writeln!(out)
+    };
     let rec = r.recommendation.as_ref().map(|x| x.index);
     for &i in &r.front {
         let x = &r.rows[i];
@@ -471,6 +517,10 @@ pub fn stdout_table(r: &SweepResult) -> String {
             s.max_aliasing,
             s.shimmer_snapped
         );
+        if screen {
+            out.pop();
+            let _ = writeln!(out, " {:>10.4}", r.objective.value(s));
+        }
     }
     let _ = writeln!(out, "recommended (budget {} MiB): {}", r.budget_mib, why_text(r));
     out

@@ -15,8 +15,8 @@ const LAYERS: &[&str] = &[
     "config",
     "presets",
     "analysis",
-    "load",
     "metric",
+    "load",
     "commands",
     "drift_table",
     "figures",
@@ -28,8 +28,8 @@ const LAYERS: &[&str] = &[
 /// Short paths re-exported by `lib.rs`, resolved to the module they name.
 fn module_of(name: &str) -> &str {
     match name {
-        "cascades" | "depth_range" | "fitting" | "geometry" | "metrics" | "motion" | "precision" | "rng" | "scene"
-        | "shimmer" | "snapping" | "splits" | "walk" => "core",
+        "cascades" | "depth_range" | "fitting" | "geometry" | "mesh" | "metrics" | "motion" | "precision" | "rng"
+        | "scene" | "screen" | "shimmer" | "snapping" | "splits" | "visibility" | "walk" => "core",
         "bench" | "check" | "compare" | "stress" | "sweep" => "commands",
         "plots" => "figures",
         "Error" | "Result" => "error",

@@ -46,11 +46,55 @@ fn bundled(name: &str) -> (String, String) {
     (name.to_string(), std::fs::read_to_string(&path).unwrap())
 }
 
-/// The default scene with 60 frames and no sweep table, as text to edit.
+/// A config's text without its scene geometry (`ground` and the `[[scene.box]]` tables): the
+/// bounds-only mode, whose outputs must stay byte-identical to those recorded before the
+/// geometry existed.
+fn bounds_only(text: &str) -> String {
+    let mut out = Vec::new();
+    let mut in_box = false;
+    for l in text.lines() {
+        let t = l.trim();
+        if t.starts_with("[[scene.box]]") {
+            in_box = true;
+            continue;
+        }
+        if in_box && (t.starts_with("min") || t.starts_with("max") || t.is_empty()) {
+            continue;
+        }
+        in_box = false;
+        if t.starts_with("ground =") || t.starts_with("gltf =") {
+            continue;
+        }
+        out.push(l);
+    }
+    out.join("\n") + "\n"
+}
+
+/// A bundled config in the bounds-only mode, under its own name.
+fn bundled_bounds_only(name: &str) -> (String, String) {
+    let (name, text) = bundled(name);
+    (name, bounds_only(&text))
+}
+
+/// The default scene in the bounds-only mode with 60 frames and no sweep table, as text to edit.
 fn base() -> String {
+    let text = std::fs::read_to_string(Path::new(ROOT).join("configs/default.toml")).unwrap();
+    let text = bounds_only(text.split("[sweep]").next().unwrap());
+    text.replace("frames = 240", "frames = 60")
+}
+
+/// The default scene with its geometry, 60 frames and no sweep table.
+fn geometry_base() -> String {
     let text = std::fs::read_to_string(Path::new(ROOT).join("configs/default.toml")).unwrap();
     let text = text.split("[sweep]").next().unwrap().to_string();
     text.replace("frames = 240", "frames = 60")
+}
+
+/// An `analyze` case of the default scene with geometry, edited.
+fn analyze_geometry(name: &str, edits: &[(&str, &str)], extra: &str) -> Case {
+    let file = format!("{name}.toml");
+    let text = edit(&geometry_base(), edits) + extra;
+    case(name, vec![(file.clone(), text)], &["analyze", &file, "--out", "out"])
 }
 
 /// `base()` with `table.key = value` lines set (replaced, or appended to their table).
@@ -248,16 +292,20 @@ fn analyze_presets() -> Vec<Case> {
 
 fn bundled_runs() -> Vec<Case> {
     let mut cases = Vec::new();
-    for name in ["default", "indoor", "open_world", "top_down"] {
+    for name in ["default", "indoor", "open_world", "top_down", "village"] {
         let file = format!("{name}.toml");
+        let mut files = vec![bundled(&file)];
+        if name == "village" {
+            files.push(bundled("village.gltf"));
+        }
         cases.push(case(
             &format!("analyze_{name}"),
-            vec![bundled(&file)],
+            files.clone(),
             &["analyze", &file, "--out", "out"],
         ));
         cases.push(case(
             &format!("sweep_{name}"),
-            vec![bundled(&file)],
+            files,
             &["sweep", &file, "--quiet", "--out", "out"],
         ));
     }
@@ -296,10 +344,10 @@ fn sweep_compare_stress() -> Vec<Case> {
     ];
     fits.extend(small);
     let mut cases = vec![
-        case("sweep_default_fits", vec![bundled("default.toml")], &fits),
+        case("sweep_default_fits", vec![bundled_bounds_only("default.toml")], &fits),
         case(
             "sweep_default_preset_bevy",
-            vec![bundled("default.toml")],
+            vec![bundled_bounds_only("default.toml")],
             &["sweep", "default.toml", "--quiet", "--out", "out", "--preset", "bevy"],
         ),
         case(
@@ -324,17 +372,17 @@ fn sweep_compare_stress() -> Vec<Case> {
         ),
         case(
             "check_default_sweep",
-            vec![bundled("default.toml"), bundled("thresholds.toml")],
+            vec![bundled_bounds_only("default.toml"), bundled("thresholds.toml")],
             &["check", "default.toml", "--thresholds", "thresholds.toml", "--sweep"],
         ),
         case(
             "compare_default_defaults",
-            vec![bundled("default.toml")],
+            vec![bundled_bounds_only("default.toml")],
             &["compare", "default.toml", "--defaults", "--out", "out"],
         ),
         case(
             "compare_default",
-            vec![bundled("default.toml")],
+            vec![bundled_bounds_only("default.toml")],
             &["compare", "default.toml", "--out", "out"],
         ),
         case("stress", vec![], &["stress", "--out", "out"]),
@@ -490,6 +538,79 @@ fn golden(group: &str, cases: Vec<Case>) {
             problems.join("\n  ")
         );
     }
+}
+
+/// A small sweep of `g.toml` (8 configurations).
+const SMALL_GEO_SWEEP: [&str; 11] = [
+    "sweep",
+    "g.toml",
+    "--quiet",
+    "--out",
+    "out",
+    "--cascades",
+    "2,4",
+    "--resolution",
+    "1024,2048",
+    "--lambda",
+    "0.5,0.75",
+];
+
+/// Scene geometry: ground, boxes, glTF, splits fitted to the visible depths, a camera that sees
+/// nothing, sweeps and compare with screen metrics, and the errors of bad geometry input.
+fn geometry_runs() -> Vec<Case> {
+    let village = vec![bundled("village.toml"), bundled("village.gltf")];
+    let fitted = [("shadow.fit_depth_to_visible", "true")];
+    vec![
+        case(
+            "geo_ground",
+            scene("geo_ground", &[("scene.ground", "0.0")]),
+            &["analyze", "geo_ground.toml", "--out", "out"],
+        ),
+        analyze_geometry("geo_boxes", &[], ""),
+        analyze_geometry("geo_fit_visible", &fitted, ""),
+        analyze_geometry("geo_scale_1", &[("analysis.screen_scale", "1.0")], ""),
+        analyze_geometry(
+            "geo_sees_nothing",
+            &[
+                ("camera.target", "[0.0, 200.0, -50.0]"),
+                ("shadow.fit_depth_to_visible", "true"),
+            ],
+            "",
+        ),
+        analyze_geometry(
+            "geo_box_min_above_max",
+            &[],
+            "\n[[scene.box]]\nmin = [0.0, 5.0, 0.0]\nmax = [1.0, 4.0, 1.0]\n",
+        ),
+        analyze_geometry("geo_bad_scale", &[("analysis.screen_scale", "1.5")], ""),
+        analyze_geometry("geo_missing_gltf", &[("scene.gltf", "\"missing.glb\"")], ""),
+        analyze("geo_fit_visible_without_geometry", &fitted),
+        case(
+            "geo_gltf",
+            village.clone(),
+            &["analyze", "village.toml", "--out", "out"],
+        ),
+        case(
+            "geo_sweep_small",
+            vec![("g.toml".to_string(), geometry_base())],
+            &SMALL_GEO_SWEEP,
+        ),
+        case(
+            "geo_sweep_fitted_small",
+            vec![("g.toml".to_string(), edit(&geometry_base(), &fitted))],
+            &SMALL_GEO_SWEEP,
+        ),
+        case(
+            "geo_compare",
+            vec![("g.toml".to_string(), geometry_base())],
+            &["compare", "g.toml", "--out", "out"],
+        ),
+    ]
+}
+
+#[test]
+fn golden_geometry_runs_are_unchanged() {
+    golden("geometry", geometry_runs());
 }
 
 #[test]

@@ -60,10 +60,10 @@ pub fn extremes(metric: DepthMetric, splits: &[f64], texel: &[f64], k: f64, lo: 
             }
             let near_end = aliasing(i, a);
             let far_end = aliasing(i, b);
-            if max_a.map_or(true, |x| near_end.value > x.value) {
+            if max_a.is_none_or(|x| near_end.value > x.value) {
                 max_a = Some(near_end);
             }
-            if min_a.map_or(true, |x| far_end.value < x.value) {
+            if min_a.is_none_or(|x| far_end.value < x.value) {
                 min_a = Some(far_end);
             }
         }

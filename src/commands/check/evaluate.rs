@@ -16,7 +16,6 @@
 //! not have, are errors.
 
 use super::depth;
-use super::metric::SummaryMetric;
 use super::thresholds::{CascadeSelection, Rule, Target};
 use crate::analysis::Analysis;
 use crate::error::ConfigError;
@@ -205,6 +204,13 @@ pub fn judge_value(rule: &Rule, v: Located) -> RuleResult {
 pub fn evaluate(rule: &Rule, a: &Analysis) -> Result<RuleResult> {
     let no_cascades = "no cascades: the scene is not visible within the shadow distance";
     match rule.target {
+        Target::Summary(m) if m.def().screen && a.summary.screen.is_none() => Ok(RuleResult::not_applicable(
+            rule,
+            format!(
+                "`{}` is a screen metric: it needs scene geometry (scene.ground, [[scene.box]] or scene.gltf)",
+                m.name()
+            ),
+        )),
         Target::Summary(m) => Ok(judge_value(rule, Located::bare(m.value(&a.summary)))),
         Target::Cascade(..) | Target::Depth(..) if !a.summary.cascades_needed => {
             Ok(RuleResult::not_applicable(rule, no_cascades))
@@ -335,8 +341,9 @@ pub fn evaluate_values(rule: &Rule, values: &std::collections::BTreeMap<String, 
 
 /// The summary metric values of an analysis, keyed by name (the shape of a sweep row).
 pub fn summary_map(a: &Analysis) -> std::collections::BTreeMap<String, f64> {
-    SummaryMetric::all()
-        .map(|m| (m.name().to_string(), m.value(&a.summary)))
+    crate::metric::summary_values(&a.summary)
+        .into_iter()
+        .map(|(m, v)| (m.name().to_string(), v))
         .collect()
 }
 
@@ -344,6 +351,7 @@ pub fn summary_map(a: &Analysis) -> std::collections::BTreeMap<String, f64> {
 mod tests {
     use super::*;
     use crate::check::metric::{CascadeMetric, DepthMetric};
+    use crate::metric::SummaryMetric;
 
     fn rule(target: Target, min: Option<f64>, max: Option<f64>) -> Rule {
         Rule {

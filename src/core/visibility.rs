@@ -1,0 +1,331 @@
+//! The visibility pass: one primary ray through the centre of each sampled screen pixel, the
+//! nearest hit, and the geometric factor of per-pixel aliasing at that hit.
+//!
+//! **Pixels.** Screen pixel coordinates `(u, v)` run over `[0, W] x [0, H]` (the `[screen]`
+//! size), `v` downward. A sampling scale `s` in (0, 1] picks `round(W s) x round(H s)` pixels
+//! (at least one per axis): sample column `i` is screen pixel `floor((i + 1/2) W / cols)`, and
+//! its ray goes through that pixel's centre (`+ 1/2`). The pixels stay those of `[screen]`;
+//! the scale only chooses which are sampled, and every sample weighs the same.
+//!
+//! **Rays.** With camera frame (forward `f`, right `r`, up `u`) and half-angle tangents
+//! `tanH`, `tanV`, the ray through `(u, v)` is `C + t d` with
+//! `d = f + r (2u/W - 1) tanH + u (1 - 2v/H) tanV`. Because `d . f = 1`, the ray parameter `t`
+//! of a hit *is* its view depth. Only hits with `near <= t <= far` count.
+//!
+//! **Exact hits.** The BVH (crate `obvhs`, binary32) only finds which triangle is nearest;
+//! the hit point, depth and normal are then recomputed in f64 from that triangle's plane, so
+//! the analytic tests hold to f64 precision.
+//!
+//! **Geometric factor.** On the hit plane (unit normal `n`), the surface point as a function
+//! of the pixel is `X(u, v) = C + t(u, v) d(u, v)`, `t = n.(P0 - C) / (n.d)`. Its derivatives
+//! are `X_u = t (d_u - d (n.d_u)/(n.d))` (the same with `v`), where `d_u = r 2tanH/W` and
+//! `d_v = -u 2tanV/H`. With the light's x and y axes as the rows of `L` (any orthonormal pair
+//! across the light direction: the singular values do not depend on which), shadow-texel
+//! coordinates are `L X / T` for a texel of side `T`, so their Jacobian against pixels is
+//! `J = L [X_u X_v] / T`. The per-pixel aliasing `m = 1 / sigma_min(J)` (the longest extent of
+//! one texel, in pixels) is therefore `T g` with the factor `g = 1 / sigma_min(L [X_u X_v])`
+//! (pixels per world unit), computed once per pixel; each configuration multiplies by its
+//! cascade's texel size. `sigma_min` comes from the closed form of a 2x2 matrix: with
+//! `E` the sum of squared entries and `D = |det|`, `sigma_max^2 = (E + sqrt(E^2 - 4 D^2)) / 2`
+//! and `sigma_min = D / sigma_max`. A light grazing the surface drives `sigma_min` to 0; it is
+//! clamped at `sigma_max / MAX_ANISOTROPY`, so `m` is always finite.
+//!
+//! **Facing.** The normal is turned toward the camera (`n.d < 0`). A hit is a *lit-facing
+//! receiver* when that normal points toward the light: `n . (-light direction) > 0`; other
+//! hits are self-shadowed whatever the map holds.
+
+use std::sync::{Arc, Mutex, OnceLock};
+
+use glam::DVec3;
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+use rayon::prelude::*;
+
+use crate::geometry::{CameraPose, Lens, LightBasis};
+use crate::mesh::Mesh;
+
+/// Largest ratio of a texel's longest to shortest extent on screen: keeps `m` finite when the
+/// light grazes a surface.
+pub const MAX_ANISOTROPY: f64 = 1e6;
+
+/// Everything the pass depends on: the camera (frame 0), the screen and its sampling, and the
+/// light. Two passes with equal views give equal results (this is the cache key).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    pub pose: CameraPose,
+    pub lens: Lens,
+    pub near: f64,
+    pub far: f64,
+    pub width: u32,
+    pub height: u32,
+    /// Fraction of the width and height sampled, in (0, 1].
+    pub scale: f64,
+    /// Unit direction in which light travels.
+    pub light: DVec3,
+}
+
+impl View {
+    /// Sample columns and rows: `round(W s)` and `round(H s)`, at least 1.
+    pub fn grid(&self) -> (u32, u32) {
+        let n = |x: u32| ((x as f64 * self.scale).round() as u32).clamp(1, x);
+        (n(self.width), n(self.height))
+    }
+
+    /// Screen coordinates (pixel units) of the centre of the pixel sampled at (col, row).
+    pub fn pixel_centre(&self, col: u32, row: u32) -> (f64, f64) {
+        let (cols, rows) = self.grid();
+        let pick = |i: u32, n: u32, size: u32| ((i as f64 + 0.5) * size as f64 / n as f64).floor() + 0.5;
+        (pick(col, cols, self.width), pick(row, rows, self.height))
+    }
+
+    /// The (unnormalised) ray direction through screen point (u, v); `d . forward = 1`.
+    pub fn ray(&self, u: f64, v: f64) -> DVec3 {
+        let (w, h) = (self.width as f64, self.height as f64);
+        self.pose.forward
+            + self.pose.right * ((2.0 * u / w - 1.0) * self.lens.tan_h)
+            + self.pose.up * ((1.0 - 2.0 * v / h) * self.lens.tan_v)
+    }
+
+    /// `(d_u, d_v)`: the ray direction's derivatives against screen x and y.
+    pub fn ray_derivatives(&self) -> (DVec3, DVec3) {
+        (
+            self.pose.right * (2.0 * self.lens.tan_h / self.width as f64),
+            -self.pose.up * (2.0 * self.lens.tan_v / self.height as f64),
+        )
+    }
+}
+
+/// What one sampled pixel sees.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// View depth of the hit (world units); the hit point is `C + t d` with `t` this depth
+    /// and `d` the pixel's ray ([`Visibility::position`]).
+    pub depth: f64,
+    /// The hit's normal points toward the light.
+    pub lit: bool,
+    /// `g`: the per-pixel aliasing is `m = T g` for texel size `T` (pixels per world unit).
+    pub factor: f64,
+}
+
+/// The result of one pass.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Visibility {
+    pub view: View,
+    pub cols: u32,
+    pub rows: u32,
+    /// Row-major, `cols x rows`; None where the ray meets nothing between near and far.
+    pub samples: Vec<Option<Sample>>,
+    /// `(depth, factor)` of every lit-facing sample, sorted by depth.
+    pub receivers: Vec<(f64, f64)>,
+    /// Number of samples that hit a surface facing away from the light.
+    pub self_shadowed: usize,
+    /// View-depth extent of every hit, or None when nothing is hit.
+    pub depth_range: Option<(f64, f64)>,
+}
+
+impl Visibility {
+    pub fn sample_count(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// World position of the hit of sample `k` (row-major) at view depth `depth`.
+    pub fn position(&self, k: usize, depth: f64) -> DVec3 {
+        let cols = self.cols as usize;
+        let (u, v) = self.view.pixel_centre((k % cols) as u32, (k / cols) as u32);
+        self.view.pose.position + self.view.ray(u, v) * depth
+    }
+}
+
+/// `g = 1 / sigma_min(L [X_u X_v])` at a hit with view depth `t`, unit normal `n`, ray `d`.
+pub fn geometric_factor(view: &View, light: &LightBasis, n: DVec3, d: DVec3, t: f64) -> f64 {
+    let (du, dv) = view.ray_derivatives();
+    let nd = n.dot(d);
+    let xu = t * (du - d * (n.dot(du) / nd));
+    let xv = t * (dv - d * (n.dot(dv) / nd));
+    let (a, b, c, e) = (light.x.dot(xu), light.x.dot(xv), light.y.dot(xu), light.y.dot(xv));
+    1.0 / sigma_min_2x2(a, b, c, e)
+}
+
+/// Smallest singular value of `[[a, b], [c, d]]`, clamped below at
+/// `sigma_max / MAX_ANISOTROPY` (and at the smallest positive normal f64 for a zero matrix).
+pub fn sigma_min_2x2(a: f64, b: f64, c: f64, d: f64) -> f64 {
+    let e = a * a + b * b + c * c + d * d;
+    let det = (a * d - b * c).abs();
+    let disc = (e * e - 4.0 * det * det).max(0.0).sqrt();
+    let smax = ((e + disc) * 0.5).sqrt();
+    if smax.is_nan() || smax <= 0.0 || !smax.is_finite() {
+        return f64::MIN_POSITIVE;
+    }
+    (det / smax).max(smax / MAX_ANISOTROPY)
+}
+
+/// The BVH over a mesh's triangles (binary32, as the crate builds it).
+struct Tracer {
+    bvh: CwBvh,
+    tris: Vec<Triangle>,
+}
+
+fn v3(p: DVec3) -> glam_bvh::Vec3A {
+    glam_bvh::Vec3A::new(p.x as f32, p.y as f32, p.z as f32)
+}
+
+impl Tracer {
+    fn new(mesh: &Mesh) -> Tracer {
+        let tris: Vec<Triangle> = mesh
+            .triangles
+            .iter()
+            .map(|t| Triangle {
+                v0: v3(t[0]),
+                v1: v3(t[1]),
+                v2: v3(t[2]),
+            })
+            .collect();
+        let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Default::default());
+        Tracer { bvh, tris }
+    }
+
+    /// Index of the nearest triangle along the ray within `[tmin, tmax]` (ray units), if any.
+    fn nearest(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Option<usize> {
+        let ray = Ray::new(v3(origin), v3(dir), tmin as f32, tmax as f32);
+        let mut hit = RayHit::none();
+        let tris = &self.tris;
+        let indices = &self.bvh.primitive_indices;
+        self.bvh
+            .ray_traverse(ray, &mut hit, |r, id| tris[indices[id] as usize].intersect(r))
+            .then(|| indices[hit.primitive_id as usize] as usize)
+    }
+}
+
+/// A scene's geometry with its BVH (built on first use) and the passes already made.
+pub struct SceneGeometry {
+    pub mesh: Mesh,
+    tracer: OnceLock<Tracer>,
+    cache: Mutex<Vec<Arc<Visibility>>>,
+}
+
+impl SceneGeometry {
+    pub fn new(mesh: Mesh) -> Self {
+        SceneGeometry {
+            mesh,
+            tracer: OnceLock::new(),
+            cache: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// The pass for a view, computed once per view and shared (a sweep's configurations share
+    /// their camera, screen and light, so they share one pass).
+    pub fn visibility(&self, view: &View) -> Arc<Visibility> {
+        if let Some(v) = self.cached(view) {
+            return v;
+        }
+        let v = Arc::new(self.cast(view));
+        let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        // A few views at most (one per camera pose analysed); keep the latest ones.
+        if cache.len() >= 8 {
+            cache.remove(0);
+        }
+        cache.push(v.clone());
+        v
+    }
+
+    fn cached(&self, view: &View) -> Option<Arc<Visibility>> {
+        let cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        cache.iter().find(|v| v.view == *view).cloned()
+    }
+
+    /// The pass itself, without the cache.
+    pub fn cast(&self, view: &View) -> Visibility {
+        let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
+        let (cols, rows) = view.grid();
+        let light = LightBasis::new(view.light);
+        let samples: Vec<Option<Sample>> = (0..cols as usize * rows as usize)
+            .into_par_iter()
+            .map(|k| {
+                let (u, v) = view.pixel_centre((k % cols as usize) as u32, (k / cols as usize) as u32);
+                self.sample(tracer, view, &light, u, v)
+            })
+            .collect();
+        let mut receivers: Vec<(f64, f64)> = samples
+            .iter()
+            .flatten()
+            .filter(|s| s.lit)
+            .map(|s| (s.depth, s.factor))
+            .collect();
+        receivers.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        let self_shadowed = samples.iter().flatten().filter(|s| !s.lit).count();
+        let depth_range = samples.iter().flatten().fold(None, |r: Option<(f64, f64)>, s| {
+            Some(r.map_or((s.depth, s.depth), |(lo, hi)| (lo.min(s.depth), hi.max(s.depth))))
+        });
+        Visibility {
+            view: *view,
+            cols,
+            rows,
+            samples,
+            receivers,
+            self_shadowed,
+            depth_range,
+        }
+    }
+
+    fn sample(&self, tracer: &Tracer, view: &View, light: &LightBasis, u: f64, v: f64) -> Option<Sample> {
+        let d = view.ray(u, v);
+        let len = d.length();
+        // Ray units are world units along the normalised direction: depth t is t |d| along it.
+        let origin = view.pose.position;
+        let slack = 1e-4;
+        let id = tracer.nearest(
+            origin,
+            d / len,
+            view.near * len * (1.0 - slack),
+            view.far * len * (1.0 + slack),
+        )?;
+        let [a, b, c] = self.mesh.triangles[id];
+        let mut n = (b - a).cross(c - a).normalize();
+        let mut nd = n.dot(d);
+        if nd > 0.0 {
+            n = -n;
+            nd = -nd;
+        }
+        if nd == 0.0 {
+            return None;
+        }
+        let t = n.dot(a - origin) / nd;
+        if !(t >= view.near && t <= view.far) {
+            return None;
+        }
+        let lit = n.dot(-view.light) > 0.0;
+        let factor = geometric_factor(view, light, n, d, t);
+        Some(Sample { depth: t, lit, factor })
+    }
+}
+
+impl std::fmt::Debug for SceneGeometry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SceneGeometry").field("mesh", &self.mesh).finish()
+    }
+}
+
+impl PartialEq for SceneGeometry {
+    fn eq(&self, other: &Self) -> bool {
+        self.mesh == other.mesh
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sigma_min_of_a_diagonal_and_a_rotation() {
+        assert!((sigma_min_2x2(3.0, 0.0, 0.0, 2.0) - 2.0).abs() < 1e-15);
+        let (s, c) = 0.3f64.sin_cos();
+        assert!((sigma_min_2x2(2.0 * c, -s, 2.0 * s, c) - 1.0).abs() < 1e-14);
+        // Rank one: clamped, finite.
+        let g = sigma_min_2x2(1.0, 1.0, 1.0, 1.0);
+        assert!(g > 0.0 && g.is_finite());
+        assert!(sigma_min_2x2(0.0, 0.0, 0.0, 0.0) > 0.0);
+    }
+}

@@ -1,0 +1,242 @@
+//! The camera-view images of a scene with geometry: `screen_aliasing.png` (each sampled pixel
+//! coloured by its per-pixel aliasing `m` on a log scale) and `screen_cascades.png` (each
+//! pixel coloured by the cascade that serves it, with the split lines in black).
+//!
+//! Both are raster images of the sampled grid (`[analysis] screen_scale`), enlarged by a whole
+//! factor to at least 960 pixels wide, with a legend drawn below as SVG and rasterised with the
+//! same fonts as every other figure. Sky is neutral light grey, surfaces facing away from the
+//! light are dimmed to dark grey, lit-facing pixels outside the split range mid grey.
+
+use std::fmt::Write as _;
+
+use plotters::style::RGBColor;
+
+use super::{colormap, encode_png, series_color, svg_to_rgb, FONT};
+use crate::analysis::Analysis;
+use crate::error::Result;
+use crate::metrics::cascade_at;
+use crate::output::Exporter;
+
+const SKY: [u8; 3] = [236, 236, 236];
+const SELF_SHADOWED: [u8; 3] = [70, 70, 70];
+const UNSERVED: [u8; 3] = [170, 170, 170];
+const SPLIT_LINE: [u8; 3] = [0, 0, 0];
+/// The aliasing scale: log2 m from -3 (m = 1/8) to +6 (m = 64).
+const LOG2_LO: f64 = -3.0;
+const LOG2_HI: f64 = 6.0;
+
+fn rgb(c: RGBColor) -> [u8; 3] {
+    [c.0, c.1, c.2]
+}
+
+fn hex(c: [u8; 3]) -> String {
+    format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
+}
+
+/// Colour of aliasing `m` on the log scale.
+pub fn aliasing_color(m: f64) -> [u8; 3] {
+    rgb(colormap((m.log2() - LOG2_LO) / (LOG2_HI - LOG2_LO)))
+}
+
+/// What each sampled pixel shows: None (sky), or (lit, served cascade, aliasing m).
+struct Pixel {
+    lit: bool,
+    cascade: Option<usize>,
+    m: f64,
+}
+
+fn pixels(a: &Analysis) -> Option<(u32, u32, Vec<Option<Pixel>>)> {
+    let vis = a.config.setup().visibility()?;
+    let rig = a.rig();
+    let served = |d: f64| {
+        let r = rig?;
+        let m = r.cascade_count();
+        (d >= r.splits[0] && d <= r.splits[m]).then(|| cascade_at(&r.splits, d))
+    };
+    let px = vis
+        .samples
+        .iter()
+        .map(|s| {
+            s.map(|s| {
+                let cascade = served(s.depth);
+                Pixel {
+                    lit: s.lit,
+                    cascade,
+                    m: cascade.map_or(0.0, |i| a.cascades[i].texel_size * s.factor),
+                }
+            })
+        })
+        .collect();
+    Some((vis.cols, vis.rows, px))
+}
+
+/// The image scaled up by a whole factor, with `legend` (SVG) below; PNG bytes.
+fn compose(cols: u32, rows: u32, colour: &[[u8; 3]], legend: &str) -> Result<Vec<u8>> {
+    let k = (960 / cols).max(1);
+    let w = cols * k;
+    let (lw, lh, lrgb) = svg_to_rgb(legend.replace("{W}", &w.to_string()).as_bytes(), 1.0)?;
+    let h = rows * k + lh;
+    let mut out = vec![255u8; (w * h * 3) as usize];
+    for y in 0..rows * k {
+        for x in 0..w {
+            let c = colour[((y / k) * cols + x / k) as usize];
+            let o = ((y * w + x) * 3) as usize;
+            out[o..o + 3].copy_from_slice(&c);
+        }
+    }
+    for y in 0..lh {
+        for x in 0..lw.min(w) {
+            let i = ((y * lw + x) * 3) as usize;
+            let o = (((rows * k + y) * w + x) * 3) as usize;
+            out[o..o + 3].copy_from_slice(&lrgb[i..i + 3]);
+        }
+    }
+    encode_png(w, h, &out)
+}
+
+fn legend_svg(body: &str) -> String {
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{{W}}\" height=\"64\" font-family=\"{FONT}\" font-size=\"13\">\
+         <rect width=\"100%\" height=\"100%\" fill=\"white\"/>{body}</svg>"
+    )
+}
+
+fn swatch(x: f64, c: [u8; 3], label: &str) -> String {
+    format!(
+        "<rect x=\"{x}\" y=\"40\" width=\"14\" height=\"14\" fill=\"{}\" stroke=\"#888\"/>\
+         <text x=\"{}\" y=\"52\">{label}</text>",
+        hex(c),
+        x + 19.0
+    )
+}
+
+/// `screen_aliasing.png`.
+pub fn aliasing_png(a: &Analysis) -> Result<Vec<u8>> {
+    let (cols, rows, px) = pixels(a).expect("written only with geometry");
+    let colour: Vec<[u8; 3]> = px
+        .iter()
+        .map(|p| match p {
+            None => SKY,
+            Some(p) if !p.lit => SELF_SHADOWED,
+            Some(p) if p.cascade.is_none() => UNSERVED,
+            Some(p) => aliasing_color(p.m),
+        })
+        .collect();
+    let mut body = String::new();
+    let steps = 90;
+    for i in 0..steps {
+        let t = i as f64 / steps as f64;
+        let c = rgb(colormap(t));
+        let _ = write!(
+            body,
+            "<rect x=\"{}\" y=\"8\" width=\"4\" height=\"14\" fill=\"{}\"/>",
+            10 + 4 * i,
+            hex(c)
+        );
+    }
+    for e in LOG2_LO as i32..=LOG2_HI as i32 {
+        let x = 10.0 + 360.0 * (e as f64 - LOG2_LO) / (LOG2_HI - LOG2_LO);
+        let label = if e < 0 {
+            format!("1/{}", 1 << -e)
+        } else {
+            format!("{}", 1 << e)
+        };
+        let _ = write!(
+            body,
+            "<line x1=\"{x}\" y1=\"6\" x2=\"{x}\" y2=\"24\" stroke=\"black\"/><text x=\"{x}\" y=\"36\" text-anchor=\"middle\">{label}</text>"
+        );
+    }
+    let st = a.summary.screen.as_ref();
+    let _ = write!(
+        body,
+        "<text x=\"385\" y=\"20\">per-pixel aliasing m (texel extent in pixels; &gt; 1 is blocky), log scale</text>\
+         <text x=\"385\" y=\"36\">p50 {:.3}, p95 {:.3}, max {:.3}</text>",
+        st.map_or(0.0, |s| s.aliasing_p50),
+        st.map_or(0.0, |s| s.aliasing_p95),
+        st.map_or(0.0, |s| s.aliasing_max)
+    );
+    body.push_str(&swatch(10.0, SKY, "sky"));
+    body.push_str(&swatch(70.0, SELF_SHADOWED, "facing away from the light"));
+    body.push_str(&swatch(290.0, UNSERVED, "outside the split range"));
+    compose(cols, rows, &colour, &legend_svg(&body))
+}
+
+/// `screen_cascades.png`.
+pub fn cascades_png(a: &Analysis) -> Result<Vec<u8>> {
+    let (cols, rows, px) = pixels(a).expect("written only with geometry");
+    let dim = |c: [u8; 3]| c.map(|x| (x as f64 * 0.4) as u8);
+    let cascade_of = |i: usize| px[i].as_ref().and_then(|p| p.cascade);
+    let colour: Vec<[u8; 3]> = (0..px.len())
+        .map(|i| {
+            let (x, y) = (i as u32 % cols, i as u32 / cols);
+            let c = cascade_of(i);
+            // A split line where the right or lower neighbour is served by another cascade.
+            let differs = |j: usize| c.is_some() && cascade_of(j).is_some() && cascade_of(j) != c;
+            if (x + 1 < cols && differs(i + 1)) || (y + 1 < rows && differs(i + cols as usize)) {
+                return SPLIT_LINE;
+            }
+            match (&px[i], c) {
+                (None, _) => SKY,
+                (Some(_), None) => UNSERVED,
+                (Some(p), Some(k)) if !p.lit => dim(rgb(series_color(k))),
+                (Some(_), Some(k)) => rgb(series_color(k)),
+            }
+        })
+        .collect();
+    let mut body = String::new();
+    let mut x = 10.0;
+    for c in &a.cascades {
+        let label = format!("cascade {}: {:.1}..{:.1}", c.cascade, c.near, c.far);
+        let _ = write!(
+            body,
+            "<rect x=\"{x}\" y=\"8\" width=\"14\" height=\"14\" fill=\"{}\"/><text x=\"{}\" y=\"20\">{label}</text>",
+            hex(rgb(series_color(c.cascade))),
+            x + 19.0
+        );
+        x += 40.0 + 7.5 * label.len() as f64;
+    }
+    body.push_str(&swatch(10.0, SKY, "sky"));
+    body.push_str(&swatch(70.0, SPLIT_LINE, "split lines"));
+    body.push_str(&swatch(180.0, UNSERVED, "outside the split range"));
+    body.push_str("<text x=\"390\" y=\"52\">darker: facing away from the light</text>");
+    compose(cols, rows, &colour, &legend_svg(&body))
+}
+
+pub struct ScreenAliasingPng;
+pub struct ScreenCascadesPng;
+
+impl Exporter<Analysis> for ScreenAliasingPng {
+    fn file_name(&self) -> &'static str {
+        "screen_aliasing.png"
+    }
+    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
+        aliasing_png(a)
+    }
+}
+
+impl Exporter<Analysis> for ScreenCascadesPng {
+    fn file_name(&self) -> &'static str {
+        "screen_cascades.png"
+    }
+    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
+        cascades_png(a)
+    }
+}
+
+/// Both images of an analysis with their captions (empty without geometry or on a failure to
+/// draw, which only leaves them out of a page).
+pub fn captioned(a: &Analysis, label: &str) -> Vec<(Vec<u8>, String)> {
+    if a.config.geometry.is_none() {
+        return Vec::new();
+    }
+    match (aliasing_png(a), cascades_png(a)) {
+        (Ok(m), Ok(c)) => vec![
+            (m, format!("{label}: per-pixel aliasing m on screen (log scale)")),
+            (
+                c,
+                format!("{label}: the cascade serving each pixel, with the split lines"),
+            ),
+        ],
+        _ => Vec::new(),
+    }
+}
