@@ -119,14 +119,25 @@ pub struct CheckArgs {
     /// Scene and shadow settings (TOML).
     pub config: PathBuf,
     /// Rules and baseline tolerances (TOML; see docs/check.md).
-    #[arg(long)]
-    pub thresholds: PathBuf,
-    /// An earlier summary.json (or, with --sweep, sweep.csv) to compare against.
+    #[arg(long, required_unless_present = "init", conflicts_with = "init")]
+    pub thresholds: Option<PathBuf>,
+    /// Write a thresholds file here from the config's current values (with --headroom), and
+    /// its baseline beside it (`NAME.baseline.json`); then commit both.
+    #[arg(long, value_name = "FILE")]
+    pub init: Option<PathBuf>,
+    /// With --init: room each limit leaves over today's value, as a fraction (0.05 = 5 %).
+    #[arg(long, default_value_t = 0.05, requires = "init")]
+    pub headroom: f64,
+    /// An earlier summary.json (or, with --sweep, sweep.csv) to compare against [default: the
+    /// thresholds file's `[baseline] file`].
     #[arg(long)]
     pub baseline: Option<PathBuf>,
     /// Judge sweep rows (summary metrics only) instead of the one configuration.
     #[arg(long)]
     pub sweep: bool,
+    /// With --sweep: list every configuration instead of a summary.
+    #[arg(long)]
+    pub verbose: bool,
     /// Also write a JUnit XML report to this file.
     #[arg(long)]
     pub junit: Option<PathBuf>,
@@ -186,14 +197,23 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             preset: args.preset,
             format: args.format,
         }),
-        Command::Check(args) => check::execute(&check::CheckRequest {
-            config: &args.config,
-            thresholds: &args.thresholds,
-            baseline: args.baseline.as_deref(),
-            sweep: args.sweep,
-            junit: args.junit.as_deref(),
-            format: args.format,
-        }),
+        Command::Check(args) => match (&args.init, &args.thresholds) {
+            (Some(file), _) => check::init(&check::InitRequest {
+                config: &args.config,
+                file,
+                headroom: args.headroom,
+            }),
+            (None, Some(thresholds)) => check::execute(&check::CheckRequest {
+                config: &args.config,
+                thresholds,
+                baseline: args.baseline.as_deref(),
+                sweep: args.sweep,
+                verbose: args.verbose,
+                junit: args.junit.as_deref(),
+                format: args.format,
+            }),
+            (None, None) => unreachable!("clap requires --thresholds unless --init"),
+        },
         Command::Stress(args) => stress::execute(&stress::StressRequest {
             out: args.out,
             cases: args.cases,

@@ -740,6 +740,7 @@ mod tests {
                 mean_aliasing: mean,
                 mean_log_aliasing: mean,
                 undersampled_fraction: 0.0,
+                shimmer: 0.0,
                 shimmer_snapped: 0.0,
                 shimmer_unsnapped: 0.3,
                 size_jitter: 0.0,

@@ -223,40 +223,101 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let m = raw.motion;
     let frames = v.int_range("motion.frames", m.frames.unwrap_or(240), 2, 1_000_000)? as usize;
     let step_as_written = v.finite("motion.step", m.step.unwrap_or(0.05))?;
-    let path_name = m.path.unwrap_or_else(|| "strafe".to_string());
-    let (path, step) = match path_name.as_str() {
-        "strafe" => (MotionPath::Strafe, step_as_written),
-        "dolly" => (MotionPath::Dolly, step_as_written),
-        "yaw" => (MotionPath::Yaw, step_as_written.to_radians()),
-        "pitch" => (MotionPath::Pitch, step_as_written.to_radians()),
-        "orbit" => (MotionPath::Orbit, step_as_written.to_radians()),
-        "file" => {
-            let file = m.file.ok_or_else(|| {
-                v.invalid(
-                    "motion.file",
-                    "(missing)",
-                    "a CSV file with columns px,py,pz,tx,ty,tz when motion.path = \"file\"",
-                )
-            })?;
-            let p = PathBuf::from(&file);
-            let p = match base_dir {
-                Some(dir) if p.is_relative() => dir.join(p),
-                _ => p,
-            };
-            let poses = super::read_path_file(&p)?
-                .into_iter()
-                .map(|(position, target)| (position + world_offset, target + world_offset))
-                .collect();
-            (MotionPath::File { path: p, poses }, 0.0)
-        }
-        other => {
+    let file = m.file;
+    let parse_path = |name: &str, step_as_written: f64, key: &str| -> Result<(MotionPath, f64)> {
+        Ok(match name {
+            "strafe" => (MotionPath::Strafe, step_as_written),
+            "dolly" => (MotionPath::Dolly, step_as_written),
+            "yaw" => (MotionPath::Yaw, step_as_written.to_radians()),
+            "pitch" => (MotionPath::Pitch, step_as_written.to_radians()),
+            "orbit" => (MotionPath::Orbit, step_as_written.to_radians()),
+            "file" => {
+                let file = file.clone().ok_or_else(|| {
+                    v.invalid(
+                        "motion.file",
+                        "(missing)",
+                        "a CSV file with columns px,py,pz,tx,ty,tz when motion.path = \"file\"",
+                    )
+                })?;
+                let p = PathBuf::from(&file);
+                let p = match base_dir {
+                    Some(dir) if p.is_relative() => dir.join(p),
+                    _ => p,
+                };
+                let poses = super::read_path_file(&p)?
+                    .into_iter()
+                    .map(|(position, target)| (position + world_offset, target + world_offset))
+                    .collect();
+                (MotionPath::File { path: p, poses }, 0.0)
+            }
+            other => {
+                return Err(v.invalid(
+                    key,
+                    format!("{other:?}"),
+                    "one of \"strafe\", \"dolly\", \"yaw\", \"pitch\", \"orbit\", \"file\"",
+                ))
+            }
+        })
+    };
+    let names: Vec<String> = match (m.path, m.paths) {
+        (Some(_), Some(_)) => {
             return Err(v.invalid(
-                "motion.path",
-                format!("{other:?}"),
-                "one of \"strafe\", \"dolly\", \"yaw\", \"pitch\", \"orbit\", \"file\"",
+                "motion.paths",
+                "(with motion.path)",
+                "either `path = \"NAME\"` or `paths = [\"NAME\", ...]`, not both",
+            ))
+        }
+        (Some(p), None) => vec![p],
+        (None, Some(list)) => {
+            if list.is_empty() || list.len() > 8 {
+                return Err(v.invalid(
+                    "motion.paths",
+                    format!("{} entries", list.len()),
+                    "a list of 1 to 8 path names",
+                ));
+            }
+            for (i, a) in list.iter().enumerate() {
+                if list[..i].contains(a) {
+                    return Err(v.invalid("motion.paths", format!("{a:?} twice"), "each path at most once"));
+                }
+            }
+            list
+        }
+        (None, None) => vec!["strafe".to_string()],
+    };
+    let steps: Vec<f64> = match m.steps {
+        None => vec![step_as_written; names.len()],
+        Some(list) if list.len() == names.len() => list
+            .into_iter()
+            .map(|x| v.finite("motion.steps", x))
+            .collect::<Result<_>>()?,
+        Some(list) => {
+            return Err(v.invalid(
+                "motion.steps",
+                format!("{} entries", list.len()),
+                &format!("one step per entry of motion.paths ({})", names.len()),
             ))
         }
     };
+    let key = if names.len() > 1 { "motion.paths" } else { "motion.path" };
+    let (path, step) = parse_path(&names[0], steps[0], key)?;
+    let step_as_written = steps[0];
+    let mut extra = Vec::new();
+    for (name, &sw) in names.iter().zip(&steps).skip(1) {
+        let (p, st) = parse_path(name, sw, key)?;
+        if p.is_translation() && sw.abs() * (frames - 1) as f64 > MAX_WORLD {
+            return Err(v.invalid(
+                "motion.steps",
+                sw,
+                &format!("a step whose {} frames travel at most 1e9 world units", frames),
+            ));
+        }
+        extra.push(super::ExtraPath {
+            path: p,
+            step: st,
+            step_as_written: sw,
+        });
+    }
     let frames = match &path {
         MotionPath::File { poses, .. } => poses.len(),
         _ => frames,
@@ -310,6 +371,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             frames,
             step,
             step_as_written,
+            extra,
         },
         analysis,
         sweep,
@@ -336,6 +398,13 @@ pub fn check_camera_path(config: &Config, v: &Validator<'_>) -> Result<()> {
                 "motion.step"
             },
             format!("{} (frame {frame})", config.motion.step_as_written),
+            &format!("a motion that keeps a valid camera in every frame: {why}"),
+        )
+    })?;
+    config.extra_camera_paths().map(|_| ()).map_err(|(k, frame, why)| {
+        v.invalid(
+            "motion.paths",
+            format!("{:?} (frame {frame})", config.motion.extra[k - 1].path.name()),
             &format!("a motion that keeps a valid camera in every frame: {why}"),
         )
     })

@@ -14,6 +14,7 @@ mod precision;
 mod presets;
 mod prop_analysis;
 mod prop_toml;
+mod readme_ci;
 mod regressions;
 mod shimmer;
 mod shimmer_fast_paths;
