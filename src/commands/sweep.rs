@@ -556,17 +556,64 @@ pub fn recommend(rows: &[Row], budget_mib: f64) -> Option<Recommendation> {
     })
 }
 
+/// The quantity the recommendation minimises (lower is better): mean aliasing. The one place
+/// a configurable objective metric (a `[sweep] objective`) would slot in.
+pub fn objective_value(s: &Summary) -> f64 {
+    s.mean_aliasing
+}
+
+/// Why no configuration qualified, and which one comes closest.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NoRecommendation {
+    /// Rows whose scene needs no cascades.
+    pub no_cascades: usize,
+    /// Rows with slice corners outside their windows.
+    pub coverage_misses: usize,
+    /// Rows that shimmer when snapped (> [`STABLE_SHIMMER`]).
+    pub unstable: usize,
+    /// The closest row: the fewest coverage violations, then the least snapped shimmer, then
+    /// within the budget, then the objective. None when no row needs cascades.
+    pub closest: Option<usize>,
+}
+
+/// The failure analysis of a sweep without a recommendation.
+pub fn no_recommendation(rows: &[Row], budget_mib: f64) -> NoRecommendation {
+    let budget_bytes = (budget_mib * 1024.0 * 1024.0).floor() as u64;
+    let needed: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed).collect();
+    let closest = needed.iter().copied().min_by(|&a, &b| {
+        let (x, y) = (&rows[a].summary, &rows[b].summary);
+        x.coverage_violations
+            .cmp(&y.coverage_violations)
+            .then(x.shimmer_snapped.total_cmp(&y.shimmer_snapped))
+            .then((x.memory_bytes > budget_bytes).cmp(&(y.memory_bytes > budget_bytes)))
+            .then(objective_value(x).total_cmp(&objective_value(y)))
+            .then(a.cmp(&b))
+    });
+    NoRecommendation {
+        no_cascades: rows.len() - needed.len(),
+        coverage_misses: needed
+            .iter()
+            .filter(|&&i| rows[i].summary.coverage_violations > 0)
+            .count(),
+        unstable: needed
+            .iter()
+            .filter(|&&i| rows[i].summary.shimmer_snapped > STABLE_SHIMMER)
+            .count(),
+        closest,
+    }
+}
+
 /// The best of `candidates` by [`OBJECTIVE`]: the shortlist within [`MEAN_TOLERANCE`] of the
 /// lowest mean aliasing, then the lowest max aliasing, less memory, fewer cascades, grid order.
 fn pick(rows: &[Row], candidates: &[usize]) -> Option<usize> {
     let best = candidates
         .iter()
-        .map(|&i| rows[i].summary.mean_aliasing)
+        .map(|&i| objective_value(&rows[i].summary))
         .min_by(f64::total_cmp)?;
     candidates
         .iter()
         .copied()
-        .filter(|&i| rows[i].summary.mean_aliasing <= best * (1.0 + MEAN_TOLERANCE))
+        .filter(|&i| objective_value(&rows[i].summary) <= best * (1.0 + MEAN_TOLERANCE))
         .min_by(|&a, &b| {
             let (x, y) = (&rows[a].summary, &rows[b].summary);
             x.max_aliasing

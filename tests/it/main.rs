@@ -11,6 +11,7 @@ mod cli_sweep;
 mod common;
 mod golden_outputs;
 mod precision;
+mod preset_sweeps;
 mod presets;
 mod prop_analysis;
 mod prop_toml;
