@@ -45,7 +45,7 @@ pub enum Command {
 pub struct AnalyzeArgs {
     /// Scene and shadow settings (TOML).
     pub config: PathBuf,
-    /// Output directory [default: reports/<config name>/].
+    /// Output directory [default: out/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// What to print on stdout.
@@ -64,7 +64,7 @@ pub struct AnalyzeArgs {
 #[derive(Debug, Args)]
 pub struct StressArgs {
     /// Output directory for stress.csv.
-    #[arg(long, default_value = "reports/stress")]
+    #[arg(long, default_value = "out/stress")]
     pub out: PathBuf,
     /// Random cases added to the fixed battery (0..=100000).
     #[arg(long, default_value_t = 32)]
@@ -82,7 +82,7 @@ pub struct StressArgs {
 pub struct SweepArgs {
     /// Scene and shadow settings (TOML); its `[sweep]` table gives the grid.
     pub config: PathBuf,
-    /// Output directory [default: reports/<config name>/].
+    /// Output directory [default: out/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// λ axis: start:end:step (0:1:0.05) or a list (0,0.5,1).
@@ -148,7 +148,7 @@ pub struct CheckArgs {
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Output directory [default: reports/bench/].
+    /// Output directory [default: out/bench/].
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Scene to measure [default: the built-in configs/default.toml].
@@ -169,7 +169,7 @@ pub struct CompareArgs {
     /// Every preset at its own defaults: ignore shadow.cascades, shadow.resolution and shadow.max_distance.
     #[arg(long)]
     pub defaults: bool,
-    /// Output directory [default: reports/<config name>/].
+    /// Output directory [default: out/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
 }

@@ -84,7 +84,12 @@ pub fn print_result(
     Ok(())
 }
 
-/// The default output directory for a config: `reports/<name>/`.
+/// Where commands write without `--out`: `out/`, ignored by git, so running a command never
+/// changes the committed samples under `reports/` (those are written on purpose, by
+/// `scripts/regen-samples.sh`).
+pub const DEFAULT_OUT_ROOT: &str = "out";
+
+/// The default output directory for a config: `out/<name>/`.
 pub fn default_out_dir(config: &Config) -> PathBuf {
-    Path::new("reports").join(&config.name)
+    Path::new(DEFAULT_OUT_ROOT).join(&config.name)
 }

@@ -249,7 +249,7 @@ impl Default for AnalysisSettings {
 /// A validated scene and shadow setting.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Config {
-    /// The file stem, used for the default output directory `reports/<name>/`.
+    /// The file stem, used for the default output directory `out/<name>/`.
     pub name: String,
     /// Where the config was read from, if from a file.
     pub path: Option<PathBuf>,

@@ -338,7 +338,7 @@ fn table_rows(r: &SweepResult) -> Vec<Vec<String>> {
                 format!("{:.4}", s.mean_aliasing),
                 format!("{:.4}", s.max_aliasing),
                 format!("{:.4}", s.mean_log_aliasing),
-                format!("{:.2e}", s.shimmer_snapped),
+                crate::output::short_number(s.shimmer_snapped),
                 s.coverage_violations.to_string(),
                 format!("{}", mib(s.memory_bytes)),
             ]
@@ -492,16 +492,25 @@ pub fn stdout_table(r: &SweepResult) -> String {
         let s = &x.summary;
         let _ = writeln!(
             out,
-            "{} {:>9} {:>8} {:>6} {:>6} {:>6} {:>10.4} {:>10.4} {:>10.2e}",
+            "{} {:>9} {:>8} {:>6} {:>6} {:>6} {:>10.4} {:>10.4} {:>10}",
             if Some(i) == rec { "*" } else { " " },
             mib(s.memory_bytes),
             x.setting.cascades,
             x.setting.resolution,
-            x.setting.lambda,
-            x.setting.fit.name(),
+            // A preset's table shows only the knobs it has.
+            if has_lambda(r) {
+                x.setting.lambda.to_string()
+            } else {
+                "-".to_string()
+            },
+            if r.config.shadow.preset.is_none() {
+                x.setting.fit.name()
+            } else {
+                "-"
+            },
             s.mean_aliasing,
             s.max_aliasing,
-            s.shimmer_snapped
+            crate::output::short_number(s.shimmer_snapped)
         );
     }
     let _ = writeln!(out, "recommended (budget {} MiB): {}", r.budget_mib, why_text(r));

@@ -16,6 +16,7 @@ mod presets;
 mod prop_analysis;
 mod prop_toml;
 mod readme_ci;
+mod readme_clean;
 mod regressions;
 mod shimmer;
 mod shimmer_fast_paths;
