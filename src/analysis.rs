@@ -60,6 +60,9 @@ pub struct Summary {
     pub mean_aliasing: f64,
     pub mean_log_aliasing: f64,
     pub undersampled_fraction: f64,
+    /// RMS sub-texel phase drift (S3) with the configured snapping (`shadow.snap`): what the
+    /// configured setting shows. The worst over the motion paths.
+    pub shimmer: f64,
     /// RMS sub-texel phase drift (S3) over the path with snapping, in texels.
     pub shimmer_snapped: f64,
     /// The same without snapping.
@@ -155,6 +158,17 @@ pub struct Measured {
     pub snapped: PathResult,
     pub unsnapped: PathResult,
     /// S7 for the configured snap setting, when precision = "f32".
+    pub lookup_error: Option<LookupError>,
+    /// The further paths of `motion.paths` (empty with a single path).
+    pub extra: Vec<ExtraPathResult>,
+}
+
+/// One further motion path of `motion.paths`, walked in both snap modes.
+#[derive(Debug, Clone)]
+pub struct ExtraPathResult {
+    pub name: &'static str,
+    pub snapped: PathResult,
+    pub unsnapped: PathResult,
     pub lookup_error: Option<LookupError>,
 }
 
@@ -266,6 +280,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
                 mean_aliasing: 0.0,
                 mean_log_aliasing: 0.0,
                 undersampled_fraction: 0.0,
+                shimmer: 0.0,
                 shimmer_snapped: 0.0,
                 shimmer_unsnapped: 0.0,
                 size_jitter: 0.0,
@@ -319,19 +334,64 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         Vec::new()
     };
     // With precision = "f32" every path metric measures the emulated binary32 pipeline.
-    let (snapped, unsnapped, lookup_error) = match config.shadow.precision {
+    let walk = |poses: &[CameraPose]| match config.shadow.precision {
         Precision::F64 => {
-            let (s, u) = shimmer::along_path_both(&rig, &poses, &probes, sopts);
+            let (s, u) = shimmer::along_path_both(&rig, poses, &probes, sopts);
             (s, u, None)
         }
         Precision::F32 => {
             let space = config.shadow.snap_space;
-            let (s, u) = precision::along_path_both(&rig, &poses, &probes, space, sopts);
+            let (s, u) = precision::along_path_both(&rig, poses, &probes, space, sopts);
             let lookup = if config.shadow.snap { s.lookup } else { u.lookup };
             (s.path, u.path, Some(lookup))
         }
     };
-    let configured = if config.shadow.snap { &snapped } else { &unsnapped };
+    let (snapped, unsnapped, lookup_error) = walk(&poses);
+    let extra: Vec<ExtraPathResult> = config
+        .extra_camera_paths()
+        .expect("validated when the config was loaded")
+        .into_iter()
+        .map(|(name, poses)| {
+            let (snapped, unsnapped, lookup_error) = walk(&poses);
+            ExtraPathResult {
+                name,
+                snapped,
+                unsnapped,
+                lookup_error,
+            }
+        })
+        .collect();
+    // Coverage and S7 over every path: violations add up, the worst and the slack take the
+    // extreme, S7 the largest of the paths.
+    let mut coverage = if config.shadow.snap { &snapped } else { &unsnapped }.coverage.clone();
+    let mut lookup_error = lookup_error;
+    let (mut worst_snapped, mut worst_unsnapped, mut jitter) = (
+        snapped.stats.rms,
+        unsnapped.stats.rms,
+        snapped.stats.size_jitter.max(unsnapped.stats.size_jitter),
+    );
+    for e in &extra {
+        let c = if config.shadow.snap { &e.snapped } else { &e.unsnapped };
+        let cov = &mut coverage;
+        for i in 0..cov.violations.len() {
+            cov.violations[i] += c.coverage.violations[i];
+            cov.worst_texels[i] = cov.worst_texels[i].max(c.coverage.worst_texels[i]);
+            cov.min_slack_texels[i] = cov.min_slack_texels[i].min(c.coverage.min_slack_texels[i]);
+        }
+        worst_snapped = worst_snapped.max(e.snapped.stats.rms);
+        worst_unsnapped = worst_unsnapped.max(e.unsnapped.stats.rms);
+        jitter = jitter
+            .max(e.snapped.stats.size_jitter)
+            .max(e.unsnapped.stats.size_jitter);
+        if let (Some(l), Some(x)) = (lookup_error.as_mut(), e.lookup_error.as_ref()) {
+            l.max = l.max.max(x.max);
+            l.rms = l.rms.max(x.rms);
+            for i in 0..l.cascade_max.len() {
+                l.cascade_max[i] = l.cascade_max[i].max(x.cascade_max[i]);
+                l.cascade_rms[i] = l.cascade_rms[i].max(x.cascade_rms[i]);
+            }
+        }
+    }
     let screen_stats = visibility
         .as_ref()
         .map(|vis| screen::stats(vis, &rig.splits, &texel, visible));
@@ -375,9 +435,9 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
                 centre_y_texels: w.origin_texels.y + 0.5 * w.resolution as f64,
                 light_near,
                 light_far,
-                coverage_violations: configured.coverage.violations[i],
-                coverage_worst_texels: configured.coverage.worst_texels[i],
-                min_slack_texels: configured.coverage.min_slack_texels[i],
+                coverage_violations: coverage.violations[i],
+                coverage_worst_texels: coverage.worst_texels[i],
+                min_slack_texels: coverage.min_slack_texels[i],
                 max_aliasing: aggregates.cascade_max_aliasing[i],
                 min_aliasing: aggregates.cascade_min_aliasing[i],
                 lookup_error_max: cascade_lookup(i).0,
@@ -398,10 +458,15 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         mean_aliasing: aggregates.mean_aliasing,
         mean_log_aliasing: aggregates.mean_log_aliasing,
         undersampled_fraction: aggregates.undersampled_fraction,
-        shimmer_snapped: snapped.stats.rms,
-        shimmer_unsnapped: unsnapped.stats.rms,
-        size_jitter: snapped.stats.size_jitter.max(unsnapped.stats.size_jitter),
-        coverage_violations: configured.coverage.total(),
+        shimmer: if config.shadow.snap {
+            worst_snapped
+        } else {
+            worst_unsnapped
+        },
+        shimmer_snapped: worst_snapped,
+        shimmer_unsnapped: worst_unsnapped,
+        size_jitter: jitter,
+        coverage_violations: coverage.total(),
         memory_bytes: memory,
         lookup_error_max: lookup_error.as_ref().map_or(0.0, |l| l.max),
         lookup_error_rms: lookup_error.as_ref().map_or(0.0, |l| l.rms),
@@ -424,6 +489,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
             snapped,
             unsnapped,
             lookup_error,
+            extra,
         })),
         summary,
     }

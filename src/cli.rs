@@ -45,7 +45,7 @@ pub enum Command {
 pub struct AnalyzeArgs {
     /// Scene and shadow settings (TOML).
     pub config: PathBuf,
-    /// Output directory [default: reports/<config name>/].
+    /// Output directory [default: out/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// What to print on stdout.
@@ -64,7 +64,7 @@ pub struct AnalyzeArgs {
 #[derive(Debug, Args)]
 pub struct StressArgs {
     /// Output directory for stress.csv.
-    #[arg(long, default_value = "reports/stress")]
+    #[arg(long, default_value = "out/stress")]
     pub out: PathBuf,
     /// Random cases added to the fixed battery (0..=100000).
     #[arg(long, default_value_t = 32, allow_negative_numbers = true)]
@@ -82,7 +82,7 @@ pub struct StressArgs {
 pub struct SweepArgs {
     /// Scene and shadow settings (TOML); its `[sweep]` table gives the grid.
     pub config: PathBuf,
-    /// Output directory [default: reports/<config name>/].
+    /// Output directory [default: out/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// λ axis: start:end:step (0:1:0.05) or a list (0,0.5,1).
@@ -119,14 +119,25 @@ pub struct CheckArgs {
     /// Scene and shadow settings (TOML).
     pub config: PathBuf,
     /// Rules and baseline tolerances (TOML; see docs/check.md).
-    #[arg(long)]
-    pub thresholds: PathBuf,
-    /// An earlier summary.json (or, with --sweep, sweep.csv) to compare against.
+    #[arg(long, required_unless_present = "init", conflicts_with = "init")]
+    pub thresholds: Option<PathBuf>,
+    /// Write a thresholds file here from the config's current values (with --headroom), and
+    /// its baseline beside it (`NAME.baseline.json`); then commit both.
+    #[arg(long, value_name = "FILE")]
+    pub init: Option<PathBuf>,
+    /// With --init: room each limit leaves over today's value, as a fraction (0.05 = 5 %).
+    #[arg(long, default_value_t = 0.05, requires = "init")]
+    pub headroom: f64,
+    /// An earlier summary.json (or, with --sweep, sweep.csv) to compare against [default: the
+    /// thresholds file's `[baseline] file`].
     #[arg(long)]
     pub baseline: Option<PathBuf>,
     /// Judge sweep rows (summary metrics only) instead of the one configuration.
     #[arg(long)]
     pub sweep: bool,
+    /// With --sweep: list every configuration instead of a summary.
+    #[arg(long)]
+    pub verbose: bool,
     /// Also write a JUnit XML report to this file.
     #[arg(long)]
     pub junit: Option<PathBuf>,
@@ -137,7 +148,7 @@ pub struct CheckArgs {
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Output directory [default: reports/bench/].
+    /// Output directory [default: out/bench/].
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Scene to measure [default: the built-in configs/default.toml].
@@ -158,7 +169,7 @@ pub struct CompareArgs {
     /// Every preset at its own defaults: ignore shadow.cascades, shadow.resolution and shadow.max_distance.
     #[arg(long)]
     pub defaults: bool,
-    /// Output directory [default: reports/<config name>/].
+    /// Output directory [default: out/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
@@ -186,14 +197,23 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             preset: args.preset,
             format: args.format,
         }),
-        Command::Check(args) => check::execute(&check::CheckRequest {
-            config: &args.config,
-            thresholds: &args.thresholds,
-            baseline: args.baseline.as_deref(),
-            sweep: args.sweep,
-            junit: args.junit.as_deref(),
-            format: args.format,
-        }),
+        Command::Check(args) => match (&args.init, &args.thresholds) {
+            (Some(file), _) => check::init(&check::InitRequest {
+                config: &args.config,
+                file,
+                headroom: args.headroom,
+            }),
+            (None, Some(thresholds)) => check::execute(&check::CheckRequest {
+                config: &args.config,
+                thresholds,
+                baseline: args.baseline.as_deref(),
+                sweep: args.sweep,
+                verbose: args.verbose,
+                junit: args.junit.as_deref(),
+                format: args.format,
+            }),
+            (None, None) => unreachable!("clap requires --thresholds unless --init"),
+        },
         Command::Stress(args) => stress::execute(&stress::StressRequest {
             out: args.out,
             cases: args.cases,

@@ -168,3 +168,63 @@ pub fn json_bytes(what: &str, v: &serde_json::Value) -> Result<Vec<u8>> {
     out.push(b'\n');
     Ok(out)
 }
+
+/// A number for people: "0" for zero, "< 1e-9" for magnitudes below 1e-9, at most four
+/// significant digits without trailing zeros ("10", "0.2", "1.967"), scientific notation
+/// outside [1e-3, 1e6) ("2.5e-5", "6.711e7").
+pub fn short_number(v: f64) -> String {
+    if v == 0.0 {
+        return "0".to_string();
+    }
+    if !v.is_finite() {
+        return v.to_string();
+    }
+    if v.abs() < 1e-9 {
+        return if v < 0.0 {
+            "> -1e-9".to_string()
+        } else {
+            "< 1e-9".to_string()
+        };
+    }
+    let a = v.abs();
+    if !(1e-3..1e6).contains(&a) {
+        let s = format!("{v:.3e}");
+        let (m, e) = s.split_once('e').expect("exponent");
+        let m = if m.contains('.') {
+            m.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            m
+        };
+        return format!("{m}e{e}");
+    }
+    let digits = (3 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+#[cfg(test)]
+mod short_number_tests {
+    use super::short_number;
+
+    #[test]
+    fn numbers_read_like_people_write_them() {
+        for (v, s) in [
+            (0.0, "0"),
+            (10.0, "10"),
+            (0.2, "0.2"),
+            (1.9674, "1.967"),
+            (0.1667, "0.1667"),
+            (5.24e-14, "< 1e-9"),
+            (2.5e-5, "2.5e-5"),
+            (67108864.0, "6.711e7"),
+            (106.115, "106.1"),
+            (-3.0, "-3"),
+        ] {
+            assert_eq!(short_number(v), s, "{v}");
+        }
+    }
+}

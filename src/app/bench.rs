@@ -35,7 +35,10 @@ pub fn execute(args: &BenchRequest) -> Result<Outcome> {
         }
     };
     let measured = run(&config, args.repeats as usize)?;
-    let dir = args.out.clone().unwrap_or_else(|| Path::new("reports").join("bench"));
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new(super::DEFAULT_OUT_ROOT).join("bench"));
     let exporters: [&dyn Exporter<BenchReport>; 2] = [&report::bench::BenchCsv, &crate::figures::bench::BenchSvg];
     let written = output::export_all(&dir, &measured, &exporters)?;
     print!("{}", report::bench::table(&measured));

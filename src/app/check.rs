@@ -28,16 +28,41 @@ pub struct CheckRequest<'a> {
     pub baseline: Option<&'a Path>,
     /// Judge sweep rows instead of the one configuration.
     pub sweep: bool,
+    /// With `sweep`: every configuration instead of the summary.
+    pub verbose: bool,
     /// Also write a JUnit XML report here.
     pub junit: Option<&'a Path>,
     pub format: Format,
 }
 
 /// The `check` command. Every input is read and validated before anything is analysed, and
-/// nothing is printed or written unless the whole check succeeded.
+/// nothing is printed unless the whole check succeeded. When it cannot run (exit 2), the
+/// JUnit file, if asked for, is replaced by one that reports the error.
 pub fn execute(args: &CheckRequest) -> Result<Outcome> {
+    let result = run(args);
+    if let (Err(e), Some(p)) = (&result, args.junit) {
+        let xml = crate::report::junit::render_error(&args.config.display().to_string(), &e.to_string());
+        if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+            output::ensure_dir(dir)?;
+        }
+        output::write_atomic(p, xml.as_bytes())?;
+        eprintln!("wrote {} (reporting the error)", p.display());
+    }
+    result
+}
+
+fn run(args: &CheckRequest) -> Result<Outcome> {
     let config = Config::load(args.config)?;
     let thresholds = Thresholds::load(args.thresholds)?;
+    // `--baseline` or the thresholds file's `[baseline] file`.
+    let baseline_path = args
+        .baseline
+        .map(Path::to_path_buf)
+        .or_else(|| thresholds.baseline_file.clone());
+    let args = &CheckRequest {
+        baseline: baseline_path.as_deref(),
+        ..*args
+    };
     if thresholds.rules.is_empty() && args.baseline.is_none() {
         return Err(Error::flag(
             "--thresholds",
@@ -87,7 +112,7 @@ pub fn execute(args: &CheckRequest) -> Result<Outcome> {
     };
 
     let stdout = match args.format {
-        Format::Table => report.table().into_bytes(),
+        Format::Table => report.table_with(args.verbose).into_bytes(),
         Format::Json => output::json_bytes("check", &report.json())?,
     };
     if let Some(p) = &args.junit {
@@ -121,4 +146,59 @@ fn with_hint(e: Error, hint: &str) -> Error {
         .into(),
         other => other,
     }
+}
+
+/// What `check --init` was asked to do.
+#[derive(Debug, Clone, Copy)]
+pub struct InitRequest<'a> {
+    pub config: &'a Path,
+    /// The thresholds file to write; the baseline goes beside it.
+    pub file: &'a Path,
+    /// Room each limit leaves over today's value (a fraction).
+    pub headroom: f64,
+}
+
+/// `check CONFIG --init FILE`: a thresholds file from the config's current values, with
+/// `headroom`, and its baseline (`summary.json` content) beside it, named in the file.
+pub fn init(args: &InitRequest) -> Result<Outcome> {
+    if !(args.headroom.is_finite() && (0.0..=10.0).contains(&args.headroom)) {
+        return Err(Error::flag(
+            "--headroom",
+            &args.headroom.to_string(),
+            "a fraction in 0..=10 (0.05 leaves 5 % of room)",
+        ));
+    }
+    let config = Config::load(args.config)?;
+    // Everything `analyze` computes: the baseline is its summary.json.
+    let analysis = analyze(&config, &crate::analysis::AnalysisOptions::full());
+    let stem = args
+        .file
+        .file_stem()
+        .map_or_else(|| "thresholds".to_string(), |s| s.to_string_lossy().into_owned());
+    let baseline_name = format!("{stem}.baseline.json");
+    let baseline_path = args.file.with_file_name(&baseline_name);
+    let text = init::thresholds_text(
+        &analysis,
+        &args.config.display().to_string(),
+        &baseline_name,
+        args.headroom,
+    );
+    // The text must load as a thresholds file (the same validation `check` applies).
+    Thresholds::from_toml_str(&text, &args.file.display().to_string())?;
+    let baseline = output::json_bytes("summary", &crate::report::analyze::summary_value(&analysis))?;
+    if let Some(dir) = args.file.parent().filter(|d| !d.as_os_str().is_empty()) {
+        output::ensure_dir(dir)?;
+    }
+    output::write_atomic(&baseline_path, &baseline)?;
+    output::write_atomic(args.file, text.as_bytes())?;
+    eprintln!(
+        "wrote {} ({} rules, {} % headroom) and its baseline {}; commit both, then run\n  csm-lab check {} --thresholds {}",
+        args.file.display(),
+        text.matches("[[rule]]").count(),
+        crate::output::short_number(args.headroom * 100.0),
+        baseline_path.display(),
+        args.config.display(),
+        args.file.display()
+    );
+    Ok(Outcome::Success)
 }

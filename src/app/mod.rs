@@ -49,6 +49,18 @@ pub fn load_with_preset_flag(path: &Path, preset: Option<&str>) -> Result<Config
     Config::load_with_preset(path, &choice)
 }
 
+/// The same for `sweep --preset`: a `[shadow]` count or map size the engine does not offer
+/// falls back to the engine's default with a note (the sweep covers the engine's own axes
+/// anyway), so every preset sweeps every scene.
+pub fn load_for_preset_sweep(path: &Path, preset: Option<&str>) -> Result<Config> {
+    let choice = crate::presets::PresetChoice {
+        name: preset.map(|s| crate::presets::parse_flag("--preset", s)).transpose()?,
+        lenient_overrides: preset.is_some(),
+        ..Default::default()
+    };
+    Config::load_with_preset(path, &choice)
+}
+
 /// Prints a command's result: with `--format table` the table, then the "wrote" line, on
 /// stdout; with `--format json` the JSON document on stdout and the "wrote" line on stderr, so
 /// that stdout is exactly one document.
@@ -72,7 +84,12 @@ pub fn print_result(
     Ok(())
 }
 
-/// The default output directory for a config: `reports/<name>/`.
+/// Where commands write without `--out`: `out/`, ignored by git, so running a command never
+/// changes the committed samples under `reports/` (those are written on purpose, by
+/// `scripts/regen-samples.sh`).
+pub const DEFAULT_OUT_ROOT: &str = "out";
+
+/// The default output directory for a config: `out/<name>/`.
 pub fn default_out_dir(config: &Config) -> PathBuf {
-    Path::new("reports").join(&config.name)
+    Path::new(DEFAULT_OUT_ROOT).join(&config.name)
 }

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use super::{default_out_dir, load_with_preset_flag, print_result, Format, Outcome};
+use super::{default_out_dir, load_for_preset_sweep, print_result, Format, Outcome};
 use crate::commands::sweep::*;
 use crate::error::Result;
 use crate::output;
@@ -11,7 +11,7 @@ use crate::report;
 
 /// Runs a sweep as the CLI does, without printing: (result, rendered files).
 pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::RenderedFiles)> {
-    let config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
+    let config = load_for_preset_sweep(&args.config, args.preset.as_deref())?;
     let overrides = GridOverrides {
         lambda: args.lambda.as_deref().map(parse_lambda_spec).transpose()?,
         cascades: args.cascades.as_deref().map(parse_cascades_spec).transpose()?,

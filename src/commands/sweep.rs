@@ -599,6 +599,47 @@ pub fn recommend_by(rows: &[Row], budget_mib: f64, objective: SummaryMetric) -> 
     })
 }
 
+/// Why no configuration qualified, and which one comes closest.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NoRecommendation {
+    /// Rows whose scene needs no cascades.
+    pub no_cascades: usize,
+    /// Rows with slice corners outside their windows.
+    pub coverage_misses: usize,
+    /// Rows that shimmer when snapped (> [`STABLE_SHIMMER`]).
+    pub unstable: usize,
+    /// The closest row: the fewest coverage violations, then the least snapped shimmer, then
+    /// within the budget, then the objective. None when no row needs cascades.
+    pub closest: Option<usize>,
+}
+
+/// The failure analysis of a sweep without a recommendation.
+pub fn no_recommendation(rows: &[Row], budget_mib: f64, objective: SummaryMetric) -> NoRecommendation {
+    let budget_bytes = (budget_mib * 1024.0 * 1024.0).floor() as u64;
+    let needed: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed).collect();
+    let closest = needed.iter().copied().min_by(|&a, &b| {
+        let (x, y) = (&rows[a].summary, &rows[b].summary);
+        x.coverage_violations
+            .cmp(&y.coverage_violations)
+            .then(x.shimmer_snapped.total_cmp(&y.shimmer_snapped))
+            .then((x.memory_bytes > budget_bytes).cmp(&(y.memory_bytes > budget_bytes)))
+            .then(objective.value(x).total_cmp(&objective.value(y)))
+            .then(a.cmp(&b))
+    });
+    NoRecommendation {
+        no_cascades: rows.len() - needed.len(),
+        coverage_misses: needed
+            .iter()
+            .filter(|&&i| rows[i].summary.coverage_violations > 0)
+            .count(),
+        unstable: needed
+            .iter()
+            .filter(|&&i| rows[i].summary.shimmer_snapped > STABLE_SHIMMER)
+            .count(),
+        closest,
+    }
+}
+
 /// The best of `candidates` by [`OBJECTIVE`]: the shortlist within [`MEAN_TOLERANCE`] of the
 /// lowest mean aliasing, then the lowest max aliasing, less memory, fewer cascades, grid order.
 fn pick(rows: &[Row], candidates: &[usize], objective: SummaryMetric) -> Option<usize> {
@@ -787,6 +828,7 @@ mod tests {
                 mean_aliasing: mean,
                 mean_log_aliasing: mean,
                 undersampled_fraction: 0.0,
+                shimmer: 0.0,
                 shimmer_snapped: 0.0,
                 shimmer_unsnapped: 0.3,
                 size_jitter: 0.0,

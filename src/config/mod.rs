@@ -243,6 +243,34 @@ pub struct MotionSettings {
     pub step: f64,
     /// The step as written: degrees for the rotational paths.
     pub step_as_written: f64,
+    /// Further paths of `motion.paths` after the first (empty with a single path). Each is
+    /// walked from the configured camera; the summary's path metrics take the worst of all.
+    pub extra: Vec<ExtraPath>,
+}
+
+/// A further motion path of `motion.paths`, with its own step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExtraPath {
+    pub path: MotionPath,
+    pub step: f64,
+    pub step_as_written: f64,
+}
+
+impl MotionSettings {
+    /// Every path, first the primary one: (path, step in internal units, step as written).
+    pub fn all_paths(&self) -> Vec<(&MotionPath, f64, f64)> {
+        std::iter::once((&self.path, self.step, self.step_as_written))
+            .chain(self.extra.iter().map(|e| (&e.path, e.step, e.step_as_written)))
+            .collect()
+    }
+}
+
+fn step_unit(path: &MotionPath) -> &'static str {
+    match path {
+        MotionPath::Strafe | MotionPath::Dolly => "world units per frame",
+        MotionPath::File { .. } => "unused (poses from file)",
+        _ => "degrees per frame",
+    }
 }
 
 /// How densely the sampled quantities are sampled. The closed forms do not depend on these.
@@ -309,7 +337,7 @@ impl GeometrySettings {
 /// A validated scene and shadow setting.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Config {
-    /// The file stem, used for the default output directory `reports/<name>/`.
+    /// The file stem, used for the default output directory `out/<name>/`.
     pub name: String,
     /// Where the config was read from, if from a file.
     pub path: Option<PathBuf>,
@@ -369,11 +397,7 @@ impl Config {
 
     /// The inputs as used, for `summary.json`.
     pub fn echo(&self) -> serde_json::Value {
-        let motion_step_unit = match self.motion.path {
-            MotionPath::Strafe | MotionPath::Dolly => "world units per frame",
-            MotionPath::File { .. } => "unused (poses from file)",
-            _ => "degrees per frame",
-        };
+        let motion_step_unit = step_unit(&self.motion.path);
         let mut motion = serde_json::json!({
             "path": self.motion.path.name(),
             "frames": self.motion.frames,
@@ -382,6 +406,14 @@ impl Config {
         });
         if let MotionPath::File { path, .. } = &self.motion.path {
             motion["file"] = serde_json::Value::String(path.display().to_string());
+        }
+        if !self.motion.extra.is_empty() {
+            motion["paths"] = self
+                .motion
+                .all_paths()
+                .into_iter()
+                .map(|(p, _, step)| serde_json::json!({ "path": p.name(), "step": step, "step_unit": step_unit(p) }))
+                .collect();
         }
         let mut scene =
             serde_json::json!({ "min": self.scene.min, "max": self.scene.max, "world_offset": self.world_offset });
@@ -443,5 +475,29 @@ impl Config {
     pub fn camera_path(&self) -> std::result::Result<Vec<CameraPose>, (usize, String)> {
         let setup = self.setup();
         crate::motion::camera_path(&setup.camera, &setup.motion)
+    }
+
+    /// Camera poses of each further path of `motion.paths` (after the first), with its name,
+    /// or the path's index (1-based in `motion.paths`), first invalid frame and why.
+    #[allow(clippy::type_complexity)]
+    pub fn extra_camera_paths(
+        &self,
+    ) -> std::result::Result<Vec<(&'static str, Vec<CameraPose>)>, (usize, usize, String)> {
+        let setup = self.setup();
+        self.motion
+            .extra
+            .iter()
+            .enumerate()
+            .map(|(k, e)| {
+                let motion = crate::scene::Motion {
+                    path: e.path.clone(),
+                    frames: self.motion.frames,
+                    step: e.step,
+                };
+                crate::motion::camera_path(&setup.camera, &motion)
+                    .map(|poses| (e.path.name(), poses))
+                    .map_err(|(frame, why)| (k + 1, frame, why))
+            })
+            .collect()
     }
 }

@@ -151,6 +151,10 @@ pub(crate) struct RawShadow {
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawMotion {
     pub(crate) path: Option<String>,
+    /// Several paths, judged together (the summary takes the worst); excludes `path`.
+    pub(crate) paths: Option<Vec<String>>,
+    /// One step per entry of `paths` (default: `step` for every path).
+    pub(crate) steps: Option<Vec<f64>>,
     pub(crate) frames: Option<i64>,
     pub(crate) step: Option<f64>,
     pub(crate) file: Option<String>,

@@ -224,59 +224,124 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let m = raw.motion;
     let frames = v.int_range("motion.frames", m.frames.unwrap_or(240), 2, 1_000_000)? as usize;
     let step_as_written = v.finite("motion.step", m.step.unwrap_or(0.05))?;
-    let path_name = m.path.unwrap_or_else(|| "strafe".to_string());
-    if path_name != "file" {
-        if let Some(file) = &m.file {
-            return Err(v.invalid(
-                "motion.file",
-                format!("{file:?}"),
-                &format!(
-                    "motion.file only together with motion.path = \"file\" (motion.path is {path_name:?}); \
-                     set motion.path = \"file\" or remove motion.file"
-                ),
-            ));
-        }
-        if step_as_written == 0.0 {
-            return Err(v.invalid(
-                "motion.step",
-                step_as_written,
-                "a non-zero step (world units or degrees per frame); a zero step does not move the camera",
-            ));
-        }
-    }
-    let (path, step) = match path_name.as_str() {
-        name if MotionPath::generated(name).is_some() => {
-            let path = MotionPath::generated(name).expect("just matched");
-            let step = path.step_from_written(step_as_written);
-            (path, step)
-        }
-        "file" => {
-            let file = m.file.ok_or_else(|| {
-                v.invalid(
+    let file = m.file;
+    let parse_path = |name: &str, step_as_written: f64, key: &str| -> Result<(MotionPath, f64)> {
+        if name != "file" {
+            if let Some(file) = &file {
+                return Err(v.invalid(
                     "motion.file",
-                    "(missing)",
-                    "a CSV file with columns px,py,pz,tx,ty,tz when motion.path = \"file\"",
-                )
-            })?;
-            let p = PathBuf::from(&file);
-            let p = match base_dir {
-                Some(dir) if p.is_relative() => dir.join(p),
-                _ => p,
-            };
-            let poses = super::read_path_file(&p)?
-                .into_iter()
-                .map(|(position, target)| (position + world_offset, target + world_offset))
-                .collect();
-            (MotionPath::File { path: p, poses }, 0.0)
+                    format!("{file:?}"),
+                    &format!(
+                        "motion.file only together with motion.path = \"file\" (motion.path is {name:?}); \
+                         set motion.path = \"file\" or remove motion.file"
+                    ),
+                ));
+            }
+            if step_as_written == 0.0 {
+                return Err(v.invalid(
+                    if key == "motion.paths" {
+                        "motion.steps"
+                    } else {
+                        "motion.step"
+                    },
+                    step_as_written,
+                    "a non-zero step (world units or degrees per frame); a zero step does not move the camera",
+                ));
+            }
         }
-        other => {
+        Ok(match name {
+            name if MotionPath::generated(name).is_some() => {
+                let path = MotionPath::generated(name).expect("just matched");
+                let step = path.step_from_written(step_as_written);
+                (path, step)
+            }
+            "file" => {
+                let file = file.clone().ok_or_else(|| {
+                    v.invalid(
+                        "motion.file",
+                        "(missing)",
+                        "a CSV file with columns px,py,pz,tx,ty,tz when motion.path = \"file\"",
+                    )
+                })?;
+                let p = PathBuf::from(&file);
+                let p = match base_dir {
+                    Some(dir) if p.is_relative() => dir.join(p),
+                    _ => p,
+                };
+                let poses = super::read_path_file(&p)?
+                    .into_iter()
+                    .map(|(position, target)| (position + world_offset, target + world_offset))
+                    .collect();
+                (MotionPath::File { path: p, poses }, 0.0)
+            }
+            other => {
+                return Err(v.invalid(
+                    key,
+                    format!("{other:?}"),
+                    &format!("one of {}", MotionPath::names_quoted()),
+                ))
+            }
+        })
+    };
+    let names: Vec<String> = match (m.path, m.paths) {
+        (Some(_), Some(_)) => {
             return Err(v.invalid(
-                "motion.path",
-                format!("{other:?}"),
-                &format!("one of {}", MotionPath::names_quoted()),
+                "motion.paths",
+                "(with motion.path)",
+                "either `path = \"NAME\"` or `paths = [\"NAME\", ...]`, not both",
+            ))
+        }
+        (Some(p), None) => vec![p],
+        (None, Some(list)) => {
+            if list.is_empty() || list.len() > 8 {
+                return Err(v.invalid(
+                    "motion.paths",
+                    format!("{} entries", list.len()),
+                    "a list of 1 to 8 path names",
+                ));
+            }
+            for (i, a) in list.iter().enumerate() {
+                if list[..i].contains(a) {
+                    return Err(v.invalid("motion.paths", format!("{a:?} twice"), "each path at most once"));
+                }
+            }
+            list
+        }
+        (None, None) => vec!["strafe".to_string()],
+    };
+    let steps: Vec<f64> = match m.steps {
+        None => vec![step_as_written; names.len()],
+        Some(list) if list.len() == names.len() => list
+            .into_iter()
+            .map(|x| v.finite("motion.steps", x))
+            .collect::<Result<_>>()?,
+        Some(list) => {
+            return Err(v.invalid(
+                "motion.steps",
+                format!("{} entries", list.len()),
+                &format!("one step per entry of motion.paths ({})", names.len()),
             ))
         }
     };
+    let key = if names.len() > 1 { "motion.paths" } else { "motion.path" };
+    let (path, step) = parse_path(&names[0], steps[0], key)?;
+    let step_as_written = steps[0];
+    let mut extra = Vec::new();
+    for (name, &sw) in names.iter().zip(&steps).skip(1) {
+        let (p, st) = parse_path(name, sw, key)?;
+        if p.is_translation() && sw.abs() * (frames - 1) as f64 > MAX_WORLD {
+            return Err(v.invalid(
+                "motion.steps",
+                sw,
+                &format!("a step whose {} frames travel at most 1e9 world units", frames),
+            ));
+        }
+        extra.push(super::ExtraPath {
+            path: p,
+            step: st,
+            step_as_written: sw,
+        });
+    }
     let frames = match &path {
         MotionPath::File { poses, .. } => poses.len(),
         _ => frames,
@@ -341,6 +406,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             frames,
             step,
             step_as_written,
+            extra,
         },
         analysis,
         sweep,
@@ -373,7 +439,14 @@ pub fn check_camera_path(config: &Config, v: &Validator<'_>) -> Result<()> {
                 format!("{} (frame {frame})", config.motion.step_as_written),
                 &format!("a motion that keeps a valid camera in every frame: {why}"),
             ),
-        })
+        })?;
+    config.extra_camera_paths().map(|_| ()).map_err(|(k, frame, why)| {
+        v.invalid(
+            "motion.paths",
+            format!("{:?} (frame {frame})", config.motion.extra[k - 1].path.name()),
+            &format!("a motion that keeps a valid camera in every frame: {why}"),
+        )
+    })
 }
 
 /// The scene's bounds and geometry. Without geometry `min` and `max` are required; with it

@@ -94,7 +94,21 @@ impl Exporter<Analysis> for ShimmerCsv {
 
     fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
         let mut rows = Vec::new();
-        for path in [a.snapped(), a.unsnapped()].into_iter().flatten() {
+        let first = (a.config.motion.path.name(), a.snapped(), a.unsnapped());
+        let extra = a
+            .measured()
+            .map(|m| {
+                m.extra
+                    .iter()
+                    .map(|e| (e.name, Some(&e.snapped), Some(&e.unsnapped)))
+                    .collect::<Vec<_>>()
+            })
+            .unwrap_or_default();
+        for (name, path) in std::iter::once(first)
+            .chain(extra)
+            .flat_map(|(n, s, u)| [(n, s), (n, u)])
+            .filter_map(|(n, p)| p.map(|p| (n, p)))
+        {
             for f in &path.frames {
                 rows.push(vec![
                     f.frame.to_string(),
@@ -107,6 +121,7 @@ impl Exporter<Analysis> for ShimmerCsv {
                         Some(v) => num("cell_flips", v)?,
                         None => String::new(),
                     },
+                    name.to_string(),
                 ]);
             }
         }
@@ -119,6 +134,7 @@ impl Exporter<Analysis> for ShimmerCsv {
                 "phase_drift_rms",
                 "phase_drift_max",
                 "cell_flips",
+                "path",
             ],
             &rows,
         )
@@ -177,13 +193,24 @@ pub fn summary_value(a: &Analysis) -> serde_json::Value {
             })
         })
     };
+    // Per motion path (the flat `shimmer*` keys take the worst of them).
+    let mut paths = vec![serde_json::json!({
+        "path": a.config.motion.path.name(),
+        "snapped": path_json(a.snapped()),
+        "unsnapped": path_json(a.unsnapped()),
+    })];
+    for e in a.measured().map(|m| m.extra.as_slice()).unwrap_or_default() {
+        paths.push(serde_json::json!({
+            "path": e.name,
+            "snapped": path_json(Some(&e.snapped)),
+            "unsnapped": path_json(Some(&e.unsnapped)),
+        }));
+    }
     obj.insert(
-        "shimmer".into(),
+        "shimmer_paths".into(),
         serde_json::json!({
             "frames": a.config.motion.frames,
-            "path": a.config.motion.path.name(),
-            "snapped": path_json(a.snapped()),
-            "unsnapped": path_json(a.unsnapped()),
+            "paths": paths,
         }),
     );
     obj.insert(

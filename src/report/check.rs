@@ -11,7 +11,183 @@ use crate::check::report::{Body, CheckReport};
 use crate::check::sweep::SweepKey;
 use crate::check::thresholds::{CascadeSelection, Target};
 
+/// Offenders listed per rule and regressions listed in the `--sweep` summary.
+const WORST_LISTED: usize = 3;
+
 impl CheckReport {
+    /// The terminal table: with `--sweep`, a summary (counts per rule, the worst offenders)
+    /// unless `verbose`, which lists every configuration.
+    pub fn table_with(&self, verbose: bool) -> String {
+        match &self.body {
+            Body::Sweep { rows, baseline } if !verbose => self.sweep_summary(rows, baseline.as_ref()),
+            _ => self.table(),
+        }
+    }
+
+    /// `check --sweep`'s summary: one line per rule with its counts over the configurations
+    /// and its worst offenders, each distinct note once, the baseline's counts per metric and
+    /// its largest regressions.
+    fn sweep_summary(
+        &self,
+        rows: &[crate::check::sweep::RowReport],
+        baseline: Option<&crate::check::report::SweepBaseline>,
+    ) -> String {
+        let mut out = String::new();
+        let c = self.counts();
+        let _ = writeln!(
+            out,
+            "check --sweep {} against {}: {} configuration{} (summary; --verbose lists every one)",
+            self.config,
+            self.thresholds,
+            rows.len(),
+            plural(rows.len())
+        );
+        let rule_count = rows.first().map_or(0, |r| r.results.len());
+        // Each distinct note once, with the rules it concerns.
+        let mut notes: Vec<(String, Vec<String>)> = Vec::new();
+        let mut table = vec![vec![
+            "rule".to_string(),
+            "metric".to_string(),
+            "limit".to_string(),
+            "pass".to_string(),
+            "fail".to_string(),
+            "n/a".to_string(),
+            "worst".to_string(),
+        ]];
+        let mut offenders: Vec<String> = Vec::new();
+        for k in 0..rule_count {
+            let results: Vec<(&crate::check::sweep::SweepKey, &RuleResult)> =
+                rows.iter().map(|r| (&r.key, &r.results[k])).collect();
+            let first = results[0].1;
+            let n = |s: Status| results.iter().filter(|(_, r)| r.status == s).count();
+            let mut judged: Vec<_> = results
+                .iter()
+                .filter_map(|(key, r)| r.judgement.as_ref().map(|j| (*key, j)))
+                .collect();
+            judged.sort_by(|a, b| a.1.margin.total_cmp(&b.1.margin).then_with(|| a.0.cmp(b.0)));
+            for (_, r) in &results {
+                if r.status == Status::NotApplicable {
+                    if let Some(note) = &r.note {
+                        let rule = format!("{} ({})", first.rule.index, first.rule.target.metric_name());
+                        match notes.iter_mut().find(|(n, _)| n == note) {
+                            Some((_, rules)) if rules.contains(&rule) => {}
+                            Some((_, rules)) => rules.push(rule),
+                            None => notes.push((note.clone(), vec![rule])),
+                        }
+                    }
+                }
+            }
+            table.push(vec![
+                first.rule.index.to_string(),
+                first.rule.target.metric_name().to_string(),
+                limit_text(first),
+                n(Status::Pass).to_string(),
+                n(Status::Fail).to_string(),
+                n(Status::NotApplicable).to_string(),
+                judged.first().map_or("-".to_string(), |(_, j)| short(j.actual.value)),
+            ]);
+            for (key, j) in judged.iter().filter(|(_, j)| j.margin < 0.0).take(WORST_LISTED) {
+                offenders.push(format!(
+                    "rule {} ({} {}): {} = {}, over by {}",
+                    first.rule.index,
+                    first.rule.target.metric_name(),
+                    limit_text(first),
+                    key.label(),
+                    short(j.actual.value),
+                    short(-j.margin)
+                ));
+            }
+        }
+        out.push_str(&grid(&table, &[true, false, false, true, true, true, true], "  "));
+        if !offenders.is_empty() {
+            let _ = writeln!(out, "worst offenders (up to {WORST_LISTED} per rule):");
+            for o in &offenders {
+                let _ = writeln!(out, "  {o}");
+            }
+        }
+        for (note, rules) in &notes {
+            let _ = writeln!(
+                out,
+                "note: rule{} {} not applicable: {note}",
+                plural(rules.len()),
+                rules.join(", ")
+            );
+        }
+        let passing = rows.iter().filter(|r| r.passed()).count();
+        let _ = writeln!(out, "{passing} of {} configurations pass", rows.len());
+        if let Some(b) = baseline {
+            let cmp = &b.comparison;
+            let _ = writeln!(
+                out,
+                "baseline {}: {} configuration{} matched, {} new, {} not in the current sweep",
+                b.file,
+                cmp.matched.len(),
+                plural(cmp.matched.len()),
+                cmp.only_current.len(),
+                cmp.only_baseline.len()
+            );
+            if !cmp.columns_not_in_baseline.is_empty() {
+                let _ = writeln!(
+                    out,
+                    "note: not compared (the baseline has no such column): {}",
+                    cmp.columns_not_in_baseline.join(", ")
+                );
+            }
+            out.push_str(&tolerance_line(&self.tolerances));
+            let mut regressions: Vec<(&crate::check::sweep::SweepKey, &Comparison)> = cmp
+                .matched
+                .iter()
+                .flat_map(|r| r.comparisons.iter().map(move |x| (&r.key, x)))
+                .filter(|(_, x)| x.verdict == Verdict::Regressed)
+                .collect();
+            let mut per_metric: std::collections::BTreeMap<&str, usize> = Default::default();
+            for (_, x) in &regressions {
+                *per_metric.entry(x.metric.name()).or_default() += 1;
+            }
+            for (m, n) in &per_metric {
+                let _ = writeln!(out, "  {m}: regressed in {n} configuration{}", plural(*n));
+            }
+            // Largest relative worsening first.
+            let rel = |x: &Comparison| {
+                let w = x
+                    .metric
+                    .direction()
+                    .worsening(x.baseline.unwrap_or(0.0), x.current.unwrap_or(0.0));
+                w.unwrap_or(0.0) / x.baseline.unwrap_or(0.0).abs().max(1e-300)
+            };
+            regressions.sort_by(|a, b| rel(b.1).total_cmp(&rel(a.1)).then_with(|| a.0.cmp(b.0)));
+            for (key, x) in regressions.iter().take(2 * WORST_LISTED) {
+                let _ = writeln!(
+                    out,
+                    "  {}: {} {} -> {}",
+                    key.label(),
+                    x.metric.name(),
+                    short(x.baseline.unwrap_or(0.0)),
+                    short(x.current.unwrap_or(0.0))
+                );
+            }
+            let all: Vec<Comparison> = cmp.matched.iter().flat_map(|r| r.comparisons.clone()).collect();
+            out.push_str(&verdict_counts(&all));
+        }
+        let _ = writeln!(out, "result: {}", self.result_text(&c));
+        out
+    }
+
+    fn result_text(&self, c: &crate::check::report::Counts) -> String {
+        if self.passed() {
+            "PASS".to_string()
+        } else {
+            let mut why = Vec::new();
+            if c.fail > 0 {
+                why.push(format!("{} rule check{} failed", c.fail, plural(c.fail)));
+            }
+            if c.regressed > 0 {
+                why.push(format!("{} metric{} regressed", c.regressed, plural(c.regressed)));
+            }
+            format!("FAIL ({})", why.join(", "))
+        }
+    }
+
     /// The terminal table.
     pub fn table(&self) -> String {
         let mut out = String::new();
@@ -101,6 +277,13 @@ impl CheckReport {
                     for k in &cmp.only_baseline {
                         let _ = writeln!(out, "{}: not in the current sweep", k.label());
                     }
+                    if !cmp.columns_not_in_baseline.is_empty() {
+                        let _ = writeln!(
+                            out,
+                            "note: not compared (the baseline has no such column): {}",
+                            cmp.columns_not_in_baseline.join(", ")
+                        );
+                    }
                     let all: Vec<Comparison> = cmp.matched.iter().flat_map(|r| r.comparisons.clone()).collect();
                     out.push_str(&verdict_counts(&all));
                 }
@@ -187,6 +370,7 @@ impl CheckReport {
                             })).collect::<Vec<_>>(),
                             "only_current": cmp.only_current.iter().map(key_json).collect::<Vec<_>>(),
                             "only_baseline": cmp.only_baseline.iter().map(key_json).collect::<Vec<_>>(),
+                            "columns_not_in_baseline": cmp.columns_not_in_baseline,
                         }),
                     );
                 }

@@ -237,3 +237,25 @@ pub fn render(report: &CheckReport) -> String {
     x.push_str("</testsuites>\n");
     x
 }
+
+/// The JUnit document of a `check` that could not run (exit 2): one test case in error, with
+/// the message, so a CI step publishing the file never shows an earlier pass.
+pub fn render_error(config: &str, message: &str) -> String {
+    let mut x = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    x.push_str(
+        "<testsuites name=\"csm-lab check\" tests=\"1\" failures=\"0\" errors=\"1\" skipped=\"0\" time=\"0\">\n",
+    );
+    let _ = writeln!(
+        x,
+        "  <testsuite name=\"check {}\" tests=\"1\" failures=\"0\" errors=\"1\" skipped=\"0\" time=\"0\">",
+        escape(config)
+    );
+    let _ = writeln!(
+        x,
+        "    <testcase classname=\"csm-lab.check\" name=\"check could not run\" time=\"0\">\n      <error message=\"{}\" type=\"error\">exit code 2: {}</error>\n    </testcase>",
+        escape(message),
+        escape(message)
+    );
+    x.push_str("  </testsuite>\n</testsuites>\n");
+    x
+}

@@ -70,17 +70,36 @@ fn row_json(row: &Row) -> serde_json::Value {
 }
 
 pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
-    serde_json::json!({
+    let mut v = serde_json::json!({
         "tool": format!("csm-lab {}", env!("CARGO_PKG_VERSION")),
         "name": r.config.name,
         "command": r.command,
         "configurations": r.rows.len(),
         "objective": sweep::objective_text(r.objective),
         "memory_budget_mib": r.budget_mib,
-        "within_budget": r.recommendation.as_ref().map(|x| x.within_budget),
-        "recommended": r.recommended().map(row_json),
         "pareto_front": r.front.iter().map(|&i| row_json(&r.rows[i])).collect::<Vec<_>>(),
-    })
+    });
+    match (r.recommendation.as_ref(), r.recommended()) {
+        (Some(rec), Some(row)) => {
+            v["within_budget"] = rec.within_budget.into();
+            v["recommended"] = row_json(row);
+        }
+        _ => {
+            // No null (every number must be finite): the reasons and the closest row instead.
+            let n = sweep::no_recommendation(&r.rows, r.budget_mib, r.objective);
+            let mut none = serde_json::json!({
+                "why": why_text(r),
+                "configurations_without_cascades": n.no_cascades,
+                "configurations_with_coverage_misses": n.coverage_misses,
+                "configurations_unstable_when_snapped": n.unstable,
+            });
+            if let Some(i) = n.closest {
+                none["closest"] = row_json(&r.rows[i]);
+            }
+            v["no_recommendation"] = none;
+        }
+    }
+    v
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -185,11 +204,33 @@ fn scene_facts(c: &Config, rows: &[Row]) -> Vec<(String, String)> {
 
 fn why_text(r: &SweepResult) -> String {
     let Some(rec) = r.recommended() else {
-        return if r.rows.iter().any(|x| x.summary.cascades_needed) {
-            "No configuration covers every slice and stays stable when snapped; see the table below.".to_string()
-        } else {
-            "The scene is not visible within the shadow distance: no cascades are needed.".to_string()
+        let n = sweep::no_recommendation(&r.rows, r.budget_mib, r.objective);
+        let Some(c) = n.closest else {
+            return "The scene is not visible within the shadow distance: no cascades are needed.".to_string();
         };
+        let x = &r.rows[c];
+        let total = r.rows.len();
+        return format!(
+            "Nothing qualifies: of {total} configuration{}, {} miss slice corners (coverage_violations > 0) and {} shimmer when snapped (shimmer_snapped > {} texel){}. Closest: {} cascade{} of {}² texels, {}: {} coverage violation{}, snapped shimmer {}, mean aliasing {}, {} MiB.",
+            crate::report::check::plural(total),
+            n.coverage_misses,
+            n.unstable,
+            sweep::STABLE_SHIMMER,
+            if n.no_cascades > 0 {
+                format!(", {} need no cascades", n.no_cascades)
+            } else {
+                String::new()
+            },
+            x.setting.cascades,
+            crate::report::check::plural(x.setting.cascades),
+            x.setting.resolution,
+            setting_knobs(r, x),
+            x.summary.coverage_violations,
+            crate::report::check::plural(x.summary.coverage_violations as usize),
+            crate::output::short_number(x.summary.shimmer_snapped),
+            crate::output::short_number(x.summary.mean_aliasing),
+            crate::output::short_number(mib(x.summary.memory_bytes)),
+        );
     };
     let s = &rec.summary;
     let acceptable_within = r
@@ -205,12 +246,12 @@ fn why_text(r: &SweepResult) -> String {
     let screen = r.objective.name() != "mean_aliasing";
     let mut t = if let Some(st) = s.screen.as_ref().filter(|_| screen) {
         format!(
-            "{} cascades of {}² texels, λ = {}, {} fit: {} {:.3} on screen (per-pixel aliasing: median {:.3}, \
+            "{} cascade{} of {}² texels, {}: {} {:.3} on screen (per-pixel aliasing: median {:.3}, \
              worst {:.3}; {:.0}% of the receiver pixels under-sampled), {} MiB. ",
             rec.setting.cascades,
+            crate::report::check::plural(rec.setting.cascades),
             rec.setting.resolution,
-            rec.setting.lambda,
-            rec.setting.fit,
+            setting_knobs(r, rec),
             r.objective.name(),
             r.objective.value(s),
             st.aliasing_p50,
@@ -220,12 +261,12 @@ fn why_text(r: &SweepResult) -> String {
         )
     } else {
         format!(
-            "{} cascades of {}² texels, λ = {}, {} fit: mean aliasing {:.3}, worst {:.3} at a cascade's near edge, \
-         {:.0}% of the depth range under-sampled, {} MiB. ",
+            "{} cascade{} of {}² texels, {}: mean aliasing {:.3}, worst {:.3} at a cascade's near edge, \
+             {:.0}% of the depth range under-sampled, {} MiB. ",
             rec.setting.cascades,
+            crate::report::check::plural(rec.setting.cascades),
             rec.setting.resolution,
-            rec.setting.lambda,
-            rec.setting.fit,
+            setting_knobs(r, rec),
             s.mean_aliasing,
             s.max_aliasing,
             100.0 * s.undersampled_fraction,
@@ -256,26 +297,27 @@ fn why_text(r: &SweepResult) -> String {
             && x.setting.fit == r.config.shadow.fit
     });
     if let Some(o) = own {
-        if o.setting != rec.setting && screen {
+        let change = changes(r, o, rec);
+        if !change.is_empty() && screen {
             let _ = write!(
                 t,
-                " The configured setting ({}) has {} {:.3}, {} MiB.",
-                o.setting.label(),
+                " To get it, change {} (the configured setting has {} {:.3}, {} MiB).",
+                change.join(", "),
                 r.objective.name(),
                 r.objective.value(&o.summary),
                 mib(o.summary.memory_bytes)
             );
-        } else if o.setting != rec.setting {
+        } else if !change.is_empty() {
             let _ = write!(
                 t,
-                " The configured setting ({}) has mean aliasing {:.3}, worst {:.3}, {} MiB.",
-                o.setting.label(),
+                " To get it, change {} (the configured setting has mean aliasing {:.3}, worst {:.3}, {} MiB).",
+                change.join(", "),
                 o.summary.mean_aliasing,
                 o.summary.max_aliasing,
                 mib(o.summary.memory_bytes)
             );
         } else {
-            t.push_str(" It is the configured setting.");
+            t.push_str(" It is the configured setting: keep it.");
         }
     }
     t
@@ -325,7 +367,7 @@ fn table_rows(r: &SweepResult) -> Vec<Vec<String>> {
                 format!("{:.4}", s.mean_aliasing),
                 format!("{:.4}", s.max_aliasing),
                 format!("{:.4}", s.mean_log_aliasing),
-                format!("{:.2e}", s.shimmer_snapped),
+                crate::output::short_number(s.shimmer_snapped),
                 s.coverage_violations.to_string(),
                 format!("{}", mib(s.memory_bytes)),
             ]
@@ -506,16 +548,25 @@ pub fn stdout_table(r: &SweepResult) -> String {
         let s = &x.summary;
         let _ = writeln!(
             out,
-            "{} {:>9} {:>8} {:>6} {:>6} {:>6} {:>10.4} {:>10.4} {:>10.2e}",
+            "{} {:>9} {:>8} {:>6} {:>6} {:>6} {:>10.4} {:>10.4} {:>10}",
             if Some(i) == rec { "*" } else { " " },
             mib(s.memory_bytes),
             x.setting.cascades,
             x.setting.resolution,
-            x.setting.lambda,
-            x.setting.fit.name(),
+            // A preset's table shows only the knobs it has.
+            if has_lambda(r) {
+                x.setting.lambda.to_string()
+            } else {
+                "-".to_string()
+            },
+            if r.config.shadow.preset.is_none() {
+                x.setting.fit.name()
+            } else {
+                "-"
+            },
             s.mean_aliasing,
             s.max_aliasing,
-            s.shimmer_snapped
+            crate::output::short_number(s.shimmer_snapped)
         );
         if screen {
             out.pop();
@@ -523,5 +574,47 @@ pub fn stdout_table(r: &SweepResult) -> String {
         }
     }
     let _ = writeln!(out, "recommended (budget {} MiB): {}", r.budget_mib, why_text(r));
+    out
+}
+
+/// A row's λ and fit in the words of the sweep: a preset's own knobs only (a preset without a
+/// practical λ or a choice of fit shows neither).
+fn setting_knobs(r: &SweepResult, x: &Row) -> String {
+    match &r.config.shadow.preset {
+        None => format!("λ = {}, {} fit", x.setting.lambda, x.setting.fit),
+        Some(p) if has_lambda(r) => format!("the {} preset with λ = {}", p.name, x.setting.lambda),
+        Some(p) => format!("the {} preset", p.name),
+    }
+}
+
+/// Whether the sweep's settings have a practical λ: csm-lab's own pipeline, or a preset whose
+/// split rule has one.
+fn has_lambda(r: &SweepResult) -> bool {
+    r.config
+        .shadow
+        .preset
+        .as_ref()
+        .is_none_or(|p| crate::presets::lambda_value(&p.knobs).is_some())
+}
+
+/// What to change from the configured setting `o` to reach `x`, in the knobs the settings have
+/// ("cascades 4 → 3, resolution 2048 → 1024"); empty when nothing differs.
+fn changes(r: &SweepResult, o: &Row, x: &Row) -> Vec<String> {
+    let mut out = Vec::new();
+    if o.setting.cascades != x.setting.cascades {
+        out.push(format!("cascades {} → {}", o.setting.cascades, x.setting.cascades));
+    }
+    if o.setting.resolution != x.setting.resolution {
+        out.push(format!(
+            "resolution {} → {}",
+            o.setting.resolution, x.setting.resolution
+        ));
+    }
+    if has_lambda(r) && o.setting.lambda != x.setting.lambda {
+        out.push(format!("λ {} → {}", o.setting.lambda, x.setting.lambda));
+    }
+    if r.config.shadow.preset.is_none() && o.setting.fit != x.setting.fit {
+        out.push(format!("fit {} → {}", o.setting.fit, x.setting.fit));
+    }
     out
 }

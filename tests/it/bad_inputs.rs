@@ -234,7 +234,7 @@ fn a_config_named_dots_toml_writes_beside_itself_not_into_the_working_directory(
     for n in &names {
         assert!(n == "...toml" || dir.path().join(n).is_dir(), "{names:?}");
     }
-    assert!(dir.path().join("reports/config").is_dir(), "{names:?}");
+    assert!(dir.path().join("out/config").is_dir(), "{names:?}");
 }
 
 #[test]

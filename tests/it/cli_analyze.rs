@@ -83,7 +83,7 @@ fn analyze_writes_every_file_and_prints_the_table() {
     let header = std::fs::read_to_string(o.join("density.csv")).unwrap();
     assert!(header.starts_with("depth,cascade,texel_size,pixel_size,texels_per_pixel,aliasing\n"));
     let header = std::fs::read_to_string(o.join("shimmer.csv")).unwrap();
-    assert!(header.starts_with("frame,cascade,snap,size_change,phase_drift_rms,phase_drift_max,cell_flips\n"));
+    assert!(header.starts_with("frame,cascade,snap,size_change,phase_drift_rms,phase_drift_max,cell_flips,path\n"));
 }
 
 #[test]

@@ -58,14 +58,14 @@ fn compare_writes_one_csv_row_per_preset_and_every_file() {
     assert_eq!(
         lines.next().unwrap(),
         "preset,lambda,cascades,resolution,fit,z_lo,z_hi,max_aliasing,mean_aliasing,mean_log_aliasing,\
-undersampled_fraction,shimmer_snapped,shimmer_unsnapped,size_jitter,coverage_violations,memory_bytes,\
+undersampled_fraction,shimmer,shimmer_snapped,shimmer_unsnapped,size_jitter,coverage_violations,memory_bytes,\
 snaps,coverage_worst_texels,min_slack_texels,receivers_outside_depth,casters_outside_depth"
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     let names: Vec<&str> = rows.iter().map(|r| r[0]).collect();
     assert_eq!(names, ["bevy", "godot", "unreal", "threejs", "dart"]);
     for r in &rows {
-        assert_eq!(r.len(), 21);
+        assert_eq!(r.len(), 22);
         // [shadow] of BASE overrides the presets' counts and sizes.
         assert_eq!((r[2], r[3]), ("4", "2048"), "{r:?}");
     }
@@ -81,7 +81,7 @@ snaps,coverage_worst_texels,min_slack_texels,receivers_outside_depth,casters_out
     let c = csm_lab::Config::load_with_preset(&cfg, &choice).unwrap();
     let a = csm_lab::analyze(&c, &csm_lab::AnalysisOptions::summary_only());
     assert_eq!(rows[2][7].parse::<f64>().unwrap(), a.summary.max_aliasing);
-    assert_eq!(rows[2][12].parse::<f64>().unwrap(), a.summary.shimmer_unsnapped);
+    assert_eq!(rows[2][13].parse::<f64>().unwrap(), a.summary.shimmer_unsnapped);
 
     for f in ["compare_density.svg", "compare_shimmer.svg"] {
         let text = std::fs::read_to_string(o.join(f)).unwrap();

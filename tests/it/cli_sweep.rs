@@ -83,8 +83,8 @@ fn every_sweep_row_equals_what_analyze_reports_for_that_setting() {
     assert_eq!(sweep(&cfg, &out, &[]).status.code(), Some(0));
     let (header, rows) = read_csv(&out.join("sweep.csv"));
     assert_eq!(
-        header[..15].join(","),
-        "lambda,cascades,resolution,fit,z_lo,z_hi,max_aliasing,mean_aliasing,mean_log_aliasing,undersampled_fraction,shimmer_snapped,shimmer_unsnapped,size_jitter,coverage_violations,memory_bytes"
+        header[..16].join(","),
+        "lambda,cascades,resolution,fit,z_lo,z_hi,max_aliasing,mean_aliasing,mean_log_aliasing,undersampled_fraction,shimmer,shimmer_snapped,shimmer_unsnapped,size_jitter,coverage_violations,memory_bytes"
     );
     assert_eq!(rows.len(), 36);
     let base = csm_lab::Config::load(&cfg).unwrap();

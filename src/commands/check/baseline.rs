@@ -26,7 +26,9 @@ pub struct Tolerance {
 impl Tolerance {
     /// The largest change that does not count: `max(absolute, relative * |baseline|)`.
     pub fn allowed(&self, baseline: f64) -> f64 {
-        self.absolute.max(self.relative * baseline.abs())
+        // Clamped to the largest finite value: a huge tolerance allows everything, it does not
+        // overflow into a NaN margin or a non-finite number in the JSON report.
+        self.absolute.max(self.relative * baseline.abs()).min(f64::MAX)
     }
 }
 

@@ -217,19 +217,19 @@ pub fn evaluate(rule: &Rule, a: &Analysis) -> Result<RuleResult> {
         }
         Target::Cascade(m, CascadeSelection::One(i)) => {
             let count = a.cascades.len();
-            let c = a.cascades.get(i).ok_or_else(|| {
-                Error::from(ConfigError::Invalid {
-                    location: format!("{}: ", rule.scope_location.as_ref().unwrap_or(&rule.location)),
-                    key: format!("rule[{}].cascade", rule.index),
-                    value: i.to_string(),
-                    allowed: format!(
-                        "a cascade index in 0..={} ({} has {count} cascade{})",
-                        count - 1,
+            // A rule written for a scene with more cascades does not apply to this one: it is
+            // skipped with a note (a scene with fewer cascades is not an error of the gate).
+            let Some(c) = a.cascades.get(i) else {
+                return Ok(RuleResult::not_applicable(
+                    rule,
+                    format!(
+                        "skipped: {} has {count} cascade{} (indices 0..={}), the rule names cascade {i}",
                         a.config.name,
-                        if count == 1 { "" } else { "s" }
+                        if count == 1 { "" } else { "s" },
+                        count.saturating_sub(1)
                     ),
-                })
-            })?;
+                ));
+            };
             let v = Located {
                 value: m.value(c),
                 cascade: Some(i),

@@ -109,6 +109,7 @@ mod tests {
             mean_aliasing: 4.0,
             mean_log_aliasing: 5.0,
             undersampled_fraction: 0.25,
+            shimmer: 6.0,
             shimmer_snapped: 6.0,
             shimmer_unsnapped: 7.0,
             size_jitter: 8.0,

@@ -9,6 +9,7 @@
 pub mod baseline;
 pub mod depth;
 pub mod evaluate;
+pub mod init;
 pub mod metric;
 pub mod report;
 pub mod sweep;

@@ -140,6 +140,9 @@ pub struct SweepComparison {
     pub only_current: Vec<SweepKey>,
     /// Configurations the current table does not have (dropped), in key order.
     pub only_baseline: Vec<SweepKey>,
+    /// Columns of `sweep.csv` the baseline table lacks (an older sweep.csv): not compared,
+    /// reported once.
+    pub columns_not_in_baseline: Vec<&'static str>,
 }
 
 impl SweepComparison {
@@ -170,16 +173,26 @@ fn index_rows<'a>(rows: &'a [SweepRow], which: &str) -> Result<BTreeMap<&'a Swee
 pub fn compare_rows(current: &[SweepRow], baseline: &[SweepRow], tol: &Tolerances) -> Result<SweepComparison> {
     let cur = index_rows(current, "current")?;
     let base = index_rows(baseline, "baseline")?;
+    // Exactly the columns sweep.csv has (the registry's row metrics), and of those only the
+    // ones the baseline table has: an older table without a column is not 1,000 regressions.
+    let in_base = |m: &SummaryMetric| baseline.first().is_none_or(|b| b.metrics.contains_key(m.name()));
+    let columns: Vec<SummaryMetric> = SummaryMetric::all().filter(|m| m.def().in_rows).collect();
     let mut out = SweepComparison {
         matched: Vec::new(),
         only_current: Vec::new(),
         only_baseline: Vec::new(),
+        columns_not_in_baseline: columns.iter().filter(|m| !in_base(m)).map(|m| m.name()).collect(),
+    };
+    let keep = |v: BTreeMap<SummaryMetric, f64>| -> BTreeMap<SummaryMetric, f64> {
+        v.into_iter()
+            .filter(|(m, _)| columns.contains(m) && in_base(m))
+            .collect()
     };
     for (key, row) in &cur {
         match base.get(key) {
             Some(b) => out.matched.push(RowComparison {
                 key: (*key).clone(),
-                comparisons: compare(&row.summary_values(), &b.summary_values(), tol),
+                comparisons: compare(&keep(row.summary_values()), &keep(b.summary_values()), tol),
             }),
             None => out.only_current.push((*key).clone()),
         }

@@ -35,7 +35,6 @@ use super::baseline::{Tolerance, Tolerances};
 use super::metric::{all_names, CascadeMetric, DepthMetric, SummaryMetric};
 use crate::config::toml_error;
 use crate::error::{Error, Result};
-use crate::suggest::closest;
 
 /// Which cascades a per-cascade rule looks at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -120,6 +119,8 @@ pub struct Thresholds {
     pub label: String,
     pub rules: Vec<Rule>,
     pub tolerances: Tolerances,
+    /// `[baseline] file`, resolved against the thresholds file's directory.
+    pub baseline_file: Option<std::path::PathBuf>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -143,6 +144,9 @@ struct RawRule {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawBaseline {
+    /// The baseline file (a `summary.json`, or with `--sweep` a `sweep.csv`), relative to the
+    /// thresholds file; `--baseline` overrides it.
+    file: Option<String>,
     relative: Option<Spanned<f64>>,
     absolute: Option<Spanned<f64>>,
     #[serde(default)]
@@ -219,7 +223,12 @@ pub const MAX_RULES: usize = 10_000;
 impl Thresholds {
     pub fn load(path: &Path) -> Result<Thresholds> {
         let text = crate::config::read_bounded(path, crate::config::MAX_TEXT_FILE_BYTES, "a thresholds file")?;
-        Thresholds::from_toml_str(&text, &path.display().to_string())
+        let mut t = Thresholds::from_toml_str(&text, &path.display().to_string())?;
+        if let Some(f) = t.baseline_file.take() {
+            let dir = path.parent().unwrap_or(Path::new(""));
+            t.baseline_file = Some(if f.is_relative() { dir.join(f) } else { f });
+        }
+        Ok(t)
     }
 
     /// Parses and validates thresholds text; `label` names the source in messages.
@@ -246,6 +255,11 @@ impl Thresholds {
             None => Tolerances::default(),
         };
         Ok(Thresholds {
+            baseline_file: raw
+                .baseline
+                .as_ref()
+                .and_then(|b| b.file.as_ref())
+                .map(std::path::PathBuf::from),
             label: label.to_string(),
             rules,
             tolerances,
@@ -254,7 +268,7 @@ impl Thresholds {
 }
 
 fn unknown_metric(at: &At<'_>, span: std::ops::Range<usize>, key: &str, name: &str, names: &[&str]) -> Error {
-    let suggestion = closest(name, names).unwrap_or("max_aliasing");
+    let suggestion = crate::suggest::metric_suggestion(name, names).unwrap_or("max_aliasing");
     at.invalid(
         span,
         key,
