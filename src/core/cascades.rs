@@ -202,16 +202,22 @@ impl Rig {
     /// csm-lab's own pipeline: fitted slices = selection intervals = consecutive splits.
     pub fn new(lens: Lens, light: LightBasis, fit: Fit, resolution: u32, snap_rule: SnapRule, splits: Vec<f64>) -> Rig {
         let k2 = lens.k2();
-        let fitted: Vec<(f64, f64)> = splits.windows(2).map(|w| (w[0], w[1])).collect();
-        let spheres: Vec<Sphere> = fitted.iter().map(|&(n, f)| minimal_sphere(n, f, k2)).collect();
+        let slices: Vec<Slice> = splits
+            .windows(2)
+            .map(|w| Slice {
+                near: w[0],
+                far: w[1],
+                sphere: minimal_sphere(w[0], w[1], k2),
+            })
+            .collect();
         let shift = snap_rule.max_shift_texels();
-        let sides = spheres
+        let sides = slices
             .iter()
-            .map(|s| Window::side_with_border(2.0 * s.radius, resolution, shift))
+            .map(|s| Window::side_with_border(2.0 * s.sphere.radius, resolution, shift))
             .collect();
         let window = match fit {
             Fit::Sphere => WindowRule::AxisCentred {
-                centre_depth: spheres.iter().map(|s| s.centre_depth).collect(),
+                centre_depth: slices.iter().map(|s| s.sphere.centre_depth).collect(),
             },
             Fit::Aabb => WindowRule::Tight { pad: 0.0, border: true },
         };
@@ -223,7 +229,17 @@ impl Rig {
             snap_anchor: DVec2::ZERO,
             depth: LightDepthRule::Scene,
         };
-        Rig::with_scheme(lens, light, fit, resolution, snap_rule, splits, &fitted, sides, scheme)
+        Rig {
+            lens,
+            light,
+            fit,
+            resolution,
+            snap_rule,
+            splits,
+            slices,
+            sphere_side: sides,
+            scheme,
+        }
     }
 
     /// A rig for an arbitrary scheme: `selection` has one more entry than `fitted`, and

@@ -153,6 +153,7 @@ impl PathTotals {
     }
 
     /// Cascade `i`'s coverage so far, as one [`FrameCoverage`].
+    #[inline]
     fn frame_coverage(&self, i: usize) -> FrameCoverage {
         FrameCoverage {
             violations: self.coverage.violations[i],
@@ -161,6 +162,7 @@ impl PathTotals {
         }
     }
 
+    #[inline]
     fn set_coverage(&mut self, i: usize, c: FrameCoverage) {
         self.coverage.violations[i] = c.violations;
         self.coverage.worst_texels[i] = c.worst_texels;
