@@ -372,12 +372,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
     );
     for e in &extra {
         let c = if config.shadow.snap { &e.snapped } else { &e.unsnapped };
-        let cov = &mut coverage;
-        for i in 0..cov.violations.len() {
-            cov.violations[i] += c.coverage.violations[i];
-            cov.worst_texels[i] = cov.worst_texels[i].max(c.coverage.worst_texels[i]);
-            cov.min_slack_texels[i] = cov.min_slack_texels[i].min(c.coverage.min_slack_texels[i]);
-        }
+        coverage.merge(&c.coverage);
         worst_snapped = worst_snapped.max(e.snapped.stats.rms);
         worst_unsnapped = worst_unsnapped.max(e.unsnapped.stats.rms);
         jitter = jitter

@@ -59,6 +59,20 @@ pub struct BenchRow {
     pub error: f64,
 }
 
+impl BenchRow {
+    /// One measurement: its error is the relative error of `estimate` against `reference`.
+    pub fn measured(metric: &'static str, samples: usize, seconds: f64, estimate: f64, reference: f64) -> Self {
+        BenchRow {
+            metric,
+            samples,
+            seconds,
+            estimate,
+            reference,
+            error: relative_error(estimate, reference),
+        }
+    }
+}
+
 /// What one metric measures.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MetricInfo {
@@ -235,14 +249,7 @@ fn bench_density(config: &Config, crossing: u32, repeats: usize, rows: &mut Vec<
                 ("density_undersampled_fraction", under, agg.undersampled_fraction),
             ] {
                 if metrics_here.contains(&metric) {
-                    rows.push(BenchRow {
-                        metric,
-                        samples: n,
-                        seconds,
-                        estimate,
-                        reference,
-                        error: relative_error(estimate, reference),
-                    });
+                    rows.push(BenchRow::measured(metric, n, seconds, estimate, reference));
                 }
             }
         }
@@ -288,14 +295,13 @@ fn bench_cell_flips(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -
             shimmer::along_path(&rig, &poses, &probes, false, opts)
         });
         let estimate = result.stats.cell_flip_rate.expect("requested");
-        rows.push(BenchRow {
-            metric: "s4_cell_flips_strafe",
-            samples: n,
+        rows.push(BenchRow::measured(
+            "s4_cell_flips_strafe",
+            n,
             seconds,
             estimate,
             reference,
-            error: relative_error(estimate, reference),
-        });
+        ));
     }
     Ok(())
 }
@@ -317,14 +323,7 @@ fn bench_aabb_drift(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -
             ("s3_rms_aabb_yaw", stats.rms, dense.rms),
             ("s3_max_aabb_yaw", stats.max, dense.max),
         ] {
-            rows.push(BenchRow {
-                metric,
-                samples: n,
-                seconds,
-                estimate,
-                reference,
-                error: relative_error(estimate, reference),
-            });
+            rows.push(BenchRow::measured(metric, n, seconds, estimate, reference));
         }
     }
     Ok(())
@@ -356,14 +355,7 @@ fn bench_frames(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Re
                 .rms)
         });
         let estimate = estimate?;
-        rows.push(BenchRow {
-            metric: "s3_rms_frames_yaw",
-            samples: n,
-            seconds,
-            estimate,
-            reference,
-            error: relative_error(estimate, reference),
-        });
+        rows.push(BenchRow::measured("s3_rms_frames_yaw", n, seconds, estimate, reference));
     }
     Ok(())
 }

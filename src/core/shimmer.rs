@@ -101,6 +101,16 @@ impl Coverage {
     pub fn total(&self) -> u64 {
         self.violations.iter().sum()
     }
+
+    /// Adds another path's coverage of the same cascades: violations add up, the worst miss and
+    /// the smallest slack take the extreme.
+    pub fn merge(&mut self, other: &Coverage) {
+        for i in 0..self.violations.len() {
+            self.violations[i] += other.violations[i];
+            self.worst_texels[i] = self.worst_texels[i].max(other.worst_texels[i]);
+            self.min_slack_texels[i] = self.min_slack_texels[i].min(other.min_slack_texels[i]);
+        }
+    }
 }
 
 /// What to compute along the path.
@@ -329,8 +339,11 @@ impl PathModel for RigPath<'_> {
             for (prev, (b, _)) in self.prev_basis.iter_mut().zip(&self.frame) {
                 *prev = Some(*b);
             }
+            // Reuse the buffer: this runs every frame.
             let rig = self.rig;
-            self.frame = (0..rig.cascade_count()).map(|i| rig.cascade_pose(i, &lp)).collect();
+            self.frame.clear();
+            self.frame
+                .extend((0..rig.cascade_count()).map(|i| rig.cascade_pose(i, &lp)));
         }
     }
 

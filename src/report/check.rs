@@ -117,15 +117,7 @@ impl CheckReport {
         let _ = writeln!(out, "{passing} of {} configurations pass", rows.len());
         if let Some(b) = baseline {
             let cmp = &b.comparison;
-            let _ = writeln!(
-                out,
-                "baseline {}: {} configuration{} matched, {} new, {} not in the current sweep",
-                b.file,
-                cmp.matched.len(),
-                plural(cmp.matched.len()),
-                cmp.only_current.len(),
-                cmp.only_baseline.len()
-            );
+            out.push_str(&sweep_baseline_line(b));
             if !cmp.columns_not_in_baseline.is_empty() {
                 let _ = writeln!(
                     out,
@@ -246,15 +238,7 @@ impl CheckReport {
                 let _ = writeln!(out, "{passing} of {} configurations pass", rows.len());
                 if let Some(b) = baseline {
                     let cmp = &b.comparison;
-                    let _ = writeln!(
-                        out,
-                        "\nbaseline {}: {} configuration{} matched, {} new, {} not in the current sweep",
-                        b.file,
-                        cmp.matched.len(),
-                        plural(cmp.matched.len()),
-                        cmp.only_current.len(),
-                        cmp.only_baseline.len()
-                    );
+                    let _ = write!(out, "\n{}", sweep_baseline_line(b));
                     out.push_str(&tolerance_line(&self.tolerances));
                     for row in &cmp.matched {
                         let _ = writeln!(out, "{}:", row.key.label());
@@ -487,6 +471,19 @@ fn rules_table(results: &[RuleResult], indent: &str) -> String {
         out.push_str(&n);
     }
     out
+}
+
+/// How a sweep matched its baseline: rows matched, new, and gone, one line.
+fn sweep_baseline_line(b: &crate::check::report::SweepBaseline) -> String {
+    let cmp = &b.comparison;
+    format!(
+        "baseline {}: {} configuration{} matched, {} new, {} not in the current sweep\n",
+        b.file,
+        cmp.matched.len(),
+        plural(cmp.matched.len()),
+        cmp.only_current.len(),
+        cmp.only_baseline.len()
+    )
 }
 
 fn tolerance_line(t: &Tolerances) -> String {
