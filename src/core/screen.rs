@@ -54,22 +54,79 @@ pub fn percentile(values: &mut [f64], p: f64) -> f64 {
     *values.select_nth_unstable_by(rank_index(p, n), f64::total_cmp).1
 }
 
-/// Nearest-rank percentiles at increasing `ps` of non-negative finite values given as their
-/// bit patterns (which order like the values), reordering them. Each selection works only on
-/// the part at and above the previous one.
-fn percentiles_of_bits(bits: &mut [u64], ps: &[f64]) -> Vec<f64> {
-    let n = bits.len();
-    if n == 0 {
-        return vec![0.0; ps.len()];
+/// A monotone bucket key for positive finite values in `[lo, hi]`: a positive finite f64
+/// orders like its bit pattern, so `(bits - bits(lo)) >> shift` never decreases with the
+/// value, and `shift` is chosen so that every key is below [`Buckets::COUNT`].
+#[derive(Clone, Copy)]
+struct Buckets {
+    base: u64,
+    shift: u32,
+}
+
+impl Buckets {
+    const COUNT: usize = 4096;
+
+    fn new(lo: f64, hi: f64) -> Self {
+        let base = lo.to_bits();
+        let span = hi.to_bits() - base;
+        let shift = (u64::BITS - span.leading_zeros()).saturating_sub(Self::COUNT.trailing_zeros());
+        Buckets { base, shift }
     }
-    let mut start = 0;
-    ps.iter()
-        .map(|&p| {
-            let r = rank_index(p, n).max(start);
-            let x = *bits[start..].select_nth_unstable(r - start).1;
-            start = r;
-            f64::from_bits(x)
+
+    #[inline]
+    fn key(self, m: f64) -> usize {
+        ((m.to_bits() - self.base) >> self.shift) as usize
+    }
+}
+
+/// For each wanted 0-based rank (increasing): its bucket and its rank inside that bucket.
+fn locate(hist: &[u32], ranks: &[usize]) -> Vec<(usize, usize)> {
+    let (mut bucket, mut below) = (0, 0);
+    ranks
+        .iter()
+        .map(|&r| {
+            while below + hist[bucket] as usize <= r {
+                below += hist[bucket] as usize;
+                bucket += 1;
+            }
+            (bucket, r - below)
         })
+        .collect()
+}
+
+/// Exact nearest-rank values at the 0-based `ranks` (increasing) of the served values `t g`,
+/// without storing or sorting them: `runs` are `(start, end, t)` ranges of receivers, `hist`
+/// the counts of every value's bucket. One pass gathers the values of the wanted buckets only
+/// and a selection inside each gives the exact value.
+fn values_at_ranks(
+    g: &[(f64, f64)],
+    runs: &[(usize, usize, f64)],
+    buckets: Buckets,
+    hist: &[u32],
+    ranks: &[usize],
+) -> Vec<f64> {
+    let wanted = locate(hist, ranks);
+    // Bucket -> which gathered list it feeds (u8::MAX: none); the wanted buckets are few.
+    let mut slot = vec![u8::MAX; Buckets::COUNT];
+    let mut lists: Vec<Vec<u64>> = Vec::new();
+    for &(b, _) in &wanted {
+        if slot[b] == u8::MAX {
+            slot[b] = lists.len() as u8;
+            lists.push(Vec::with_capacity(hist[b] as usize));
+        }
+    }
+    for &(a, b, t) in runs {
+        for &(_, gk) in &g[a..b] {
+            let m = t * gk;
+            let s = slot[buckets.key(m)];
+            if s != u8::MAX {
+                lists[s as usize].push(m.to_bits());
+            }
+        }
+    }
+    wanted
+        .iter()
+        .map(|&(b, r)| f64::from_bits(*lists[slot[b] as usize].select_nth_unstable(r).1))
         .collect()
 }
 
@@ -80,11 +137,12 @@ pub fn visible_range(vis: &Visibility, lo: f64, hi: f64) -> Option<(f64, f64)> {
     (a <= b).then_some((a, b))
 }
 
-/// The per-pixel aliasing of every served receiver pixel, cascade by cascade (in depth order).
-pub fn served_aliasing(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<f64>, Vec<usize>) {
+/// The runs of depth-sorted receivers each cascade serves: `(start, end, texel size)`, in
+/// depth order, and the number of pixels each cascade serves.
+fn served_runs(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<(usize, usize, f64)>, Vec<usize>) {
     let r = &vis.receivers;
     let m = texel.len();
-    let mut out = Vec::with_capacity(r.len());
+    let mut runs = Vec::with_capacity(m);
     let mut counts = vec![0; m];
     let start = r.partition_point(|&(d, _)| d < splits[0]);
     let end = r.partition_point(|&(d, _)| d <= splits[m]);
@@ -98,12 +156,21 @@ pub fn served_aliasing(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<
         } else {
             k + r[k..end].partition_point(|&(d, _)| d < splits[i + 1])
         };
-        let t = texel[i];
-        out.extend(r[k..run_end].iter().map(|&(_, g)| t * g));
+        runs.push((k, run_end, texel[i]));
         counts[i] += run_end - k;
         k = run_end.max(k + 1);
     }
-    (out, counts)
+    (runs, counts)
+}
+
+/// The per-pixel aliasing of every served receiver pixel, cascade by cascade (in depth order).
+pub fn served_aliasing(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<f64>, Vec<usize>) {
+    let (runs, counts) = served_runs(vis, splits, texel);
+    let values = runs
+        .iter()
+        .flat_map(|&(a, b, t)| vis.receivers[a..b].iter().map(move |&(_, g)| t * g))
+        .collect();
+    (values, counts)
 }
 
 /// The screen metrics of a configuration with selection `splits` and texel sizes `texel`;
@@ -111,25 +178,39 @@ pub fn served_aliasing(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<
 pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f64, f64)>) -> ScreenStats {
     let total = vis.sample_count().max(1) as f64;
     let receivers = vis.receivers.len();
-    let (values, counts) = served_aliasing(vis, splits, texel);
-    let n = values.len();
+    let (runs, counts) = served_runs(vis, splits, texel);
+    let g = &vis.receivers;
+    let n: usize = counts.iter().sum();
     let (mut sum, mut max, mut under) = (0.0, 0.0f64, 0usize);
-    // m is finite and positive, so its bit pattern orders like its value (a faster selection).
-    let mut bits: Vec<u64> = values
-        .iter()
-        .map(|&m| {
-            sum += m;
-            max = max.max(m);
-            under += usize::from(m > 1.0);
-            m.to_bits()
-        })
-        .collect();
+    let p = if n == 0 {
+        vec![0.0; 3]
+    } else {
+        // Every served value lies in [min t * min g, max t * max g]; rounding is monotone, so
+        // the bounds hold for the rounded products too, and the keys need no first pass.
+        let (g_lo, g_hi) = vis.factor_range.unwrap_or((0.0, 0.0));
+        let (t_lo, t_hi) = runs
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(r.2), h.max(r.2)));
+        let buckets = Buckets::new(t_lo * g_lo, t_hi * g_hi);
+        let mut hist = vec![0u32; Buckets::COUNT];
+        for &(a, b, t) in &runs {
+            for &(_, gk) in &g[a..b] {
+                let m = t * gk;
+                sum += m;
+                // A plain comparison (not f64::max, which also handles NaN): m is finite.
+                max = if m > max { m } else { max };
+                under += usize::from(m > 1.0);
+                hist[buckets.key(m)] += 1;
+            }
+        }
+        let ranks = [50.0, 95.0, 99.0].map(|p| rank_index(p, n));
+        values_at_ranks(g, &runs, buckets, &hist, &ranks)
+    };
     let (mean, under) = if n == 0 {
         (0.0, 0.0)
     } else {
         (sum / n as f64, under as f64 / n as f64)
     };
-    let p = percentiles_of_bits(&mut bits, &[50.0, 95.0, 99.0]);
     let (p50, p95, p99) = (p[0], p[1], p[2]);
     let (visible_z_lo, visible_z_hi) = visible.unwrap_or((0.0, 0.0));
     ScreenStats {
@@ -168,11 +249,38 @@ mod tests {
         assert_eq!(percentile(&mut v, 99.0), 20.0);
         assert_eq!(percentile(&mut v, 0.0), 1.0);
         assert_eq!(percentile(&mut [], 50.0), 0.0);
-        let mut bits: Vec<u64> = (1..=20).rev().map(|x| f64::from(x).to_bits()).collect();
-        assert_eq!(
-            percentiles_of_bits(&mut bits, &[50.0, 95.0, 99.0]),
-            vec![10.0, 19.0, 20.0]
-        );
-        assert_eq!(percentiles_of_bits(&mut [], &[50.0]), vec![0.0]);
+    }
+
+    /// The bucketed selection equals sorting every value, on spreads from one repeated value
+    /// to many octaves, with several runs of different texel sizes.
+    #[test]
+    fn bucketed_percentiles_equal_a_full_sort() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (n, spread) in [(1, 1.0), (7, 0.0), (20, 1.0), (1000, 0.0), (5000, 3.0), (30000, 40.0)] {
+            let g: Vec<(f64, f64)> = (0..n).map(|k| (k as f64, 0.1 * (spread * next()).exp2())).collect();
+            let cut = n / 3;
+            let runs = vec![(0, cut, 0.7), (cut, n, 1.9)];
+            let mut all: Vec<f64> = runs
+                .iter()
+                .flat_map(|&(a, b, t)| g[a..b].iter().map(move |&(_, x)| t * x))
+                .collect();
+            let (lo, hi) = all
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(l, h), &m| (l.min(m), h.max(m)));
+            let buckets = Buckets::new(lo, hi);
+            let mut hist = vec![0u32; Buckets::COUNT];
+            all.iter().for_each(|&m| hist[buckets.key(m)] += 1);
+            let ps = [50.0, 95.0, 99.0];
+            let got = values_at_ranks(&g, &runs, buckets, &hist, &ps.map(|p| rank_index(p, n)));
+            all.sort_by(f64::total_cmp);
+            let want: Vec<f64> = ps.iter().map(|&p| all[rank_index(p, n)]).collect();
+            assert_eq!(got, want, "n = {n}, spread = {spread}");
+        }
     }
 }

@@ -124,6 +124,8 @@ pub struct Visibility {
     pub self_shadowed: usize,
     /// View-depth extent of every hit, or None when nothing is hit.
     pub depth_range: Option<(f64, f64)>,
+    /// Smallest and largest factor `g` of the receivers, or None without receivers.
+    pub factor_range: Option<(f64, f64)>,
 }
 
 impl Visibility {
@@ -259,6 +261,9 @@ impl SceneGeometry {
         let depth_range = samples.iter().flatten().fold(None, |r: Option<(f64, f64)>, s| {
             Some(r.map_or((s.depth, s.depth), |(lo, hi)| (lo.min(s.depth), hi.max(s.depth))))
         });
+        let factor_range = receivers.iter().fold(None, |r: Option<(f64, f64)>, &(_, g)| {
+            Some(r.map_or((g, g), |(lo, hi)| (lo.min(g), hi.max(g))))
+        });
         Visibility {
             view: *view,
             cols,
@@ -267,6 +272,7 @@ impl SceneGeometry {
             receivers,
             self_shadowed,
             depth_range,
+            factor_range,
         }
     }
 
