@@ -97,6 +97,9 @@ pub struct SweepArgs {
     /// Fits: sphere, aabb or sphere,aabb.
     #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub fit: Option<String>,
+    /// Split ranges: bounds, visible or bounds,visible (side by side; scene geometry only).
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
+    pub split_range: Option<String>,
     /// Worker threads, 1..=256 [default: one per core]. Results are identical at any count.
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u16).range(1..=256))]
     pub threads: Option<u16>,
@@ -191,6 +194,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             cascades: args.cascades,
             resolution: args.resolution,
             fit: args.fit,
+            split_range: args.split_range,
             threads: args.threads,
             quiet: args.quiet,
             no_plots: args.no_plots,

@@ -10,6 +10,7 @@
 use crate::analysis::{CascadeReport, Summary};
 use crate::error::Result;
 use crate::output::num;
+use crate::scene::SplitRange;
 
 /// Which way a metric gets worse.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -495,12 +496,16 @@ fn shown_for(screen_metric: bool, s: &Summary) -> bool {
 /// The setting columns every per-configuration table starts with.
 pub const SETTING_COLUMNS: [&str; 4] = ["lambda", "cascades", "resolution", "fit"];
 
+/// With scene geometry, rows also say which depths the splits divide (`bounds` or `visible`).
+pub const SPLIT_RANGE_COLUMN: &str = "split_range";
+
 /// The columns every per-configuration table shares (`sweep.csv`, `compare.csv`): the setting,
 /// then the summary metrics marked `in_rows`. A contract: users' scripts and CI baselines read
 /// them by name. The screen metrics are columns only with scene geometry (`screen`).
 pub fn summary_columns(screen: bool) -> Vec<&'static str> {
     SETTING_COLUMNS
         .into_iter()
+        .chain(screen.then_some(SPLIT_RANGE_COLUMN))
         .chain(
             SUMMARY
                 .iter()
@@ -512,8 +517,18 @@ pub fn summary_columns(screen: bool) -> Vec<&'static str> {
 
 /// The fields of [`summary_columns`] for one configuration (`lambda` may be empty where a
 /// split rule has none).
-pub fn summary_fields(lambda: String, cascades: usize, resolution: u32, fit: &str, s: &Summary) -> Result<Vec<String>> {
+pub fn summary_fields(
+    lambda: String,
+    cascades: usize,
+    resolution: u32,
+    fit: &str,
+    split_range: SplitRange,
+    s: &Summary,
+) -> Result<Vec<String>> {
     let mut fields = vec![lambda, cascades.to_string(), resolution.to_string(), fit.to_string()];
+    if s.screen.is_some() {
+        fields.push(split_range.name().to_string());
+    }
     for d in SUMMARY.iter().filter(|d| d.in_rows && shown_for(d.screen, s)) {
         fields.push((d.value)(s).csv(d.name)?);
     }

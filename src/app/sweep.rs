@@ -17,6 +17,7 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         cascades: args.cascades.as_deref().map(parse_cascades_spec).transpose()?,
         resolution: args.resolution.as_deref().map(parse_resolution_spec).transpose()?,
         fit: args.fit.as_deref().map(parse_fit_spec).transpose()?,
+        split_range: args.split_range.as_deref().map(parse_split_range_spec).transpose()?,
     };
     let grid = Grid::resolve(&config, &overrides)?;
     if !args.quiet {
@@ -69,6 +70,7 @@ pub struct SweepRequest {
     pub cascades: Option<String>,
     pub resolution: Option<String>,
     pub fit: Option<String>,
+    pub split_range: Option<String>,
     pub threads: Option<u16>,
     pub quiet: bool,
     pub no_plots: bool,

@@ -11,7 +11,7 @@ use std::collections::BTreeSet;
 use rayon::prelude::*;
 
 use crate::analysis::{analyze, AnalysisOptions, Summary};
-use crate::config::{Config, Fit};
+use crate::config::{Config, Fit, SplitRange};
 use crate::error::{Error, GridError, Result};
 use crate::metric::SummaryMetric;
 
@@ -27,6 +27,8 @@ pub struct Grid {
     pub cascades: Axis<usize>,
     pub resolution: Axis<u32>,
     pub fit: Axis<Fit>,
+    /// Splits on the bounds' depth range and/or on the visible depths (scene geometry only).
+    pub split_range: Axis<SplitRange>,
     /// What was left out of the `[sweep]` table because the preset has no such axis or value.
     pub notes: Vec<String>,
 }
@@ -144,6 +146,33 @@ pub fn parse_fit_spec(spec: &str) -> Result<Axis<Fit>> {
     })
 }
 
+/// `--split-range bounds,visible`: splits on the bounds' depth range, on the visible depths,
+/// or both side by side (scene geometry only; checked in [`Grid::resolve`]).
+pub fn parse_split_range_spec(spec: &str) -> Result<Axis<SplitRange>> {
+    let values = spec
+        .split(',')
+        .map(|s| match s.trim() {
+            "bounds" => Ok(SplitRange::Bounds),
+            "visible" => Ok(SplitRange::Visible),
+            other => Err(Error::flag(
+                "--split-range",
+                spec,
+                format!("{other:?} is not a split range; use bounds, visible or bounds,visible"),
+            )),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    check_values(
+        &values.iter().map(|r| r.name()).collect::<Vec<_>>(),
+        "bounds, visible",
+        |_| true,
+    )
+    .map_err(|m| Error::flag("--split-range", spec, m))?;
+    Ok(Axis {
+        values,
+        spec: spec.to_string(),
+    })
+}
+
 /// Command-line overrides of the grid.
 #[derive(Debug, Clone, Default)]
 pub struct GridOverrides {
@@ -151,6 +180,7 @@ pub struct GridOverrides {
     pub cascades: Option<Axis<usize>>,
     pub resolution: Option<Axis<u32>>,
     pub fit: Option<Axis<Fit>>,
+    pub split_range: Option<Axis<SplitRange>>,
 }
 
 impl Grid {
@@ -295,11 +325,52 @@ impl Grid {
                 spec: config.shadow.fit.name().into(),
             },
         };
+        let configured = SplitRange::of(config.shadow.fit_depth_to_visible);
+        let split_range = match (overrides.split_range.clone(), &spec.split_range, preset) {
+            (Some(axis), _, Some(p)) => {
+                return Err(Error::flag(
+                    "--split-range",
+                    &axis.spec,
+                    format!(
+                        "the {} preset fixes its split range ({configured}); drop --split-range",
+                        p.name
+                    ),
+                ))
+            }
+            (Some(axis), _, None) => {
+                if config.geometry.is_none() && axis.values.contains(&SplitRange::Visible) {
+                    return Err(Error::flag(
+                        "--split-range",
+                        &axis.spec,
+                        "\"visible\" needs scene geometry (scene.ground, [[scene.box]] or scene.gltf): \
+                         the bounds alone show no visible depth; use bounds"
+                            .to_string(),
+                    ));
+                }
+                axis
+            }
+            (None, Some(axis), Some(p)) => {
+                notes.push(format!(
+                    "sweep.split_range = {} left out: the {} preset fixes its split range",
+                    axis.spec, p.name
+                ));
+                Axis {
+                    values: vec![configured],
+                    spec: configured.name().into(),
+                }
+            }
+            (None, Some(axis), None) => axis.clone(),
+            (None, None, _) => Axis {
+                values: vec![configured],
+                spec: configured.name().into(),
+            },
+        };
         let grid = Grid {
             lambda,
             cascades,
             resolution,
             fit,
+            split_range,
             notes,
         };
         let n = grid.len();
@@ -309,7 +380,7 @@ impl Grid {
                 lambdas: grid.lambda.values.len(),
                 counts: grid.cascades.values.len(),
                 resolutions: grid.resolution.values.len(),
-                fits: grid.fit.values.len(),
+                fits: grid.fit.values.len() * grid.split_range.values.len(),
                 max: max_configs,
             }
             .into());
@@ -338,26 +409,34 @@ impl Grid {
     }
 
     pub fn len(&self) -> usize {
-        self.lambda.values.len() * self.cascades.values.len() * self.resolution.values.len() * self.fit.values.len()
+        self.lambda.values.len()
+            * self.cascades.values.len()
+            * self.resolution.values.len()
+            * self.fit.values.len()
+            * self.split_range.values.len()
     }
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
-    /// All settings in row order: fit, then resolution, then cascades, then λ (innermost).
+    /// All settings in row order: split range, then fit, then resolution, then cascades, then
+    /// λ (innermost).
     pub fn settings(&self) -> Vec<Setting> {
         let mut out = Vec::with_capacity(self.len());
-        for &fit in &self.fit.values {
-            for &resolution in &self.resolution.values {
-                for &cascades in &self.cascades.values {
-                    for &lambda in &self.lambda.values {
-                        out.push(Setting {
-                            lambda,
-                            cascades,
-                            resolution,
-                            fit,
-                        });
+        for &split_range in &self.split_range.values {
+            for &fit in &self.fit.values {
+                for &resolution in &self.resolution.values {
+                    for &cascades in &self.cascades.values {
+                        for &lambda in &self.lambda.values {
+                            out.push(Setting {
+                                lambda,
+                                cascades,
+                                resolution,
+                                fit,
+                                split_range,
+                            });
+                        }
                     }
                 }
             }
@@ -380,6 +459,9 @@ impl Grid {
         if axes.fit {
             out.push_str(&format!(" --fit {}", self.fit.spec));
         }
+        if self.split_range.values.len() > 1 || self.split_range.values.contains(&SplitRange::Visible) {
+            out.push_str(&format!(" --split-range {}", self.split_range.spec));
+        }
         out
     }
 }
@@ -391,6 +473,7 @@ pub struct Setting {
     pub cascades: usize,
     pub resolution: u32,
     pub fit: Fit,
+    pub split_range: SplitRange,
 }
 
 impl Setting {
@@ -400,7 +483,7 @@ impl Setting {
     /// a resolved grid.
     pub fn apply(&self, base: &Config) -> Result<Config> {
         if base.shadow.preset.is_none() {
-            return base.with_sweep_point(self.lambda, self.cascades, self.resolution, self.fit);
+            return base.with_sweep_point(self.lambda, self.cascades, self.resolution, self.fit, self.split_range);
         }
         let mut c = base.clone();
         if crate::presets::axes(&c).lambda.is_some() {
@@ -413,8 +496,12 @@ impl Setting {
     }
 
     pub fn label(&self) -> String {
+        let range = match self.split_range {
+            SplitRange::Bounds => "",
+            SplitRange::Visible => ", splits on the visible depths",
+        };
         format!(
-            "{} x {}^2, lambda {}, {}",
+            "{} x {}^2, lambda {}, {}{range}",
             self.cascades, self.resolution, self.lambda, self.fit
         )
     }
@@ -806,6 +893,8 @@ mod tests {
             (parse_resolution_spec("1024,abc").map(|_| ()), "--resolution"),
             (parse_resolution_spec("8").map(|_| ()), "--resolution"),
             (parse_fit_spec("box").map(|_| ()), "--fit"),
+            (parse_split_range_spec("depth").map(|_| ()), "--split-range"),
+            (parse_split_range_spec("bounds,bounds").map(|_| ()), "--split-range"),
         ] {
             let e = r.unwrap_err().to_string();
             assert!(e.starts_with(flag), "{e}");
@@ -819,6 +908,7 @@ mod tests {
                 cascades: 1,
                 resolution: 512,
                 fit: Fit::Sphere,
+                split_range: SplitRange::Bounds,
             },
             summary: Summary {
                 cascades_needed,

@@ -21,11 +21,56 @@ pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
 /// Turn a `toml` deserialisation error into one with the file's line and column.
 pub fn toml_error(path: &str, text: &str, err: &toml::de::Error) -> Error {
     let (line, column) = err.span().map(|span| line_column(text, span.start)).unwrap_or((1, 1));
+    let mut message = err.message().trim().to_string();
+    // serde names the bad value but not its key for enum values and wrong types: name it.
+    let about_a_value = ["unknown variant", "invalid type", "invalid value"]
+        .iter()
+        .any(|m| message.starts_with(m));
+    if about_a_value {
+        if let Some(key) = err.span().and_then(|span| key_at(text, span.start)) {
+            message = format!("`{key}`: {message}");
+        }
+    }
     Error::from(ConfigError::Toml {
         path: path.to_string(),
         line,
         column,
-        message: err.message().trim().to_string(),
+        message,
+    })
+}
+
+/// The dotted key (`table.key`) whose value is written at byte `offset`: the nearest
+/// `key = ...` at or above the offset's line within the same table.
+pub fn key_at(text: &str, offset: usize) -> Option<String> {
+    let mut table = String::new();
+    let mut key = None;
+    let mut start = 0;
+    for line in text.split_inclusive('\n') {
+        if start > offset {
+            break;
+        }
+        start += line.len();
+        let trimmed = line.trim_start();
+        if let Some(rest) = trimmed.strip_prefix('[') {
+            let rest = rest.trim_start_matches('[');
+            if let Some(end) = rest.find(']') {
+                table = rest[..end].trim().to_string();
+                key = None;
+            }
+            continue;
+        }
+        if let Some((k, _)) = trimmed.split_once('=') {
+            let k = k.trim();
+            if !k.is_empty() && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '.') {
+                key = Some(k.to_string());
+            }
+        }
+    }
+    let key = key?;
+    Some(if table.is_empty() {
+        key
+    } else {
+        format!("{table}.{key}")
     })
 }
 

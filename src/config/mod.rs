@@ -24,7 +24,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::geometry::{Aabb, CameraPose};
-pub use crate::scene::ShadowParams;
+pub use crate::scene::{ShadowParams, SplitRange};
 
 pub use crate::fitting::Fit;
 pub use crate::motion::MotionPath;
@@ -385,6 +385,14 @@ impl Config {
             }
         };
         eat(echo.to_string().as_bytes());
+        // The echo counts the triangles; a glTF edited in place must change the hash too.
+        if let Some(g) = &self.geometry {
+            for tri in &g.scene.mesh.triangles {
+                for x in tri.iter().flat_map(|v| v.to_array()) {
+                    eat(&x.to_bits().to_le_bytes());
+                }
+            }
+        }
         if let MotionPath::File { poses, .. } = &self.motion.path {
             for (p, t) in poses {
                 for x in p.to_array().into_iter().chain(t.to_array()) {

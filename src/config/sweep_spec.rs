@@ -4,7 +4,7 @@
 
 use serde::Deserialize;
 
-use super::{Fit, Validator};
+use super::{Fit, SplitRange, Validator};
 use crate::error::Result;
 
 /// One axis: its values in order, and the canonical spec that reproduces it on the CLI.
@@ -21,6 +21,9 @@ pub struct SweepSpec {
     pub cascades: Option<Axis<usize>>,
     pub resolution: Option<Axis<u32>>,
     pub fit: Option<Axis<Fit>>,
+    /// `split_range = ["bounds", "visible"]`: splits on the bounds' depth range and/or on the
+    /// visible depths (scene geometry only), side by side in one sweep.
+    pub split_range: Option<Axis<SplitRange>>,
     /// Memory budget for the recommendation, MiB (2^20 bytes).
     pub memory_budget_mib: Option<f64>,
     /// A larger grid is an error, not an out-of-memory.
@@ -187,6 +190,7 @@ pub(crate) struct RawSweep {
     cascades: Option<RawAxis>,
     resolution: Option<RawAxis>,
     fit: Option<Vec<Fit>>,
+    split_range: Option<Vec<SplitRange>>,
     memory_budget_mib: Option<f64>,
     max_configs: Option<i64>,
     objective: Option<String>,
@@ -291,7 +295,7 @@ fn int_axis<T: TryFrom<i64> + Copy + PartialOrd + std::fmt::Display>(
     })
 }
 
-pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>) -> Result<SweepSpec> {
+pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool) -> Result<SweepSpec> {
     let lambda = raw
         .lambda
         .map(raw_lambda)
@@ -338,6 +342,35 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>) -> Result<SweepSpec
         }
         None => None,
     };
+    let split_range = match raw.split_range {
+        Some(r) => {
+            check_values(
+                &r.iter().map(|x| x.name()).collect::<Vec<_>>(),
+                "bounds, visible",
+                |_| true,
+            )
+            .map_err(|why| {
+                v.invalid(
+                    "sweep.split_range",
+                    format!("{r:?}"),
+                    &format!("\"bounds\" and/or \"visible\": {why}"),
+                )
+            })?;
+            if !has_geometry && r.contains(&SplitRange::Visible) {
+                return Err(v.invalid(
+                    "sweep.split_range",
+                    format!("{r:?}"),
+                    "[\"bounds\"] without scene geometry: add scene.ground, [[scene.box]] or scene.gltf \
+                     (the bounds alone show no visible depth)",
+                ));
+            }
+            Some(Axis {
+                spec: fmt_list(&r),
+                values: r,
+            })
+        }
+        None => None,
+    };
     let memory_budget_mib = match raw.memory_budget_mib {
         Some(b) if !(b.is_finite() && b > 0.0) => {
             return Err(v.invalid("sweep.memory_budget_mib", b, "a number of MiB > 0"));
@@ -355,6 +388,7 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>) -> Result<SweepSpec
         cascades,
         resolution,
         fit,
+        split_range,
         memory_budget_mib,
         max_configs,
         objective: raw.objective,

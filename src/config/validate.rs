@@ -388,7 +388,10 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         },
     };
 
-    let sweep = raw.sweep.map(|s| super::sweep_spec::validate_raw(s, v)).transpose()?;
+    let sweep = raw
+        .sweep
+        .map(|s| super::sweep_spec::validate_raw(s, v, geometry.is_some()))
+        .transpose()?;
 
     let config = Config {
         name: "config".to_string(),

@@ -96,6 +96,43 @@ pub struct Geometry {
     pub screen_scale: f64,
 }
 
+/// Which view depths the splits divide: the scene bounds' range (every metre of it, seen or
+/// not) or only the range where geometry is visible (what SDSM reads from the depth buffer;
+/// sharper, needs geometry). The same choice as [`ShadowParams::fit_depth_to_visible`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SplitRange {
+    Bounds,
+    Visible,
+}
+
+impl SplitRange {
+    pub fn of(fit_depth_to_visible: bool) -> Self {
+        if fit_depth_to_visible {
+            SplitRange::Visible
+        } else {
+            SplitRange::Bounds
+        }
+    }
+
+    pub fn is_visible(self) -> bool {
+        self == SplitRange::Visible
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SplitRange::Bounds => "bounds",
+            SplitRange::Visible => "visible",
+        }
+    }
+}
+
+impl std::fmt::Display for SplitRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Everything the core measures, in one value.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Setup {

@@ -4,7 +4,7 @@
 //! `bench` build their variants through these, so no unchecked setting reaches the core.
 
 use super::{binary32_range, cross_checks};
-use crate::config::{Config, Fit, MotionPath, Precision, Validator, MAX_WORLD};
+use crate::config::{Config, Fit, MotionPath, Precision, SplitRange, Validator, MAX_WORLD};
 use crate::error::Result;
 
 impl Config {
@@ -104,13 +104,41 @@ impl Config {
 
     /// One point of a sweep of csm-lab's own pipeline: λ, cascade count, map size and fit,
     /// checked together (one cross-check for the four).
-    pub fn with_sweep_point(&self, lambda: f64, cascades: usize, resolution: u32, fit: Fit) -> Result<Config> {
+    pub fn with_sweep_point(
+        &self,
+        lambda: f64,
+        cascades: usize,
+        resolution: u32,
+        fit: Fit,
+        range: SplitRange,
+    ) -> Result<Config> {
         let mut c = self.clone();
         c.set_lambda(lambda)?;
         c.set_cascades(cascades)?;
         c.set_resolution(resolution)?;
         c.shadow.fit = fit;
+        c.set_split_range(range)?;
         c.checked()
+    }
+
+    /// The splits on the bounds' depth range or on the visible depths (`fit_depth_to_visible`),
+    /// which needs scene geometry.
+    pub fn with_split_range(&self, range: SplitRange) -> Result<Config> {
+        let mut c = self.clone();
+        c.set_split_range(range)?;
+        c.checked()
+    }
+
+    fn set_split_range(&mut self, range: SplitRange) -> Result<()> {
+        if range.is_visible() && self.geometry.is_none() {
+            return Err(self.refuse(
+                "shadow.fit_depth_to_visible",
+                true,
+                "false without scene geometry (the bounds alone show no visible depth)",
+            ));
+        }
+        self.shadow.fit_depth_to_visible = range.is_visible();
+        Ok(())
     }
 
     /// The config with a generated motion path (not a path file): `frames` poses, `step` as a

@@ -51,6 +51,7 @@ pub fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
                 cascades,
                 a.config.shadow.resolution,
                 &fit_label(a),
+                crate::config::SplitRange::of(a.config.shadow.fit_depth_to_visible),
                 s,
             )?);
             fields.extend([

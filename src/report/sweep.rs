@@ -38,6 +38,7 @@ pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
                 st.cascades,
                 st.resolution,
                 st.fit.name(),
+                st.split_range,
                 &row.summary,
             )?;
             fields.extend([
@@ -63,6 +64,9 @@ fn row_json(row: &Row) -> serde_json::Value {
         "resolution": row.setting.resolution,
         "fit": row.setting.fit,
     });
+    if row.summary.screen.is_some() {
+        v["split_range"] = serde_json::json!(row.setting.split_range);
+    }
     for (k, x) in metric::summary_json(&row.summary) {
         v[k] = x;
     }
@@ -295,6 +299,7 @@ fn why_text(r: &SweepResult) -> String {
             && x.setting.cascades == r.config.shadow.cascades
             && x.setting.resolution == r.config.shadow.resolution
             && x.setting.fit == r.config.shadow.fit
+            && x.setting.split_range.is_visible() == r.config.shadow.fit_depth_to_visible
     });
     if let Some(o) = own {
         let change = changes(r, o, rec);
@@ -363,7 +368,7 @@ fn table_rows(r: &SweepResult) -> Vec<Vec<String>> {
                 x.setting.cascades.to_string(),
                 x.setting.resolution.to_string(),
                 x.setting.lambda.to_string(),
-                x.setting.fit.to_string(),
+                fit_cell(x),
                 format!("{:.4}", s.mean_aliasing),
                 format!("{:.4}", s.max_aliasing),
                 format!("{:.4}", s.mean_log_aliasing),
@@ -391,12 +396,13 @@ const TABLE_HEAD: [&str; 10] = [
 /// "N configurations: a λ values × b cascade counts × …, each analysed in full".
 fn grid_sentence(r: &SweepResult) -> String {
     format!(
-        "{} configurations: {} λ values × {} cascade counts × {} resolutions × {} fits, each analysed in full",
+        "{} configurations: {} λ values × {} cascade counts × {} resolutions × {} fits{}, each analysed in full",
         r.rows.len(),
         r.grid.lambda.values.len(),
         r.grid.cascades.values.len(),
         r.grid.resolution.values.len(),
-        r.grid.fit.values.len()
+        r.grid.fit.values.len(),
+        ranges_factor(r)
     )
 }
 
@@ -506,18 +512,27 @@ pub fn render_all(r: &SweepResult, plots: bool) -> Result<crate::output::Rendere
     Ok(files)
 }
 
+/// " × 2 split ranges" when the sweep puts bounds and visible splits side by side.
+fn ranges_factor(r: &SweepResult) -> String {
+    match r.grid.split_range.values.len() {
+        1 => String::new(),
+        n => format!(" × {n} split ranges"),
+    }
+}
+
 /// The short table printed on stdout.
 pub fn stdout_table(r: &SweepResult) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{}: {} configurations ({} λ × {} cascade counts × {} resolutions × {} fits)",
+        "{}: {} configurations ({} λ × {} cascade counts × {} resolutions × {} fits{})",
         r.config.name,
         r.rows.len(),
         r.grid.lambda.values.len(),
         r.grid.cascades.values.len(),
         r.grid.resolution.values.len(),
-        r.grid.fit.values.len()
+        r.grid.fit.values.len(),
+        ranges_factor(r)
     );
     if r.front.is_empty() {
         let _ = writeln!(
@@ -532,9 +547,15 @@ pub fn stdout_table(r: &SweepResult) -> String {
     } else {
         let _ = writeln!(out, "Pareto front (memory against mean aliasing):");
     }
+    // The fit column is as wide as its widest cell ("sphere", "sphere (visible)").
+    let fw = r
+        .front
+        .iter()
+        .map(|&i| fit_cell(&r.rows[i]).chars().count())
+        .fold(6, usize::max);
     let _ = write!(
         out,
-        "  {:>9} {:>8} {:>6} {:>6} {:>6} {:>10} {:>10} {:>10}",
+        "  {:>9} {:>8} {:>6} {:>6} {:>fw$} {:>10} {:>10} {:>10}",
         "MiB", "cascades", "res", "λ", "fit", "mean", "max", "shimmer"
     );
     let _ = if screen {
@@ -548,7 +569,7 @@ pub fn stdout_table(r: &SweepResult) -> String {
         let s = &x.summary;
         let _ = writeln!(
             out,
-            "{} {:>9} {:>8} {:>6} {:>6} {:>6} {:>10.4} {:>10.4} {:>10}",
+            "{} {:>9} {:>8} {:>6} {:>6} {:>fw$} {:>10.4} {:>10.4} {:>10}",
             if Some(i) == rec { "*" } else { " " },
             mib(s.memory_bytes),
             x.setting.cascades,
@@ -560,9 +581,9 @@ pub fn stdout_table(r: &SweepResult) -> String {
                 "-".to_string()
             },
             if r.config.shadow.preset.is_none() {
-                x.setting.fit.name()
+                fit_cell(x)
             } else {
-                "-"
+                "-".to_string()
             },
             s.mean_aliasing,
             s.max_aliasing,
@@ -581,9 +602,34 @@ pub fn stdout_table(r: &SweepResult) -> String {
 /// practical λ or a choice of fit shows neither).
 fn setting_knobs(r: &SweepResult, x: &Row) -> String {
     match &r.config.shadow.preset {
-        None => format!("λ = {}, {} fit", x.setting.lambda, x.setting.fit),
+        None => format!(
+            "λ = {}, {} fit{}",
+            x.setting.lambda,
+            x.setting.fit,
+            range_words(r, x.setting.split_range)
+        ),
         Some(p) if has_lambda(r) => format!("the {} preset with λ = {}", p.name, x.setting.lambda),
         Some(p) => format!("the {} preset", p.name),
+    }
+}
+
+/// A table's fit cell: the fit, and "visible" when the splits divide the visible depths.
+fn fit_cell(x: &Row) -> String {
+    if x.setting.split_range.is_visible() {
+        format!("{} (visible)", x.setting.fit)
+    } else {
+        x.setting.fit.to_string()
+    }
+}
+
+/// ", splits on the visible depths" (or "... on the bounds' depth range") when the sweep puts
+/// both side by side or the config fits the splits to what is visible; empty otherwise.
+fn range_words(r: &SweepResult, range: crate::config::SplitRange) -> &'static str {
+    let shown = r.grid.split_range.values.len() > 1 || range.is_visible();
+    match (shown, range.is_visible()) {
+        (false, _) => "",
+        (true, true) => ", splits on the visible depths",
+        (true, false) => ", splits on the bounds' depth range",
     }
 }
 
@@ -615,6 +661,13 @@ fn changes(r: &SweepResult, o: &Row, x: &Row) -> Vec<String> {
     }
     if r.config.shadow.preset.is_none() && o.setting.fit != x.setting.fit {
         out.push(format!("fit {} → {}", o.setting.fit, x.setting.fit));
+    }
+    if o.setting.split_range != x.setting.split_range {
+        out.push(format!(
+            "fit_depth_to_visible {} → {}",
+            o.setting.split_range.is_visible(),
+            x.setting.split_range.is_visible()
+        ));
     }
     out
 }

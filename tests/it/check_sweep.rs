@@ -20,6 +20,7 @@ fn key(lambda: f64, cascades: u32, resolution: u32, fit: &str) -> SweepKey {
         cascades,
         resolution,
         fit: fit.to_string(),
+        split_range: csm_lab::config::SplitRange::Bounds,
     }
 }
 

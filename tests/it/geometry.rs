@@ -343,3 +343,101 @@ fn a_screen_rule_on_a_bounds_only_scene_is_not_applicable() {
     assert_eq!(out.status.code(), Some(0), "{stdout}");
     assert!(stdout.contains("needs scene geometry"), "{stdout}");
 }
+
+/// One sweep over both split ranges holds, row for row, the sweep fitted to the bounds and the
+/// sweep of a config fitted to the visible depths; the visible rows split exactly the visible
+/// range, and the recommendation says which range it chose.
+#[test]
+fn a_sweep_puts_bounds_and_visible_splits_side_by_side() {
+    use csm_lab::sweep::{parse_split_range_spec, run, Grid, GridOverrides};
+    let text = with(&[("scene.ground", "ground = 0.0")])
+        + "\n[[scene.box]]\nmin = [-30.0, 0.0, -80.0]\nmax = [-10.0, 30.0, -60.0]\n\
+           [sweep]\nlambda = [0.25, 0.75]\ncascades = [2, 4]\nresolution = [1024]\n";
+    let config = load(&text);
+    let grid_of = |spec: &str| {
+        Grid::resolve(
+            &config,
+            &GridOverrides {
+                split_range: Some(parse_split_range_spec(spec).unwrap()),
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    };
+    let both = run(&config, &grid_of("bounds,visible"), Some(2), &|| {}).unwrap();
+    let bounds = run(&config, &grid_of("bounds"), Some(1), &|| {}).unwrap();
+    let fitted = load(&text.replace("snap = true", "snap = true\nfit_depth_to_visible = true"));
+    assert!(fitted.shadow.fit_depth_to_visible);
+    let visible = run(
+        &fitted,
+        &Grid::resolve(&fitted, &GridOverrides::default()).unwrap(),
+        Some(1),
+        &|| {},
+    )
+    .unwrap();
+    assert_eq!(both.len(), 8);
+    assert_eq!(both[..4], bounds[..]);
+    let summaries = |rows: &[csm_lab::sweep::Row]| rows.iter().map(|r| r.summary.clone()).collect::<Vec<_>>();
+    assert_eq!(summaries(&both[4..]), summaries(&visible));
+    for r in &both[4..] {
+        let st = r.summary.screen.as_ref().unwrap();
+        assert_eq!((r.summary.z_lo, r.summary.z_hi), (st.visible_z_lo, st.visible_z_hi));
+    }
+    for r in &both[..4] {
+        assert!(r.summary.z_lo < r.summary.screen.as_ref().unwrap().visible_z_lo);
+    }
+}
+
+/// The split range is refused where it cannot apply, naming the flag or key.
+#[test]
+fn a_visible_split_range_needs_geometry_and_no_preset() {
+    use csm_lab::sweep::{parse_split_range_spec, Grid, GridOverrides};
+    let bounds_only = load(&with(&[]));
+    let over = GridOverrides {
+        split_range: Some(parse_split_range_spec("bounds,visible").unwrap()),
+        ..Default::default()
+    };
+    let e = Grid::resolve(&bounds_only, &over).unwrap_err().to_string();
+    assert!(e.starts_with("--split-range") && e.contains("geometry"), "{e}");
+    let e = err(&(with(&[]) + "\n[sweep]\nsplit_range = [\"visible\"]\n"));
+    assert!(e.contains("sweep.split_range") && e.contains("geometry"), "{e}");
+    let e = err(&(with(&[]) + "\n[sweep]\nsplit_range = [\"depth\"]\n"));
+    assert!(e.contains("sweep.split_range") || e.contains("split_range"), "{e}");
+    assert!(parse_split_range_spec("bounds,bounds")
+        .unwrap_err()
+        .to_string()
+        .contains("twice"));
+}
+
+/// A baseline's scene hash covers the triangles themselves: the same file name, triangle count
+/// and bounds with one vertex moved is another scene.
+#[test]
+fn the_scene_hash_changes_when_a_gltf_vertex_moves() {
+    let dir = tempfile::tempdir().unwrap();
+    let config_with = |name: &str, apex_x: f32| {
+        let positions: [f32; 9] = [0.0, 0.0, 0.0, 4.0, 0.0, 0.0, apex_x, 0.0, 4.0];
+        let bytes: Vec<u8> = positions.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let json = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+            "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+            "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [4.0, 0.0, 4.0]}}],
+            "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+            "buffers": [{{"byteLength": 36, "uri": "data:application/octet-stream;base64,{}"}}]}}"#,
+            csm_lab::report::html::base64(&bytes)
+        );
+        let sub = dir.path().join(name);
+        std::fs::create_dir_all(&sub).unwrap();
+        let path = sub.join("scene.gltf");
+        std::fs::write(&path, json).unwrap();
+        load(&with(&[(
+            "scene.gltf",
+            &format!("gltf = {:?}", path.display().to_string()),
+        )]))
+    };
+    let a = config_with("a", 1.0);
+    let same = config_with("a", 1.0);
+    let moved = config_with("a", 2.0);
+    assert_eq!(a.scene_hash(), same.scene_hash());
+    assert_eq!(a.echo(), moved.echo());
+    assert_ne!(a.scene_hash(), moved.scene_hash());
+}

@@ -173,6 +173,7 @@ fn sweeping_to_a_fit_binary32_cannot_hold_is_refused_naming_the_key_before_any_w
         cascades: Some(parse_cascades_spec("3").unwrap()),
         resolution: Some(parse_resolution_spec("512").unwrap()),
         fit: Some(parse_fit_spec("aabb").unwrap()),
+        split_range: None,
     };
     let grid = Grid::resolve(&base, &overrides).unwrap();
     let done = std::sync::atomic::AtomicUsize::new(0);

@@ -18,7 +18,7 @@ use super::baseline::{compare, Comparison, Tolerances, Verdict};
 use super::evaluate::{evaluate_values, RuleResult, Status};
 use super::metric::SummaryMetric;
 use super::thresholds::Rule;
-use crate::config::Config;
+use crate::config::{Config, SplitRange};
 use crate::error::{BaselineError, Error, Result};
 
 /// The columns that identify a configuration in `sweep.csv`.
@@ -31,6 +31,9 @@ pub struct SweepKey {
     pub cascades: u32,
     pub resolution: u32,
     pub fit: String,
+    /// `bounds` or `visible` (the `split_range` column, present with scene geometry; a table
+    /// without it has every split on the bounds' range).
+    pub split_range: SplitRange,
 }
 
 impl SweepKey {
@@ -41,13 +44,19 @@ impl SweepKey {
             cascades: config.shadow.cascades as u32,
             resolution: config.shadow.resolution,
             fit: config.shadow.fit.name().to_string(),
+            split_range: SplitRange::of(config.shadow.fit_depth_to_visible),
         }
     }
 
-    /// `lambda=0.75 cascades=4 resolution=2048 fit=sphere`
+    /// `lambda=0.75 cascades=4 resolution=2048 fit=sphere` (and ` split_range=visible` when the
+    /// splits divide the visible depths).
     pub fn label(&self) -> String {
+        let range = match self.split_range {
+            SplitRange::Bounds => "",
+            SplitRange::Visible => " split_range=visible",
+        };
         format!(
-            "lambda={} cascades={} resolution={} fit={}",
+            "lambda={} cascades={} resolution={} fit={}{range}",
             self.lambda, self.cascades, self.resolution, self.fit
         )
     }
@@ -61,6 +70,7 @@ impl Ord for SweepKey {
             .then(self.cascades.cmp(&other.cascades))
             .then(self.resolution.cmp(&other.resolution))
             .then_with(|| self.fit.cmp(&other.fit))
+            .then(self.split_range.cmp(&other.split_range))
     }
 }
 
@@ -233,6 +243,7 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
             )
         })?;
     }
+    let range_idx = column(crate::metric::SPLIT_RANGE_COLUMN);
     let metric_cols: Vec<(usize, SummaryMetric)> = headers
         .iter()
         .enumerate()
@@ -277,6 +288,16 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
             cascades: int(key_idx[1], "cascades")?,
             resolution: int(key_idx[2], "resolution")?,
             fit: field(key_idx[3]).to_string(),
+            split_range: match range_idx.map(field) {
+                None | Some("bounds") => SplitRange::Bounds,
+                Some("visible") => SplitRange::Visible,
+                Some(other) => {
+                    return Err(data_err(
+                        line,
+                        format!("`split_range` = {other:?} is not a split range: bounds or visible"),
+                    ))
+                }
+            },
         };
         let metrics = metric_cols
             .iter()
@@ -307,6 +328,7 @@ pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
                 cascades: r.setting.cascades as u32,
                 resolution: r.setting.resolution,
                 fit: r.setting.fit.name().to_string(),
+                split_range: r.setting.split_range,
             },
             metrics: SummaryMetric::all()
                 .map(|m| (m.name().to_string(), m.value(&r.summary)))
@@ -326,6 +348,7 @@ mod tests {
             cascades: 4,
             resolution: 2048,
             fit: fit.into(),
+            split_range: SplitRange::Bounds,
         };
         assert_eq!(k(0.5, "sphere"), k(0.5, "sphere"));
         assert!(k(0.25, "sphere") < k(0.5, "aabb"));
