@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
-use crate::app::{analyze, bench, check, compare, stress, sweep};
+use crate::app::{analyze, bench, check, compare, merge, stress, sweep};
 use crate::error::Result;
 use crate::precision::Precision;
 
@@ -39,6 +39,8 @@ pub enum Command {
     Bench(BenchArgs),
     /// Run several engine presets on one scene and compare them (CSV, plots, HTML, Markdown).
     Compare(CompareArgs),
+    /// Join the shards of a sweep (`sweep --shard K/N`) into the files the unsharded sweep writes.
+    Merge(MergeArgs),
 }
 
 #[derive(Debug, Args)]
@@ -109,6 +111,30 @@ pub struct SweepArgs {
     /// Sweep an engine preset's own axes (overrides shadow.preset); see `analyze --preset`.
     #[arg(long)]
     pub preset: Option<String>,
+    /// What to print on stdout.
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    pub format: Format,
+    /// Run only the K-th of N disjoint slices of the grid (K from 1 to N; row i goes to shard
+    /// i mod N + 1); `csm-lab merge` joins the N shard directories [default --out:
+    /// out/<config name>/shard-K-of-N/].
+    #[arg(long, value_name = "K/N", allow_hyphen_values = true)]
+    pub shard: Option<String>,
+}
+
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// The output directories of every `sweep --shard K/N` run of one sweep (any order).
+    #[arg(required = true, value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+    /// Output directory [default: out/<config name>/].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Skip the SVG/PNG figures, as `sweep --no-plots` does.
+    #[arg(long)]
+    pub no_plots: bool,
+    /// No notes on stderr.
+    #[arg(long)]
+    pub quiet: bool,
     /// What to print on stdout.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
@@ -196,6 +222,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             no_plots: args.no_plots,
             preset: args.preset,
             format: args.format,
+            shard: args.shard,
         }),
         Command::Check(args) => match (&args.init, &args.thresholds) {
             (Some(file), _) => check::init(&check::InitRequest {
@@ -224,6 +251,13 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             out: args.out,
             config: args.config,
             repeats: args.repeats,
+        }),
+        Command::Merge(args) => merge::execute(&merge::MergeRequest {
+            dirs: args.dirs,
+            out: args.out,
+            no_plots: args.no_plots,
+            quiet: args.quiet,
+            format: args.format,
         }),
         Command::Compare(args) => compare::execute(&compare::CompareRequest {
             config: args.config,

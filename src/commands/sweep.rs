@@ -430,7 +430,16 @@ pub struct Row {
 /// Runs the full analysis of every setting in parallel. `threads` = None uses rayon's default
 /// pool; `on_done` is called once per finished configuration (progress bars).
 pub fn run(base: &Config, grid: &Grid, threads: Option<usize>, on_done: &(dyn Fn() + Sync)) -> Result<Vec<Row>> {
-    let settings = grid.settings();
+    run_settings(base, &grid.settings(), threads, on_done)
+}
+
+/// [`run`] over some settings of a grid (a shard's slice), in their order.
+pub fn run_settings(
+    base: &Config,
+    settings: &[Setting],
+    threads: Option<usize>,
+    on_done: &(dyn Fn() + Sync),
+) -> Result<Vec<Row>> {
     // Every point is built and checked before any analysis runs: a setting the config could
     // not hold (an f32 window that collapses at this fit, say) is refused like the file would be.
     let configs = settings
