@@ -161,6 +161,10 @@ pub struct CheckArgs {
     /// Judge sweep rows (summary metrics only) instead of the one configuration.
     #[arg(long)]
     pub sweep: bool,
+    /// With --sweep: judge the rows of this sweep.csv instead of running the sweep (e.g. the
+    /// output of `csm-lab merge`); its configurations must be the config's `[sweep]` grid.
+    #[arg(long, value_name = "FILE", requires = "sweep")]
+    pub sweep_csv: Option<PathBuf>,
     /// With --sweep: list every configuration instead of a summary.
     #[arg(long)]
     pub verbose: bool,
@@ -235,6 +239,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
                 thresholds,
                 baseline: args.baseline.as_deref(),
                 sweep: args.sweep,
+                sweep_csv: args.sweep_csv.as_deref(),
                 verbose: args.verbose,
                 junit: args.junit.as_deref(),
                 format: args.format,

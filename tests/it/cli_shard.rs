@@ -295,3 +295,66 @@ fn merging_after_the_config_changed_or_with_another_version_or_a_plain_directory
     let err = fails_with_2(merge(&d, &tmp.path().join("m2")));
     assert!(err.contains("is not what the shards ran"), "{err}");
 }
+
+#[test]
+fn check_judges_a_merged_sweep_csv_exactly_as_it_judges_the_sweep_it_runs_itself() {
+    let tmp = tempfile::tempdir().unwrap();
+    let small = small_config(tmp.path(), "small.toml", 1000.0);
+    let rules = tmp.path().join("rules.toml");
+    std::fs::write(
+        &rules,
+        "[[rule]]\nmetric = \"max_aliasing\"\nmax = 200.0\n[[rule]]\nmetric = \"coverage_violations\"\nmax = 0\n",
+    )
+    .unwrap();
+    // A bounds-only scene with its own rules, and a bundled scene with geometry and the shipped rules.
+    for (cfg, thresholds) in [
+        (small.as_str(), s(&rules)),
+        ("configs/default.toml", "configs/thresholds.toml"),
+    ] {
+        let d = three_shards(cfg, &tmp.path().join(cfg.replace(['/', '.'], "_")));
+        let merged = tmp.path().join("merged");
+        ok(merge(&d, &merged));
+        let csv = merged.join("sweep.csv");
+        for format in ["table", "json"] {
+            let direct = run(&["check", cfg, "--thresholds", thresholds, "--sweep", "--format", format]);
+            let from_csv = run(&[
+                "check",
+                cfg,
+                "--thresholds",
+                thresholds,
+                "--sweep",
+                "--sweep-csv",
+                s(&csv),
+                "--format",
+                format,
+            ]);
+            assert!(matches!(direct.status.code(), Some(0 | 1)), "{cfg}");
+            assert_eq!(direct.status.code(), from_csv.status.code(), "{cfg}");
+            assert!(!direct.stdout.is_empty());
+            assert!(
+                direct.stdout == from_csv.stdout,
+                "{cfg} --format {format}: the reports differ"
+            );
+        }
+    }
+    // A sweep.csv of another grid is refused, naming the file.
+    let other = small_config(tmp.path(), "other.toml", 1000.0);
+    let text = std::fs::read_to_string(&other)
+        .unwrap()
+        .replace("cascades = [2, 4]", "cascades = [2, 3]");
+    std::fs::write(&other, text).unwrap();
+    let csv = tmp.path().join("merged").join("sweep.csv");
+    let err = fails_with_2(run(&[
+        "check",
+        &other,
+        "--thresholds",
+        s(&rules),
+        "--sweep",
+        "--sweep-csv",
+        s(&csv),
+    ]));
+    assert!(err.contains(s(&csv)) && err.contains("this config's grid"), "{err}");
+    // --sweep-csv needs --sweep.
+    let out = run(&["check", &small, "--thresholds", s(&rules), "--sweep-csv", s(&csv)]);
+    assert_eq!(out.status.code(), Some(2));
+}
