@@ -358,3 +358,52 @@ fn check_judges_a_merged_sweep_csv_exactly_as_it_judges_the_sweep_it_runs_itself
     let out = run(&["check", &small, "--thresholds", s(&rules), "--sweep-csv", s(&csv)]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn the_plain_shell_recipe_in_docs_check_md_runs_verbatim_and_gates_like_check_sweep() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let doc = std::fs::read_to_string(root.join("docs/check.md")).unwrap();
+    let at = doc.find("<!-- shard-shell").expect("the shard-shell marker");
+    let body = &doc[at..];
+    let body = &body[body.find("```sh\n").unwrap() + 6..];
+    let script = &body[..body.find("```").unwrap()];
+    assert!(script.contains("--shard") && script.contains("csm-lab merge") && script.contains("--sweep-csv"));
+    // A fresh directory holding the bundled configs, with csm-lab on the PATH.
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::create_dir(tmp.path().join("configs")).unwrap();
+    for f in ["default.toml", "thresholds.toml"] {
+        std::fs::copy(root.join("configs").join(f), tmp.path().join("configs").join(f)).unwrap();
+    }
+    let bin_dir = Path::new(env!("CARGO_BIN_EXE_csm-lab")).parent().unwrap();
+    let path = format!("{}:{}", bin_dir.display(), std::env::var("PATH").unwrap_or_default());
+    let out = Command::new("sh")
+        .args(["-e", "-c", script])
+        .current_dir(tmp.path())
+        .env("PATH", &path)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("error"), "{stderr}");
+    // The merged files are the unsharded sweep's, and the gate's verdict is check --sweep's.
+    let direct = tmp.path().join("direct");
+    let o = Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+        .args(["sweep", "configs/default.toml", "--quiet", "--out", s(&direct)])
+        .current_dir(tmp.path())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(files(&tmp.path().join("out/default")), files(&direct));
+    let check = Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+        .args([
+            "check",
+            "configs/default.toml",
+            "--thresholds",
+            "configs/thresholds.toml",
+            "--sweep",
+        ])
+        .current_dir(tmp.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), check.status.code(), "{stderr}");
+    assert!(String::from_utf8_lossy(&out.stdout).ends_with(&*String::from_utf8_lossy(&check.stdout)));
+}
