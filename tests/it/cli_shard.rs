@@ -407,3 +407,51 @@ fn the_plain_shell_recipe_in_docs_check_md_runs_verbatim_and_gates_like_check_sw
     assert_eq!(out.status.code(), check.status.code(), "{stderr}");
     assert!(String::from_utf8_lossy(&out.stdout).ends_with(&*String::from_utf8_lossy(&check.stdout)));
 }
+
+#[test]
+fn merging_the_shards_of_a_sweep_with_grid_flags_or_a_preset_replays_those_flags() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (case, flags) in [
+        (
+            "flags",
+            &[
+                "--lambda",
+                "0,0.5,1",
+                "--cascades",
+                "2..4",
+                "--resolution",
+                "1024",
+                "--fit",
+                "sphere,aabb",
+            ][..],
+        ),
+        ("unity", &["--preset", "unity"][..]),
+        ("unity-res", &["--preset", "unity", "--resolution", "512,2048"][..]),
+    ] {
+        let base = tmp.path().join(case);
+        let full = base.join("full");
+        let mut args = vec!["sweep", "configs/default.toml", "--quiet", "--out", s(&full)];
+        args.extend(flags);
+        ok(run(&args));
+        let dirs: Vec<PathBuf> = (1..=3).map(|k| base.join(format!("s{k}"))).collect();
+        for (k, dir) in dirs.iter().enumerate() {
+            let shard = format!("{}/3", k + 1);
+            let mut args = vec![
+                "sweep",
+                "configs/default.toml",
+                "--quiet",
+                "--no-plots",
+                "--threads",
+                "1",
+            ];
+            args.extend(flags);
+            args.extend(["--shard", &shard, "--out", s(dir)]);
+            ok(run(&args));
+        }
+        let merged = base.join("merged");
+        ok(merge(&dirs, &merged));
+        assert_eq!(files(&merged), files(&full), "{case}");
+        let command = String::from_utf8(std::fs::read(merged.join("report.md")).unwrap()).unwrap();
+        assert!(command.contains("csm-lab sweep configs/default.toml"), "{case}");
+    }
+}
