@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
-use crate::app::{analyze, bench, check, compare, stress, sweep};
+use crate::app::{analyze, bench, check, compare, merge, stress, sweep};
 use crate::error::Result;
 use crate::precision::Precision;
 
@@ -39,6 +39,8 @@ pub enum Command {
     Bench(BenchArgs),
     /// Run several engine presets on one scene and compare them (CSV, plots, HTML, Markdown).
     Compare(CompareArgs),
+    /// Join the shards of a sweep (`sweep --shard K/N`) into the files the unsharded sweep writes.
+    Merge(MergeArgs),
 }
 
 #[derive(Debug, Args)]
@@ -115,6 +117,30 @@ pub struct SweepArgs {
     /// What to print on stdout.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
+    /// Run only the K-th of N disjoint slices of the grid (K from 1 to N; row i goes to shard
+    /// i mod N + 1); `csm-lab merge` joins the N shard directories [default --out:
+    /// out/<config name>/shard-K-of-N/].
+    #[arg(long, value_name = "K/N", allow_hyphen_values = true)]
+    pub shard: Option<String>,
+}
+
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// The output directories of every `sweep --shard K/N` run of one sweep (any order).
+    #[arg(required = true, value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+    /// Output directory [default: out/<config name>/].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Skip the SVG/PNG figures, as `sweep --no-plots` does.
+    #[arg(long)]
+    pub no_plots: bool,
+    /// No notes on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+    /// What to print on stdout.
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    pub format: Format,
 }
 
 #[derive(Debug, Args)]
@@ -138,6 +164,10 @@ pub struct CheckArgs {
     /// Judge sweep rows (summary metrics only) instead of the one configuration.
     #[arg(long)]
     pub sweep: bool,
+    /// With --sweep: judge the rows of this sweep.csv instead of running the sweep (e.g. the
+    /// output of `csm-lab merge`); its configurations must be the config's `[sweep]` grid.
+    #[arg(long, value_name = "FILE", requires = "sweep")]
+    pub sweep_csv: Option<PathBuf>,
     /// With --sweep: list every configuration instead of a summary.
     #[arg(long)]
     pub verbose: bool,
@@ -200,6 +230,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             no_plots: args.no_plots,
             preset: args.preset,
             format: args.format,
+            shard: args.shard,
         }),
         Command::Check(args) => match (&args.init, &args.thresholds) {
             (Some(file), _) => check::init(&check::InitRequest {
@@ -212,6 +243,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
                 thresholds,
                 baseline: args.baseline.as_deref(),
                 sweep: args.sweep,
+                sweep_csv: args.sweep_csv.as_deref(),
                 verbose: args.verbose,
                 junit: args.junit.as_deref(),
                 format: args.format,
@@ -228,6 +260,13 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             out: args.out,
             config: args.config,
             repeats: args.repeats,
+        }),
+        Command::Merge(args) => merge::execute(&merge::MergeRequest {
+            dirs: args.dirs,
+            out: args.out,
+            no_plots: args.no_plots,
+            quiet: args.quiet,
+            format: args.format,
         }),
         Command::Compare(args) => compare::execute(&compare::CompareRequest {
             config: args.config,

@@ -23,6 +23,9 @@ pub enum Error {
     Plot(#[from] PlotError),
 
     #[error(transparent)]
+    Shard(#[from] ShardError),
+
+    #[error(transparent)]
     Io(#[from] IoError),
 
     /// A value that would have been written as NaN or infinity. This is a bug guard: it
@@ -153,6 +156,27 @@ pub enum BaselineError {
     /// A sweep table with two rows for one configuration.
     #[error("the {which} sweep table has two rows for {key}; each configuration must appear once")]
     DuplicateRow { which: String, key: String },
+}
+
+/// Shards of a sweep that cannot be merged (`sweep --shard`, `merge`).
+#[derive(Debug, thiserror::Error)]
+pub enum ShardError {
+    /// One shard directory: not a shard, unreadable, or not of the same sweep as the others.
+    #[error("merge: {}: {message}", dir.display())]
+    Dir { dir: PathBuf, message: String },
+
+    /// The set of shards as a whole (missing shards, none given).
+    #[error("merge: {0}")]
+    Set(String),
+}
+
+impl ShardError {
+    pub fn dir(dir: &Path, message: impl Into<String>) -> Self {
+        ShardError::Dir {
+            dir: dir.to_path_buf(),
+            message: message.into(),
+        }
+    }
 }
 
 /// A figure that could not be drawn or rasterised.

@@ -28,6 +28,8 @@ pub struct CheckRequest<'a> {
     pub baseline: Option<&'a Path>,
     /// Judge sweep rows instead of the one configuration.
     pub sweep: bool,
+    /// With `sweep`: judge this `sweep.csv` (of the config's grid) instead of running the sweep.
+    pub sweep_csv: Option<&'a Path>,
     /// With `sweep`: every configuration instead of the summary.
     pub verbose: bool,
     /// Also write a JUnit XML report here.
@@ -80,7 +82,10 @@ fn run(args: &CheckRequest) -> Result<Outcome> {
             })?),
             None => None,
         };
-        let rows = sweep::sweep_rows_for(&config)?;
+        let rows = match args.sweep_csv {
+            Some(p) => sweep::sweep_rows_from_csv(&config, p)?,
+            None => sweep::sweep_rows_for(&config)?,
+        };
         let applicable = thresholds
             .rules
             .iter()

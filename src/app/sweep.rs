@@ -1,16 +1,18 @@
 //! `csm-lab sweep`: every configuration of the grid, the Pareto front and the recommendation,
 //! written as CSV, JSON, figures and a report.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::{default_out_dir, load_for_preset_sweep, print_result, Format, Outcome};
+use crate::commands::shard::{self, Shard};
 use crate::commands::sweep::*;
-use crate::error::Result;
+use crate::config::Config;
+use crate::error::{Error, Result};
 use crate::output;
 use crate::report;
 
-/// Runs a sweep as the CLI does, without printing: (result, rendered files).
-pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::RenderedFiles)> {
+/// The loaded config, the resolved grid and the command that reproduces the (unsharded) sweep.
+pub(crate) fn plan(args: &SweepRequest) -> Result<(Config, Grid, String)> {
     let config = load_for_preset_sweep(&args.config, args.preset.as_deref())?;
     let overrides = GridOverrides {
         lambda: args.lambda.as_deref().map(parse_lambda_spec).transpose()?,
@@ -25,21 +27,6 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
             eprintln!("note: {note}");
         }
     }
-    let show_progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let bar = if show_progress {
-        let bar = indicatif::ProgressBar::new(grid.len() as u64);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} sweeping {pos}/{len} configurations {wide_bar} {eta}")
-                .expect("valid template"),
-        );
-        bar
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    let start = std::time::Instant::now();
-    let rows = run(&config, &grid, args.threads.map(usize::from), &|| bar.inc(1))?;
-    bar.finish_and_clear();
-    let compute = start.elapsed();
     let preset = match &config.shadow.preset {
         Some(p) => format!(" --preset {}", p.name),
         None => String::new(),
@@ -49,8 +36,79 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         args.config.display(),
         grid.cli_args(&config)
     );
-    let result = SweepResult::new(config, grid, rows, command);
-    let files = report::sweep::render_all(&result, !args.no_plots)?;
+    Ok((config, grid, command))
+}
+
+/// [`shard::config_hash`] of a planned sweep, reading the config file (and its glTF) again.
+pub(crate) fn shard_hash(path: &Path, config: &Config, grid: &Grid, command: &str) -> Result<String> {
+    let bytes = std::fs::read(path).map_err(|e| Error::read(path, e))?;
+    let gltf = match config.geometry.as_ref().and_then(|g| g.gltf.as_deref()) {
+        Some(p) => Some(std::fs::read(p).map_err(|e| Error::read(p, e))?),
+        None => None,
+    };
+    Ok(shard::config_hash(&bytes, gltf.as_deref(), config, grid, command))
+}
+
+/// Runs a sweep as the CLI does, without printing: (result, rendered files). With `--shard`
+/// the result holds the shard's slice, and the files include the shard's manifest and rows.
+pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::RenderedFiles)> {
+    let shard = args.shard.as_deref().map(Shard::parse).transpose()?;
+    let (config, grid, command) = plan(args)?;
+    let mut settings = grid.settings();
+    let mut indices = Vec::new();
+    if let Some(s) = shard {
+        s.check_grid(settings.len())?;
+        indices = s.indices(settings.len()).collect();
+        settings = indices.iter().map(|&i| settings[i]).collect();
+    }
+    let show_progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let bar = if show_progress {
+        let bar = indicatif::ProgressBar::new(settings.len() as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} sweeping {pos}/{len} configurations {wide_bar} {eta}")
+                .expect("valid template"),
+        );
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let start = std::time::Instant::now();
+    let rows = run_settings(&config, &settings, args.threads.map(usize::from), &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    let compute = start.elapsed();
+    let manifest = match shard {
+        Some(s) => Some(shard::Manifest {
+            tool: shard::tool(),
+            shard: s,
+            grid_configurations: grid.len(),
+            config: args.config.display().to_string(),
+            preset: args.preset.clone(),
+            lambda: args.lambda.clone(),
+            cascades: args.cascades.clone(),
+            resolution: args.resolution.clone(),
+            fit: args.fit.clone(),
+            split_range: args.split_range.clone(),
+            config_hash: shard_hash(&args.config, &config, &grid, &command)?,
+            command: command.clone(),
+        }),
+        None => None,
+    };
+    let shown_command = match shard {
+        Some(s) => format!("{command} --shard {}/{}", s.k, s.n),
+        None => command,
+    };
+    let result = SweepResult::new(config, grid, rows, shown_command);
+    let mut files = report::sweep::render_all(&result, !args.no_plots)?;
+    if let Some(m) = manifest {
+        files.push((
+            shard::MANIFEST_FILE.to_string(),
+            output::json_bytes("shard manifest", &m.to_json())?,
+        ));
+        files.push((
+            shard::ROWS_FILE.to_string(),
+            shard::rows_text(indices.iter().copied().zip(&result.rows)).into_bytes(),
+        ));
+    }
     if !args.quiet {
         eprintln!(
             "analysed {} configurations in {:.1} ms",
@@ -76,12 +134,18 @@ pub struct SweepRequest {
     pub no_plots: bool,
     pub preset: Option<String>,
     pub format: Format,
+    /// `--shard K/N`, unparsed.
+    pub shard: Option<String>,
 }
 
 /// The `sweep` command.
 pub fn execute(args: &SweepRequest) -> Result<Outcome> {
     let (result, files) = sweep_files(args)?;
-    let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&result.config));
+    let dir = match (&args.out, args.shard.as_deref().map(Shard::parse).transpose()?) {
+        (Some(dir), _) => dir.clone(),
+        (None, Some(s)) => default_out_dir(&result.config).join(format!("shard-{}-of-{}", s.k, s.n)),
+        (None, None) => default_out_dir(&result.config),
+    };
     let written = output::write_files(&dir, &files)?;
     print_result(
         args.format,

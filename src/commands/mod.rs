@@ -7,5 +7,6 @@
 pub mod bench;
 pub mod check;
 pub mod compare;
+pub mod shard;
 pub mod stress;
 pub mod sweep;

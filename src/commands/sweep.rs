@@ -517,30 +517,37 @@ pub struct Row {
 /// Runs the full analysis of every setting in parallel. `threads` = None uses rayon's default
 /// pool; `on_done` is called once per finished configuration (progress bars).
 pub fn run(base: &Config, grid: &Grid, threads: Option<usize>, on_done: &(dyn Fn() + Sync)) -> Result<Vec<Row>> {
-    let settings = grid.settings();
+    run_settings(base, &grid.settings(), threads, on_done)
+}
+
+/// [`run`] over some settings of a grid (a shard's slice), in their order.
+pub fn run_settings(
+    base: &Config,
+    settings: &[Setting],
+    threads: Option<usize>,
+    on_done: &(dyn Fn() + Sync),
+) -> Result<Vec<Row>> {
     // Every point is built and checked before any analysis runs: a setting the config could
     // not hold (an f32 window that collapses at this fit, say) is refused like the file would be.
-    let configs = settings
-        .iter()
-        .map(|s| {
-            s.apply(base).map_err(|e| {
-                Error::from(GridError::Point {
-                    point: s.label(),
-                    source: Box::new(e),
-                })
+    // The configs are built again in the parallel part rather than kept: a 100,000-point grid
+    // would otherwise hold 100,000 configs at once.
+    let point = |s: &Setting| {
+        s.apply(base).map_err(|e| {
+            Error::from(GridError::Point {
+                point: s.label(),
+                source: Box::new(e),
             })
         })
-        .collect::<Result<Vec<Config>>>()?;
-    // The visibility pass is made once, before the parallel part, and shared by every row.
-    for c in &configs {
-        let _ = c.setup().visibility();
+    };
+    for s in settings {
+        // The visibility pass is made once, before the parallel part, and shared by every row.
+        let _ = point(s)?.setup().visibility();
     }
     let work = || {
         settings
             .par_iter()
-            .zip(&configs)
-            .map(|(s, c)| {
-                let a = analyze(c, &AnalysisOptions::summary_only());
+            .map(|s| {
+                let a = analyze(&point(s)?, &AnalysisOptions::summary_only());
                 on_done();
                 Ok(Row {
                     setting: *s,

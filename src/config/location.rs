@@ -19,18 +19,15 @@ pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
 }
 
 /// Turn a `toml` deserialisation error into one with the file's line and column.
+/// A value of the wrong type or length (`position = [0, 10]`) is reported with its key
+/// (`` `camera.position`: invalid length 2, ... ``); errors about a key itself name it already.
 pub fn toml_error(path: &str, text: &str, err: &toml::de::Error) -> Error {
     let (line, column) = err.span().map(|span| line_column(text, span.start)).unwrap_or((1, 1));
-    let mut message = err.message().trim().to_string();
-    // serde names the bad value but not its key for enum values and wrong types: name it.
-    let about_a_value = ["unknown variant", "invalid type", "invalid value"]
-        .iter()
-        .any(|m| message.starts_with(m));
-    if about_a_value {
-        if let Some(key) = err.span().and_then(|span| key_at(text, span.start)) {
-            message = format!("`{key}`: {message}");
-        }
-    }
+    let message = err.message().trim();
+    let message = match err.span().and_then(|span| key_of_value_at(text, span.start)) {
+        Some(key) => format!("`{key}`: {message}"),
+        None => message.to_string(),
+    };
     Error::from(ConfigError::Toml {
         path: path.to_string(),
         line,
@@ -39,38 +36,35 @@ pub fn toml_error(path: &str, text: &str, err: &toml::de::Error) -> Error {
     })
 }
 
-/// The dotted key (`table.key`) whose value is written at byte `offset`: the nearest
-/// `key = ...` at or above the offset's line within the same table.
-pub fn key_at(text: &str, offset: usize) -> Option<String> {
-    let mut table = String::new();
-    let mut key = None;
-    let mut start = 0;
-    for line in text.split_inclusive('\n') {
-        if start > offset {
-            break;
-        }
-        start += line.len();
-        let trimmed = line.trim_start();
-        if let Some(rest) = trimmed.strip_prefix('[') {
-            let rest = rest.trim_start_matches('[');
-            if let Some(end) = rest.find(']') {
-                table = rest[..end].trim().to_string();
-                key = None;
-            }
-            continue;
-        }
-        if let Some((k, _)) = trimmed.split_once('=') {
-            let k = k.trim();
-            if !k.is_empty() && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '.') {
-                key = Some(k.to_string());
-            }
-        }
+/// The dotted key (`table.key`) whose value starts the line holding byte `offset`, when
+/// `offset` lies in that value (after the `=`): None for a position in a key, a header or a
+/// continuation line of a multi-line array.
+pub fn key_of_value_at(text: &str, offset: usize) -> Option<String> {
+    let offset = offset.min(text.len());
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+    let line = text[line_start..].lines().next().unwrap_or("");
+    let eq = line.find('=')?;
+    if line_start + eq >= offset {
+        return None;
     }
-    let key = key?;
-    Some(if table.is_empty() {
-        key
-    } else {
-        format!("{table}.{key}")
+    let key = line[..eq].trim();
+    let bare = |s: &str| {
+        !s.is_empty()
+            && s.chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | '"' | '\'' | ' '))
+    };
+    if !bare(key) {
+        return None;
+    }
+    let table = text[..line_start]
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| l.starts_with('['))
+        .map(|l| l.trim_matches(|c| c == '[' || c == ']').trim());
+    Some(match table {
+        Some(t) if !t.is_empty() => format!("{t}.{key}"),
+        _ => key.to_string(),
     })
 }
 

@@ -11,7 +11,7 @@ use crate::error::Result;
 use crate::figures::sweep::{HeatmapFigure, LambdaDensityFigure, ParetoFigure, ShimmerSweepFigure};
 use crate::figures::{svg_to_png, Figure};
 use crate::metric;
-use crate::output::{csv_bytes, json_bytes, num};
+use crate::output::{csv_bytes_from, json_bytes, num};
 use crate::sweep::{self, Row, SweepResult};
 
 /// `sweep.csv`: [`metric::summary_columns`], then these.
@@ -27,34 +27,33 @@ pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
         .as_ref()
         .map(|p| p.name.to_string())
         .unwrap_or_default();
-    let rows = r
-        .rows
-        .iter()
-        .enumerate()
-        .map(|(i, row)| {
-            let st = &row.setting;
-            let mut fields = metric::summary_fields(
-                num("lambda", st.lambda)?,
-                st.cascades,
-                st.resolution,
-                st.fit.name(),
-                st.split_range,
-                &row.summary,
-            )?;
-            fields.extend([
-                row.summary.cascades_needed.to_string(),
-                r.front.contains(&i).to_string(),
-                (rec == Some(i)).to_string(),
-                preset.clone(),
-            ]);
-            Ok(fields)
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let mut on_front = vec![false; r.rows.len()];
+    for &i in &r.front {
+        on_front[i] = true;
+    }
+    let rows = r.rows.iter().enumerate().map(|(i, row)| {
+        let st = &row.setting;
+        let mut fields = metric::summary_fields(
+            num("lambda", st.lambda)?,
+            st.cascades,
+            st.resolution,
+            st.fit.name(),
+            st.split_range,
+            &row.summary,
+        )?;
+        fields.extend([
+            row.summary.cascades_needed.to_string(),
+            on_front[i].to_string(),
+            (rec == Some(i)).to_string(),
+            preset.clone(),
+        ]);
+        Ok(fields)
+    });
     let header: Vec<&str> = metric::summary_columns(r.config.geometry.is_some())
         .into_iter()
         .chain(SWEEP_EXTRA_COLUMNS)
         .collect();
-    csv_bytes(&header, &rows)
+    csv_bytes_from(&header, rows)
 }
 
 fn row_json(row: &Row) -> serde_json::Value {

@@ -481,3 +481,37 @@ fn a_long_path_keeps_a_bounded_number_of_frame_rows_and_exact_summaries() {
     assert_eq!(a.summary.shimmer_snapped, b.summary.shimmer_snapped);
     assert_eq!(a.summary.shimmer_unsnapped, b.summary.shimmer_unsnapped);
 }
+
+#[test]
+fn a_vector_of_the_wrong_length_or_type_names_its_key_and_line() {
+    for (key, line, says) in [
+        ("camera.position", "position = [0, 10]", "invalid length 2"),
+        ("camera.up", "up = [0, 1]", "invalid length 2"),
+        ("light.direction", "direction = [1]", "invalid length 1"),
+        ("scene.min", "min = []", "invalid length 0"),
+        ("scene.max", "max = [1, 2, 3, 4]", "invalid length 4"),
+        ("camera.target", "target = [0, \"x\", 1]", "invalid type"),
+        ("camera.fov_y_deg", "fov_y_deg = \"wide\"", "invalid type"),
+    ] {
+        let text = with(&[(key, line)]);
+        let n = text.lines().position(|l| l == line).unwrap() + 1;
+        let err = rejected(&text);
+        assert!(
+            err.starts_with(&format!("t.toml:{n}:")) && err.contains(&format!("`{key}`: {says}")),
+            "{line}: {err}"
+        );
+    }
+    // The same through the binary: exit 2, the key on stderr.
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = write(
+        dir.path(),
+        "short.toml",
+        &with(&[("camera.position", "position = [0, 10]")]),
+    );
+    let out = bin()
+        .args(["analyze", &cfg, "--out", dir.path().join("out").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = fails_with_2(&out);
+    assert!(err.contains("`camera.position`: invalid length 2"), "{err}");
+}

@@ -314,6 +314,50 @@ pub fn read_sweep_csv(path: &Path) -> Result<Vec<SweepRow>> {
     parse_sweep_csv(&text, path)
 }
 
+/// The rows of a `sweep.csv` written for `config` (`check --sweep --sweep-csv FILE`, e.g. a
+/// merged sharded sweep), read by column name, refused unless its configurations are exactly
+/// the config's grid in grid order, so a table of another config or grid is never judged.
+pub fn sweep_rows_from_csv(config: &Config, path: &Path) -> Result<Vec<SweepRow>> {
+    let rows = read_sweep_csv(path)?;
+    let grid = crate::sweep::Grid::resolve(config, &crate::sweep::GridOverrides::default())?;
+    let settings = grid.settings();
+    let mismatch = |message: String| {
+        Error::from(BaselineError::Mismatch {
+            path: path.to_path_buf(),
+            message: format!(
+                "{message}; --sweep-csv takes the sweep.csv of this config's [sweep] grid \
+                 (`csm-lab sweep`, or `csm-lab merge` of its shards)"
+            ),
+        })
+    };
+    if rows.len() != settings.len() {
+        return Err(mismatch(format!(
+            "it has {} configurations and this config's grid has {}",
+            rows.len(),
+            settings.len()
+        )));
+    }
+    for (i, (row, s)) in rows.iter().zip(&settings).enumerate() {
+        let k = &row.key;
+        if k.lambda != s.lambda
+            || k.cascades as usize != s.cascades
+            || k.resolution != s.resolution
+            || k.fit != s.fit.name()
+        {
+            return Err(mismatch(format!(
+                "row {} is lambda={} cascades={} resolution={} fit={} where this config's grid has {}",
+                i + 1,
+                k.lambda,
+                k.cascades,
+                k.resolution,
+                k.fit,
+                s.label()
+            )));
+        }
+    }
+    Ok(rows)
+}
+
 /// The rows `--sweep` judges: every configuration of the config's sweep grid (its `[sweep]`
 /// table, or the default grid), run by the sweep runner exactly as `csm-lab sweep` runs it,
 /// so each row equals the corresponding line of `sweep.csv`.

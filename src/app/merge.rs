@@ -1,0 +1,133 @@
+//! `csm-lab merge`: joins the shards of a sweep (`sweep --shard K/N`) into the files the
+//! unsharded sweep writes, byte for byte: the rows come back exactly from each shard's
+//! lossless rows file, and the Pareto front, recommendation, figures and reports are made by
+//! the same code as `sweep`'s.
+
+use std::path::{Path, PathBuf};
+
+use super::sweep::{plan, shard_hash, SweepRequest};
+use super::{default_out_dir, print_result, Format, Outcome};
+use crate::commands::shard::{self, Manifest, ShardInput};
+use crate::commands::sweep::SweepResult;
+use crate::error::{Error, IoError, Result, ShardError};
+use crate::output;
+use crate::report;
+
+/// What `merge` was asked to do.
+#[derive(Debug, Clone)]
+pub struct MergeRequest {
+    /// The shard directories, in any order.
+    pub dirs: Vec<PathBuf>,
+    pub out: Option<PathBuf>,
+    pub no_plots: bool,
+    pub quiet: bool,
+    pub format: Format,
+}
+
+/// Largest shard file merge reads (a 100,000-row shard's rows are about 40 MB).
+const MAX_SHARD_FILE: u64 = 1 << 30;
+
+fn read_text(dir: &Path, name: &str) -> Result<String> {
+    let path = dir.join(name);
+    let meta = std::fs::metadata(&path).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            Error::from(ShardError::dir(
+                dir,
+                format!("not a shard of a sweep: it has no {name} (`csm-lab sweep --shard K/N` writes one)"),
+            ))
+        } else {
+            Error::read(&path, e)
+        }
+    })?;
+    if meta.len() > MAX_SHARD_FILE {
+        return Err(IoError::TooLarge {
+            path,
+            what: "a shard file",
+            size: meta.len(),
+            max: MAX_SHARD_FILE,
+        }
+        .into());
+    }
+    std::fs::read_to_string(&path).map_err(|e| Error::read(&path, e))
+}
+
+/// Reads one shard directory.
+pub fn read_shard(dir: &Path) -> Result<ShardInput> {
+    if !dir.is_dir() {
+        return Err(ShardError::dir(
+            dir,
+            "not a directory (give the output directories of `sweep --shard K/N`)",
+        )
+        .into());
+    }
+    let manifest = Manifest::from_json(dir, &read_text(dir, shard::MANIFEST_FILE)?)?;
+    let rows = shard::parse_rows(&dir.join(shard::ROWS_FILE), &read_text(dir, shard::ROWS_FILE)?)?;
+    Ok(ShardInput {
+        dir: dir.to_path_buf(),
+        manifest,
+        rows,
+    })
+}
+
+/// Merges as the CLI does, without printing: (result, rendered files).
+pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::RenderedFiles)> {
+    let shards = args.dirs.iter().map(|d| read_shard(d)).collect::<Result<Vec<_>>>()?;
+    let m = shard::check_set(&shards)?.clone();
+    // The config is loaded again from where the shards read it, and must still be the same.
+    let request = SweepRequest {
+        config: PathBuf::from(&m.config),
+        out: None,
+        lambda: m.lambda.clone(),
+        cascades: m.cascades.clone(),
+        resolution: m.resolution.clone(),
+        fit: m.fit.clone(),
+        split_range: m.split_range.clone(),
+        threads: None,
+        quiet: args.quiet,
+        no_plots: args.no_plots,
+        preset: m.preset.clone(),
+        format: args.format,
+        shard: None,
+    };
+    let (config, grid, command) = plan(&request).map_err(|e| {
+        Error::from(ShardError::Set(format!(
+            "the shards ran {}; merge loads that config again, relative to this directory, and it failed: {e}",
+            m.command
+        )))
+    })?;
+    let hash = shard_hash(&request.config, &config, &grid, &command)?;
+    if hash != m.config_hash || command != m.command || grid.len() != m.grid_configurations {
+        return Err(ShardError::Set(format!(
+            "{} (or its grid) is not what the shards ran: its config_hash is {hash} now and {} in the shards; \
+             run the shards again, or merge where the config is as they saw it",
+            m.config, m.config_hash
+        ))
+        .into());
+    }
+    let rows = shard::join(shards, &grid)?;
+    let result = SweepResult::new(config, grid, rows, command);
+    let files = report::sweep::render_all(&result, !args.no_plots)?;
+    Ok((result, files))
+}
+
+/// The `merge` command.
+pub fn execute(args: &MergeRequest) -> Result<Outcome> {
+    let (result, files) = merge_files(args)?;
+    let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&result.config));
+    let written = output::write_files(&dir, &files)?;
+    if !args.quiet {
+        eprintln!(
+            "merged {} shards: {} configurations",
+            args.dirs.len(),
+            result.rows.len()
+        );
+    }
+    print_result(
+        args.format,
+        || report::sweep::stdout_table(&result),
+        || output::json_bytes("recommendation", &report::sweep::recommendation_value(&result)),
+        written.len(),
+        &dir,
+    )?;
+    Ok(Outcome::Success)
+}

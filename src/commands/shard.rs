@@ -1,0 +1,649 @@
+//! Sharded sweeps: `sweep --shard K/N` runs the K-th of N disjoint slices of a grid, and
+//! `merge` joins the slices back into the rows of the unsharded sweep.
+//!
+//! A slice is round-robin over the grid order: row `i` (0-based, in [`Grid::settings`] order)
+//! belongs to shard `i mod N + 1`, so every shard gets a share of every axis (cheap and costly
+//! settings alike) and the N slices together are the grid, each row exactly once.
+//!
+//! A shard keeps its rows in [`ROWS_FILE`] in a lossless text form (every `f64` as the 16 hex
+//! digits of its bit pattern) and describes itself in [`MANIFEST_FILE`]: the csm-lab version,
+//! K and N, the grid size, the command of the unsharded sweep and a hash of everything that
+//! decides the rows. Merging rebuilds the exact rows, so the merged files are byte for byte
+//! those of the unsharded sweep. Nothing here reads or writes a file: [`crate::app`] does.
+
+use std::fmt::Write as _;
+
+use crate::analysis::Summary;
+use crate::config::Config;
+use crate::config::{Fit, SplitRange};
+use crate::error::{Error, Result, ShardError};
+use crate::screen::ScreenStats;
+use crate::sweep::{Grid, Row, Setting};
+
+/// The shard's description, beside its other files.
+pub const MANIFEST_FILE: &str = "shard.json";
+/// The shard's rows, lossless.
+pub const ROWS_FILE: &str = "shard-rows.tsv";
+/// First line of [`ROWS_FILE`] (the format's version).
+const ROWS_MAGIC: &str = "# csm-lab shard rows v1";
+/// Most shards a grid may be split into.
+pub const MAX_SHARDS: usize = 100_000;
+
+/// `--shard K/N`: the K-th (1-based) of N slices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    pub k: usize,
+    pub n: usize,
+}
+
+impl Shard {
+    /// Parses `K/N` (`1 <= K <= N <= 100000`), naming `--shard` in every error.
+    pub fn parse(spec: &str) -> Result<Shard> {
+        let err = |m: String| Error::flag("--shard", spec, m);
+        let (k, n) = spec
+            .split_once('/')
+            .ok_or_else(|| err("use K/N: the K-th of N shards, K from 1 to N (e.g. 2/4)".into()))?;
+        let whole = |s: &str, what: &str| {
+            s.trim().parse::<usize>().map_err(|_| {
+                err(format!(
+                    "{what} {s:?} is not a whole number; use K/N with 1 <= K <= N (e.g. 2/4)"
+                ))
+            })
+        };
+        let (k, n) = (whole(k, "K")?, whole(n, "N")?);
+        if n == 0 || n > MAX_SHARDS {
+            return Err(err(format!("N = {n} shards is outside 1..={MAX_SHARDS}")));
+        }
+        if k == 0 || k > n {
+            return Err(err(format!(
+                "K = {k} is outside 1..={n}: shards are numbered from 1 to N (a 0-based index such as \
+                 $JOB_COMPLETION_INDEX needs +1)"
+            )));
+        }
+        Ok(Shard { k, n })
+    }
+
+    /// Whether row `index` of the grid is in this shard.
+    pub fn contains(self, index: usize) -> bool {
+        index % self.n == self.k - 1
+    }
+
+    /// The grid indices of this shard, ascending.
+    pub fn indices(self, grid_len: usize) -> impl Iterator<Item = usize> {
+        (self.k - 1..grid_len).step_by(self.n)
+    }
+
+    /// How many rows of a grid of `grid_len` rows this shard holds.
+    pub fn len_of(self, grid_len: usize) -> usize {
+        (grid_len + self.n - self.k) / self.n
+    }
+
+    /// Refuses more shards than the grid has configurations (a shard would be empty).
+    pub fn check_grid(self, grid_len: usize) -> Result<()> {
+        if self.n > grid_len {
+            return Err(Error::flag(
+                "--shard",
+                &format!("{}/{}", self.k, self.n),
+                format!(
+                    "{} shards for a grid of {grid_len} configurations: at most {grid_len} (no shard may be empty)",
+                    self.n
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What a shard says about itself ([`MANIFEST_FILE`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Manifest {
+    /// `csm-lab <version>` that ran the shard.
+    pub tool: String,
+    pub shard: Shard,
+    /// Configurations in the whole grid.
+    pub grid_configurations: usize,
+    /// The config file as given to `sweep` (merge loads it again from there).
+    pub config: String,
+    /// `--preset`, `--lambda`, `--cascades`, `--resolution`, `--fit` as given.
+    pub preset: Option<String>,
+    pub lambda: Option<String>,
+    pub cascades: Option<String>,
+    pub resolution: Option<String>,
+    pub fit: Option<String>,
+    /// `--split-range` as given.
+    pub split_range: Option<String>,
+    /// The command of the unsharded sweep (it appears in the merged files).
+    pub command: String,
+    /// [`config_hash`] of the loaded config, grid and command.
+    pub config_hash: String,
+}
+
+/// The csm-lab that is running, as written in manifests and reports.
+pub fn tool() -> String {
+    format!("csm-lab {}", env!("CARGO_PKG_VERSION"))
+}
+
+const OPTIONAL_KEYS: [&str; 6] = ["preset", "lambda", "cascades", "resolution", "fit", "split_range"];
+
+impl Manifest {
+    fn optional(&self) -> [&Option<String>; 6] {
+        [
+            &self.preset,
+            &self.lambda,
+            &self.cascades,
+            &self.resolution,
+            &self.fit,
+            &self.split_range,
+        ]
+    }
+
+    pub fn to_json(&self) -> serde_json::Value {
+        let mut v = serde_json::json!({
+            "tool": self.tool,
+            "shard": self.shard.k,
+            "shards": self.shard.n,
+            "grid_configurations": self.grid_configurations,
+            "rows": self.shard.len_of(self.grid_configurations),
+            "rows_file": ROWS_FILE,
+            "config": self.config,
+            "command": self.command,
+            "config_hash": self.config_hash,
+        });
+        for (key, value) in OPTIONAL_KEYS.into_iter().zip(self.optional()) {
+            if let Some(s) = value {
+                v[key] = s.clone().into();
+            }
+        }
+        v
+    }
+
+    /// Reads a manifest back; `dir` names the shard in errors.
+    pub fn from_json(dir: &std::path::Path, text: &str) -> Result<Manifest> {
+        let bad = |m: String| Error::from(ShardError::dir(dir, format!("{MANIFEST_FILE}: {m}")));
+        let v: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| bad(format!("not a csm-lab shard manifest ({e})")))?;
+        let string = |key: &str| {
+            v.get(key)
+                .and_then(|x| x.as_str())
+                .map(str::to_string)
+                .ok_or_else(|| bad(format!("`{key}` is missing or not a string")))
+        };
+        let count = |key: &str| {
+            v.get(key)
+                .and_then(|x| x.as_u64())
+                .and_then(|x| usize::try_from(x).ok())
+                .ok_or_else(|| bad(format!("`{key}` is missing or not a whole number")))
+        };
+        let (k, n) = (count("shard")?, count("shards")?);
+        if n == 0 || n > MAX_SHARDS || k == 0 || k > n {
+            return Err(bad(format!("shard {k} of {n} is not a valid K/N")));
+        }
+        let optional = |key: &str| v.get(key).and_then(|x| x.as_str()).map(str::to_string);
+        Ok(Manifest {
+            tool: string("tool")?,
+            shard: Shard { k, n },
+            grid_configurations: count("grid_configurations")?,
+            config: string("config")?,
+            preset: optional("preset"),
+            lambda: optional("lambda"),
+            cascades: optional("cascades"),
+            resolution: optional("resolution"),
+            fit: optional("fit"),
+            split_range: optional("split_range"),
+            command: string("command")?,
+            config_hash: string("config_hash")?,
+        })
+    }
+}
+
+/// FNV-1a (64 bits) over byte strings, each followed by its length so that boundaries count.
+#[derive(Debug, Clone)]
+pub struct Fnv(u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv {
+    pub fn eat(&mut self, bytes: &[u8]) {
+        for b in bytes.iter().chain(&(bytes.len() as u64).to_le_bytes()) {
+            self.0 ^= u64::from(*b);
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+
+    pub fn hex(&self) -> String {
+        format!("{:016x}", self.0)
+    }
+}
+
+/// The hash two shards must share to be merged: the csm-lab version, the config file's bytes
+/// (and its glTF's, if any), the loaded config (every value as used, the motion file's poses),
+/// the resolved grid and the command of the unsharded sweep. 16 hex digits.
+pub fn config_hash(
+    file_bytes: &[u8],
+    gltf_bytes: Option<&[u8]>,
+    config: &Config,
+    grid: &Grid,
+    command: &str,
+) -> String {
+    let mut h = Fnv::default();
+    h.eat(tool().as_bytes());
+    h.eat(file_bytes);
+    h.eat(gltf_bytes.unwrap_or_default());
+    h.eat(config.echo().to_string().as_bytes());
+    h.eat(config.scene_hash().as_bytes());
+    h.eat(format!("{:?}", config.sweep).as_bytes());
+    h.eat(format!("{:?}", config.shadow.preset.as_ref().map(|p| p.name)).as_bytes());
+    h.eat(
+        format!(
+            "{:?}",
+            (
+                &grid.lambda,
+                &grid.cascades,
+                &grid.resolution,
+                &grid.fit,
+                &grid.split_range
+            )
+        )
+        .as_bytes(),
+    );
+    h.eat(command.as_bytes());
+    h.hex()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rows, lossless
+// ---------------------------------------------------------------------------------------------
+
+const ROW_COLUMNS: &str =
+    "index\tlambda\tcascades\tresolution\tfit\tsplit_range\tcascades_needed\tz_lo\tz_hi\tmax_aliasing\t\
+mean_aliasing\tmean_log_aliasing\tundersampled_fraction\tshimmer\tshimmer_snapped\tshimmer_unsnapped\tsize_jitter\t\
+coverage_violations\tmemory_bytes\tlookup_error_max\tlookup_error_rms\tscreen";
+
+fn hex(x: f64) -> String {
+    format!("{:016x}", x.to_bits())
+}
+
+/// [`ROWS_FILE`]'s text for rows `(grid index, row)`.
+pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String {
+    let mut out = format!("{ROWS_MAGIC}\n{ROW_COLUMNS}\n");
+    for (index, row) in rows {
+        let st = &row.setting;
+        // Destructured without `..`: a new field of Summary fails to compile here until it is
+        // carried, so merging never silently drops a value.
+        let Summary {
+            cascades_needed,
+            z_lo,
+            z_hi,
+            max_aliasing,
+            mean_aliasing,
+            mean_log_aliasing,
+            undersampled_fraction,
+            shimmer,
+            shimmer_snapped,
+            shimmer_unsnapped,
+            size_jitter,
+            coverage_violations,
+            memory_bytes,
+            lookup_error_max,
+            lookup_error_rms,
+            screen,
+        } = &row.summary;
+        let _ = write!(
+            out,
+            "{index}\t{}\t{}\t{}\t{}\t{}\t{}",
+            hex(st.lambda),
+            st.cascades,
+            st.resolution,
+            st.fit.name(),
+            st.split_range.name(),
+            u8::from(*cascades_needed)
+        );
+        for x in [
+            z_lo,
+            z_hi,
+            max_aliasing,
+            mean_aliasing,
+            mean_log_aliasing,
+            undersampled_fraction,
+            shimmer,
+            shimmer_snapped,
+            shimmer_unsnapped,
+            size_jitter,
+        ] {
+            let _ = write!(out, "\t{}", hex(*x));
+        }
+        let _ = write!(
+            out,
+            "\t{coverage_violations}\t{memory_bytes}\t{}\t{}\t",
+            hex(*lookup_error_max),
+            hex(*lookup_error_rms)
+        );
+        match screen {
+            None => out.push('-'),
+            Some(ScreenStats {
+                receiver_fraction,
+                self_shadowed_fraction,
+                aliasing_mean,
+                aliasing_p50,
+                aliasing_p95,
+                aliasing_p99,
+                aliasing_max,
+                undersampled_fraction,
+                visible_z_lo,
+                visible_z_hi,
+                cascade_pixels,
+            }) => {
+                let fixed = [
+                    receiver_fraction,
+                    self_shadowed_fraction,
+                    aliasing_mean,
+                    aliasing_p50,
+                    aliasing_p95,
+                    aliasing_p99,
+                    aliasing_max,
+                    undersampled_fraction,
+                    visible_z_lo,
+                    visible_z_hi,
+                ];
+                let all: Vec<String> = fixed.into_iter().chain(cascade_pixels).map(|x| hex(*x)).collect();
+                out.push_str(&all.join(","));
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Reads [`rows_text`] back: (grid index, row) per line. `file` names the file in errors.
+pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)>> {
+    let mut lines = text.lines().enumerate();
+    let bad = |line: usize, m: String| Error::data_file(file, line, m);
+    match lines.next() {
+        Some((_, ROWS_MAGIC)) => {}
+        _ => {
+            return Err(bad(
+                1,
+                format!("not a csm-lab shard rows file (the first line is not {ROWS_MAGIC:?})"),
+            ))
+        }
+    }
+    match lines.next() {
+        Some((_, l)) if l == ROW_COLUMNS => {}
+        _ => return Err(bad(2, "the column line is not that of this csm-lab".into())),
+    }
+    let mut rows = Vec::new();
+    for (i, line) in lines {
+        let n = i + 1;
+        let f: Vec<&str> = line.split('\t').collect();
+        if f.len() != 22 {
+            return Err(bad(n, format!("{} fields; a row has 22", f.len())));
+        }
+        let float = |s: &str| {
+            u64::from_str_radix(s, 16)
+                .ok()
+                .filter(|_| s.len() == 16)
+                .map(f64::from_bits)
+                .ok_or_else(|| bad(n, format!("{s:?} is not 16 hex digits")))
+        };
+        let whole = |s: &str| {
+            s.parse::<u64>()
+                .map_err(|_| bad(n, format!("{s:?} is not a whole number")))
+        };
+        let small =
+            |s: &str| whole(s).and_then(|x| usize::try_from(x).map_err(|_| bad(n, format!("{s:?} is too large"))));
+        let fit = match f[4] {
+            "sphere" => Fit::Sphere,
+            "aabb" => Fit::Aabb,
+            other => return Err(bad(n, format!("{other:?} is not a fit"))),
+        };
+        let split_range = match f[5] {
+            "bounds" => SplitRange::Bounds,
+            "visible" => SplitRange::Visible,
+            other => return Err(bad(n, format!("{other:?} is not a split range"))),
+        };
+        let cascades_needed = match f[6] {
+            "0" => false,
+            "1" => true,
+            other => return Err(bad(n, format!("{other:?} is not 0 or 1"))),
+        };
+        let v: Vec<f64> = f[7..17].iter().map(|s| float(s)).collect::<Result<_>>()?;
+        let screen = match f[21] {
+            "-" => None,
+            s => {
+                let x: Vec<f64> = s.split(',').map(float).collect::<Result<_>>()?;
+                if x.len() < 10 {
+                    return Err(bad(
+                        n,
+                        format!("the screen field has {} numbers; it has at least 10", x.len()),
+                    ));
+                }
+                Some(ScreenStats {
+                    receiver_fraction: x[0],
+                    self_shadowed_fraction: x[1],
+                    aliasing_mean: x[2],
+                    aliasing_p50: x[3],
+                    aliasing_p95: x[4],
+                    aliasing_p99: x[5],
+                    aliasing_max: x[6],
+                    undersampled_fraction: x[7],
+                    visible_z_lo: x[8],
+                    visible_z_hi: x[9],
+                    cascade_pixels: x[10..].to_vec(),
+                })
+            }
+        };
+        let resolution = u32::try_from(whole(f[3])?).map_err(|_| bad(n, format!("{:?} is too large", f[3])))?;
+        rows.push((
+            small(f[0])?,
+            Row {
+                setting: Setting {
+                    lambda: float(f[1])?,
+                    cascades: small(f[2])?,
+                    resolution,
+                    fit,
+                    split_range,
+                },
+                summary: Summary {
+                    cascades_needed,
+                    z_lo: v[0],
+                    z_hi: v[1],
+                    max_aliasing: v[2],
+                    mean_aliasing: v[3],
+                    mean_log_aliasing: v[4],
+                    undersampled_fraction: v[5],
+                    shimmer: v[6],
+                    shimmer_snapped: v[7],
+                    shimmer_unsnapped: v[8],
+                    size_jitter: v[9],
+                    coverage_violations: whole(f[17])?,
+                    memory_bytes: whole(f[18])?,
+                    lookup_error_max: float(f[19])?,
+                    lookup_error_rms: float(f[20])?,
+                    screen,
+                },
+            },
+        ));
+    }
+    Ok(rows)
+}
+
+/// One shard as read from its directory.
+#[derive(Debug, Clone)]
+pub struct ShardInput {
+    pub dir: std::path::PathBuf,
+    pub manifest: Manifest,
+    /// (grid index, row), as stored.
+    pub rows: Vec<(usize, Row)>,
+}
+
+/// Checks that `shards` are the N slices of one sweep, each once, and returns the manifest they
+/// share. Errors name the problem and the directory: a shard given twice, shards of other
+/// csm-lab versions or of different sweeps, missing shards (by K).
+pub fn check_set(shards: &[ShardInput]) -> Result<&Manifest> {
+    let first = shards
+        .first()
+        .ok_or_else(|| ShardError::Set("no shard directories were given".into()))?;
+    let m0 = &first.manifest;
+    for s in shards {
+        let m = &s.manifest;
+        if m.tool != tool() {
+            return Err(ShardError::dir(
+                &s.dir,
+                format!(
+                    "this shard was made by {}, and this is {}: run every shard and the merge with one csm-lab version",
+                    m.tool,
+                    tool()
+                ),
+            )
+            .into());
+        }
+        if m.shard.n != m0.shard.n {
+            return Err(ShardError::dir(
+                &s.dir,
+                format!(
+                    "this shard is {} of {} shards, but {} is {} of {}: every shard must come from one split",
+                    m.shard.k,
+                    m.shard.n,
+                    first.dir.display(),
+                    m0.shard.k,
+                    m0.shard.n
+                ),
+            )
+            .into());
+        }
+        if m.config_hash != m0.config_hash || m.command != m0.command {
+            return Err(ShardError::dir(
+                &s.dir,
+                format!(
+                    "this shard is of another config or sweep than {} (config_hash {} running `{}`; \
+                     {} running `{}`)",
+                    first.dir.display(),
+                    m.config_hash,
+                    m.command,
+                    m0.config_hash,
+                    m0.command
+                ),
+            )
+            .into());
+        }
+    }
+    let n = m0.shard.n;
+    let mut seen: Vec<Option<&std::path::Path>> = vec![None; n];
+    for s in shards {
+        let k = s.manifest.shard.k;
+        if let Some(other) = seen[k - 1] {
+            return Err(ShardError::dir(
+                &s.dir,
+                format!(
+                    "shard {k} of {n} was given twice (also as {}); give each shard once",
+                    other.display()
+                ),
+            )
+            .into());
+        }
+        seen[k - 1] = Some(&s.dir);
+    }
+    let missing: Vec<String> = (1..=n)
+        .filter(|k| seen[k - 1].is_none())
+        .map(|k| k.to_string())
+        .collect();
+    if !missing.is_empty() {
+        let shown = if missing.len() > 20 {
+            format!("{}, ... ({} in all)", missing[..20].join(", "), missing.len())
+        } else {
+            missing.join(", ")
+        };
+        return Err(ShardError::Set(format!(
+            "missing shard{} {shown} of {n}: merge needs all {n} shards of the sweep",
+            if missing.len() == 1 { "" } else { "s" }
+        ))
+        .into());
+    }
+    Ok(m0)
+}
+
+/// The grid's rows, in grid order, from a complete set of shards ([`check_set`]); every row must
+/// sit in its own shard and carry the setting of its place in `grid`.
+pub fn join(shards: Vec<ShardInput>, grid: &Grid) -> Result<Vec<Row>> {
+    let settings = grid.settings();
+    let mut slots: Vec<Option<Row>> = vec![None; settings.len()];
+    for s in shards {
+        let shard = s.manifest.shard;
+        let expected = shard.len_of(settings.len());
+        if s.rows.len() != expected {
+            return Err(ShardError::dir(
+                &s.dir,
+                format!(
+                    "{ROWS_FILE} has {} rows; shard {} of {} of this grid has {expected}",
+                    s.rows.len(),
+                    shard.k,
+                    shard.n
+                ),
+            )
+            .into());
+        }
+        for (index, row) in s.rows {
+            let place = settings.get(index).filter(|_| shard.contains(index));
+            let same = place.is_some_and(|p| {
+                p.lambda.to_bits() == row.setting.lambda.to_bits()
+                    && p.cascades == row.setting.cascades
+                    && p.resolution == row.setting.resolution
+                    && p.fit == row.setting.fit
+                    && p.split_range == row.setting.split_range
+            });
+            if !same || slots[index].is_some() {
+                return Err(ShardError::dir(
+                    &s.dir,
+                    format!(
+                        "{ROWS_FILE}: row {index} ({}) is not a row of shard {} of {} of this grid",
+                        row.setting.label(),
+                        shard.k,
+                        shard.n
+                    ),
+                )
+                .into());
+            }
+            slots[index] = Some(row);
+        }
+    }
+    // Every slot is filled: each shard had exactly its count of distinct, in-shard indices.
+    Ok(slots.into_iter().map(|r| r.expect("all shards present")).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shard_specs_parse_and_bad_ones_name_the_flag() {
+        assert_eq!(Shard::parse("1/1").unwrap(), Shard { k: 1, n: 1 });
+        assert_eq!(Shard::parse(" 3 / 7 ").unwrap(), Shard { k: 3, n: 7 });
+        for bad in ["", "1", "0/4", "5/4", "1/0", "a/4", "1/b", "-1/4", "1/100001", "1/2/3"] {
+            let e = Shard::parse(bad).unwrap_err().to_string();
+            assert!(e.starts_with("--shard"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn shards_are_disjoint_and_cover_the_grid() {
+        for len in [1usize, 2, 7, 10, 672] {
+            for n in 1..=len.min(9) {
+                let mut count = vec![0; len];
+                for k in 1..=n {
+                    let s = Shard { k, n };
+                    let idx: Vec<usize> = s.indices(len).collect();
+                    assert_eq!(idx.len(), s.len_of(len));
+                    for &i in &idx {
+                        assert!(s.contains(i));
+                        count[i] += 1;
+                    }
+                }
+                assert!(count.iter().all(|&c| c == 1), "len {len}, n {n}");
+            }
+        }
+    }
+}
