@@ -343,17 +343,17 @@ pub fn summary_table(a: &Analysis) -> String {
         for (k, v, what) in [
             (
                 "coverage_worst_texels",
-                format!("{worst:.4}"),
+                short_number(worst),
                 "how far the worst corner lies outside its window",
             ),
             (
                 "receivers_outside_depth",
-                format!("{:.4}", p.receivers_outside_depth),
+                short_number(p.receivers_outside_depth),
                 "receiver depth outside the light depth range (world units)",
             ),
             (
                 "casters_outside_depth",
-                format!("{:.4}", p.casters_outside_depth),
+                short_number(p.casters_outside_depth),
                 "caster depth lost in front of the light depth range",
             ),
         ] {
@@ -398,11 +398,11 @@ fn screen_heading(a: &Analysis, st: &crate::screen::ScreenStats) -> String {
         );
     }
     format!(
-        "screen ({cols} x {rows} sampled pixels of {} x {}; visible geometry at depth {:.4} .. {:.4}{}):",
+        "screen ({cols} x {rows} sampled pixels of {} x {}; visible geometry at depth {} .. {}{}):",
         c.screen.width,
         c.screen.height,
-        st.visible_z_lo,
-        st.visible_z_hi,
+        short_number(st.visible_z_lo),
+        short_number(st.visible_z_hi),
         if c.shadow.fit_depth_to_visible {
             ", splits fitted to it"
         } else {

@@ -469,6 +469,12 @@ fn rival_text(r: &SweepResult, x: &sweep::Rival) -> String {
         sweep::RivalKind::OtherFit => "The best setting with the other fit",
         sweep::RivalKind::Configured => "The configured setting",
     };
+    // A group's best that is also the configured setting says so (it is listed once).
+    let who = if x.kind != sweep::RivalKind::Configured && r.configured() == Some(x.index) {
+        format!("{who}, which is the configured setting")
+    } else {
+        who.to_string()
+    };
     let obj = r.objective.name();
     let (va, vb) = (r.objective.value(a), r.objective.value(b));
     let pct = |base: f64, v: f64| percent_change(base, v).map_or(String::new(), |p| format!(", {}", signed_percent(p)));
