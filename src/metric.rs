@@ -544,8 +544,10 @@ pub fn summary_lines(s: &Summary, f32_block: bool) -> Vec<(&'static str, String,
         .filter_map(|d| {
             let v = (d.value)(s);
             let text = match (d.shown, f32_block) {
-                (Shown::Fixed, false) => format!("{:.4}", v.as_f64()),
-                (Shown::Scientific, false) | (Shown::F32Scientific, true) => format!("{:.3e}", v.as_f64()),
+                // Numbers for people (crate::output::short_number): "0", "< 1e-9", 4 significant digits.
+                (Shown::Fixed, false) | (Shown::Scientific, false) | (Shown::F32Scientific, true) => {
+                    crate::output::short_number(v.as_f64())
+                }
                 (Shown::Whole, false) => match v {
                     Value::Count(n) => n.to_string(),
                     other => format!("{}", other.as_f64()),

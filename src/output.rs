@@ -218,6 +218,33 @@ pub fn short_number(v: f64) -> String {
     }
 }
 
+/// "1 cascade", "2 cascades", "0 cascades": a count and its noun with the plural right
+/// (`noun` is the singular; the plural adds "s").
+pub fn count(n: impl Into<u64>, noun: &str) -> String {
+    let n = n.into();
+    format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
+}
+
+/// The relative change from `base` to `value` in percent; None when `base` is 0 (no relative
+/// change exists) or either is not finite.
+pub fn percent_change(base: f64, value: f64) -> Option<f64> {
+    (base != 0.0 && base.is_finite() && value.is_finite()).then(|| 100.0 * (value - base) / base.abs())
+}
+
+/// A percentage from [`percent_change`] as text for people: "+16 %", "-25 %", "+0.4 %", "0 %"
+/// (whole percent from 10 % up, one decimal below).
+pub fn signed_percent(p: f64) -> String {
+    let r = if p.abs() >= 10.0 {
+        p.round()
+    } else {
+        (p * 10.0).round() / 10.0
+    };
+    if r == 0.0 {
+        return "0 %".to_string();
+    }
+    format!("{}{} %", if r > 0.0 { "+" } else { "" }, short_number(r))
+}
+
 #[cfg(test)]
 mod short_number_tests {
     use super::short_number;
@@ -235,8 +262,53 @@ mod short_number_tests {
             (67108864.0, "6.711e7"),
             (106.115, "106.1"),
             (-3.0, "-3"),
+            (-0.0, "0"),
+            (-5.24e-14, "> -1e-9"),
+            (1e-9, "1e-9"),
+            (0.00099996, "1e-3"),
+            (0.001, "0.001"),
+            (999_999.4, "999999"),
+            (1e300, "1e300"),
+            (-2.5e-5, "-2.5e-5"),
+            (0.99996, "1"),
+            (9.99951, "10"),
+            (123_456.0, "123456"),
+            (0.012346, "0.01235"),
         ] {
             assert_eq!(short_number(v), s, "{v}");
         }
+    }
+
+    #[test]
+    fn no_number_reads_like_a_float_dump() {
+        // Whatever the magnitude, no "e0", no "e-1x", no "e+", no run of zeros after the point.
+        let mut x = 1e-300_f64;
+        while x < 1e300 {
+            for v in [x, -x, x * 1.5, x * 9.99951] {
+                let s = short_number(v);
+                assert!(
+                    !s.contains("e0") && !s.contains("e-1") && !s.contains("e+") && !s.contains(".000"),
+                    "{v} -> {s}"
+                );
+                assert!(s.len() <= 9, "{v} -> {s}");
+            }
+            x *= 10.0;
+        }
+    }
+
+    #[test]
+    fn counts_and_percentages_read_right() {
+        use super::{count, percent_change, signed_percent};
+        assert_eq!(count(1u64, "cascade"), "1 cascade");
+        assert_eq!(count(0u64, "cascade"), "0 cascades");
+        assert_eq!(count(4u32, "cascade"), "4 cascades");
+        assert_eq!(percent_change(64.0, 48.0), Some(-25.0));
+        assert_eq!(percent_change(0.0, 1.0), None);
+        assert_eq!(signed_percent(percent_change(1.0, 1.1612).unwrap()), "+16 %");
+        assert_eq!(signed_percent(-25.0), "-25 %");
+        assert_eq!(signed_percent(0.04), "0 %");
+        assert_eq!(signed_percent(0.44), "+0.4 %");
+        assert_eq!(signed_percent(-9.96), "-10 %");
+        assert_eq!(signed_percent(150.4), "+150 %");
     }
 }

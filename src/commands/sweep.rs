@@ -584,7 +584,17 @@ pub fn pareto_front(rows: &[Row]) -> Vec<usize> {
 
 /// [`pareto_front`] of memory against any objective metric.
 pub fn pareto_front_by(rows: &[Row], objective: SummaryMetric) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed).collect();
+    front_of(
+        rows,
+        (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed),
+        objective,
+    )
+}
+
+/// The Pareto front of memory against `objective` over the rows `candidates`, ordered by memory
+/// (among exact ties the first row in grid order is kept).
+fn front_of(rows: &[Row], candidates: impl Iterator<Item = usize>, objective: SummaryMetric) -> Vec<usize> {
+    let mut idx: Vec<usize> = candidates.collect();
     idx.sort_by(|&a, &b| {
         let (ra, rb) = (&rows[a].summary, &rows[b].summary);
         ra.memory_bytes
@@ -654,7 +664,10 @@ pub struct Recommendation {
     pub within_budget: bool,
 }
 
-fn acceptable(r: &Row) -> bool {
+/// Whether a row may be recommended: its scene needs cascades, it covers every slice
+/// (`coverage_violations` = 0) and it is stable when snapped (`shimmer_snapped` <=
+/// [`STABLE_SHIMMER`]).
+pub fn acceptable(r: &Row) -> bool {
     r.summary.cascades_needed && r.summary.coverage_violations == 0 && r.summary.shimmer_snapped <= STABLE_SHIMMER
 }
 
@@ -755,6 +768,206 @@ fn pick(rows: &[Row], candidates: &[usize], objective: SummaryMetric) -> Option<
         })
 }
 
+// ---------------------------------------------------------------------------------------------
+// Alternatives and rivals
+// ---------------------------------------------------------------------------------------------
+
+/// Which way an alternative departs from the recommendation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AlternativeKind {
+    /// Less memory, for a higher objective.
+    Cheaper,
+    /// A lower objective, for more memory.
+    Sharper,
+    /// Less shimmer in the configured snap mode.
+    MoreStable,
+}
+
+impl AlternativeKind {
+    /// The `kind` of `recommendation.json`'s `alternatives`.
+    pub fn name(self) -> &'static str {
+        match self {
+            AlternativeKind::Cheaper => "cheaper",
+            AlternativeKind::Sharper => "sharper",
+            AlternativeKind::MoreStable => "more_stable",
+        }
+    }
+
+    /// The rule that picks it, in words (reports and `recommendation.json`).
+    pub fn rule(self) -> &'static str {
+        match self {
+            AlternativeKind::Cheaper => {
+                "the acceptable Pareto row with the most memory below the recommendation's:                  the lowest objective for less memory"
+            }
+            AlternativeKind::Sharper => {
+                "the acceptable Pareto row with the least memory whose objective is more than 1%                  below the recommendation's: the cheapest real improvement"
+            }
+            AlternativeKind::MoreStable => {
+                "the acceptable row within the budget with the least shimmer (configured snap mode),                  when that is below the recommendation's; ties go to the lower objective, then less memory"
+            }
+        }
+    }
+}
+
+/// One alternative to the recommendation: the row and why it was picked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Alternative {
+    pub kind: AlternativeKind,
+    pub index: usize,
+}
+
+/// The alternatives to a recommendation, at most one of each kind, in the order cheaper,
+/// sharper, more stable. Each comes from the rows [`acceptable`] for a recommendation:
+///
+/// - **cheaper**: on the Pareto front of memory against the objective over the acceptable rows,
+///   the row with the most memory below the recommendation's; that is the lowest objective
+///   any acceptable row with less memory reaches (ties: less memory, then grid order);
+/// - **sharper**: on the same front, the row with the least memory whose objective is below the
+///   recommendation's by more than [`MEAN_TOLERANCE`] (smaller gains count as a tie);
+/// - **more stable**: among the acceptable rows within the budget (within the recommendation's
+///   memory when nothing fits the budget), the row with the least `shimmer` (the configured snap
+///   mode's), when that is below the recommendation's; ties go to the lower objective, then less
+///   memory, then grid order.
+pub fn alternatives(rows: &[Row], rec: &Recommendation, objective: SummaryMetric) -> Vec<Alternative> {
+    let r = &rows[rec.index].summary;
+    let ok = || (0..rows.len()).filter(|&i| acceptable(&rows[i]));
+    let front = front_of(rows, ok(), objective);
+    let mut out = Vec::new();
+    let cheaper = front
+        .iter()
+        .copied()
+        .rfind(|&i| rows[i].summary.memory_bytes < r.memory_bytes);
+    let bound = objective.value(r) * (1.0 - MEAN_TOLERANCE);
+    let sharper = front
+        .iter()
+        .copied()
+        .find(|&i| objective.value(&rows[i].summary) < bound);
+    let limit = if rec.within_budget {
+        rec.budget_bytes
+    } else {
+        r.memory_bytes
+    };
+    let stabler = ok()
+        .filter(|&i| rows[i].summary.memory_bytes <= limit && rows[i].summary.shimmer < r.shimmer)
+        .min_by(|&a, &b| {
+            let (x, y) = (&rows[a].summary, &rows[b].summary);
+            x.shimmer
+                .total_cmp(&y.shimmer)
+                .then(objective.value(x).total_cmp(&objective.value(y)))
+                .then(x.memory_bytes.cmp(&y.memory_bytes))
+                .then(a.cmp(&b))
+        });
+    for (kind, pick) in [
+        (AlternativeKind::Cheaper, cheaper),
+        (AlternativeKind::Sharper, sharper),
+        (AlternativeKind::MoreStable, stabler),
+    ] {
+        if let Some(index) = pick.filter(|&i| i != rec.index && !out.iter().any(|a: &Alternative| a.index == i)) {
+            out.push(Alternative { kind, index });
+        }
+    }
+    out
+}
+
+/// Which rival a row is: the best row of a group the recommendation beat.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RivalKind {
+    /// The recommendation with λ = 1 (purely logarithmic splits) instead of its own λ, when λ
+    /// is swept and the recommendation has more than one cascade.
+    LambdaOne,
+    /// The best row with another cascade count.
+    OtherCascades,
+    /// The best row with another resolution.
+    OtherResolution,
+    /// The best row with the other fit.
+    OtherFit,
+    /// The configured setting itself.
+    Configured,
+}
+
+impl RivalKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            RivalKind::LambdaOne => "best_lambda_1",
+            RivalKind::OtherCascades => "best_other_cascade_count",
+            RivalKind::OtherResolution => "best_other_resolution",
+            RivalKind::OtherFit => "best_other_fit",
+            RivalKind::Configured => "configured",
+        }
+    }
+}
+
+/// Why a rival lost to the recommendation: the first test of the recommendation rule it failed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Loss {
+    /// Slice corners outside their windows (the count).
+    CoverageMisses(u64),
+    /// Snapped shimmer above [`STABLE_SHIMMER`] (the value).
+    Unstable(f64),
+    /// Over the memory budget, which the recommendation fits.
+    OverBudget,
+    /// Nothing fits the budget and the rival needs more memory than the recommendation.
+    MoreMemory,
+    /// A higher objective, beyond the [`MEAN_TOLERANCE`] tie.
+    Objective,
+    /// Tied on the objective; a higher max aliasing.
+    MaxAliasing,
+    /// Tied on the objective and max aliasing; more memory.
+    TieMemory,
+    /// Tied on everything above; more cascades or later in grid order.
+    TieOrder,
+}
+
+/// A rival and why it lost.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rival {
+    pub kind: RivalKind,
+    pub index: usize,
+    pub loss: Loss,
+}
+
+/// Why row `x` lost to the recommendation `rec`, by the rule of [`recommend_by`].
+pub fn loss(rows: &[Row], rec: &Recommendation, x: usize, objective: SummaryMetric) -> Loss {
+    let s = &rows[x].summary;
+    let r = &rows[rec.index].summary;
+    if s.coverage_violations > 0 {
+        return Loss::CoverageMisses(s.coverage_violations);
+    }
+    if !acceptable(&rows[x]) {
+        return Loss::Unstable(s.shimmer_snapped);
+    }
+    if rec.within_budget && s.memory_bytes > rec.budget_bytes {
+        return Loss::OverBudget;
+    }
+    if !rec.within_budget && s.memory_bytes > r.memory_bytes {
+        return Loss::MoreMemory;
+    }
+    // The shortlist of the rule: within MEAN_TOLERANCE of the best objective among the rows
+    // the recommendation was picked from.
+    let pool = |i: usize| {
+        acceptable(&rows[i])
+            && if rec.within_budget {
+                rows[i].summary.memory_bytes <= rec.budget_bytes
+            } else {
+                rows[i].summary.memory_bytes == r.memory_bytes
+            }
+    };
+    let best = (0..rows.len())
+        .filter(|&i| pool(i))
+        .map(|i| objective.value(&rows[i].summary))
+        .min_by(f64::total_cmp)
+        .unwrap_or(objective.value(r));
+    if objective.value(s) > best * (1.0 + MEAN_TOLERANCE) {
+        Loss::Objective
+    } else if s.max_aliasing > r.max_aliasing {
+        Loss::MaxAliasing
+    } else if s.memory_bytes > r.memory_bytes {
+        Loss::TieMemory
+    } else {
+        Loss::TieOrder
+    }
+}
+
 /// Distinct values of the rows' fits (for plots).
 pub fn fits_in(rows: &[Row]) -> Vec<Fit> {
     rows.iter()
@@ -813,6 +1026,71 @@ impl SweepResult {
 
     pub fn recommended(&self) -> Option<&Row> {
         self.recommendation.as_ref().map(|r| &self.rows[r.index])
+    }
+
+    /// The row of the configured setting (the config's own λ, cascade count, resolution and
+    /// fit), when the grid has it.
+    pub fn configured(&self) -> Option<usize> {
+        let c = &self.config.shadow;
+        self.rows.iter().position(|x| {
+            x.setting.lambda == c.lambda
+                && x.setting.cascades == c.cascades
+                && x.setting.resolution == c.resolution
+                && x.setting.fit == c.fit
+                && x.setting.split_range.is_visible() == c.fit_depth_to_visible
+        })
+    }
+
+    /// The alternatives to the recommendation ([`alternatives`]); empty without one.
+    pub fn alternatives(&self) -> Vec<Alternative> {
+        self.recommendation
+            .as_ref()
+            .map_or_else(Vec::new, |r| alternatives(&self.rows, r, self.objective))
+    }
+
+    /// The main rivals of the recommendation and why each lost: the recommendation's setting with
+    /// λ = 1 (when λ is swept), the best row (in [`Self::ranked`] order) with another cascade
+    /// count, with another resolution,
+    /// with the other fit, and the configured setting; each row once (the first group names
+    /// it), never the recommendation. Empty without a recommendation.
+    pub fn rivals(&self) -> Vec<Rival> {
+        let Some(rec) = &self.recommendation else {
+            return Vec::new();
+        };
+        let r = self.rows[rec.index].setting;
+        let ranked = self.ranked();
+        let best = |f: &dyn Fn(&Setting) -> bool| ranked.iter().copied().find(|&i| f(&self.rows[i].setting));
+        let lambda_swept = self.grid.lambda.values.len() > 1;
+        let groups: [(RivalKind, Option<usize>); 5] = [
+            (
+                RivalKind::LambdaOne,
+                if lambda_swept && r.lambda != 1.0 && r.cascades > 1 {
+                    best(&|s| {
+                        s.lambda == 1.0 && s.cascades == r.cascades && s.resolution == r.resolution && s.fit == r.fit
+                    })
+                } else {
+                    None
+                },
+            ),
+            (RivalKind::OtherCascades, best(&|s| s.cascades != r.cascades)),
+            (RivalKind::OtherResolution, best(&|s| s.resolution != r.resolution)),
+            (RivalKind::OtherFit, best(&|s| s.fit != r.fit)),
+            (
+                RivalKind::Configured,
+                self.configured().filter(|&i| self.rows[i].summary.cascades_needed),
+            ),
+        ];
+        let mut out: Vec<Rival> = Vec::new();
+        for (kind, index) in groups {
+            if let Some(index) = index.filter(|&i| i != rec.index && !out.iter().any(|x| x.index == i)) {
+                out.push(Rival {
+                    kind,
+                    index,
+                    loss: loss(&self.rows, rec, index, self.objective),
+                });
+            }
+        }
+        out
     }
 
     /// Rows in objective order (acceptable within budget first), for the "top" tables.
@@ -975,6 +1253,138 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Random rows with ties in memory, objective and shimmer, some unacceptable.
+    fn random_rows(rng: &mut crate::rng::SplitMix64, n: usize) -> Vec<Row> {
+        let mib = 1024 * 1024;
+        (0..n)
+            .map(|_| {
+                let mut r = row(
+                    (1 + (rng.unit() * 8.0) as u64) * mib,
+                    (1.0 + rng.unit() * 20.0).round() / 4.0,
+                    rng.unit() > 0.05,
+                );
+                r.summary.max_aliasing = r.summary.mean_aliasing * (1.0 + (rng.unit() * 4.0).round() / 4.0);
+                r.summary.shimmer = (rng.unit() * 4.0).round() / 8.0;
+                if rng.unit() < 0.1 {
+                    r.summary.coverage_violations = 1 + (rng.unit() * 5.0) as u64;
+                }
+                if rng.unit() < 0.1 {
+                    r.summary.shimmer_snapped = 0.01;
+                }
+                r
+            })
+            .collect()
+    }
+
+    #[test]
+    fn alternatives_are_what_a_brute_force_search_finds() {
+        let objective = SummaryMetric::named("mean_aliasing");
+        let obj = |r: &Row| r.summary.mean_aliasing;
+        let mut rng = crate::rng::SplitMix64::new(5);
+        let mut seen = [0usize; 3];
+        for round in 0..400 {
+            let rows = random_rows(&mut rng, 5 + round % 40);
+            let budget = 1.0 + (rng.unit() * 8.0).floor();
+            let Some(rec) = recommend_by(&rows, budget, objective) else {
+                continue;
+            };
+            let r = &rows[rec.index];
+            let ok: Vec<usize> = (0..rows.len()).filter(|&i| acceptable(&rows[i])).collect();
+            // Cheaper: the lowest objective among acceptable rows with less memory (then less
+            // memory, then grid order).
+            let cheaper = ok
+                .iter()
+                .copied()
+                .filter(|&i| rows[i].summary.memory_bytes < r.summary.memory_bytes)
+                .min_by(|&a, &b| {
+                    obj(&rows[a])
+                        .total_cmp(&obj(&rows[b]))
+                        .then(rows[a].summary.memory_bytes.cmp(&rows[b].summary.memory_bytes))
+                        .then(a.cmp(&b))
+                });
+            // Sharper: the least memory among acceptable rows more than 1% below (then the
+            // lower objective, then grid order).
+            let sharper = ok
+                .iter()
+                .copied()
+                .filter(|&i| obj(&rows[i]) < obj(r) * 0.99)
+                .min_by(|&a, &b| {
+                    rows[a]
+                        .summary
+                        .memory_bytes
+                        .cmp(&rows[b].summary.memory_bytes)
+                        .then(obj(&rows[a]).total_cmp(&obj(&rows[b])))
+                        .then(a.cmp(&b))
+                });
+            // More stable: the least shimmer within the budget, below the recommendation's.
+            let limit = if rec.within_budget {
+                rec.budget_bytes
+            } else {
+                r.summary.memory_bytes
+            };
+            let stabler = ok
+                .iter()
+                .copied()
+                .filter(|&i| rows[i].summary.memory_bytes <= limit && rows[i].summary.shimmer < r.summary.shimmer)
+                .min_by(|&a, &b| {
+                    rows[a]
+                        .summary
+                        .shimmer
+                        .total_cmp(&rows[b].summary.shimmer)
+                        .then(obj(&rows[a]).total_cmp(&obj(&rows[b])))
+                        .then(rows[a].summary.memory_bytes.cmp(&rows[b].summary.memory_bytes))
+                        .then(a.cmp(&b))
+                });
+            let got = alternatives(&rows, &rec, objective);
+            let find = |k: AlternativeKind| got.iter().find(|a| a.kind == k).map(|a| a.index);
+            let mut expected = Vec::new();
+            for (k, want) in [
+                (AlternativeKind::Cheaper, cheaper),
+                (AlternativeKind::Sharper, sharper),
+                (AlternativeKind::MoreStable, stabler),
+            ] {
+                if let Some(i) = want.filter(|&i| !expected.contains(&i)) {
+                    expected.push(i);
+                    assert_eq!(find(k), Some(i), "{k:?} in round {round}");
+                    seen[k as usize] += 1;
+                } else {
+                    assert_eq!(find(k), None, "{k:?} in round {round}");
+                }
+            }
+            // The cheaper and sharper rows are on the Pareto front of the acceptable rows.
+            for i in [cheaper, sharper].into_iter().flatten() {
+                assert!(!ok.iter().any(|&j| {
+                    let (a, b) = (&rows[j].summary, &rows[i].summary);
+                    a.memory_bytes <= b.memory_bytes
+                        && a.mean_aliasing <= b.mean_aliasing
+                        && (a.memory_bytes < b.memory_bytes || a.mean_aliasing < b.mean_aliasing)
+                }));
+            }
+            // Why every other row lost, by the rule that picked the recommendation.
+            for x in (0..rows.len()).filter(|&i| i != rec.index && rows[i].summary.cascades_needed) {
+                let s = &rows[x].summary;
+                match loss(&rows, &rec, x, objective) {
+                    Loss::CoverageMisses(n) => assert_eq!(n, s.coverage_violations),
+                    Loss::Unstable(v) => assert!(v > STABLE_SHIMMER && s.coverage_violations == 0),
+                    Loss::OverBudget => assert!(rec.within_budget && s.memory_bytes > rec.budget_bytes),
+                    Loss::MoreMemory => assert!(!rec.within_budget && s.memory_bytes > r.summary.memory_bytes),
+                    Loss::Objective => assert!(obj(&rows[x]) > obj(r) && acceptable(&rows[x])),
+                    Loss::MaxAliasing => {
+                        assert!(s.max_aliasing > r.summary.max_aliasing && obj(&rows[x]) <= obj(r) * 1.0101)
+                    }
+                    Loss::TieMemory => {
+                        assert!(s.max_aliasing == r.summary.max_aliasing && s.memory_bytes > r.summary.memory_bytes)
+                    }
+                    Loss::TieOrder => {
+                        assert!(s.max_aliasing == r.summary.max_aliasing && s.memory_bytes == r.summary.memory_bytes)
+                    }
+                }
+            }
+        }
+        // Every kind was exercised, and so was its absence.
+        assert!(seen.iter().all(|&n| n > 20), "{seen:?}");
     }
 
     #[test]

@@ -7,7 +7,7 @@ use crate::analysis::Analysis;
 use crate::error::Result;
 use crate::figures;
 use crate::metric;
-use crate::output::{csv_bytes, json_bytes, num, Exporter};
+use crate::output::{csv_bytes, json_bytes, num, short_number, Exporter};
 
 /// The files `analyze` writes, in order: its tables, its summary and its figures.
 pub fn exporters() -> Vec<&'static dyn Exporter<Analysis>> {
@@ -238,8 +238,12 @@ pub fn summary_table(a: &Analysis) -> String {
     if let Some(p) = &a.preset {
         let _ = writeln!(
             out,
-            "{}: preset {}: {} cascades x {}^2, shadow distance {}",
-            c.name, p.name, c.shadow.cascades, c.shadow.resolution, c.shadow.max_distance
+            "{}: preset {}: {} x {}^2, shadow distance {}",
+            c.name,
+            p.name,
+            crate::output::count(c.shadow.cascades as u64, "cascade"),
+            c.shadow.resolution,
+            c.shadow.max_distance
         );
         let _ = writeln!(out, "  split: {}", p.split_rule);
         let _ = writeln!(out, "  fit: {}; snap: {}", p.fit, p.snap);
@@ -250,9 +254,9 @@ pub fn summary_table(a: &Analysis) -> String {
     } else {
         let _ = writeln!(
             out,
-            "{}: {} cascades x {}^2, lambda {}, fit {}, snap {}",
+            "{}: {} x {}^2, lambda {}, fit {}, snap {}",
             c.name,
-            c.shadow.cascades,
+            crate::output::count(c.shadow.cascades as u64, "cascade"),
             c.shadow.resolution,
             c.shadow.lambda,
             c.shadow.fit,
@@ -275,9 +279,9 @@ pub fn summary_table(a: &Analysis) -> String {
     }
     let _ = writeln!(
         out,
-        "depth range {:.4} .. {:.4}{}",
-        s.z_lo,
-        s.z_hi,
+        "depth range {} .. {}{}",
+        short_number(s.z_lo),
+        short_number(s.z_hi),
         if a.preset.is_some() {
             " (the view depths that read the preset's cascades)"
         } else if c.shadow.fit_depth_to_visible {
@@ -296,8 +300,15 @@ pub fn summary_table(a: &Analysis) -> String {
     for r in &a.cascades {
         let _ = writeln!(
             out,
-            "{:>7} {:>10.4} {:>10.4} {:>10.4} {:>10.6} {:>11.4} {:>11.4} {:>9}",
-            r.cascade, r.near, r.far, r.width, r.texel_size, r.max_aliasing, r.min_aliasing, r.coverage_violations
+            "{:>7} {:>10} {:>10} {:>10} {:>10} {:>11} {:>11} {:>9}",
+            r.cascade,
+            short_number(r.near),
+            short_number(r.far),
+            short_number(r.width),
+            short_number(r.texel_size),
+            short_number(r.max_aliasing),
+            short_number(r.min_aliasing),
+            r.coverage_violations
         );
     }
     let f32_block = c.shadow.precision == crate::precision::Precision::F32;
@@ -332,17 +343,17 @@ pub fn summary_table(a: &Analysis) -> String {
         for (k, v, what) in [
             (
                 "coverage_worst_texels",
-                format!("{worst:.4}"),
+                short_number(worst),
                 "how far the worst corner lies outside its window",
             ),
             (
                 "receivers_outside_depth",
-                format!("{:.4}", p.receivers_outside_depth),
+                short_number(p.receivers_outside_depth),
                 "receiver depth outside the light depth range (world units)",
             ),
             (
                 "casters_outside_depth",
-                format!("{:.4}", p.casters_outside_depth),
+                short_number(p.casters_outside_depth),
                 "caster depth lost in front of the light depth range",
             ),
         ] {
@@ -387,11 +398,11 @@ fn screen_heading(a: &Analysis, st: &crate::screen::ScreenStats) -> String {
         );
     }
     format!(
-        "screen ({cols} x {rows} sampled pixels of {} x {}; visible geometry at depth {:.4} .. {:.4}{}):",
+        "screen ({cols} x {rows} sampled pixels of {} x {}; visible geometry at depth {} .. {}{}):",
         c.screen.width,
         c.screen.height,
-        st.visible_z_lo,
-        st.visible_z_hi,
+        short_number(st.visible_z_lo),
+        short_number(st.visible_z_hi),
         if c.shadow.fit_depth_to_visible {
             ", splits fitted to it"
         } else {

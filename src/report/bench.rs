@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 
 use crate::bench::{BenchReport, TARGET_ERROR};
 use crate::error::Result;
-use crate::output::{csv_bytes, num, Exporter};
+use crate::output::{csv_bytes, num, short_number, Exporter};
 
 /// The terminal table: per metric, the smallest count reaching [`TARGET_ERROR`] and its
 /// time, and the error and time at the current default.
@@ -12,8 +12,9 @@ pub fn table(report: &BenchReport) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "bench ({}): smallest sample count reaching relative error {:.0e}, and the defaults",
-        report.scene, TARGET_ERROR
+        "bench ({}): smallest sample count reaching relative error {}, and the defaults",
+        report.scene,
+        short_number(TARGET_ERROR)
     );
     let _ = writeln!(
         out,
@@ -22,18 +23,14 @@ pub fn table(report: &BenchReport) -> String {
     );
     for m in &report.metrics {
         let (count, time, err) = match report.first_reaching(m.name, TARGET_ERROR) {
-            Some(r) => (
-                r.samples.to_string(),
-                format!("{:.3e}", r.seconds),
-                format!("{:.2e}", r.error),
-            ),
+            Some(r) => (r.samples.to_string(), short_number(r.seconds), short_number(r.error)),
             None => {
                 let max = report.rows_of(m.name).map(|r| r.samples).max().unwrap_or(0);
                 (format!(">{max}"), "-".to_string(), "-".to_string())
             }
         };
         let (derr, dtime) = match report.at(m.name, m.default) {
-            Some(r) => (format!("{:.2e}", r.error), format!("{:.3e}", r.seconds)),
+            Some(r) => (short_number(r.error), short_number(r.seconds)),
             None => ("-".to_string(), "-".to_string()),
         };
         let _ = writeln!(

@@ -3,15 +3,15 @@
 
 use std::fmt::Write as _;
 
-use super::{html, markdown};
+use super::{defs, html, markdown};
 
 use crate::analysis::{mib, Analysis};
 use crate::compare::{coverage_extremes, fit_label, preset_of, Comparison};
 use crate::error::Result;
 use crate::figures::compare::{DensityOverlay, DensityPng, DensitySvg, ShimmerCoverageBars, ShimmerPng, ShimmerSvg};
-use crate::figures::{short, Figure};
+use crate::figures::Figure;
 use crate::metric;
-use crate::output::{csv_bytes, num, Exporter};
+use crate::output::{count, csv_bytes, num, short_number as short, Exporter};
 use crate::presets::{is_generic_note, lambda_value};
 
 /// `compare.csv`: `preset`, the sweep columns ([`metric::summary_columns`]), then these
@@ -123,6 +123,47 @@ fn scene_lines(c: &Comparison) -> Vec<String> {
     ]
 }
 
+/// Why a preset's result cannot be used as it stands: slice corners its windows miss (those
+/// points read "lit"), or receivers outside its light depth range (clipped). None when valid.
+pub fn invalid_reason(a: &Analysis) -> Option<String> {
+    let mut why = Vec::new();
+    let misses = a.summary.coverage_violations;
+    if misses > 0 {
+        why.push(format!("{} missed", count(misses, "slice corner")));
+    }
+    let clipped = a.preset.as_ref().map_or(0.0, |p| p.receivers_outside_depth);
+    if clipped > 0.0 {
+        why.push(format!(
+            "receivers clipped by {} world units of light depth",
+            short(clipped)
+        ));
+    }
+    (!why.is_empty()).then(|| why.join("; "))
+}
+
+/// Definitions of the results table's columns (the registry's texts where it has the metric).
+fn table_definitions() -> Vec<(String, String)> {
+    vec![
+        defs::other("preset", "the engine preset; INVALID when its windows miss slice corners or clip receivers, so its other numbers do not describe a working set-up"),
+        defs::other("cascades × map", "cascade count × side of each square shadow map, in texels"),
+        defs::other("fit", "how the preset encloses each slice in its window"),
+        defs::other("snap", "how the preset keeps its windows on the texel grid"),
+        defs::metric("max aliasing", "max_aliasing"),
+        defs::metric("mean aliasing", "mean_aliasing"),
+        defs::metric("shimmer snapped", "shimmer_snapped"),
+        defs::metric("shimmer unsnapped", "shimmer_unsnapped"),
+        {
+            let (l, t) = defs::metric("coverage misses (worst, texels)", "coverage_violations");
+            (l, format!("{t} In brackets: how far the worst missed corner lies outside its window, in texels."))
+        },
+        defs::other(
+            "receivers / casters outside light depth",
+            "largest depth (world units) of receivers beyond, and of casters in front of, a cascade's light depth range; receivers beyond it are clipped",
+        ),
+        defs::memory("memory (MiB)"),
+    ]
+}
+
 /// Table cells shared by both reports: (header, per-row values).
 fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
     let header = vec![
@@ -145,8 +186,12 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
             let s = &a.summary;
             let p = a.preset.as_ref();
             let (worst, _) = coverage_extremes(a);
+            let name = preset_of(a).map_or_else(String::new, |p| p.to_string());
             vec![
-                preset_of(a).map_or_else(String::new, |p| p.to_string()),
+                match invalid_reason(a) {
+                    Some(why) => format!("{name} (INVALID: {why})"),
+                    None => name,
+                },
                 format!(
                     "{} × {}",
                     a.rig().map_or(0, |r| r.cascade_count()),
@@ -154,8 +199,8 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
                 ),
                 fit_label(a),
                 p.map_or_else(String::new, |p| p.snap.clone()),
-                format!("{:.3}", s.max_aliasing),
-                format!("{:.3}", s.mean_aliasing),
+                short(s.max_aliasing),
+                short(s.mean_aliasing),
                 short(s.shimmer_snapped),
                 short(s.shimmer_unsnapped),
                 format!("{} ({})", s.coverage_violations, short(worst)),
@@ -164,7 +209,7 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
                     short(p.map_or(0.0, |p| p.receivers_outside_depth)),
                     short(p.map_or(0.0, |p| p.casters_outside_depth))
                 ),
-                format!("{:.1}", mib(s.memory_bytes)),
+                short(mib(s.memory_bytes)),
             ]
         })
         .collect();
@@ -209,6 +254,7 @@ impl Exporter<Comparison> for CompareHtml {
         h.push_str(&html::list(&scene_lines(c), None));
         h.push_str("<h2>Results</h2>\n");
         h.push_str(&html::table(&header, &rows, &[0, 2, 3], None));
+        h.push_str(&html::definitions(&table_definitions()));
         let _ = writeln!(h, "<p>{}</p>", html::escape(RESULTS_NOTE));
         h.push_str(&html::figure(&DensityOverlay(c).to_svg()?, DENSITY_CAPTION));
         h.push_str(&html::figure(&ShimmerCoverageBars(c).to_svg()?, SHIMMER_CAPTION));
@@ -232,7 +278,7 @@ impl Exporter<Comparison> for CompareHtml {
 }
 
 /// What the columns of the results table measure.
-const RESULTS_NOTE: &str = "Aliasing is shadow texel size over screen pixel size at each view depth (above 1: blocky), over the depths that read each preset's cascades. Shimmer is the RMS sub-texel drift of world-fixed points per frame. Coverage counts slice corners (fitted slice and selection interval) outside their window over the path; those points read \"lit\". docs/metrics.md gives the formulas.";
+const RESULTS_NOTE: &str = "Aliasing is measured over the depths that read each preset's cascades; coverage checks each fitted slice and selection interval over the path, and missed corners read \"lit\". docs/metrics.md gives the formulas.";
 
 const DENSITY_CAPTION: &str = "Texels per pixel against view depth, one line per preset";
 const SHIMMER_CAPTION: &str = "Shimmer snapped and unsnapped, and coverage misses, per preset";
@@ -255,6 +301,7 @@ impl Exporter<Comparison> for CompareMd {
         }
         let _ = writeln!(m, "\n## Results\n");
         m.push_str(&markdown::table(&header, &rows, &[0]));
+        let _ = writeln!(m, "\n{}\n{}", defs::markdown(&table_definitions()), RESULTS_NOTE);
         let _ = writeln!(
             m,
             "\n![texels per pixel against depth](compare_density.svg)\n\n![shimmer and coverage](compare_shimmer.svg)\n"
@@ -312,7 +359,7 @@ pub fn summary_table(c: &Comparison) -> String {
             .map_or(0.0, |p| p.receivers_outside_depth.max(p.casters_outside_depth));
         let _ = writeln!(
             out,
-            "{:<13} {:>11} {:<22} {:>10.3} {:>9.3} {:>10.2e} {:>10.2e} {:>9} {:>8.3} {:>10.3}",
+            "{:<13} {:>11} {:<22} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>10}{}",
             preset_of(a).map_or("?", |p| p.as_str()),
             format!(
                 "{}x{}",
@@ -320,13 +367,14 @@ pub fn summary_table(c: &Comparison) -> String {
                 a.config.shadow.resolution
             ),
             fit_label(a),
-            s.max_aliasing,
-            s.mean_aliasing,
-            s.shimmer_snapped,
-            s.shimmer_unsnapped,
+            short(s.max_aliasing),
+            short(s.mean_aliasing),
+            short(s.shimmer_snapped),
+            short(s.shimmer_unsnapped),
             s.coverage_violations,
-            worst,
-            depth_out
+            short(worst),
+            short(depth_out),
+            invalid_reason(a).map_or(String::new(), |w| format!("  INVALID: {w}"))
         );
     }
     out

@@ -15,7 +15,7 @@ th{background:#f3f3f3}td.l,th.l{text-align:left}tr.rec{background:#ffecec;font-w
 .rec-box{background:#f6fbf6;border-left:5px solid #2a9d4a;padding:0.8em 1em}\
 figure{margin:1.5em 0}figure svg{max-width:100%;height:auto;border:1px solid #eee}figcaption{color:#555;font-size:0.92em}\
 pre,code{background:#f5f5f5}pre{padding:0.8em;overflow-x:auto}code{padding:2px 4px}\
-ul.notes{font-size:0.92em}p.footer{color:#555;font-size:0.92em}";
+ul.notes{font-size:0.92em}dl.defs{font-size:0.88em;color:#444;margin:0.3em 0 1.2em}dl.defs dt{font-weight:bold;float:left;clear:left;margin-right:0.5em}dl.defs dd{margin:0 0 0.2em 0}p.footer{color:#555;font-size:0.92em}";
 
 /// Escapes text for HTML and XML content and attribute values: markup characters, both
 /// quote kinds, newlines and tabs as character references (attribute values keep them), and
@@ -60,6 +60,57 @@ pub fn figure(svg: &[u8], caption: &str) -> String {
         inline_svg(svg),
         escape(caption)
     )
+}
+
+/// The largest SVG inlined in a page; a larger one (a figure of a huge grid) is shown as its
+/// PNG and linked, both files beside the page, so the page stays small.
+pub const INLINE_SVG_LIMIT: usize = 256 * 1024;
+
+/// A figure by reference: the PNG `{stem}.png` linked to `{stem}.svg`, both beside the page.
+pub fn figure_linked(stem: &str, caption: &str, svg_bytes: usize) -> String {
+    format!(
+        "<figure><a href=\"{0}.svg\"><img style=\"max-width: 100%\" src=\"{0}.png\" alt=\"{1}\"/></a><figcaption>{1} (<a href=\"{0}.svg\">{0}.svg</a>, {2} KiB, not inlined)</figcaption></figure>\n",
+        escape(stem),
+        escape(caption),
+        svg_bytes.div_ceil(1024)
+    )
+}
+
+/// Inline when small, linked when not ([`INLINE_SVG_LIMIT`]).
+pub fn figure_bounded(stem: &str, svg: &[u8], caption: &str) -> String {
+    if svg.len() <= INLINE_SVG_LIMIT {
+        figure(svg, caption)
+    } else {
+        figure_linked(stem, caption, svg.len())
+    }
+}
+
+/// Definitions of a table's columns, as a definition list under the table: (term, text).
+pub fn definitions<K: AsRef<str>, V: AsRef<str>>(defs: &[(K, V)]) -> String {
+    let mut h = String::from("<dl class=\"defs\">\n");
+    for (k, v) in defs {
+        let _ = writeln!(
+            h,
+            "<dt>{}</dt><dd>{}</dd>",
+            escape(k.as_ref()),
+            code_spans(&escape(v.as_ref()))
+        );
+    }
+    h.push_str("</dl>\n");
+    h
+}
+
+/// `name` in backticks → `<code>name</code>` (on escaped text).
+fn code_spans(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for (i, part) in s.split('`').enumerate() {
+        if i % 2 == 1 {
+            let _ = write!(out, "<code>{part}</code>");
+        } else {
+            out.push_str(part);
+        }
+    }
+    out
 }
 
 /// Raster images side by side (PNG bytes embedded as base64 data URIs), each with its caption.

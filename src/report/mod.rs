@@ -7,6 +7,7 @@ pub mod analyze;
 pub mod bench;
 pub mod check;
 pub mod compare;
+pub mod defs;
 pub mod html;
 pub mod junit;
 pub mod markdown;

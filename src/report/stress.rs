@@ -143,7 +143,7 @@ pub fn csv(results: &[CaseResult]) -> Result<Vec<u8>> {
 
 /// The terminal table.
 pub fn table(results: &[CaseResult]) -> String {
-    let g = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.2e}"));
+    let g = |v: Option<f64>| v.map_or("-".to_string(), output::short_number);
     let mut out = String::new();
     let _ = writeln!(
         out,

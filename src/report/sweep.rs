@@ -4,14 +4,14 @@
 
 use std::fmt::Write as _;
 
-use super::{html, markdown};
+use super::{defs, html, markdown};
 use crate::analysis::mib;
 use crate::config::Config;
 use crate::error::Result;
 use crate::figures::sweep::{HeatmapFigure, LambdaDensityFigure, ParetoFigure, ShimmerSweepFigure};
 use crate::figures::{svg_to_png, Figure};
 use crate::metric;
-use crate::output::{csv_bytes_from, json_bytes, num};
+use crate::output::{count, csv_bytes_from, json_bytes, num, percent_change, short_number as n, signed_percent};
 use crate::sweep::{self, Row, SweepResult};
 
 /// `sweep.csv`: [`metric::summary_columns`], then these.
@@ -79,6 +79,7 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
         "command": r.command,
         "configurations": r.rows.len(),
         "objective": sweep::objective_text(r.objective),
+        "objective_metric": r.objective.name(),
         "memory_budget_mib": r.budget_mib,
         "pareto_front": r.front.iter().map(|&i| row_json(&r.rows[i])).collect::<Vec<_>>(),
     });
@@ -86,6 +87,58 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
         (Some(rec), Some(row)) => {
             v["within_budget"] = rec.within_budget.into();
             v["recommended"] = row_json(row);
+            v["alternatives"] = r
+                .alternatives()
+                .iter()
+                .map(|a| {
+                    let x = &r.rows[a.index];
+                    let mut j = serde_json::json!({
+                        "kind": a.kind.name(),
+                        "rule": a.kind.rule(),
+                        "within_budget": x.summary.memory_bytes <= rec.budget_bytes,
+                    });
+                    for (key, base, value) in [
+                        (
+                            "memory_change_percent",
+                            row.summary.memory_bytes as f64,
+                            x.summary.memory_bytes as f64,
+                        ),
+                        (
+                            "objective_change_percent",
+                            r.objective.value(&row.summary),
+                            r.objective.value(&x.summary),
+                        ),
+                        (
+                            "max_aliasing_change_percent",
+                            row.summary.max_aliasing,
+                            x.summary.max_aliasing,
+                        ),
+                        ("shimmer_change_percent", row.summary.shimmer, x.summary.shimmer),
+                    ] {
+                        // Absent when the recommendation's value is 0 (no relative change).
+                        if let Some(p) = percent_change(base, value) {
+                            j[key] = p.into();
+                        }
+                    }
+                    j["shimmer_change_texels"] = (x.summary.shimmer - row.summary.shimmer).into();
+                    j["configuration"] = row_json(x);
+                    j
+                })
+                .collect::<Vec<_>>()
+                .into();
+            v["rivals"] = r
+                .rivals()
+                .iter()
+                .map(|x| {
+                    serde_json::json!({
+                        "kind": x.kind.name(),
+                        "lost_on": loss_name(x.loss),
+                        "why": rival_text(r, x),
+                        "configuration": row_json(&r.rows[x.index]),
+                    })
+                })
+                .collect::<Vec<_>>()
+                .into();
         }
         _ => {
             // No null (every number must be finite): the reasons and the closest row instead.
@@ -199,7 +252,7 @@ fn scene_facts(c: &Config, rows: &[Row]) -> Vec<(String, String)> {
     if let Some(r) = rows.iter().find(|r| r.summary.cascades_needed) {
         v.push((
             "Depth range split".to_string(),
-            format!("{:.4} to {:.4}", r.summary.z_lo, r.summary.z_hi),
+            format!("{} to {}", n(r.summary.z_lo), n(r.summary.z_hi)),
         ));
     }
     v
@@ -207,32 +260,28 @@ fn scene_facts(c: &Config, rows: &[Row]) -> Vec<(String, String)> {
 
 fn why_text(r: &SweepResult) -> String {
     let Some(rec) = r.recommended() else {
-        let n = sweep::no_recommendation(&r.rows, r.budget_mib, r.objective);
-        let Some(c) = n.closest else {
+        let nr = sweep::no_recommendation(&r.rows, r.budget_mib, r.objective);
+        let Some(c) = nr.closest else {
             return "The scene is not visible within the shadow distance: no cascades are needed.".to_string();
         };
         let x = &r.rows[c];
         let total = r.rows.len();
         return format!(
-            "Nothing qualifies: of {total} configuration{}, {} miss slice corners (coverage_violations > 0) and {} shimmer when snapped (shimmer_snapped > {} texel){}. Closest: {} cascade{} of {}² texels, {}: {} coverage violation{}, snapped shimmer {}, mean aliasing {}, {} MiB.",
-            crate::report::check::plural(total),
-            n.coverage_misses,
-            n.unstable,
-            sweep::STABLE_SHIMMER,
-            if n.no_cascades > 0 {
-                format!(", {} need no cascades", n.no_cascades)
+            "Nothing qualifies: of {}, {} miss slice corners (coverage_violations > 0) and {} shimmer when snapped (shimmer_snapped > {} texel){}. Closest: {}: {}, snapped shimmer {}, mean aliasing {}, {} MiB.",
+            count(total as u64, "configuration"),
+            nr.coverage_misses,
+            nr.unstable,
+            n(sweep::STABLE_SHIMMER),
+            if nr.no_cascades > 0 {
+                format!(", {} need no cascades", nr.no_cascades)
             } else {
                 String::new()
             },
-            x.setting.cascades,
-            crate::report::check::plural(x.setting.cascades),
-            x.setting.resolution,
-            setting_knobs(r, x),
-            x.summary.coverage_violations,
-            crate::report::check::plural(x.summary.coverage_violations as usize),
-            crate::output::short_number(x.summary.shimmer_snapped),
-            crate::output::short_number(x.summary.mean_aliasing),
-            crate::output::short_number(mib(x.summary.memory_bytes)),
+            setting_text(r, x),
+            count(x.summary.coverage_violations, "coverage violation"),
+            n(x.summary.shimmer_snapped),
+            n(x.summary.mean_aliasing),
+            n(mib(x.summary.memory_bytes)),
         );
     };
     let s = &rec.summary;
@@ -249,82 +298,236 @@ fn why_text(r: &SweepResult) -> String {
     let screen = r.objective.name() != "mean_aliasing";
     let mut t = if let Some(st) = s.screen.as_ref().filter(|_| screen) {
         format!(
-            "{} cascade{} of {}² texels, {}: {} {:.3} on screen (per-pixel aliasing: median {:.3}, \
-             worst {:.3}; {:.0}% of the receiver pixels under-sampled), {} MiB. ",
-            rec.setting.cascades,
-            crate::report::check::plural(rec.setting.cascades),
-            rec.setting.resolution,
-            setting_knobs(r, rec),
+            "{}: {} {} on screen (per-pixel aliasing: median {}, worst {}; {} % of the receiver \
+             pixels under-sampled), {} MiB. ",
+            setting_text(r, rec),
             r.objective.name(),
-            r.objective.value(s),
-            st.aliasing_p50,
-            st.aliasing_max,
-            100.0 * st.undersampled_fraction,
-            mib(s.memory_bytes)
+            n(r.objective.value(s)),
+            n(st.aliasing_p50),
+            n(st.aliasing_max),
+            n(100.0 * st.undersampled_fraction),
+            n(mib(s.memory_bytes))
         )
     } else {
         format!(
-            "{} cascade{} of {}² texels, {}: mean aliasing {:.3}, worst {:.3} at a cascade's near edge, \
-             {:.0}% of the depth range under-sampled, {} MiB. ",
-            rec.setting.cascades,
-            crate::report::check::plural(rec.setting.cascades),
-            rec.setting.resolution,
-            setting_knobs(r, rec),
-            s.mean_aliasing,
-            s.max_aliasing,
-            100.0 * s.undersampled_fraction,
-            mib(s.memory_bytes)
+            "{}: mean aliasing {}, worst {} at a cascade's near edge, {} % of the depth range \
+             under-sampled, {} MiB. ",
+            setting_text(r, rec),
+            n(s.mean_aliasing),
+            n(s.max_aliasing),
+            n(100.0 * s.undersampled_fraction),
+            n(mib(s.memory_bytes))
         )
     };
     if r.recommendation.as_ref().is_some_and(|x| x.within_budget) {
         let _ = write!(
             t,
-            "Of {} configurations, {} fit the {} MiB budget, cover every slice and are stable when snapped; \
-             this one has the lowest {} among them (within 1%, the lowest worst case).",
-            r.rows.len(),
+            "Of {}, {} fit the {} MiB budget, cover every slice and are stable when snapped; \
+             this one has the lowest {} among them (within 1 %, the lowest worst case).",
+            count(r.rows.len() as u64, "configuration"),
             acceptable_within,
-            r.budget_mib,
+            n(r.budget_mib),
             if screen { r.objective.name() } else { "mean aliasing" }
         );
     } else {
         let _ = write!(
             t,
             "Nothing fits the {} MiB budget; this is the cheapest configuration that covers every slice and is stable.",
-            r.budget_mib
+            n(r.budget_mib)
         );
     }
-    let own = r.rows.iter().find(|x| {
-        x.setting.lambda == r.config.shadow.lambda
-            && x.setting.cascades == r.config.shadow.cascades
-            && x.setting.resolution == r.config.shadow.resolution
-            && x.setting.fit == r.config.shadow.fit
-            && x.setting.split_range.is_visible() == r.config.shadow.fit_depth_to_visible
-    });
-    if let Some(o) = own {
+    if let Some(o) = r.configured().map(|i| &r.rows[i]) {
         let change = changes(r, o, rec);
         if !change.is_empty() && screen {
             let _ = write!(
                 t,
-                " To get it, change {} (the configured setting has {} {:.3}, {} MiB).",
+                " To get it, change {} (the configured setting has {} {}, {} MiB).",
                 change.join(", "),
                 r.objective.name(),
-                r.objective.value(&o.summary),
-                mib(o.summary.memory_bytes)
+                n(r.objective.value(&o.summary)),
+                n(mib(o.summary.memory_bytes))
             );
         } else if !change.is_empty() {
             let _ = write!(
                 t,
-                " To get it, change {} (the configured setting has mean aliasing {:.3}, worst {:.3}, {} MiB).",
+                " To get it, change {} (the configured setting has mean aliasing {}, worst {}, {} MiB).",
                 change.join(", "),
-                o.summary.mean_aliasing,
-                o.summary.max_aliasing,
-                mib(o.summary.memory_bytes)
+                n(o.summary.mean_aliasing),
+                n(o.summary.max_aliasing),
+                n(mib(o.summary.memory_bytes))
             );
         } else {
             t.push_str(" It is the configured setting: keep it.");
         }
     }
     t
+}
+
+/// "3 cascades of 2048² texels, λ = 0.8, sphere fit": a row's setting in the sweep's words.
+fn setting_text(r: &SweepResult, x: &Row) -> String {
+    format!(
+        "{} of {}² texels, {}",
+        count(x.setting.cascades as u64, "cascade"),
+        x.setting.resolution,
+        setting_knobs(r, x)
+    )
+}
+
+/// "name value (+16 %)": a metric of `x` against the recommendation's `base`.
+fn versus(name: &str, base: f64, value: f64) -> String {
+    match percent_change(base, value) {
+        _ if base == value => format!("{name} {} (the same)", n(value)),
+        Some(p) => format!("{name} {} ({})", n(value), signed_percent(p)),
+        None => format!("{name} {} (recommendation: {})", n(value), n(base)),
+    }
+}
+
+/// What choosing `x` instead of the recommendation `rec` costs and gains.
+fn cost_text(r: &SweepResult, rec: &Row, x: &Row) -> String {
+    let (a, b) = (&rec.summary, &x.summary);
+    let mut parts = vec![format!(
+        "{} MiB ({} memory{})",
+        n(mib(b.memory_bytes)),
+        percent_change(a.memory_bytes as f64, b.memory_bytes as f64).map_or("same".into(), signed_percent),
+        if b.memory_bytes as f64 > r.budget_mib * 1048576.0 {
+            format!(", over the {} MiB budget", n(r.budget_mib))
+        } else {
+            String::new()
+        }
+    )];
+    parts.push(versus(r.objective.name(), r.objective.value(a), r.objective.value(b)));
+    if r.objective.name() != "max_aliasing" {
+        parts.push(versus("max aliasing", a.max_aliasing, b.max_aliasing));
+    }
+    parts.push(versus("shimmer", a.shimmer, b.shimmer));
+    parts.join(", ")
+}
+
+/// One line per alternative kind: the alternative and its cost, or why there is none.
+fn alternative_lines(r: &SweepResult) -> Vec<String> {
+    let Some(rec) = r.recommended() else {
+        return Vec::new();
+    };
+    let alts = r.alternatives();
+    [
+        sweep::AlternativeKind::Cheaper,
+        sweep::AlternativeKind::Sharper,
+        sweep::AlternativeKind::MoreStable,
+    ]
+    .iter()
+    .map(|&kind| {
+        let head = match kind {
+            sweep::AlternativeKind::Cheaper => "Cheaper",
+            sweep::AlternativeKind::Sharper => "Sharper",
+            sweep::AlternativeKind::MoreStable => "More stable",
+        };
+        match alts.iter().find(|a| a.kind == kind) {
+            Some(a) => {
+                let x = &r.rows[a.index];
+                format!("{head}: {}: {}.", setting_text(r, x), cost_text(r, rec, x))
+            }
+            None => format!(
+                "{head}: none. {}",
+                match kind {
+                    sweep::AlternativeKind::Cheaper =>
+                        "No configuration that covers every slice and is stable needs less memory.".to_string(),
+                    sweep::AlternativeKind::Sharper => format!(
+                        "No configuration that covers every slice and is stable has a {} more than 1 % lower.",
+                        r.objective.name()
+                    ),
+                    sweep::AlternativeKind::MoreStable => format!(
+                        "No configuration within the budget that covers every slice shimmers less (the recommendation's shimmer is {} texel per frame).",
+                        n(rec.summary.shimmer)
+                    ),
+                }
+            ),
+        }
+    })
+    .collect()
+}
+
+/// The `lost_on` word of `recommendation.json`'s rivals.
+fn loss_name(l: sweep::Loss) -> &'static str {
+    match l {
+        sweep::Loss::CoverageMisses(_) => "coverage",
+        sweep::Loss::Unstable(_) => "stability",
+        sweep::Loss::OverBudget => "memory_budget",
+        sweep::Loss::MoreMemory => "memory",
+        sweep::Loss::Objective => "objective",
+        sweep::Loss::MaxAliasing => "max_aliasing",
+        sweep::Loss::TieMemory => "memory_tie",
+        sweep::Loss::TieOrder => "order_tie",
+    }
+}
+
+/// One sentence: which rival, and the budget or metric it lost on, by how much.
+fn rival_text(r: &SweepResult, x: &sweep::Rival) -> String {
+    let rec = r.recommended().expect("rivals need a recommendation");
+    let row = &r.rows[x.index];
+    let (a, b) = (&rec.summary, &row.summary);
+    let who = match x.kind {
+        sweep::RivalKind::LambdaOne => "The same setting with λ = 1",
+        sweep::RivalKind::OtherCascades => "The best setting with another cascade count",
+        sweep::RivalKind::OtherResolution => "The best setting with another resolution",
+        sweep::RivalKind::OtherFit => "The best setting with the other fit",
+        sweep::RivalKind::Configured => "The configured setting",
+    };
+    // A group's best that is also the configured setting says so (it is listed once).
+    let who = if x.kind != sweep::RivalKind::Configured && r.configured() == Some(x.index) {
+        format!("{who}, which is the configured setting")
+    } else {
+        who.to_string()
+    };
+    let obj = r.objective.name();
+    let (va, vb) = (r.objective.value(a), r.objective.value(b));
+    let pct = |base: f64, v: f64| percent_change(base, v).map_or(String::new(), |p| format!(", {}", signed_percent(p)));
+    let why = match x.loss {
+        sweep::Loss::CoverageMisses(c) => format!(
+            "lost on coverage: {} outside their windows along the path (the recommendation has none)",
+            count(c, "slice corner")
+        ),
+        sweep::Loss::Unstable(v) => format!(
+            "lost on stability: it shimmers {} texel per frame when snapped, above the {} texel limit",
+            n(v),
+            n(sweep::STABLE_SHIMMER)
+        ),
+        sweep::Loss::OverBudget => format!(
+            "lost on the memory budget: it needs {} MiB, over the {} MiB budget (the recommendation {} MiB), for {} {} against {}{}",
+            n(mib(b.memory_bytes)),
+            n(r.budget_mib),
+            n(mib(a.memory_bytes)),
+            obj,
+            n(vb),
+            n(va),
+            pct(va, vb)
+        ),
+        sweep::Loss::MoreMemory => format!(
+            "lost on memory: nothing fits the budget, and it needs {} MiB where the recommendation needs {} MiB",
+            n(mib(b.memory_bytes)),
+            n(mib(a.memory_bytes))
+        ),
+        sweep::Loss::Objective => format!("lost on {obj}: {} against {}{}", n(vb), n(va), pct(va, vb)),
+        sweep::Loss::MaxAliasing => format!(
+            "tied on {obj} (within 1 %) and lost on max aliasing: {} against {}{}",
+            n(b.max_aliasing),
+            n(a.max_aliasing),
+            pct(a.max_aliasing, b.max_aliasing)
+        ),
+        sweep::Loss::TieMemory => format!(
+            "tied on {obj} and max aliasing, and needs more memory: {} MiB against {} MiB",
+            n(mib(b.memory_bytes)),
+            n(mib(a.memory_bytes))
+        ),
+        sweep::Loss::TieOrder => {
+            "tied on every measure; the recommendation has fewer cascades or comes first in the grid".to_string()
+        }
+    };
+    format!("{who} ({}) {why}.", setting_text(r, row))
+}
+
+/// One sentence per main rival ([`SweepResult::rivals`]).
+fn rival_lines(r: &SweepResult) -> Vec<String> {
+    r.rivals().iter().map(|x| rival_text(r, x)).collect()
 }
 
 const TOP: usize = 15;
@@ -356,73 +559,181 @@ pub fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, &'static str
     ])
 }
 
-fn table_rows(r: &SweepResult) -> Vec<Vec<String>> {
-    r.ranked()
-        .into_iter()
-        .take(TOP)
-        .map(|i| {
-            let x = &r.rows[i];
-            let s = &x.summary;
-            vec![
-                x.setting.cascades.to_string(),
-                x.setting.resolution.to_string(),
-                x.setting.lambda.to_string(),
-                fit_cell(x),
-                format!("{:.4}", s.mean_aliasing),
-                format!("{:.4}", s.max_aliasing),
-                format!("{:.4}", s.mean_log_aliasing),
-                crate::output::short_number(s.shimmer_snapped),
-                s.coverage_violations.to_string(),
-                format!("{}", mib(s.memory_bytes)),
-            ]
-        })
-        .collect()
+/// The largest number of Pareto rows a report table shows (the rest are in `sweep.csv`).
+const TOP_FRONT: usize = 40;
+
+/// A row's standing in one word or two: recommended, an alternative, acceptable, or what
+/// rules it out.
+fn status(r: &SweepResult, i: usize) -> String {
+    if r.recommendation.as_ref().is_some_and(|x| x.index == i) {
+        return "recommended".into();
+    }
+    if let Some(a) = r.alternatives().iter().find(|a| a.index == i) {
+        return format!("{} alternative", a.kind.name().replace('_', " "));
+    }
+    let s = &r.rows[i].summary;
+    if s.coverage_violations > 0 {
+        "misses slice corners".into()
+    } else if s.shimmer_snapped > sweep::STABLE_SHIMMER {
+        "unstable when snapped".into()
+    } else if s.memory_bytes as f64 > r.budget_mib * 1048576.0 {
+        "over budget".into()
+    } else {
+        "acceptable".into()
+    }
 }
 
-const TABLE_HEAD: [&str; 10] = [
-    "cascades",
-    "resolution",
-    "λ",
-    "fit",
-    "mean aliasing",
-    "max aliasing",
-    "mean log aliasing",
-    "shimmer snapped",
-    "coverage misses",
-    "MiB",
-];
+/// What [`config_table`] returns.
+type ConfigTable = (Vec<&'static str>, Vec<Vec<String>>, Vec<usize>, Vec<(String, String)>);
+
+/// A table of configurations: (header, rows, left-aligned columns, definitions). λ and fit
+/// appear only when the sweep's settings have them; the objective when it is not the mean.
+fn config_table(r: &SweepResult, idx: &[usize]) -> ConfigTable {
+    let lambda = has_lambda(r);
+    let fit = r.config.shadow.preset.is_none();
+    let screen = r.objective.name() != "mean_aliasing";
+    let mut head = vec!["cascades", "resolution"];
+    let mut left = Vec::new();
+    if lambda {
+        head.push("λ");
+    }
+    if fit {
+        left.push(head.len());
+        head.push("fit");
+    }
+    if screen {
+        head.push(r.objective.name());
+    }
+    head.extend([
+        "mean aliasing",
+        "max aliasing",
+        "shimmer",
+        "shimmer snapped",
+        "coverage misses",
+        "MiB",
+    ]);
+    left.push(head.len());
+    head.push("status");
+    let rows = idx
+        .iter()
+        .map(|&i| {
+            let x = &r.rows[i];
+            let s = &x.summary;
+            let mut v = vec![x.setting.cascades.to_string(), x.setting.resolution.to_string()];
+            if lambda {
+                v.push(n(x.setting.lambda));
+            }
+            if fit {
+                v.push(fit_cell(x));
+            }
+            if screen {
+                v.push(n(r.objective.value(s)));
+            }
+            v.extend([
+                n(s.mean_aliasing),
+                n(s.max_aliasing),
+                n(s.shimmer),
+                n(s.shimmer_snapped),
+                s.coverage_violations.to_string(),
+                n(mib(s.memory_bytes)),
+                status(r, i),
+            ]);
+            v
+        })
+        .collect();
+    let mut d = defs::settings(lambda, fit);
+    if screen {
+        d.push(defs::metric(r.objective.name(), r.objective.name()));
+    }
+    d.extend([
+        defs::metric("mean aliasing", "mean_aliasing"),
+        defs::metric("max aliasing", "max_aliasing"),
+        defs::metric("shimmer", "shimmer"),
+        defs::metric("shimmer snapped", "shimmer_snapped"),
+        defs::metric("coverage misses", "coverage_violations"),
+        defs::memory("MiB"),
+        defs::other(
+            "status",
+            &format!(
+                "recommended, one of the alternatives, acceptable (covers every slice, snapped shimmer at most {} texel, within the {} MiB budget), or what rules it out",
+                n(sweep::STABLE_SHIMMER),
+                n(r.budget_mib)
+            ),
+        ),
+    ]);
+    (head, rows, left, d)
+}
+
+/// The Pareto rows a report shows (at most [`TOP_FRONT`]) and how many are left out.
+fn front_shown(r: &SweepResult) -> (Vec<usize>, usize) {
+    let shown: Vec<usize> = r.front.iter().copied().take(TOP_FRONT).collect();
+    let left = r.front.len() - shown.len();
+    (shown, left)
+}
+
+/// The top rows by the recommendation rule, at most [`TOP`].
+fn top_shown(r: &SweepResult) -> Vec<usize> {
+    r.ranked().into_iter().take(TOP).collect()
+}
 
 /// "N configurations: a λ values × b cascade counts × …, each analysed in full".
 fn grid_sentence(r: &SweepResult) -> String {
     format!(
-        "{} configurations: {} λ values × {} cascade counts × {} resolutions × {} fits{}, each analysed in full",
-        r.rows.len(),
-        r.grid.lambda.values.len(),
-        r.grid.cascades.values.len(),
-        r.grid.resolution.values.len(),
-        r.grid.fit.values.len(),
+        "{}: {} × {} × {} × {}{}, each analysed in full",
+        count(r.rows.len() as u64, "configuration"),
+        count(r.grid.lambda.values.len() as u64, "λ value"),
+        count(r.grid.cascades.values.len() as u64, "cascade count"),
+        count(r.grid.resolution.values.len() as u64, "resolution"),
+        count(r.grid.fit.values.len() as u64, "fit"),
         ranges_factor(r)
     )
 }
 
+/// The sentence under the tables: what they leave out, and where the rest is.
+fn rest_sentence(r: &SweepResult, front_left: usize) -> String {
+    format!(
+        "The tables show the Pareto front{} and the top {} by the recommendation rule; all {} are in sweep.csv (one row each, with pareto and recommended columns).",
+        if front_left > 0 {
+            format!(" (first {TOP_FRONT} of {} rows)", r.front.len())
+        } else {
+            String::new()
+        },
+        TOP.min(r.rows.len()),
+        count(r.rows.len() as u64, "configuration")
+    )
+}
+
 /// `report.html`: one self-contained, well-formed (XHTML-compatible) document in the shared
-/// report look ([`html::page`]).
+/// report look ([`html::page`]). It opens with the verdict, the alternatives and why the main
+/// rivals lost; its tables show the Pareto front and the top rows, with every metric defined
+/// under them; a figure too large to inline is linked ([`html::figure_bounded`]), so the page
+/// stays small at any grid size.
 pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
     let mut h = String::new();
-    let _ = writeln!(
-        h,
-        "<p>{} (closed-form aliasing, shimmer with and without snapping along the motion path, coverage).</p>",
-        grid_sentence(r)
-    );
-    h.push_str("<h2>Scene</h2>\n");
-    h.push_str(&html::facts(&scene_facts(&r.config, &r.rows)));
-    h.push_str("<h2>Recommendation</h2>\n");
+    h.push_str("<h2>Verdict</h2>\n");
     let _ = writeln!(h, "<div class=\"rec-box\"><p>{}</p>", html::escape(&why_text(r)));
     let _ = writeln!(
         h,
         "<p><em>Objective:</em> {}.</p></div>",
         html::escape(&sweep::objective_text(r.objective))
     );
+    let alts = alternative_lines(r);
+    if !alts.is_empty() {
+        h.push_str("<h2>Alternatives</h2>\n");
+        h.push_str(&html::list(&alts, None));
+    }
+    let rivals = rival_lines(r);
+    if !rivals.is_empty() {
+        h.push_str("<h2>Why the main rivals lost</h2>\n");
+        h.push_str(&html::list(&rivals, None));
+    }
+    let _ = writeln!(
+        h,
+        "<h2>Sweep</h2>\n<p>{} (closed-form aliasing, shimmer with and without snapping along the motion path, coverage).</p>",
+        html::escape(&grid_sentence(r))
+    );
+    h.push_str("<h2>Scene</h2>\n");
+    h.push_str(&html::facts(&scene_facts(&r.config, &r.rows)));
     // The camera view of the recommended configuration, with scene geometry.
     if let (Some(rec), Some(_)) = (r.recommended(), &r.config.geometry) {
         if let Ok(cfg) = rec.setting.apply(&r.config) {
@@ -433,18 +744,42 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
     }
     if !figures.is_empty() {
         h.push_str("<h2>Plots</h2>\n");
-        for (_, caption, svg) in figures {
-            h.push_str(&html::figure(svg, caption));
+        for (stem, caption, svg) in figures {
+            h.push_str(&html::figure_bounded(stem, svg, caption));
         }
     }
+    let rec = r.recommendation.as_ref().map(|x| x.index);
+    let (front, front_left) = front_shown(r);
+    if !front.is_empty() {
+        let _ = writeln!(
+            h,
+            "<h2>Pareto front</h2>\n<p>Memory against {}: no other configuration has both less memory and a lower value.</p>",
+            html::escape(r.objective.name())
+        );
+        let (head, rows, left, d) = config_table(r, &front);
+        h.push_str(&html::table(
+            &head,
+            &rows,
+            &left,
+            front.iter().position(|&i| Some(i) == rec),
+        ));
+        h.push_str(&html::definitions(&d));
+    }
     h.push_str("<h2>Top configurations</h2>\n");
-    let rec = r.recommended().map(|x| x.setting);
-    let highlight = r
-        .ranked()
-        .into_iter()
-        .take(TOP)
-        .position(|i| Some(r.rows[i].setting) == rec);
-    h.push_str(&html::table(&TABLE_HEAD, &table_rows(r), &[3], highlight));
+    let top = top_shown(r);
+    let (head, rows, left, d) = config_table(r, &top);
+    h.push_str(&html::table(
+        &head,
+        &rows,
+        &left,
+        top.iter().position(|&i| Some(i) == rec),
+    ));
+    h.push_str(&html::definitions(&d));
+    let _ = writeln!(
+        h,
+        "<p>{}</p>",
+        html::escape(&rest_sentence(r, front_left)).replace("sweep.csv", "<a href=\"sweep.csv\">sweep.csv</a>")
+    );
     h.push_str("<h2>Reproduce</h2>\n");
     let _ = writeln!(h, "<pre>{}</pre>", html::escape(&r.command));
     let name = &r.config.name;
@@ -460,25 +795,65 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
 pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
     let mut m = String::new();
     let _ = writeln!(m, "# Cascaded shadow map sweep: {}\n", r.config.name);
-    let _ = writeln!(m, "{}.\n", grid_sentence(r));
+    let _ = writeln!(
+        m,
+        "## Verdict\n\n{}\n\n*Objective:* {}.\n",
+        why_text(r),
+        sweep::objective_text(r.objective)
+    );
+    let alts = alternative_lines(r);
+    if !alts.is_empty() {
+        m.push_str("## Alternatives\n\n");
+        for l in alts {
+            let _ = writeln!(m, "- {l}");
+        }
+        m.push('\n');
+    }
+    let rivals = rival_lines(r);
+    if !rivals.is_empty() {
+        m.push_str("## Why the main rivals lost\n\n");
+        for l in rivals {
+            let _ = writeln!(m, "- {l}");
+        }
+        m.push('\n');
+    }
+    let _ = writeln!(m, "## Sweep\n\n{}.\n", grid_sentence(r));
     m.push_str("## Scene\n\n| | |\n|---|---|\n");
     for (k, v) in scene_facts(&r.config, &r.rows) {
         let _ = writeln!(m, "| {k} | {v} |");
     }
-    let _ = writeln!(
-        m,
-        "\n## Recommendation\n\n{}\n\n*Objective:* {}.\n",
-        why_text(r),
-        sweep::objective_text(r.objective)
-    );
+    m.push('\n');
     if !figures.is_empty() {
         m.push_str("## Plots\n\n");
         for (stem, caption, _) in figures {
             let _ = writeln!(m, "![{caption}]({stem}.svg)\n\n*{caption}* ([PNG]({stem}.png))\n");
         }
     }
+    let (front, front_left) = front_shown(r);
+    let mut d = Vec::new();
+    if !front.is_empty() {
+        let _ = writeln!(
+            m,
+            "## Pareto front\n\nMemory against {}: no other configuration has both less memory and a lower value.\n",
+            r.objective.name()
+        );
+        let (head, rows, left, defs) = config_table(r, &front);
+        m.push_str(&markdown::table(&head, &rows, &left));
+        m.push('\n');
+        d = defs;
+    }
     m.push_str("## Top configurations\n\n");
-    m.push_str(&markdown::table(&TABLE_HEAD, &table_rows(r), &[]));
+    let (head, rows, left, defs) = config_table(r, &top_shown(r));
+    m.push_str(&markdown::table(&head, &rows, &left));
+    if d.is_empty() {
+        d = defs;
+    }
+    let _ = writeln!(
+        m,
+        "\n{}\n\n{}",
+        defs::markdown(&d),
+        rest_sentence(r, front_left).replace("sweep.csv", "[sweep.csv](sweep.csv)")
+    );
     let _ = writeln!(m, "\n## Reproduce\n\n```sh\n{}\n```", r.command);
     m.into_bytes()
 }
@@ -524,13 +899,13 @@ pub fn stdout_table(r: &SweepResult) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{}: {} configurations ({} λ × {} cascade counts × {} resolutions × {} fits{})",
+        "{}: {} ({} × {} × {} × {}{})",
         r.config.name,
-        r.rows.len(),
-        r.grid.lambda.values.len(),
-        r.grid.cascades.values.len(),
-        r.grid.resolution.values.len(),
-        r.grid.fit.values.len(),
+        count(r.rows.len() as u64, "configuration"),
+        count(r.grid.lambda.values.len() as u64, "λ value"),
+        count(r.grid.cascades.values.len() as u64, "cascade count"),
+        count(r.grid.resolution.values.len() as u64, "resolution"),
+        count(r.grid.fit.values.len() as u64, "fit"),
         ranges_factor(r)
     );
     if r.front.is_empty() {
@@ -568,14 +943,14 @@ pub fn stdout_table(r: &SweepResult) -> String {
         let s = &x.summary;
         let _ = writeln!(
             out,
-            "{} {:>9} {:>8} {:>6} {:>6} {:>fw$} {:>10.4} {:>10.4} {:>10}",
+            "{} {:>9} {:>8} {:>6} {:>6} {:>fw$} {:>10} {:>10} {:>10}",
             if Some(i) == rec { "*" } else { " " },
-            mib(s.memory_bytes),
+            n(mib(s.memory_bytes)),
             x.setting.cascades,
             x.setting.resolution,
             // A preset's table shows only the knobs it has.
             if has_lambda(r) {
-                x.setting.lambda.to_string()
+                n(x.setting.lambda)
             } else {
                 "-".to_string()
             },
@@ -584,16 +959,19 @@ pub fn stdout_table(r: &SweepResult) -> String {
             } else {
                 "-".to_string()
             },
-            s.mean_aliasing,
-            s.max_aliasing,
-            crate::output::short_number(s.shimmer_snapped)
+            n(s.mean_aliasing),
+            n(s.max_aliasing),
+            n(s.shimmer_snapped)
         );
         if screen {
             out.pop();
-            let _ = writeln!(out, " {:>10.4}", r.objective.value(s));
+            let _ = writeln!(out, " {:>10}", n(r.objective.value(s)));
         }
     }
-    let _ = writeln!(out, "recommended (budget {} MiB): {}", r.budget_mib, why_text(r));
+    let _ = writeln!(out, "recommended (budget {} MiB): {}", n(r.budget_mib), why_text(r));
+    for l in alternative_lines(r) {
+        let _ = writeln!(out, "  {l}");
+    }
     out
 }
 

@@ -8,6 +8,7 @@ mod cli_analyze;
 mod cli_bench;
 mod cli_check;
 mod cli_compare;
+mod cli_report;
 mod cli_shard;
 mod cli_stress;
 mod cli_sweep;
