@@ -202,6 +202,10 @@ pub struct CompareArgs {
     /// Every preset at its own defaults: ignore shadow.cascades, shadow.resolution and shadow.max_distance.
     #[arg(long)]
     pub defaults: bool,
+    /// Add csm-lab's own pipeline (the file's [shadow]) with its splits on these depth ranges:
+    /// bounds, visible or bounds,visible (visible needs scene geometry).
+    #[arg(long, value_name = "SPEC")]
+    pub split_range: Option<String>,
     /// Output directory [default: out/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -273,6 +277,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             presets: args.presets,
             defaults: args.defaults,
             out: args.out,
+            split_range: args.split_range,
         }),
     }
 }

@@ -15,6 +15,8 @@ pub struct CompareRequest {
     pub presets: Option<String>,
     pub defaults: bool,
     pub out: Option<PathBuf>,
+    /// `--split-range`: csm-lab's own pipeline added with its splits on these ranges.
+    pub split_range: Option<String>,
 }
 
 /// The `compare` command.
@@ -23,7 +25,11 @@ pub fn execute(args: &CompareRequest) -> Result<Outcome> {
         Some(list) => crate::presets::parse_list("--presets", list)?,
         None => crate::presets::PresetName::ALL.to_vec(),
     };
-    let comparison = run(&args.config, &presets, args.defaults)?;
+    let own = match &args.split_range {
+        Some(spec) => crate::commands::sweep::parse_split_range_spec(spec)?.values,
+        None => Vec::new(),
+    };
+    let comparison = run(&args.config, &presets, args.defaults, &own)?;
     let dir = args
         .out
         .clone()

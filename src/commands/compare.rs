@@ -10,13 +10,17 @@
 //! * `compare_density.svg/.png`: texels per pixel against view depth, one line per preset;
 //! * `compare_shimmer.svg/.png`: shimmer with and without snapping, and coverage, per preset;
 //! * `compare.html` (self-contained: inline CSS and SVG, nothing fetched) and `compare.md`.
+//!
+//! `--split-range bounds,visible` adds csm-lab's own pipeline (the file's `[shadow]` settings)
+//! after the presets, once with its splits on the bounds' depth range and once on the visible
+//! depths (scene geometry only): the two placements side by side with the engines.
 
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
 use crate::analysis::{analyze, Analysis, AnalysisOptions};
-use crate::config::Config;
+use crate::config::{Config, SplitRange};
 use crate::error::{Error, Result};
 use crate::presets::{PresetChoice, PresetName};
 
@@ -28,6 +32,8 @@ pub struct Comparison {
     pub name: String,
     /// True when every preset ran at its own defaults (`--defaults`).
     pub engine_defaults: bool,
+    /// The split ranges of csm-lab's own pipeline added after the presets (`--split-range`).
+    pub own: Vec<SplitRange>,
     pub analyses: Vec<Analysis>,
 }
 
@@ -39,12 +45,31 @@ impl Comparison {
             .iter()
             .filter_map(|a| preset_of(a).map(|p| p.as_str()))
             .collect();
+        let own = match self.own.as_slice() {
+            [] => String::new(),
+            r => format!(
+                " --split-range {}",
+                r.iter().map(|x| x.name()).collect::<Vec<_>>().join(",")
+            ),
+        };
         format!(
-            "csm-lab compare {} --presets {}{}",
+            "csm-lab compare {} --presets {}{}{own}",
             self.config_path.display(),
             names.join(","),
             if self.engine_defaults { " --defaults" } else { "" }
         )
+    }
+}
+
+/// How reports name an analysis: its preset, or csm-lab's own pipeline with the depths its
+/// splits divide (`csm-lab (bounds)`, `csm-lab (visible)`).
+pub fn label(a: &Analysis) -> String {
+    match preset_of(a) {
+        Some(p) => p.to_string(),
+        None => format!(
+            "csm-lab ({})",
+            crate::config::SplitRange::of(a.config.shadow.fit_depth_to_visible)
+        ),
     }
 }
 
@@ -55,7 +80,7 @@ pub fn preset_of(a: &Analysis) -> Option<PresetName> {
 
 /// Loads and validates the config once, applies each preset to a copy (its engine table from
 /// the file still applies) and analyses each (in parallel, results in input order).
-pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool) -> Result<Comparison> {
+pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool, own: &[SplitRange]) -> Result<Comparison> {
     if presets.is_empty() {
         return Err(Error::flag("--presets", "", "give at least one preset"));
     }
@@ -74,6 +99,19 @@ pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool) -> Result
             Ok(config)
         })
         .collect::<Result<Vec<_>>>()?;
+    let mut configs = configs;
+    for &range in own {
+        if range.is_visible() && scene.geometry.is_none() {
+            return Err(Error::flag(
+                "--split-range",
+                "visible",
+                "\"visible\" needs scene geometry (scene.ground, [[scene.box]] or scene.gltf): the bounds alone show no visible depth; use bounds",
+            ));
+        }
+        let mut own_config = scene.clone();
+        own_config.shadow.preset = None;
+        configs.push(own_config.with_split_range(range)?);
+    }
     let name = configs[0].name.clone();
     // One visibility pass, made before the parallel part and shared by every preset.
     for c in &configs {
@@ -87,6 +125,7 @@ pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool) -> Result
         config_path: path.to_path_buf(),
         name,
         engine_defaults,
+        own: own.to_vec(),
         analyses,
     })
 }

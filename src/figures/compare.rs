@@ -10,7 +10,7 @@ use super::{
     PlotResult, FONT,
 };
 use crate::analysis::Analysis;
-use crate::compare::{coverage_extremes, preset_of, Comparison};
+use crate::compare::{coverage_extremes, label, Comparison};
 use crate::error::Result;
 use crate::output::Exporter;
 
@@ -52,7 +52,7 @@ impl Figure for DensityOverlay<'_> {
                 .draw_series(LineSeries::new(pts, style))?
                 .label(format!(
                     "{}: {} x {}, max aliasing {:.3}",
-                    preset_of(a).map_or("?", |p| p.as_str()),
+                    &label(a),
                     a.rig().map_or(0, |r| r.cascade_count()),
                     a.config.shadow.resolution,
                     a.summary.max_aliasing
@@ -69,11 +69,7 @@ pub struct ShimmerCoverageBars<'a>(pub &'a Comparison);
 
 impl ShimmerCoverageBars<'_> {
     fn names(&self) -> Vec<String> {
-        self.0
-            .analyses
-            .iter()
-            .map(|a| preset_of(a).map_or_else(|| "?".to_string(), |p| p.to_string()))
-            .collect()
+        self.0.analyses.iter().map(label).collect()
     }
 }
 

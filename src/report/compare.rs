@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use super::{defs, html, markdown};
 
 use crate::analysis::{mib, Analysis};
-use crate::compare::{coverage_extremes, fit_label, preset_of, Comparison};
+use crate::compare::{coverage_extremes, fit_label, label, preset_of, Comparison};
 use crate::error::Result;
 use crate::figures::compare::{DensityOverlay, DensityPng, DensitySvg, ShimmerCoverageBars, ShimmerPng, ShimmerSvg};
 use crate::figures::Figure;
@@ -112,8 +112,13 @@ fn scene_lines(c: &Comparison) -> Vec<String> {
             cfg.motion.frames,
             cfg.motion.step_as_written
         ),
-        "csm-lab's own [shadow] lambda, fit, snap and fit_depth_to_scene do not apply: each preset has its own rules."
-            .to_string(),
+        if c.own.is_empty() {
+            "csm-lab's own [shadow] lambda, fit, snap and fit_depth_to_scene do not apply: each preset has its own rules."
+                .to_string()
+        } else {
+            "csm-lab's own [shadow] lambda, fit, snap and fit_depth_to_scene apply only to the csm-lab rows (--split-range): each preset has its own rules."
+                .to_string()
+        },
         if c.engine_defaults {
             "Every preset runs at its own defaults (--defaults).".to_string()
         } else {
@@ -142,8 +147,8 @@ pub fn invalid_reason(a: &Analysis) -> Option<String> {
 }
 
 /// Definitions of the results table's columns (the registry's texts where it has the metric).
-fn table_definitions() -> Vec<(String, String)> {
-    vec![
+fn table_definitions(c: &Comparison) -> Vec<(String, String)> {
+    let mut d = vec![
         defs::other("preset", "the engine preset; INVALID when its windows miss slice corners or clip receivers, so its other numbers do not describe a working set-up"),
         defs::other("cascades × map", "cascade count × side of each square shadow map, in texels"),
         defs::other("fit", "how the preset encloses each slice in its window"),
@@ -161,12 +166,21 @@ fn table_definitions() -> Vec<(String, String)> {
             "largest depth (world units) of receivers beyond, and of casters in front of, a cascade's light depth range; receivers beyond it are clipped",
         ),
         defs::memory("memory (MiB)"),
-    ]
+    ];
+    if has_screen(c) {
+        d.push(defs::metric("screen p95", "screen_aliasing_p95"));
+    }
+    d
+}
+
+/// Whether the comparison has screen metrics (the scene has geometry).
+fn has_screen(c: &Comparison) -> bool {
+    c.analyses.iter().any(|a| a.summary.screen.is_some())
 }
 
 /// Table cells shared by both reports: (header, per-row values).
 fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
-    let header = vec![
+    let mut header = vec![
         "preset",
         "cascades × map",
         "fit",
@@ -179,6 +193,10 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
         "receivers / casters outside light depth",
         "memory (MiB)",
     ];
+    let screen = has_screen(c);
+    if screen {
+        header.push("screen p95");
+    }
     let rows = c
         .analyses
         .iter()
@@ -186,8 +204,8 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
             let s = &a.summary;
             let p = a.preset.as_ref();
             let (worst, _) = coverage_extremes(a);
-            let name = preset_of(a).map_or_else(String::new, |p| p.to_string());
-            vec![
+            let name = label(a);
+            let mut row = vec![
                 match invalid_reason(a) {
                     Some(why) => format!("{name} (INVALID: {why})"),
                     None => name,
@@ -210,7 +228,11 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
                     short(p.map_or(0.0, |p| p.casters_outside_depth))
                 ),
                 short(mib(s.memory_bytes)),
-            ]
+            ];
+            if screen {
+                row.push(short(s.screen.as_ref().map_or(0.0, |x| x.aliasing_p95)));
+            }
+            row
         })
         .collect();
     (header, rows)
@@ -254,16 +276,16 @@ impl Exporter<Comparison> for CompareHtml {
         h.push_str(&html::list(&scene_lines(c), None));
         h.push_str("<h2>Results</h2>\n");
         h.push_str(&html::table(&header, &rows, &[0, 2, 3], None));
-        h.push_str(&html::definitions(&table_definitions()));
+        h.push_str(&html::definitions(&table_definitions(c)));
         let _ = writeln!(h, "<p>{}</p>", html::escape(RESULTS_NOTE));
         h.push_str(&html::figure(&DensityOverlay(c).to_svg()?, DENSITY_CAPTION));
         h.push_str(&html::figure(&ShimmerCoverageBars(c).to_svg()?, SHIMMER_CAPTION));
         h.push_str("<h2>Presets</h2>\n");
         for a in &c.analyses {
-            let _ = writeln!(h, "<h3>{}</h3>", html::escape(preset_of(a).map_or("?", |p| p.as_str())));
+            let _ = writeln!(h, "<h3>{}</h3>", html::escape(label(a).as_str()));
             h.push_str(&html::list(&preset_lines(a), Some("notes")));
-            let label = preset_of(a).map_or("?", |p| p.as_str());
-            let images = crate::figures::screen::captioned(a, label);
+            let name = label(a);
+            let images = crate::figures::screen::captioned(a, &name);
             if !images.is_empty() {
                 h.push_str(&html::png_figures(&images));
             }
@@ -301,14 +323,14 @@ impl Exporter<Comparison> for CompareMd {
         }
         let _ = writeln!(m, "\n## Results\n");
         m.push_str(&markdown::table(&header, &rows, &[0]));
-        let _ = writeln!(m, "\n{}\n{}", defs::markdown(&table_definitions()), RESULTS_NOTE);
+        let _ = writeln!(m, "\n{}\n{}", defs::markdown(&table_definitions(c)), RESULTS_NOTE);
         let _ = writeln!(
             m,
             "\n![texels per pixel against depth](compare_density.svg)\n\n![shimmer and coverage](compare_shimmer.svg)\n"
         );
         let _ = writeln!(m, "## Presets\n");
         for a in &c.analyses {
-            let _ = writeln!(m, "### {}\n", preset_of(a).map_or("?", |p| p.as_str()));
+            let _ = writeln!(m, "### {}\n", label(a).as_str());
             for l in preset_lines(a) {
                 let _ = writeln!(m, "- {l}");
             }
@@ -334,22 +356,36 @@ pub fn exporters() -> Vec<&'static dyn Exporter<Comparison>> {
 /// The terminal summary of a comparison.
 pub fn summary_table(c: &Comparison) -> String {
     let mut out = String::new();
+    let presets = c.analyses.len() - c.own.len();
     let _ = writeln!(
         out,
-        "{}: {} presets{}",
+        "{}: {}{}{}",
         c.name,
-        c.analyses.len(),
+        count(presets as u64, "preset"),
         if c.engine_defaults {
             " at their own defaults"
         } else {
             ""
+        },
+        match c.own.len() {
+            0 => String::new(),
+            n => format!(" and csm-lab's own pipeline with {}", count(n as u64, "split range")),
         }
     );
-    let _ = writeln!(
+    // The first column fits the longest name ("csm-lab (visible)"); the screen column appears
+    // with scene geometry.
+    let w = c.analyses.iter().map(|a| label(a).chars().count()).fold(13, usize::max);
+    let screen = c.analyses.iter().any(|a| a.summary.screen.is_some());
+    let _ = write!(
         out,
-        "{:<13} {:>11} {:<22} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>10}",
+        "{:<w$} {:>11} {:<22} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>10}",
         "preset", "cascades", "fit", "max alias", "mean", "shim snap", "shim raw", "coverage", "worst", "depth out"
     );
+    let _ = if screen {
+        writeln!(out, " {:>10}", "screen p95")
+    } else {
+        writeln!(out)
+    };
     for a in &c.analyses {
         let s = &a.summary;
         let (worst, _) = coverage_extremes(a);
@@ -357,10 +393,10 @@ pub fn summary_table(c: &Comparison) -> String {
             .preset
             .as_ref()
             .map_or(0.0, |p| p.receivers_outside_depth.max(p.casters_outside_depth));
-        let _ = writeln!(
+        let _ = write!(
             out,
-            "{:<13} {:>11} {:<22} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>10}{}",
-            preset_of(a).map_or("?", |p| p.as_str()),
+            "{:<w$} {:>11} {:<22} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>10}",
+            label(a).as_str(),
             format!(
                 "{}x{}",
                 a.rig().map_or(0, |r| r.cascade_count()),
@@ -374,6 +410,13 @@ pub fn summary_table(c: &Comparison) -> String {
             s.coverage_violations,
             short(worst),
             short(depth_out),
+        );
+        if screen {
+            let _ = write!(out, " {:>10}", short(s.screen.as_ref().map_or(0.0, |x| x.aliasing_p95)));
+        }
+        let _ = writeln!(
+            out,
+            "{}",
             invalid_reason(a).map_or(String::new(), |w| format!("  INVALID: {w}"))
         );
     }

@@ -441,3 +441,36 @@ fn the_scene_hash_changes_when_a_gltf_vertex_moves() {
     assert_eq!(a.echo(), moved.echo());
     assert_ne!(a.scene_hash(), moved.scene_hash());
 }
+
+/// `compare --split-range bounds,visible` adds csm-lab's own pipeline after the presets, once
+/// per range, each row the analysis `analyze` gives that setting.
+#[test]
+fn compare_puts_the_own_pipeline_on_both_split_ranges_beside_the_presets() {
+    use csm_lab::compare::{label, run};
+    use csm_lab::config::SplitRange;
+    let dir = tempfile::tempdir().unwrap();
+    let text = with(&[("scene.ground", "ground = 0.0")])
+        + "\n[[scene.box]]\nmin = [-30.0, 0.0, -80.0]\nmax = [-10.0, 30.0, -60.0]\n";
+    let path = dir.path().join("g.toml");
+    std::fs::write(&path, &text).unwrap();
+    let presets = [csm_lab::presets::PresetName::ALL[0]];
+    let c = run(&path, &presets, false, &[SplitRange::Bounds, SplitRange::Visible]).unwrap();
+    assert_eq!(c.analyses.len(), 3);
+    assert_eq!(label(&c.analyses[1]), "csm-lab (bounds)");
+    assert_eq!(label(&c.analyses[2]), "csm-lab (visible)");
+    let plain = analyze(&load(&text), &AnalysisOptions::full()).summary;
+    assert_eq!(c.analyses[1].summary, plain);
+    let fitted = load(&text.replace("snap = true", "snap = true\nfit_depth_to_visible = true"));
+    assert_eq!(
+        c.analyses[2].summary,
+        analyze(&fitted, &AnalysisOptions::full()).summary
+    );
+    assert!(c.command().ends_with("--split-range bounds,visible"), "{}", c.command());
+    // Without geometry, "visible" is refused naming the flag.
+    let bare = dir.path().join("b.toml");
+    std::fs::write(&bare, with(&[])).unwrap();
+    let e = run(&bare, &presets, false, &[SplitRange::Visible])
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("--split-range") && e.contains("geometry"), "{e}");
+}

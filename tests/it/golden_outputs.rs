@@ -624,6 +624,20 @@ fn geometry_runs() -> Vec<Case> {
             vec![("g.toml".to_string(), geometry_base())],
             &["compare", "g.toml", "--out", "out"],
         ),
+        case(
+            "geo_compare_split_ranges",
+            vec![("g.toml".to_string(), geometry_base())],
+            &[
+                "compare",
+                "g.toml",
+                "--presets",
+                "bevy,unity",
+                "--split-range",
+                "bounds,visible",
+                "--out",
+                "out",
+            ],
+        ),
     ]
 }
 
