@@ -59,6 +59,9 @@ pub struct AnalyzeArgs {
     /// dart, threejs, unity-sample, eevee, learnopengl, bevy, godot, unreal, unity, unity-urp, filament.
     #[arg(long)]
     pub preset: Option<String>,
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]
@@ -76,6 +79,9 @@ pub struct StressArgs {
     /// By default f32 residuals are reported, not judged.
     #[arg(long, value_name = "TEXELS", allow_negative_numbers = true)]
     pub max_f32_drift: Option<f64>,
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]
@@ -157,6 +163,9 @@ pub struct BenchArgs {
     /// Timed repetitions per point; the best is kept (1..=1000).
     #[arg(long, default_value_t = 5, allow_negative_numbers = true)]
     pub repeats: u32,
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]
@@ -172,6 +181,9 @@ pub struct CompareArgs {
     /// Output directory [default: out/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 /// Runs the parsed command.
@@ -183,6 +195,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             format: args.format,
             precision: args.precision,
             preset: args.preset,
+            quiet: args.quiet,
         }),
         Command::Sweep(args) => sweep::execute(&sweep::SweepRequest {
             config: args.config,
@@ -219,17 +232,20 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             cases: args.cases,
             seed: args.seed,
             max_f32_drift: args.max_f32_drift,
+            quiet: args.quiet,
         }),
         Command::Bench(args) => bench::execute(&bench::BenchRequest {
             out: args.out,
             config: args.config,
             repeats: args.repeats,
+            quiet: args.quiet,
         }),
         Command::Compare(args) => compare::execute(&compare::CompareRequest {
             config: args.config,
             presets: args.presets,
             defaults: args.defaults,
             out: args.out,
+            quiet: args.quiet,
         }),
     }
 }

@@ -15,6 +15,8 @@ pub struct CompareRequest {
     pub presets: Option<String>,
     pub defaults: bool,
     pub out: Option<PathBuf>,
+    /// No progress bar.
+    pub quiet: bool,
 }
 
 /// The `compare` command.
@@ -23,12 +25,15 @@ pub fn execute(args: &CompareRequest) -> Result<Outcome> {
         Some(list) => crate::presets::parse_list("--presets", list)?,
         None => crate::presets::PresetName::ALL.to_vec(),
     };
-    let comparison = run(&args.config, &presets, args.defaults)?;
+    let progress = super::progress::Progress::new(args.quiet, presets.len() as u64, "presets");
+    let comparison = run_with_progress(&args.config, &presets, args.defaults, &|| progress.inc(1))?;
+    progress.writing();
     let dir = args
         .out
         .clone()
         .unwrap_or_else(|| default_out_dir(&comparison.analyses[0].config));
     let written = output::export_all(&dir, &comparison, &report::compare::exporters())?;
+    progress.finish();
     print!("{}", report::compare::summary_table(&comparison));
     println!("wrote {} files to {}", written.len(), dir.display());
     Ok(Outcome::Success)

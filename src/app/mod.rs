@@ -7,6 +7,7 @@ pub mod analyze;
 pub mod bench;
 pub mod check;
 pub mod compare;
+pub mod progress;
 pub mod stress;
 pub mod sweep;
 

@@ -9,8 +9,9 @@ use crate::error::Result;
 use crate::output;
 use crate::report;
 
-/// Runs a sweep as the CLI does, without printing: (result, rendered files).
-pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::RenderedFiles)> {
+/// Runs a sweep as the CLI does, without printing: (result, rendered files, the progress bar,
+/// left up for the writing).
+pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::RenderedFiles, super::progress::Progress)> {
     let config = load_for_preset_sweep(&args.config, args.preset.as_deref())?;
     let overrides = GridOverrides {
         lambda: args.lambda.as_deref().map(parse_lambda_spec).transpose()?,
@@ -24,21 +25,11 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
             eprintln!("note: {note}");
         }
     }
-    let show_progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let bar = if show_progress {
-        let bar = indicatif::ProgressBar::new(grid.len() as u64);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} sweeping {pos}/{len} configurations {wide_bar} {eta}")
-                .expect("valid template"),
-        );
-        bar
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let progress = super::progress::Progress::new(args.quiet, grid.len() as u64, "configurations");
     let start = std::time::Instant::now();
-    let rows = run(&config, &grid, args.threads.map(usize::from), &|| bar.inc(1))?;
-    bar.finish_and_clear();
+    let rows = run(&config, &grid, args.threads.map(usize::from), &|| progress.inc(1))?;
     let compute = start.elapsed();
+    progress.writing();
     let preset = match &config.shadow.preset {
         Some(p) => format!(" --preset {}", p.name),
         None => String::new(),
@@ -51,13 +42,13 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
     let result = SweepResult::new(config, grid, rows, command);
     let files = report::sweep::render_all(&result, !args.no_plots)?;
     if !args.quiet {
-        eprintln!(
+        progress.note(&format!(
             "analysed {} configurations in {:.1} ms",
             result.rows.len(),
             compute.as_secs_f64() * 1e3
-        );
+        ));
     }
-    Ok((result, files))
+    Ok((result, files, progress))
 }
 
 /// What `sweep` was asked to do (the command line's flags, as plain values; specs unparsed).
@@ -78,9 +69,10 @@ pub struct SweepRequest {
 
 /// The `sweep` command.
 pub fn execute(args: &SweepRequest) -> Result<Outcome> {
-    let (result, files) = sweep_files(args)?;
+    let (result, files, progress) = sweep_files(args)?;
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&result.config));
     let written = output::write_files(&dir, &files)?;
+    progress.finish();
     print_result(
         args.format,
         || report::sweep::stdout_table(&result),

@@ -707,27 +707,35 @@ impl PathModel for EnginePath<'_> {
 }
 
 /// Walks the path with the binary32 pipeline for one snap setting.
-pub fn along_path(
+pub fn along_path<P: std::borrow::Borrow<CameraPose>, I>(
     rig: &Rig,
-    poses: &[CameraPose],
+    poses: I,
     probes: &[Vec<DVec3>],
     space: SnapSpace,
     snapped: bool,
     opts: ShimmerOptions,
-) -> EmulatedPath {
+) -> EmulatedPath
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
     let [t] = walk(&mut EnginePath::new(rig, probes, space), poses, [snapped], opts);
     emulated(t, opts)
 }
 
 /// Both snap settings in one walk, `(snapped, unsnapped)`: the same results as two calls of
 /// [`along_path`].
-pub fn along_path_both(
+pub fn along_path_both<P: std::borrow::Borrow<CameraPose>, I>(
     rig: &Rig,
-    poses: &[CameraPose],
+    poses: I,
     probes: &[Vec<DVec3>],
     space: SnapSpace,
     opts: ShimmerOptions,
-) -> (EmulatedPath, EmulatedPath) {
+) -> (EmulatedPath, EmulatedPath)
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
     let [s, u] = walk(&mut EnginePath::new(rig, probes, space), poses, [true, false], opts);
     (emulated(s, opts), emulated(u, opts))
 }

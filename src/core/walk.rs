@@ -9,6 +9,8 @@
 //! binary32 pipeline, S7 lookup error. The metric definitions are in [`crate::shimmer`] and
 //! [`crate::precision`]; units are texels throughout.
 
+use std::borrow::Borrow;
+
 use glam::DVec2;
 
 use crate::geometry::CameraPose;
@@ -61,6 +63,12 @@ pub trait PathModel {
     );
     /// The sampled-texel centre of a landing in an earlier window, in `w`'s light space.
     fn centre_in(&self, w: &Self::Win, earlier: &Landing) -> DVec2;
+    /// True when every probe lands in `w` exactly as in `p` (the same cascade's window one
+    /// frame earlier): the walk then keeps the earlier landings and counts no drift and no
+    /// flip, which is what the kernels compute for equal landings. False unless known.
+    fn same_landings(&self, _p: &Self::Win, _w: &Self::Win) -> bool {
+        false
+    }
 }
 
 /// Running totals of one snap mode along a path: coverage, S1, S3, S4, S7 and the per-frame
@@ -289,6 +297,28 @@ fn probe_kernel<M: PathModel>(
     (ss, mx_sq, flipped, served)
 }
 
+/// [`probe_kernel`]'s S4 part alone, for a pair whose S3 has the closed form:
+/// `(flipped, served)`, the same counts bit for bit.
+#[inline(never)]
+fn flip_kernel<M: PathModel>(
+    model: &M,
+    w: &M::Win,
+    prev: &[Option<Landing>],
+    cur: &[Option<Landing>],
+) -> (usize, usize) {
+    let texel = M::texel(w);
+    let (mut flipped, mut served) = (0usize, 0usize);
+    for (a, b) in prev.iter().zip(cur) {
+        let (Some(a), Some(b)) = (a, b) else {
+            continue;
+        };
+        served += 1;
+        let moved = ((b.centre - model.centre_in(w, a)) / texel).abs();
+        flipped += (moved.x >= 0.5 || moved.y >= 0.5) as usize;
+    }
+    (flipped, served)
+}
+
 /// One snap mode of a walk: its totals, each cascade's previous window and landings.
 struct ModeState<M: PathModel> {
     totals: PathTotals,
@@ -298,19 +328,21 @@ struct ModeState<M: PathModel> {
     /// buffers are reused and nothing larger than a window moves per frame.
     prev_landings: Vec<Vec<Option<Landing>>>,
     current: Vec<Option<Landing>>,
+    /// How many of `prev_landings` are served, once counted.
+    prev_served: Vec<Option<usize>>,
 }
 
 /// The one loop along a path: for every frame (in order) and every cascade, calls
 /// `f(model, t, i, shared)` with the values of cascade `i` in frame `t` that every snap mode
 /// shares.
-pub fn each_cascade_frame<M: PathModel>(
+pub fn each_cascade_frame<M: PathModel, P: Borrow<CameraPose>>(
     model: &mut M,
-    poses: &[CameraPose],
+    poses: impl IntoIterator<Item = P>,
     mut f: impl FnMut(&M, usize, usize, &mut M::Shared),
 ) {
     let m = model.cascade_count();
-    for (t, pose) in poses.iter().enumerate() {
-        model.begin_frame(t, pose);
+    for (t, pose) in poses.into_iter().enumerate() {
+        model.begin_frame(t, pose.borrow());
         for i in 0..m {
             let mut shared = model.shared(i);
             f(model, t, i, &mut shared);
@@ -320,13 +352,20 @@ pub fn each_cascade_frame<M: PathModel>(
 
 /// Walks `poses` once with `model`, for each snap mode in `modes` (`true` = snapped), and
 /// returns each mode's totals. Per frame and cascade, the values the modes share are computed
-/// once; probes are landed only when the options need them.
-pub fn walk<M: PathModel, const K: usize>(
+/// once; probes are landed only when the options need them. The poses are read once, in
+/// order, and not kept: a path of any length walks in the memory of one frame (a slice, or
+/// the generator [`crate::motion::poses`]).
+pub fn walk<M: PathModel, P: Borrow<CameraPose>, I, const K: usize>(
     model: &mut M,
-    poses: &[CameraPose],
+    poses: I,
     modes: [bool; K],
     opts: ShimmerOptions,
-) -> [PathTotals; K] {
+) -> [PathTotals; K]
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
+    let poses = poses.into_iter();
     let m = model.cascade_count();
     let probes = model.probes_needed(opts);
     let stride = crate::shimmer::frame_row_stride(poses.len());
@@ -335,14 +374,16 @@ pub fn walk<M: PathModel, const K: usize>(
         prev: (0..m).map(|_| None).collect(),
         prev_landings: vec![Vec::new(); m],
         current: Vec::new(),
+        prev_served: vec![None; m],
     });
     each_cascade_frame(model, poses, |model, t, i, shared| {
         for st in &mut states {
             let w = model.window(i, shared, st.totals.snapped);
             model.cover(i, shared, &w, &mut st.totals);
+            let same = probes && st.prev[i].as_ref().is_some_and(|p| model.same_landings(p, &w));
             let landings = &mut st.current;
             landings.clear();
-            if probes {
+            if probes && !same {
                 model.land(i, shared, &w, landings, &mut st.totals);
             }
             if let Some(p) = &st.prev[i] {
@@ -362,7 +403,28 @@ pub fn walk<M: PathModel, const K: usize>(
                 st.totals.jitter = st.totals.jitter.max(size_change);
                 let drift = match closed {
                     Some(ms) if !opts.cell_flips => Some((ms, ms, None)),
-                    _ => {
+                    // Every probe lands where it landed a frame ago (a snapped window that
+                    // did not move): what the kernels give for equal landings, without them.
+                    _ if same => {
+                        let served =
+                            *st.prev_served[i].get_or_insert_with(|| pl.iter().filter(|l| l.is_some()).count());
+                        if M::SKIP_UNSERVED && served == 0 {
+                            None
+                        } else {
+                            let (ms, mx_sq) = closed.map_or((0.0, 0.0), |ms| (ms, ms));
+                            Some((ms, mx_sq, opts.cell_flips.then_some(0.0)))
+                        }
+                    }
+                    // S3 has the closed form: the probes only count S4 flips.
+                    Some(ms) => {
+                        let (flipped, served) = flip_kernel(model, &w, pl, landings);
+                        if M::SKIP_UNSERVED && served == 0 {
+                            None
+                        } else {
+                            Some((ms, ms, Some(flipped as f64 / served.max(1) as f64)))
+                        }
+                    }
+                    None => {
                         let (ss, mx_sq, flipped, served) = probe_kernel(model, &w, pl, landings);
                         if M::SKIP_UNSERVED && served == 0 {
                             None
@@ -378,7 +440,10 @@ pub fn walk<M: PathModel, const K: usize>(
                 }
             }
             st.prev[i] = Some(w);
-            std::mem::swap(&mut st.prev_landings[i], &mut st.current);
+            if !same {
+                std::mem::swap(&mut st.prev_landings[i], &mut st.current);
+                st.prev_served[i] = None;
+            }
         }
     });
     states.map(|st| st.totals)
