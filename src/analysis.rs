@@ -235,8 +235,14 @@ pub fn rig(config: &Config) -> Option<Rig> {
 /// None; see [`precision::f32_range_problem`].
 pub fn f32_range_problem(config: &Config) -> Option<String> {
     let rig = rig(config)?;
-    let poses = config.camera_path().ok()?;
-    precision::f32_range_problem(&rig, &poses, &config.scene, config.shadow.snap_space)
+    // An invalid path is reported by its own check; the poses are generated, not kept.
+    let setup = config.setup();
+    let poses = crate::motion::poses(&setup.camera, &setup.motion);
+    if poses.clone().any(|p| p.is_err()) {
+        return None;
+    }
+    let poses = poses.map_while(|p| p.ok());
+    precision::f32_range_problem(&rig, poses, &config.scene, config.shadow.snap_space)
 }
 
 /// Runs the analysis of one validated config.
