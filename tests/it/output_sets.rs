@@ -101,6 +101,7 @@ fn a_killed_sweep_never_leaves_a_mixed_set_and_the_next_run_cleans_up() {
         assert!(after == b, "kill after {k}: the next run did not write the new set");
         assert_eq!(leftovers(&dir), Vec::<String>::new(), "kill after {k}");
     }
+    eprintln!("kill outcomes: {outcomes:?}");
     // Kills landed before the move at least (a 0 ms kill always does).
     assert!(outcomes.contains_key("previous set"), "{outcomes:?}");
 }
