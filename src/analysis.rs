@@ -253,7 +253,10 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
 /// How many frames [`analyze_with_progress`] walks: every frame of every motion path, once per
 /// snap mode.
 pub fn frames_walked(config: &Config) -> u64 {
-    2 * config.motion.frames as u64 * (1 + config.motion.extra.len() as u64)
+    // A path file has as many frames as rows; every further path has `motion.frames`.
+    let setup = config.setup();
+    let first = crate::motion::poses(&setup.camera, &setup.motion).len() as u64;
+    2 * (first + config.motion.extra.len() as u64 * config.motion.frames as u64)
 }
 
 /// Frames walked between two progress reports.
