@@ -267,6 +267,35 @@ pub fn closed_form_drift(p_origin_texels: DVec2, w_origin_texels: DVec2) -> f64 
     d.length_squared()
 }
 
+/// Whether a sampled texel centre that moved by `d` (world units, either sign) moved by half a
+/// texel or more along either axis: `|d / texel| >= 0.5`, bit for bit. `inv` is `1 / texel`
+/// when [`flip_divisor`] allows the shortcut: the product `|d| * inv` is within a few units in
+/// the 16th digit of the quotient, so away from 0.5 it decides alike; within 1e-9 of 0.5 (or
+/// for NaN) the quotient itself decides. Two divisions per probe were most of the kernel.
+#[inline]
+fn moved_half_texel(d: DVec2, texel: DVec2, inv: Option<DVec2>) -> bool {
+    let d = d.abs();
+    if let Some(inv) = inv {
+        let q = d * inv;
+        if (q.x - 0.5).abs() > 1e-9 && (q.y - 0.5).abs() > 1e-9 {
+            return q.x >= 0.5 || q.y >= 0.5;
+        }
+    }
+    // |x / t| == |x| / t for t > 0 (division rounds symmetrically), and the original form
+    // otherwise.
+    let moved = if inv.is_some() { d / texel } else { (d / texel).abs() };
+    moved.x >= 0.5 || moved.y >= 0.5
+}
+
+/// `1 / texel` when the multiplication shortcut of [`moved_half_texel`] is exact in its
+/// decisions: positive texel sizes whose reciprocals are normal and far from overflow.
+#[inline]
+fn flip_divisor(texel: DVec2) -> Option<DVec2> {
+    let inv = DVec2::ONE / texel;
+    let ok = |t: f64, i: f64| t > 0.0 && (1e-300..1e300).contains(&i);
+    (ok(texel.x, inv.x) && ok(texel.y, inv.y)).then_some(inv)
+}
+
 /// The per-probe kernel: over the probes landed in both windows, the sum and the largest of
 /// the squared wrapped texel-coordinate change (S3), and how many sampled texel centres moved
 /// by half a texel or more along either axis, in texels of the current window (S4).
@@ -279,6 +308,7 @@ fn probe_kernel<M: PathModel>(
     cur: &[Option<Landing>],
 ) -> (f64, f64, usize, usize) {
     let texel = M::texel(w);
+    let inv = flip_divisor(texel);
     let (mut ss, mut mx_sq, mut flipped, mut served) = (0.0, 0.0f64, 0usize, 0usize);
     for (a, b) in prev.iter().zip(cur) {
         let (Some(a), Some(b)) = (a, b) else {
@@ -289,8 +319,7 @@ fn probe_kernel<M: PathModel>(
         let d2 = d.length_squared();
         ss += d2;
         mx_sq = mx_sq.max(d2);
-        let moved = ((b.centre - model.centre_in(w, a)) / texel).abs();
-        if moved.x >= 0.5 || moved.y >= 0.5 {
+        if moved_half_texel(b.centre - model.centre_in(w, a), texel, inv) {
             flipped += 1;
         }
     }
@@ -307,14 +336,14 @@ fn flip_kernel<M: PathModel>(
     cur: &[Option<Landing>],
 ) -> (usize, usize) {
     let texel = M::texel(w);
+    let inv = flip_divisor(texel);
     let (mut flipped, mut served) = (0usize, 0usize);
     for (a, b) in prev.iter().zip(cur) {
         let (Some(a), Some(b)) = (a, b) else {
             continue;
         };
         served += 1;
-        let moved = ((b.centre - model.centre_in(w, a)) / texel).abs();
-        flipped += (moved.x >= 0.5 || moved.y >= 0.5) as usize;
+        flipped += moved_half_texel(b.centre - model.centre_in(w, a), texel, inv) as usize;
     }
     (flipped, served)
 }
@@ -447,4 +476,41 @@ where
         }
     });
     states.map(|st| st.totals)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shortcut decides exactly as the division, on moves near and far from half a texel,
+    /// of every sign and magnitude, for texel sizes across the allowed range.
+    #[test]
+    fn the_flip_shortcut_decides_as_the_division_does() {
+        let mut rng = crate::rng::SplitMix64::new(7);
+        for _ in 0..400_000 {
+            let texel = DVec2::new(10f64.powf(rng.range(-12.0, 9.0)), 10f64.powf(rng.range(-12.0, 9.0)));
+            let pick = |rng: &mut crate::rng::SplitMix64, t: f64| match rng.range(0.0, 4.0) as u32 {
+                // Exactly at, or one ulp around, half a texel.
+                0 => {
+                    let h = 0.5 * t;
+                    [h, f64::from_bits(h.to_bits() + 1), f64::from_bits(h.to_bits() - 1)]
+                        [rng.range(0.0, 2.999) as usize]
+                }
+                1 => rng.range(0.0, 2.0) * t,
+                2 => (0.5 + rng.range(-1e-8, 1e-8)) * t,
+                _ => rng.range(-1.0, 1.0) * 10f64.powf(rng.range(-300.0, 300.0)),
+            };
+            let d = DVec2::new(pick(&mut rng, texel.x), pick(&mut rng, texel.y))
+                * if rng.range(0.0, 1.0) < 0.5 { -1.0 } else { 1.0 };
+            let exact = {
+                let m = (d / texel).abs();
+                m.x >= 0.5 || m.y >= 0.5
+            };
+            assert_eq!(
+                moved_half_texel(d, texel, flip_divisor(texel)),
+                exact,
+                "{d:?} {texel:?}"
+            );
+        }
+    }
 }
