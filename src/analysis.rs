@@ -235,12 +235,36 @@ pub fn rig(config: &Config) -> Option<Rig> {
 /// None; see [`precision::f32_range_problem`].
 pub fn f32_range_problem(config: &Config) -> Option<String> {
     let rig = rig(config)?;
-    let poses = config.camera_path().ok()?;
-    precision::f32_range_problem(&rig, &poses, &config.scene, config.shadow.snap_space)
+    // An invalid path is reported by its own check; the poses are generated, not kept.
+    let setup = config.setup();
+    let poses = crate::motion::poses(&setup.camera, &setup.motion);
+    if poses.clone().any(|p| p.is_err()) {
+        return None;
+    }
+    let poses = poses.map_while(|p| p.ok());
+    precision::f32_range_problem(&rig, poses, &config.scene, config.shadow.snap_space)
 }
 
 /// Runs the analysis of one validated config.
 pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
+    analyze_with_progress(config, opts, &|_| ())
+}
+
+/// How many frames [`analyze_with_progress`] walks: every frame of every motion path, once per
+/// snap mode.
+pub fn frames_walked(config: &Config) -> u64 {
+    // A path file has as many frames as rows; every further path has `motion.frames`.
+    let setup = config.setup();
+    let first = crate::motion::poses(&setup.camera, &setup.motion).len() as u64;
+    2 * (first + config.motion.extra.len() as u64 * config.motion.frames as u64)
+}
+
+/// Frames walked between two progress reports.
+const PROGRESS_FRAMES: usize = 4096;
+
+/// [`analyze`], reporting the frames walked to `on_frames` as it goes (in batches; they add up
+/// to [`frames_walked`] when the scene needs cascades).
+pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u64) + Sync)) -> Analysis {
     let rig = rig(config);
     // A preset has its own range (no scene clipping): the view depths that read its cascades.
     let range = match (&config.shadow.preset, &rig) {
@@ -320,7 +344,6 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         Vec::new()
     };
 
-    let poses = config.camera_path().expect("validated when the config was loaded");
     let sopts = ShimmerOptions {
         cell_flips: opts.cell_flips,
         probe_drift: false,
@@ -334,25 +357,43 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
         Vec::new()
     };
     // With precision = "f32" every path metric measures the emulated binary32 pipeline.
-    let walk = |poses: &[CameraPose]| match config.shadow.precision {
-        Precision::F64 => {
-            let (s, u) = shimmer::along_path_both(&rig, poses, &probes, sopts);
-            (s, u, None)
-        }
-        Precision::F32 => {
-            let space = config.shadow.snap_space;
-            let (s, u) = precision::along_path_both(&rig, poses, &probes, space, sopts);
-            let lookup = if config.shadow.snap { s.lookup } else { u.lookup };
-            (s.path, u.path, Some(lookup))
-        }
+    // The poses are generated as the walk reads them (a long path is never held), and the
+    // two snap modes walk on their own threads: each mode's totals are the same, bit for bit,
+    // as in one walk of both (`along_path_both`).
+    let setup = config.setup();
+    let walk = |motion: &crate::scene::Motion| {
+        let poses = || {
+            crate::motion::poses(&setup.camera, motion).enumerate().map(|(t, p)| {
+                if (t + 1) % PROGRESS_FRAMES == 0 {
+                    on_frames(PROGRESS_FRAMES as u64);
+                }
+                p.expect("validated when the config was loaded")
+            })
+        };
+        let remainder = (poses().len() % PROGRESS_FRAMES) as u64;
+        let walked = match config.shadow.precision {
+            Precision::F64 => {
+                let one = |snapped| shimmer::along_path(&rig, poses(), &probes, snapped, sopts);
+                let (s, u) = rayon::join(|| one(true), || one(false));
+                (s, u, None)
+            }
+            Precision::F32 => {
+                let space = config.shadow.snap_space;
+                let one = |snapped| precision::along_path(&rig, poses(), &probes, space, snapped, sopts);
+                let (s, u) = rayon::join(|| one(true), || one(false));
+                let lookup = if config.shadow.snap { s.lookup } else { u.lookup };
+                (s.path, u.path, Some(lookup))
+            }
+        };
+        on_frames(2 * remainder);
+        walked
     };
-    let (snapped, unsnapped, lookup_error) = walk(&poses);
+    let (snapped, unsnapped, lookup_error) = walk(&setup.motion);
     let extra: Vec<ExtraPathResult> = config
-        .extra_camera_paths()
-        .expect("validated when the config was loaded")
+        .extra_motions()
         .into_iter()
-        .map(|(name, poses)| {
-            let (snapped, unsnapped, lookup_error) = walk(&poses);
+        .map(|(name, motion)| {
+            let (snapped, unsnapped, lookup_error) = walk(&motion);
             ExtraPathResult {
                 name,
                 snapped,

@@ -61,6 +61,9 @@ pub struct AnalyzeArgs {
     /// dart, threejs, unity-sample, eevee, learnopengl, bevy, godot, unreal, unity, unity-urp, filament.
     #[arg(long)]
     pub preset: Option<String>,
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]
@@ -78,6 +81,9 @@ pub struct StressArgs {
     /// By default f32 residuals are reported, not judged.
     #[arg(long, value_name = "TEXELS", allow_negative_numbers = true)]
     pub max_f32_drift: Option<f64>,
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]
@@ -190,6 +196,9 @@ pub struct BenchArgs {
     /// Timed repetitions per point; the best is kept (1..=1000).
     #[arg(long, default_value_t = 5, allow_negative_numbers = true)]
     pub repeats: u32,
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]
@@ -209,6 +218,9 @@ pub struct CompareArgs {
     /// Output directory [default: out/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 /// Runs the parsed command.
@@ -220,6 +232,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             format: args.format,
             precision: args.precision,
             preset: args.preset,
+            quiet: args.quiet,
         }),
         Command::Sweep(args) => sweep::execute(&sweep::SweepRequest {
             config: args.config,
@@ -259,11 +272,13 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             cases: args.cases,
             seed: args.seed,
             max_f32_drift: args.max_f32_drift,
+            quiet: args.quiet,
         }),
         Command::Bench(args) => bench::execute(&bench::BenchRequest {
             out: args.out,
             config: args.config,
             repeats: args.repeats,
+            quiet: args.quiet,
         }),
         Command::Merge(args) => merge::execute(&merge::MergeRequest {
             dirs: args.dirs,
@@ -278,6 +293,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             defaults: args.defaults,
             out: args.out,
             split_range: args.split_range,
+            quiet: args.quiet,
         }),
     }
 }

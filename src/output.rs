@@ -1,9 +1,11 @@
 //! Writing results: a small exporter trait, CSV/JSON renderers, and atomic file writes.
 //!
 //! Every file is rendered to memory first; only when all of them rendered does anything touch
-//! the disk, and each file is written to a temporary file in the same directory and renamed
-//! over the target. A crash, a full disk or a bad value therefore never leaves a half-written
-//! CSV where a CI job will read it, and the previous files stay whole.
+//! the disk. A command's files are one set: written into a staging directory inside the
+//! output directory and moved into place only when all of them are on disk ([`write_files`]).
+//! A crash, a full disk or a bad value therefore never leaves a half-written CSV where a CI
+//! job will read it, nor new files beside the previous run's: the previous set stays whole.
+//! A single file (`check`'s JUnit report, a baseline) is written with [`write_atomic`].
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -91,11 +93,43 @@ pub fn export_all<T: ?Sized>(dir: &Path, data: &T, exporters: &[&dyn Exporter<T>
 /// Rendered files: (file name, bytes).
 pub type RenderedFiles = Vec<(String, Vec<u8>)>;
 
-/// Writes already-rendered files atomically into `dir`.
+/// Writes already-rendered files into `dir` as one set (see [`write_set`]).
 pub fn write_files<N: AsRef<str> + Sync>(dir: &Path, files: &[(N, Vec<u8>)]) -> Result<Vec<PathBuf>> {
+    write_set(dir, files, None)
+}
+
+/// Name prefix of the staging directories [`write_files`] makes in an output directory:
+/// `.csm-lab-staging-<pid>-XXXXXX`.
+pub const STAGING_PREFIX: &str = ".csm-lab-staging-";
+
+/// The file a staging directory holds once every file of its set is written and synced: from
+/// then on the set is moved into place, and an interrupted move is completed by the next run.
+pub const STAGING_COMPLETE: &str = ".complete";
+
+/// Writes a set of files into `dir`, all or nothing:
+///
+/// 1. Recovers what an interrupted run left ([`recover`]): its stale temporaries and staging
+///    directories are removed, and a staged set that was complete when the run stopped is
+///    moved into place first.
+/// 2. Writes every file into a new staging directory inside `dir` (same file system), syncs
+///    each, then marks the set complete ([`STAGING_COMPLETE`]) and syncs the directory.
+/// 3. Renames each file over its name in `dir` (no data is written any more: renames only),
+///    syncs `dir`, and removes the staging directory.
+///
+/// A failure in step 2 (a full disk, a bad value, a kill) leaves the previous files untouched
+/// and no new file beside them. Only a kill within step 3 can leave a mix; the staging
+/// directory is then marked complete, and the next run into `dir` completes the move before
+/// anything else. Files in `dir` that are not of this set are never touched.
+fn write_set<N: AsRef<str> + Sync>(dir: &Path, files: &[(N, Vec<u8>)], fail_at: Option<usize>) -> Result<Vec<PathBuf>> {
     ensure_dir(dir)?;
     let names: Vec<&str> = files.iter().map(|(n, _)| n.as_ref()).collect();
-    let removed = remove_stale_temporaries(dir, &names);
+    let (completed, removed) = recover(dir, &names);
+    if completed > 0 {
+        eprintln!(
+            "completed the output set of an interrupted run in {} before writing this one",
+            dir.display()
+        );
+    }
     if removed > 0 {
         eprintln!(
             "removed {removed} stale temporary file{} (left by an interrupted run) from {}",
@@ -103,17 +137,132 @@ pub fn write_files<N: AsRef<str> + Sync>(dir: &Path, files: &[(N, Vec<u8>)]) -> 
             dir.display()
         );
     }
-    // Each file is written, synced and renamed on its own; in parallel, the syncs overlap
-    // (they were most of the wall time of a small sweep). Paths come back in order.
+    // A name taken by a directory would fail in the middle of the swap: refuse it up front.
+    for name in &names {
+        let target = dir.join(name);
+        if target.is_dir() {
+            return Err(Error::write(
+                &target,
+                std::io::Error::other("a directory has this name; move it away or choose another --out"),
+            ));
+        }
+    }
+    let staging = tempfile::Builder::new()
+        .prefix(&format!("{STAGING_PREFIX}{}-", std::process::id()))
+        .tempdir_in(dir)
+        .map_err(|e| Error::write(dir, e))?;
+    // Each file is written and synced on its own; in parallel, the syncs overlap (they were
+    // most of the wall time of a small sweep).
     use rayon::prelude::*;
-    files
-        .par_iter()
-        .map(|(name, bytes)| {
-            let path = dir.join(name.as_ref());
-            write_atomic(&path, bytes)?;
+    files.par_iter().enumerate().try_for_each(|(k, (name, bytes))| {
+        let path = staging.path().join(name.as_ref());
+        if fail_at == Some(k) {
+            return Err(Error::write(
+                &dir.join(name.as_ref()),
+                std::io::Error::other("simulated failure"),
+            ));
+        }
+        write_synced(&path, bytes).map_err(|e| Error::write(&dir.join(name.as_ref()), e))
+    })?;
+    write_synced(&staging.path().join(STAGING_COMPLETE), names.join("\n").as_bytes())
+        .map_err(|e| Error::write(dir, e))?;
+    sync_dir(staging.path());
+    let paths = names
+        .iter()
+        .map(|name| {
+            let path = dir.join(name);
+            std::fs::rename(staging.path().join(name), &path).map_err(|e| Error::write(&path, e))?;
             Ok(path)
         })
-        .collect()
+        .collect::<Result<Vec<_>>>()?;
+    sync_dir(dir);
+    // Only the marker is left; dropping the staging directory removes it.
+    drop(staging);
+    Ok(paths)
+}
+
+/// Creates `path` (a new file in a staging directory), writes `bytes`, sets it readable like
+/// an ordinary file and syncs it.
+fn write_synced(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut f = std::fs::File::create(path)?;
+    f.write_all(bytes)?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        f.set_permissions(std::fs::Permissions::from_mode(0o644))?;
+    }
+    f.sync_all()
+}
+
+/// Syncs a directory's entries (best effort: not every platform opens directories).
+fn sync_dir(dir: &Path) {
+    if let Ok(d) = std::fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
+}
+
+/// The process id in a staging directory's name, if it is one.
+fn staging_pid(entry: &str) -> Option<u32> {
+    let rest = entry.strip_prefix(STAGING_PREFIX)?;
+    let (pid, suffix) = rest.split_once('-')?;
+    (suffix.len() == 6 && suffix.bytes().all(|b| b.is_ascii_alphanumeric()))
+        .then(|| pid.parse().ok())
+        .flatten()
+}
+
+/// Whether the process that made a staging directory may still be writing it.
+fn still_running(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return true;
+    }
+    #[cfg(target_os = "linux")]
+    {
+        Path::new(&format!("/proc/{pid}")).exists()
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        false
+    }
+}
+
+/// Cleans up after interrupted runs in `dir`, touching only csm-lab's own entries: staging
+/// directories of processes that are gone (a complete one is first moved into place, file by
+/// file; an incomplete one is removed) and the temporaries of earlier versions for the files
+/// `names` ([`remove_stale_temporaries`]). Returns (sets completed, entries removed). Best
+/// effort: what cannot be recovered is left, and the write goes on.
+pub fn recover(dir: &Path, names: &[&str]) -> (usize, usize) {
+    let mut completed = 0;
+    let mut removed = remove_stale_temporaries(dir, names);
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return (completed, removed);
+    };
+    for e in entries.filter_map(|e| e.ok()) {
+        let entry = e.file_name().to_string_lossy().into_owned();
+        let Some(pid) = staging_pid(&entry) else {
+            continue;
+        };
+        if !e.file_type().is_ok_and(|t| t.is_dir()) || still_running(pid) {
+            continue;
+        }
+        let staging = e.path();
+        if staging.join(STAGING_COMPLETE).is_file() {
+            let Ok(staged) = std::fs::read_dir(&staging) else {
+                continue;
+            };
+            for f in staged.filter_map(|f| f.ok()) {
+                let name = f.file_name();
+                if name != STAGING_COMPLETE && f.file_type().is_ok_and(|t| t.is_file()) {
+                    let _ = std::fs::rename(f.path(), dir.join(&name));
+                }
+            }
+            sync_dir(dir);
+            completed += 1;
+        } else {
+            removed += 1;
+        }
+        let _ = std::fs::remove_dir_all(&staging);
+    }
+    (completed, removed)
 }
 
 /// A finite number formatted for CSV/JSON: shortest round-trip representation.
@@ -310,5 +459,122 @@ mod short_number_tests {
         assert_eq!(signed_percent(0.44), "+0.4 %");
         assert_eq!(signed_percent(-9.96), "-10 %");
         assert_eq!(signed_percent(150.4), "+150 %");
+    }
+}
+
+#[cfg(test)]
+mod set_tests {
+    use super::*;
+
+    fn set(tag: &str) -> Vec<(String, Vec<u8>)> {
+        ["a.csv", "b.json", "c.svg"]
+            .iter()
+            .map(|n| (n.to_string(), format!("{tag} {n}\n").into_bytes()))
+            .collect()
+    }
+
+    /// Every entry of `dir` with its contents (directories as "<dir>").
+    fn listing(dir: &Path) -> Vec<(String, String)> {
+        let mut v: Vec<_> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                let name = e.file_name().to_string_lossy().into_owned();
+                let body = if e.path().is_dir() {
+                    "<dir>".to_string()
+                } else {
+                    std::fs::read_to_string(e.path()).unwrap()
+                };
+                (name, body)
+            })
+            .collect();
+        v.sort();
+        v
+    }
+
+    fn expected(tag: &str, user: bool) -> Vec<(String, String)> {
+        let mut v: Vec<_> = set(tag)
+            .into_iter()
+            .map(|(n, b)| (n, String::from_utf8(b).unwrap()))
+            .collect();
+        if user {
+            v.push(("notes.txt".to_string(), "mine\n".to_string()));
+        }
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn a_failure_while_writing_leaves_the_previous_set_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("notes.txt"), "mine\n").unwrap();
+        write_files(dir.path(), &set("old")).unwrap();
+        assert_eq!(listing(dir.path()), expected("old", true));
+        for k in 0..3 {
+            assert!(write_set(dir.path(), &set("new"), Some(k)).is_err());
+            assert_eq!(listing(dir.path()), expected("old", true), "failure at file {k}");
+        }
+        write_files(dir.path(), &set("new")).unwrap();
+        assert_eq!(listing(dir.path()), expected("new", true));
+    }
+
+    /// A run killed while moving its staged set into place: the next run completes that set
+    /// before it writes its own; a run killed while staging leaves a staging directory that
+    /// the next run removes. Other entries (a user's file, a directory of another tool's
+    /// with a similar name) are left alone.
+    #[test]
+    fn the_next_run_completes_or_removes_what_an_interrupted_run_left() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::write(d.join("notes.txt"), "mine\n").unwrap();
+        write_files(d, &set("old")).unwrap();
+        // A complete staged set of a dead process (pid 0 never names one), half moved.
+        let staged = d.join(format!("{STAGING_PREFIX}0-AbC123"));
+        std::fs::create_dir(&staged).unwrap();
+        for (n, b) in set("killed") {
+            std::fs::write(staged.join(&n), b).unwrap();
+        }
+        std::fs::write(staged.join(STAGING_COMPLETE), "a.csv\nb.json\nc.svg").unwrap();
+        std::fs::rename(staged.join("a.csv"), d.join("a.csv")).unwrap();
+        // An incomplete one, a stale temporary of an earlier version, and lookalikes that are
+        // not csm-lab's (wrong suffix length; a file, not a directory).
+        let partial = d.join(format!("{STAGING_PREFIX}0-XyZ789"));
+        std::fs::create_dir(&partial).unwrap();
+        std::fs::write(partial.join("a.csv"), "partial").unwrap();
+        std::fs::write(d.join(".a.csv.Q1w2E3.tmp"), "stale").unwrap();
+        std::fs::create_dir(d.join(format!("{STAGING_PREFIX}0-notours"))).unwrap();
+        std::fs::write(d.join(format!("{STAGING_PREFIX}0-File12")), "a file").unwrap();
+        assert_eq!(recover(d, &["a.csv", "b.json", "c.svg"]), (1, 2));
+        let mut want = expected("killed", true);
+        want.push((format!("{STAGING_PREFIX}0-File12"), "a file".to_string()));
+        want.push((format!("{STAGING_PREFIX}0-notours"), "<dir>".to_string()));
+        want.sort();
+        assert_eq!(listing(d), want);
+        write_files(d, &set("new")).unwrap();
+        let mut want = expected("new", true);
+        want.push((format!("{STAGING_PREFIX}0-File12"), "a file".to_string()));
+        want.push((format!("{STAGING_PREFIX}0-notours"), "<dir>".to_string()));
+        want.sort();
+        assert_eq!(listing(d), want);
+    }
+
+    #[test]
+    fn a_live_process_staging_directory_is_left_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let mine = dir
+            .path()
+            .join(format!("{STAGING_PREFIX}{}-AbC123", std::process::id()));
+        std::fs::create_dir(&mine).unwrap();
+        assert_eq!(recover(dir.path(), &["a.csv"]), (0, 0));
+        assert!(mine.is_dir());
+    }
+
+    #[test]
+    fn a_directory_in_the_way_is_refused_before_anything_is_written() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("b.json")).unwrap();
+        let e = write_files(dir.path(), &set("new")).unwrap_err().to_string();
+        assert!(e.contains("b.json") && e.contains("directory"), "{e}");
+        assert_eq!(listing(dir.path()), vec![("b.json".to_string(), "<dir>".to_string())]);
     }
 }

@@ -2,7 +2,7 @@
 //! and SVG, with a summary on stdout.
 
 use super::{default_out_dir, load_with_preset_flag, print_result, Format, Outcome};
-use crate::analysis::{analyze, AnalysisOptions};
+use crate::analysis::{analyze_with_progress, frames_walked, AnalysisOptions};
 use crate::error::{ConfigError, Error, Result};
 use crate::output;
 use crate::precision::Precision;
@@ -17,6 +17,8 @@ pub struct AnalyzeRequest {
     pub format: Format,
     pub precision: Option<Precision>,
     pub preset: Option<String>,
+    /// No progress bar.
+    pub quiet: bool,
 }
 
 /// The `analyze` command.
@@ -29,9 +31,12 @@ pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
             other => other,
         })?;
     }
-    let analysis = analyze(&config, &AnalysisOptions::full());
+    let progress = super::progress::Progress::new(args.quiet, frames_walked(&config), "frames");
+    let analysis = analyze_with_progress(&config, &AnalysisOptions::full(), &|n| progress.inc(n));
+    progress.writing();
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&config));
     let written = output::export_all(&dir, &analysis, &report::analyze::exporters_for(&analysis))?;
+    progress.finish();
     print_result(
         args.format,
         || report::analyze::summary_table(&analysis),

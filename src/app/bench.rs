@@ -15,6 +15,8 @@ pub struct BenchRequest {
     pub out: Option<PathBuf>,
     pub config: Option<PathBuf>,
     pub repeats: u32,
+    /// No progress bar.
+    pub quiet: bool,
 }
 
 /// The `bench` command.
@@ -34,13 +36,16 @@ pub fn execute(args: &BenchRequest) -> Result<Outcome> {
             c
         }
     };
-    let measured = run(&config, args.repeats as usize)?;
+    let progress = super::progress::Progress::new(args.quiet, BENCH_STEPS, "measurement groups");
+    let measured = run_with_progress(&config, args.repeats as usize, &|| progress.inc(1))?;
+    progress.writing();
     let dir = args
         .out
         .clone()
         .unwrap_or_else(|| Path::new(super::DEFAULT_OUT_ROOT).join("bench"));
     let exporters: [&dyn Exporter<BenchReport>; 2] = [&report::bench::BenchCsv, &crate::figures::bench::BenchSvg];
     let written = output::export_all(&dir, &measured, &exporters)?;
+    progress.finish();
     print!("{}", report::bench::table(&measured));
     println!("wrote {} files to {}", written.len(), dir.display());
     Ok(Outcome::Success)

@@ -17,6 +17,8 @@ pub struct CompareRequest {
     pub out: Option<PathBuf>,
     /// `--split-range`: csm-lab's own pipeline added with its splits on these ranges.
     pub split_range: Option<String>,
+    /// No progress bar.
+    pub quiet: bool,
 }
 
 /// The `compare` command.
@@ -29,12 +31,15 @@ pub fn execute(args: &CompareRequest) -> Result<Outcome> {
         Some(spec) => crate::commands::sweep::parse_split_range_spec(spec)?.values,
         None => Vec::new(),
     };
-    let comparison = run(&args.config, &presets, args.defaults, &own)?;
+    let progress = super::progress::Progress::new(args.quiet, (presets.len() + own.len()) as u64, "presets");
+    let comparison = run_with_progress(&args.config, &presets, args.defaults, &own, &|| progress.inc(1))?;
+    progress.writing();
     let dir = args
         .out
         .clone()
         .unwrap_or_else(|| default_out_dir(&comparison.analyses[0].config));
     let written = output::export_all(&dir, &comparison, &report::compare::exporters())?;
+    progress.finish();
     print!("{}", report::compare::summary_table(&comparison));
     println!("wrote {} files to {}", written.len(), dir.display());
     Ok(Outcome::Success)

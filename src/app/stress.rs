@@ -15,6 +15,8 @@ pub struct StressRequest {
     pub cases: u64,
     pub seed: u64,
     pub max_f32_drift: Option<f64>,
+    /// No progress bar.
+    pub quiet: bool,
 }
 
 /// The `stress` command.
@@ -41,9 +43,12 @@ pub fn execute(args: &StressRequest) -> Result<Outcome> {
         max_f32_drift: args.max_f32_drift,
         outputs: report::analyze::output_problems,
     };
-    let results = run(&cases, &opts);
+    let progress = super::progress::Progress::new(args.quiet, cases.len() as u64, "cases");
+    let results = run_with_progress(&cases, &opts, &|| progress.inc(1));
+    progress.writing();
     let bytes = report::stress::csv(&results)?;
     output::write_files(&args.out, &[("stress.csv", bytes)])?;
+    progress.finish();
     print!("{}", report::stress::table(&results));
     println!("wrote {}", args.out.join("stress.csv").display());
     Ok(if results.iter().all(|r| r.pass()) {

@@ -51,7 +51,8 @@ pub(crate) fn shard_hash(path: &Path, config: &Config, grid: &Grid, command: &st
 
 /// Runs a sweep as the CLI does, without printing: (result, rendered files). With `--shard`
 /// the result holds the shard's slice, and the files include the shard's manifest and rows.
-pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::RenderedFiles)> {
+/// The progress bar is returned still up, for the writing.
+pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::RenderedFiles, super::progress::Progress)> {
     let shard = args.shard.as_deref().map(Shard::parse).transpose()?;
     let (config, grid, command) = plan(args)?;
     let mut settings = grid.settings();
@@ -61,21 +62,11 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         indices = s.indices(settings.len()).collect();
         settings = indices.iter().map(|&i| settings[i]).collect();
     }
-    let show_progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let bar = if show_progress {
-        let bar = indicatif::ProgressBar::new(settings.len() as u64);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} sweeping {pos}/{len} configurations {wide_bar} {eta}")
-                .expect("valid template"),
-        );
-        bar
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let progress = super::progress::Progress::new(args.quiet, settings.len() as u64, "configurations");
     let start = std::time::Instant::now();
-    let rows = run_settings(&config, &settings, args.threads.map(usize::from), &|| bar.inc(1))?;
-    bar.finish_and_clear();
+    let rows = run_settings(&config, &settings, args.threads.map(usize::from), &|| progress.inc(1))?;
     let compute = start.elapsed();
+    progress.writing();
     let manifest = match shard {
         Some(s) => Some(shard::Manifest {
             tool: shard::tool(),
@@ -110,13 +101,13 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         ));
     }
     if !args.quiet {
-        eprintln!(
+        progress.note(&format!(
             "analysed {} configurations in {:.1} ms",
             result.rows.len(),
             compute.as_secs_f64() * 1e3
-        );
+        ));
     }
-    Ok((result, files))
+    Ok((result, files, progress))
 }
 
 /// What `sweep` was asked to do (the command line's flags, as plain values; specs unparsed).
@@ -140,13 +131,14 @@ pub struct SweepRequest {
 
 /// The `sweep` command.
 pub fn execute(args: &SweepRequest) -> Result<Outcome> {
-    let (result, files) = sweep_files(args)?;
+    let (result, files, progress) = sweep_files(args)?;
     let dir = match (&args.out, args.shard.as_deref().map(Shard::parse).transpose()?) {
         (Some(dir), _) => dir.clone(),
         (None, Some(s)) => default_out_dir(&result.config).join(format!("shard-{}-of-{}", s.k, s.n)),
         (None, None) => default_out_dir(&result.config),
     };
     let written = output::write_files(&dir, &files)?;
+    progress.finish();
     print_result(
         args.format,
         || report::sweep::stdout_table(&result),

@@ -363,6 +363,14 @@ fn bench_frames(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Re
 /// Runs every measurement on `config` (its camera, light, scene and shadow settings; the
 /// motion is set per metric as described in the module documentation).
 pub fn run(config: &Config, repeats: usize) -> Result<BenchReport> {
+    run_with_progress(config, repeats, &|| ())
+}
+
+/// How many measurement groups [`run_with_progress`] reports.
+pub const BENCH_STEPS: u64 = 4;
+
+/// [`run`], calling `on_step` after each of its [`BENCH_STEPS`] measurement groups.
+pub fn run_with_progress(config: &Config, repeats: usize, on_step: &dyn Fn()) -> Result<BenchReport> {
     let Some(rig) = crate::analysis::rig(config) else {
         return Err(unusable(format!(
             "{} needs no cascades (the scene is not visible within the shadow distance), so there is nothing to sample; use a scene the camera sees",
@@ -373,9 +381,13 @@ pub fn run(config: &Config, repeats: usize) -> Result<BenchReport> {
     let crossing = crossing_resolution(config);
     let mut rows = Vec::new();
     bench_density(config, crossing, repeats, &mut rows)?;
+    on_step();
     bench_cell_flips(config, repeats, &mut rows)?;
+    on_step();
     bench_aabb_drift(config, repeats, &mut rows)?;
+    on_step();
     bench_frames(config, repeats, &mut rows)?;
+    on_step();
     let a = &config.analysis;
     let turn = (360.0 / YAW_STEP_DEG).round() as usize;
     let metric = |name, knob, unit, default, note: String| MetricInfo {

@@ -81,6 +81,17 @@ pub fn preset_of(a: &Analysis) -> Option<PresetName> {
 /// Loads and validates the config once, applies each preset to a copy (its engine table from
 /// the file still applies) and analyses each (in parallel, results in input order).
 pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool, own: &[SplitRange]) -> Result<Comparison> {
+    run_with_progress(path, presets, engine_defaults, own, &|| ())
+}
+
+/// [`run`], calling `on_done` after each analysis (from any thread).
+pub fn run_with_progress(
+    path: &Path,
+    presets: &[PresetName],
+    engine_defaults: bool,
+    own: &[SplitRange],
+    on_done: &(dyn Fn() + Sync),
+) -> Result<Comparison> {
     if presets.is_empty() {
         return Err(Error::flag("--presets", "", "give at least one preset"));
     }
@@ -119,7 +130,11 @@ pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool, own: &[Sp
     }
     let analyses = configs
         .par_iter()
-        .map(|c| analyze(c, &AnalysisOptions::full()))
+        .map(|c| {
+            let a = analyze(c, &AnalysisOptions::full());
+            on_done();
+            a
+        })
         .collect();
     Ok(Comparison {
         config_path: path.to_path_buf(),

@@ -738,7 +738,19 @@ pub fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
 
 /// Runs every case in parallel; results come back in case order.
 pub fn run(cases: &[StressCase], opts: &StressOptions) -> Vec<CaseResult> {
-    cases.par_iter().map(|c| run_case(c, opts)).collect()
+    run_with_progress(cases, opts, &|| ())
+}
+
+/// [`run`], calling `on_done` after each case (from any thread).
+pub fn run_with_progress(cases: &[StressCase], opts: &StressOptions, on_done: &(dyn Fn() + Sync)) -> Vec<CaseResult> {
+    cases
+        .par_iter()
+        .map(|c| {
+            let r = run_case(c, opts);
+            on_done();
+            r
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -485,27 +485,37 @@ impl Config {
         crate::motion::camera_path(&setup.camera, &setup.motion)
     }
 
-    /// Camera poses of each further path of `motion.paths` (after the first), with its name,
-    /// or the path's index (1-based in `motion.paths`), first invalid frame and why.
-    #[allow(clippy::type_complexity)]
-    pub fn extra_camera_paths(
-        &self,
-    ) -> std::result::Result<Vec<(&'static str, Vec<CameraPose>)>, (usize, usize, String)> {
-        let setup = self.setup();
+    /// Each further path of `motion.paths` (after the first), with its name, as a motion of
+    /// the configured frame count.
+    pub fn extra_motions(&self) -> Vec<(&'static str, crate::scene::Motion)> {
         self.motion
             .extra
             .iter()
-            .enumerate()
-            .map(|(k, e)| {
+            .map(|e| {
                 let motion = crate::scene::Motion {
                     path: e.path.clone(),
                     frames: self.motion.frames,
                     step: e.step,
                 };
-                crate::motion::camera_path(&setup.camera, &motion)
-                    .map(|poses| (e.path.name(), poses))
-                    .map_err(|(frame, why)| (k + 1, frame, why))
+                (e.path.name(), motion)
             })
             .collect()
+    }
+
+    /// Checks every pose of the motion path and of each further path without keeping them:
+    /// the first invalid frame as (path index: 0 for the first path, 1-based in
+    /// `motion.paths` after it; frame; why).
+    pub fn check_camera_paths(&self) -> std::result::Result<(), (usize, usize, String)> {
+        let setup = self.setup();
+        let first = std::iter::once(setup.motion.clone());
+        for (k, motion) in first
+            .chain(self.extra_motions().into_iter().map(|(_, m)| m))
+            .enumerate()
+        {
+            if let Some(Err((frame, why))) = crate::motion::poses(&setup.camera, &motion).find(|p| p.is_err()) {
+                return Err((k, frame, why));
+            }
+        }
+        Ok(())
     }
 }

@@ -428,28 +428,26 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
 /// Every pose of the motion path must be a valid camera (pitching through the up vector, or a
 /// path file row with position == target, is a config error, not a panic later).
 pub fn check_camera_path(config: &Config, v: &Validator<'_>) -> Result<()> {
+    // Pose by pose, none kept: a long path costs time, not memory.
     config
-        .camera_path()
-        .map(|_| ())
-        .map_err(|(frame, why)| match &config.motion.path {
-            MotionPath::File { path, .. } => v.invalid(
+        .check_camera_paths()
+        .map_err(|(k, frame, why)| match (k, &config.motion.path) {
+            (0, MotionPath::File { path, .. }) => v.invalid(
                 "motion.file",
                 format!("{} line {} (frame {frame})", path.display(), frame + 2),
                 &format!("rows that each give a valid camera: {why}"),
             ),
-            _ => v.invalid(
+            (0, _) => v.invalid(
                 "motion.step",
                 format!("{} (frame {frame})", config.motion.step_as_written),
                 &format!("a motion that keeps a valid camera in every frame: {why}"),
             ),
-        })?;
-    config.extra_camera_paths().map(|_| ()).map_err(|(k, frame, why)| {
-        v.invalid(
-            "motion.paths",
-            format!("{:?} (frame {frame})", config.motion.extra[k - 1].path.name()),
-            &format!("a motion that keeps a valid camera in every frame: {why}"),
-        )
-    })
+            _ => v.invalid(
+                "motion.paths",
+                format!("{:?} (frame {frame})", config.motion.extra[k - 1].path.name()),
+                &format!("a motion that keeps a valid camera in every frame: {why}"),
+            ),
+        })
 }
 
 /// The scene's bounds and geometry. Without geometry `min` and `max` are required; with it

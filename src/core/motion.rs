@@ -82,61 +82,111 @@ impl MotionPath {
 
 /// Poses for every frame of a motion path, or the first frame whose camera is
 /// invalid (up parallel to the view direction, position equal to target) and why.
+/// Collects [`poses`]; a walk along a long path should take the iterator instead.
 pub fn camera_path(cam: &Camera, motion: &Motion) -> std::result::Result<Vec<CameraPose>, (usize, String)> {
-    let up = cam.up;
-    let frames = motion.frames;
-    let step = motion.step;
-    let pose0 = CameraPose::look_at(cam.position, cam.target, up)
-        .ok_or((0, "camera.up is parallel to the view direction".to_string()))?;
-    let dir0 = cam.target - cam.position;
-    let bad = |t: usize| (t, "the view direction becomes parallel to camera.up".to_string());
-    let mut poses = Vec::with_capacity(frames);
-    match &motion.path {
-        MotionPath::File { poses: rows, .. } => {
-            for (t, (p, target)) in rows.iter().enumerate() {
-                let pose = CameraPose::look_at(*p, *target, up).ok_or((
-                    t,
-                    "position equals target, or the view direction is parallel to camera.up".to_string(),
-                ))?;
-                poses.push(pose);
-            }
-        }
-        path => {
-            for t in 0..frames {
-                let s = step * t as f64;
-                let pose = match path {
-                    MotionPath::Strafe => {
-                        let d = pose0.right * s;
-                        CameraPose::look_to(cam.position + d, dir0, up)
-                    }
-                    MotionPath::Dolly => {
-                        let d = pose0.forward * s;
-                        CameraPose::look_to(cam.position + d, dir0, up)
-                    }
-                    MotionPath::Yaw => {
-                        let q = DQuat::from_axis_angle(up.normalize(), s);
-                        CameraPose::look_to(cam.position, q * dir0, up)
-                    }
-                    MotionPath::Pitch => {
-                        let q = DQuat::from_axis_angle(pose0.right, s);
-                        CameraPose::look_to(cam.position, q * dir0, up)
-                    }
-                    MotionPath::Orbit => {
-                        let q = DQuat::from_axis_angle(up.normalize(), s);
-                        CameraPose::look_at(cam.target + q * (cam.position - cam.target), cam.target, up)
-                    }
-                    MotionPath::File { .. } => unreachable!("handled above"),
-                };
-                let pose = pose.ok_or_else(|| bad(t))?;
-                // Pitching over the top flips the camera's right axis: a discontinuity no
-                // real camera controller makes, so it is an error rather than a silent roll.
-                // (Yaw and orbit turn the right axis continuously, through any angle.)
-                if matches!(path, MotionPath::Pitch) && pose.right.dot(pose0.right) <= 0.0 {
-                    return Err(bad(t));
-                }
-                poses.push(pose);
-            }
-        }
-    }
-    Ok(poses)
+    poses(cam, motion).collect()
 }
+
+/// One frame's pose, or that frame and why its camera is invalid.
+pub type PoseResult = std::result::Result<CameraPose, (usize, String)>;
+
+/// The poses of a motion path, one per frame, generated as they are read: a path of any
+/// length takes the memory of one pose (a path file's rows are already in memory). Yields
+/// `Err` for the first invalid frame (and for frame 0 when the configured camera is
+/// invalid); a caller stops there.
+pub fn poses<'a>(cam: &'a Camera, motion: &'a Motion) -> Poses<'a> {
+    let len = match &motion.path {
+        MotionPath::File { poses, .. } => poses.len(),
+        _ => motion.frames,
+    };
+    Poses {
+        cam,
+        motion,
+        pose0: CameraPose::look_at(cam.position, cam.target, cam.up),
+        t: 0,
+        len,
+    }
+}
+
+/// The iterator [`poses`] returns: exact size, cheap to clone (it borrows the camera and
+/// the motion).
+#[derive(Debug, Clone)]
+pub struct Poses<'a> {
+    cam: &'a Camera,
+    motion: &'a Motion,
+    pose0: Option<CameraPose>,
+    t: usize,
+    len: usize,
+}
+
+impl Poses<'_> {
+    fn pose(&self, t: usize) -> PoseResult {
+        let (cam, up) = (self.cam, self.cam.up);
+        let pose0 = self
+            .pose0
+            .ok_or((0, "camera.up is parallel to the view direction".to_string()))?;
+        let dir0 = cam.target - cam.position;
+        let bad = |t: usize| (t, "the view direction becomes parallel to camera.up".to_string());
+        let path = &self.motion.path;
+        if let MotionPath::File { poses: rows, .. } = path {
+            let (p, target) = rows[t];
+            return CameraPose::look_at(p, target, up).ok_or((
+                t,
+                "position equals target, or the view direction is parallel to camera.up".to_string(),
+            ));
+        }
+        let s = self.motion.step * t as f64;
+        let pose = match path {
+            MotionPath::Strafe => {
+                let d = pose0.right * s;
+                CameraPose::look_to(cam.position + d, dir0, up)
+            }
+            MotionPath::Dolly => {
+                let d = pose0.forward * s;
+                CameraPose::look_to(cam.position + d, dir0, up)
+            }
+            MotionPath::Yaw => {
+                let q = DQuat::from_axis_angle(up.normalize(), s);
+                CameraPose::look_to(cam.position, q * dir0, up)
+            }
+            MotionPath::Pitch => {
+                let q = DQuat::from_axis_angle(pose0.right, s);
+                CameraPose::look_to(cam.position, q * dir0, up)
+            }
+            MotionPath::Orbit => {
+                let q = DQuat::from_axis_angle(up.normalize(), s);
+                CameraPose::look_at(cam.target + q * (cam.position - cam.target), cam.target, up)
+            }
+            MotionPath::File { .. } => unreachable!("handled above"),
+        };
+        let pose = pose.ok_or_else(|| bad(t))?;
+        // Pitching over the top flips the camera's right axis: a discontinuity no
+        // real camera controller makes, so it is an error rather than a silent roll.
+        // (Yaw and orbit turn the right axis continuously, through any angle.)
+        if matches!(path, MotionPath::Pitch) && pose.right.dot(pose0.right) <= 0.0 {
+            return Err(bad(t));
+        }
+        Ok(pose)
+    }
+}
+
+impl Iterator for Poses<'_> {
+    type Item = PoseResult;
+
+    fn next(&mut self) -> Option<PoseResult> {
+        if self.t >= self.len {
+            return None;
+        }
+        let r = self.pose(self.t);
+        // After an invalid frame the path ends.
+        self.t = if r.is_ok() { self.t + 1 } else { self.len };
+        Some(r)
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let n = self.len - self.t;
+        (n, Some(n))
+    }
+}
+
+impl ExactSizeIterator for Poses<'_> {}

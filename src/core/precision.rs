@@ -707,27 +707,35 @@ impl PathModel for EnginePath<'_> {
 }
 
 /// Walks the path with the binary32 pipeline for one snap setting.
-pub fn along_path(
+pub fn along_path<P: std::borrow::Borrow<CameraPose>, I>(
     rig: &Rig,
-    poses: &[CameraPose],
+    poses: I,
     probes: &[Vec<DVec3>],
     space: SnapSpace,
     snapped: bool,
     opts: ShimmerOptions,
-) -> EmulatedPath {
+) -> EmulatedPath
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
     let [t] = walk(&mut EnginePath::new(rig, probes, space), poses, [snapped], opts);
     emulated(t, opts)
 }
 
 /// Both snap settings in one walk, `(snapped, unsnapped)`: the same results as two calls of
 /// [`along_path`].
-pub fn along_path_both(
+pub fn along_path_both<P: std::borrow::Borrow<CameraPose>, I>(
     rig: &Rig,
-    poses: &[CameraPose],
+    poses: I,
     probes: &[Vec<DVec3>],
     space: SnapSpace,
     opts: ShimmerOptions,
-) -> (EmulatedPath, EmulatedPath) {
+) -> (EmulatedPath, EmulatedPath)
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
     let [s, u] = walk(&mut EnginePath::new(rig, probes, space), poses, [true, false], opts);
     (emulated(s, opts), emulated(u, opts))
 }
@@ -751,16 +759,26 @@ pub const F32_LIMIT: f64 = 1.2676506002282294e30; // 2^100
 /// coordinates (conservative for `camera_relative`); then builds every frame's f32 windows in
 /// snap space `space` and refuses one that collapses or is not finite. The message completes
 /// "use precision = ...".
-pub fn f32_range_problem(rig: &Rig, poses: &[CameraPose], bounds: &Aabb, space: SnapSpace) -> Option<String> {
+pub fn f32_range_problem<P: std::borrow::Borrow<CameraPose>>(
+    rig: &Rig,
+    poses: impl IntoIterator<Item = P> + Clone,
+    bounds: &Aabb,
+    space: SnapSpace,
+) -> Option<String> {
     let reach = rig
         .slices
         .iter()
         .map(|s| s.sphere.centre_depth + s.sphere.radius)
         .fold(0.0, f64::max);
-    let camera = poses.iter().map(|p| p.position.abs().max_element()).fold(0.0, f64::max);
+    // Two passes over the poses (a generator is cloned, not collected).
+    let camera = poses
+        .clone()
+        .into_iter()
+        .map(|p| p.borrow().position.abs().max_element())
+        .fold(0.0, f64::max);
     let scene = bounds.min.abs().max(bounds.max.abs()).max_element();
     let coord = (camera + reach).max(scene);
-    let lp0 = LightPose::new(&rig.light, poses.first()?);
+    let lp0 = LightPose::new(&rig.light, poses.clone().into_iter().next()?.borrow());
     let texel = (0..rig.cascade_count())
         .map(|i| rig.window(i, &lp0, true).texel.min_element())
         .fold(f64::INFINITY, f64::min);
@@ -786,7 +804,8 @@ pub fn f32_range_problem(rig: &Rig, poses: &[CameraPose], bounds: &Aabb, space: 
     // engine would divide by zero), which no metric can describe.
     let engine: EnginePipeline<f32> = EnginePipeline::new(rig);
     let smallest = (1.0 / F32_LIMIT) as f32;
-    for (t, pose) in poses.iter().enumerate() {
+    for (t, pose) in poses.into_iter().enumerate() {
+        let pose = pose.borrow();
         let anchors = frame_anchors(rig, pose, space);
         for (i, anchor) in anchors.iter().enumerate() {
             for snapped in [true, false] {

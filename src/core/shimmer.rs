@@ -26,6 +26,8 @@
 //! The walk along the path is [`crate::walk::walk`]; [`RigPath`] is the exact f64 rig as a
 //! [`crate::walk::PathModel`], the binary32 pipeline is the other ([`crate::precision`]).
 
+use std::borrow::Borrow;
+
 use glam::{DVec2, DVec3};
 
 use crate::cascades::{bounds_2d, LightPose, Rig};
@@ -55,6 +57,20 @@ fn round_half_away(x: f64) -> f64 {
         _ => t,
     };
     // round(-0.3) is -0.0: the result always carries the sign of x.
+    r.copysign(x)
+}
+
+/// `f64::floor`, bit for bit, without the libm call that baseline x86-64 makes for it: it
+/// runs once per probe, axis, frame and snap mode.
+#[inline]
+fn floor_exact(x: f64) -> f64 {
+    if x.is_nan() || x.abs() >= 4_503_599_627_370_496.0 {
+        return x.floor();
+    }
+    // Truncation toward zero is exact here; one less when that rounded up (negative x).
+    let t = (x as i64) as f64;
+    let r = if t > x { t - 1.0 } else { t };
+    // floor(-0.0) is -0.0 and floor(0.3) is +0.0: the result carries the sign of x.
     r.copysign(x)
 }
 
@@ -117,7 +133,7 @@ impl Coverage {
 /// Per-frame rows kept for a path of this many frames at most: a longer path keeps every
 /// `frame_row_stride(frames)`-th frame, so its rows (and `shimmer.csv`, and the figure) stay
 /// bounded whatever the frame count. Summaries always use every frame.
-pub const MAX_FRAME_ROWS: usize = 10_000;
+pub const MAX_FRAME_ROWS: usize = 1_000;
 
 /// 1 up to [`MAX_FRAME_ROWS`] frames; then the smallest stride that keeps at most that many.
 pub fn frame_row_stride(frames: usize) -> usize {
@@ -200,25 +216,33 @@ fn fast_walk_applies(rig: &Rig) -> bool {
 
 /// Walk the path once for one snap mode: shimmer and coverage together, so each window is
 /// computed once per frame.
-pub fn along_path(
+pub fn along_path<P: Borrow<CameraPose>, I>(
     rig: &Rig,
-    poses: &[CameraPose],
+    poses: I,
     probes: &[Vec<DVec3>],
     snapped: bool,
     opts: ShimmerOptions,
-) -> PathResult {
+) -> PathResult
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
     let [r] = walk(&mut RigPath::new(rig, probes), poses, [snapped], opts);
     r.finish(opts)
 }
 
 /// Both snap modes in one walk, `(snapped, unsnapped)`: the same results as two calls of
 /// [`along_path`], bit for bit, with the per-frame work the modes share done once.
-pub fn along_path_both(
+pub fn along_path_both<P: Borrow<CameraPose>, I>(
     rig: &Rig,
-    poses: &[CameraPose],
+    poses: I,
     probes: &[Vec<DVec3>],
     opts: ShimmerOptions,
-) -> (PathResult, PathResult) {
+) -> (PathResult, PathResult)
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
     let [s, u] = walk(&mut RigPath::new(rig, probes), poses, [true, false], opts);
     (s.finish(opts), u.finish(opts))
 }
@@ -255,6 +279,10 @@ pub struct RigPath<'a> {
     probes: &'a [Vec<DVec3>],
     /// Fixed basis: each probe's light-space x/y, computed once.
     probe_xy: Vec<Vec<DVec2>>,
+    /// Fixed basis: per cascade, a texel size and each probe's x/y divided by it, from the
+    /// first landing. A window of that texel size (a sphere fit's, every frame) lands the
+    /// probes with one subtraction each, bit for bit as [`Window::texel_coords`].
+    probe_texels: Vec<std::cell::OnceCell<(DVec2, Vec<DVec2>)>>,
     fixed: bool,
     /// Fixed basis and selection inside the fitted slices: coverage from the slice corners'
     /// extremes, shared by the snap modes.
@@ -291,6 +319,7 @@ impl<'a> RigPath<'a> {
             rig,
             probes,
             probe_xy: rig.fixed_probe_xy(probes),
+            probe_texels: (0..rig.cascade_count()).map(|_| std::cell::OnceCell::new()).collect(),
             fixed: rig.fixed_basis(),
             fast: fast_walk_applies(rig),
             lp: None,
@@ -427,10 +456,23 @@ impl PathModel for RigPath<'_> {
         _totals: &mut PathTotals,
     ) {
         let win = &w.window;
-        let centre = |s: DVec2| (win.origin_texels + s.floor() + 0.5) * win.texel;
+        let centre = |s: DVec2| (win.origin_texels + DVec2::new(floor_exact(s.x), floor_exact(s.y)) + 0.5) * win.texel;
         if self.fixed {
             // A cascade without probes measures 0 wherever probes are needed.
             let xy = self.probe_xy.get(i).map_or(&[][..], |v| &v[..]);
+            let (texel, scaled) =
+                self.probe_texels[i].get_or_init(|| (win.texel, xy.iter().map(|q| *q / win.texel).collect()));
+            if *texel == win.texel {
+                out.extend(scaled.iter().map(|u| {
+                    let s = *u - win.origin_texels;
+                    Some(Landing {
+                        s,
+                        centre: centre(s),
+                        world: DVec3::ZERO,
+                    })
+                }));
+                return;
+            }
             out.extend(xy.iter().map(|q| {
                 let s = win.texel_coords(*q);
                 Some(Landing {
@@ -450,6 +492,15 @@ impl PathModel for RigPath<'_> {
                 Some(Landing { s, centre: c, world })
             }));
         }
+    }
+
+    /// With a fixed basis a landing depends only on the window's texel size and origin.
+    #[inline]
+    fn same_landings(&self, p: &RigWindow, w: &RigWindow) -> bool {
+        self.fixed
+            && p.cascade == w.cascade
+            && p.window.texel == w.window.texel
+            && p.window.origin_texels == w.window.origin_texels
     }
 
     #[inline]
@@ -496,9 +547,11 @@ mod tests {
             xs.push(x.trunc() + 0.5);
         }
         for x in xs {
+            assert_eq!(floor_exact(x).to_bits(), x.floor().to_bits(), "{x:e}");
             assert_eq!(round_half_away(x).to_bits(), x.round().to_bits(), "{x:e}");
             assert_eq!(wrap(x).to_bits(), (x - x.round()).to_bits(), "{x:e}");
         }
         assert!(round_half_away(f64::NAN).is_nan());
+        assert!(floor_exact(f64::NAN).is_nan());
     }
 }

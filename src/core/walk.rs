@@ -9,6 +9,8 @@
 //! binary32 pipeline, S7 lookup error. The metric definitions are in [`crate::shimmer`] and
 //! [`crate::precision`]; units are texels throughout.
 
+use std::borrow::Borrow;
+
 use glam::DVec2;
 
 use crate::geometry::CameraPose;
@@ -61,6 +63,12 @@ pub trait PathModel {
     );
     /// The sampled-texel centre of a landing in an earlier window, in `w`'s light space.
     fn centre_in(&self, w: &Self::Win, earlier: &Landing) -> DVec2;
+    /// True when every probe lands in `w` exactly as in `p` (the same cascade's window one
+    /// frame earlier): the walk then keeps the earlier landings and counts no drift and no
+    /// flip, which is what the kernels compute for equal landings. False unless known.
+    fn same_landings(&self, _p: &Self::Win, _w: &Self::Win) -> bool {
+        false
+    }
 }
 
 /// Running totals of one snap mode along a path: coverage, S1, S3, S4, S7 and the per-frame
@@ -259,6 +267,35 @@ pub fn closed_form_drift(p_origin_texels: DVec2, w_origin_texels: DVec2) -> f64 
     d.length_squared()
 }
 
+/// Whether a sampled texel centre that moved by `d` (world units, either sign) moved by half a
+/// texel or more along either axis: `|d / texel| >= 0.5`, bit for bit. `inv` is `1 / texel`
+/// when [`flip_divisor`] allows the shortcut: the product `|d| * inv` is within a few units in
+/// the 16th digit of the quotient, so away from 0.5 it decides alike; within 1e-9 of 0.5 (or
+/// for NaN) the quotient itself decides. Two divisions per probe were most of the kernel.
+#[inline]
+fn moved_half_texel(d: DVec2, texel: DVec2, inv: Option<DVec2>) -> bool {
+    let d = d.abs();
+    if let Some(inv) = inv {
+        let q = d * inv;
+        if (q.x - 0.5).abs() > 1e-9 && (q.y - 0.5).abs() > 1e-9 {
+            return q.x >= 0.5 || q.y >= 0.5;
+        }
+    }
+    // |x / t| == |x| / t for t > 0 (division rounds symmetrically), and the original form
+    // otherwise.
+    let moved = if inv.is_some() { d / texel } else { (d / texel).abs() };
+    moved.x >= 0.5 || moved.y >= 0.5
+}
+
+/// `1 / texel` when the multiplication shortcut of [`moved_half_texel`] is exact in its
+/// decisions: positive texel sizes whose reciprocals are normal and far from overflow.
+#[inline]
+fn flip_divisor(texel: DVec2) -> Option<DVec2> {
+    let inv = DVec2::ONE / texel;
+    let ok = |t: f64, i: f64| t > 0.0 && (1e-300..1e300).contains(&i);
+    (ok(texel.x, inv.x) && ok(texel.y, inv.y)).then_some(inv)
+}
+
 /// The per-probe kernel: over the probes landed in both windows, the sum and the largest of
 /// the squared wrapped texel-coordinate change (S3), and how many sampled texel centres moved
 /// by half a texel or more along either axis, in texels of the current window (S4).
@@ -271,6 +308,7 @@ fn probe_kernel<M: PathModel>(
     cur: &[Option<Landing>],
 ) -> (f64, f64, usize, usize) {
     let texel = M::texel(w);
+    let inv = flip_divisor(texel);
     let (mut ss, mut mx_sq, mut flipped, mut served) = (0.0, 0.0f64, 0usize, 0usize);
     for (a, b) in prev.iter().zip(cur) {
         let (Some(a), Some(b)) = (a, b) else {
@@ -281,12 +319,33 @@ fn probe_kernel<M: PathModel>(
         let d2 = d.length_squared();
         ss += d2;
         mx_sq = mx_sq.max(d2);
-        let moved = ((b.centre - model.centre_in(w, a)) / texel).abs();
-        if moved.x >= 0.5 || moved.y >= 0.5 {
+        if moved_half_texel(b.centre - model.centre_in(w, a), texel, inv) {
             flipped += 1;
         }
     }
     (ss, mx_sq, flipped, served)
+}
+
+/// [`probe_kernel`]'s S4 part alone, for a pair whose S3 has the closed form:
+/// `(flipped, served)`, the same counts bit for bit.
+#[inline(never)]
+fn flip_kernel<M: PathModel>(
+    model: &M,
+    w: &M::Win,
+    prev: &[Option<Landing>],
+    cur: &[Option<Landing>],
+) -> (usize, usize) {
+    let texel = M::texel(w);
+    let inv = flip_divisor(texel);
+    let (mut flipped, mut served) = (0usize, 0usize);
+    for (a, b) in prev.iter().zip(cur) {
+        let (Some(a), Some(b)) = (a, b) else {
+            continue;
+        };
+        served += 1;
+        flipped += moved_half_texel(b.centre - model.centre_in(w, a), texel, inv) as usize;
+    }
+    (flipped, served)
 }
 
 /// One snap mode of a walk: its totals, each cascade's previous window and landings.
@@ -298,19 +357,21 @@ struct ModeState<M: PathModel> {
     /// buffers are reused and nothing larger than a window moves per frame.
     prev_landings: Vec<Vec<Option<Landing>>>,
     current: Vec<Option<Landing>>,
+    /// How many of `prev_landings` are served, once counted.
+    prev_served: Vec<Option<usize>>,
 }
 
 /// The one loop along a path: for every frame (in order) and every cascade, calls
 /// `f(model, t, i, shared)` with the values of cascade `i` in frame `t` that every snap mode
 /// shares.
-pub fn each_cascade_frame<M: PathModel>(
+pub fn each_cascade_frame<M: PathModel, P: Borrow<CameraPose>>(
     model: &mut M,
-    poses: &[CameraPose],
+    poses: impl IntoIterator<Item = P>,
     mut f: impl FnMut(&M, usize, usize, &mut M::Shared),
 ) {
     let m = model.cascade_count();
-    for (t, pose) in poses.iter().enumerate() {
-        model.begin_frame(t, pose);
+    for (t, pose) in poses.into_iter().enumerate() {
+        model.begin_frame(t, pose.borrow());
         for i in 0..m {
             let mut shared = model.shared(i);
             f(model, t, i, &mut shared);
@@ -320,13 +381,20 @@ pub fn each_cascade_frame<M: PathModel>(
 
 /// Walks `poses` once with `model`, for each snap mode in `modes` (`true` = snapped), and
 /// returns each mode's totals. Per frame and cascade, the values the modes share are computed
-/// once; probes are landed only when the options need them.
-pub fn walk<M: PathModel, const K: usize>(
+/// once; probes are landed only when the options need them. The poses are read once, in
+/// order, and not kept: a path of any length walks in the memory of one frame (a slice, or
+/// the generator [`crate::motion::poses`]).
+pub fn walk<M: PathModel, P: Borrow<CameraPose>, I, const K: usize>(
     model: &mut M,
-    poses: &[CameraPose],
+    poses: I,
     modes: [bool; K],
     opts: ShimmerOptions,
-) -> [PathTotals; K] {
+) -> [PathTotals; K]
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
+    let poses = poses.into_iter();
     let m = model.cascade_count();
     let probes = model.probes_needed(opts);
     let stride = crate::shimmer::frame_row_stride(poses.len());
@@ -335,14 +403,16 @@ pub fn walk<M: PathModel, const K: usize>(
         prev: (0..m).map(|_| None).collect(),
         prev_landings: vec![Vec::new(); m],
         current: Vec::new(),
+        prev_served: vec![None; m],
     });
     each_cascade_frame(model, poses, |model, t, i, shared| {
         for st in &mut states {
             let w = model.window(i, shared, st.totals.snapped);
             model.cover(i, shared, &w, &mut st.totals);
+            let same = probes && st.prev[i].as_ref().is_some_and(|p| model.same_landings(p, &w));
             let landings = &mut st.current;
             landings.clear();
-            if probes {
+            if probes && !same {
                 model.land(i, shared, &w, landings, &mut st.totals);
             }
             if let Some(p) = &st.prev[i] {
@@ -362,7 +432,28 @@ pub fn walk<M: PathModel, const K: usize>(
                 st.totals.jitter = st.totals.jitter.max(size_change);
                 let drift = match closed {
                     Some(ms) if !opts.cell_flips => Some((ms, ms, None)),
-                    _ => {
+                    // Every probe lands where it landed a frame ago (a snapped window that
+                    // did not move): what the kernels give for equal landings, without them.
+                    _ if same => {
+                        let served =
+                            *st.prev_served[i].get_or_insert_with(|| pl.iter().filter(|l| l.is_some()).count());
+                        if M::SKIP_UNSERVED && served == 0 {
+                            None
+                        } else {
+                            let (ms, mx_sq) = closed.map_or((0.0, 0.0), |ms| (ms, ms));
+                            Some((ms, mx_sq, opts.cell_flips.then_some(0.0)))
+                        }
+                    }
+                    // S3 has the closed form: the probes only count S4 flips.
+                    Some(ms) => {
+                        let (flipped, served) = flip_kernel(model, &w, pl, landings);
+                        if M::SKIP_UNSERVED && served == 0 {
+                            None
+                        } else {
+                            Some((ms, ms, Some(flipped as f64 / served.max(1) as f64)))
+                        }
+                    }
+                    None => {
                         let (ss, mx_sq, flipped, served) = probe_kernel(model, &w, pl, landings);
                         if M::SKIP_UNSERVED && served == 0 {
                             None
@@ -378,8 +469,48 @@ pub fn walk<M: PathModel, const K: usize>(
                 }
             }
             st.prev[i] = Some(w);
-            std::mem::swap(&mut st.prev_landings[i], &mut st.current);
+            if !same {
+                std::mem::swap(&mut st.prev_landings[i], &mut st.current);
+                st.prev_served[i] = None;
+            }
         }
     });
     states.map(|st| st.totals)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shortcut decides exactly as the division, on moves near and far from half a texel,
+    /// of every sign and magnitude, for texel sizes across the allowed range.
+    #[test]
+    fn the_flip_shortcut_decides_as_the_division_does() {
+        let mut rng = crate::rng::SplitMix64::new(7);
+        for _ in 0..400_000 {
+            let texel = DVec2::new(10f64.powf(rng.range(-12.0, 9.0)), 10f64.powf(rng.range(-12.0, 9.0)));
+            let pick = |rng: &mut crate::rng::SplitMix64, t: f64| match rng.range(0.0, 4.0) as u32 {
+                // Exactly at, or one ulp around, half a texel.
+                0 => {
+                    let h = 0.5 * t;
+                    [h, f64::from_bits(h.to_bits() + 1), f64::from_bits(h.to_bits() - 1)]
+                        [rng.range(0.0, 2.999) as usize]
+                }
+                1 => rng.range(0.0, 2.0) * t,
+                2 => (0.5 + rng.range(-1e-8, 1e-8)) * t,
+                _ => rng.range(-1.0, 1.0) * 10f64.powf(rng.range(-300.0, 300.0)),
+            };
+            let d = DVec2::new(pick(&mut rng, texel.x), pick(&mut rng, texel.y))
+                * if rng.range(0.0, 1.0) < 0.5 { -1.0 } else { 1.0 };
+            let exact = {
+                let m = (d / texel).abs();
+                m.x >= 0.5 || m.y >= 0.5
+            };
+            assert_eq!(
+                moved_half_texel(d, texel, flip_divisor(texel)),
+                exact,
+                "{d:?} {texel:?}"
+            );
+        }
+    }
 }

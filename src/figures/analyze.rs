@@ -81,15 +81,15 @@ impl Figure for ShimmerFigure<'_> {
         let frames = a.config.motion.frames;
         let per_frame = |p: &crate::shimmer::PathResult| -> Vec<(f64, f64)> {
             let m = a.cascades.len().max(1);
-            let mut acc = vec![0.0; frames];
-            for f in &p.frames {
-                acc[f.frame] += f.phase_drift_rms * f.phase_drift_rms / m as f64;
-            }
             // Long paths keep every stride-th frame's rows (see `frame_row_stride`).
             let stride = crate::shimmer::frame_row_stride(frames);
+            let mut acc = vec![0.0; frames / stride + 1];
+            for f in &p.frames {
+                acc[f.frame / stride] += f.phase_drift_rms * f.phase_drift_rms / m as f64;
+            }
             (1..frames)
                 .filter(|t| t % stride == 0)
-                .map(|t| (t as f64, acc[t].sqrt()))
+                .map(|t| (t as f64, acc[t / stride].sqrt()))
                 .collect()
         };
         let s_pts = per_frame(sn);

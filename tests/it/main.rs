@@ -15,6 +15,8 @@ mod cli_sweep;
 mod common;
 mod geometry;
 mod golden_outputs;
+mod memory;
+mod output_sets;
 mod precision;
 mod preset_sweeps;
 mod presets;
