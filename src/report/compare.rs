@@ -145,7 +145,11 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
             let p = a.preset.as_ref();
             let (worst, _) = coverage_extremes(a);
             vec![
-                preset_of(a).map_or_else(String::new, |p| p.to_string()),
+                // An invalid preset says so beside its name, as in every compare figure.
+                match crate::figures::compare::invalid_reason(a) {
+                    Some(why) => format!("{} ({why})", preset_of(a).map_or("?", |p| p.as_str())),
+                    None => preset_of(a).map_or_else(String::new, |p| p.to_string()),
+                },
                 format!(
                     "{} × {}",
                     a.rig().map_or(0, |r| r.cascade_count()),

@@ -11,6 +11,7 @@ mod cli_compare;
 mod cli_stress;
 mod cli_sweep;
 mod common;
+mod figures;
 mod geometry;
 mod golden_outputs;
 mod precision;
