@@ -554,3 +554,69 @@ pub fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTransl
         .draw()?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_the_shortest_decimal() {
+        assert_eq!(tick(10.0), "10");
+        assert_eq!(tick(0.2), "0.2");
+        assert_eq!(tick(0.1 + 0.2), "0.3");
+        assert_eq!(tick(6.0 * 0.1), "0.6");
+        assert_eq!(tick(1500.0), "1500");
+        assert_eq!(tick(0.0), "0");
+        assert_eq!(tick(-2.5), "-2.5");
+        assert_eq!(tick(2.5e-5), "2.5e-5");
+        assert_eq!(tick(3e7), "3e7");
+    }
+
+    fn labels(lo: f64, hi: f64, log: bool) -> Vec<String> {
+        nice_ticks(lo, hi, log).into_iter().map(tick).collect()
+    }
+
+    #[test]
+    fn log_ticks_take_1_2_5_steps_per_decade_and_every_decade_on_wide_ranges() {
+        assert_eq!(labels(0.8, 120.0, true), ["1", "2", "5", "10", "20", "50", "100"]);
+        assert_eq!(
+            labels(0.9, 1.1e4, true),
+            ["1", "3", "10", "30", "100", "300", "1000", "3000", "10000"]
+        );
+        assert_eq!(
+            labels(1e-3, 1e5, true),
+            ["0.001", "0.01", "0.1", "1", "10", "100", "1000", "10000", "100000"]
+        );
+    }
+
+    #[test]
+    fn narrow_ranges_get_at_least_three_distinct_labels() {
+        // top_down's max aliasing at 4096²: inside one decade, no 1-2-5 value but 0.6 and 0.8.
+        assert_eq!(labels(0.580319, 0.986597, true), ["0.6", "0.7", "0.8", "0.9"]);
+        assert_eq!(labels(1.16, 1.97, true), ["1.2", "1.4", "1.6", "1.8"]);
+        for (lo, hi) in [(0.5, 0.52), (1234.0, 1240.0), (3.0e-5, 3.3e-5), (99.0, 101.0)] {
+            let l = labels(lo, hi, true);
+            assert!(l.len() >= 3, "{lo}..{hi}: {l:?}");
+            let mut d = l.clone();
+            d.dedup();
+            assert_eq!(d, l, "{lo}..{hi}: duplicated labels");
+            let slack = 1e-9 * hi;
+            for v in nice_ticks(lo, hi, true) {
+                assert!(v >= lo - slack && v <= hi + slack, "{v} outside {lo}..{hi}");
+            }
+        }
+    }
+
+    #[test]
+    fn linear_ticks_are_round_and_cover_the_range() {
+        assert_eq!(labels(0.0, 0.6048, false), ["0", "0.2", "0.4", "0.6"]);
+        assert_eq!(labels(0.0, 239.0, false), ["0", "50", "100", "150", "200"]);
+        assert_eq!(labels(-12.0, 12.0, false), ["-10", "-5", "0", "5", "10"]);
+    }
+
+    #[test]
+    fn a_legend_reserves_one_line_per_entry() {
+        assert_eq!(legend_height(0, 13), 24);
+        assert_eq!(legend_height(4, 13), 4 * 17 + 24);
+    }
+}

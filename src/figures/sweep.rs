@@ -749,3 +749,21 @@ impl Figure for ParetoFigure<'_> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn five_numbers_are_min_quartiles_median_max() {
+        assert_eq!(
+            five_numbers(&[5.0, 1.0, 4.0, 2.0, 3.0]),
+            Some([1.0, 2.0, 3.0, 4.0, 5.0])
+        );
+        // Quartiles interpolate between order statistics.
+        assert_eq!(five_numbers(&[10.0, 0.0]), Some([0.0, 2.5, 5.0, 7.5, 10.0]));
+        assert_eq!(five_numbers(&[0.3]), Some([0.3; 5]));
+        assert_eq!(five_numbers(&[f64::NAN, 2.0]), Some([2.0; 5]));
+        assert_eq!(five_numbers(&[]), None);
+    }
+}
