@@ -73,6 +73,24 @@ pub fn label(a: &Analysis) -> String {
     }
 }
 
+/// Why a preset's result cannot be used as it stands: slice corners its windows miss (those
+/// points read "lit"), or receivers outside its light depth range (clipped). None when valid.
+pub fn invalid_reason(a: &Analysis) -> Option<String> {
+    let mut why = Vec::new();
+    let misses = a.summary.coverage_violations;
+    if misses > 0 {
+        why.push(format!("{} missed", crate::output::count(misses, "slice corner")));
+    }
+    let clipped = a.preset.as_ref().map_or(0.0, |p| p.receivers_outside_depth);
+    if clipped > 0.0 {
+        why.push(format!(
+            "receivers clipped by {} world units of light depth",
+            crate::output::short_number(clipped)
+        ));
+    }
+    (!why.is_empty()).then(|| why.join("; "))
+}
+
 /// The preset an analysis ran, if any.
 pub fn preset_of(a: &Analysis) -> Option<PresetName> {
     a.config.shadow.preset.as_ref().map(|p| p.name)

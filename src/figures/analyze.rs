@@ -5,7 +5,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    chart_frame, draw_legend, draw_message, palette, series_color, texels_per_pixel_chart, Figure, PlotResult, FONT,
+    draw_legend_below, draw_message, legend_frame, legend_height, linear_axis, palette, series_color,
+    texels_per_pixel_chart, tick, Figure, Legend, PlotResult, FONT, LEGEND_FONT,
 };
 use crate::analysis::Analysis;
 use crate::cascades::{bounds_2d, LightPose};
@@ -15,8 +16,21 @@ use crate::output::Exporter;
 /// Texels per pixel against view depth, log-log, with split lines and the ideal 1.
 pub struct DensityFigure<'a>(pub &'a Analysis);
 
+impl DensityFigure<'_> {
+    /// Legend entries: the ideal line, the split depths (with two or more cascades), a cascade each.
+    fn legend_lines(&self) -> usize {
+        let m = self.0.cascades.len();
+        1 + usize::from(m > 1) + m
+    }
+}
+
 impl Figure for DensityFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        (960, 540 + legend_height(self.legend_lines(), LEGEND_FONT))
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
+        let mut legend = Legend::default();
         let a = self.0;
         let title = format!("Shadow texels per screen pixel vs depth: {}", a.config.name);
         let Some(rig) = a.rig() else {
@@ -32,14 +46,16 @@ impl Figure for DensityFigure<'_> {
             22,
             (a.summary.z_lo, a.summary.z_hi),
             a.density.iter().map(|d| d.texels_per_pixel),
+            self.legend_lines(),
+            &mut legend,
         )?;
         for (i, s) in rig.splits[1..rig.splits.len() - 1].iter().enumerate() {
             let style = palette::SPLIT.stroke_width(1);
-            let series = chart.draw_series(DashedLineSeries::new(vec![(*s, y0), (*s, y1)], 5, 4, style))?;
+            chart.draw_series(DashedLineSeries::new(vec![(*s, y0), (*s, y1)], 5, 4, style))?;
             if i == 0 {
-                series
-                    .label("split depths")
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+                legend.add("split depths", move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], style)
+                });
             }
         }
         for (i, c) in a.cascades.iter().enumerate() {
@@ -50,15 +66,13 @@ impl Figure for DensityFigure<'_> {
                 .filter(|d| d.cascade == i)
                 .map(|d| (d.depth, d.texels_per_pixel))
                 .collect();
-            chart
-                .draw_series(LineSeries::new(pts, color.stroke_width(3)))?
-                .label(format!(
-                    "cascade {i}: {:.3}..{:.3}, texel {:.4}",
-                    c.near, c.far, c.texel_size
-                ))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3)));
+            chart.draw_series(LineSeries::new(pts, color.stroke_width(3)))?;
+            legend.add(
+                format!("cascade {i}: {:.3}..{:.3}, texel {:.4}", c.near, c.far, c.texel_size),
+                move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3)),
+            );
         }
-        draw_legend(&mut chart, SeriesLabelPosition::LowerRight, 13)?;
+        draw_legend_below(root, legend, self.legend_lines())?;
         Ok(())
     }
 }
@@ -67,7 +81,12 @@ impl Figure for DensityFigure<'_> {
 pub struct ShimmerFigure<'a>(pub &'a Analysis);
 
 impl Figure for ShimmerFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        (960, 540 + legend_height(2, LEGEND_FONT))
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
+        let mut legend = Legend::default();
         let a = self.0;
         let title = format!(
             "Sub-texel drift per frame ({} path, {} fit): {}",
@@ -95,10 +114,12 @@ impl Figure for ShimmerFigure<'_> {
         let s_pts = per_frame(sn);
         let u_pts = per_frame(un);
         let ymax = u_pts.iter().chain(&s_pts).map(|p| p.1).fold(0.0f64, f64::max).max(0.05) * 1.15;
-        let mut chart =
-            chart_frame(root, &title, 22, 70).build_cartesian_2d(0.0..(frames.max(2) - 1) as f64, 0.0..ymax)?;
+        let mut chart = legend_frame(root, &title, 22, 70, 2, LEGEND_FONT)
+            .build_cartesian_2d(linear_axis(0.0, (frames.max(2) - 1) as f64), linear_axis(0.0, ymax))?;
         chart
             .configure_mesh()
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
             .x_desc("frame")
             .y_desc("RMS phase drift over cascades (texels)")
             .axis_desc_style((FONT, 15))
@@ -106,15 +127,15 @@ impl Figure for ShimmerFigure<'_> {
             .draw()?;
         let red = series_color(1);
         let blue = series_color(0);
-        chart
-            .draw_series(LineSeries::new(u_pts, red.stroke_width(2)))?
-            .label(format!("unsnapped (RMS {:.3e} texels)", un.stats.rms))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], red.stroke_width(2)));
-        chart
-            .draw_series(LineSeries::new(s_pts, blue.stroke_width(4)))?
-            .label(format!("snapped (RMS {:.3e} texels)", sn.stats.rms))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], blue.stroke_width(4)));
-        draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 14)?;
+        chart.draw_series(LineSeries::new(u_pts, red.stroke_width(2)))?;
+        legend.add(format!("unsnapped (RMS {:.3e} texels)", un.stats.rms), move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 18, y)], red.stroke_width(2))
+        });
+        chart.draw_series(LineSeries::new(s_pts, blue.stroke_width(4)))?;
+        legend.add(format!("snapped (RMS {:.3e} texels)", sn.stats.rms), move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 18, y)], blue.stroke_width(4))
+        });
+        draw_legend_below(root, legend, 2)?;
         Ok(())
     }
 }
@@ -151,10 +172,12 @@ pub struct CascadesFigure<'a>(pub &'a Analysis);
 
 impl Figure for CascadesFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (860, 800)
+        let lines = self.0.cascades.len() + 1;
+        (860, 760 + legend_height(lines, LEGEND_FONT))
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
+        let mut legend = Legend::default();
         let a = self.0;
         let title = format!("Slices and windows seen from the light: {}", a.config.name);
         let Some(rig) = a.rig() else {
@@ -182,14 +205,14 @@ impl Figure for CascadesFigure<'_> {
         // Equal scales on both axes so shapes are not distorted.
         let c = 0.5 * (lo + hi);
         let half = 0.5 * (hi - lo).max_element() * 1.06;
-        let mut chart = ChartBuilder::on(root)
-            .caption(&title, (FONT, 20))
-            .margin(14)
+        let lines = rig.cascade_count() + 1;
+        let mut chart = legend_frame(root, &title, 20, 70, lines, LEGEND_FONT)
             .x_label_area_size(48)
-            .y_label_area_size(70)
-            .build_cartesian_2d((c.x - half)..(c.x + half), (c.y - half)..(c.y + half))?;
+            .build_cartesian_2d(linear_axis(c.x - half, c.x + half), linear_axis(c.y - half, c.y + half))?;
         chart
             .configure_mesh()
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
             .x_desc("light-space x (world units)")
             .y_desc("light-space y (world units)")
             .axis_desc_style((FONT, 15))
@@ -202,27 +225,22 @@ impl Figure for CascadesFigure<'_> {
             let mut outline = hull.clone();
             outline.push(hull[0]);
             chart.draw_series(std::iter::once(PathElement::new(outline, color.stroke_width(1))))?;
-            chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [(wlo.x, wlo.y), (whi.x, whi.y)],
-                    color.stroke_width(2),
-                )))?
-                .label(format!(
-                    "cascade {i}: window {:.3} x {:.3}",
-                    whi.x - wlo.x,
-                    whi.y - wlo.y
-                ))
-                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], color.mix(0.5).filled()));
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(wlo.x, wlo.y), (whi.x, whi.y)],
+                color.stroke_width(2),
+            )))?;
+            legend.add(
+                format!("cascade {i}: window {:.3} x {:.3}", whi.x - wlo.x, whi.y - wlo.y),
+                move |(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], color.mix(0.5).filled()),
+            );
         }
-        chart
-            .draw_series(std::iter::once(Circle::new(
-                (lp.position.x, lp.position.y),
-                5,
-                BLACK.filled(),
-            )))?
-            .label("camera")
-            .legend(|(x, y)| Circle::new((x + 8, y), 4, BLACK.filled()));
-        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft, 13)?;
+        chart.draw_series(std::iter::once(Circle::new(
+            (lp.position.x, lp.position.y),
+            5,
+            BLACK.filled(),
+        )))?;
+        legend.add("camera", |(x, y)| Circle::new((x + 8, y), 4, BLACK.filled()));
+        draw_legend_below(root, legend, lines)?;
         Ok(())
     }
 }

@@ -3,7 +3,10 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{chart_frame, draw_legend, log_range, series_color, Figure, PlotResult, FONT};
+use super::{
+    draw_legend_below, legend_frame, legend_height, log_axis, log_range, series_color, tick, Figure, Legend,
+    PlotResult, FONT, LEGEND_FONT,
+};
 use crate::bench::{BenchReport, BenchRow, TARGET_ERROR};
 use crate::error::Result;
 use crate::output::Exporter;
@@ -26,10 +29,11 @@ pub struct BenchFigure<'a>(pub &'a BenchReport);
 
 impl Figure for BenchFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (1040, 660)
+        (1040, 600 + legend_height(self.0.metrics.len() + 1, LEGEND_FONT))
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
+        let mut legend = Legend::default();
         let report = self.0;
         // Exact (zero-error) points have no place on a log axis: they are left out.
         let plotted = |r: &&BenchRow| r.error > 0.0 && r.seconds > 0.0;
@@ -47,27 +51,28 @@ impl Figure for BenchFigure<'_> {
         };
         let (y0, y1) = log_range(emin, emax);
         let title = format!("Accuracy against run time of the sampled metrics: {}", report.scene);
-        let mut chart =
-            chart_frame(root, &title, 22, 80).build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+        let lines = report.metrics.len() + 1;
+        let mut chart = legend_frame(root, &title, 22, 80, lines, LEGEND_FONT)
+            .build_cartesian_2d(log_axis(x0, x1), log_axis(y0, y1))?;
         chart
             .configure_mesh()
             .x_desc("time per evaluation (seconds, log; best of repeated runs)")
             .y_desc("relative error (log)")
-            .x_label_formatter(&|v| format!("{v:.0e}"))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
             .axis_desc_style((FONT, 15))
             .label_style((FONT, 13))
             .draw()?;
         let target = BLACK.stroke_width(2);
-        chart
-            .draw_series(DashedLineSeries::new(
-                vec![(x0, TARGET_ERROR), (x1, TARGET_ERROR)],
-                8,
-                5,
-                target,
-            ))?
-            .label(format!("target: relative error {TARGET_ERROR:.0e}"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], target));
+        chart.draw_series(DashedLineSeries::new(
+            vec![(x0, TARGET_ERROR), (x1, TARGET_ERROR)],
+            8,
+            5,
+            target,
+        ))?;
+        legend.add(format!("target: relative error {TARGET_ERROR:.0e}"), move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 18, y)], target)
+        });
         for (i, m) in report.metrics.iter().enumerate() {
             let color = series_color(i);
             let line: Vec<(f64, f64)> = report
@@ -76,12 +81,12 @@ impl Figure for BenchFigure<'_> {
                 .map(|r| (r.seconds, r.error))
                 .collect();
             chart.draw_series(line.iter().map(|p| Circle::new(*p, 3, color.filled())))?;
-            chart
-                .draw_series(LineSeries::new(line, color.stroke_width(2)))?
-                .label(format!("{} ({})", m.name, m.unit))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+            chart.draw_series(LineSeries::new(line, color.stroke_width(2)))?;
+            legend.add(format!("{} ({})", m.name, m.unit), move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+            });
         }
-        draw_legend(&mut chart, SeriesLabelPosition::LowerLeft, 13)?;
+        draw_legend_below(root, legend, lines)?;
         Ok(())
     }
 }

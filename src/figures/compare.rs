@@ -6,19 +6,31 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{
-    draw_legend, draw_message, log_range, palette, preset_color, series_color, short, texels_per_pixel_chart, Figure,
-    PlotResult, FONT,
+    draw_legend_below, draw_message, legend_height, linear_axis, log_range, palette, preset_color, series_color, short,
+    texels_per_pixel_chart, tick, Figure, Legend, PlotResult, FONT, LEGEND_FONT,
 };
 use crate::analysis::Analysis;
-use crate::compare::{coverage_extremes, label, Comparison};
+use crate::compare::{coverage_extremes, invalid_reason, label, Comparison};
 use crate::error::Result;
 use crate::output::Exporter;
 
 /// Texels per pixel against view depth, log-log, one line per preset.
 pub struct DensityOverlay<'a>(pub &'a Comparison);
 
+impl DensityOverlay<'_> {
+    /// Legend entries: the ideal line and one per preset with cascades.
+    fn legend_lines(&self) -> usize {
+        1 + self.0.analyses.iter().filter(|a| !a.density.is_empty()).count()
+    }
+}
+
 impl Figure for DensityOverlay<'_> {
+    fn size(&self) -> (u32, u32) {
+        (960, 540 + legend_height(self.legend_lines(), LEGEND_FONT))
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
+        let mut legend = Legend::default();
         let c = self.0;
         let title = format!("Shadow texels per screen pixel vs depth, by preset: {}", c.name);
         let with_cascades: Vec<&Analysis> = c.analyses.iter().filter(|a| !a.density.is_empty()).collect();
@@ -38,6 +50,8 @@ impl Figure for DensityOverlay<'_> {
             with_cascades
                 .iter()
                 .flat_map(|a| a.density.iter().map(|d| d.texels_per_pixel)),
+            self.legend_lines(),
+            &mut legend,
         )?;
         for (i, a) in c.analyses.iter().enumerate() {
             if a.density.is_empty() {
@@ -47,19 +61,30 @@ impl Figure for DensityOverlay<'_> {
             // Samples are sorted by depth with both sides of every split: the line shows the
             // sawtooth's jumps as vertical segments.
             let pts: Vec<(f64, f64)> = a.density.iter().map(|d| (d.depth, d.texels_per_pixel)).collect();
-            let style = color.stroke_width(3);
-            chart
-                .draw_series(LineSeries::new(pts, style))?
-                .label(format!(
-                    "{}: {} x {}, max aliasing {:.3}",
-                    &label(a),
-                    a.rig().map_or(0, |r| r.cascade_count()),
-                    a.config.shadow.resolution,
-                    a.summary.max_aliasing
-                ))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+            // An invalid preset is drawn dashed and thin, and says why in the legend.
+            let invalid = invalid_reason(a);
+            let style = color.stroke_width(if invalid.is_some() { 2 } else { 3 });
+            let label = format!(
+                "{}: {} x {}, max aliasing {}{}",
+                label(a),
+                a.rig().map_or(0, |r| r.cascade_count()),
+                a.config.shadow.resolution,
+                short(a.summary.max_aliasing),
+                invalid
+                    .as_ref()
+                    .map_or(String::new(), |r| format!(" - INVALID: {r} (dashed)"))
+            );
+            if invalid.is_some() {
+                chart.draw_series(DashedLineSeries::new(pts, 7, 5, style))?;
+            } else {
+                chart.draw_series(LineSeries::new(pts, style))?;
+            }
+            let swatch = if invalid.is_some() { 9 } else { 18 };
+            legend.add(label, move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + swatch, y)], style)
+            });
         }
-        draw_legend(&mut chart, SeriesLabelPosition::LowerRight, 13)?;
+        draw_legend_below(root, legend, self.legend_lines())?;
         Ok(())
     }
 }
@@ -69,7 +94,18 @@ pub struct ShimmerCoverageBars<'a>(pub &'a Comparison);
 
 impl ShimmerCoverageBars<'_> {
     fn names(&self) -> Vec<String> {
-        self.0.analyses.iter().map(label).collect()
+        self.0
+            .analyses
+            .iter()
+            .map(|a| {
+                let name = label(a);
+                if invalid_reason(a).is_some() {
+                    format!("{name} (INVALID)")
+                } else {
+                    name
+                }
+            })
+            .collect()
     }
 }
 
@@ -101,7 +137,7 @@ impl Figure for ShimmerCoverageBars<'_> {
             ),
             (FONT, 22),
         )?;
-        let (left, right) = root.split_horizontally(700);
+        let (left, right) = root.split_horizontally(740);
 
         // Shimmer: two rows per preset.
         let rows = 2 * n;
@@ -127,10 +163,11 @@ impl Figure for ShimmerCoverageBars<'_> {
         let mut chart = ChartBuilder::on(&left)
             .margin(12)
             .x_label_area_size(46)
-            .y_label_area_size(190)
-            .build_cartesian_2d(0.0..xmax, rows_axis(rows).into_segmented())?;
+            .y_label_area_size(250)
+            .build_cartesian_2d(linear_axis(0.0, xmax), rows_axis(rows).into_segmented())?;
         chart
             .configure_mesh()
+            .x_label_formatter(&|v| tick(*v))
             .disable_y_mesh()
             .y_labels(rows)
             .y_label_formatter(&|v| match v {
@@ -169,14 +206,15 @@ impl Figure for ShimmerCoverageBars<'_> {
             .map(|a| a.summary.coverage_violations as f64)
             .fold(0.0f64, f64::max)
             .max(1.0)
-            * 2.0;
+            * 2.8;
         let mut chart = ChartBuilder::on(&right)
             .margin(12)
             .x_label_area_size(46)
-            .y_label_area_size(110)
-            .build_cartesian_2d(0.0..cmax, rows_axis(n).into_segmented())?;
+            .y_label_area_size(190)
+            .build_cartesian_2d(linear_axis(0.0, cmax), rows_axis(n).into_segmented())?;
         chart
             .configure_mesh()
+            .x_label_formatter(&|v| tick(*v))
             .disable_y_mesh()
             .y_labels(n)
             .y_label_formatter(&|v| match v {
@@ -200,7 +238,7 @@ impl Figure for ShimmerCoverageBars<'_> {
             let text = if v == 0.0 {
                 "0".to_string()
             } else {
-                format!("{} (worst {} texels)", v as u64, short(worst))
+                format!("{} (worst {} texels): INVALID", v as u64, short(worst))
             };
             chart.draw_series(std::iter::once(Text::new(
                 text,

@@ -14,13 +14,21 @@ pub mod sweep;
 use std::sync::Once;
 
 use plotters::coord::cartesian::Cartesian2d;
-use plotters::coord::combinators::LogCoord;
+use plotters::coord::combinators::{BindKeyPoints, LogCoord, WithKeyPoints};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
+use plotters::element::{DynElement, IntoDynElement};
+
+/// A pixel position on a backend.
+type BackendCoord = (i32, i32);
 use plotters::prelude::*;
 
 use crate::error::{PlotError, Result};
 
 pub const FONT: &str = "sans-serif";
+
+/// The font size of every legend.
+pub const LEGEND_FONT: u32 = 13;
 
 /// Registers the embedded font with plotters (once per process).
 pub fn init_fonts() {
@@ -112,7 +120,17 @@ pub fn svg_to_rgb(svg: &[u8], scale: f32) -> Result<(u32, u32, Vec<u8>)> {
         &mut pixmap.as_mut(),
     );
     // Opaque background, so premultiplied RGBA equals straight RGBA: drop alpha.
-    let rgb: Vec<u8> = pixmap.data().chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+    // In place: pixel i's RGB moves from 4i to 3i (never past a pixel not yet read), which
+    // saves allocating and faulting in a second image-sized buffer.
+    let mut rgb = pixmap.take();
+    let n = rgb.len() / 4;
+    for i in 0..n {
+        let (s, d) = (4 * i, 3 * i);
+        rgb[d] = rgb[s];
+        rgb[d + 1] = rgb[s + 1];
+        rgb[d + 2] = rgb[s + 2];
+    }
+    rgb.truncate(3 * n);
     Ok((w, h, rgb))
 }
 
@@ -129,6 +147,95 @@ pub fn encode_png(w: u32, h: u32, rgb: &[u8]) -> Result<Vec<u8>> {
             .map_err(|e| PlotError::Png(e.to_string()))?;
     }
     Ok(out)
+}
+
+/// An axis tick label: the shortest decimal that names the tick ("10", "0.2", "2.5e-5"), never
+/// trailing zeros. Ticks come from [`nice_ticks`], so 4 significant digits always suffice.
+pub fn tick(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return "0".to_string();
+    }
+    let a = v.abs();
+    if !(1e-4..1e6).contains(&a) {
+        let s = format!("{v:.3e}");
+        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+        let m = if m.contains('.') {
+            m.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            m
+        };
+        return format!("{m}e{e}");
+    }
+    let digits = (3 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// Round tick values for an axis over `lo..hi` (log or linear), at least three when the range
+/// allows, each with a distinct [`tick`] label. Log axes take 1-2-5 steps per decade (every
+/// decade when the range spans many), falling back to a linear 1-2-5 step on narrow ranges, so
+/// an axis never goes unlabelled.
+pub fn nice_ticks(lo: f64, hi: f64, log: bool) -> Vec<f64> {
+    if !(lo.is_finite() && hi.is_finite()) || hi <= lo {
+        return vec![lo];
+    }
+    // The largest 1-2-5 step that still gives `min_count` ticks.
+    let linear = |min_count: usize| -> Vec<f64> {
+        let mag = 10f64.powf((hi - lo).log10().floor());
+        let at = |step: f64| -> Vec<f64> {
+            let first = (lo / step).ceil() as i64;
+            let last = (hi / step).floor() as i64;
+            (first..=last).map(|k| k as f64 * step).collect()
+        };
+        [5.0, 2.0, 1.0, 0.5, 0.2, 0.1, 0.05]
+            .iter()
+            .map(|m| at(m * mag))
+            .find(|t| t.len() >= min_count)
+            .unwrap_or_else(|| at(0.05 * mag))
+    };
+    let mut out = if log && lo > 0.0 {
+        let decades = (hi / lo).log10();
+        let (d0, d1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+        let mantissas: &[f64] = if decades > 6.0 {
+            &[1.0]
+        } else if decades > 2.5 {
+            &[1.0, 3.0]
+        } else if decades > 1.0 {
+            &[1.0, 2.0, 5.0]
+        } else {
+            &[1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0]
+        };
+        let stride = if decades > 12.0 {
+            (decades / 6.0).ceil() as i32
+        } else {
+            1
+        };
+        let mut v = Vec::new();
+        for d in (d0..=d1).filter(|d| (d - d0) % stride == 0) {
+            for m in mantissas {
+                let x = m * 10f64.powi(d);
+                if x >= lo && x <= hi {
+                    v.push(x);
+                }
+            }
+        }
+        if v.len() < 3 {
+            linear(3).into_iter().filter(|x| *x > 0.0).collect()
+        } else {
+            v
+        }
+    } else {
+        linear(4)
+    };
+    out.dedup_by(|a, b| tick(*a) == tick(*b));
+    if out.is_empty() {
+        out.push(lo);
+    }
+    out
 }
 
 /// Value labels: "0" for exact zeros, 3 significant digits otherwise.
@@ -264,7 +371,63 @@ pub fn log_range(lo: f64, hi: f64) -> (f64, f64) {
 }
 
 /// The chart type of the log-log "texels per pixel against view depth" figures.
-pub type DepthChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+pub type DepthChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogAxis, LogAxis>>;
+
+/// A log axis labelled at [`nice_ticks`].
+pub type LogAxis = WithKeyPoints<LogCoord<f64>>;
+
+/// A log axis over `lo..hi` with round, distinct tick labels.
+pub fn log_axis(lo: f64, hi: f64) -> LogAxis {
+    (lo..hi).log_scale().with_key_points(nice_ticks(lo, hi, true))
+}
+
+/// A log axis over `lo..hi` labelled at `ticks`.
+pub fn log_axis_with(lo: f64, hi: f64, ticks: Vec<f64>) -> LogAxis {
+    (lo..hi).log_scale().with_key_points(ticks)
+}
+
+/// A linear axis over `lo..hi` with round, distinct tick labels.
+pub fn linear_axis(lo: f64, hi: f64) -> TickedAxis {
+    TickedAxis {
+        inner: (lo..hi).into(),
+        ticks: nice_ticks(lo, hi, false),
+    }
+}
+
+/// A linear axis over `lo..hi` labelled at the given ticks (e.g. the centres of categories).
+pub fn ticked_axis(lo: f64, hi: f64, ticks: Vec<f64>) -> TickedAxis {
+    TickedAxis {
+        inner: (lo..hi).into(),
+        ticks,
+    }
+}
+
+/// A linear f64 axis with chosen tick positions, labelled by the chart's label formatter.
+pub struct TickedAxis {
+    inner: RangedCoordf64,
+    ticks: Vec<f64>,
+}
+
+impl Ranged for TickedAxis {
+    type ValueType = f64;
+    type FormatOption = plotters::coord::ranged1d::DefaultFormatting;
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.inner.range()
+    }
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.inner.map(value, limit)
+    }
+
+    fn key_points<Hint: plotters::coord::ranged1d::KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            Vec::new()
+        } else {
+            self.ticks.clone()
+        }
+    }
+}
 
 /// A log-log chart of texels per pixel against view depth over `depth` with its axes, labels and
 /// the dashed "ideal: 1 texel per pixel" line already drawn; the y range covers `texels_per_pixel`
@@ -275,25 +438,111 @@ pub fn texels_per_pixel_chart<'a, DB: DrawingBackend>(
     caption_size: u32,
     depth: (f64, f64),
     texels_per_pixel: impl Iterator<Item = f64>,
+    legend_lines: usize,
+    legend: &mut Legend<DB>,
 ) -> Result<(DepthChart<'a, DB>, (f64, f64)), DrawError> {
     let (ymin, ymax) = texels_per_pixel.fold((1.0f64, 1.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
     let (y0, y1) = log_range(ymin, ymax);
     let (x0, x1) = depth;
-    let mut chart =
-        chart_frame(root, title, caption_size, 70).build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+    let mut chart = legend_frame(root, title, caption_size, 70, legend_lines, LEGEND_FONT)
+        .build_cartesian_2d(log_axis(x0, x1), log_axis(y0, y1))?;
     chart
         .configure_mesh()
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(*v))
         .x_desc("view depth (world units, log)")
         .y_desc("texels per pixel (log; above 1 = sharper than the screen)")
         .axis_desc_style((FONT, 15))
         .label_style((FONT, 13))
         .draw()?;
     let ideal = BLACK.stroke_width(2);
-    chart
-        .draw_series(DashedLineSeries::new(vec![(x0, 1.0), (x1, 1.0)], 8, 5, ideal))?
-        .label("ideal: 1 texel per pixel")
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], ideal));
+    chart.draw_series(DashedLineSeries::new(vec![(x0, 1.0), (x1, 1.0)], 8, 5, ideal))?;
+    legend.add("ideal: 1 texel per pixel", move |(x, y)| {
+        PathElement::new(vec![(x, y), (x + 18, y)], ideal)
+    });
     Ok((chart, (y0, y1)))
+}
+
+/// The height of a legend of `lines` entries in `font_size` text, in pixels: what
+/// [`legend_frame`] reserves below a chart and [`draw_legend_below`] fills.
+pub fn legend_height(lines: usize, font_size: u32) -> u32 {
+    lines as u32 * (font_size * 5).div_ceil(4) + 24
+}
+
+/// [`chart_frame`] with a band of [`legend_height`] pixels reserved under the x-axis labels, where
+/// [`draw_legend_below`] puts the legend: outside the plotting area, so it never covers data.
+pub fn legend_frame<'a, 'b, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    caption_size: u32,
+    y_labels: u32,
+    legend_lines: usize,
+    font_size: u32,
+) -> ChartBuilder<'a, 'b, DB> {
+    let mut b = chart_frame(root, title, caption_size, y_labels);
+    b.margin_bottom(14 + legend_height(legend_lines, font_size));
+    b
+}
+
+/// A figure's legend entries (label and swatch), drawn by [`draw_legend_below`] in a band of its
+/// own under the chart, so the legend box never covers data.
+pub struct Legend<DB: DrawingBackend> {
+    entries: Vec<LegendEntry<DB>>,
+}
+
+type LegendEntry<DB> = (
+    String,
+    Box<dyn Fn(BackendCoord) -> DynElement<'static, DB, BackendCoord>>,
+);
+
+impl<DB: DrawingBackend> Default for Legend<DB> {
+    fn default() -> Self {
+        Legend { entries: Vec::new() }
+    }
+}
+
+impl<DB: DrawingBackend> Legend<DB> {
+    /// An entry: `label` beside the swatch `f` draws at the given pixel.
+    pub fn add<E, F>(&mut self, label: impl Into<String>, f: F)
+    where
+        E: IntoDynElement<'static, DB, BackendCoord>,
+        F: Fn(BackendCoord) -> E + 'static,
+    {
+        self.entries.push((label.into(), Box::new(move |p| f(p).into_dyn())));
+    }
+
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+}
+
+/// Draws `legend` in the house style (white, framed box) in the band of [`legend_height`] pixels
+/// for `reserved_lines` entries that [`legend_frame`] left at the bottom of `root`, left-aligned
+/// with the plotting area.
+pub fn draw_legend_below<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    legend: Legend<DB>,
+    reserved_lines: usize,
+) -> PlotResult {
+    if legend.is_empty() {
+        return Ok(());
+    }
+    let (w, h) = root.dim_in_pixel();
+    let band_h = legend_height(reserved_lines.max(legend.len()), LEGEND_FONT).min(h);
+    let left = 84.min(w.saturating_sub(1));
+    let band = root.clone().shrink((left, h - band_h), (w - left, band_h));
+    let mut chart = ChartBuilder::on(&band).build_cartesian_2d(0.0..1.0, 0.0..1.0)?;
+    for (label, f) in legend.entries {
+        chart
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
+            .label(label)
+            .legend(f);
+    }
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft, LEGEND_FONT)
 }
 
 /// Draws the series legend in the house style (white, framed box) at `position`.
@@ -310,4 +559,70 @@ pub fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTransl
         .label_font((FONT, font_size))
         .draw()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_the_shortest_decimal() {
+        assert_eq!(tick(10.0), "10");
+        assert_eq!(tick(0.2), "0.2");
+        assert_eq!(tick(0.1 + 0.2), "0.3");
+        assert_eq!(tick(6.0 * 0.1), "0.6");
+        assert_eq!(tick(1500.0), "1500");
+        assert_eq!(tick(0.0), "0");
+        assert_eq!(tick(-2.5), "-2.5");
+        assert_eq!(tick(2.5e-5), "2.5e-5");
+        assert_eq!(tick(3e7), "3e7");
+    }
+
+    fn labels(lo: f64, hi: f64, log: bool) -> Vec<String> {
+        nice_ticks(lo, hi, log).into_iter().map(tick).collect()
+    }
+
+    #[test]
+    fn log_ticks_take_1_2_5_steps_per_decade_and_every_decade_on_wide_ranges() {
+        assert_eq!(labels(0.8, 120.0, true), ["1", "2", "5", "10", "20", "50", "100"]);
+        assert_eq!(
+            labels(0.9, 1.1e4, true),
+            ["1", "3", "10", "30", "100", "300", "1000", "3000", "10000"]
+        );
+        assert_eq!(
+            labels(1e-3, 1e5, true),
+            ["0.001", "0.01", "0.1", "1", "10", "100", "1000", "10000", "100000"]
+        );
+    }
+
+    #[test]
+    fn narrow_ranges_get_at_least_three_distinct_labels() {
+        // top_down's max aliasing at 4096²: inside one decade, no 1-2-5 value but 0.6 and 0.8.
+        assert_eq!(labels(0.580319, 0.986597, true), ["0.6", "0.7", "0.8", "0.9"]);
+        assert_eq!(labels(1.16, 1.97, true), ["1.2", "1.4", "1.6", "1.8"]);
+        for (lo, hi) in [(0.5, 0.52), (1234.0, 1240.0), (3.0e-5, 3.3e-5), (99.0, 101.0)] {
+            let l = labels(lo, hi, true);
+            assert!(l.len() >= 3, "{lo}..{hi}: {l:?}");
+            let mut d = l.clone();
+            d.dedup();
+            assert_eq!(d, l, "{lo}..{hi}: duplicated labels");
+            let slack = 1e-9 * hi;
+            for v in nice_ticks(lo, hi, true) {
+                assert!(v >= lo - slack && v <= hi + slack, "{v} outside {lo}..{hi}");
+            }
+        }
+    }
+
+    #[test]
+    fn linear_ticks_are_round_and_cover_the_range() {
+        assert_eq!(labels(0.0, 0.6048, false), ["0", "0.2", "0.4", "0.6"]);
+        assert_eq!(labels(0.0, 239.0, false), ["0", "50", "100", "150", "200"]);
+        assert_eq!(labels(-12.0, 12.0, false), ["-10", "-5", "0", "5", "10"]);
+    }
+
+    #[test]
+    fn a_legend_reserves_one_line_per_entry() {
+        assert_eq!(legend_height(0, 13), 24);
+        assert_eq!(legend_height(4, 13), 4 * 17 + 24);
+    }
 }

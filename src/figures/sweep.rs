@@ -5,179 +5,383 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    chart_frame, colormap, draw_legend, draw_message, log_range, palette, series_color, texels_per_pixel_chart, Figure,
-    PlotResult, FONT,
+    colormap, draw_legend_below, draw_message, legend_frame, legend_height, linear_axis, log_axis, log_axis_with,
+    log_range, nice_ticks, palette, series_color, texels_per_pixel_chart, tick, ticked_axis, Figure, Legend,
+    PlotResult, FONT, LEGEND_FONT,
 };
 use crate::analysis::{analyze, mib, Analysis, AnalysisOptions};
-use crate::config::Fit;
 use crate::metric::SummaryMetric;
 use crate::sweep::{self, Row, Setting, SweepResult};
 
-/// A number with 3 significant digits and no trailing zeros ("1000", "12.5", "0.0431").
-pub fn significant(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let digits = (2 - v.abs().log10().floor() as i32).max(0) as usize;
-    let s = format!("{v:.digits$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
+/// The configuration the figures single out: the recommended one, or when nothing qualifies the
+/// one that comes closest (false), or None when no configuration needs cascades.
+pub fn focus(r: &SweepResult) -> Option<(&Row, bool)> {
+    match r.recommended() {
+        Some(x) => Some((x, true)),
+        None => sweep::no_recommendation(&r.rows, r.budget_mib, r.objective)
+            .closest
+            .map(|i| (&r.rows[i], false)),
     }
 }
 
-/// Max and mean aliasing over λ × cascade count, one panel per resolution (and fit).
+/// "recommended" or "closest (nothing qualifies)".
+fn focus_word(recommended: bool) -> &'static str {
+    if recommended {
+        "recommended"
+    } else {
+        "closest (nothing qualifies)"
+    }
+}
+
+/// A setting in the sweep's own knobs: an engine preset has no λ or fit to print.
+pub fn setting_words(r: &SweepResult, s: &Setting) -> String {
+    if r.config.shadow.preset.is_some() {
+        format!("{} × {}²", s.cascades, s.resolution)
+    } else {
+        format!("{} × {}², λ {} ({})", s.cascades, s.resolution, tick(s.lambda), s.fit)
+    }
+}
+
+/// The most λ columns a heat-map panel draws; a longer λ axis is binned (each column shows the
+/// lowest value among adjacent λ), which keeps the SVG bounded at any grid size.
+pub const MAX_HEAT_COLUMNS: usize = 48;
+
+/// Aliasing over λ × cascade count, one panel per metric, resolution and fit (or over resolution ×
+/// cascade count when the grid has one λ, as for engine presets). Each panel has its own colour
+/// scale, so the effect of λ shows within every resolution.
 pub struct HeatmapFigure<'a>(pub &'a SweepResult);
 
+/// One heat-map panel: labelled columns × rows of cells.
+struct HeatPanel {
+    caption: String,
+    x_desc: String,
+    /// Columns.
+    nx: usize,
+    /// Labelled columns: (column, label).
+    x_ticks: Vec<(usize, String)>,
+    y_labels: Vec<String>,
+    /// (column, row, value, within the memory budget); value None: no cascades needed.
+    cells: Vec<(usize, usize, Option<f64>, bool)>,
+    /// The recommended cell, when it is in this panel.
+    marked: Option<(usize, usize)>,
+    unit: String,
+}
+
+/// The heat-map rows of panels: the objective when it is not mean aliasing, then mean and max.
+fn heat_metrics(r: &SweepResult) -> Vec<SummaryMetric> {
+    let mut v = Vec::new();
+    if r.objective.name() != "mean_aliasing" {
+        v.push(r.objective);
+    }
+    v.push(SummaryMetric::named("mean_aliasing"));
+    v.push(SummaryMetric::named("max_aliasing"));
+    v
+}
+
 impl HeatmapFigure<'_> {
-    fn rows_of_panels(&self) -> Vec<(Fit, SummaryMetric)> {
-        let mut v = Vec::new();
-        for fit in sweep::fits_in(&self.0.rows) {
-            v.push((fit, SummaryMetric::named("max_aliasing")));
-            v.push((fit, SummaryMetric::named("mean_aliasing")));
+    /// True when λ is an axis of the grid; otherwise resolution is the panels' x axis.
+    fn lambda_axis(&self) -> bool {
+        self.0.grid.lambda.values.len() > 1
+    }
+
+    /// λ columns: the grid's λ values in groups of at most [`MAX_HEAT_COLUMNS`] columns.
+    fn lambda_bins(&self) -> (usize, usize) {
+        let n = self.0.grid.lambda.values.len().max(1);
+        let per = n.div_ceil(MAX_HEAT_COLUMNS);
+        (n.div_ceil(per), per)
+    }
+
+    /// (panel columns, panel rows).
+    fn layout(&self) -> (usize, usize) {
+        let fits = sweep::fits_in(&self.0.rows).len().max(1);
+        let metrics = heat_metrics(self.0).len();
+        if self.lambda_axis() {
+            (self.0.grid.resolution.values.len().max(1), metrics * fits)
+        } else {
+            (metrics, fits)
         }
-        v
-    }
-}
-
-fn metric_of(row: &Row, metric: &SummaryMetric) -> f64 {
-    metric.value(&row.summary)
-}
-
-impl Figure for HeatmapFigure<'_> {
-    fn size(&self) -> (u32, u32) {
-        let cols = self.0.grid.resolution.values.len() as u32;
-        let rows = self.rows_of_panels().len() as u32;
-        (120 + 330 * cols, 70 + 300 * rows)
     }
 
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
+    fn panels(&self) -> Vec<HeatPanel> {
         let r = self.0;
         let lambdas = &r.grid.lambda.values;
         let counts = &r.grid.cascades.values;
         let resolutions = &r.grid.resolution.values;
-        let title = format!(
-            "Aliasing (shadow texel / screen pixel, lower is better) over λ × cascades: {}",
-            r.config.name
-        );
-        let root = root.titled(&title, (FONT, 22))?;
-        let panel_rows = self.rows_of_panels();
-        let bands = root.split_evenly((panel_rows.len(), 1));
-        let rec = r.recommended().map(|x| x.setting);
-        for (band, (fit, metric)) in bands.iter().zip(&panel_rows) {
-            let (w, _) = band.dim_in_pixel();
-            let (panels_area, bar_area) = band.split_horizontally(w.saturating_sub(110));
-            // One colour scale per band (metric and fit), on log values.
-            let values: Vec<f64> = r
-                .rows
-                .iter()
-                .filter(|x| x.setting.fit == *fit && x.summary.cascades_needed)
-                .map(|x| metric_of(x, metric))
-                .filter(|v| *v > 0.0)
-                .collect();
-            let lo = values.iter().cloned().fold(f64::INFINITY, f64::min);
-            let hi = values.iter().cloned().fold(0.0, f64::max);
-            let (lo, hi) = if lo.is_finite() && hi > lo {
-                (lo, hi)
+        let rec = focus(r).map(|x| x.0.setting);
+        let y_labels: Vec<String> = counts.iter().map(|c| c.to_string()).collect();
+        let within = |x: &Row| mib(x.summary.memory_bytes) <= r.budget_mib;
+        let mut out = Vec::new();
+        let fits = sweep::fits_in(&r.rows);
+        if self.lambda_axis() {
+            let (cols, per) = self.lambda_bins();
+            // Every few columns its λ; binned, round λ values at the column that holds them.
+            let x_ticks: Vec<(usize, String)> = if per == 1 {
+                (0..cols)
+                    .step_by(cols.div_ceil(6).max(1))
+                    .map(|c| (c, tick(lambdas[c])))
+                    .collect()
             } else {
-                (1.0, 10.0)
+                let (first, last) = (lambdas[0], lambdas[lambdas.len() - 1]);
+                nice_ticks(first.min(last), first.max(last), false)
+                    .into_iter()
+                    .filter_map(|t| {
+                        let i = lambdas
+                            .iter()
+                            .position(|l| (*l - t).abs() <= 0.5 * (last - first).abs() / lambdas.len() as f64)?;
+                        Some((i / per, tick(t)))
+                    })
+                    .collect()
             };
-            let t_of = |v: f64| (v.ln() - lo.ln()) / (hi.ln() - lo.ln());
-            let panels = panels_area.split_evenly((1, resolutions.len()));
-            for (panel, &res) in panels.iter().zip(resolutions) {
-                let label_every = lambdas.len().div_ceil(6).max(1);
-                let mut chart = ChartBuilder::on(panel)
-                    .caption(
-                        format!("{} · {res}² · {fit}", metric.name().replace('_', " ")),
-                        (FONT, 15),
-                    )
-                    .margin(6)
-                    .x_label_area_size(38)
-                    .y_label_area_size(42)
-                    // plotters' segmented ranges include their end value: 0..n-1 gives n cells.
-                    .build_cartesian_2d(
-                        (0..lambdas.len().saturating_sub(1)).into_segmented(),
-                        (0..counts.len().saturating_sub(1)).into_segmented(),
-                    )?;
-                chart
-                    .configure_mesh()
-                    .disable_mesh()
-                    .x_desc("λ (0 uniform → 1 log)")
-                    .y_desc("cascades")
-                    .axis_desc_style((FONT, 12))
-                    .label_style((FONT, 11))
-                    .x_labels(lambdas.len())
-                    .y_labels(counts.len())
-                    .x_label_formatter(&|v| match v {
-                        SegmentValue::CenterOf(i) if *i < lambdas.len() && i % label_every == 0 => {
-                            format!("{}", lambdas[*i])
+            for fit in &fits {
+                for metric in heat_metrics(r) {
+                    for &res in resolutions {
+                        let mut cells: Vec<(usize, usize, Option<f64>, bool)> = Vec::new();
+                        let mut marked = None;
+                        for row in r
+                            .rows
+                            .iter()
+                            .filter(|x| x.setting.fit == *fit && x.setting.resolution == res)
+                        {
+                            let (Some(i), Some(j)) = (
+                                lambdas.iter().position(|l| *l == row.setting.lambda),
+                                counts.iter().position(|c| *c == row.setting.cascades),
+                            ) else {
+                                continue;
+                            };
+                            let col = i / per;
+                            let v = row.summary.cascades_needed.then(|| metric.value(&row.summary));
+                            if Some(row.setting) == rec {
+                                marked = Some((col, j));
+                            }
+                            // A binned column keeps the lowest value of its λ values.
+                            match cells.iter_mut().find(|c| c.0 == col && c.1 == j) {
+                                Some(c) => {
+                                    c.2 = match (c.2, v) {
+                                        (Some(p), Some(q)) => Some(p.min(q)),
+                                        (p, q) => p.or(q),
+                                    };
+                                    c.3 |= within(row);
+                                }
+                                None => cells.push((col, j, v, within(row))),
+                            }
                         }
-                        _ => String::new(),
-                    })
-                    .y_label_formatter(&|v| match v {
-                        SegmentValue::CenterOf(i) if *i < counts.len() => counts[*i].to_string(),
-                        _ => String::new(),
-                    })
-                    .draw()?;
-                for row in r
-                    .rows
-                    .iter()
-                    .filter(|x| x.setting.fit == *fit && x.setting.resolution == res)
-                {
-                    let (Some(i), Some(j)) = (
-                        lambdas.iter().position(|l| *l == row.setting.lambda),
-                        counts.iter().position(|c| *c == row.setting.cascades),
-                    ) else {
-                        continue;
-                    };
-                    let color = if row.summary.cascades_needed {
-                        colormap(t_of(metric_of(row, metric)))
-                    } else {
-                        palette::NO_DATA
-                    };
-                    chart.draw_series(std::iter::once(Rectangle::new(
-                        [
-                            (SegmentValue::Exact(i), SegmentValue::Exact(j)),
-                            (SegmentValue::Exact(i + 1), SegmentValue::Exact(j + 1)),
-                        ],
-                        color.filled(),
-                    )))?;
-                    if Some(row.setting) == rec {
-                        chart.draw_series(std::iter::once(Rectangle::new(
-                            [
-                                (SegmentValue::Exact(i), SegmentValue::Exact(j)),
-                                (SegmentValue::Exact(i + 1), SegmentValue::Exact(j + 1)),
-                            ],
-                            palette::MARKED.stroke_width(3),
-                        )))?;
+                        out.push(HeatPanel {
+                            caption: format!("{} · {res}² · {fit}", metric.name().replace('_', " ")),
+                            x_desc: if per == 1 {
+                                "λ (0 uniform → 1 log)".to_string()
+                            } else {
+                                format!("λ (0 uniform → 1 log); a column: the lowest of {per} λ")
+                            },
+                            nx: cols,
+                            x_ticks: x_ticks.clone(),
+                            y_labels: y_labels.clone(),
+                            cells,
+                            marked,
+                            unit: metric_unit(&metric),
+                        });
                     }
                 }
             }
-            // Colour bar.
-            let mut bar = ChartBuilder::on(&bar_area)
-                .margin_top(30)
-                .margin_bottom(45)
-                .margin_right(8)
-                .y_label_area_size(55)
-                .build_cartesian_2d(0.0..1.0, (lo..hi).log_scale())?;
-            bar.configure_mesh()
-                .disable_x_mesh()
-                .disable_x_axis()
-                .disable_y_mesh()
-                .label_style((FONT, 11))
-                .y_labels(6)
-                .y_label_formatter(&|v| significant(*v))
-                .draw()?;
-            let steps = 60;
-            bar.draw_series((0..steps).map(|k| {
-                let a = lo * (hi / lo).powf(k as f64 / steps as f64);
-                let b = lo * (hi / lo).powf((k + 1) as f64 / steps as f64);
-                Rectangle::new([(0.0, a), (1.0, b)], colormap((k as f64 + 0.5) / steps as f64).filled())
-            }))?;
+        } else {
+            let x_ticks: Vec<(usize, String)> = resolutions
+                .iter()
+                .enumerate()
+                .map(|(i, r)| (i, r.to_string()))
+                .collect();
+            for fit in &fits {
+                for metric in heat_metrics(r) {
+                    let mut cells = Vec::new();
+                    let mut marked = None;
+                    for row in r.rows.iter().filter(|x| x.setting.fit == *fit) {
+                        let (Some(i), Some(j)) = (
+                            resolutions.iter().position(|l| *l == row.setting.resolution),
+                            counts.iter().position(|c| *c == row.setting.cascades),
+                        ) else {
+                            continue;
+                        };
+                        if Some(row.setting) == rec {
+                            marked = Some((i, j));
+                        }
+                        let v = row.summary.cascades_needed.then(|| metric.value(&row.summary));
+                        cells.push((i, j, v, within(row)));
+                    }
+                    let caption = if r.config.shadow.preset.is_some() {
+                        format!("{} · the preset's own splits", metric.name().replace('_', " "))
+                    } else {
+                        format!("{} · λ {} · {fit}", metric.name().replace('_', " "), tick(lambdas[0]))
+                    };
+                    out.push(HeatPanel {
+                        caption,
+                        x_desc: "resolution (texels per side)".to_string(),
+                        nx: resolutions.len(),
+                        x_ticks: x_ticks.clone(),
+                        y_labels: y_labels.clone(),
+                        cells,
+                        marked,
+                        unit: metric_unit(&metric),
+                    });
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The colour bar's title: the metric's unit (the panel's caption names the metric).
+fn metric_unit(m: &SummaryMetric) -> String {
+    if m.name().contains("aliasing") {
+        "texel/pixel, log".to_string()
+    } else {
+        "log scale".to_string()
+    }
+}
+
+impl Figure for HeatmapFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        let (cols, rows) = self.layout();
+        (40 + 400 * cols as u32, 110 + 300 * rows as u32)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
+        let r = self.0;
+        let title = format!(
+            "Aliasing over {} × cascades: {}",
+            if self.lambda_axis() { "λ" } else { "resolution" },
+            r.config.name
+        );
+        let root = root.titled(&title, (FONT, 22))?;
+        let (w, _) = root.dim_in_pixel();
+        let (note_area, grid_area) = root.split_vertically(40);
+        let rec = match focus(r) {
+            Some((x, ok)) => format!("Red ring: {} ({})", focus_word(ok), setting_words(r, &x.setting)),
+            None => "No configuration needs cascades: nothing is marked".to_string(),
+        };
+        let note = format!(
+            "Lower is better; each panel has its own colour scale. {rec}. White line: {} MiB memory budget (cells above or right of it exceed it). Grey: no cascades needed.",
+            tick(r.budget_mib)
+        );
+        let font = if note.len() as u32 * 7 > w { 11 } else { 13 };
+        note_area.draw(&Text::new(note, (14, 8), (FONT, font).into_font()))?;
+        let panels = self.panels();
+        if panels.is_empty() || panels.iter().all(|p| p.cells.is_empty()) {
+            return draw_message(&grid_area, "", "No configuration to draw: the sweep has no rows.");
+        }
+        let (cols, rows) = self.layout();
+        let areas = grid_area.split_evenly((rows, cols));
+        for (area, panel) in areas.iter().zip(&panels) {
+            draw_heat_panel(area, panel)?;
         }
         Ok(())
     }
+}
+
+/// Draws one heat-map panel with its own log colour bar (titled with the unit), the budget line
+/// and the recommendation ring. Cells overlap their neighbours by a pixel, so no seam shows
+/// when a browser scales the SVG.
+fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &HeatPanel) -> PlotResult {
+    let (w, _) = area.dim_in_pixel();
+    let (cells_area, bar_area) = area.split_horizontally(w.saturating_sub(100));
+    let values: Vec<f64> = p
+        .cells
+        .iter()
+        .filter_map(|c| c.2)
+        .filter(|v| *v > 0.0 && v.is_finite())
+        .collect();
+    let lo = values.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = values.iter().cloned().fold(0.0, f64::max);
+    let (lo, hi) = if !lo.is_finite() {
+        (1.0, 10.0)
+    } else if hi <= lo * 1.001 {
+        (lo / 1.05, lo * 1.05)
+    } else {
+        (lo, hi)
+    };
+    let t_of = |v: f64| (v.ln() - lo.ln()) / (hi.ln() - lo.ln());
+    let (nx, ny) = (p.nx.max(1), p.y_labels.len().max(1));
+    let mut chart = ChartBuilder::on(&cells_area)
+        .caption(&p.caption, (FONT, 13))
+        .margin(6)
+        .x_label_area_size(38)
+        .y_label_area_size(42)
+        .build_cartesian_2d(
+            ticked_axis(0.0, nx as f64, p.x_ticks.iter().map(|t| t.0 as f64 + 0.5).collect()),
+            ticked_axis(0.0, ny as f64, (0..ny).map(|j| j as f64 + 0.5).collect()),
+        )?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc(p.x_desc.as_str())
+        .y_desc("cascades")
+        .axis_desc_style((FONT, 12))
+        .label_style((FONT, 11))
+        .x_label_formatter(&|v| {
+            let c = v.floor() as usize;
+            p.x_ticks
+                .iter()
+                .find(|t| t.0 == c)
+                .map(|t| t.1.clone())
+                .unwrap_or_default()
+        })
+        .y_label_formatter(&|v| p.y_labels.get(v.floor() as usize).cloned().unwrap_or_default())
+        .draw()?;
+    let (pw, ph) = chart.plotting_area().dim_in_pixel();
+    // One pixel in data units: cells reach a pixel into their right and upper neighbours.
+    let (ox, oy) = (nx as f64 / pw.max(1) as f64, ny as f64 / ph.max(1) as f64);
+    chart.draw_series(p.cells.iter().map(|&(i, j, v, _)| {
+        let color = match v {
+            Some(v) => colormap(t_of(v)),
+            None => palette::NO_DATA,
+        };
+        let x1 = if i + 1 < nx { i as f64 + 1.0 + ox } else { nx as f64 };
+        let y1 = if j + 1 < ny { j as f64 + 1.0 + oy } else { ny as f64 };
+        Rectangle::new([(i as f64, j as f64), (x1, y1)], color.filled())
+    }))?;
+    // The budget line: the edges between a cell within the budget and its neighbour above or to
+    // the right that exceeds it.
+    let within = |i: usize, j: usize| p.cells.iter().find(|c| c.0 == i && c.1 == j).map(|c| c.3);
+    let mut edges = Vec::new();
+    for &(i, j, _, ok) in &p.cells {
+        if !ok {
+            continue;
+        }
+        if within(i, j + 1) == Some(false) {
+            edges.push(vec![(i as f64, (j + 1) as f64), ((i + 1) as f64, (j + 1) as f64)]);
+        }
+        if within(i + 1, j) == Some(false) {
+            edges.push(vec![((i + 1) as f64, j as f64), ((i + 1) as f64, (j + 1) as f64)]);
+        }
+    }
+    chart.draw_series(edges.into_iter().map(|e| PathElement::new(e, WHITE.stroke_width(3))))?;
+    if let Some((i, j)) = p.marked {
+        let c = (i as f64 + 0.5, j as f64 + 0.5);
+        chart.draw_series(std::iter::once(Circle::new(c, 8, WHITE.stroke_width(5))))?;
+        chart.draw_series(std::iter::once(Circle::new(c, 8, palette::MARKED.stroke_width(3))))?;
+    }
+    // The colour bar, titled with the metric and unit.
+    let ticks = nice_ticks(lo, hi, true);
+    // Tick labels and the title sit right of the bar, clear of the cells and of the bar itself.
+    let mut bar = ChartBuilder::on(&bar_area)
+        .caption(&p.unit, (FONT, 11))
+        .margin_top(8)
+        .margin_bottom(44)
+        .margin_left(6)
+        .set_label_area_size(LabelAreaPosition::Right, 44)
+        .build_cartesian_2d(0.0..1.0, log_axis_with(lo, hi, ticks))?;
+    bar.configure_mesh()
+        .disable_x_mesh()
+        .disable_x_axis()
+        .disable_y_mesh()
+        .label_style((FONT, 11))
+        .y_label_formatter(&|v| tick(*v))
+        .draw()?;
+    let steps = 40;
+    bar.draw_series((0..steps).map(|k| {
+        // Each step reaches a little into the next one, so no seam shows between them.
+        let a = lo * (hi / lo).powf(k as f64 / steps as f64);
+        let b = (lo * (hi / lo).powf((k as f64 + 1.3) / steps as f64)).min(hi);
+        Rectangle::new([(0.0, a), (1.0, b)], colormap((k as f64 + 0.5) / steps as f64).filled())
+    }))?;
+    Ok(())
 }
 
 /// Texels per pixel against depth for a handful of λ at the recommended count/resolution/fit.
@@ -189,7 +393,7 @@ pub struct LambdaDensityFigure<'a> {
 impl<'a> LambdaDensityFigure<'a> {
     /// Picks λ values near 0, 0.25, 0.5, 0.75, 1 (and the recommended one) from the grid.
     pub fn new(result: &'a SweepResult) -> Self {
-        let Some(rec) = result.recommended() else {
+        let Some((rec, _)) = focus(result) else {
             return LambdaDensityFigure {
                 result,
                 analyses: Vec::new(),
@@ -221,15 +425,34 @@ impl<'a> LambdaDensityFigure<'a> {
 }
 
 impl Figure for LambdaDensityFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        (960, 540 + legend_height(self.analyses.len() + 1, LEGEND_FONT))
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
+        let mut legend = Legend::default();
         let r = self.result;
-        let Some(rec) = r.recommended() else {
-            return draw_message(root, "Texels per pixel vs depth", "No recommendation: nothing to plot.");
+        let Some((rec, ok)) = focus(r) else {
+            return draw_message(
+                root,
+                "Texels per pixel vs depth",
+                "No configuration needs cascades (the scene is outside the shadow distance): nothing to plot.",
+            );
         };
-        let title = format!(
-            "Texels per pixel vs depth for several λ: {} cascades × {}², {} fit",
-            rec.setting.cascades, rec.setting.resolution, rec.setting.fit
-        );
+        let preset = r.config.shadow.preset.is_some();
+        let title = if preset {
+            format!(
+                "Texels per pixel vs depth, {}: {} cascades × {}²",
+                focus_word(ok),
+                rec.setting.cascades,
+                rec.setting.resolution
+            )
+        } else {
+            format!(
+                "Texels per pixel vs depth for several λ: {} cascades × {}², {} fit",
+                rec.setting.cascades, rec.setting.resolution, rec.setting.fit
+            )
+        };
         let (mut chart, (y0, y1)) = texels_per_pixel_chart(
             root,
             &title,
@@ -238,6 +461,8 @@ impl Figure for LambdaDensityFigure<'_> {
             self.analyses
                 .iter()
                 .flat_map(|a| a.density.iter().map(|d| d.texels_per_pixel)),
+            self.analyses.len() + 1,
+            &mut legend,
         )?;
         for (k, a) in self.analyses.iter().enumerate() {
             let color = series_color(k);
@@ -255,17 +480,26 @@ impl Figure for LambdaDensityFigure<'_> {
                     .filter(|d| d.cascade == i)
                     .map(|d| (d.depth, d.texels_per_pixel))
                     .collect();
-                let s = chart.draw_series(LineSeries::new(pts, color.stroke_width(width)))?;
+                chart.draw_series(LineSeries::new(pts, color.stroke_width(width)))?;
                 if i == 0 {
                     let label = format!(
-                        "λ = {}: mean aliasing {:.3}, max {:.3}{}",
-                        a.config.shadow.lambda,
-                        a.summary.mean_aliasing,
-                        a.summary.max_aliasing,
-                        if width == 4 { " (recommended)" } else { "" }
+                        "{}: mean aliasing {}, max {}{}",
+                        if preset {
+                            "the preset's own splits".to_string()
+                        } else {
+                            format!("λ = {}", tick(a.config.shadow.lambda))
+                        },
+                        super::short(a.summary.mean_aliasing),
+                        super::short(a.summary.max_aliasing),
+                        if width == 4 {
+                            format!(" ({})", focus_word(ok))
+                        } else {
+                            String::new()
+                        }
                     );
-                    s.label(label)
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(width)));
+                    legend.add(label, move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(width))
+                    });
                 }
             }
             // Split depths as short ticks at the bottom, in the λ's colour.
@@ -278,26 +512,50 @@ impl Figure for LambdaDensityFigure<'_> {
                 }
             }
         }
-        draw_legend(&mut chart, SeriesLabelPosition::LowerRight, 13)?;
+        draw_legend_below(root, legend, self.analyses.len() + 1)?;
         Ok(())
     }
 }
 
-/// Shimmer snapped vs unsnapped for every configuration.
+/// The five-number summary of `v` (min, lower quartile, median, upper quartile, max), or None
+/// when `v` is empty. Quartiles by linear interpolation between order statistics.
+pub fn five_numbers(v: &[f64]) -> Option<[f64; 5]> {
+    let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if s.is_empty() {
+        return None;
+    }
+    s.sort_by(f64::total_cmp);
+    let q = |p: f64| {
+        let x = p * (s.len() - 1) as f64;
+        let (i, f) = (x.floor() as usize, x - x.floor());
+        if i + 1 < s.len() {
+            s[i] + f * (s[i + 1] - s[i])
+        } else {
+            s[i]
+        }
+    };
+    Some([s[0], q(0.25), q(0.5), q(0.75), s[s.len() - 1]])
+}
+
+/// Shimmer snapped vs unsnapped as distributions: one box per cascade count over every λ,
+/// resolution and fit of the grid (whiskers: min and max; box: quartiles; bar: median), with the
+/// recommended configuration marked. Bounded at any grid size.
 pub struct ShimmerSweepFigure<'a>(pub &'a SweepResult);
 
 impl Figure for ShimmerSweepFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (1100, 560)
+        (1100, 520 + legend_height(3, LEGEND_FONT))
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
+        let mut legend = Legend::default();
         let r = self.0;
+        let counts = &r.grid.cascades.values;
         let title = format!(
-            "Shimmer of every configuration ({} path): snapped vs unsnapped",
+            "Shimmer per cascade count over {} configurations ({} path): snapped vs unsnapped",
+            r.rows.len(),
             r.config.motion.path.name()
         );
-        let n = r.rows.len();
         let max_un = r
             .rows
             .iter()
@@ -305,52 +563,81 @@ impl Figure for ShimmerSweepFigure<'_> {
             .fold(0.0f64, f64::max);
         let max_sn = r.rows.iter().map(|x| x.summary.shimmer_snapped).fold(0.0f64, f64::max);
         let ymax = max_un.max(max_sn).max(0.05) * 1.12;
-        let mut chart =
-            chart_frame(root, &title, 20, 70).build_cartesian_2d(-0.5..(n as f64 - 0.5).max(0.5), 0.0..ymax)?;
+        let n = counts.len().max(1);
+        let mut chart = legend_frame(root, &title, 20, 70, 3, LEGEND_FONT).build_cartesian_2d(
+            ticked_axis(0.0, n as f64, (0..n).map(|i| i as f64 + 0.5).collect()),
+            linear_axis(0.0, ymax),
+        )?;
         chart
             .configure_mesh()
-            .x_desc("configuration (fit, resolution, cascades; λ varies fastest)")
+            .disable_x_mesh()
+            .x_label_formatter(&|v| counts.get(v.floor() as usize).map_or(String::new(), |c| c.to_string()))
+            .y_label_formatter(&|v| tick(*v))
+            .x_desc("cascades (each box: every λ, resolution and fit with that count)")
             .y_desc("RMS sub-texel drift per frame (texels)")
             .axis_desc_style((FONT, 15))
-            .label_style((FONT, 12))
+            .label_style((FONT, 13))
             .draw()?;
-        // Group separators: each (fit, resolution) block.
-        let mut last = None;
-        for (i, row) in r.rows.iter().enumerate() {
-            let key = (row.setting.fit, row.setting.resolution);
-            if last.is_some() && last != Some(key) {
-                chart.draw_series(std::iter::once(PathElement::new(
-                    vec![(i as f64 - 0.5, 0.0), (i as f64 - 0.5, ymax)],
-                    palette::SEPARATOR.stroke_width(1),
-                )))?;
-            }
-            last = Some(key);
-        }
         let orange = series_color(1);
         let blue = series_color(0);
-        chart
-            .draw_series(r.rows.iter().enumerate().map(|(i, x)| {
-                Rectangle::new(
-                    [(i as f64 - 0.4, 0.0), (i as f64 + 0.4, x.summary.shimmer_unsnapped)],
-                    orange.mix(0.7).filled(),
-                )
-            }))?
-            .label(format!("unsnapped (largest {max_un:.3} texels)"))
-            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], orange.filled()));
-        chart
-            .draw_series(
-                r.rows
+        // Unsnapped boxes left of each count's centre, snapped right of it.
+        for (k, (color, offset, snapped)) in [(orange, 0.27, false), (blue, 0.73, true)].into_iter().enumerate() {
+            let mut elements: Vec<DynElement<DB, (f64, f64)>> = Vec::new();
+            for (i, &c) in counts.iter().enumerate() {
+                let v: Vec<f64> = r
+                    .rows
                     .iter()
-                    .enumerate()
-                    .map(|(i, x)| Circle::new((i as f64, x.summary.shimmer_snapped), 3, blue.filled())),
-            )?
-            .label(if max_sn <= sweep::STABLE_SHIMMER {
-                format!("snapped (largest {max_sn:.1e} texels: stable, dots sit on zero)")
-            } else {
-                format!("snapped (largest {max_sn:.3} texels: NOT stable)")
-            })
-            .legend(move |(x, y)| Circle::new((x + 8, y), 4, blue.filled()));
-        draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 14)?;
+                    .filter(|x| x.setting.cascades == c)
+                    .map(|x| {
+                        if snapped {
+                            x.summary.shimmer_snapped
+                        } else {
+                            x.summary.shimmer_unsnapped
+                        }
+                    })
+                    .collect();
+                let Some([lo, q1, med, q3, hi]) = five_numbers(&v) else {
+                    continue;
+                };
+                let x = i as f64 + offset;
+                let half = 0.17;
+                elements.push(PathElement::new(vec![(x, lo), (x, hi)], color.stroke_width(2)).into_dyn());
+                elements.push(PathElement::new(vec![(x - 0.08, lo), (x + 0.08, lo)], color.stroke_width(2)).into_dyn());
+                elements.push(PathElement::new(vec![(x - 0.08, hi), (x + 0.08, hi)], color.stroke_width(2)).into_dyn());
+                elements.push(Rectangle::new([(x - half, q1), (x + half, q3)], color.mix(0.45).filled()).into_dyn());
+                elements.push(Rectangle::new([(x - half, q1), (x + half, q3)], color.stroke_width(1)).into_dyn());
+                elements
+                    .push(PathElement::new(vec![(x - half, med), (x + half, med)], color.stroke_width(3)).into_dyn());
+            }
+            let label = match (snapped, max_sn <= sweep::STABLE_SHIMMER) {
+                (false, _) => format!("unsnapped (largest {} texels)", super::short(max_un)),
+                (true, true) => format!(
+                    "snapped (largest {}: stable, boxes sit on zero)",
+                    crate::output::short_number(max_sn)
+                ),
+                (true, false) => format!("snapped (largest {} texels: NOT stable)", super::short(max_sn)),
+            };
+            let _ = k;
+            chart.draw_series(elements)?;
+            legend.add(label, move |(x, y)| {
+                Rectangle::new([(x, y - 5), (x + 16, y + 5)], color.filled())
+            });
+        }
+        if let Some((rec, ok)) = focus(r) {
+            if let Some(i) = counts.iter().position(|c| *c == rec.setting.cascades) {
+                let red = palette::RECOMMENDED;
+                let pts = [
+                    (i as f64 + 0.27, rec.summary.shimmer_unsnapped),
+                    (i as f64 + 0.73, rec.summary.shimmer_snapped),
+                ];
+                chart.draw_series(pts.iter().map(|p| Circle::new(*p, 6, red.stroke_width(2))))?;
+                legend.add(
+                    format!("{}: {}", focus_word(ok), setting_words(r, &rec.setting)),
+                    move |(x, y)| Circle::new((x + 8, y), 5, red.stroke_width(2)),
+                );
+            }
+        }
+        draw_legend_below(root, legend, 3)?;
         Ok(())
     }
 }
@@ -359,7 +646,12 @@ impl Figure for ShimmerSweepFigure<'_> {
 pub struct ParetoFigure<'a>(pub &'a SweepResult);
 
 impl Figure for ParetoFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        (960, 540 + legend_height(4, LEGEND_FONT))
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
+        let mut legend = Legend::default();
         let r = self.0;
         let obj = r.objective;
         let bounds_only = obj.name() == "mean_aliasing";
@@ -385,10 +677,13 @@ impl Figure for ParetoFigure<'_> {
             .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
         let (x0, x1) = log_range(xmin.min(r.budget_mib), xmax.max(r.budget_mib));
         let (y0, y1) = log_range(ymin, ymax);
-        let mut chart =
-            chart_frame(root, &title, 22, 70).build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+        let lines = 3 + usize::from(focus(r).is_some());
+        let mut chart = legend_frame(root, &title, 22, 70, lines, LEGEND_FONT)
+            .build_cartesian_2d(log_axis(x0, x1), log_axis(y0, y1))?;
         chart
             .configure_mesh()
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
             .x_desc("shadow map memory (MiB, log; cascades × resolution² × 4 bytes)")
             .y_desc(if bounds_only {
                 "mean aliasing (texel/pixel, log; lower is better)".to_string()
@@ -400,52 +695,75 @@ impl Figure for ParetoFigure<'_> {
             .label_style((FONT, 13))
             .draw()?;
         let grey = palette::POINT;
-        chart
-            .draw_series(pts.iter().map(|p| Circle::new(*p, 3, grey.filled())))?
-            .label("configuration")
-            .legend(move |(x, y)| Circle::new((x + 8, y), 3, grey.filled()));
+        // One dot per 2-pixel cell: a large sweep draws what can be seen, not every point.
+        let mut seen = std::collections::HashSet::new();
+        let shown: Vec<(f64, f64)> = pts
+            .iter()
+            .filter(|p| {
+                let (x, y) = chart.backend_coord(p);
+                seen.insert((x / 2, y / 2))
+            })
+            .copied()
+            .collect();
+        chart.draw_series(shown.iter().map(|p| Circle::new(*p, 3, grey.filled())))?;
+        legend.add("configuration", move |(x, y)| Circle::new((x + 8, y), 3, grey.filled()));
         let budget = palette::LIMIT.stroke_width(2);
-        chart
-            .draw_series(DashedLineSeries::new(
-                vec![(r.budget_mib, y0), (r.budget_mib, y1)],
-                6,
-                4,
-                budget,
-            ))?
-            .label(format!("memory budget {} MiB", r.budget_mib))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], budget));
+        chart.draw_series(DashedLineSeries::new(
+            vec![(r.budget_mib, y0), (r.budget_mib, y1)],
+            6,
+            4,
+            budget,
+        ))?;
+        legend.add(format!("memory budget {} MiB", tick(r.budget_mib)), move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 18, y)], budget)
+        });
         let orange = series_color(1);
         let front: Vec<(f64, f64)> = r
             .front
             .iter()
             .map(|&i| (mib(r.rows[i].summary.memory_bytes), obj.value(&r.rows[i].summary)))
             .collect();
-        chart
-            .draw_series(LineSeries::new(front.clone(), orange.stroke_width(3)))?
-            .label("Pareto front (nothing is both cheaper and sharper)")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], orange.stroke_width(3)));
+        chart.draw_series(LineSeries::new(front.clone(), orange.stroke_width(3)))?;
+        legend.add("Pareto front (nothing is both cheaper and sharper)", move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 18, y)], orange.stroke_width(3))
+        });
         chart.draw_series(front.iter().map(|p| Circle::new(*p, 5, orange.filled())))?;
-        if let Some(rec) = r.recommended() {
+        if let Some((rec, ok)) = focus(r) {
             let p = (mib(rec.summary.memory_bytes), obj.value(&rec.summary));
             let red = palette::RECOMMENDED;
-            chart
-                .draw_series(std::iter::once(Circle::new(p, 9, red.stroke_width(3))))?
-                .label("recommended")
-                .legend(move |(x, y)| Circle::new((x + 8, y), 6, red.stroke_width(2)));
+            chart.draw_series(std::iter::once(Circle::new(p, 9, red.stroke_width(3))))?;
+            legend.add(focus_word(ok), move |(x, y)| {
+                Circle::new((x + 8, y), 6, red.stroke_width(2))
+            });
             // The label sits up and to the right of the marker, in pixels, clear of it.
             chart.draw_series(std::iter::once(
                 EmptyElement::at(p)
                     + Text::new(
-                        format!(
-                            "recommended: {} × {}², λ {} ({})",
-                            rec.setting.cascades, rec.setting.resolution, rec.setting.lambda, rec.setting.fit
-                        ),
+                        format!("{}: {}", focus_word(ok), setting_words(r, &rec.setting)),
                         (14, -30),
                         (FONT, 15).into_font().color(&red),
                     ),
             ))?;
         }
-        draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 13)?;
+        draw_legend_below(root, legend, lines)?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn five_numbers_are_min_quartiles_median_max() {
+        assert_eq!(
+            five_numbers(&[5.0, 1.0, 4.0, 2.0, 3.0]),
+            Some([1.0, 2.0, 3.0, 4.0, 5.0])
+        );
+        // Quartiles interpolate between order statistics.
+        assert_eq!(five_numbers(&[10.0, 0.0]), Some([0.0, 2.5, 5.0, 7.5, 10.0]));
+        assert_eq!(five_numbers(&[0.3]), Some([0.3; 5]));
+        assert_eq!(five_numbers(&[f64::NAN, 2.0]), Some([2.0; 5]));
+        assert_eq!(five_numbers(&[]), None);
     }
 }

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use super::{defs, html, markdown};
 
 use crate::analysis::{mib, Analysis};
-use crate::compare::{coverage_extremes, fit_label, label, preset_of, Comparison};
+use crate::compare::{coverage_extremes, fit_label, invalid_reason, label, preset_of, Comparison};
 use crate::error::Result;
 use crate::figures::compare::{DensityOverlay, DensityPng, DensitySvg, ShimmerCoverageBars, ShimmerPng, ShimmerSvg};
 use crate::figures::Figure;
@@ -126,24 +126,6 @@ fn scene_lines(c: &Comparison) -> Vec<String> {
                 .to_string()
         },
     ]
-}
-
-/// Why a preset's result cannot be used as it stands: slice corners its windows miss (those
-/// points read "lit"), or receivers outside its light depth range (clipped). None when valid.
-pub fn invalid_reason(a: &Analysis) -> Option<String> {
-    let mut why = Vec::new();
-    let misses = a.summary.coverage_violations;
-    if misses > 0 {
-        why.push(format!("{} missed", count(misses, "slice corner")));
-    }
-    let clipped = a.preset.as_ref().map_or(0.0, |p| p.receivers_outside_depth);
-    if clipped > 0.0 {
-        why.push(format!(
-            "receivers clipped by {} world units of light depth",
-            short(clipped)
-        ));
-    }
-    (!why.is_empty()).then(|| why.join("; "))
 }
 
 /// Definitions of the results table's columns (the registry's texts where it has the metric).
