@@ -245,6 +245,27 @@ pub fn f32_range_problem(config: &Config) -> Option<String> {
     precision::f32_range_problem(&rig, poses, &config.scene, config.shadow.snap_space)
 }
 
+/// Paths of up to this many frames are generated once per analysis and held (a pose is a
+/// few dozen bytes); longer ones are generated as they are walked.
+const HELD_POSES: usize = 1 << 14;
+
+/// An iterator of a known length (a chain of a held and a streamed part reports none).
+struct ExactLen<I>(I, usize);
+
+impl<I: Iterator> Iterator for ExactLen<I> {
+    type Item = I::Item;
+    fn next(&mut self) -> Option<I::Item> {
+        let x = self.0.next();
+        self.1 = self.1.saturating_sub(usize::from(x.is_some()));
+        x
+    }
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (self.1, Some(self.1))
+    }
+}
+
+impl<I: Iterator> ExactSizeIterator for ExactLen<I> {}
+
 /// Runs the analysis of one validated config.
 pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
     analyze_with_progress(config, opts, &|_| ())
@@ -362,25 +383,50 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
     // as in one walk of both (`along_path_both`).
     let setup = config.setup();
     let walk = |motion: &crate::scene::Motion| {
+        let generated =
+            || crate::motion::poses(&setup.camera, motion).map(|p| p.expect("validated when the config was loaded"));
+        let frames = generated().len();
+        // A path of up to HELD_POSES frames is generated once and read by both walks (a
+        // sweep's paths are short: generating each pose twice cost it a sixth of its time);
+        // a longer one is generated as each walk reads it, so memory stays flat.
+        let held: Vec<CameraPose> = if frames <= HELD_POSES {
+            generated().collect()
+        } else {
+            Vec::new()
+        };
         let poses = || {
-            crate::motion::poses(&setup.camera, motion).enumerate().map(|(t, p)| {
+            let streamed = (frames > HELD_POSES).then(generated).into_iter().flatten();
+            let all = held.iter().copied().chain(streamed).enumerate().map(|(t, p)| {
                 if (t + 1) % PROGRESS_FRAMES == 0 {
                     on_frames(PROGRESS_FRAMES as u64);
                 }
-                p.expect("validated when the config was loaded")
-            })
+                p
+            });
+            ExactLen(all, frames)
         };
-        let remainder = (poses().len() % PROGRESS_FRAMES) as u64;
+        let remainder = (frames % PROGRESS_FRAMES) as u64;
+        // Inside a parallel batch (a sweep, a comparison) every core is busy already: one walk
+        // of both snap modes computes the values they share once per frame. Alone, the two
+        // modes walk on two threads. Either way the totals are the same, bit for bit.
+        let batch = rayon::current_thread_index().is_some();
         let walked = match config.shadow.precision {
             Precision::F64 => {
                 let one = |snapped| shimmer::along_path(&rig, poses(), &probes, snapped, sopts);
-                let (s, u) = rayon::join(|| one(true), || one(false));
+                let (s, u) = if batch {
+                    shimmer::along_path_both(&rig, poses(), &probes, sopts)
+                } else {
+                    rayon::join(|| one(true), || one(false))
+                };
                 (s, u, None)
             }
             Precision::F32 => {
                 let space = config.shadow.snap_space;
                 let one = |snapped| precision::along_path(&rig, poses(), &probes, space, snapped, sopts);
-                let (s, u) = rayon::join(|| one(true), || one(false));
+                let (s, u) = if batch {
+                    precision::along_path_both(&rig, poses(), &probes, space, sopts)
+                } else {
+                    rayon::join(|| one(true), || one(false))
+                };
                 let lookup = if config.shadow.snap { s.lookup } else { u.lookup };
                 (s.path, u.path, Some(lookup))
             }
