@@ -968,10 +968,36 @@ pub fn loss(rows: &[Row], rec: &Recommendation, x: usize, objective: SummaryMetr
     }
 }
 
-/// Distinct values of the rows' fits (for plots).
-pub fn fits_in(rows: &[Row]) -> Vec<Fit> {
+/// A fit and the depths its splits divide: what figures draw a panel or series for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub struct FitGroup {
+    pub split_range: SplitRange,
+    pub fit: Fit,
+}
+
+impl std::fmt::Display for FitGroup {
+    /// "sphere", or "sphere, visible splits" when the splits divide the visible depths.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.split_range {
+            SplitRange::Bounds => write!(f, "{}", self.fit),
+            SplitRange::Visible => write!(f, "{}, visible splits", self.fit),
+        }
+    }
+}
+
+impl Setting {
+    pub fn fit_group(&self) -> FitGroup {
+        FitGroup {
+            split_range: self.split_range,
+            fit: self.fit,
+        }
+    }
+}
+
+/// Distinct fit groups of the rows, in order (for plots).
+pub fn fits_in(rows: &[Row]) -> Vec<FitGroup> {
     rows.iter()
-        .map(|r| r.setting.fit)
+        .map(|r| r.setting.fit_group())
         .collect::<BTreeSet<_>>()
         .into_iter()
         .collect()

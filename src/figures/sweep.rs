@@ -38,7 +38,13 @@ pub fn setting_words(r: &SweepResult, s: &Setting) -> String {
     if r.config.shadow.preset.is_some() {
         format!("{} × {}²", s.cascades, s.resolution)
     } else {
-        format!("{} × {}², λ {} ({})", s.cascades, s.resolution, tick(s.lambda), s.fit)
+        format!(
+            "{} × {}², λ {} ({})",
+            s.cascades,
+            s.resolution,
+            tick(s.lambda),
+            s.fit_group()
+        )
     }
 }
 
@@ -140,7 +146,7 @@ impl HeatmapFigure<'_> {
                         for row in r
                             .rows
                             .iter()
-                            .filter(|x| x.setting.fit == *fit && x.setting.resolution == res)
+                            .filter(|x| x.setting.fit_group() == *fit && x.setting.resolution == res)
                         {
                             let (Some(i), Some(j)) = (
                                 lambdas.iter().position(|l| *l == row.setting.lambda),
@@ -192,7 +198,7 @@ impl HeatmapFigure<'_> {
                 for metric in heat_metrics(r) {
                     let mut cells = Vec::new();
                     let mut marked = None;
-                    for row in r.rows.iter().filter(|x| x.setting.fit == *fit) {
+                    for row in r.rows.iter().filter(|x| x.setting.fit_group() == *fit) {
                         let (Some(i), Some(j)) = (
                             resolutions.iter().position(|l| *l == row.setting.resolution),
                             counts.iter().position(|c| *c == row.setting.cascades),
