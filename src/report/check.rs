@@ -589,7 +589,7 @@ fn rule_json(r: &RuleResult) -> Value {
     o.insert("rule".into(), json!(r.rule.index));
     o.insert("metric".into(), r.rule.target.metric_name().into());
     o.insert("kind".into(), r.rule.target.kind().into());
-    o.insert("location".into(), r.rule.location.clone().into());
+    o.insert("location".into(), (*r.rule.location).into());
     match r.rule.target {
         Target::Cascade(_, CascadeSelection::One(i)) => {
             o.insert("cascade".into(), json!(i));

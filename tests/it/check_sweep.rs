@@ -24,10 +24,10 @@ fn key(lambda: f64, cascades: u32, resolution: u32, fit: &str) -> SweepKey {
     }
 }
 
-fn row(k: SweepKey, metrics: &[(&str, f64)]) -> SweepRow {
+fn row(k: SweepKey, metrics: &[(&'static str, f64)]) -> SweepRow {
     SweepRow {
         key: k,
-        metrics: metrics.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
+        metrics: metrics.iter().map(|&(n, v)| (n, v)).collect(),
     }
 }
 

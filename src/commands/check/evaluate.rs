@@ -322,7 +322,7 @@ pub fn evaluate_all(rules: &[Rule], a: &Analysis) -> Result<Vec<RuleResult>> {
 /// Evaluates a rule against bare summary values, looked up by metric name (a sweep row).
 /// Per-cascade and per-depth rules are not applicable; so is a summary rule whose metric the
 /// values lack.
-pub fn evaluate_values(rule: &Rule, values: &std::collections::BTreeMap<String, f64>) -> RuleResult {
+pub fn evaluate_values(rule: &Rule, values: &std::collections::BTreeMap<&'static str, f64>) -> RuleResult {
     match rule.target {
         Target::Summary(m) => match values.get(m.name()) {
             Some(&v) => judge_value(rule, Located::bare(v)),
@@ -340,10 +340,10 @@ pub fn evaluate_values(rule: &Rule, values: &std::collections::BTreeMap<String, 
 }
 
 /// The summary metric values of an analysis, keyed by name (the shape of a sweep row).
-pub fn summary_map(a: &Analysis) -> std::collections::BTreeMap<String, f64> {
+pub fn summary_map(a: &Analysis) -> std::collections::BTreeMap<&'static str, f64> {
     crate::metric::summary_values(&a.summary)
         .into_iter()
-        .map(|(m, v)| (m.name().to_string(), v))
+        .map(|(m, v)| (m.name(), v))
         .collect()
 }
 
@@ -390,7 +390,7 @@ mod tests {
 
     #[test]
     fn sweep_values_judge_only_summary_rules() {
-        let values = std::collections::BTreeMap::from([("max_aliasing".to_string(), 3.0)]);
+        let values = std::collections::BTreeMap::from([("max_aliasing", 3.0)]);
         let r = evaluate_values(
             &rule(Target::Summary(SummaryMetric::named("max_aliasing")), None, Some(2.0)),
             &values,

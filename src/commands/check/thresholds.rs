@@ -80,11 +80,12 @@ pub struct Rule {
     pub target: Target,
     pub min: Option<f64>,
     pub max: Option<f64>,
-    /// `file:line:column` of the rule's `[[rule]]` header, for messages.
-    pub location: String,
+    /// `file:line:column` of the rule's `[[rule]]` header, for messages. Shared, not copied:
+    /// every row of a sweep's report holds its rules.
+    pub location: std::sync::Arc<str>,
     /// `file:line:column` of the rule's `cascade` or `depth` value, when written (errors that
     /// depend on the analysed config point there).
-    pub scope_location: Option<String>,
+    pub scope_location: Option<std::sync::Arc<str>>,
 }
 
 impl Rule {
@@ -382,8 +383,8 @@ fn rule(at: &At<'_>, index: usize, spanned: &Spanned<RawRule>) -> Result<Rule> {
         target,
         min,
         max,
-        location: at.location(spanned.span()),
-        scope_location: scope_span.map(|s| at.location(s)),
+        location: at.location(spanned.span()).into(),
+        scope_location: scope_span.map(|s| at.location(s).into()),
     })
 }
 
@@ -478,7 +479,7 @@ min = 0.25
         );
         assert_eq!((t.rules[1].min, t.rules[1].max), (Some(0.5), Some(9.5)));
         assert_eq!(t.rules[0].max, Some(8.0));
-        assert_eq!(t.rules[2].location, "t.toml:10:1");
+        assert_eq!(&*t.rules[2].location, "t.toml:10:1");
         assert_eq!(t.tolerances, Tolerances::default());
     }
 
