@@ -347,10 +347,17 @@ pub fn short_number(v: f64) -> String {
             "< 1e-9".to_string()
         };
     }
+    four_digits(v, 1e-3)
+}
+
+/// At most four significant digits without trailing zeros ("10", "0.2", "1.967"), scientific
+/// notation for magnitudes outside `[sci_below, 1e6)` ("2.5e-5", "6.711e7"). `v` is finite and
+/// not zero. The one decimal formatter behind [`short_number`] and the figures' tick labels.
+pub fn four_digits(v: f64, sci_below: f64) -> String {
     let a = v.abs();
-    if !(1e-3..1e6).contains(&a) {
+    if !(sci_below..1e6).contains(&a) {
         let s = format!("{v:.3e}");
-        let (m, e) = s.split_once('e').expect("exponent");
+        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
         let m = if m.contains('.') {
             m.trim_end_matches('0').trim_end_matches('.')
         } else {

@@ -155,24 +155,7 @@ pub fn tick(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
         return "0".to_string();
     }
-    let a = v.abs();
-    if !(1e-4..1e6).contains(&a) {
-        let s = format!("{v:.3e}");
-        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
-        let m = if m.contains('.') {
-            m.trim_end_matches('0').trim_end_matches('.')
-        } else {
-            m
-        };
-        return format!("{m}e{e}");
-    }
-    let digits = (3 - a.log10().floor() as i32).max(0) as usize;
-    let s = format!("{v:.digits$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
+    crate::output::four_digits(v, 1e-4)
 }
 
 /// Round tick values for an axis over `lo..hi` (log or linear), at least three when the range
@@ -238,16 +221,8 @@ pub fn nice_ticks(lo: f64, hi: f64, log: bool) -> Vec<f64> {
     out
 }
 
-/// Value labels: "0" for exact zeros, 3 significant digits otherwise.
-pub fn short(v: f64) -> String {
-    if v == 0.0 {
-        "0".to_string()
-    } else if (1e-2..1e4).contains(&v.abs()) {
-        format!("{v:.3}")
-    } else {
-        format!("{v:.2e}")
-    }
-}
+/// Value labels in figures use the reports' number format.
+pub use crate::output::short_number as short;
 
 // ---------------------------------------------------------------------------------------------
 // Palette: every colour a figure uses
