@@ -524,3 +524,64 @@ fn a_preset_sweep_over_its_knob_and_distance_merges_byte_for_byte() {
         .unwrap()
         .ends_with("unreal.cascade_distribution_exponent,shadow.max_distance"));
 }
+
+#[test]
+fn check_sweep_keys_rows_on_a_presets_knob_and_distance_like_its_sweep_csv() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = tmp.path().join("unreal.toml");
+    std::fs::write(
+        &cfg,
+        format!(
+            "{}\n[sweep]\ncascades = [3, 4]\nresolution = [1024]\nknob = [2.0, 3.0]\ndistance = [100.0, 150.0]\n",
+            common::with(&[("shadow.preset", "preset = \"unreal\"")])
+        ),
+    )
+    .unwrap();
+    let rules = tmp.path().join("rules.toml");
+    std::fs::write(&rules, "[[rule]]\nmetric = \"max_aliasing\"\nmax = 200.0\n").unwrap();
+    let out = tmp.path().join("out");
+    ok(run(&["sweep", s(&cfg), "--quiet", "--no-plots", "--out", s(&out)]));
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    assert!(csv
+        .lines()
+        .next()
+        .unwrap()
+        .ends_with("unreal.cascade_distribution_exponent,shadow.max_distance"));
+    for format in ["table", "json"] {
+        let direct = run(&[
+            "check",
+            s(&cfg),
+            "--thresholds",
+            s(&rules),
+            "--sweep",
+            "--format",
+            format,
+        ]);
+        let from_csv = run(&[
+            "check",
+            s(&cfg),
+            "--thresholds",
+            s(&rules),
+            "--sweep",
+            "--sweep-csv",
+            s(&out.join("sweep.csv")),
+            "--format",
+            format,
+        ]);
+        assert!(
+            matches!(direct.status.code(), Some(0 | 1)),
+            "{}",
+            String::from_utf8_lossy(&direct.stderr)
+        );
+        assert_eq!(
+            direct.status.code(),
+            from_csv.status.code(),
+            "{}",
+            String::from_utf8_lossy(&from_csv.stderr)
+        );
+        assert!(
+            direct.stdout == from_csv.stdout,
+            "--format {format}: the reports differ"
+        );
+    }
+}
