@@ -80,7 +80,7 @@ pub enum GridError {
     /// The sweep grid is larger than `sweep.max_configs`.
     #[error(
         "the sweep grid has {configs} configurations ({lambdas} λ × {counts} cascade counts × {resolutions} resolutions × {fits} fits{extra}), \
-         more than sweep.max_configs = {max}; narrow an axis (--lambda, --cascades, --resolution, --fit) \
+         more than sweep.max_configs = {max}; narrow an axis (--lambda, --cascades, --resolution, --fit{more_flags}) \
          or raise sweep.max_configs"
     )]
     TooLarge {
@@ -91,6 +91,8 @@ pub enum GridError {
         fits: usize,
         /// " × N knob values × M distances" when those axes are swept, else empty.
         extra: String,
+        /// ", --knob, --distance" for the swept ones, else empty.
+        more_flags: String,
         max: usize,
     },
 

@@ -455,12 +455,14 @@ impl Grid {
         };
         let n = grid.len();
         if n > max_configs {
-            let mut extra = String::new();
+            let (mut extra, mut more_flags) = (String::new(), String::new());
             if let Some(k) = &grid.knob {
                 extra.push_str(&format!(" × {} knob values", k.values.len()));
+                more_flags.push_str(", --knob");
             }
             if let Some(d) = &grid.distance {
                 extra.push_str(&format!(" × {} distances", d.values.len()));
+                more_flags.push_str(", --distance");
             }
             return Err(GridError::TooLarge {
                 configs: n,
@@ -469,6 +471,7 @@ impl Grid {
                 resolutions: grid.resolution.values.len(),
                 fits: grid.fit.values.len() * grid.split_range.values.len(),
                 extra,
+                more_flags,
                 max: max_configs,
             }
             .into());

@@ -177,6 +177,25 @@ fn knob_and_distance_flags_are_refused_naming_the_flag_where_the_preset_lacks_th
         assert!(err.contains(flag) && err.contains(says), "{extra:?}: {err}");
         assert!(!err.contains("panicked"), "{err}");
     }
+    // A grid too large names the knob and distance flags among the axes to narrow.
+    let (code, _, err) = cli(&[
+        "sweep",
+        "configs/default.toml",
+        "--quiet",
+        "--out",
+        out,
+        "--preset",
+        "unreal",
+        "--knob",
+        "0.5:10:0.001",
+        "--distance",
+        "1:1000:1",
+    ]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("× 9501 knob values × 1000 distances") && err.contains("--knob, --distance"),
+        "{err}"
+    );
     // A Bevy far bound beyond a swept distance names the point.
     let (code, _, err) = cli(&[
         "sweep",
