@@ -108,6 +108,13 @@ pub struct SweepArgs {
     /// Split ranges: bounds, visible or bounds,visible (side by side; scene geometry only).
     #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub split_range: Option<String>,
+    /// The preset's own split knob (unreal: CascadeDistributionExponent; bevy:
+    /// first_cascade_far_bound): a range (1:5:0.5) or a list (2,3,4) [default: around its value].
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
+    pub knob: Option<String>,
+    /// Shadow distances (shadow.max_distance), world units: a range (50:200:50) or a list (50,100,150).
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
+    pub distance: Option<String>,
     /// Worker threads, 1..=256 [default: one per core]. Results are identical at any count.
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u16).range(1..=256))]
     pub threads: Option<u16>,
@@ -242,6 +249,8 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             resolution: args.resolution,
             fit: args.fit,
             split_range: args.split_range,
+            knob: args.knob,
+            distance: args.distance,
             threads: args.threads,
             quiet: args.quiet,
             no_plots: args.no_plots,

@@ -79,8 +79,8 @@ pub enum GridError {
 
     /// The sweep grid is larger than `sweep.max_configs`.
     #[error(
-        "the sweep grid has {configs} configurations ({lambdas} λ × {counts} cascade counts × {resolutions} resolutions × {fits} fits), \
-         more than sweep.max_configs = {max}; narrow an axis (--lambda, --cascades, --resolution, --fit) \
+        "the sweep grid has {configs} configurations ({lambdas} λ × {counts} cascade counts × {resolutions} resolutions × {fits} fits{extra}), \
+         more than sweep.max_configs = {max}; narrow an axis (--lambda, --cascades, --resolution, --fit{more_flags}) \
          or raise sweep.max_configs"
     )]
     TooLarge {
@@ -89,6 +89,10 @@ pub enum GridError {
         counts: usize,
         resolutions: usize,
         fits: usize,
+        /// " × N knob values × M distances" when those axes are swept, else empty.
+        extra: String,
+        /// ", --knob, --distance" for the swept ones, else empty.
+        more_flags: String,
         max: usize,
     },
 
@@ -128,6 +132,22 @@ pub enum PresetError {
     /// A λ sweep over a preset whose split rule has no λ.
     #[error("the {preset} preset has no λ to sweep ({split_rule}); remove the lambda axis")]
     NoLambda { preset: String, split_rule: String },
+
+    /// A knob sweep over a preset without a split knob.
+    #[error("the {preset} preset has no split knob to sweep; drop --knob / sweep.knob")]
+    NoKnob { preset: String },
+
+    /// A knob value outside the engine's range.
+    #[error("{key} = {value} is outside the allowed range {range}")]
+    KnobRange {
+        key: &'static str,
+        value: String,
+        range: String,
+    },
+
+    /// A distance sweep over a preset that has no shadow distance.
+    #[error("the {preset} preset has no shadow distance (it shadows to camera.far); drop --distance / sweep.distance")]
+    NoDistance { preset: String },
 
     /// A cascade count the preset does not offer.
     #[error("the {preset} preset does not take {count} cascades (valid: {valid})")]

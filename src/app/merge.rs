@@ -82,6 +82,8 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
         resolution: m.resolution.clone(),
         fit: m.fit.clone(),
         split_range: m.split_range.clone(),
+        knob: m.knob.clone(),
+        distance: m.distance.clone(),
         threads: None,
         quiet: args.quiet,
         no_plots: args.no_plots,

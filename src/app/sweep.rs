@@ -20,6 +20,8 @@ pub(crate) fn plan(args: &SweepRequest) -> Result<(Config, Grid, String)> {
         resolution: args.resolution.as_deref().map(parse_resolution_spec).transpose()?,
         fit: args.fit.as_deref().map(parse_fit_spec).transpose()?,
         split_range: args.split_range.as_deref().map(parse_split_range_spec).transpose()?,
+        knob: args.knob.as_deref().map(parse_knob_spec).transpose()?,
+        distance: args.distance.as_deref().map(parse_distance_spec).transpose()?,
     };
     let grid = Grid::resolve(&config, &overrides)?;
     if !args.quiet {
@@ -79,6 +81,8 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
             resolution: args.resolution.clone(),
             fit: args.fit.clone(),
             split_range: args.split_range.clone(),
+            knob: args.knob.clone(),
+            distance: args.distance.clone(),
             config_hash: shard_hash(&args.config, &config, &grid, &command)?,
             command: command.clone(),
         }),
@@ -120,6 +124,10 @@ pub struct SweepRequest {
     pub resolution: Option<String>,
     pub fit: Option<String>,
     pub split_range: Option<String>,
+    /// `--knob`: the preset's split knob.
+    pub knob: Option<String>,
+    /// `--distance`: shadow distances.
+    pub distance: Option<String>,
     pub threads: Option<u16>,
     pub quiet: bool,
     pub no_plots: bool,

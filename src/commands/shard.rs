@@ -112,6 +112,9 @@ pub struct Manifest {
     pub fit: Option<String>,
     /// `--split-range` as given.
     pub split_range: Option<String>,
+    /// `--knob` and `--distance` as given.
+    pub knob: Option<String>,
+    pub distance: Option<String>,
     /// The command of the unsharded sweep (it appears in the merged files).
     pub command: String,
     /// [`config_hash`] of the loaded config, grid and command.
@@ -123,10 +126,19 @@ pub fn tool() -> String {
     format!("csm-lab {}", env!("CARGO_PKG_VERSION"))
 }
 
-const OPTIONAL_KEYS: [&str; 6] = ["preset", "lambda", "cascades", "resolution", "fit", "split_range"];
+const OPTIONAL_KEYS: [&str; 8] = [
+    "preset",
+    "lambda",
+    "cascades",
+    "resolution",
+    "fit",
+    "split_range",
+    "knob",
+    "distance",
+];
 
 impl Manifest {
-    fn optional(&self) -> [&Option<String>; 6] {
+    fn optional(&self) -> [&Option<String>; 8] {
         [
             &self.preset,
             &self.lambda,
@@ -134,6 +146,8 @@ impl Manifest {
             &self.resolution,
             &self.fit,
             &self.split_range,
+            &self.knob,
+            &self.distance,
         ]
     }
 
@@ -190,6 +204,8 @@ impl Manifest {
             resolution: optional("resolution"),
             fit: optional("fit"),
             split_range: optional("split_range"),
+            knob: optional("knob"),
+            distance: optional("distance"),
             command: string("command")?,
             config_hash: string("config_hash")?,
         })
@@ -250,6 +266,10 @@ pub fn config_hash(
         )
         .as_bytes(),
     );
+    // Only when swept: the hashes of sweeps without these axes stay as they were.
+    if grid.knob.is_some() || grid.distance.is_some() {
+        h.eat(format!("{:?}", (&grid.knob, &grid.distance)).as_bytes());
+    }
     h.eat(command.as_bytes());
     h.hex()
 }
@@ -261,7 +281,7 @@ pub fn config_hash(
 const ROW_COLUMNS: &str =
     "index\tlambda\tcascades\tresolution\tfit\tsplit_range\tcascades_needed\tz_lo\tz_hi\tmax_aliasing\t\
 mean_aliasing\tmean_log_aliasing\tundersampled_fraction\tshimmer\tshimmer_snapped\tshimmer_unsnapped\tsize_jitter\t\
-coverage_violations\tmemory_bytes\tlookup_error_max\tlookup_error_rms\tscreen";
+coverage_violations\tmemory_bytes\tlookup_error_max\tlookup_error_rms\tscreen\tknob\tdistance";
 
 fn hex(x: f64) -> String {
     format!("{:016x}", x.to_bits())
@@ -353,6 +373,9 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
                 out.push_str(&all.join(","));
             }
         }
+        for x in [st.knob, st.distance] {
+            let _ = write!(out, "\t{}", x.map_or_else(|| "-".to_string(), hex));
+        }
         out.push('\n');
     }
     out
@@ -379,8 +402,8 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
     for (i, line) in lines {
         let n = i + 1;
         let f: Vec<&str> = line.split('\t').collect();
-        if f.len() != 22 {
-            return Err(bad(n, format!("{} fields; a row has 22", f.len())));
+        if f.len() != 24 {
+            return Err(bad(n, format!("{} fields; a row has 24", f.len())));
         }
         let float = |s: &str| {
             u64::from_str_radix(s, 16)
@@ -389,6 +412,7 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                 .map(f64::from_bits)
                 .ok_or_else(|| bad(n, format!("{s:?} is not 16 hex digits")))
         };
+        let optional_float = |s: &str| if s == "-" { Ok(None) } else { float(s).map(Some) };
         let whole = |s: &str| {
             s.parse::<u64>()
                 .map_err(|_| bad(n, format!("{s:?} is not a whole number")))
@@ -446,6 +470,8 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                     resolution,
                     fit,
                     split_range,
+                    knob: optional_float(f[22])?,
+                    distance: optional_float(f[23])?,
                 },
                 summary: Summary {
                     cascades_needed,
@@ -594,6 +620,8 @@ pub fn join(shards: Vec<ShardInput>, grid: &Grid) -> Result<Vec<Row>> {
                     && p.resolution == row.setting.resolution
                     && p.fit == row.setting.fit
                     && p.split_range == row.setting.split_range
+                    && p.knob.map(f64::to_bits) == row.setting.knob.map(f64::to_bits)
+                    && p.distance.map(f64::to_bits) == row.setting.distance.map(f64::to_bits)
             });
             if !same || slots[index].is_some() {
                 return Err(ShardError::dir(

@@ -29,6 +29,10 @@ pub struct Grid {
     pub fit: Axis<Fit>,
     /// Splits on the bounds' depth range and/or on the visible depths (scene geometry only).
     pub split_range: Axis<SplitRange>,
+    /// The preset's split knob (Unreal's exponent, Bevy's first far bound), when it has one.
+    pub knob: Option<Axis<f64>>,
+    /// Shadow distances (`shadow.max_distance`), when swept.
+    pub distance: Option<Axis<f64>>,
     /// What was left out of the `[sweep]` table because the preset has no such axis or value.
     pub notes: Vec<String>,
 }
@@ -110,6 +114,43 @@ where
     })
 }
 
+/// `--knob 1,2,3` or `--knob 1:5:0.5` (values of a preset's split knob; range checked
+/// against the engine in [`Grid::resolve`]), and likewise `--distance 50,100,150`.
+pub fn parse_number_spec(flag: &str, spec: &str, allowed: &str, ok: impl Fn(f64) -> bool) -> Result<Axis<f64>> {
+    let err = |m: String| Error::flag(flag, spec, m);
+    let num = |s: &str| {
+        s.trim().parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
+            err(format!(
+                "{s:?} is not a number; use start:end:step (1:5:0.5) or a list (1,2,3)"
+            ))
+        })
+    };
+    let values = if spec.contains(':') {
+        let parts: Vec<&str> = spec.split(':').collect();
+        if parts.len() != 3 {
+            return Err(err("a range is start:end:step, e.g. 1:5:0.5".into()));
+        }
+        decimal_range(num(parts[0])?, num(parts[1])?, num(parts[2])?).map_err(err)?
+    } else {
+        spec.split(',').map(num).collect::<Result<Vec<_>>>()?
+    };
+    check_values(&values, allowed, ok).map_err(err)?;
+    Ok(Axis {
+        values,
+        spec: spec.to_string(),
+    })
+}
+
+/// `--knob VALUES`: the preset's split knob.
+pub fn parse_knob_spec(spec: &str) -> Result<Axis<f64>> {
+    parse_number_spec("--knob", spec, "finite numbers", f64::is_finite)
+}
+
+/// `--distance VALUES`: shadow distances in world units.
+pub fn parse_distance_spec(spec: &str) -> Result<Axis<f64>> {
+    parse_number_spec("--distance", spec, "(0, 1e9]", crate::config::sweep_spec::distance_ok)
+}
+
 /// `--cascades 1..8` (inclusive), `--cascades 2,4` or `--cascades 4`.
 pub fn parse_cascades_spec(spec: &str) -> Result<Axis<usize>> {
     parse_int_list("--cascades", spec, "1..=16", cascades_ok, true)
@@ -181,6 +222,8 @@ pub struct GridOverrides {
     pub resolution: Option<Axis<u32>>,
     pub fit: Option<Axis<Fit>>,
     pub split_range: Option<Axis<SplitRange>>,
+    pub knob: Option<Axis<f64>>,
+    pub distance: Option<Axis<f64>>,
 }
 
 impl Grid {
@@ -365,22 +408,70 @@ impl Grid {
                 spec: configured.name().into(),
             },
         };
+        let knob_source = source(overrides.knob.is_some(), "--knob", "sweep.knob");
+        let knob = match (overrides.knob.clone().or(spec.knob.clone()), &axes.knob) {
+            (Some(axis), None) => {
+                let name = preset.map_or("csm-lab's own pipeline".to_string(), |p| {
+                    format!("the {} preset", p.name)
+                });
+                return Err(Error::flag(
+                    &knob_source,
+                    &axis.spec,
+                    format!(
+                        "{name} has no split knob to sweep (only unreal and bevy have one; λ is --lambda); drop {knob_source}"
+                    ),
+                ));
+            }
+            (Some(axis), Some(_)) => Some(axis),
+            (None, Some(k)) => Some(Axis {
+                spec: fmt_list(&k.sweep),
+                values: k.sweep.clone(),
+            }),
+            (None, None) => None,
+        };
+        let distance_source = source(overrides.distance.is_some(), "--distance", "sweep.distance");
+        let distance = overrides.distance.clone().or(spec.distance.clone());
+        if let (Some(axis), Some(p)) = (&distance, preset) {
+            if !axes.distance {
+                return Err(Error::flag(
+                    &distance_source,
+                    &axis.spec,
+                    format!(
+                        "the {} preset has no shadow distance (it shadows to camera.far); drop {distance_source}",
+                        p.name
+                    ),
+                ));
+            }
+        }
         let grid = Grid {
             lambda,
             cascades,
             resolution,
             fit,
             split_range,
+            knob,
+            distance,
             notes,
         };
         let n = grid.len();
         if n > max_configs {
+            let (mut extra, mut more_flags) = (String::new(), String::new());
+            if let Some(k) = &grid.knob {
+                extra.push_str(&format!(" × {} knob values", k.values.len()));
+                more_flags.push_str(", --knob");
+            }
+            if let Some(d) = &grid.distance {
+                extra.push_str(&format!(" × {} distances", d.values.len()));
+                more_flags.push_str(", --distance");
+            }
             return Err(GridError::TooLarge {
                 configs: n,
                 lambdas: grid.lambda.values.len(),
                 counts: grid.cascades.values.len(),
                 resolutions: grid.resolution.values.len(),
                 fits: grid.fit.values.len() * grid.split_range.values.len(),
+                extra,
+                more_flags,
                 max: max_configs,
             }
             .into());
@@ -404,6 +495,17 @@ impl Grid {
                         .map_err(|e| axis_error(&lambda_source, &grid.lambda.spec, e))?;
                 }
             }
+            if let Some(k) = &grid.knob {
+                for &v in &k.values {
+                    crate::presets::set_knob(&mut c, v).map_err(|e| axis_error(&knob_source, &k.spec, e))?;
+                }
+            }
+        }
+        if let Some(d) = &grid.distance {
+            let mut c = config.clone();
+            for &v in &d.values {
+                crate::presets::set_distance(&mut c, v).map_err(|e| axis_error(&distance_source, &d.spec, e))?;
+            }
         }
         Ok(grid)
     }
@@ -414,28 +516,41 @@ impl Grid {
             * self.resolution.values.len()
             * self.fit.values.len()
             * self.split_range.values.len()
+            * self.knob.as_ref().map_or(1, |a| a.values.len())
+            * self.distance.as_ref().map_or(1, |a| a.values.len())
     }
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
-    /// All settings in row order: split range, then fit, then resolution, then cascades, then
-    /// λ (innermost).
+    /// All settings in row order: split range, then fit, then distance, then resolution, then
+    /// cascades, then the knob, then λ (innermost).
     pub fn settings(&self) -> Vec<Setting> {
+        let opt = |a: &Option<Axis<f64>>| {
+            a.as_ref()
+                .map_or(vec![None], |a| a.values.iter().map(|&v| Some(v)).collect())
+        };
+        let (knobs, distances) = (opt(&self.knob), opt(&self.distance));
         let mut out = Vec::with_capacity(self.len());
         for &split_range in &self.split_range.values {
             for &fit in &self.fit.values {
-                for &resolution in &self.resolution.values {
-                    for &cascades in &self.cascades.values {
-                        for &lambda in &self.lambda.values {
-                            out.push(Setting {
-                                lambda,
-                                cascades,
-                                resolution,
-                                fit,
-                                split_range,
-                            });
+                for &distance in &distances {
+                    for &resolution in &self.resolution.values {
+                        for &cascades in &self.cascades.values {
+                            for &knob in &knobs {
+                                for &lambda in &self.lambda.values {
+                                    out.push(Setting {
+                                        lambda,
+                                        cascades,
+                                        resolution,
+                                        fit,
+                                        split_range,
+                                        knob,
+                                        distance,
+                                    });
+                                }
+                            }
                         }
                     }
                 }
@@ -462,6 +577,12 @@ impl Grid {
         if self.split_range.values.len() > 1 || self.split_range.values.contains(&SplitRange::Visible) {
             out.push_str(&format!(" --split-range {}", self.split_range.spec));
         }
+        if let Some(k) = &self.knob {
+            out.push_str(&format!(" --knob {}", k.spec));
+        }
+        if let Some(d) = &self.distance {
+            out.push_str(&format!(" --distance {}", d.spec));
+        }
         out
     }
 }
@@ -474,6 +595,10 @@ pub struct Setting {
     pub resolution: u32,
     pub fit: Fit,
     pub split_range: SplitRange,
+    /// The preset's split knob (None: not swept).
+    pub knob: Option<f64>,
+    /// The shadow distance (None: not swept; the config's own).
+    pub distance: Option<f64>,
 }
 
 impl Setting {
@@ -483,7 +608,15 @@ impl Setting {
     /// a resolved grid.
     pub fn apply(&self, base: &Config) -> Result<Config> {
         if base.shadow.preset.is_none() {
-            return base.with_sweep_point(self.lambda, self.cascades, self.resolution, self.fit, self.split_range);
+            let c = base.with_sweep_point(self.lambda, self.cascades, self.resolution, self.fit, self.split_range)?;
+            return match self.distance {
+                None => Ok(c),
+                Some(d) => {
+                    let mut c = c;
+                    crate::presets::set_distance(&mut c, d)?;
+                    c.rechecked()
+                }
+            };
         }
         let mut c = base.clone();
         if crate::presets::axes(&c).lambda.is_some() {
@@ -491,6 +624,15 @@ impl Setting {
         }
         crate::presets::set_cascades(&mut c, self.cascades)?;
         crate::presets::set_resolution(&mut c, self.resolution)?;
+        if let Some(k) = self.knob {
+            crate::presets::set_knob(&mut c, k)?;
+        }
+        if let Some(d) = self.distance {
+            crate::presets::set_distance(&mut c, d)?;
+        }
+        if self.knob.is_some() || self.distance.is_some() {
+            crate::presets::check_point(&c)?;
+        }
         // The engine checked its own knobs; the set-up as a whole is checked again here.
         c.rechecked()
     }
@@ -500,8 +642,15 @@ impl Setting {
             SplitRange::Bounds => "",
             SplitRange::Visible => ", splits on the visible depths",
         };
+        let mut extra = String::new();
+        if let Some(k) = self.knob {
+            extra.push_str(&format!(", knob {k}"));
+        }
+        if let Some(d) = self.distance {
+            extra.push_str(&format!(", distance {d}"));
+        }
         format!(
-            "{} x {}^2, lambda {}, {}{range}",
+            "{} x {}^2, lambda {}, {}{range}{extra}",
             self.cascades, self.resolution, self.lambda, self.fit
         )
     }
@@ -1055,11 +1204,14 @@ impl SweepResult {
     }
 
     /// The row of the configured setting (the config's own λ, cascade count, resolution and
-    /// fit), when the grid has it.
+    /// fit, and the preset's knob and shadow distance when swept), when the grid has it.
     pub fn configured(&self) -> Option<usize> {
         let c = &self.config.shadow;
+        let knob = crate::presets::axes(&self.config).knob.map(|k| k.value);
         self.rows.iter().position(|x| {
-            x.setting.lambda == c.lambda
+            x.setting.knob.is_none_or(|k| Some(k) == knob)
+                && x.setting.distance.is_none_or(|d| d == c.max_distance)
+                && x.setting.lambda == c.lambda
                 && x.setting.cascades == c.cascades
                 && x.setting.resolution == c.resolution
                 && x.setting.fit == c.fit
@@ -1220,6 +1372,8 @@ mod tests {
                 resolution: 512,
                 fit: Fit::Sphere,
                 split_range: SplitRange::Bounds,
+                knob: None,
+                distance: None,
             },
             summary: Summary {
                 cascades_needed,

@@ -24,6 +24,10 @@ pub struct SweepSpec {
     /// `split_range = ["bounds", "visible"]`: splits on the bounds' depth range and/or on the
     /// visible depths (scene geometry only), side by side in one sweep.
     pub split_range: Option<Axis<SplitRange>>,
+    /// `knob = [...]`: values of the preset's split knob (`docs/presets.md`, "Sweep axes").
+    pub knob: Option<Axis<f64>>,
+    /// `distance = [...]`: shadow distances (`shadow.max_distance`), world units.
+    pub distance: Option<Axis<f64>>,
     /// Memory budget for the recommendation, MiB (2^20 bytes).
     pub memory_budget_mib: Option<f64>,
     /// A larger grid is an error, not an out-of-memory.
@@ -191,6 +195,8 @@ pub(crate) struct RawSweep {
     resolution: Option<RawAxis>,
     fit: Option<Vec<Fit>>,
     split_range: Option<Vec<SplitRange>>,
+    knob: Option<RawAxis>,
+    distance: Option<RawAxis>,
     memory_budget_mib: Option<f64>,
     max_configs: Option<i64>,
     objective: Option<String>,
@@ -256,6 +262,27 @@ fn raw_lambda(raw: RawAxis) -> std::result::Result<Axis<f64>, String> {
     };
     check_values(&axis.values, "[0, 1]", lambda_ok)?;
     Ok(axis)
+}
+
+/// A finite-number axis (`knob`, `distance`): a list or a decimal-exact range.
+fn raw_numbers(raw: RawAxis, allowed: &str, ok: impl Fn(f64) -> bool) -> std::result::Result<Axis<f64>, String> {
+    let axis = match raw {
+        RawAxis::List(values) => Axis {
+            spec: fmt_list(&values),
+            values,
+        },
+        RawAxis::Range(r) => Axis {
+            values: decimal_range(r.start, r.end, r.step)?,
+            spec: format!("{}:{}:{}", r.start, r.end, r.step),
+        },
+    };
+    check_values(&axis.values, allowed, ok)?;
+    Ok(axis)
+}
+
+/// A shadow distance a sweep may use.
+pub fn distance_ok(x: f64) -> bool {
+    x.is_finite() && x > 0.0 && x <= 1e9
 }
 
 fn whole(values: Vec<f64>) -> std::result::Result<Vec<i64>, String> {
@@ -383,12 +410,24 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
         1,
         10_000_000,
     )? as usize;
+    let knob = raw
+        .knob
+        .map(|r| raw_numbers(r, "finite numbers", f64::is_finite))
+        .transpose()
+        .map_err(|why| v.invalid("sweep.knob", "as written", &format!("finite numbers: {why}")))?;
+    let distance = raw
+        .distance
+        .map(|r| raw_numbers(r, "(0, 1e9]", distance_ok))
+        .transpose()
+        .map_err(|why| v.invalid("sweep.distance", "as written", &format!("distances in (0, 1e9]: {why}")))?;
     Ok(SweepSpec {
         lambda,
         cascades,
         resolution,
         fit,
         split_range,
+        knob,
+        distance,
         memory_budget_mib,
         max_configs,
         objective: raw.objective,

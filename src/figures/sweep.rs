@@ -36,7 +36,14 @@ fn focus_word(recommended: bool) -> &'static str {
 /// A setting in the sweep's own knobs: an engine preset has no λ or fit to print.
 pub fn setting_words(r: &SweepResult, s: &Setting) -> String {
     if r.config.shadow.preset.is_some() {
-        format!("{} × {}²", s.cascades, s.resolution)
+        let mut out = format!("{} × {}²", s.cascades, s.resolution);
+        if let (Some(k), Some(v)) = (crate::presets::axes(&r.config).knob, s.knob) {
+            out.push_str(&format!(", {} {}", k.term, tick(v)));
+        }
+        if let Some(d) = s.distance {
+            out.push_str(&format!(", distance {}", tick(d)));
+        }
+        out
     } else {
         format!(
             "{} × {}², λ {} ({})",
@@ -85,14 +92,32 @@ fn heat_metrics(r: &SweepResult) -> Vec<SummaryMetric> {
 }
 
 impl HeatmapFigure<'_> {
-    /// True when λ is an axis of the grid; otherwise resolution is the panels' x axis.
+    /// True when λ (or, for a preset without λ, its swept split knob) is an axis of the grid;
+    /// otherwise resolution is the panels' x axis.
     fn lambda_axis(&self) -> bool {
-        self.0.grid.lambda.values.len() > 1
+        self.x_values().len() > 1
+    }
+
+    /// The swept engine knob's name, when it is the x axis (λ has one value).
+    fn knob_x(&self) -> Option<&'static str> {
+        let g = &self.0.grid;
+        if g.lambda.values.len() > 1 || g.knob.as_ref().is_none_or(|k| k.values.len() < 2) {
+            return None;
+        }
+        crate::presets::axes(&self.0.config).knob.map(|k| k.term)
+    }
+
+    /// The x axis values: λ, or the engine knob's (see [`Self::knob_x`]).
+    fn x_values(&self) -> &[f64] {
+        match (self.knob_x(), &self.0.grid.knob) {
+            (Some(_), Some(k)) => &k.values,
+            _ => &self.0.grid.lambda.values,
+        }
     }
 
     /// λ columns: the grid's λ values in groups of at most [`MAX_HEAT_COLUMNS`] columns.
     fn lambda_bins(&self) -> (usize, usize) {
-        let n = self.0.grid.lambda.values.len().max(1);
+        let n = self.x_values().len().max(1);
         let per = n.div_ceil(MAX_HEAT_COLUMNS);
         (n.div_ceil(per), per)
     }
@@ -110,7 +135,12 @@ impl HeatmapFigure<'_> {
 
     fn panels(&self) -> Vec<HeatPanel> {
         let r = self.0;
-        let lambdas = &r.grid.lambda.values;
+        let lambdas = self.x_values();
+        let knob = self.knob_x();
+        let x_of = |x: &Row| match knob {
+            Some(_) => x.setting.knob.unwrap_or(f64::NAN),
+            None => x.setting.lambda,
+        };
         let counts = &r.grid.cascades.values;
         let resolutions = &r.grid.resolution.values;
         let rec = focus(r).map(|x| x.0.setting);
@@ -149,7 +179,7 @@ impl HeatmapFigure<'_> {
                             .filter(|x| x.setting.fit_group() == *fit && x.setting.resolution == res)
                         {
                             let (Some(i), Some(j)) = (
-                                lambdas.iter().position(|l| *l == row.setting.lambda),
+                                lambdas.iter().position(|l| *l == x_of(row)),
                                 counts.iter().position(|c| *c == row.setting.cascades),
                             ) else {
                                 continue;
@@ -173,10 +203,10 @@ impl HeatmapFigure<'_> {
                         }
                         out.push(HeatPanel {
                             caption: format!("{} · {res}² · {fit}", metric.name().replace('_', " ")),
-                            x_desc: if per == 1 {
-                                "λ (0 uniform → 1 log)".to_string()
-                            } else {
-                                format!("λ (0 uniform → 1 log); a column: the lowest of {per} λ")
+                            x_desc: match (knob, per) {
+                                (Some(term), _) => term.to_string(),
+                                (None, 1) => "λ (0 uniform → 1 log)".to_string(),
+                                (None, _) => format!("λ (0 uniform → 1 log); a column: the lowest of {per} λ"),
                             },
                             nx: cols,
                             x_ticks: x_ticks.clone(),
@@ -252,7 +282,11 @@ impl Figure for HeatmapFigure<'_> {
         let r = self.0;
         let title = format!(
             "Aliasing over {} × cascades: {}",
-            if self.lambda_axis() { "λ" } else { "resolution" },
+            match (self.lambda_axis(), self.knob_x()) {
+                (true, Some(term)) => term,
+                (true, None) => "λ",
+                (false, _) => "resolution",
+            },
             r.config.name
         );
         let root = root.titled(&title, (FONT, 22))?;

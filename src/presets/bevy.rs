@@ -130,6 +130,28 @@ impl Engine for Bevy {
         Ok(())
     }
 
+    /// The first far bound, swept at ¼ to 2× the configured one, those inside
+    /// (minimum_distance, max_distance); given values outside are refused by [`Engine::check`].
+    fn knob(k: &BevyKnobs, max_distance: f64) -> Option<Knob> {
+        let f = k.first_cascade_far_bound;
+        let mults = [0.25, 0.5, 0.75, 1.0, 1.5, 2.0];
+        Some(Knob {
+            key: "bevy.first_cascade_far_bound",
+            term: "first_cascade_far_bound",
+            value: f,
+            min: k.minimum_distance,
+            max: 1e9,
+            sweep: around(f, &mults.map(|m| m * f), k.minimum_distance, 1e9)
+                .into_iter()
+                .filter(|&x| x < max_distance)
+                .collect(),
+        })
+    }
+
+    fn set_knob(k: &mut BevyKnobs, value: f64) {
+        k.first_cascade_far_bound = value;
+    }
+
     fn layout(k: &BevyKnobs, cascades: usize, max_distance: f64, _near: f64, _far: f64) -> Layout {
         let fars = bevy_far_bounds(cascades, k.first_cascade_far_bound, max_distance);
         let nears: Vec<f64> = (0..cascades)

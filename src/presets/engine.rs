@@ -112,6 +112,22 @@ pub fn snap(mode: SnapMode, step_texels: u32) -> SnapRule {
     SnapRule { mode, step_texels }
 }
 
+/// An engine's own split knob that a sweep can vary (`docs/presets.md`, "Sweep axes").
+#[derive(Debug, Clone, PartialEq)]
+pub struct Knob {
+    /// The config key, as in the engine's table (`unreal.cascade_distribution_exponent`).
+    pub key: &'static str,
+    /// The knob's name in the engine's own terms (reports, figures).
+    pub term: &'static str,
+    /// The configured value.
+    pub value: f64,
+    /// Allowed values: `min..=max`.
+    pub min: f64,
+    pub max: f64,
+    /// What a sweep varies when no values are given: values around the configured one.
+    pub sweep: Vec<f64>,
+}
+
 /// One engine's whole cascade set-up. Implemented by a unit struct per engine file.
 pub trait Engine: Sync + 'static {
     /// Resolved knobs (defaults applied, validated).
@@ -160,6 +176,14 @@ pub trait Engine: Sync + 'static {
     }
     /// Sets the λ knob (only called when [`Engine::lambda_key`] is Some).
     fn set_lambda(_k: &mut Self::Knobs, _lambda: f64) {}
+
+    /// The engine's split knob a sweep can vary, if it has a scalar one besides λ; its default
+    /// sweep values fit the shadow distance `max_distance`.
+    fn knob(_k: &Self::Knobs, _max_distance: f64) -> Option<Knob> {
+        None
+    }
+    /// Sets the split knob (only called when [`Engine::knob`] is Some, with a value in range).
+    fn set_knob(_k: &mut Self::Knobs, _value: f64) {}
 
     /// Fitted slices and selection boundaries. `max_distance` is the shadow distance (unused
     /// without one); `near`/`far` are the camera planes.
@@ -211,6 +235,8 @@ pub trait DynEngine: Sync {
     fn lambda(&self, k: &Knobs) -> Option<f64>;
     fn lambda_key(&self, k: &Knobs) -> Option<&'static str>;
     fn set_lambda(&self, k: &mut Knobs, lambda: f64);
+    fn knob(&self, k: &Knobs, max_distance: f64) -> Option<Knob>;
+    fn set_knob(&self, k: &mut Knobs, value: f64);
     fn layout(&self, k: &Knobs, cascades: usize, max_distance: f64, near: f64, far: f64) -> Layout;
     fn snap_rule(&self, k: &Knobs) -> SnapRule;
     fn light_basis(&self, direction: DVec3) -> LightBasis;
@@ -283,6 +309,16 @@ impl<E: KnobsOf> DynEngine for E {
     fn set_lambda(&self, k: &mut Knobs, lambda: f64) {
         if let Some(k) = E::get_mut(k) {
             E::set_lambda(k, lambda);
+        }
+    }
+
+    fn knob(&self, k: &Knobs, max_distance: f64) -> Option<Knob> {
+        E::knob(own::<E>(k), max_distance)
+    }
+
+    fn set_knob(&self, k: &mut Knobs, value: f64) {
+        if let Some(k) = E::get_mut(k) {
+            E::set_knob(k, value);
         }
     }
 

@@ -251,3 +251,17 @@ pub fn minimal_sphere_scheme(f: &super::Fitting<'_>) -> super::EngineScheme {
         crate::cascades::LightDepthRule::Scene,
     )
 }
+
+/// A knob's default sweep: the candidates and the configured value, those in `(lo, hi]`,
+/// sorted, without repeats.
+pub fn around(value: f64, candidates: &[f64], lo: f64, hi: f64) -> Vec<f64> {
+    let mut v: Vec<f64> = candidates
+        .iter()
+        .copied()
+        .chain([value])
+        .filter(|x| x.is_finite() && *x > lo && *x <= hi)
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v.dedup();
+    v
+}

@@ -17,28 +17,36 @@ pub struct Axes {
     pub resolution_power_of_two: bool,
     /// The fit can be swept (csm-lab's own pipeline only: a preset fixes its fit).
     pub fit: bool,
+    /// The engine's own split knob (Unreal's distribution exponent, Bevy's first far bound).
+    pub knob: Option<Knob>,
+    /// The shadow distance (`shadow.max_distance`) can be swept.
+    pub distance: bool,
 }
 
-/// The sweep axes of a preset.
-pub fn preset_axes(p: &Preset) -> Axes {
+/// The sweep axes of a preset at the shadow distance `max_distance`.
+pub fn preset_axes(p: &Preset, max_distance: f64) -> Axes {
     let engine = p.knobs.engine();
     Axes {
         lambda: engine.lambda_key(&p.knobs),
         cascades: engine.counts(&p.knobs).list(),
         resolution_power_of_two: engine.power_of_two_maps(),
         fit: false,
+        knob: engine.knob(&p.knobs, max_distance),
+        distance: engine.has_distance(),
     }
 }
 
 /// The sweep axes of a config: its preset's, or csm-lab's own (every axis).
 pub fn axes(config: &Config) -> Axes {
     match &config.shadow.preset {
-        Some(p) => preset_axes(p),
+        Some(p) => preset_axes(p, config.shadow.max_distance),
         None => Axes {
             lambda: Some("shadow.lambda"),
             cascades: (1..=16).collect(),
             resolution_power_of_two: false,
             fit: true,
+            knob: None,
+            distance: true,
         },
     }
 }
@@ -73,7 +81,7 @@ pub fn set_lambda(config: &mut Config, lambda: f64) -> Result<()> {
 /// Sets the cascade count for a sweep point, checking the preset accepts it.
 pub fn set_cascades(config: &mut Config, n: usize) -> Result<()> {
     if let Some(p) = &config.shadow.preset {
-        let ax = preset_axes(p);
+        let ax = preset_axes(p, config.shadow.max_distance);
         if !ax.cascades.contains(&n) {
             return Err(PresetError::Cascades {
                 preset: p.name.to_string(),
@@ -109,5 +117,72 @@ pub fn set_resolution(config: &mut Config, n: u32) -> Result<()> {
         }
     }
     config.shadow.resolution = n;
+    Ok(())
+}
+
+/// Sets the preset's split knob for a sweep point, checking the engine's range.
+pub fn set_knob(config: &mut Config, value: f64) -> Result<()> {
+    let max_distance = config.shadow.max_distance;
+    let Some(p) = &mut config.shadow.preset else {
+        return Err(PresetError::NoKnob {
+            preset: "csm-lab".to_string(),
+        }
+        .into());
+    };
+    let engine = p.knobs.engine();
+    let Some(knob) = engine.knob(&p.knobs, max_distance) else {
+        return Err(PresetError::NoKnob {
+            preset: p.name.to_string(),
+        }
+        .into());
+    };
+    if !(value.is_finite() && value > knob.min && value <= knob.max) {
+        return Err(PresetError::KnobRange {
+            key: knob.key,
+            value: value.to_string(),
+            range: format!("({}, {}]", knob.min, knob.max),
+        }
+        .into());
+    }
+    engine.set_knob(&mut p.knobs, value);
+    Ok(())
+}
+
+/// Sets the shadow distance for a sweep point (`shadow.max_distance`), checking it against
+/// the preset's own rules.
+pub fn set_distance(config: &mut Config, distance: f64) -> Result<()> {
+    if !(distance.is_finite() && distance > 0.0 && distance <= 1e9) {
+        return Err(PresetError::OutOfRange {
+            axis: "distance",
+            value: distance.to_string(),
+            range: "(0, 1e9]",
+        }
+        .into());
+    }
+    if let Some(p) = &config.shadow.preset {
+        if !p.knobs.engine().has_distance() {
+            return Err(PresetError::NoDistance {
+                preset: p.name.to_string(),
+            }
+            .into());
+        }
+    }
+    config.shadow.max_distance = distance;
+    Ok(())
+}
+
+/// Runs the engine's own checks that involve the count and the shadow distance (after a sweep
+/// point changed the knob or the distance).
+pub fn check_point(config: &Config) -> Result<()> {
+    if let Some(p) = &config.shadow.preset {
+        let label = config
+            .path
+            .as_ref()
+            .map_or_else(|| config.name.clone(), |p| p.display().to_string());
+        let v = crate::config::Validator { path: &label, text: "" };
+        p.knobs
+            .engine()
+            .check(&p.knobs, config.shadow.cascades, config.shadow.max_distance, &v)?;
+    }
     Ok(())
 }

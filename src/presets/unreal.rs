@@ -92,6 +92,22 @@ impl Engine for Unreal {
         Counts::Allowed((1..=10).collect())
     }
 
+    fn knob(k: &UnrealKnobs, _max_distance: f64) -> Option<Knob> {
+        let e = k.cascade_distribution_exponent;
+        Some(Knob {
+            key: "unreal.cascade_distribution_exponent",
+            term: "CascadeDistributionExponent",
+            value: e,
+            min: 0.1,
+            max: 10.0,
+            sweep: around(e, &[1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0], 0.1, 10.0),
+        })
+    }
+
+    fn set_knob(k: &mut UnrealKnobs, value: f64) {
+        k.cascade_distribution_exponent = value;
+    }
+
     fn layout(k: &UnrealKnobs, cascades: usize, max_distance: f64, near: f64, _far: f64) -> Layout {
         let s = unreal_splits(cascades, k.cascade_distribution_exponent, near, max_distance);
         let m = cascades;

@@ -552,7 +552,14 @@ fn verdict_counts(comparisons: &[Comparison]) -> String {
 }
 
 fn key_json(k: &SweepKey) -> Value {
-    json!({"lambda": k.lambda, "cascades": k.cascades, "resolution": k.resolution, "fit": k.fit})
+    let mut v = json!({"lambda": k.lambda, "cascades": k.cascades, "resolution": k.resolution, "fit": k.fit});
+    if let Some(x) = k.knob {
+        v["knob"] = json!(x);
+    }
+    if let Some(x) = k.distance {
+        v["distance"] = json!(x);
+    }
+    v
 }
 
 fn tolerances_json(t: &Tolerances) -> Value {

@@ -31,6 +31,14 @@ pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
     for &i in &r.front {
         on_front[i] = true;
     }
+    // The knob and distance columns exist only when swept (csm-lab's own sweeps and presets
+    // without them keep their columns): named by the config key they set.
+    let knob_key = r
+        .grid
+        .knob
+        .as_ref()
+        .and(crate::presets::axes(&r.config).knob.map(|k| k.key));
+    let distance = r.grid.distance.is_some();
     let rows = r.rows.iter().enumerate().map(|(i, row)| {
         let st = &row.setting;
         let mut fields = metric::summary_fields(
@@ -47,11 +55,19 @@ pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
             (rec == Some(i)).to_string(),
             preset.clone(),
         ]);
+        if let (Some(_), Some(k)) = (knob_key, st.knob) {
+            fields.push(num("knob", k)?);
+        }
+        if let (true, Some(d)) = (distance, st.distance) {
+            fields.push(num("distance", d)?);
+        }
         Ok(fields)
     });
     let header: Vec<&str> = metric::summary_columns(r.config.geometry.is_some())
         .into_iter()
         .chain(SWEEP_EXTRA_COLUMNS)
+        .chain(knob_key)
+        .chain(distance.then_some("shadow.max_distance"))
         .collect();
     csv_bytes_from(&header, rows)
 }
@@ -65,6 +81,12 @@ fn row_json(row: &Row) -> serde_json::Value {
     });
     if row.summary.screen.is_some() {
         v["split_range"] = serde_json::json!(row.setting.split_range);
+    }
+    if let Some(k) = row.setting.knob {
+        v["knob"] = serde_json::json!(k);
+    }
+    if let Some(d) = row.setting.distance {
+        v["distance"] = serde_json::json!(d);
     }
     for (k, x) in metric::summary_json(&row.summary) {
         v[k] = x;
@@ -601,6 +623,9 @@ fn config_table(r: &SweepResult, idx: &[usize]) -> ConfigTable {
         left.push(head.len());
         head.push("fit");
     }
+    if let Some(&i) = idx.first() {
+        head.extend(axis_cells(r, &r.rows[i]).into_iter().map(|(h, _)| h));
+    }
     if screen {
         head.push(r.objective.name());
     }
@@ -626,6 +651,7 @@ fn config_table(r: &SweepResult, idx: &[usize]) -> ConfigTable {
             if fit {
                 v.push(fit_cell(x));
             }
+            v.extend(axis_cells(r, x).into_iter().map(|(_, c)| c));
             if screen {
                 v.push(n(r.objective.value(s)));
             }
@@ -888,10 +914,29 @@ pub fn render_all(r: &SweepResult, plots: bool) -> Result<crate::output::Rendere
 
 /// " × 2 split ranges" when the sweep puts bounds and visible splits side by side.
 fn ranges_factor(r: &SweepResult) -> String {
-    match r.grid.split_range.values.len() {
+    let mut out = match r.grid.split_range.values.len() {
         1 => String::new(),
         n => format!(" × {n} split ranges"),
+    };
+    if let (Some(a), Some(k)) = (&r.grid.knob, crate::presets::axes(&r.config).knob) {
+        let _ = write!(out, " × {}", count(a.values.len() as u64, &format!("{} value", k.term)));
     }
+    if let Some(a) = &r.grid.distance {
+        let _ = write!(out, " × {}", count(a.values.len() as u64, "shadow distance"));
+    }
+    out
+}
+
+/// The swept engine knob's and distance's column names and cells of a row (tables).
+fn axis_cells(r: &SweepResult, x: &Row) -> Vec<(&'static str, String)> {
+    let mut out = Vec::new();
+    if let (Some(k), Some(v)) = (crate::presets::axes(&r.config).knob, x.setting.knob) {
+        out.push((k.term, n(v)));
+    }
+    if let Some(d) = x.setting.distance {
+        out.push(("shadow distance", n(d)));
+    }
+    out
 }
 
 /// The short table printed on stdout.
@@ -932,11 +977,15 @@ pub fn stdout_table(r: &SweepResult) -> String {
         "  {:>9} {:>8} {:>6} {:>6} {:>fw$} {:>10} {:>10} {:>10}",
         "MiB", "cascades", "res", "λ", "fit", "mean", "max", "shimmer"
     );
-    let _ = if screen {
-        writeln!(out, " {:>10}", "objective")
-    } else {
-        writeln!(out)
-    };
+    if screen {
+        let _ = write!(out, " {:>10}", "objective");
+    }
+    if let Some(&i) = r.front.first() {
+        for (h, _) in axis_cells(r, &r.rows[i]) {
+            let _ = write!(out, " {h:>10}");
+        }
+    }
+    let _ = writeln!(out);
     let rec = r.recommendation.as_ref().map(|x| x.index);
     for &i in &r.front {
         let x = &r.rows[i];
@@ -967,6 +1016,14 @@ pub fn stdout_table(r: &SweepResult) -> String {
             out.pop();
             let _ = writeln!(out, " {:>10}", n(r.objective.value(s)));
         }
+        let cells = axis_cells(r, x);
+        if !cells.is_empty() {
+            out.pop();
+            for (_, c) in cells {
+                let _ = write!(out, " {c:>10}");
+            }
+            out.push('\n');
+        }
     }
     let _ = writeln!(out, "recommended (budget {} MiB): {}", n(r.budget_mib), why_text(r));
     for l in alternative_lines(r) {
@@ -980,14 +1037,33 @@ pub fn stdout_table(r: &SweepResult) -> String {
 fn setting_knobs(r: &SweepResult, x: &Row) -> String {
     match &r.config.shadow.preset {
         None => format!(
-            "λ = {}, {} fit{}",
+            "λ = {}, {} fit{}{}",
             x.setting.lambda,
             x.setting.fit,
-            range_words(r, x.setting.split_range)
+            range_words(r, x.setting.split_range),
+            knob_words(r, x)
         ),
-        Some(p) if has_lambda(r) => format!("the {} preset with λ = {}", p.name, x.setting.lambda),
-        Some(p) => format!("the {} preset", p.name),
+        Some(p) if has_lambda(r) => format!(
+            "the {} preset with λ = {}{}",
+            p.name,
+            x.setting.lambda,
+            knob_words(r, x)
+        ),
+        Some(p) => format!("the {} preset{}", p.name, knob_words(r, x)),
     }
+}
+
+/// ", CascadeDistributionExponent 2.5" / ", shadow distance 100" for the swept engine knob and
+/// distance, in the engine's terms; empty when neither is swept.
+fn knob_words(r: &SweepResult, x: &Row) -> String {
+    let mut out = String::new();
+    if let (Some(k), Some(v)) = (crate::presets::axes(&r.config).knob, x.setting.knob) {
+        let _ = write!(out, ", {} {}", k.term, v);
+    }
+    if let Some(d) = x.setting.distance {
+        let _ = write!(out, ", shadow distance {d}");
+    }
+    out
 }
 
 /// A table's fit cell: the fit, and "visible" when the splits divide the visible depths.
@@ -1038,6 +1114,16 @@ fn changes(r: &SweepResult, o: &Row, x: &Row) -> Vec<String> {
     }
     if r.config.shadow.preset.is_none() && o.setting.fit != x.setting.fit {
         out.push(format!("fit {} → {}", o.setting.fit, x.setting.fit));
+    }
+    if let (Some(k), Some(a), Some(b)) = (crate::presets::axes(&r.config).knob, o.setting.knob, x.setting.knob) {
+        if a != b {
+            out.push(format!("{} {a} → {b}", k.term));
+        }
+    }
+    if let (Some(a), Some(b)) = (o.setting.distance, x.setting.distance) {
+        if a != b {
+            out.push(format!("shadow distance {a} → {b}"));
+        }
     }
     if o.setting.split_range != x.setting.split_range {
         out.push(format!(

@@ -21,6 +21,8 @@ fn key(lambda: f64, cascades: u32, resolution: u32, fit: &str) -> SweepKey {
         resolution,
         fit: fit.to_string(),
         split_range: csm_lab::config::SplitRange::Bounds,
+        knob: None,
+        distance: None,
     }
 }
 

@@ -468,3 +468,120 @@ fn merging_the_shards_of_a_sweep_with_grid_flags_or_a_preset_replays_those_flags
         assert!(command.contains("csm-lab sweep configs/default.toml"), "{case}");
     }
 }
+
+#[test]
+fn a_preset_sweep_over_its_knob_and_distance_merges_byte_for_byte() {
+    let tmp = tempfile::tempdir().unwrap();
+    let axes = [
+        "--preset",
+        "unreal",
+        "--cascades",
+        "3,4",
+        "--resolution",
+        "1024,2048",
+        "--knob",
+        "2,3",
+        "--distance",
+        "100,150",
+    ];
+    let full = tmp.path().join("full");
+    let mut args = vec!["sweep", "configs/default.toml", "--quiet", "--out", s(&full)];
+    args.extend(axes);
+    ok(run(&args));
+    let expected = files(&full);
+    let dirs: Vec<PathBuf> = (1..=3).map(|k| tmp.path().join(format!("s{k}"))).collect();
+    for (k, dir) in dirs.iter().enumerate() {
+        let shard = format!("{}/3", k + 1);
+        let mut args = vec![
+            "sweep",
+            "configs/default.toml",
+            "--quiet",
+            "--shard",
+            &shard,
+            "--out",
+            s(dir),
+        ];
+        args.extend(axes);
+        ok(run(&args));
+        let manifest = std::fs::read_to_string(dir.join("shard.json")).unwrap();
+        assert!(
+            manifest.contains("\"knob\": \"2,3\"") && manifest.contains("\"distance\": \"100,150\""),
+            "{manifest}"
+        );
+    }
+    let out = tmp.path().join("merged");
+    ok(merge(&dirs, &out));
+    let got = files(&out);
+    assert_eq!(got.keys().collect::<Vec<_>>(), expected.keys().collect::<Vec<_>>());
+    for (name, bytes) in &expected {
+        assert!(&got[name] == bytes, "{name} differs");
+    }
+    let csv = String::from_utf8(expected["sweep.csv"].clone()).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 2 * 2 * 2 * 2);
+    assert!(csv
+        .lines()
+        .next()
+        .unwrap()
+        .ends_with("unreal.cascade_distribution_exponent,shadow.max_distance"));
+}
+
+#[test]
+fn check_sweep_keys_rows_on_a_presets_knob_and_distance_like_its_sweep_csv() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = tmp.path().join("unreal.toml");
+    std::fs::write(
+        &cfg,
+        format!(
+            "{}\n[sweep]\ncascades = [3, 4]\nresolution = [1024]\nknob = [2.0, 3.0]\ndistance = [100.0, 150.0]\n",
+            common::with(&[("shadow.preset", "preset = \"unreal\"")])
+        ),
+    )
+    .unwrap();
+    let rules = tmp.path().join("rules.toml");
+    std::fs::write(&rules, "[[rule]]\nmetric = \"max_aliasing\"\nmax = 200.0\n").unwrap();
+    let out = tmp.path().join("out");
+    ok(run(&["sweep", s(&cfg), "--quiet", "--no-plots", "--out", s(&out)]));
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    assert!(csv
+        .lines()
+        .next()
+        .unwrap()
+        .ends_with("unreal.cascade_distribution_exponent,shadow.max_distance"));
+    for format in ["table", "json"] {
+        let direct = run(&[
+            "check",
+            s(&cfg),
+            "--thresholds",
+            s(&rules),
+            "--sweep",
+            "--format",
+            format,
+        ]);
+        let from_csv = run(&[
+            "check",
+            s(&cfg),
+            "--thresholds",
+            s(&rules),
+            "--sweep",
+            "--sweep-csv",
+            s(&out.join("sweep.csv")),
+            "--format",
+            format,
+        ]);
+        assert!(
+            matches!(direct.status.code(), Some(0 | 1)),
+            "{}",
+            String::from_utf8_lossy(&direct.stderr)
+        );
+        assert_eq!(
+            direct.status.code(),
+            from_csv.status.code(),
+            "{}",
+            String::from_utf8_lossy(&from_csv.stderr)
+        );
+        assert!(
+            direct.stdout == from_csv.stdout,
+            "--format {format}: the reports differ"
+        );
+    }
+}

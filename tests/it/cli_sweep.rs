@@ -441,7 +441,12 @@ fn a_preset_sweep_varies_only_the_axes_that_engine_has_and_each_row_equals_analy
         .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
     let (_, rows) = read_csv(&out.join("sweep.csv"));
-    assert_eq!(rows.len(), 3 * 2, "1 λ x counts {{1, 3, 4}} x 2 resolutions");
+    // ... and its first_cascade_far_bound (10) is swept at ¼, ½, ¾, 1, 1.5, 2 × 10.
+    assert_eq!(
+        rows.len(),
+        3 * 2 * 6,
+        "1 λ x counts {{1, 3, 4}} x 2 resolutions x 6 far bounds"
+    );
     // Flags the engine cannot take are errors naming the flag.
     for (args, fragment) in [
         (vec!["--preset", "unreal", "--lambda", "0,1"], "--lambda"),

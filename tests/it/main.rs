@@ -13,6 +13,7 @@ mod cli_shard;
 mod cli_stress;
 mod cli_sweep;
 mod common;
+mod engine_axes;
 mod figures;
 mod geometry;
 mod golden_outputs;

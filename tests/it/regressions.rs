@@ -174,6 +174,8 @@ fn sweeping_to_a_fit_binary32_cannot_hold_is_refused_naming_the_key_before_any_w
         resolution: Some(parse_resolution_spec("512").unwrap()),
         fit: Some(parse_fit_spec("aabb").unwrap()),
         split_range: None,
+        knob: None,
+        distance: None,
     };
     let grid = Grid::resolve(&base, &overrides).unwrap();
     let done = std::sync::atomic::AtomicUsize::new(0);

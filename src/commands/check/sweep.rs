@@ -34,7 +34,15 @@ pub struct SweepKey {
     /// `bounds` or `visible` (the `split_range` column, present with scene geometry; a table
     /// without it has every split on the bounds' range).
     pub split_range: SplitRange,
+    /// The preset's split knob, when swept (the column named by its config key,
+    /// `unreal.cascade_distribution_exponent`).
+    pub knob: Option<f64>,
+    /// The shadow distance, when swept (the `shadow.max_distance` column).
+    pub distance: Option<f64>,
 }
+
+/// The `sweep.csv` column of a swept shadow distance.
+pub const DISTANCE_COLUMN: &str = "shadow.max_distance";
 
 impl SweepKey {
     /// The key of a config's own shadow setting.
@@ -45,6 +53,8 @@ impl SweepKey {
             resolution: config.shadow.resolution,
             fit: config.shadow.fit.name().to_string(),
             split_range: SplitRange::of(config.shadow.fit_depth_to_visible),
+            knob: crate::presets::axes(config).knob.map(|k| k.value),
+            distance: None,
         }
     }
 
@@ -55,8 +65,15 @@ impl SweepKey {
             SplitRange::Bounds => "",
             SplitRange::Visible => " split_range=visible",
         };
+        let mut extra = String::new();
+        if let Some(k) = self.knob {
+            extra.push_str(&format!(" knob={k}"));
+        }
+        if let Some(d) = self.distance {
+            extra.push_str(&format!(" distance={d}"));
+        }
         format!(
-            "lambda={} cascades={} resolution={} fit={}{range}",
+            "lambda={} cascades={} resolution={} fit={}{range}{extra}",
             self.lambda, self.cascades, self.resolution, self.fit
         )
     }
@@ -71,6 +88,15 @@ impl Ord for SweepKey {
             .then(self.resolution.cmp(&other.resolution))
             .then_with(|| self.fit.cmp(&other.fit))
             .then(self.split_range.cmp(&other.split_range))
+            .then(opt_cmp(self.knob, other.knob))
+            .then(opt_cmp(self.distance, other.distance))
+    }
+}
+
+fn opt_cmp(a: Option<f64>, b: Option<f64>) -> Ordering {
+    match (a, b) {
+        (Some(a), Some(b)) => a.total_cmp(&b),
+        (a, b) => a.is_some().cmp(&b.is_some()),
     }
 }
 
@@ -245,6 +271,11 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
         })?;
     }
     let range_idx = column(crate::metric::SPLIT_RANGE_COLUMN);
+    // A swept engine knob is the column named by its config key (`<engine>.<knob>`).
+    let knob_idx = headers
+        .iter()
+        .position(|h| h.trim().contains('.') && h.trim() != DISTANCE_COLUMN);
+    let distance_idx = column(DISTANCE_COLUMN);
     let metric_cols: Vec<(usize, SummaryMetric)> = headers
         .iter()
         .enumerate()
@@ -285,6 +316,8 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
                 .map_err(|_| data_err(line, format!("`{what}` = {s:?} is not a whole number")))
         };
         let key = SweepKey {
+            knob: knob_idx.map(|i| number(i, "knob")).transpose()?,
+            distance: distance_idx.map(|i| number(i, DISTANCE_COLUMN)).transpose()?,
             lambda: number(key_idx[0], "lambda")?,
             cascades: int(key_idx[1], "cascades")?,
             resolution: int(key_idx[2], "resolution")?,
@@ -374,6 +407,8 @@ pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
                 resolution: r.setting.resolution,
                 fit: r.setting.fit.name().to_string(),
                 split_range: r.setting.split_range,
+                knob: r.setting.knob,
+                distance: r.setting.distance,
             },
             metrics: SummaryMetric::all().map(|m| (m.name(), m.value(&r.summary))).collect(),
         })
@@ -392,6 +427,8 @@ mod tests {
             resolution: 2048,
             fit: fit.into(),
             split_range: SplitRange::Bounds,
+            knob: None,
+            distance: None,
         };
         assert_eq!(k(0.5, "sphere"), k(0.5, "sphere"));
         assert!(k(0.25, "sphere") < k(0.5, "aabb"));
