@@ -8,12 +8,14 @@ use crate::geometry::CameraPose;
 use crate::metrics::{self, Aggregates, DensitySample};
 use crate::precision::{self, LookupError, Precision};
 use crate::screen::{self, ScreenStats};
+use crate::seams;
 use crate::shimmer::{self, PathResult, ShimmerOptions};
 use crate::visibility::Visibility;
 use glam::DVec2;
 
 /// Which optional parts to compute. The summary metrics are always computed and never depend
-/// on these switches, so a sweep row equals what `analyze` reports for the same config.
+/// on these switches (but `seams`, which adds `seam_crossings` or leaves it out), so a sweep
+/// row equals what `analyze` reports for the same config.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AnalysisOptions {
     /// S4 cell flips per probe (the only per-probe work when window sizes are fixed).
@@ -24,6 +26,10 @@ pub struct AnalysisOptions {
     pub density_profile: bool,
     /// Light near/far per cascade (`cascades.csv`).
     pub light_depth: bool,
+    /// `seam_crossings`: every receiver point over every frame of the motion paths (the only
+    /// summary metric that depends on a switch: without it the summary holds None and every
+    /// output leaves the key out).
+    pub seams: bool,
 }
 
 impl AnalysisOptions {
@@ -34,6 +40,7 @@ impl AnalysisOptions {
             frame_rows: true,
             density_profile: true,
             light_depth: true,
+            seams: true,
         }
     }
 
@@ -44,6 +51,7 @@ impl AnalysisOptions {
             frame_rows: false,
             density_profile: false,
             light_depth: false,
+            seams: false,
         }
     }
 }
@@ -78,6 +86,17 @@ pub struct Summary {
     pub lookup_error_max: f64,
     /// RMS of S7 over the same set (texels; 0 with precision = "f64").
     pub lookup_error_rms: f64,
+    /// Extra shadow-map texels the blend bands cost (every split), over all maps' texels.
+    pub overlap_area_fraction: f64,
+    /// Share of the lit-facing receiver pixels inside a blend band (every split; 0 without
+    /// geometry, where it is not reported). A screen metric (`screen_band_pixel_share`): the
+    /// registry writes it with the other screen metrics, serde leaves it out.
+    #[serde(skip)]
+    pub band_pixel_share: f64,
+    /// Fraction of world-fixed receiver points that change cascade per frame, the worst over
+    /// the motion paths; None when not computed ([`AnalysisOptions::seams`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seam_crossings: Option<f64>,
     /// The screen metrics (per-pixel aliasing of the visible receivers); None in the
     /// bounds-only mode, and then absent from every output.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -112,6 +131,14 @@ pub struct CascadeReport {
     /// S7 of this cascade over the path (texels; 0 with precision = "f64").
     pub lookup_error_max: f64,
     pub lookup_error_rms: f64,
+    /// Texel size of the next cascade over this one's (the jump at this cascade's far split;
+    /// 0 for the last cascade).
+    pub split_jump: f64,
+    /// The blend band at this cascade's far split (view depths; equal ends when none).
+    pub band_near: f64,
+    pub band_far: f64,
+    /// Texels of this cascade's map spent on its far band, over all maps' texels.
+    pub overlap_area_fraction: f64,
     /// With scene geometry: the share of receiver pixels this cascade serves, and the area of
     /// the light-space rectangle around its receiver points over its window's area.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -122,6 +149,8 @@ pub struct CascadeReport {
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct CascadeScreen {
     pub pixels: f64,
+    /// Share of the receiver pixels inside the blend band at this cascade's far split.
+    pub band_pixels: f64,
     /// 0 when not computed (sweeps) or when the cascade serves no receiver pixel.
     pub texel_utilization: f64,
 }
@@ -280,6 +309,12 @@ pub fn frames_walked(config: &Config) -> u64 {
     2 * (first + config.motion.extra.len() as u64 * config.motion.frames as u64)
 }
 
+/// Probes per cascade that `seam_crossings` follows without scene geometry.
+const SEAM_PROBES: usize = 64;
+
+/// Receiver pixels `seam_crossings` follows at most with scene geometry (every k-th one).
+const SEAM_RECEIVERS: usize = 4096;
+
 /// Frames walked between two progress reports.
 const PROGRESS_FRAMES: usize = 4096;
 
@@ -333,6 +368,9 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
                 memory_bytes: memory,
                 lookup_error_max: 0.0,
                 lookup_error_rms: 0.0,
+                overlap_area_fraction: 0.0,
+                band_pixel_share: 0.0,
+                seam_crossings: opts.seams.then_some(0.0),
                 screen: visibility
                     .as_ref()
                     .map(|vis| screen::stats(vis, &[0.0, 0.0], &[0.0], visible)),
@@ -376,6 +414,21 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
         shimmer::probes(&rig, &pose0, &config.scene, config.analysis.probes)
     } else {
         Vec::new()
+    };
+    // The receivers seam_crossings follows: frame 0's lit-facing pixels with geometry, else
+    // the first probes of each cascade.
+    let seam_points: Vec<glam::DVec3> = if !opts.seams {
+        Vec::new()
+    } else if let Some(vis) = &visibility {
+        let all = seams::receiver_points(vis, &rig.splits);
+        // Every k-th receiver, at most SEAM_RECEIVERS of them (a fixed, deterministic subset).
+        let k = all.len().div_ceil(SEAM_RECEIVERS).max(1);
+        all.into_iter().step_by(k).collect()
+    } else {
+        shimmer::probes(&rig, &pose0, &config.scene, SEAM_PROBES.min(config.analysis.probes))
+            .into_iter()
+            .flatten()
+            .collect()
     };
     // With precision = "f32" every path metric measures the emulated binary32 pipeline.
     // The poses are generated as the walk reads them (a long path is never held), and the
@@ -432,14 +485,21 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
             }
         };
         on_frames(2 * remainder);
-        walked
+        let crossings = opts.seams.then(|| {
+            let streamed = (frames > HELD_POSES).then(generated).into_iter().flatten();
+            seams::seam_crossings(&rig.splits, &seam_points, held.iter().copied().chain(streamed))
+        });
+        (walked.0, walked.1, walked.2, crossings)
     };
-    let (snapped, unsnapped, lookup_error) = walk(&setup.motion);
+    let (snapped, unsnapped, lookup_error, mut seam_crossings) = walk(&setup.motion);
     let extra: Vec<ExtraPathResult> = config
         .extra_motions()
         .into_iter()
         .map(|(name, motion)| {
-            let (snapped, unsnapped, lookup_error) = walk(&motion);
+            let (snapped, unsnapped, lookup_error, crossings) = walk(&motion);
+            if let (Some(c), Some(x)) = (seam_crossings.as_mut(), crossings) {
+                *c = c.max(x);
+            }
             ExtraPathResult {
                 name,
                 snapped,
@@ -481,6 +541,12 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
         (Some(vis), true) => texel_utilization(vis, &rig, &lp0, &windows0),
         _ => vec![0.0; rig.cascade_count()],
     };
+    let bands = seams::bands(&rig);
+    let overlap = seams::overlap_area(&rig, &lp0, &windows0, &bands);
+    let band_pixels = visibility
+        .as_ref()
+        .map_or_else(|| vec![0.0; bands.len()], |vis| seams::band_shares(vis, &bands));
+    let at_split = |v: &[f64], i: usize| v.get(i).copied().unwrap_or(0.0);
     let cascade_lookup = |i: usize| {
         lookup_error
             .as_ref()
@@ -524,8 +590,13 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
                 min_aliasing: aggregates.cascade_min_aliasing[i],
                 lookup_error_max: cascade_lookup(i).0,
                 lookup_error_rms: cascade_lookup(i).1,
+                split_jump: at_split(&aggregates.split_jumps, i),
+                band_near: bands.get(i).map_or(rig.slices[i].far, |b| b.0),
+                band_far: bands.get(i).map_or(rig.slices[i].far, |b| b.1),
+                overlap_area_fraction: at_split(&overlap, i),
                 screen: screen_stats.as_ref().map(|st| CascadeScreen {
                     pixels: st.cascade_pixels[i],
+                    band_pixels: at_split(&band_pixels, i),
                     texel_utilization: utilization[i],
                 }),
             }
@@ -552,6 +623,9 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
         memory_bytes: memory,
         lookup_error_max: lookup_error.as_ref().map_or(0.0, |l| l.max),
         lookup_error_rms: lookup_error.as_ref().map_or(0.0, |l| l.rms),
+        overlap_area_fraction: overlap.iter().sum(),
+        band_pixel_share: band_pixels.iter().sum(),
+        seam_crossings,
         screen: screen_stats,
     };
     let preset = config

@@ -291,6 +291,28 @@ pub const SUMMARY: &[SummaryDef] = &[
         value: |s| Value::Real(s.lookup_error_rms),
     },
     SummaryDef {
+        name: "overlap_area_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "shadow-map texels spent twice on the blend bands (each finer map's texels over its far band's slice), over all maps' texels; 0 without bands",
+        brief: "map texels spent twice on blend bands (share of all)",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: false,
+        value: |s| Value::Real(s.overlap_area_fraction),
+    },
+    SummaryDef {
+        name: "seam_crossings",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "fraction of world-fixed receiver points whose cascade changes from one frame to the next, averaged over the frames, worst over the motion paths (not a sweep column)",
+        brief: "receivers changing cascade per frame (seams sweeping)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.seam_crossings.unwrap_or(0.0)),
+    },
+    SummaryDef {
         name: "screen_receiver_fraction",
         unit: "",
         direction: Direction::LowerIsWorse,
@@ -377,6 +399,17 @@ pub const SUMMARY: &[SummaryDef] = &[
         in_rows: true,
         screen: true,
         value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.undersampled_fraction)),
+    },
+    SummaryDef {
+        name: "screen_band_pixel_share",
+        unit: "",
+        direction: Direction::Neither,
+        help: "share of the lit-facing receiver pixels inside a blend band (both cascades rendered, the coarser read), all splits together",
+        brief: "share of receiver pixels in blend bands",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.band_pixel_share),
     },
     SummaryDef {
         name: "visible_z_lo",
@@ -474,7 +507,7 @@ impl SummaryMetric {
 /// Every summary metric of a summary (the screen metrics only with geometry), in registry order.
 pub fn summary_values(s: &Summary) -> Vec<(SummaryMetric, f64)> {
     SummaryMetric::all()
-        .filter(|m| shown_for(m.def().screen, s))
+        .filter(|m| shown_for(m.def(), s))
         .map(|m| (m, m.value(s)))
         .collect()
 }
@@ -483,15 +516,19 @@ pub fn summary_values(s: &Summary) -> Vec<(SummaryMetric, f64)> {
 pub fn summary_json(s: &Summary) -> Vec<(&'static str, serde_json::Value)> {
     SUMMARY
         .iter()
-        .filter(|d| shown_for(d.screen, s))
+        .filter(|d| shown_for(d, s))
         .map(|d| (d.name, (d.value)(s).json()))
         .collect()
 }
 
 /// Whether a metric belongs in the outputs of a summary: screen metrics only with geometry.
-fn shown_for(screen_metric: bool, s: &Summary) -> bool {
-    !screen_metric || s.screen.is_some()
+fn shown_for(d: &SummaryDef, s: &Summary) -> bool {
+    (!d.screen || s.screen.is_some()) && (d.name != SEAM_CROSSINGS || s.seam_crossings.is_some())
 }
+
+/// The one summary metric an analysis computes only on request ([`crate::analysis::AnalysisOptions::seams`]):
+/// absent from the outputs of analyses without it (sweep rows).
+const SEAM_CROSSINGS: &str = "seam_crossings";
 
 /// The setting columns every per-configuration table starts with.
 pub const SETTING_COLUMNS: [&str; 4] = ["lambda", "cascades", "resolution", "fit"];
@@ -529,7 +566,7 @@ pub fn summary_fields(
     if s.screen.is_some() {
         fields.push(split_range.name().to_string());
     }
-    for d in SUMMARY.iter().filter(|d| d.in_rows && shown_for(d.screen, s)) {
+    for d in SUMMARY.iter().filter(|d| d.in_rows && shown_for(d, s)) {
         fields.push((d.value)(s).csv(d.name)?);
     }
     Ok(fields)
@@ -540,7 +577,7 @@ pub fn summary_fields(
 pub fn summary_lines(s: &Summary, f32_block: bool) -> Vec<(&'static str, String, &'static str)> {
     SUMMARY
         .iter()
-        .filter(|d| shown_for(d.screen, s))
+        .filter(|d| shown_for(d, s))
         .filter_map(|d| {
             let v = (d.value)(s);
             let text = match (d.shown, f32_block) {
@@ -727,12 +764,52 @@ pub const CASCADE: &[CascadeDef] = &[
         value: |c| Value::Real(c.lookup_error_rms),
     },
     CascadeDef {
+        name: "split_jump",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "texel size of the next cascade over this one's: the jump at this cascade's far split (0 for the last)",
+        screen: false,
+        value: |c| Value::Real(c.split_jump),
+    },
+    CascadeDef {
+        name: "band_near",
+        unit: "world units",
+        direction: Direction::Neither,
+        help: "view depth where the blend band at this cascade's far split starts (equal to band_far when there is none)",
+        screen: false,
+        value: |c| Value::Real(c.band_near),
+    },
+    CascadeDef {
+        name: "band_far",
+        unit: "world units",
+        direction: Direction::Neither,
+        help: "view depth where that blend band ends",
+        screen: false,
+        value: |c| Value::Real(c.band_far),
+    },
+    CascadeDef {
+        name: "overlap_area_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "texels of this cascade's map that render its far band (also rendered by the next cascade), over all maps' texels",
+        screen: false,
+        value: |c| Value::Real(c.overlap_area_fraction),
+    },
+    CascadeDef {
         name: "screen_pixels",
         unit: "",
         direction: Direction::Neither,
         help: "share of the lit-facing receiver pixels this cascade serves",
         screen: true,
         value: |c| Value::Real(c.screen.map_or(0.0, |x| x.pixels)),
+    },
+    CascadeDef {
+        name: "band_pixels",
+        unit: "",
+        direction: Direction::Neither,
+        help: "share of the lit-facing receiver pixels inside the blend band at this cascade's far split",
+        screen: true,
+        value: |c| Value::Real(c.screen.map_or(0.0, |x| x.band_pixels)),
     },
     CascadeDef {
         name: "texel_utilization",

@@ -281,7 +281,8 @@ pub fn config_hash(
 const ROW_COLUMNS: &str =
     "index\tlambda\tcascades\tresolution\tfit\tsplit_range\tcascades_needed\tz_lo\tz_hi\tmax_aliasing\t\
 mean_aliasing\tmean_log_aliasing\tundersampled_fraction\tshimmer\tshimmer_snapped\tshimmer_unsnapped\tsize_jitter\t\
-coverage_violations\tmemory_bytes\tlookup_error_max\tlookup_error_rms\tscreen\tknob\tdistance";
+coverage_violations\tmemory_bytes\tlookup_error_max\tlookup_error_rms\toverlap_area_fraction\tband_pixel_share\t\
+seam_crossings\tscreen\tknob\tdistance";
 
 fn hex(x: f64) -> String {
     format!("{:016x}", x.to_bits())
@@ -310,6 +311,9 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
             memory_bytes,
             lookup_error_max,
             lookup_error_rms,
+            overlap_area_fraction,
+            band_pixel_share,
+            seam_crossings,
             screen,
         } = &row.summary;
         let _ = write!(
@@ -338,9 +342,12 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
         }
         let _ = write!(
             out,
-            "\t{coverage_violations}\t{memory_bytes}\t{}\t{}\t",
+            "\t{coverage_violations}\t{memory_bytes}\t{}\t{}\t{}\t{}\t{}\t",
             hex(*lookup_error_max),
-            hex(*lookup_error_rms)
+            hex(*lookup_error_rms),
+            hex(*overlap_area_fraction),
+            hex(*band_pixel_share),
+            seam_crossings.map_or_else(|| "-".to_string(), hex)
         );
         match screen {
             None => out.push('-'),
@@ -402,8 +409,8 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
     for (i, line) in lines {
         let n = i + 1;
         let f: Vec<&str> = line.split('\t').collect();
-        if f.len() != 24 {
-            return Err(bad(n, format!("{} fields; a row has 24", f.len())));
+        if f.len() != 27 {
+            return Err(bad(n, format!("{} fields; a row has 27", f.len())));
         }
         let float = |s: &str| {
             u64::from_str_radix(s, 16)
@@ -435,7 +442,7 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
             other => return Err(bad(n, format!("{other:?} is not 0 or 1"))),
         };
         let v: Vec<f64> = f[7..17].iter().map(|s| float(s)).collect::<Result<_>>()?;
-        let screen = match f[21] {
+        let screen = match f[24] {
             "-" => None,
             s => {
                 let x: Vec<f64> = s.split(',').map(float).collect::<Result<_>>()?;
@@ -470,8 +477,8 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                     resolution,
                     fit,
                     split_range,
-                    knob: optional_float(f[22])?,
-                    distance: optional_float(f[23])?,
+                    knob: optional_float(f[25])?,
+                    distance: optional_float(f[26])?,
                 },
                 summary: Summary {
                     cascades_needed,
@@ -489,6 +496,12 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                     memory_bytes: whole(f[18])?,
                     lookup_error_max: float(f[19])?,
                     lookup_error_rms: float(f[20])?,
+                    overlap_area_fraction: float(f[21])?,
+                    band_pixel_share: float(f[22])?,
+                    seam_crossings: match f[23] {
+                        "-" => None,
+                        s => Some(float(s)?),
+                    },
                     screen,
                 },
             },

@@ -1391,6 +1391,9 @@ mod tests {
                 memory_bytes: memory,
                 lookup_error_max: 0.0,
                 lookup_error_rms: 0.0,
+                overlap_area_fraction: 0.0,
+                band_pixel_share: 0.0,
+                seam_crossings: None,
                 screen: None,
             },
         }

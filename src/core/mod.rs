@@ -18,6 +18,7 @@ pub mod precision;
 pub mod rng;
 pub mod scene;
 pub mod screen;
+pub mod seams;
 pub mod shimmer;
 pub mod snapping;
 pub mod splits;

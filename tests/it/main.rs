@@ -28,5 +28,6 @@ mod prop_toml;
 mod readme_ci;
 mod readme_clean;
 mod regressions;
+mod seams;
 mod shimmer;
 mod shimmer_fast_paths;

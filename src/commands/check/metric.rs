@@ -117,6 +117,9 @@ mod tests {
             memory_bytes: 10,
             lookup_error_max: 11.0,
             lookup_error_rms: 12.0,
+            overlap_area_fraction: 0.125,
+            band_pixel_share: 0.0,
+            seam_crossings: Some(0.375),
             screen: None,
         };
         let json = serde_json::to_value(&s).unwrap();
@@ -165,6 +168,10 @@ mod tests {
             min_aliasing: 13.0,
             lookup_error_max: 14.0,
             lookup_error_rms: 15.0,
+            split_jump: 16.0,
+            band_near: 17.0,
+            band_far: 18.0,
+            overlap_area_fraction: 0.5,
             screen: None,
         };
         let json = serde_json::to_value(&c).unwrap();
@@ -192,11 +199,11 @@ mod tests {
         dedup.sort_unstable();
         dedup.dedup();
         assert_eq!(dedup.len(), names.len());
-        // Four names are both summary and per-cascade metrics (max_aliasing,
-        // coverage_violations, lookup_error_max, lookup_error_rms).
+        // Five names are both summary and per-cascade metrics (max_aliasing,
+        // coverage_violations, lookup_error_max, lookup_error_rms, overlap_area_fraction).
         assert_eq!(
             names.len(),
-            SummaryMetric::all().count() + CascadeMetric::all().count() - 4 + DepthMetric::ALL.len()
+            SummaryMetric::all().count() + CascadeMetric::all().count() - 5 + DepthMetric::ALL.len()
         );
     }
 

@@ -29,6 +29,7 @@ pub use thresholds::{Rule, Thresholds};
 pub fn check_options() -> AnalysisOptions {
     AnalysisOptions {
         light_depth: true,
+        seams: true,
         ..AnalysisOptions::summary_only()
     }
 }

@@ -1,0 +1,213 @@
+//! Seams and transitions: blend-band pixel shares, the map area the bands cost and
+//! `seam_crossings`, each checked against a computation of its own (brute-force counts).
+
+use csm_lab::analysis::{analyze, AnalysisOptions};
+use csm_lab::geometry::CameraPose;
+use glam::DVec3;
+
+use crate::common::{config, with, BASE};
+
+/// A ground plane under the default camera, seen on a small screen.
+fn ground(extra: &str) -> String {
+    with(&[
+        ("screen.width", "width = 160"),
+        ("screen.height", "height = 90"),
+        ("light.direction", "direction = [-0.4, -1.0, -0.3]"),
+        ("analysis.screen_scale", "screen_scale = 1.0"),
+    ]) + extra
+        + "\n[[scene.box]]\nmin = [-400.0, -1.0, -400.0]\nmax = [400.0, 0.0, 400.0]\n"
+}
+
+fn bevy(extra: &str) -> String {
+    ground(extra).replace("max_distance = 150.0", "max_distance = 150.0\npreset = \"bevy\"")
+}
+
+#[test]
+fn a_camera_that_stays_has_no_seam_crossings() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("still.csv");
+    std::fs::write(
+        &csv,
+        "px,py,pz,tx,ty,tz\n0,10,0,0,0,-50\n0,10,0,0,0,-50\n0,10,0,0,0,-50\n0,10,0,0,0,-50\n",
+    )
+    .unwrap();
+    let still = |text: String| {
+        text.replace(
+            "path = \"strafe\"\nframes = 60\nstep = 0.05",
+            &format!("path = \"file\"\nfile = {:?}", csv.to_str().unwrap()),
+        )
+    };
+    for text in [still(BASE.to_string()), still(ground("")), still(bevy(""))] {
+        assert!(text.contains("path = \"file\""));
+        let a = analyze(&config(&text), &AnalysisOptions::full());
+        assert_eq!(a.summary.seam_crossings, Some(0.0), "{text}");
+    }
+    // A strafe keeps every view depth (no crossing); a dolly crosses seams (the test above can fail).
+    let strafe = analyze(
+        &config(&bevy("").replace("step = 0.05", "step = 2.0")),
+        &AnalysisOptions::full(),
+    );
+    assert_eq!(strafe.summary.seam_crossings, Some(0.0));
+    let dolly = bevy("")
+        .replace("path = \"strafe\"", "path = \"dolly\"")
+        .replace("step = 0.05", "step = 0.5");
+    let a = analyze(&config(&dolly), &AnalysisOptions::full());
+    assert!(a.summary.seam_crossings.unwrap() > 0.0);
+    // A sweep row does not compute it, and no output shows a value it did not compute.
+    let a = analyze(&config(BASE), &AnalysisOptions::summary_only());
+    assert_eq!(a.summary.seam_crossings, None);
+    assert!(csm_lab::metric::summary_json(&a.summary)
+        .iter()
+        .all(|(k, _)| *k != "seam_crossings"));
+}
+
+#[test]
+fn seam_crossings_of_a_dolly_equal_a_direct_count() {
+    // Points on the view axis at depths 0.5, 1.5, ..., 99.5; the camera dollies forward by s
+    // per frame, so a point's depth falls by s each frame. Splits 1, 10, 30, 60, 80.
+    let splits = [1.0, 10.0, 30.0, 60.0, 80.0];
+    let points: Vec<DVec3> = (0..100).map(|k| DVec3::new(0.0, 0.0, -(k as f64 + 0.5))).collect();
+    for (s, frames) in [(0.7, 40usize), (3.0, 12), (25.0, 5)] {
+        let poses = (0..frames).map(|t| {
+            CameraPose::look_at(
+                DVec3::new(0.0, 0.0, -(t as f64) * s),
+                DVec3::new(0.0, 0.0, -1e6),
+                DVec3::Y,
+            )
+            .unwrap()
+        });
+        let got = csm_lab::seams::seam_crossings(&splits, &points, poses);
+        // Direct count: between frames t-1 and t a point changes cascade when some boundary
+        // is crossed: the near end and interior splits are "at or beyond", the far end "beyond".
+        let mut changed = 0usize;
+        for t in 1..frames {
+            for k in 0..100 {
+                let d0 = k as f64 + 0.5;
+                let (a, b) = (d0 - (t - 1) as f64 * s, d0 - t as f64 * s); // a > b
+                let crossed = splits[..4].iter().any(|&x| b < x && x <= a) || (b <= 80.0 && 80.0 < a);
+                changed += usize::from(crossed);
+            }
+        }
+        let expected = changed as f64 / ((frames - 1) as f64 * 100.0);
+        assert!((got - expected).abs() < 1e-12, "step {s}: {got} vs {expected}");
+        assert!(expected > 0.0);
+    }
+}
+
+/// Bevy's far bounds and blend bands, computed here from its rule.
+fn bevy_bands(m: usize, first: f64, max: f64, overlap: f64) -> Vec<(f64, f64)> {
+    let far: Vec<f64> = (0..m)
+        .map(|i| first * (max / first).powf(i as f64 / (m - 1) as f64))
+        .collect();
+    (0..m - 1).map(|i| ((1.0 - overlap) * far[i], far[i])).collect()
+}
+
+#[test]
+fn band_pixel_shares_equal_a_per_pixel_count() {
+    let c = config(&bevy(""));
+    let a = analyze(&c, &AnalysisOptions::full());
+    let bands = bevy_bands(4, 10.0, 150.0, 0.2);
+    let vis = c.setup().visibility().unwrap();
+    let lit: Vec<f64> = vis
+        .samples
+        .iter()
+        .flatten()
+        .filter(|s| s.lit)
+        .map(|s| s.depth)
+        .collect();
+    assert!(lit.len() > 1000, "{}", lit.len());
+    let mut total = 0.0;
+    for (j, &(lo, hi)) in bands.iter().enumerate() {
+        let n = lit.iter().filter(|&&d| lo <= d && d < hi).count();
+        let expected = n as f64 / lit.len() as f64;
+        let k = &a.cascades[j];
+        assert!(
+            (k.band_near - lo).abs() < 1e-9 && (k.band_far - hi).abs() < 1e-9,
+            "{k:?}"
+        );
+        assert_eq!(k.screen.unwrap().band_pixels, expected, "band {j}");
+        total += expected;
+    }
+    assert!(total > 0.05, "the bands hold pixels: {total}");
+    assert!((a.summary.band_pixel_share - total).abs() < 1e-12);
+    // csm-lab's own pipeline selects what it fits: no band, no share, no doubled area.
+    let own = analyze(&config(&ground("")), &AnalysisOptions::full());
+    assert_eq!(own.summary.band_pixel_share, 0.0);
+    assert_eq!(own.summary.overlap_area_fraction, 0.0);
+    assert!(own.cascades.iter().all(|k| k.band_near == k.band_far));
+}
+
+#[test]
+fn the_overlap_area_equals_a_count_of_texels_that_see_the_band() {
+    let c = config(&bevy("").replace("resolution = 2048", "resolution = 512"));
+    let a = analyze(&c, &AnalysisOptions::full());
+    let rig = a.rig().unwrap();
+    let pose = c.camera.pose();
+    let (tan_h, tan_v) = (rig.lens.tan_h, rig.lens.tan_v);
+    let m = a.cascades.len();
+    let n = 512usize;
+    let mut sum = 0.0;
+    for (j, &(lo, hi)) in bevy_bands(m, 10.0, 150.0, 0.2).iter().enumerate() {
+        let k = &a.cascades[j];
+        let b = rig.light; // Bevy's basis is fixed per frame
+        let texel = k.width / n as f64;
+        let (x0, y0) = (k.centre_x - 0.5 * k.width, k.centre_y - 0.5 * k.height);
+        let mut inside = 0usize;
+        for u in 0..n {
+            for v in 0..n {
+                let (qx, qy) = (
+                    x0 + (u as f64 + 0.5) * texel,
+                    y0 + (v as f64 + 0.5) * k.height / n as f64,
+                );
+                // The light ray through the texel centre, in camera terms: e + t·w.
+                let e0 = b.x * qx + b.y * qy - pose.position;
+                let w = b.z;
+                let (ez, wz) = (e0.dot(pose.forward), w.dot(pose.forward));
+                let (ex, wx) = (e0.dot(pose.right), w.dot(pose.right));
+                let (ey, wy) = (e0.dot(pose.up), w.dot(pose.up));
+                // Half-spaces a + c·t >= 0.
+                let halves = [
+                    (ez - lo, wz),
+                    (hi - ez, -wz),
+                    (tan_h * ez - ex, tan_h * wz - wx),
+                    (tan_h * ez + ex, tan_h * wz + wx),
+                    (tan_v * ez - ey, tan_v * wz - wy),
+                    (tan_v * ez + ey, tan_v * wz + wy),
+                ];
+                let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+                for (a0, c0) in halves {
+                    if c0.abs() < 1e-15 {
+                        if a0 < 0.0 {
+                            t0 = f64::INFINITY;
+                        }
+                    } else if c0 > 0.0 {
+                        t0 = t0.max(-a0 / c0);
+                    } else {
+                        t1 = t1.min(-a0 / c0);
+                    }
+                }
+                inside += usize::from(t0 <= t1);
+            }
+        }
+        let expected = inside as f64 / (m * n * n) as f64;
+        let got = k.overlap_area_fraction;
+        assert!(expected > 0.0);
+        assert!(
+            (got - expected).abs() <= 0.02 * expected,
+            "split {j}: {got} vs {expected}"
+        );
+        sum += got;
+    }
+    assert_eq!(a.cascades[m - 1].overlap_area_fraction, 0.0);
+    assert!((a.summary.overlap_area_fraction - sum).abs() < 1e-15);
+}
+
+#[test]
+fn the_split_jump_is_the_texel_ratio_of_neighbours() {
+    let a = analyze(&config(BASE), &AnalysisOptions::full());
+    let k = &a.cascades;
+    for i in 0..k.len() - 1 {
+        assert_eq!(k[i].split_jump, k[i + 1].texel_size / k[i].texel_size);
+    }
+    assert_eq!(k[k.len() - 1].split_jump, 0.0);
+}
