@@ -274,6 +274,66 @@ pub fn f32_range_problem(config: &Config) -> Option<String> {
     precision::f32_range_problem(&rig, poses, &config.scene, config.shadow.snap_space)
 }
 
+/// Frames per walk of [`each_frame_row`]: at most this many frames' rows are in memory.
+const FULL_SERIES_CHUNK: usize = crate::shimmer::MAX_FRAME_ROWS;
+
+/// Every frame's shimmer rows of every motion path, in `shimmer.csv`'s order (path, then the
+/// snapped and the unsnapped mode, then frame, then cascade), handed to `emit` as they are
+/// produced. A row depends only on its frame and the one before, so each path is walked in
+/// chunks of [`FULL_SERIES_CHUNK`] frames that overlap by one frame: memory stays that of one
+/// chunk whatever the path's length, and the rows are those of one walk of the whole path.
+/// Without cascades there are no rows.
+pub fn each_frame_row(
+    config: &Config,
+    opts: &AnalysisOptions,
+    emit: &mut dyn FnMut(&'static str, &crate::shimmer::FrameShimmer) -> crate::error::Result<()>,
+) -> crate::error::Result<()> {
+    let Some(rig) = rig(config) else {
+        return Ok(());
+    };
+    let pose0: CameraPose = config.camera.pose();
+    let sopts = ShimmerOptions {
+        cell_flips: opts.cell_flips,
+        probe_drift: false,
+        frame_rows: true,
+    };
+    let probes = if config.shadow.precision == Precision::F32 || shimmer::needs_probes(&rig, sopts) {
+        shimmer::probes(&rig, &pose0, &config.scene, config.analysis.probes)
+    } else {
+        Vec::new()
+    };
+    let setup = config.setup();
+    let paths = std::iter::once((config.motion.path.name(), setup.motion.clone())).chain(config.extra_motions());
+    for (name, motion) in paths {
+        let frames = crate::motion::poses(&setup.camera, &motion).len();
+        for snapped in [true, false] {
+            let mut start = 0;
+            while start + 1 < frames {
+                let take = FULL_SERIES_CHUNK.min(frames - start);
+                let poses = crate::motion::poses(&setup.camera, &motion)
+                    .skip(start)
+                    .take(take)
+                    .map(|p| p.expect("validated when the config was loaded"));
+                let rows = match config.shadow.precision {
+                    Precision::F64 => shimmer::along_path(&rig, poses, &probes, snapped, sopts).frames,
+                    Precision::F32 => {
+                        let space = config.shadow.snap_space;
+                        precision::along_path(&rig, poses, &probes, space, snapped, sopts)
+                            .path
+                            .frames
+                    }
+                };
+                for mut row in rows {
+                    row.frame += start;
+                    emit(name, &row)?;
+                }
+                start += take - 1;
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Paths of up to this many frames are generated once per analysis and held (a pose is a
 /// few dozen bytes); longer ones are generated as they are walked.
 const HELD_POSES: usize = 1 << 14;

@@ -64,6 +64,10 @@ pub struct AnalyzeArgs {
     /// No progress bar (it shows only on a terminal, after about a second).
     #[arg(long)]
     pub quiet: bool,
+    /// shimmer.csv with every frame's rows, streamed to the file as the path is walked
+    /// (by default a path longer than 1,000 frames keeps every k-th frame's rows).
+    #[arg(long)]
+    pub all_frames: bool,
 }
 
 #[derive(Debug, Args)]
@@ -240,6 +244,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             precision: args.precision,
             preset: args.preset,
             quiet: args.quiet,
+            all_frames: args.all_frames,
         }),
         Command::Sweep(args) => sweep::execute(&sweep::SweepRequest {
             config: args.config,

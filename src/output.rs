@@ -95,7 +95,23 @@ pub type RenderedFiles = Vec<(String, Vec<u8>)>;
 
 /// Writes already-rendered files into `dir` as one set (see [`write_set`]).
 pub fn write_files<N: AsRef<str> + Sync>(dir: &Path, files: &[(N, Vec<u8>)]) -> Result<Vec<PathBuf>> {
-    write_set(dir, files, None)
+    write_set(dir, files, &[], None)
+}
+
+/// A file too large to render in memory: it writes itself into the staged file as it is
+/// produced (a long path's every frame, say). Its numbers pass the same finite guard.
+pub trait StreamedFile: Sync {
+    fn file_name(&self) -> &str;
+    fn write_to(&self, out: &mut dyn Write) -> Result<()>;
+}
+
+/// [`write_files`] with some files streamed into the set instead of rendered first.
+pub fn write_files_streamed<N: AsRef<str> + Sync>(
+    dir: &Path,
+    files: &[(N, Vec<u8>)],
+    streamed: &[&dyn StreamedFile],
+) -> Result<Vec<PathBuf>> {
+    write_set(dir, files, streamed, None)
 }
 
 /// Name prefix of the staging directories [`write_files`] makes in an output directory:
@@ -120,9 +136,18 @@ pub const STAGING_COMPLETE: &str = ".complete";
 /// and no new file beside them. Only a kill within step 3 can leave a mix; the staging
 /// directory is then marked complete, and the next run into `dir` completes the move before
 /// anything else. Files in `dir` that are not of this set are never touched.
-fn write_set<N: AsRef<str> + Sync>(dir: &Path, files: &[(N, Vec<u8>)], fail_at: Option<usize>) -> Result<Vec<PathBuf>> {
+fn write_set<N: AsRef<str> + Sync>(
+    dir: &Path,
+    files: &[(N, Vec<u8>)],
+    streamed: &[&dyn StreamedFile],
+    fail_at: Option<usize>,
+) -> Result<Vec<PathBuf>> {
     ensure_dir(dir)?;
-    let names: Vec<&str> = files.iter().map(|(n, _)| n.as_ref()).collect();
+    let names: Vec<&str> = files
+        .iter()
+        .map(|(n, _)| n.as_ref())
+        .chain(streamed.iter().map(|f| f.file_name()))
+        .collect();
     let (completed, removed) = recover(dir, &names);
     if completed > 0 {
         eprintln!(
@@ -164,6 +189,14 @@ fn write_set<N: AsRef<str> + Sync>(dir: &Path, files: &[(N, Vec<u8>)], fail_at: 
         }
         write_synced(&path, bytes).map_err(|e| Error::write(&dir.join(name.as_ref()), e))
     })?;
+    for f in streamed {
+        let target = dir.join(f.file_name());
+        let file = std::fs::File::create(staging.path().join(f.file_name())).map_err(|e| Error::write(&target, e))?;
+        let mut out = std::io::BufWriter::new(file);
+        f.write_to(&mut out)?;
+        let file = out.into_inner().map_err(|e| Error::write(&target, e.into_error()))?;
+        finish_synced(&file).map_err(|e| Error::write(&target, e))?;
+    }
     write_synced(&staging.path().join(STAGING_COMPLETE), names.join("\n").as_bytes())
         .map_err(|e| Error::write(dir, e))?;
     sync_dir(staging.path());
@@ -186,6 +219,11 @@ fn write_set<N: AsRef<str> + Sync>(dir: &Path, files: &[(N, Vec<u8>)], fail_at: 
 fn write_synced(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let mut f = std::fs::File::create(path)?;
     f.write_all(bytes)?;
+    finish_synced(&f)
+}
+
+/// Sets a written staged file readable like an ordinary file and syncs it.
+fn finish_synced(f: &std::fs::File) -> std::io::Result<()> {
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
@@ -270,7 +308,7 @@ pub fn num(what: &str, v: f64) -> Result<String> {
     Ok(format!("{}", ensure_finite(what, v)?))
 }
 
-fn encode_error(format: &'static str, e: impl std::fmt::Display) -> Error {
+pub fn encode_error(format: &'static str, e: impl std::fmt::Display) -> Error {
     IoError::Encode {
         format,
         message: e.to_string(),
@@ -518,7 +556,7 @@ mod set_tests {
         write_files(dir.path(), &set("old")).unwrap();
         assert_eq!(listing(dir.path()), expected("old", true));
         for k in 0..3 {
-            assert!(write_set(dir.path(), &set("new"), Some(k)).is_err());
+            assert!(write_set(dir.path(), &set("new"), &[], Some(k)).is_err());
             assert_eq!(listing(dir.path()), expected("old", true), "failure at file {k}");
         }
         write_files(dir.path(), &set("new")).unwrap();

@@ -19,6 +19,8 @@ pub struct AnalyzeRequest {
     pub preset: Option<String>,
     /// No progress bar.
     pub quiet: bool,
+    /// `--all-frames`: `shimmer.csv` with every frame, streamed.
+    pub all_frames: bool,
 }
 
 /// The `analyze` command.
@@ -35,7 +37,18 @@ pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
     let analysis = analyze_with_progress(&config, &AnalysisOptions::full(), &|n| progress.inc(n));
     progress.writing();
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&config));
-    let written = output::export_all(&dir, &analysis, &report::analyze::exporters_for(&analysis))?;
+    let written = if args.all_frames {
+        // Every output but shimmer.csv is rendered as usual; shimmer.csv is streamed into the
+        // same all-or-nothing set.
+        let files = report::analyze::exporters_for(&analysis)
+            .into_iter()
+            .filter(|e| e.file_name() != "shimmer.csv")
+            .map(|e| Ok((e.file_name().to_string(), e.render(&analysis)?)))
+            .collect::<Result<Vec<_>>>()?;
+        output::write_files_streamed(&dir, &files, &[&report::analyze::FullShimmerCsv(&config)])?
+    } else {
+        output::export_all(&dir, &analysis, &report::analyze::exporters_for(&analysis))?
+    };
     progress.finish();
     print_result(
         args.format,

@@ -173,6 +173,13 @@ impl Poses<'_> {
 impl Iterator for Poses<'_> {
     type Item = PoseResult;
 
+    /// Skips to frame `t + n` without computing the frames between (each pose is a closed
+    /// form of its index; a long path's later chunks start at once).
+    fn nth(&mut self, n: usize) -> Option<PoseResult> {
+        self.t = self.t.saturating_add(n).min(self.len);
+        self.next()
+    }
+
     fn next(&mut self) -> Option<PoseResult> {
         if self.t >= self.len {
             return None;

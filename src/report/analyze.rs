@@ -87,6 +87,35 @@ impl Exporter<Analysis> for DensityCsv {
     }
 }
 
+/// `shimmer.csv`'s columns.
+const SHIMMER_COLUMNS: [&str; 8] = [
+    "frame",
+    "cascade",
+    "snap",
+    "size_change",
+    "phase_drift_rms",
+    "phase_drift_max",
+    "cell_flips",
+    "path",
+];
+
+/// One row of `shimmer.csv`: path `name`'s frame row `f`.
+fn shimmer_row(name: &str, f: &crate::shimmer::FrameShimmer) -> Result<Vec<String>> {
+    Ok(vec![
+        f.frame.to_string(),
+        f.cascade.to_string(),
+        f.snapped.to_string(),
+        num("size_change", f.size_change)?,
+        num("phase_drift_rms", f.phase_drift_rms)?,
+        num("phase_drift_max", f.phase_drift_max)?,
+        match f.cell_flips {
+            Some(v) => num("cell_flips", v)?,
+            None => String::new(),
+        },
+        name.to_string(),
+    ])
+}
+
 impl Exporter<Analysis> for ShimmerCsv {
     fn file_name(&self) -> &'static str {
         "shimmer.csv"
@@ -110,34 +139,31 @@ impl Exporter<Analysis> for ShimmerCsv {
             .filter_map(|(n, p)| p.map(|p| (n, p)))
         {
             for f in &path.frames {
-                rows.push(vec![
-                    f.frame.to_string(),
-                    f.cascade.to_string(),
-                    f.snapped.to_string(),
-                    num("size_change", f.size_change)?,
-                    num("phase_drift_rms", f.phase_drift_rms)?,
-                    num("phase_drift_max", f.phase_drift_max)?,
-                    match f.cell_flips {
-                        Some(v) => num("cell_flips", v)?,
-                        None => String::new(),
-                    },
-                    name.to_string(),
-                ]);
+                rows.push(shimmer_row(name, f)?);
             }
         }
-        csv_bytes(
-            &[
-                "frame",
-                "cascade",
-                "snap",
-                "size_change",
-                "phase_drift_rms",
-                "phase_drift_max",
-                "cell_flips",
-                "path",
-            ],
-            &rows,
-        )
+        csv_bytes(&SHIMMER_COLUMNS, &rows)
+    }
+}
+
+/// `shimmer.csv` with every frame's rows (`analyze --all-frames`), written as the path is
+/// walked ([`crate::analysis::each_frame_row`]): a path of any length in the memory of one
+/// chunk of frames. Without the flag, paths longer than 1,000 frames keep every k-th frame.
+pub struct FullShimmerCsv<'a>(pub &'a crate::config::Config);
+
+impl crate::output::StreamedFile for FullShimmerCsv<'_> {
+    fn file_name(&self) -> &str {
+        "shimmer.csv"
+    }
+
+    fn write_to(&self, out: &mut dyn std::io::Write) -> Result<()> {
+        let mut w = csv::Writer::from_writer(out);
+        let wrap = |e: csv::Error| crate::output::encode_error("CSV", e);
+        w.write_record(SHIMMER_COLUMNS).map_err(wrap)?;
+        crate::analysis::each_frame_row(self.0, &crate::analysis::AnalysisOptions::full(), &mut |name, f| {
+            w.write_record(shimmer_row(name, f)?).map_err(wrap)
+        })?;
+        w.flush().map_err(|e| crate::output::encode_error("CSV", e))
     }
 }
 
