@@ -330,13 +330,24 @@ pub fn csv_bytes(header: &[&str], rows: &[Vec<String>]) -> Result<Vec<u8>> {
 /// [`csv_bytes`] from rows formatted one at a time: only one row's fields exist at once, so a
 /// 100,000-row table costs its bytes, not a string per field.
 pub fn csv_bytes_from(header: &[&str], rows: impl Iterator<Item = Result<Vec<String>>>) -> Result<Vec<u8>> {
-    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut out = Vec::new();
+    csv_write_from(&mut out, header, rows)?;
+    Ok(out)
+}
+
+/// [`csv_bytes_from`] written to `out` row by row (a streamed file holds no copy of itself).
+pub fn csv_write_from(
+    out: &mut dyn Write,
+    header: &[&str],
+    rows: impl Iterator<Item = Result<Vec<String>>>,
+) -> Result<()> {
+    let mut w = csv::Writer::from_writer(out);
     let wrap = |e: csv::Error| encode_error("CSV", e);
     w.write_record(header).map_err(wrap)?;
     for r in rows {
         w.write_record(&r?).map_err(wrap)?;
     }
-    w.into_inner().map_err(|e| encode_error("CSV", e))
+    w.flush().map_err(|e| encode_error("CSV", e))
 }
 
 /// Recursively refuses NaN/infinity in a JSON value (serde_json would write `null`).

@@ -69,7 +69,8 @@ pub fn read_shard(dir: &Path) -> Result<ShardInput> {
     })
 }
 
-/// Merges as the CLI does, without printing: (result, rendered files).
+/// Merges as the CLI does, without printing: (result, rendered files but `sweep.csv`, which
+/// [`execute`] streams into the set).
 pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::RenderedFiles)> {
     let shards = args.dirs.iter().map(|d| read_shard(d)).collect::<Result<Vec<_>>>()?;
     let m = shard::check_set(&shards)?.clone();
@@ -108,7 +109,8 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
     }
     let rows = shard::join(shards, &grid)?;
     let result = SweepResult::new(config, grid, rows, command);
-    let files = report::sweep::render_all(&result, !args.no_plots)?;
+    // sweep.csv is streamed when the set is written (execute).
+    let files = report::sweep::render_all_but_csv(&result, !args.no_plots)?;
     Ok((result, files))
 }
 
@@ -116,7 +118,7 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
 pub fn execute(args: &MergeRequest) -> Result<Outcome> {
     let (result, files) = merge_files(args)?;
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&result.config));
-    let written = output::write_files(&dir, &files)?;
+    let written = output::write_files_streamed(&dir, &files, &[&report::sweep::SweepCsvFile(&result)])?;
     if !args.quiet {
         eprintln!(
             "merged {} shards: {} configurations",

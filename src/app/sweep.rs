@@ -51,7 +51,8 @@ pub(crate) fn shard_hash(path: &Path, config: &Config, grid: &Grid, command: &st
     Ok(shard::config_hash(&bytes, gltf.as_deref(), config, grid, command))
 }
 
-/// Runs a sweep as the CLI does, without printing: (result, rendered files). With `--shard`
+/// Runs a sweep as the CLI does, without printing: (result, rendered files; `sweep.csv` is not
+/// among them: [`execute`] streams it into the set). With `--shard`
 /// the result holds the shard's slice, and the files include the shard's manifest and rows.
 /// The progress bar is returned still up, for the writing.
 pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::RenderedFiles, super::progress::Progress)> {
@@ -93,7 +94,8 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         None => command,
     };
     let result = SweepResult::new(config, grid, rows, shown_command);
-    let mut files = report::sweep::render_all(&result, !args.no_plots)?;
+    // sweep.csv is streamed when the set is written (execute), not rendered here.
+    let mut files = report::sweep::render_all_but_csv(&result, !args.no_plots)?;
     if let Some(m) = manifest {
         files.push((
             shard::MANIFEST_FILE.to_string(),
@@ -145,7 +147,7 @@ pub fn execute(args: &SweepRequest) -> Result<Outcome> {
         (None, Some(s)) => default_out_dir(&result.config).join(format!("shard-{}-of-{}", s.k, s.n)),
         (None, None) => default_out_dir(&result.config),
     };
-    let written = output::write_files(&dir, &files)?;
+    let written = output::write_files_streamed(&dir, &files, &[&report::sweep::SweepCsvFile(&result)])?;
     progress.finish();
     print_result(
         args.format,

@@ -11,13 +11,28 @@ use crate::error::Result;
 use crate::figures::sweep::{HeatmapFigure, LambdaDensityFigure, ParetoFigure, ShimmerSweepFigure};
 use crate::figures::{svg_to_png, Figure};
 use crate::metric;
-use crate::output::{count, csv_bytes_from, json_bytes, num, percent_change, short_number as n, signed_percent};
+use crate::output::{count, json_bytes, num, percent_change, short_number as n, signed_percent};
 use crate::sweep::{self, Row, SweepResult};
 
 /// `sweep.csv`: [`metric::summary_columns`], then these.
 pub const SWEEP_EXTRA_COLUMNS: [&str; 4] = ["cascades_needed", "pareto", "recommended", "preset"];
 
-pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
+/// `sweep.csv` streamed into the output set: each row is encoded as it is written, so a
+/// 100,000-configuration sweep holds no copy of its CSV text.
+pub struct SweepCsvFile<'a>(pub &'a SweepResult);
+
+impl crate::output::StreamedFile for SweepCsvFile<'_> {
+    fn file_name(&self) -> &str {
+        "sweep.csv"
+    }
+
+    fn write_to(&self, out: &mut dyn std::io::Write) -> Result<()> {
+        write_sweep_csv(self.0, out)
+    }
+}
+
+/// `sweep.csv`, one row per configuration in grid order, written row by row to `out`.
+fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> {
     let rec = r.recommendation.as_ref().map(|x| x.index);
     // Empty for csm-lab's own pipeline.
     let preset = r
@@ -69,7 +84,7 @@ pub fn sweep_csv(r: &SweepResult) -> Result<Vec<u8>> {
         .chain(knob_key)
         .chain(distance.then_some("shadow.max_distance"))
         .collect();
-    csv_bytes_from(&header, rows)
+    crate::output::csv_write_from(out, &header, rows)
 }
 
 fn row_json(row: &Row) -> serde_json::Value {
@@ -884,15 +899,13 @@ pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> 
     m.into_bytes()
 }
 
-/// Every file of a sweep, rendered in memory: (file name, bytes).
-pub fn render_all(r: &SweepResult, plots: bool) -> Result<crate::output::RenderedFiles> {
-    let mut files = vec![
-        ("sweep.csv".to_string(), sweep_csv(r)?),
-        (
-            "recommendation.json".to_string(),
-            json_bytes("recommendation", &recommendation_value(r))?,
-        ),
-    ];
+/// Every file of a sweep but `sweep.csv`, rendered in memory: (file name, bytes). The
+/// commands stream `sweep.csv` into the same set ([`SweepCsvFile`]).
+pub fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::output::RenderedFiles> {
+    let mut files = vec![(
+        "recommendation.json".to_string(),
+        json_bytes("recommendation", &recommendation_value(r))?,
+    )];
     let figures = if plots { render_figures(r)? } else { Vec::new() };
     // Rasterising is most of the time of a small sweep: the figures go to PNG in parallel
     // (rayon keeps their order, so the files are the same at any thread count).
