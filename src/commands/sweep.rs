@@ -161,57 +161,49 @@ pub fn parse_resolution_spec(spec: &str) -> Result<Axis<u32>> {
     parse_int_list("--resolution", spec, "16..=16384", resolution_ok, false)
 }
 
-/// `--fit sphere,aabb`.
-pub fn parse_fit_spec(spec: &str) -> Result<Axis<Fit>> {
-    let values = spec
+/// A comma-separated list of named values (`--fit sphere,aabb`): each one of `choices`, none
+/// twice. Errors name `flag`.
+fn parse_named_list<T: Copy>(flag: &str, spec: &str, noun: &str, choices: &[(&str, T)]) -> Result<Axis<T>> {
+    let names: Vec<&str> = choices.iter().map(|c| c.0).collect();
+    let picked = spec
         .split(',')
-        .map(|s| match s.trim() {
-            "sphere" => Ok(Fit::Sphere),
-            "aabb" => Ok(Fit::Aabb),
-            other => Err(Error::flag(
-                "--fit",
-                spec,
-                format!("{other:?} is not a fit; use sphere, aabb or sphere,aabb"),
-            )),
+        .map(|s| {
+            let s = s.trim();
+            choices.iter().find(|c| c.0 == s).ok_or_else(|| {
+                Error::flag(
+                    flag,
+                    spec,
+                    format!("{s:?} is not a {noun}; use {} or {}", names.join(", "), names.join(",")),
+                )
+            })
         })
         .collect::<Result<Vec<_>>>()?;
     check_values(
-        &values.iter().map(|f| f.name()).collect::<Vec<_>>(),
-        "sphere, aabb",
+        &picked.iter().map(|c| c.0).collect::<Vec<_>>(),
+        &names.join(", "),
         |_| true,
     )
-    .map_err(|m| Error::flag("--fit", spec, m))?;
+    .map_err(|m| Error::flag(flag, spec, m))?;
     Ok(Axis {
-        values,
+        values: picked.iter().map(|c| c.1).collect(),
         spec: spec.to_string(),
     })
+}
+
+/// `--fit sphere,aabb`.
+pub fn parse_fit_spec(spec: &str) -> Result<Axis<Fit>> {
+    parse_named_list("--fit", spec, "fit", &[("sphere", Fit::Sphere), ("aabb", Fit::Aabb)])
 }
 
 /// `--split-range bounds,visible`: splits on the bounds' depth range, on the visible depths,
 /// or both side by side (scene geometry only; checked in [`Grid::resolve`]).
 pub fn parse_split_range_spec(spec: &str) -> Result<Axis<SplitRange>> {
-    let values = spec
-        .split(',')
-        .map(|s| match s.trim() {
-            "bounds" => Ok(SplitRange::Bounds),
-            "visible" => Ok(SplitRange::Visible),
-            other => Err(Error::flag(
-                "--split-range",
-                spec,
-                format!("{other:?} is not a split range; use bounds, visible or bounds,visible"),
-            )),
-        })
-        .collect::<Result<Vec<_>>>()?;
-    check_values(
-        &values.iter().map(|r| r.name()).collect::<Vec<_>>(),
-        "bounds, visible",
-        |_| true,
+    parse_named_list(
+        "--split-range",
+        spec,
+        "split range",
+        &[("bounds", SplitRange::Bounds), ("visible", SplitRange::Visible)],
     )
-    .map_err(|m| Error::flag("--split-range", spec, m))?;
-    Ok(Axis {
-        values,
-        spec: spec.to_string(),
-    })
 }
 
 /// Command-line overrides of the grid.
