@@ -78,17 +78,10 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
     let request = SweepRequest {
         config: PathBuf::from(&m.config),
         out: None,
-        lambda: m.lambda.clone(),
-        cascades: m.cascades.clone(),
-        resolution: m.resolution.clone(),
-        fit: m.fit.clone(),
-        split_range: m.split_range.clone(),
-        knob: m.knob.clone(),
-        distance: m.distance.clone(),
+        grid: m.flags.clone(),
         threads: None,
         quiet: args.quiet,
         no_plots: args.no_plots,
-        preset: m.preset.clone(),
         format: args.format,
         shard: None,
     };

@@ -13,16 +13,8 @@ use crate::report;
 
 /// The loaded config, the resolved grid and the command that reproduces the (unsharded) sweep.
 pub(crate) fn plan(args: &SweepRequest) -> Result<(Config, Grid, String)> {
-    let config = load_for_preset_sweep(&args.config, args.preset.as_deref())?;
-    let overrides = GridOverrides {
-        lambda: args.lambda.as_deref().map(parse_lambda_spec).transpose()?,
-        cascades: args.cascades.as_deref().map(parse_cascades_spec).transpose()?,
-        resolution: args.resolution.as_deref().map(parse_resolution_spec).transpose()?,
-        fit: args.fit.as_deref().map(parse_fit_spec).transpose()?,
-        split_range: args.split_range.as_deref().map(parse_split_range_spec).transpose()?,
-        knob: args.knob.as_deref().map(parse_knob_spec).transpose()?,
-        distance: args.distance.as_deref().map(parse_distance_spec).transpose()?,
-    };
+    let config = load_for_preset_sweep(&args.config, args.grid.preset.as_deref())?;
+    let overrides = args.grid.overrides()?;
     let grid = Grid::resolve(&config, &overrides)?;
     if !args.quiet {
         for note in &grid.notes {
@@ -76,14 +68,7 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
             shard: s,
             grid_configurations: grid.len(),
             config: args.config.display().to_string(),
-            preset: args.preset.clone(),
-            lambda: args.lambda.clone(),
-            cascades: args.cascades.clone(),
-            resolution: args.resolution.clone(),
-            fit: args.fit.clone(),
-            split_range: args.split_range.clone(),
-            knob: args.knob.clone(),
-            distance: args.distance.clone(),
+            flags: args.grid.clone(),
             config_hash: shard_hash(&args.config, &config, &grid, &command)?,
             command: command.clone(),
         }),
@@ -121,19 +106,11 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
 pub struct SweepRequest {
     pub config: PathBuf,
     pub out: Option<PathBuf>,
-    pub lambda: Option<String>,
-    pub cascades: Option<String>,
-    pub resolution: Option<String>,
-    pub fit: Option<String>,
-    pub split_range: Option<String>,
-    /// `--knob`: the preset's split knob.
-    pub knob: Option<String>,
-    /// `--distance`: shadow distances.
-    pub distance: Option<String>,
+    /// `--preset` and the grid's axis flags.
+    pub grid: GridFlags,
     pub threads: Option<u16>,
     pub quiet: bool,
     pub no_plots: bool,
-    pub preset: Option<String>,
     pub format: Format,
     /// `--shard K/N`, unparsed.
     pub shard: Option<String>,

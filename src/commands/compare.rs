@@ -130,13 +130,7 @@ pub fn run_with_progress(
         .collect::<Result<Vec<_>>>()?;
     let mut configs = configs;
     for &range in own {
-        if range.is_visible() && scene.geometry.is_none() {
-            return Err(Error::flag(
-                "--split-range",
-                "visible",
-                "\"visible\" needs scene geometry (scene.ground, [[scene.box]] or scene.gltf): the bounds alone show no visible depth; use bounds",
-            ));
-        }
+        crate::sweep::check_split_ranges(&scene, &[range], range.name())?;
         let mut own_config = scene.clone();
         own_config.shadow.preset = None;
         configs.push(own_config.with_split_range(range)?);

@@ -18,7 +18,7 @@ use crate::config::Config;
 use crate::config::{Fit, SplitRange};
 use crate::error::{Error, Result, ShardError};
 use crate::screen::ScreenStats;
-use crate::sweep::{Grid, Row, Setting};
+use crate::sweep::{Grid, GridFlags, Row, Setting};
 
 /// The shard's description, beside its other files.
 pub const MANIFEST_FILE: &str = "shard.json";
@@ -104,17 +104,8 @@ pub struct Manifest {
     pub grid_configurations: usize,
     /// The config file as given to `sweep` (merge loads it again from there).
     pub config: String,
-    /// `--preset`, `--lambda`, `--cascades`, `--resolution`, `--fit` as given.
-    pub preset: Option<String>,
-    pub lambda: Option<String>,
-    pub cascades: Option<String>,
-    pub resolution: Option<String>,
-    pub fit: Option<String>,
-    /// `--split-range` as given.
-    pub split_range: Option<String>,
-    /// `--knob` and `--distance` as given.
-    pub knob: Option<String>,
-    pub distance: Option<String>,
+    /// The grid flags as given.
+    pub flags: GridFlags,
     /// The command of the unsharded sweep (it appears in the merged files).
     pub command: String,
     /// [`config_hash`] of the loaded config, grid and command.
@@ -126,31 +117,7 @@ pub fn tool() -> String {
     format!("csm-lab {}", env!("CARGO_PKG_VERSION"))
 }
 
-const OPTIONAL_KEYS: [&str; 8] = [
-    "preset",
-    "lambda",
-    "cascades",
-    "resolution",
-    "fit",
-    "split_range",
-    "knob",
-    "distance",
-];
-
 impl Manifest {
-    fn optional(&self) -> [&Option<String>; 8] {
-        [
-            &self.preset,
-            &self.lambda,
-            &self.cascades,
-            &self.resolution,
-            &self.fit,
-            &self.split_range,
-            &self.knob,
-            &self.distance,
-        ]
-    }
-
     pub fn to_json(&self) -> serde_json::Value {
         let mut v = serde_json::json!({
             "tool": self.tool,
@@ -163,7 +130,7 @@ impl Manifest {
             "command": self.command,
             "config_hash": self.config_hash,
         });
-        for (key, value) in OPTIONAL_KEYS.into_iter().zip(self.optional()) {
+        for (key, value) in GridFlags::KEYS.into_iter().zip(self.flags.values()) {
             if let Some(s) = value {
                 v[key] = s.clone().into();
             }
@@ -198,14 +165,7 @@ impl Manifest {
             shard: Shard { k, n },
             grid_configurations: count("grid_configurations")?,
             config: string("config")?,
-            preset: optional("preset"),
-            lambda: optional("lambda"),
-            cascades: optional("cascades"),
-            resolution: optional("resolution"),
-            fit: optional("fit"),
-            split_range: optional("split_range"),
-            knob: optional("knob"),
-            distance: optional("distance"),
+            flags: GridFlags::from_keys(optional),
             command: string("command")?,
             config_hash: string("config_hash")?,
         })

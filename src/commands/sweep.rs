@@ -43,28 +43,7 @@ pub struct Grid {
 
 /// `--lambda 0:1:0.05` (start:end:step, inclusive), `--lambda 0,0.5,1` or `--lambda 0.75`.
 pub fn parse_lambda_spec(spec: &str) -> Result<Axis<f64>> {
-    let flag = |m: String| Error::flag("--lambda", spec, m);
-    let num = |s: &str| {
-        s.trim().parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-            flag(format!(
-                "{s:?} is not a number; use start:end:step (0:1:0.05) or a list (0,0.5,1)"
-            ))
-        })
-    };
-    let values = if spec.contains(':') {
-        let parts: Vec<&str> = spec.split(':').collect();
-        if parts.len() != 3 {
-            return Err(flag("a range is start:end:step, e.g. 0:1:0.05".into()));
-        }
-        decimal_range(num(parts[0])?, num(parts[1])?, num(parts[2])?).map_err(flag)?
-    } else {
-        spec.split(',').map(num).collect::<Result<Vec<_>>>()?
-    };
-    check_values(&values, "[0, 1]", lambda_ok).map_err(flag)?;
-    Ok(Axis {
-        values,
-        spec: spec.to_string(),
-    })
+    parse_numbers("--lambda", spec, ("0:1:0.05", "0,0.5,1"), "[0, 1]", lambda_ok)
 }
 
 fn parse_int_list<T>(flag: &str, spec: &str, allowed: &str, ok: impl Fn(T) -> bool, ranges: bool) -> Result<Axis<T>>
@@ -117,18 +96,30 @@ where
 /// `--knob 1,2,3` or `--knob 1:5:0.5` (values of a preset's split knob; range checked
 /// against the engine in [`Grid::resolve`]), and likewise `--distance 50,100,150`.
 pub fn parse_number_spec(flag: &str, spec: &str, allowed: &str, ok: impl Fn(f64) -> bool) -> Result<Axis<f64>> {
+    parse_numbers(flag, spec, ("1:5:0.5", "1,2,3"), allowed, ok)
+}
+
+/// A decimal-exact range `start:end:step` or a comma list of numbers for `flag`, each value
+/// `ok`; `(range, list)` are the examples its errors show.
+fn parse_numbers(
+    flag: &str,
+    spec: &str,
+    (range, list): (&str, &str),
+    allowed: &str,
+    ok: impl Fn(f64) -> bool,
+) -> Result<Axis<f64>> {
     let err = |m: String| Error::flag(flag, spec, m);
     let num = |s: &str| {
         s.trim().parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
             err(format!(
-                "{s:?} is not a number; use start:end:step (1:5:0.5) or a list (1,2,3)"
+                "{s:?} is not a number; use start:end:step ({range}) or a list ({list})"
             ))
         })
     };
     let values = if spec.contains(':') {
         let parts: Vec<&str> = spec.split(':').collect();
         if parts.len() != 3 {
-            return Err(err("a range is start:end:step, e.g. 1:5:0.5".into()));
+            return Err(err(format!("a range is start:end:step, e.g. {range}")));
         }
         decimal_range(num(parts[0])?, num(parts[1])?, num(parts[2])?).map_err(err)?
     } else {
@@ -204,6 +195,92 @@ pub fn parse_split_range_spec(spec: &str) -> Result<Axis<SplitRange>> {
         "split range",
         &[("bounds", SplitRange::Bounds), ("visible", SplitRange::Visible)],
     )
+}
+
+/// The grid flags of a sweep as given on the command line (`--preset`, `--lambda`,
+/// `--cascades`, `--resolution`, `--fit`, `--split-range`, `--knob`, `--distance`), unparsed:
+/// what `sweep` reads and what a shard's manifest records for `merge` to replay.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GridFlags {
+    pub preset: Option<String>,
+    pub lambda: Option<String>,
+    pub cascades: Option<String>,
+    pub resolution: Option<String>,
+    pub fit: Option<String>,
+    pub split_range: Option<String>,
+    /// `--knob`: the preset's split knob.
+    pub knob: Option<String>,
+    /// `--distance`: shadow distances.
+    pub distance: Option<String>,
+}
+
+impl GridFlags {
+    /// The flags' names without dashes, in the order of [`GridFlags::values`].
+    pub const KEYS: [&'static str; 8] = [
+        "preset",
+        "lambda",
+        "cascades",
+        "resolution",
+        "fit",
+        "split_range",
+        "knob",
+        "distance",
+    ];
+
+    pub fn values(&self) -> [&Option<String>; 8] {
+        [
+            &self.preset,
+            &self.lambda,
+            &self.cascades,
+            &self.resolution,
+            &self.fit,
+            &self.split_range,
+            &self.knob,
+            &self.distance,
+        ]
+    }
+
+    /// The flags from `get(key)` for each of [`GridFlags::KEYS`].
+    pub fn from_keys(get: impl Fn(&str) -> Option<String>) -> Self {
+        GridFlags {
+            preset: get("preset"),
+            lambda: get("lambda"),
+            cascades: get("cascades"),
+            resolution: get("resolution"),
+            fit: get("fit"),
+            split_range: get("split_range"),
+            knob: get("knob"),
+            distance: get("distance"),
+        }
+    }
+
+    /// The axis flags parsed; an error names its flag.
+    pub fn overrides(&self) -> Result<GridOverrides> {
+        Ok(GridOverrides {
+            lambda: self.lambda.as_deref().map(parse_lambda_spec).transpose()?,
+            cascades: self.cascades.as_deref().map(parse_cascades_spec).transpose()?,
+            resolution: self.resolution.as_deref().map(parse_resolution_spec).transpose()?,
+            fit: self.fit.as_deref().map(parse_fit_spec).transpose()?,
+            split_range: self.split_range.as_deref().map(parse_split_range_spec).transpose()?,
+            knob: self.knob.as_deref().map(parse_knob_spec).transpose()?,
+            distance: self.distance.as_deref().map(parse_distance_spec).transpose()?,
+        })
+    }
+}
+
+/// `--split-range` = `spec` (`ranges` parsed) is refused when it asks for visible splits
+/// without scene geometry.
+pub fn check_split_ranges(config: &Config, ranges: &[SplitRange], spec: &str) -> Result<()> {
+    if config.geometry.is_none() && ranges.contains(&SplitRange::Visible) {
+        return Err(Error::flag(
+            "--split-range",
+            spec,
+            "\"visible\" needs scene geometry (scene.ground, [[scene.box]] or scene.gltf): \
+             the bounds alone show no visible depth; use bounds"
+                .to_string(),
+        ));
+    }
+    Ok(())
 }
 
 /// Command-line overrides of the grid.
@@ -373,15 +450,7 @@ impl Grid {
                 ))
             }
             (Some(axis), _, None) => {
-                if config.geometry.is_none() && axis.values.contains(&SplitRange::Visible) {
-                    return Err(Error::flag(
-                        "--split-range",
-                        &axis.spec,
-                        "\"visible\" needs scene geometry (scene.ground, [[scene.box]] or scene.gltf): \
-                         the bounds alone show no visible depth; use bounds"
-                            .to_string(),
-                    ));
-                }
+                check_split_ranges(config, &axis.values, &axis.spec)?;
                 axis
             }
             (None, Some(axis), Some(p)) => {

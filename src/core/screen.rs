@@ -163,16 +163,6 @@ fn served_runs(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<(usize, 
     (runs, counts)
 }
 
-/// The per-pixel aliasing of every served receiver pixel, cascade by cascade (in depth order).
-pub fn served_aliasing(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<f64>, Vec<usize>) {
-    let (runs, counts) = served_runs(vis, splits, texel);
-    let values = runs
-        .iter()
-        .flat_map(|&(a, b, t)| vis.receivers[a..b].iter().map(move |&(_, g)| t * g))
-        .collect();
-    (values, counts)
-}
-
 /// The screen metrics of a configuration with selection `splits` and texel sizes `texel`;
 /// `visible` is the visible depth range already clipped (see [`visible_range`]).
 pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f64, f64)>) -> ScreenStats {
