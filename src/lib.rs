@@ -32,7 +32,7 @@ pub mod suggest;
 pub use crate::commands::{bench, check, compare, stress, sweep};
 pub use crate::core::{
     cascades, depth_range, fitting, geometry, mesh, metrics, motion, precision, rng, scene, screen, seams, shimmer,
-    snapping, splits, visibility, walk,
+    snapping, splits, sun, visibility, walk,
 };
 pub use crate::figures as plots;
 

@@ -22,5 +22,6 @@ pub mod seams;
 pub mod shimmer;
 pub mod snapping;
 pub mod splits;
+pub mod sun;
 pub mod visibility;
 pub mod walk;
