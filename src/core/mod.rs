@@ -19,6 +19,7 @@ pub mod rng;
 pub mod scene;
 pub mod screen;
 pub mod seams;
+pub mod shade;
 pub mod shimmer;
 pub mod snapping;
 pub mod splits;

@@ -1,0 +1,108 @@
+//! Pictures of shadow state on the sampled screen grid: plain images that the ground-truth pass
+//! fills and the figures draw.
+//!
+//! An image covers the visibility pass's grid (`cols × rows` samples of the screen), row-major,
+//! row 0 at the top of the screen, column 0 at its left. A pixel without a receiver (sky, a
+//! surface facing away from the light) is [`Shade::Empty`].
+
+/// What one screen pixel shows, as the shadow map decides it, against the exact answer (a ray
+/// from the surface point toward the light).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Shade {
+    /// No receiver at this pixel.
+    #[default]
+    Empty,
+    /// Lit, and truly lit.
+    Lit,
+    /// Shadowed, and truly shadowed.
+    Shadowed,
+    /// Shadowed by the map although the point is truly lit (self-shadowing: acne).
+    Acne,
+    /// Lit by the map although the point is truly shadowed (peter-panning, light leaks).
+    Leak,
+}
+
+impl Shade {
+    /// The state from the map's answer and the exact answer (both: is the point lit?).
+    pub fn of(map_lit: bool, truly_lit: bool) -> Shade {
+        match (map_lit, truly_lit) {
+            (true, true) => Shade::Lit,
+            (false, false) => Shade::Shadowed,
+            (false, true) => Shade::Acne,
+            (true, false) => Shade::Leak,
+        }
+    }
+
+    /// Whether the map lights the point (None without a receiver).
+    pub fn map_lit(self) -> Option<bool> {
+        match self {
+            Shade::Empty => None,
+            Shade::Lit | Shade::Leak => Some(true),
+            Shade::Shadowed | Shade::Acne => Some(false),
+        }
+    }
+}
+
+/// One frame's states over the sampled screen grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShadeImage {
+    pub cols: u32,
+    pub rows: u32,
+    /// `cols × rows` states, row-major from the top-left pixel.
+    pub pixels: Vec<Shade>,
+}
+
+impl ShadeImage {
+    /// An image with no receiver anywhere.
+    pub fn empty(cols: u32, rows: u32) -> Self {
+        ShadeImage {
+            cols,
+            rows,
+            pixels: vec![Shade::Empty; cols as usize * rows as usize],
+        }
+    }
+
+    pub fn get(&self, col: u32, row: u32) -> Shade {
+        self.pixels[row as usize * self.cols as usize + col as usize]
+    }
+
+    pub fn set(&mut self, col: u32, row: u32, shade: Shade) {
+        self.pixels[row as usize * self.cols as usize + col as usize] = shade;
+    }
+}
+
+/// How often each receiver pixel flipped between lit and shadowed along a path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlipImage {
+    pub cols: u32,
+    pub rows: u32,
+    /// Per pixel, row-major from the top left: the fraction of consecutive frame pairs in which
+    /// the map's answer changed, in [0, 1]; None without a receiver.
+    pub flips: Vec<Option<f64>>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn states_combine_the_two_answers() {
+        assert_eq!(Shade::of(true, true), Shade::Lit);
+        assert_eq!(Shade::of(false, false), Shade::Shadowed);
+        assert_eq!(Shade::of(false, true), Shade::Acne);
+        assert_eq!(Shade::of(true, false), Shade::Leak);
+        for (m, t) in [(true, true), (true, false), (false, true), (false, false)] {
+            assert_eq!(Shade::of(m, t).map_lit(), Some(m));
+        }
+        assert_eq!(Shade::Empty.map_lit(), None);
+    }
+
+    #[test]
+    fn pixels_are_row_major_from_the_top_left() {
+        let mut image = ShadeImage::empty(3, 2);
+        image.set(2, 1, Shade::Leak);
+        assert_eq!(image.pixels[5], Shade::Leak);
+        assert_eq!(image.get(2, 1), Shade::Leak);
+        assert_eq!(image.get(0, 0), Shade::Empty);
+    }
+}
