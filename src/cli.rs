@@ -68,6 +68,11 @@ pub struct AnalyzeArgs {
     /// (by default a path longer than 1,000 frames keeps every k-th frame's rows).
     #[arg(long)]
     pub all_frames: bool,
+    /// An engine settings file as `sweep --preset` and `compare` write it
+    /// (recommendation.<engine>.txt): its engine's cascades with exactly those settings, in
+    /// place of the engine's table and the [shadow] count, map size and shadow distance.
+    #[arg(long, value_name = "FILE")]
+    pub engine_settings: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -245,6 +250,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             preset: args.preset,
             quiet: args.quiet,
             all_frames: args.all_frames,
+            engine_settings: args.engine_settings,
         }),
         Command::Sweep(args) => sweep::execute(&sweep::SweepRequest {
             config: args.config,

@@ -160,6 +160,18 @@ pub enum PresetError {
     /// A map size the preset does not accept.
     #[error("the {preset} preset takes power-of-two map sizes only, not {size}")]
     MapSize { preset: String, size: u32 },
+
+    /// An engine settings file (`recommendation.<engine>.txt`) that is not what csm-lab
+    /// writes, or holds a value the engine does not take.
+    #[error("{path}:{line}:{column}: {field}: {message}")]
+    Settings {
+        path: String,
+        line: usize,
+        column: usize,
+        /// The field in the engine's own terms (and its config key), or "header".
+        field: String,
+        message: String,
+    },
 }
 
 /// A baseline (`summary.json` or `sweep.csv`) that cannot be compared against.

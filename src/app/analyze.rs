@@ -1,7 +1,7 @@
 //! `csm-lab analyze`: one scene and shadow setting, built and measured, written as CSV, JSON
 //! and SVG, with a summary on stdout.
 
-use super::{default_out_dir, load_with_preset_flag, print_result, Format, Outcome};
+use super::{default_out_dir, load_with_engine_settings, load_with_preset_flag, print_result, Format, Outcome};
 use crate::analysis::{analyze_with_progress, frames_walked, AnalysisOptions};
 use crate::error::{ConfigError, Error, Result};
 use crate::output;
@@ -21,11 +21,17 @@ pub struct AnalyzeRequest {
     pub quiet: bool,
     /// `--all-frames`: `shimmer.csv` with every frame, streamed.
     pub all_frames: bool,
+    /// `--engine-settings FILE`: an engine's `recommendation.<engine>.txt` in place of its
+    /// table and the `[shadow]` count, map size and distance.
+    pub engine_settings: Option<PathBuf>,
 }
 
 /// The `analyze` command.
 pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
-    let mut config = load_with_preset_flag(&args.config, args.preset.as_deref())?;
+    let mut config = match &args.engine_settings {
+        Some(file) => load_with_engine_settings(&args.config, args.preset.as_deref(), file)?,
+        None => load_with_preset_flag(&args.config, args.preset.as_deref())?,
+    };
     if let Some(p) = args.precision {
         // Through the validating constructor; a refusal names the flag that asked for it.
         config = config.with_precision(p).map_err(|e| match e {

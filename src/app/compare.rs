@@ -38,9 +38,17 @@ pub fn execute(args: &CompareRequest) -> Result<Outcome> {
         .out
         .clone()
         .unwrap_or_else(|| default_out_dir(&comparison.analyses[0].config));
-    let written = output::export_all(&dir, &comparison, &report::compare::exporters())?;
+    let scene = crate::config::Config::load_scene(&args.config)?;
+    let settings = crate::commands::terms::for_compare(&comparison, &scene)?;
+    let mut files = report::compare::exporters()
+        .iter()
+        .map(|e| Ok((e.file_name().to_string(), e.render(&comparison)?)))
+        .collect::<Result<Vec<_>>>()?;
+    files.extend(settings.iter().map(report::terms::file));
+    let written = output::write_files(&dir, &files)?;
     progress.finish();
     print!("{}", report::compare::summary_table(&comparison));
+    print!("{}", report::compare::settings_lines(&settings));
     println!("wrote {} files to {}", written.len(), dir.display());
     Ok(Outcome::Success)
 }

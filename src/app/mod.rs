@@ -51,6 +51,33 @@ pub fn load_with_preset_flag(path: &Path, preset: Option<&str>) -> Result<Config
     Config::load_with_preset(path, &choice)
 }
 
+/// Loads a config with an engine settings file (`recommendation.<engine>.txt`, as `sweep`
+/// and `compare` write it) in place of the engine's table and the `[shadow]` count, map size
+/// and shadow distance: the preset is the file's engine (`--preset`, when given, must name
+/// the same one).
+pub fn load_with_engine_settings(path: &Path, preset: Option<&str>, settings: &Path) -> Result<Config> {
+    let text = crate::config::read_bounded(settings, crate::config::MAX_TEXT_FILE_BYTES, "an engine settings file")?;
+    let label = settings.display().to_string();
+    let named = crate::presets::engine_of(&text, &label)?;
+    if let Some(p) = preset.map(|s| crate::presets::parse_flag("--preset", s)).transpose()? {
+        if p != named {
+            return Err(crate::error::Error::flag(
+                "--engine-settings",
+                &label,
+                format!("the file holds {named} settings, but --preset is {p}; drop --preset or give the {p} file"),
+            ));
+        }
+    }
+    let choice = crate::presets::PresetChoice {
+        name: Some(named),
+        lenient_overrides: true,
+        ..Default::default()
+    };
+    let mut config = Config::load_with_preset(path, &choice)?;
+    crate::presets::apply_terms(&mut config, &text, &label)?;
+    config.rechecked()
+}
+
 /// The same for `sweep --preset`: a `[shadow]` count or map size the engine does not offer
 /// falls back to the engine's default with a note (the sweep covers the engine's own axes
 /// anyway), so every preset sweeps every scene.

@@ -133,5 +133,11 @@ pub fn execute(args: &SweepRequest) -> Result<Outcome> {
         written.len(),
         &dir,
     )?;
+    // The engine settings close the table output (JSON output stays one document).
+    if args.format == Format::Table {
+        if let Some(s) = crate::commands::terms::for_sweep(&result)? {
+            print!("\n{}:\n{}", s.file_name(), report::terms::text(&s));
+        }
+    }
     Ok(Outcome::Success)
 }

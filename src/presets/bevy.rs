@@ -202,4 +202,43 @@ impl Engine for Bevy {
     fn light_depth_rule(_: &BevyKnobs) -> String {
         "slice's own z extent; casters kept (unclipped depth)".to_string()
     }
+
+    const TERMS: Terms = Terms {
+        comment: "//",
+        language: "Rust: the shadow map resource and the DirectionalLight's CascadeShadowConfig",
+        template: "\
+app.insert_resource(DirectionalLightShadowMap { size: {{size}} });
+let cascade_shadow_config = CascadeShadowConfigBuilder {
+    num_cascades: {{num_cascades}},
+    minimum_distance: {{minimum_distance}},
+    maximum_distance: {{maximum_distance}},
+    first_cascade_far_bound: {{first_cascade_far_bound}},
+    overlap_proportion: {{overlap_proportion}},
+}
+.build();",
+    };
+
+    fn terms(k: &BevyKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
+        Values::new()
+            .int("size", d.resolution)
+            .int("num_cascades", d.cascades)
+            .num("minimum_distance", k.minimum_distance)
+            .num("maximum_distance", d.max_distance.unwrap_or(150.0))
+            .num("first_cascade_far_bound", k.first_cascade_far_bound)
+            .num("overlap_proportion", k.overlap_proportion)
+    }
+
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(BevyKnobs, Dims)> {
+        let table = BevyTable {
+            minimum_distance: Some(f.num("minimum_distance", "bevy.minimum_distance")?),
+            first_cascade_far_bound: Some(f.num("first_cascade_far_bound", "bevy.first_cascade_far_bound")?),
+            overlap_proportion: Some(f.num("overlap_proportion", "bevy.overlap_proportion")?),
+        };
+        let dims = Dims {
+            cascades: f.count("num_cascades", "shadow.cascades")?,
+            resolution: f.size("size", "shadow.resolution")?,
+            max_distance: Some(f.num("maximum_distance", "shadow.max_distance")?),
+        };
+        Ok((Self::knobs(&table, cx)?, dims))
+    }
 }

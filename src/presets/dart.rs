@@ -91,4 +91,37 @@ impl Engine for Dart {
     fn light_depth_rule(_: &DartKnobs) -> String {
         "not shown in the reference: modelled as fitted to the scene".to_string()
     }
+
+    const TERMS: Terms = Terms {
+        comment: "#",
+        language: "TOML: csm-lab's [shadow] and [dart] tables (the reference takes these as arguments)",
+        template: "\
+[shadow]
+preset = \"dart\"
+cascades = {{cascades}}
+resolution = {{resolution}}
+max_distance = {{max_distance}}
+[dart]
+lambda = {{lambda}}",
+    };
+
+    fn terms(k: &DartKnobs, d: &Dims, _near: f64, far: f64) -> Values {
+        Values::new()
+            .int("cascades", d.cascades)
+            .int("resolution", d.resolution)
+            .num("max_distance", d.max_distance.unwrap_or(far))
+            .num("lambda", k.lambda)
+    }
+
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(DartKnobs, Dims)> {
+        let table = DartTable {
+            lambda: Some(f.num("lambda", "dart.lambda")?),
+        };
+        let dims = Dims {
+            cascades: f.count("cascades", "shadow.cascades")?,
+            resolution: f.size("resolution", "shadow.resolution")?,
+            max_distance: Some(f.num("max_distance", "shadow.max_distance")?),
+        };
+        Ok((Self::knobs(&table, cx)?, dims))
+    }
 }

@@ -145,4 +145,49 @@ impl Engine for Eevee {
     fn light_depth_rule(k: &EeveeKnobs) -> String {
         format!("lamp clip {} to {}", k.clip_start, k.clip_end)
     }
+
+    const TERMS: Terms = Terms {
+        comment: "#",
+        language: "TOML: csm-lab's [shadow] and [eevee] tables (csm-lab's world axes, not Blender's)",
+        template: "\
+[shadow]
+preset = \"eevee\"
+cascades = {{cascades}}
+resolution = {{resolution}}
+max_distance = {{max_distance}}
+[eevee]
+cascade_exponent = {{cascade_exponent}}
+fade = {{fade}}
+lamp_position = [{{lamp_position}}]
+clip_start = {{clip_start}}
+clip_end = {{clip_end}}",
+    };
+
+    fn terms(k: &EeveeKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
+        Values::new()
+            .int("cascades", d.cascades)
+            .int("resolution", d.resolution)
+            .num("max_distance", d.max_distance.unwrap_or(200.0))
+            .num("cascade_exponent", k.cascade_exponent)
+            .num("fade", k.fade)
+            .nums("lamp_position", &k.lamp_position.to_array())
+            .num("clip_start", k.clip_start)
+            .num("clip_end", k.clip_end)
+    }
+
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(EeveeKnobs, Dims)> {
+        let table = EeveeTable {
+            cascade_exponent: Some(f.num("cascade_exponent", "eevee.cascade_exponent")?),
+            fade: Some(f.num("fade", "eevee.fade")?),
+            lamp_position: Some(f.vec3("lamp_position", "eevee.lamp_position")?),
+            clip_start: Some(f.num("clip_start", "eevee.clip_start")?),
+            clip_end: Some(f.num("clip_end", "eevee.clip_end")?),
+        };
+        let dims = Dims {
+            cascades: f.count("cascades", "shadow.cascades")?,
+            resolution: f.size("resolution", "shadow.resolution")?,
+            max_distance: Some(f.num("max_distance", "shadow.max_distance")?),
+        };
+        Ok((Self::knobs(&table, cx)?, dims))
+    }
 }

@@ -12,7 +12,7 @@ use crate::fitting::Sphere;
 use crate::geometry::{Aabb, Lens, LightBasis};
 use crate::snapping::{SnapMode, SnapRule};
 
-use super::{Knobs, Layout};
+use super::{fit_split_knob, Dims, Fields, Knobs, Layout, Target, Terms, Values};
 
 /// Which cascade counts a preset takes.
 #[derive(Debug, Clone, PartialEq)]
@@ -208,6 +208,22 @@ pub trait Engine: Sync + 'static {
     }
     /// The light depth rule in words.
     fn light_depth_rule(k: &Self::Knobs) -> String;
+
+    /// How the engine writes a setting in its own configuration language
+    /// (`recommendation.<engine>.txt`; [`super::terms`]).
+    const TERMS: Terms;
+    /// The values of [`Engine::TERMS`]'s placeholders for knobs `k` at `d`; `near`/`far` are
+    /// the camera planes (for split rules that depend on them).
+    fn terms(k: &Self::Knobs, d: &Dims, near: f64, far: f64) -> Values;
+    /// Reads the placeholders back: the knobs, validated as [`Engine::knobs`] validates the
+    /// engine's table, and the count, map size and shadow distance.
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(Self::Knobs, Dims)>;
+    /// Sets the split knobs so that the cascades end as near csm-lab's `t.ends` as the engine
+    /// allows: exactly for free split fractions; by default a 1-D fit of the split knob or λ
+    /// ([`fit_split_knob`]); left alone when the engine has neither.
+    fn match_ends(k: &mut Self::Knobs, t: &Target<'_>) {
+        fit_split_knob::<Self>(k, t);
+    }
 }
 
 /// Finding an engine's knobs in [`Knobs`] (implemented by the registry).
@@ -244,6 +260,10 @@ pub trait DynEngine: Sync {
     fn split_rule(&self, k: &Knobs) -> String;
     fn snap_anchor(&self, k: &Knobs) -> &'static str;
     fn light_depth_rule(&self, k: &Knobs) -> String;
+    fn terms(&self) -> &'static Terms;
+    fn terms_values(&self, k: &Knobs, d: &Dims, near: f64, far: f64) -> Values;
+    fn read_terms(&self, f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(Knobs, Dims)>;
+    fn match_ends(&self, k: &mut Knobs, t: &Target<'_>);
 }
 
 fn own<E: KnobsOf>(k: &Knobs) -> &E::Knobs {
@@ -348,5 +368,24 @@ impl<E: KnobsOf> DynEngine for E {
 
     fn light_depth_rule(&self, k: &Knobs) -> String {
         E::light_depth_rule(own::<E>(k))
+    }
+
+    fn terms(&self) -> &'static Terms {
+        &E::TERMS
+    }
+
+    fn terms_values(&self, k: &Knobs, d: &Dims, near: f64, far: f64) -> Values {
+        E::terms(own::<E>(k), d, near, far)
+    }
+
+    fn read_terms(&self, f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(Knobs, Dims)> {
+        let (k, d) = E::from_terms(f, cx)?;
+        Ok((E::wrap(k), d))
+    }
+
+    fn match_ends(&self, k: &mut Knobs, t: &Target<'_>) {
+        if let Some(k) = E::get_mut(k) {
+            E::match_ends(k, t);
+        }
     }
 }

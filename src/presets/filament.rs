@@ -167,4 +167,60 @@ impl Engine for Filament {
     fn light_depth_rule(_: &FilamentKnobs) -> String {
         "from receiver and caster bounds".to_string()
     }
+
+    const TERMS: Terms = Terms {
+        comment: "//",
+        language: "C++, Filament: the sun's LightManager::ShadowOptions, stable mode",
+        template: "\
+LightManager::ShadowOptions options;
+options.mapSize = {{mapSize}};
+options.shadowCascades = {{shadowCascades}};
+options.cascadeSplitPositions[0] = {{cascadeSplitPositions[0]}};
+options.cascadeSplitPositions[1] = {{cascadeSplitPositions[1]}};
+options.cascadeSplitPositions[2] = {{cascadeSplitPositions[2]}};
+options.shadowFar = {{shadowFar}};
+options.stable = true;",
+    };
+
+    /// The positions the knobs give at this count (a helper's, computed as Filament's
+    /// `ShadowCascades` helpers do); the slots the count does not read keep valid values.
+    fn terms(k: &FilamentKnobs, d: &Dims, near: f64, far: f64) -> Values {
+        let distance = d.max_distance.unwrap_or(far);
+        let p = complete_fractions(&filament_positions(k, d.cascades, near, distance), k.split_positions);
+        Values::new()
+            .int("mapSize", d.resolution)
+            .int("shadowCascades", d.cascades)
+            .num("cascadeSplitPositions[0]", p[0])
+            .num("cascadeSplitPositions[1]", p[1])
+            .num("cascadeSplitPositions[2]", p[2])
+            .num("shadowFar", distance)
+    }
+
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(FilamentKnobs, Dims)> {
+        let key = "filament.split_positions";
+        let table = FilamentTable {
+            split_mode: None,
+            lambda: None,
+            split_positions: Some(vec![
+                f.num("cascadeSplitPositions[0]", key)?,
+                f.num("cascadeSplitPositions[1]", key)?,
+                f.num("cascadeSplitPositions[2]", key)?,
+            ]),
+        };
+        let dims = Dims {
+            cascades: f.count("shadowCascades", "shadow.cascades")?,
+            resolution: f.size("mapSize", "shadow.resolution")?,
+            max_distance: Some(f.num("shadowFar", "shadow.max_distance")?),
+        };
+        Ok((Self::knobs(&table, cx)?, dims))
+    }
+
+    /// Split positions of [near, shadowFar]: csm-lab's boundaries exactly.
+    fn match_ends(k: &mut FilamentKnobs, t: &Target<'_>) {
+        if t.cascades() < 2 {
+            return;
+        }
+        k.split_mode = FilamentSplit::Positions;
+        k.split_positions = complete_fractions(&t.fractions(t.near, t.distance), k.split_positions);
+    }
 }

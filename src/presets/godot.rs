@@ -107,4 +107,73 @@ impl Engine for Godot {
     fn light_depth_rule(k: &GodotKnobs) -> String {
         format!("sphere ± r, {} toward the light; casters pancaked", k.pancake_size)
     }
+
+    const TERMS: Terms = Terms {
+        comment: "#",
+        language: "GDScript, Godot 4: the directional shadow atlas and the DirectionalLight3D `light`",
+        template: "\
+RenderingServer.directional_shadow_atlas_set_size({{directional_shadow_size}}, true)
+light.directional_shadow_mode = DirectionalLight3D.{{directional_shadow_mode}}
+light.directional_shadow_split_1 = {{directional_shadow_split_1}}
+light.directional_shadow_split_2 = {{directional_shadow_split_2}}
+light.directional_shadow_split_3 = {{directional_shadow_split_3}}
+light.directional_shadow_blend_splits = {{directional_shadow_blend_splits}}
+light.directional_shadow_max_distance = {{directional_shadow_max_distance}}
+light.directional_shadow_pancake_size = {{directional_shadow_pancake_size}}",
+    };
+
+    /// The atlas holds one map per cascade's tile: the whole atlas for 1 cascade, a half
+    /// (full width) for 2, a quarter for 4; a tile's size is the larger side of its rect.
+    fn terms(k: &GodotKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
+        let (mode, per) = match d.cascades {
+            1 => ("SHADOW_ORTHOGONAL", 1),
+            2 => ("SHADOW_PARALLEL_2_SPLITS", 1),
+            _ => ("SHADOW_PARALLEL_4_SPLITS", 2),
+        };
+        Values::new()
+            .int("directional_shadow_size", d.resolution * per)
+            .word("directional_shadow_mode", mode)
+            .num("directional_shadow_split_1", k.splits[0])
+            .num("directional_shadow_split_2", k.splits[1])
+            .num("directional_shadow_split_3", k.splits[2])
+            .bool("directional_shadow_blend_splits", k.blend_splits)
+            .num("directional_shadow_max_distance", d.max_distance.unwrap_or(100.0))
+            .num("directional_shadow_pancake_size", k.pancake_size)
+    }
+
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(GodotKnobs, Dims)> {
+        let cascades = f.word(
+            "directional_shadow_mode",
+            "shadow.cascades",
+            &[
+                ("SHADOW_ORTHOGONAL", 1),
+                ("SHADOW_PARALLEL_2_SPLITS", 2),
+                ("SHADOW_PARALLEL_4_SPLITS", 4),
+            ],
+        )?;
+        let per = if cascades == 4 { 2 } else { 1 };
+        let key = "godot.splits";
+        let table = GodotTable {
+            splits: Some(vec![
+                f.num("directional_shadow_split_1", key)?,
+                f.num("directional_shadow_split_2", key)?,
+                f.num("directional_shadow_split_3", key)?,
+            ]),
+            blend_splits: Some(f.bool("directional_shadow_blend_splits", "godot.blend_splits")?),
+            pancake_size: Some(f.num("directional_shadow_pancake_size", "godot.pancake_size")?),
+        };
+        let dims = Dims {
+            cascades,
+            resolution: f.tile("directional_shadow_size", "shadow.resolution", per)?,
+            max_distance: Some(f.num("directional_shadow_max_distance", "shadow.max_distance")?),
+        };
+        Ok((Self::knobs(&table, cx)?, dims))
+    }
+
+    /// Fractions of [near, min(far, max distance)]: csm-lab's boundaries exactly.
+    fn match_ends(k: &mut GodotKnobs, t: &Target<'_>) {
+        let max_d = t.far.min(t.distance).max(t.near + 0.001);
+        let min_d = t.near.min(max_d);
+        k.splits = complete_fractions(&t.fractions(min_d, max_d), k.splits);
+    }
 }

@@ -116,4 +116,51 @@ impl Engine for LearnOpenGl {
     fn light_depth_rule(k: &LearnOpenGlKnobs) -> String {
         format!("mirrored: light-view z ± {} passed as distances", k.pad_z)
     }
+
+    const TERMS: Terms = Terms {
+        comment: "#",
+        language: "TOML: csm-lab's [shadow] and [learnopengl] tables (the tutorial code's constants)",
+        template: "\
+[shadow]
+preset = \"learnopengl\"
+resolution = {{resolution}}
+[learnopengl]
+planes = [{{planes}}]
+pad_xy = {{pad_xy}}
+pad_z = {{pad_z}}
+light_position = [{{light_position}}]",
+    };
+
+    fn terms(k: &LearnOpenGlKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
+        Values::new()
+            .int("resolution", d.resolution)
+            .nums("planes", &k.planes)
+            .num("pad_xy", k.pad_xy)
+            .num("pad_z", k.pad_z)
+            .nums("light_position", &k.light_position.to_array())
+    }
+
+    /// The count is the planes' (one cascade between each two).
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(LearnOpenGlKnobs, Dims)> {
+        let table = LearnOpenGlTable {
+            planes: Some(f.nums("planes", "learnopengl.planes")?),
+            pad_xy: Some(f.num("pad_xy", "learnopengl.pad_xy")?),
+            pad_z: Some(f.num("pad_z", "learnopengl.pad_z")?),
+            light_position: Some(f.vec3("light_position", "learnopengl.light_position")?),
+        };
+        let k = Self::knobs(&table, cx)?;
+        let dims = Dims {
+            cascades: k.planes.len() - 1,
+            resolution: f.size("resolution", "shadow.resolution")?,
+            max_distance: None,
+        };
+        Ok((k, dims))
+    }
+
+    /// The planes are free: csm-lab's boundaries exactly (at the planes' count).
+    fn match_ends(k: &mut LearnOpenGlKnobs, t: &Target<'_>) {
+        if t.ends.len() >= 2 && t.ends[0] > 0.0 {
+            k.planes = t.ends.to_vec();
+        }
+    }
 }

@@ -8,21 +8,27 @@
 //! Parts: `engine` (the trait and its object-safe form), `shared` (split, fit and validation
 //! helpers several engines use), `apply` (choosing a preset and applying it to a validated
 //! config), `rig` (the [`crate::cascades::Rig`] of a preset), `report` (what an analysis reports
-//! about a preset) and `sweep` (the axes a sweep may vary).
+//! about a preset), `sweep` (the axes a sweep may vary), `terms` (a setting written in the
+//! engine's own configuration language, and read back) and `closest` (the engine's split
+//! knobs matched to csm-lab's cascades).
 
 mod apply;
+mod closest;
 mod engine;
 mod report;
 mod rig;
 mod shared;
 mod sweep;
+mod terms;
 
 pub use apply::*;
+pub use closest::*;
 pub use engine::*;
 pub use report::*;
 pub use rig::*;
 pub use shared::*;
 pub use sweep::*;
+pub use terms::*;
 
 use serde::Serialize;
 

@@ -172,4 +172,74 @@ impl Engine for Threejs {
             k.light_near, k.light_far, k.light_margin
         )
     }
+
+    const TERMS: Terms = Terms {
+        comment: "//",
+        language: "JavaScript, three.js: the CSM addon's constructor options",
+        template: "\
+const csm = new CSM({
+  maxFar: {{maxFar}},
+  cascades: {{cascades}},
+  mode: '{{mode}}',
+  shadowMapSize: {{shadowMapSize}},
+  lightNear: {{lightNear}},
+  lightFar: {{lightFar}},
+  lightMargin: {{lightMargin}},
+  parent: scene,
+  camera: camera,
+  lightDirection: lightDirection,
+});",
+    };
+
+    fn terms(k: &ThreejsKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
+        let mode = match k.mode {
+            ThreejsMode::Uniform => "uniform",
+            ThreejsMode::Logarithmic => "logarithmic",
+            ThreejsMode::Practical => "practical",
+        };
+        Values::new()
+            .num("maxFar", d.max_distance.unwrap_or(1e5))
+            .int("cascades", d.cascades)
+            .word("mode", mode)
+            .int("shadowMapSize", d.resolution)
+            .num("lightNear", k.light_near)
+            .num("lightFar", k.light_far)
+            .num("lightMargin", k.light_margin)
+    }
+
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(ThreejsKnobs, Dims)> {
+        let mode = f.word(
+            "mode",
+            "threejs.mode",
+            &[
+                ("uniform", "uniform"),
+                ("logarithmic", "logarithmic"),
+                ("practical", "practical"),
+            ],
+        )?;
+        let table = ThreejsTable {
+            mode: Some(Spanned::new(0..0, mode.to_string())),
+            light_margin: Some(f.num("lightMargin", "threejs.light_margin")?),
+            light_near: Some(f.num("lightNear", "threejs.light_near")?),
+            light_far: Some(f.num("lightFar", "threejs.light_far")?),
+        };
+        let dims = Dims {
+            cascades: f.count("cascades", "shadow.cascades")?,
+            resolution: f.size("shadowMapSize", "shadow.resolution")?,
+            max_distance: Some(f.num("maxFar", "shadow.max_distance")?),
+        };
+        Ok((Self::knobs(&table, cx)?, dims))
+    }
+
+    /// The split mode is the only split knob: the one whose cascades end nearest csm-lab's
+    /// (least [`log_misfit`]; uniform, logarithmic, practical in that order on a tie).
+    fn match_ends(k: &mut ThreejsKnobs, t: &Target<'_>) {
+        let best = [ThreejsMode::Uniform, ThreejsMode::Logarithmic, ThreejsMode::Practical]
+            .into_iter()
+            .map(|mode| ThreejsKnobs { mode, ..k.clone() })
+            .min_by(|a, b| log_misfit::<Threejs>(a, t).total_cmp(&log_misfit::<Threejs>(b, t)));
+        if let Some(b) = best {
+            *k = b;
+        }
+    }
 }

@@ -66,4 +66,59 @@ impl Engine for Unity {
     fn light_depth_rule(_: &UnityKnobs) -> String {
         "engine side: modelled as fitted to the scene".to_string()
     }
+
+    const TERMS: Terms = Terms {
+        comment: "//",
+        language: "C#, Unity built-in render pipeline: QualitySettings and the Light `sun`",
+        template: "\
+QualitySettings.shadowProjection = ShadowProjection.StableFit;
+QualitySettings.shadowDistance = {{shadowDistance}}f;
+QualitySettings.shadowCascades = {{shadowCascades}};
+QualitySettings.shadowCascade2Split = {{shadowCascade2Split}}f;
+QualitySettings.shadowCascade4Split = new Vector3({{shadowCascade4Split.x}}f, {{shadowCascade4Split.y}}f, {{shadowCascade4Split.z}}f);
+sun.shadowCustomResolution = {{shadowCustomResolution}};",
+    };
+
+    /// The shadow map is an atlas: one tile for 1 cascade, 2 × 2 tiles from 2 on (csm-lab's
+    /// map size is a tile's).
+    fn terms(k: &UnityKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
+        let per = if d.cascades > 1 { 2 } else { 1 };
+        Values::new()
+            .num("shadowDistance", d.max_distance.unwrap_or(150.0))
+            .int("shadowCascades", d.cascades)
+            .num("shadowCascade2Split", k.cascade2_split)
+            .num("shadowCascade4Split.x", k.cascade4_split[0])
+            .num("shadowCascade4Split.y", k.cascade4_split[1])
+            .num("shadowCascade4Split.z", k.cascade4_split[2])
+            .int("shadowCustomResolution", d.resolution * per)
+    }
+
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(UnityKnobs, Dims)> {
+        let key = "unity.cascade4_split";
+        let table = UnityTable {
+            cascade2_split: Some(f.num("shadowCascade2Split", "unity.cascade2_split")?),
+            cascade4_split: Some(vec![
+                f.num("shadowCascade4Split.x", key)?,
+                f.num("shadowCascade4Split.y", key)?,
+                f.num("shadowCascade4Split.z", key)?,
+            ]),
+        };
+        let cascades = f.count("shadowCascades", "shadow.cascades")?;
+        let dims = Dims {
+            cascades,
+            resolution: f.tile("shadowCustomResolution", "shadow.resolution", if cascades > 1 { 2 } else { 1 })?,
+            max_distance: Some(f.num("shadowDistance", "shadow.max_distance")?),
+        };
+        Ok((Self::knobs(&table, cx)?, dims))
+    }
+
+    /// Fractions of the shadow distance: csm-lab's boundaries exactly.
+    fn match_ends(k: &mut UnityKnobs, t: &Target<'_>) {
+        let fr = t.fractions(0.0, t.far.min(t.distance));
+        match t.cascades() {
+            2 => k.cascade2_split = fr[0],
+            4 => k.cascade4_split = complete_fractions(&fr, k.cascade4_split),
+            _ => {}
+        }
+    }
 }

@@ -86,4 +86,33 @@ impl Engine for UnitySample {
     fn light_depth_rule(_: &UnitySampleKnobs) -> String {
         "slice's own z extent; casters in front are lost".to_string()
     }
+
+    const TERMS: Terms = Terms {
+        comment: "#",
+        language: "TOML: csm-lab's [shadow] and [unity-sample] tables (the sample's splits are fixed)",
+        template: "\
+[shadow]
+preset = \"unity-sample\"
+resolution = {{resolution}}
+[unity-sample]
+centre_on_slice = {{centre_on_slice}}",
+    };
+
+    fn terms(k: &UnitySampleKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
+        Values::new()
+            .int("resolution", d.resolution)
+            .bool("centre_on_slice", k.centre_on_slice)
+    }
+
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(UnitySampleKnobs, Dims)> {
+        let table = UnitySampleTable {
+            centre_on_slice: Some(f.bool("centre_on_slice", "unity-sample.centre_on_slice")?),
+        };
+        let dims = Dims {
+            cascades: 4,
+            resolution: f.size("resolution", "shadow.resolution")?,
+            max_distance: None,
+        };
+        Ok((Self::knobs(&table, cx)?, dims))
+    }
 }

@@ -83,4 +83,63 @@ impl Engine for UnityUrp {
     fn light_depth_rule(_: &UnityUrpKnobs) -> String {
         "engine side: modelled as fitted to the scene".to_string()
     }
+
+    const TERMS: Terms = Terms {
+        comment: "//",
+        language: "C#, Unity URP: the UniversalRenderPipelineAsset's shadow fields",
+        template: "\
+var urp = (UniversalRenderPipelineAsset)GraphicsSettings.currentRenderPipeline;
+urp.mainLightShadowmapResolution = {{mainLightShadowmapResolution}};
+urp.shadowDistance = {{shadowDistance}}f;
+urp.shadowCascadeCount = {{shadowCascadeCount}};
+urp.cascade2Split = {{cascade2Split}}f;
+urp.cascade3Split = new Vector2({{cascade3Split.x}}f, {{cascade3Split.y}}f);
+urp.cascade4Split = new Vector3({{cascade4Split.x}}f, {{cascade4Split.y}}f, {{cascade4Split.z}}f);",
+    };
+
+    /// The main light's atlas: one tile for 1 cascade, 2 × 2 tiles from 2 on.
+    fn terms(k: &UnityUrpKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
+        let per = if d.cascades > 1 { 2 } else { 1 };
+        Values::new()
+            .int("mainLightShadowmapResolution", d.resolution * per)
+            .num("shadowDistance", d.max_distance.unwrap_or(50.0))
+            .int("shadowCascadeCount", d.cascades)
+            .num("cascade2Split", k.cascade2_split)
+            .num("cascade3Split.x", k.cascade3_split[0])
+            .num("cascade3Split.y", k.cascade3_split[1])
+            .num("cascade4Split.x", k.cascade4_split[0])
+            .num("cascade4Split.y", k.cascade4_split[1])
+            .num("cascade4Split.z", k.cascade4_split[2])
+    }
+
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(UnityUrpKnobs, Dims)> {
+        let (k3, k4) = ("unity-urp.cascade3_split", "unity-urp.cascade4_split");
+        let table = UnityUrpTable {
+            cascade2_split: Some(f.num("cascade2Split", "unity-urp.cascade2_split")?),
+            cascade3_split: Some(vec![f.num("cascade3Split.x", k3)?, f.num("cascade3Split.y", k3)?]),
+            cascade4_split: Some(vec![
+                f.num("cascade4Split.x", k4)?,
+                f.num("cascade4Split.y", k4)?,
+                f.num("cascade4Split.z", k4)?,
+            ]),
+        };
+        let cascades = f.count("shadowCascadeCount", "shadow.cascades")?;
+        let dims = Dims {
+            cascades,
+            resolution: f.tile("mainLightShadowmapResolution", "shadow.resolution", if cascades > 1 { 2 } else { 1 })?,
+            max_distance: Some(f.num("shadowDistance", "shadow.max_distance")?),
+        };
+        Ok((Self::knobs(&table, cx)?, dims))
+    }
+
+    /// Fractions of the shadow distance: csm-lab's boundaries exactly.
+    fn match_ends(k: &mut UnityUrpKnobs, t: &Target<'_>) {
+        let fr = t.fractions(0.0, t.far.min(t.distance));
+        match t.cascades() {
+            2 => k.cascade2_split = fr[0],
+            3 => k.cascade3_split = complete_fractions(&fr, k.cascade3_split),
+            4 => k.cascade4_split = complete_fractions(&fr, k.cascade4_split),
+            _ => {}
+        }
+    }
 }

@@ -154,4 +154,44 @@ impl Engine for Unreal {
     fn light_depth_rule(_: &UnrealKnobs) -> String {
         "sphere ± max(r, 50 m); casters kept".to_string()
     }
+
+    const TERMS: Terms = Terms {
+        comment: ";",
+        language: "Unreal Engine: DefaultEngine.ini and the DirectionalLightComponent's properties, distances in centimetres",
+        template: "\
+[SystemSettings]
+r.Shadow.MaxCSMResolution={{r.Shadow.MaxCSMResolution}}
+Begin Object Class=/Script/Engine.DirectionalLightComponent Name=\"LightComponent0\"
+   DynamicShadowDistanceMovableLight={{DynamicShadowDistanceMovableLight}}
+   DynamicShadowCascades={{DynamicShadowCascades}}
+   CascadeDistributionExponent={{CascadeDistributionExponent}}
+   CascadeTransitionFraction={{CascadeTransitionFraction}}
+End Object",
+    };
+
+    /// Unreal's distances are in centimetres: csm-lab's metres × 100.
+    fn terms(k: &UnrealKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
+        Values::new()
+            .int("r.Shadow.MaxCSMResolution", d.resolution)
+            .num("DynamicShadowDistanceMovableLight", d.max_distance.unwrap_or(200.0) * 100.0)
+            .int("DynamicShadowCascades", d.cascades)
+            .num("CascadeDistributionExponent", k.cascade_distribution_exponent)
+            .num("CascadeTransitionFraction", k.transition_fraction)
+    }
+
+    fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(UnrealKnobs, Dims)> {
+        let table = UnrealTable {
+            cascade_distribution_exponent: Some(f.num(
+                "CascadeDistributionExponent",
+                "unreal.cascade_distribution_exponent",
+            )?),
+            transition_fraction: Some(f.num("CascadeTransitionFraction", "unreal.transition_fraction")?),
+        };
+        let dims = Dims {
+            cascades: f.count("DynamicShadowCascades", "shadow.cascades")?,
+            resolution: f.size("r.Shadow.MaxCSMResolution", "shadow.resolution")?,
+            max_distance: Some(f.num("DynamicShadowDistanceMovableLight", "shadow.max_distance")? / 100.0),
+        };
+        Ok((Self::knobs(&table, cx)?, dims))
+    }
 }

@@ -335,6 +335,24 @@ pub fn exporters() -> Vec<&'static dyn Exporter<Comparison>> {
     ]
 }
 
+/// The lines `compare` prints about the engine settings files: each engine's file and how
+/// near its cascades end to csm-lab's (the last comment line of the file).
+pub fn settings_lines(settings: &[crate::commands::terms::EngineSetting]) -> String {
+    if settings.is_empty() {
+        return String::new();
+    }
+    let mut out = String::from("each engine's setting closest to csm-lab's own cascades (its cascades' far ends):\n");
+    for s in settings {
+        let how = s
+            .comments
+            .iter()
+            .find_map(|c| c.strip_prefix("these settings' cascades end at "))
+            .unwrap_or("csm-lab's own pipeline needs no cascades");
+        let _ = writeln!(out, "  {}: {how}", s.file_name());
+    }
+    out
+}
+
 /// The terminal summary of a comparison.
 pub fn summary_table(c: &Comparison) -> String {
     let mut out = String::new();

@@ -922,6 +922,9 @@ pub fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::output:
     }
     files.push(("report.html".to_string(), report_html(r, &figures)));
     files.push(("report.md".to_string(), report_md(r, &figures)));
+    if let Some(s) = crate::commands::terms::for_sweep(r)? {
+        files.push(super::terms::file(&s));
+    }
     Ok(files)
 }
 

@@ -1,6 +1,7 @@
 //! `sweep --preset P` on every bundled config succeeds and writes every file, including the
 //! presets where nothing is acceptable (`unity-sample`, `learnopengl`): the recommendation
-//! then says why nothing qualified and which configuration comes closest.
+//! then says why nothing qualified and which configuration comes closest. Each writes and
+//! prints `recommendation.<engine>.txt`.
 
 use std::path::Path;
 use std::process::Command;
@@ -76,6 +77,15 @@ fn every_preset_sweeps_every_bundled_config_and_writes_every_file() {
                     assert!(stdout.contains("Closest:"), "{stdout}");
                 }
             }
+            // The engine's own settings: written, and printed last on stdout; the closest
+            // setting says that it is not recommended.
+            let text = std::fs::read_to_string(out.join(format!("recommendation.{p}.txt"))).unwrap();
+            assert!(stdout.ends_with(&text), "{scene} {p}: {stdout}");
+            assert_eq!(
+                text.contains("NOT RECOMMENDED"),
+                rec.get("recommended").is_none(),
+                "{scene} {p}: {text}"
+            );
             // A preset never prints a fit it does not have.
             let line = stdout.lines().find(|l| l.starts_with("recommended")).unwrap();
             assert!(
