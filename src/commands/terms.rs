@@ -139,11 +139,17 @@ pub fn for_compare(c: &Comparison, scene: &Config) -> Result<Vec<EngineSetting>>
         let n = nearest_count(&counts, scene.shadow.cascades);
         let mut own = scene.clone();
         own.shadow.preset = None;
-        let own = own.with_cascades(n)?;
-        let Some(rig) = crate::analysis::rig(&own) else {
+        // csm-lab's own cascades at the engine's count; when there are none (the scene is not
+        // visible, or the count does not fit the file's binary32 range), the setting compared.
+        let own_rig = own.with_cascades(n).map(|o| crate::analysis::rig(&o));
+        let Ok(Some(rig)) = own_rig else {
+            let why = match own_rig {
+                Err(e) => format!("csm-lab's own pipeline cannot run at {n} cascades here ({e})"),
+                _ => "csm-lab's own pipeline needs no cascades for this scene".to_string(),
+            };
             let comments = vec![
                 format!("from: {}", c.command()),
-                "csm-lab's own pipeline needs no cascades for this scene: this is the setting compared".to_string(),
+                format!("{why}: this is the setting compared"),
             ];
             out.extend(EngineSetting::of(config, comments));
             continue;

@@ -347,7 +347,7 @@ pub fn settings_lines(settings: &[crate::commands::terms::EngineSetting]) -> Str
             .comments
             .iter()
             .find_map(|c| c.strip_prefix("these settings' cascades end at "))
-            .unwrap_or("csm-lab's own pipeline needs no cascades");
+            .unwrap_or("the setting compared (csm-lab's own pipeline has no cascades to match here)");
         let _ = writeln!(out, "  {}: {how}", s.file_name());
     }
     out

@@ -114,7 +114,11 @@ overlap_area_fraction,snaps,coverage_worst_texels,min_slack_texels,receivers_out
     let md = std::fs::read_to_string(o.join("compare.md")).unwrap();
     assert!(md.contains("| preset |") && md.contains("### bevy") && md.contains("compare_density.svg"));
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("bevy") && stdout.contains("wrote 7 files"), "{stdout}");
+    // 7 files, and one engine settings file per preset compared (5).
+    assert!(stdout.contains("bevy") && stdout.contains("wrote 12 files"), "{stdout}");
+    for p in ["bevy", "godot", "unreal", "threejs", "dart"] {
+        assert!(o.join(format!("recommendation.{p}.txt")).is_file(), "{p}");
+    }
 }
 
 #[test]
