@@ -1,5 +1,6 @@
 //! Criterion benchmarks of the kernels: one cascade build, one configuration's analysis, the
-//! default sweep's compute (with and without the screen metrics) and the visibility pass.
+//! default sweep's compute (with and without the screen metrics), the visibility pass and an
+//! engine settings file's fit, writing and reading.
 //! Run with `cargo bench --bench kernels`; figures are in docs/speed.md and the README.
 
 use std::hint::black_box;
@@ -151,5 +152,57 @@ fn visibility_pass(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, cascade_build, one_analysis, default_sweep, visibility_pass);
+/// `recommendation.<engine>.txt`: matching Unreal's exponent to csm-lab's cascades (the 1-D
+/// fit), and writing a Bevy setting and reading it back.
+fn engine_terms(c: &mut Criterion) {
+    use csm_lab::commands::terms::EngineSetting;
+    use csm_lab::presets::{apply_terms, PresetChoice, PresetName, Target};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/default.toml");
+    let load = |p| {
+        let choice = PresetChoice {
+            name: Some(p),
+            lenient_overrides: true,
+            ..Default::default()
+        };
+        Config::load_with_preset(&path, &choice).expect("configs/default.toml loads")
+    };
+    let own = default_config();
+    let rig = csm_lab::analysis::rig(&own).expect("cascades");
+    let mut ends = vec![rig.slices[0].near];
+    ends.extend(rig.slices.iter().map(|s| s.far));
+    let unreal = load(PresetName::Unreal);
+    let knobs = unreal.shadow.preset.as_ref().expect("preset").knobs.clone();
+    let target = Target {
+        ends: &ends,
+        distance: 150.0,
+        near: own.camera.near,
+        far: own.camera.far,
+    };
+    c.bench_function("engine_terms/unreal_exponent_fit", |b| {
+        b.iter(|| {
+            let mut k = knobs.clone();
+            PresetName::Unreal.engine().match_ends(&mut k, black_box(&target));
+            k
+        })
+    });
+    let bevy = load(PresetName::Bevy);
+    let setting = EngineSetting::of(&bevy, Vec::new()).expect("preset");
+    c.bench_function("engine_terms/bevy_write_and_read_back", |b| {
+        b.iter(|| {
+            let text = csm_lab::report::terms::text(black_box(&setting));
+            let mut c = bevy.clone();
+            apply_terms(&mut c, &text, "recommendation.bevy.txt").expect("reads back");
+            c
+        })
+    });
+}
+
+criterion_group!(
+    benches,
+    cascade_build,
+    one_analysis,
+    default_sweep,
+    visibility_pass,
+    engine_terms
+);
 criterion_main!(benches);
