@@ -133,11 +133,17 @@ pub fn execute(args: &SweepRequest) -> Result<Outcome> {
         written.len(),
         &dir,
     )?;
-    // The engine settings close the table output (JSON output stays one document).
-    if args.format == Format::Table {
-        if let Some(s) = crate::commands::terms::for_sweep(&result)? {
+    print_engine_settings(args.format, &result)?;
+    Ok(Outcome::Success)
+}
+
+/// With a preset, `recommendation.<engine>.txt` closes the table output (`sweep`, `merge`);
+/// the JSON output stays one document.
+pub(crate) fn print_engine_settings(format: Format, result: &SweepResult) -> Result<()> {
+    if format == Format::Table {
+        if let Some(s) = crate::commands::terms::for_sweep(result)? {
             print!("\n{}:\n{}", s.file_name(), report::terms::text(&s));
         }
     }
-    Ok(Outcome::Success)
+    Ok(())
 }

@@ -373,3 +373,50 @@ fn compare_writes_every_engines_file_and_analyze_reads_each_back() {
         "{err}"
     );
 }
+
+#[test]
+fn merged_shards_write_and_print_the_unsharded_engine_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let grid = [
+        "--preset",
+        "godot",
+        "--resolution",
+        "1024,2048",
+        "--no-plots",
+        "--quiet",
+    ];
+    let run = |extra: &[&str]| {
+        let mut args = vec!["sweep", "configs/default.toml"];
+        args.extend_from_slice(&grid);
+        args.extend_from_slice(extra);
+        let o = csm_lab(&args);
+        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+        o
+    };
+    let whole = run(&["--out", &d("whole")]);
+    run(&["--shard", "1/2", "--out", &d("s1")]);
+    run(&["--shard", "2/2", "--out", &d("s2")]);
+    let merged = csm_lab(&[
+        "merge",
+        &d("s1"),
+        &d("s2"),
+        "--no-plots",
+        "--quiet",
+        "--out",
+        &d("merged"),
+    ]);
+    assert_eq!(
+        merged.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&merged.stderr)
+    );
+    let file = |sub: &str| std::fs::read_to_string(dir.path().join(sub).join("recommendation.godot.txt")).unwrap();
+    assert_eq!(file("whole"), file("merged"));
+    let text = file("whole");
+    assert!(text.starts_with("# csm-lab engine settings for godot"), "{text}");
+    for o in [&whole, &merged] {
+        assert!(String::from_utf8_lossy(&o.stdout).ends_with(&format!("recommendation.godot.txt:\n{text}")));
+    }
+}
