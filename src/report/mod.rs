@@ -13,3 +13,4 @@ pub mod junit;
 pub mod markdown;
 pub mod stress;
 pub mod sweep;
+pub mod truth;
