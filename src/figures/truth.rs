@@ -219,17 +219,39 @@ fn esc(s: &str) -> String {
 
 /// The titles strip: each panel's title centred over it, `extra` (markup) after.
 fn titles_svg<T>(layout: &Layout, panels: &[Panel<'_, T>], extra: &str) -> String {
+    let titles: Vec<&str> = panels.iter().map(|p| p.title).collect();
+    titles_strip(layout, &titles, extra)
+}
+
+fn titles_strip(layout: &Layout, titles: &[&str], extra: &str) -> String {
     let mut body = String::new();
-    for (i, p) in panels.iter().enumerate() {
+    for (i, t) in titles.iter().enumerate() {
         let cx = layout.panel_x(i as u32) as f64 + layout.pw as f64 / 2.0;
         let _ = write!(
             body,
             "<text x=\"{cx}\" y=\"21\" text-anchor=\"middle\" font-weight=\"bold\" font-size=\"15\">{}</text>",
-            esc(p.title)
+            esc(t)
         );
     }
     body.push_str(extra);
     strip(layout.width(), TITLE_H, &body)
+}
+
+/// The glyphs of the animation's frame counter, each centred in a cell [`CELL_W`] pixels wide.
+const GLYPHS: &str = "0123456789/";
+/// A counter glyph's cell: a 13-pixel DejaVu Sans digit advances 8.3 pixels.
+const CELL_W: u32 = 9;
+
+fn glyph_strip() -> String {
+    let mut body = String::new();
+    for (i, ch) in GLYPHS.chars().enumerate() {
+        let _ = write!(
+            body,
+            "<text x=\"{}\" y=\"21\" text-anchor=\"middle\" fill=\"#444\">{ch}</text>",
+            CELL_W as f64 * (i as f64 + 0.5)
+        );
+    }
+    strip(CELL_W * GLYPHS.len() as u32, TITLE_H, &body)
 }
 
 fn swatch(x: f64, y: f64, c: [u8; 3], label: &str) -> String {
@@ -723,6 +745,19 @@ pub fn write_animation(
         x += 34.0 + 7.0 * label.chars().count() as f64;
     }
     let legend = quantise(&strip(w, ANIM_LEGEND_H, &legend_body))?;
+    // The titles and the word "frame" are the same in every frame; the counter ("12/240") is put
+    // together from glyph cells rendered once (DejaVu Sans digits share one advance), so no
+    // frame lays out text.
+    let counter_len = format!("{0}/{0}", plan.path_frames).len() as u32;
+    let counter_x = w.saturating_sub(6 + CELL_W * counter_len);
+    let label = format!(
+        "<text x=\"{}\" y=\"21\" text-anchor=\"end\" fill=\"#444\">frame</text>",
+        counter_x.saturating_sub(4)
+    );
+    let titles: Vec<&str> = plan.titles.iter().map(|t| t.as_str()).collect();
+    let header = quantise(&titles_strip(&l, &titles, &label))?;
+    let glyphs = quantise(&glyph_strip())?;
+    let glyph_w = CELL_W * GLYPHS.len() as u32;
     let mut sink = Counting { inner: out, n: 0 };
     {
         let mut enc = png::Encoder::new(&mut sink, w, h);
@@ -752,20 +787,16 @@ pub fn write_animation(
                     .into());
                 }
             }
-            let panels: Vec<Panel<'_, ShadeImage>> = plan
-                .titles
-                .iter()
-                .zip(&images)
-                .map(|(t, image)| Panel { title: t, image })
-                .collect();
-            let counter = format!(
-                "<text x=\"{}\" y=\"21\" text-anchor=\"end\" fill=\"#444\">frame {} of {}</text>",
-                w.saturating_sub(6),
-                f + 1,
-                plan.path_frames
-            );
-            let header = quantise(&titles_svg(&l, &panels, &counter))?;
             index[..header.len()].copy_from_slice(&header);
+            for (k, ch) in format!("{}/{}", f + 1, plan.path_frames).chars().enumerate() {
+                let g = GLYPHS.find(ch).unwrap_or(0) as u32;
+                let x0 = counter_x + CELL_W * k as u32;
+                for y in 0..TITLE_H {
+                    for x in 0..CELL_W.min(w.saturating_sub(x0)) {
+                        index[(y * w + x0 + x) as usize] = glyphs[(y * glyph_w + g * CELL_W + x) as usize];
+                    }
+                }
+            }
             // The progress bar: how far along the path this frame is.
             let filled = ((f + 1) as u64 * w as u64 / plan.path_frames as u64) as u32;
             for y in TITLE_H..TITLE_H + PROGRESS_H {

@@ -172,6 +172,11 @@ fn shadow_png_of_the_default_scene_receivers() {
     assert!((apng.len() as u64) < plan.byte_bound() / 4, "{} bytes", apng.len());
     if let Ok(dir) = std::env::var("CSM_LAB_PICTURES_OUT") {
         std::fs::write(format!("{dir}/shadow.apng"), &apng).unwrap();
+        let mut last = Vec::new();
+        let mut enc = png::Encoder::new(&mut last, d.width, d.height);
+        enc.set_color(png::ColorType::Rgb);
+        enc.write_header().unwrap().write_image_data(&d.last).unwrap();
+        std::fs::write(format!("{dir}/shadow_apng_last.png"), &last).unwrap();
     }
 }
 
@@ -305,6 +310,7 @@ struct Decoded {
     /// (delay_num, delay_den) of each frame.
     delays: Vec<(u16, u16)>,
     first: Vec<u8>,
+    last: Vec<u8>,
 }
 
 fn decode_animation(bytes: &[u8]) -> Decoded {
@@ -323,6 +329,7 @@ fn decode_animation(bytes: &[u8]) -> Decoded {
             first = buf.clone();
         }
     }
+    let last = buf.clone();
     assert!(r.next_frame(&mut buf).is_err(), "no frame past num_frames");
     Decoded {
         width,
@@ -331,6 +338,7 @@ fn decode_animation(bytes: &[u8]) -> Decoded {
         plays: actl.num_plays,
         delays,
         first,
+        last,
     }
 }
 
@@ -658,4 +666,21 @@ fn the_report_section_embeds_the_pictures_with_captions() {
     assert!(imgs[2].1.contains("shadow.apng"));
     let captions = doc.descendants().filter(|n| n.has_tag_name("figcaption")).count();
     assert_eq!(captions, 3);
+}
+
+#[test]
+fn the_animation_streams_into_an_output_set() {
+    // Through the output layer's all-or-nothing set: the same bytes as written directly, the
+    // path started over by the file itself.
+    let plan = AnimationPlan::new(30, 8, 4, &["snapped", "unsnapped"], &ANIMATION_CAPS).unwrap();
+    let frames = || (0..30).map(|f| vec![synthetic(f), synthetic(f + 3)]);
+    let mut direct = Vec::new();
+    write_animation(&plan, frames(), &mut direct).unwrap();
+    let file = truth::ShadowAnimation { plan, frames };
+    let dir = tempfile::tempdir().unwrap();
+    let other = vec![("shadow.png".to_string(), vec![1u8, 2, 3])];
+    let written = csm_lab::output::write_files_streamed(dir.path(), &other, &[&file]).unwrap();
+    assert_eq!(written.len(), 2);
+    assert_eq!(std::fs::read(dir.path().join("shadow.apng")).unwrap(), direct);
+    assert_eq!(decode_animation(&direct).num_frames, 30);
 }
