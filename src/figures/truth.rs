@@ -13,6 +13,20 @@
 //!
 //! Inputs are plain values ([`ShadeImage`], [`FlipImage`], [`ShimmerPoint`]); nothing here
 //! computes a shadow. Panels carry their own titles ([`Panel::snapped`], [`Panel::unsnapped`]).
+//!
+//! # Wiring (where the ground-truth pass's data goes in)
+//!
+//! - `analyze`: add `("shadow.png", shadow_png(&panels)?)` and `("flicker.png",
+//!   flicker_png(&panels)?)` to the rendered files, and `ShadowAnimation { plan:
+//!   AnimationPlan::new(frames, cols, rows, &["snapped", "unsnapped"], &ANIMATION_CAPS)?,
+//!   frames: || /* the path's per-frame [snapped, unsnapped] ShadeImages */ }` to the streamed
+//!   files of `output::write_files_streamed` (it restarts the path itself and holds one frame).
+//!   Only every `plan.every`-th frame is drawn: a producer may skip the others cheaply by
+//!   implementing `Iterator::nth`.
+//! - `sweep`: push [`flicker_vs_shimmer_figure`] (stem, caption, SVG) onto the figures of
+//!   `report::sweep::render_figures`; its PNG and its place in `report.html` follow.
+//! - `report.html`: `report::truth::section(label, &TruthPictures { .. })` after the camera
+//!   view of the recommended configuration.
 
 use std::fmt::Write as _;
 use std::io::Write;
@@ -72,6 +86,11 @@ pub const GAP: u32 = 16;
 pub const TITLE_H: u32 = 30;
 /// The widest `shadow.png` and `flicker.png`, in pixels.
 pub const MAX_WIDTH: u32 = 1280;
+/// The narrowest `shadow.png` and `flicker.png` (room for the legend), in pixels; narrower
+/// panels are left-aligned on white.
+pub const MIN_WIDTH: u32 = 960;
+/// The narrowest animation (room for its legend), in pixels.
+pub const MIN_ANIMATION_WIDTH: u32 = 480;
 /// The tallest panel of `shadow.png` and `flicker.png`, in pixels.
 pub const MAX_PANEL_HEIGHT: u32 = 900;
 
@@ -122,6 +141,8 @@ pub struct Layout {
     pub panels: u32,
     pub pw: u32,
     pub ph: u32,
+    /// The picture is at least this wide (its legend's room), panels left-aligned.
+    pub min_width: u32,
 }
 
 impl Layout {
@@ -135,12 +156,18 @@ impl Layout {
             panels,
             pw,
             ph,
+            min_width: 0,
         }
     }
 
-    /// The width of all panels with their gaps.
+    /// The layout with the picture at least `w` pixels wide.
+    pub fn at_least(self, w: u32) -> Layout {
+        Layout { min_width: w, ..self }
+    }
+
+    /// The width of the picture: all panels with their gaps, or [`Self::min_width`].
     pub fn width(&self) -> u32 {
-        self.panels * self.pw + GAP * (self.panels - 1)
+        (self.panels * self.pw + GAP * (self.panels - 1)).max(self.min_width)
     }
 
     /// The left edge of panel `i`.
@@ -385,7 +412,7 @@ fn shade_legend<T>(layout: &Layout, panels: &[Panel<'_, T>], counts: &[ShadeCoun
 /// is enlarged by a whole factor (or shrunk) to at most [`MAX_WIDTH`] pixels in all.
 pub fn shadow_png(panels: &[Panel<'_, ShadeImage>]) -> Result<Vec<u8>> {
     let (cols, rows) = check_panels(panels, |i| (i.cols, i.rows, i.pixels.len()), "shadow.png")?;
-    let layout = Layout::new(cols, rows, panels.len() as u32, MAX_WIDTH, MAX_PANEL_HEIGHT);
+    let layout = Layout::new(cols, rows, panels.len() as u32, MAX_WIDTH, MAX_PANEL_HEIGHT).at_least(MIN_WIDTH);
     let counts: Vec<ShadeCounts> = panels.iter().map(|p| ShadeCounts::of(p.image)).collect();
     let mut c = Canvas::new(layout.width(), TITLE_H + layout.ph + SHADE_LEGEND_H);
     c.svg(0, &titles_svg(&layout, panels, ""))?;
@@ -530,7 +557,7 @@ pub fn flicker_png(panels: &[Panel<'_, FlipImage>]) -> Result<Vec<u8>> {
             .into());
         }
     }
-    let layout = Layout::new(cols, rows, panels.len() as u32, MAX_WIDTH, MAX_PANEL_HEIGHT);
+    let layout = Layout::new(cols, rows, panels.len() as u32, MAX_WIDTH, MAX_PANEL_HEIGHT).at_least(MIN_WIDTH);
     let stats: Vec<FlipStats> = panels.iter().map(|p| FlipStats::of(p.image)).collect();
     let vmax = flip_scale_max(stats.iter().map(|s| s.max).fold(0.0, f64::max));
     let mut c = Canvas::new(layout.width(), TITLE_H + layout.ph + FLICKER_LEGEND_H);
@@ -651,7 +678,8 @@ impl AnimationPlan {
             titles.len() as u32,
             caps.max_width,
             caps.max_height.saturating_sub(fixed).max(1),
-        );
+        )
+        .at_least(MIN_ANIMATION_WIDTH.min(caps.max_width));
         let mut plan = AnimationPlan {
             path_frames,
             every: 1,

@@ -181,6 +181,21 @@ fn shadow_png_of_the_default_scene_receivers() {
 }
 
 #[test]
+fn a_narrow_grid_leaves_room_for_the_legend() {
+    // 10 × 100: k = min(1280 / 10, 900 / 100) = 9, a 90-pixel panel left-aligned in 960.
+    let mut im = ShadeImage::empty(10, 100);
+    for (k, p) in im.pixels.iter_mut().enumerate() {
+        *p = STATES[k % 5];
+    }
+    let img = decode(&shadow_png(&[Panel::snapped(&im)]).unwrap());
+    assert_eq!(img.w, 960);
+    assert_eq!(img.h, TITLE_H + 900 + 96);
+    let (x, y) = centre(0, 90, 9, 3, 50);
+    assert_eq!(img.at(x, y), state_rgb(im.get(3, 50)));
+    assert_eq!(img.at(500, TITLE_H + 450), [255, 255, 255]);
+}
+
+#[test]
 fn shadow_png_refuses_mismatched_panels() {
     let e = shadow_png(&[
         Panel::snapped(&synthetic(0)),
