@@ -554,6 +554,11 @@ fn the_scatter_fit_equals_an_independent_computation() {
         assert!(!svg.contains(bad), "{bad} in the SVG");
     }
     assert_eq!(svg.as_bytes(), &fig.to_svg().unwrap()[..]);
+    // The house check of every command's figures: data marks drawn, no legend over one.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("flicker_vs_shimmer.svg");
+    std::fs::write(&path, &svg).unwrap();
+    assert_eq!(crate::figures::problems(&path), Vec::<String>::new());
     let png = fig.to_png().unwrap();
     assert_eq!(png, fig.to_png().unwrap());
     if let Ok(dir) = std::env::var("CSM_LAB_PICTURES_OUT") {
