@@ -15,7 +15,7 @@ use crate::output::short_number;
 use crate::presets::{Dims, Knobs, PresetName, Target};
 
 use super::compare::{preset_of, Comparison};
-use super::sweep::{no_recommendation, SweepResult};
+use super::sweep::{no_recommendation, Row, SweepResult};
 
 /// One engine's setting, ready to be written in its own terms.
 #[derive(Debug, Clone, PartialEq)]
@@ -65,7 +65,7 @@ pub fn for_sweep(r: &SweepResult) -> Result<Option<EngineSetting>> {
         Some(row) => {
             comments.push(format!(
                 "the recommended setting: {} ({} {}{})",
-                row.setting.label(),
+                setting_words(r, row),
                 r.objective.name(),
                 short_number(r.objective.value(&row.summary)),
                 if r.recommendation.as_ref().is_some_and(|x| !x.within_budget) {
@@ -84,7 +84,7 @@ pub fn for_sweep(r: &SweepResult) -> Result<Option<EngineSetting>> {
                     comments.push(format!(
                         "NOT RECOMMENDED: no configuration is acceptable (covers every slice and is stable when snapped); \
                          this is the closest one: {} ({} slice corners missed, snapped shimmer {} texel)",
-                        row.setting.label(),
+                        setting_words(r, row),
                         row.summary.coverage_violations,
                         short_number(row.summary.shimmer_snapped)
                     ));
@@ -105,6 +105,27 @@ pub fn for_sweep(r: &SweepResult) -> Result<Option<EngineSetting>> {
         None => r.config.clone(),
     };
     Ok(EngineSetting::of(&config, comments))
+}
+
+/// "4 x 2048^2, first_cascade_far_bound 7.5": a sweep row's setting in the knobs the swept
+/// pipeline has (never a λ or fit an engine lacks).
+fn setting_words(r: &SweepResult, row: &Row) -> String {
+    let axes = crate::presets::axes(&r.config);
+    let s = &row.setting;
+    let mut words = format!("{} x {}^2", s.cascades, s.resolution);
+    if let Some(key) = axes.lambda {
+        words.push_str(&format!(", {key} {}", s.lambda));
+    }
+    if axes.fit {
+        words.push_str(&format!(", {} fit", s.fit));
+    }
+    if let (Some(k), Some(v)) = (axes.knob, s.knob) {
+        words.push_str(&format!(", {} {v}", k.term));
+    }
+    if let Some(d) = s.distance {
+        words.push_str(&format!(", shadow distance {d}"));
+    }
+    words
 }
 
 /// The count of `list` nearest `n` (the larger on a tie).

@@ -10,6 +10,7 @@ pub mod bench;
 pub mod compare;
 pub mod screen;
 pub mod sweep;
+pub mod truth;
 
 use std::sync::Once;
 

@@ -14,3 +14,4 @@ pub mod markdown;
 pub mod stress;
 pub mod sweep;
 pub mod terms;
+pub mod truth;

@@ -29,7 +29,8 @@ const LAYERS: &[&str] = &[
 fn module_of(name: &str) -> &str {
     match name {
         "cascades" | "depth_range" | "fitting" | "geometry" | "mesh" | "metrics" | "motion" | "precision" | "rng"
-        | "scene" | "screen" | "seams" | "shimmer" | "snapping" | "splits" | "visibility" | "walk" => "core",
+        | "scene" | "screen" | "seams" | "shade" | "shimmer" | "snapping" | "splits" | "sun" | "visibility"
+        | "walk" => "core",
         "bench" | "check" | "compare" | "stress" | "sweep" => "commands",
         "plots" => "figures",
         "Error" | "Result" => "error",

@@ -136,7 +136,7 @@ fn covered(m: &Marks) -> Vec<(String, Shape)> {
 }
 
 /// Checks one figure; returns what is wrong with it.
-fn problems(path: &Path) -> Vec<String> {
+pub(crate) fn problems(path: &Path) -> Vec<String> {
     let svg = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let m = marks(&svg);
     let mut out = Vec::new();

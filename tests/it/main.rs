@@ -20,6 +20,7 @@ mod geometry;
 mod golden_outputs;
 mod memory;
 mod output_sets;
+mod pictures;
 mod precision;
 mod preset_sweeps;
 mod presets;
