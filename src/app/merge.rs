@@ -84,6 +84,7 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
         no_plots: args.no_plots,
         format: args.format,
         shard: None,
+        optimize_splits: false,
     };
     let (config, grid, command) = plan(&request).map_err(|e| {
         Error::from(ShardError::Set(format!(

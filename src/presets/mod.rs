@@ -12,6 +12,7 @@
 
 mod apply;
 mod engine;
+mod free_splits;
 mod report;
 mod rig;
 mod shared;
@@ -19,6 +20,7 @@ mod sweep;
 
 pub use apply::*;
 pub use engine::*;
+pub use free_splits::*;
 pub use report::*;
 pub use rig::*;
 pub use shared::*;

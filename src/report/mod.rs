@@ -11,5 +11,6 @@ pub mod defs;
 pub mod html;
 pub mod junit;
 pub mod markdown;
+pub mod optimize;
 pub mod stress;
 pub mod sweep;

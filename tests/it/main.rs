@@ -18,6 +18,7 @@ mod figures;
 mod geometry;
 mod golden_outputs;
 mod memory;
+mod optimize_splits;
 mod output_sets;
 mod precision;
 mod preset_sweeps;
