@@ -113,8 +113,10 @@ pub fn with_fractions(point: &Config, fractions: &[f64]) -> Result<Config> {
         Some(_) => {
             let mut c = point.clone();
             let n = c.shadow.cascades;
+            let max_distance = c.shadow.max_distance;
             let p = c.shadow.preset.as_mut().expect("checked");
-            crate::presets::set_fractions(&mut p.knobs, n, fractions)?;
+            crate::presets::set_fractions(&mut p.knobs, n, max_distance, fractions)?;
+            crate::presets::check_point(&c)?;
             c.rechecked()
         }
     }
@@ -185,9 +187,14 @@ fn nelder_mead(f: &(dyn Fn(&[f64]) -> f64 + Sync), y0: &[f64], step: f64, iters:
     }
 }
 
-/// The settings of the grid grouped by everything but λ, in grid order, with their row indices.
-fn groups(settings: &[Setting]) -> Vec<Vec<usize>> {
-    let key = |s: &Setting| Setting { lambda: 0.0, ..*s };
+/// The settings of the grid grouped by everything but λ (and a preset's split knob, which the
+/// free fractions replace: Bevy's first far bound), in grid order, with their row indices.
+fn groups(settings: &[Setting], preset: bool) -> Vec<Vec<usize>> {
+    let key = |s: &Setting| Setting {
+        lambda: 0.0,
+        knob: if preset { None } else { s.knob },
+        ..*s
+    };
     let mut out: Vec<(Setting, Vec<usize>)> = Vec::new();
     for (i, s) in settings.iter().enumerate() {
         match out.iter_mut().find(|(k, _)| *k == key(s)) {
@@ -210,7 +217,7 @@ pub fn optimize(
     threads: Option<usize>,
 ) -> Result<Optimized> {
     let preset = base.shadow.preset.is_some();
-    let groups = groups(&rows.iter().map(|r| r.setting).collect::<Vec<_>>());
+    let groups = groups(&rows.iter().map(|r| r.setting).collect::<Vec<_>>(), preset);
     let work = || {
         groups
             .par_iter()

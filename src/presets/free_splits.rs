@@ -3,9 +3,10 @@
 //!
 //! Free: Unity and URP (a split knob per count, fractions of the shadow distance), Godot
 //! (`split_1..3`, fractions of [near, max distance]) and Filament (`cascadeSplitPositions`,
-//! fractions of [near, shadowFar]). Not free: Unreal (one distribution exponent), Bevy (a
-//! geometric series from its first far bound: the preset reads no explicit bounds), three.js,
-//! EEVEE, Dart (a λ or exponent), LearnOpenGL and the Unity sample (fixed fractions in code).
+//! fractions of [near, shadowFar]) and Bevy (`CascadeShadowConfig::bounds`, the far bounds of
+//! every cascade but the last, as fractions of the maximum distance: `bevy.bounds`). Not
+//! free: Unreal (one distribution exponent), three.js, EEVEE, Dart (a λ or exponent),
+//! LearnOpenGL and the Unity sample (fixed fractions in code).
 
 use crate::config::Config;
 use crate::core::free_splits::{valid, FractionSpace};
@@ -15,11 +16,12 @@ use super::filament::FilamentSplit;
 use super::*;
 
 /// The engines whose split positions are free fractions.
-pub const FREE_SPLIT_ENGINES: [PresetName; 4] = [
+pub const FREE_SPLIT_ENGINES: [PresetName; 5] = [
     PresetName::Unity,
     PresetName::UnityUrp,
     PresetName::Godot,
     PresetName::Filament,
+    PresetName::Bevy,
 ];
 
 /// Whether the engine's splits are free fractions.
@@ -78,6 +80,11 @@ pub fn free_split_knob(knobs: &Knobs, cascades: usize) -> Option<FreeSplitKnob> 
             "ShadowOptions.cascadeSplitPositions",
             "fractions of [near, shadowFar]",
         ),
+        (PresetName::Bevy, _) => (
+            "bevy.bounds",
+            "CascadeShadowConfig.bounds",
+            "far bounds as fractions of the maximum distance",
+        ),
         _ => return None,
     };
     Some(FreeSplitKnob { key, term, of })
@@ -106,16 +113,32 @@ pub fn preset_fraction_space(config: &Config, knobs: &Knobs) -> Option<FractionS
             hi: dist,
             start: near,
         }),
+        PresetName::Bevy => {
+            let min = match knobs {
+                Knobs::Bevy(k) => k.minimum_distance,
+                _ => 0.0,
+            };
+            Some(FractionSpace {
+                lo: 0.0,
+                hi: dist,
+                start: min.max(near),
+            })
+        }
         _ => None,
     }
     .filter(|s| s.start > 0.0 && s.hi > s.start)
 }
 
-/// The value the knob holds for `fractions` of `cascades` cascades: the fractions themselves,
+/// The value the knob holds for `fractions` of `cascades` cascades: the fractions themselves
+/// (Bevy: times the maximum distance),
 /// or (Godot's three splits, Filament's three positions, with fewer cascades) the fractions
 /// followed by the configured entries after them when those still increase, else by entries
 /// spread evenly between the last fraction and 1 (the engine reads only the first ones).
-pub fn knob_values(knobs: &Knobs, cascades: usize, fractions: &[f64]) -> Vec<f64> {
+pub fn knob_values(knobs: &Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Vec<f64> {
+    if knobs.name() == PresetName::Bevy {
+        // Bevy's bounds are distances.
+        return fractions.iter().map(|p| p * max_distance).collect();
+    }
     let configured: Option<[f64; 3]> = match knobs {
         Knobs::Godot(k) => Some(k.splits),
         Knobs::Filament(k) => Some(k.split_positions),
@@ -140,7 +163,7 @@ pub fn knob_values(knobs: &Knobs, cascades: usize, fractions: &[f64]) -> Vec<f64
 /// Sets a preset's split fractions for its configured count (and, for Filament, its split mode
 /// to explicit positions). Refused when the engine's splits are not free or the fractions are
 /// not `cascades − 1` values strictly increasing inside (0, 1).
-pub fn set_fractions(knobs: &mut Knobs, cascades: usize, fractions: &[f64]) -> Result<()> {
+pub fn set_fractions(knobs: &mut Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Result<()> {
     let name = knobs.name();
     let Some(knob) = free_split_knob(knobs, cascades) else {
         return Err(crate::error::PresetError::NoKnob {
@@ -156,7 +179,7 @@ pub fn set_fractions(knobs: &mut Knobs, cascades: usize, fractions: &[f64]) -> R
         }
         .into());
     }
-    let v = knob_values(knobs, cascades, fractions);
+    let v = knob_values(knobs, cascades, max_distance, fractions);
     let arr = |i: usize| v[i];
     match knobs {
         Knobs::Unity(k) if cascades == 2 => k.cascade2_split = v[0],
@@ -169,6 +192,7 @@ pub fn set_fractions(knobs: &mut Knobs, cascades: usize, fractions: &[f64]) -> R
             k.split_mode = FilamentSplit::Positions;
             k.split_positions = [arr(0), arr(1), arr(2)];
         }
+        Knobs::Bevy(k) => k.bounds = Some(v),
         _ => unreachable!("free_split_knob is None for other engines"),
     }
     Ok(())
@@ -187,17 +211,25 @@ pub fn configured_fractions(config: &Config, knobs: &Knobs, cascades: usize) -> 
         Knobs::UnityUrp(k) => k.cascade4_split.to_vec(),
         Knobs::Godot(k) => k.splits[..used].to_vec(),
         Knobs::Filament(k) => filament::filament_positions(k, cascades, config.camera.near, config.shadow.max_distance),
+        Knobs::Bevy(k) => {
+            let max = config.shadow.max_distance;
+            let fars = match k.bounds.as_ref().filter(|b| b.len() + 1 == cascades) {
+                Some(b) => b.clone(),
+                None => bevy::bevy_far_bounds(cascades, k.first_cascade_far_bound, max)[..used].to_vec(),
+            };
+            fars.iter().map(|d| d / max).collect()
+        }
         _ => return None,
     })
 }
 
 /// The lines to paste into the config file (the engine's table) to use `fractions`.
-pub fn paste_lines(knobs: &Knobs, cascades: usize, fractions: &[f64]) -> Option<String> {
+pub fn paste_lines(knobs: &Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Option<String> {
     let knob = free_split_knob(knobs, cascades)?;
-    let values = knob_values(knobs, cascades, fractions);
+    let values = knob_values(knobs, cascades, max_distance, fractions);
     let list = |v: &[f64]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(", ");
     let (table, key) = knob.key.split_once('.').expect("engine.key");
-    let value = if values.len() == 1 {
+    let value = if values.len() == 1 && knobs.name() != PresetName::Bevy {
         values[0].to_string()
     } else {
         format!("[{}]", list(&values))
@@ -212,9 +244,9 @@ pub fn paste_lines(knobs: &Knobs, cascades: usize, fractions: &[f64]) -> Option<
 
 /// The setting in the engine's own terms (`QualitySettings.shadowCascade4Split = new
 /// Vector3(0.05f, 0.15f, 0.4f)`).
-pub fn engine_setting(knobs: &Knobs, cascades: usize, fractions: &[f64]) -> Option<String> {
+pub fn engine_setting(knobs: &Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Option<String> {
     let knob = free_split_knob(knobs, cascades)?;
-    let values = knob_values(knobs, cascades, fractions);
+    let values = knob_values(knobs, cascades, max_distance, fractions);
     let floats = |v: &[f64]| v.iter().map(|x| format!("{x}f")).collect::<Vec<_>>().join(", ");
     Some(match knobs.name() {
         PresetName::Unity | PresetName::UnityUrp => match values.len() {
@@ -233,6 +265,26 @@ pub fn engine_setting(knobs: &Knobs, cascades: usize, fractions: &[f64]) -> Opti
             "ShadowOptions.cascadeSplitPositions = {{ {} }}",
             fractions.iter().map(|x| format!("{x}f")).collect::<Vec<_>>().join(", ")
         ),
+        PresetName::Bevy => {
+            let (min, overlap) = match knobs {
+                Knobs::Bevy(k) => (k.minimum_distance, k.overlap_proportion),
+                _ => (0.0, 0.0),
+            };
+            format!(
+                "CascadeShadowConfig {{ bounds: vec![{}, {max_distance}], overlap_proportion: {overlap}, minimum_distance: {min} }}",
+                values.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(", ")
+            )
+        }
         _ => return None,
     })
+}
+
+/// Drops explicit far bounds (`bevy.bounds`) that do not hold `cascades − 1` values: a sweep
+/// point with another count uses the engine's own split series.
+pub fn drop_stale_bounds(knobs: &mut Knobs, cascades: usize) {
+    if let Knobs::Bevy(k) = knobs {
+        if k.bounds.as_ref().is_some_and(|b| b.len() + 1 != cascades) {
+            k.bounds = None;
+        }
+    }
 }

@@ -18,10 +18,18 @@ fn list(fr: &[f64]) -> String {
     fr.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(", ")
 }
 
+/// The group's shadow distance.
+fn max_distance(config: &Config, g: &OptimizedGroup) -> f64 {
+    g.setting.distance.unwrap_or(config.shadow.max_distance)
+}
+
 /// The lines to paste into the config to use the group's optimum.
 pub fn paste_text(config: &Config, g: &OptimizedGroup) -> String {
     match &config.shadow.preset {
-        Some(p) => crate::presets::paste_lines(&p.knobs, g.setting.cascades, &g.best.fractions).unwrap_or_default(),
+        Some(p) => {
+            crate::presets::paste_lines(&p.knobs, g.setting.cascades, max_distance(config, g), &g.best.fractions)
+                .unwrap_or_default()
+        }
         None => format!(
             "[shadow]\ncascades = {}\nresolution = {}\nsplits = [{}]",
             g.setting.cascades,
@@ -34,7 +42,10 @@ pub fn paste_text(config: &Config, g: &OptimizedGroup) -> String {
 /// The optimum in the engine's own terms (csm-lab: the `shadow.splits` key).
 pub fn setting_text(config: &Config, g: &OptimizedGroup) -> String {
     match &config.shadow.preset {
-        Some(p) => crate::presets::engine_setting(&p.knobs, g.setting.cascades, &g.best.fractions).unwrap_or_default(),
+        Some(p) => {
+            crate::presets::engine_setting(&p.knobs, g.setting.cascades, max_distance(config, g), &g.best.fractions)
+                .unwrap_or_default()
+        }
         None => format!("shadow.splits = [{}]", list(&g.best.fractions)),
     }
 }

@@ -176,6 +176,7 @@ fn pasted_fractions_reproduce_the_objective() {
         ("unity-urp", "2..4"),
         ("godot", "2,4"),
         ("filament", "2..4"),
+        ("bevy", "2..4"),
     ] {
         let text = with(&[
             ("scene.ground", "ground = 0.0"),
@@ -188,7 +189,9 @@ fn pasted_fractions_reproduce_the_objective() {
         assert!(!o.groups.is_empty());
         for g in &o.groups {
             let p = c.shadow.preset.as_ref().unwrap();
-            let paste = csm_lab::presets::paste_lines(&p.knobs, g.setting.cascades, &g.best.fractions).unwrap();
+            let paste =
+                csm_lab::presets::paste_lines(&p.knobs, g.setting.cascades, c.shadow.max_distance, &g.best.fractions)
+                    .unwrap();
             let mut t = with(&[
                 ("scene.ground", "ground = 0.0"),
                 ("screen.width", "width = 480"),
@@ -300,15 +303,7 @@ fn bad_input_is_refused_naming_the_flag_key_and_preset() {
     let c = cfg.to_str().unwrap();
     let out = dir.path().join("out");
     let o = out.to_str().unwrap();
-    for preset in [
-        "unreal",
-        "bevy",
-        "threejs",
-        "eevee",
-        "dart",
-        "learnopengl",
-        "unity-sample",
-    ] {
+    for preset in ["unreal", "threejs", "eevee", "dart", "learnopengl", "unity-sample"] {
         let (code, _, stderr) = cli(&[
             "sweep",
             c,
@@ -326,7 +321,7 @@ fn bad_input_is_refused_naming_the_flag_key_and_preset() {
                 && stderr.contains("not free"),
             "{stderr}"
         );
-        assert!(stderr.contains("unity, unity-urp, godot, filament"), "{stderr}");
+        assert!(stderr.contains("unity, unity-urp, godot, filament, bevy"), "{stderr}");
     }
     assert!(!out.exists(), "nothing is written on an error");
     let (code, _, stderr) = cli(&["sweep", c, "--out", o, "--optimize-splits", "--shard", "1/2", "--quiet"]);
@@ -349,6 +344,24 @@ fn bad_input_is_refused_naming_the_flag_key_and_preset() {
             .to_string();
         assert!(e.contains("shadow.splits") && e.contains(why), "{line}: {e}");
         assert!(e.contains(&line["splits = ".len()..]), "the value as written: {e}");
+    }
+    // bevy.bounds: one per cascade but the last, inside (minimum_distance, max_distance).
+    let bevy = |line: &str| {
+        Config::from_toml_str(
+            &format!("{}\n[bevy]\n{line}\n", with(&[("shadow.preset", "preset = \"bevy\"")])),
+            "t.toml",
+            None,
+        )
+    };
+    assert!(bevy("bounds = [5.0, 20.0, 60.0]").is_ok());
+    for (line, why) in [
+        ("bounds = [5.0, 20.0]", "3 far bounds"),
+        ("bounds = [5.0, 20.0, 200.0]", "maximum distance (150)"),
+        ("bounds = [0.05, 20.0, 60.0]", "bevy.minimum_distance (0.1)"),
+        ("bounds = [20.0, 5.0, 60.0]", "strictly increasing"),
+    ] {
+        let e = bevy(line).unwrap_err().to_string();
+        assert!(e.contains("bevy.bounds") && e.contains(why), "{line}: {e}");
     }
     // A type error points at the line.
     let e = Config::from_toml_str(&with(&[("shadow.splits", "splits = \"0.1\"")]), "t.toml", None)
