@@ -199,19 +199,29 @@ pub fn verdict(r: &SweepResult) -> Option<String> {
     let o = r.optimized.as_ref()?;
     let g = recommended_group(r, o)?;
     let (a, b) = g.values(r.objective);
+    // A preset has no λ: its start is named by its fractions.
+    let start = start_text(r, g);
     if b >= a {
         return Some(format!(
-            "Free split fractions do not beat λ = {} at this count and resolution.",
-            g.start_lambda
+            "Free split fractions do not beat {start} at this count and resolution."
         ));
     }
     let (_, p) = gain(r, g);
-    let lambda = match &r.config.shadow.preset {
-        Some(_) => format!("the best practical split (λ = {})", g.start_lambda),
-        None => format!("λ = {}", g.start_lambda),
-    };
+    // What the engine's configured split gives, relative to which the change is made.
+    let configured = g.configured.as_ref().map_or_else(String::new, |c| {
+        format!(
+            "; the configured split ({}) gives {}",
+            list(
+                &c.fractions
+                    .iter()
+                    .map(|&x| crate::core::free_splits::round_significant(x, 4))
+                    .collect::<Vec<_>>()
+            ),
+            n(r.objective.value(&c.summary))
+        )
+    });
     Some(format!(
-        "With free splits, split fractions ({}) ({}; {}) bring {} from {} to {} ({}) against {lambda}.",
+        "With free splits, split fractions ({}) ({}; {}) bring {} from {} to {} ({}) against {start}{configured}.",
         list(&g.best.fractions),
         of_text(&r.config, g),
         setting_text(&r.config, g),
@@ -220,6 +230,20 @@ pub fn verdict(r: &SweepResult) -> Option<String> {
         n(b),
         signed_percent(p)
     ))
+}
+
+/// The start in words: "λ = 0.4" for csm-lab's own pipeline; "the best practical split
+/// (0.05, 0.15, 0.4)" for a preset, which has no λ to set.
+fn start_text(r: &SweepResult, g: &OptimizedGroup) -> String {
+    match &r.config.shadow.preset {
+        Some(_) => format!("the best practical split ({})", short_list(&g.start.fractions)),
+        None => format!("λ = {}", g.start_lambda),
+    }
+}
+
+/// Fractions to 4 significant digits, for reading.
+fn short_list(fr: &[f64]) -> String {
+    fr.iter().map(|&x| n(x)).collect::<Vec<_>>().join(", ")
 }
 
 fn rows(r: &SweepResult, o: &Optimized) -> Vec<Vec<String>> {
@@ -231,7 +255,11 @@ fn rows(r: &SweepResult, o: &Optimized) -> Vec<Vec<String>> {
             vec![
                 g.setting.cascades.to_string(),
                 g.setting.resolution.to_string(),
-                n(g.start_lambda),
+                if r.config.shadow.preset.is_some() {
+                    short_list(&g.start.fractions)
+                } else {
+                    n(g.start_lambda)
+                },
                 n(a),
                 list(&g.best.fractions),
                 n(b),
@@ -240,6 +268,15 @@ fn rows(r: &SweepResult, o: &Optimized) -> Vec<Vec<String>> {
             ]
         })
         .collect()
+}
+
+/// The table's header; a preset's start column holds fractions ("start split"), not a λ.
+fn table_head(r: &SweepResult) -> [&'static str; 8] {
+    let mut h = TABLE_HEAD;
+    if r.config.shadow.preset.is_some() {
+        h[2] = "start split";
+    }
+    h
 }
 
 const TABLE_HEAD: [&str; 8] = [
@@ -265,15 +302,16 @@ pub fn stdout(r: &SweepResult) -> String {
         .map_or_else(String::new, |g| format!(", {}", of_text(&r.config, g)));
     let _ = writeln!(
         out,
-        "Free splits ({} against the best practical λ of each count and resolution{what}):",
+        "Free splits ({} against the best practical split of each count and resolution{what}):",
         r.objective.name()
     );
     let rows = rows(r, o);
-    let widths: Vec<usize> = (0..TABLE_HEAD.len())
+    let head = table_head(r);
+    let widths: Vec<usize> = (0..head.len())
         .map(|c| {
             rows.iter()
                 .map(|x| x[c].chars().count())
-                .chain([TABLE_HEAD[c].chars().count()])
+                .chain([head[c].chars().count()])
                 .max()
                 .unwrap_or(0)
         })
@@ -290,7 +328,7 @@ pub fn stdout(r: &SweepResult) -> String {
         }
         l.trim_end().to_string()
     };
-    let _ = writeln!(out, "{}", line(&TABLE_HEAD));
+    let _ = writeln!(out, "{}", line(&head));
     for row in &rows {
         let cells: Vec<&str> = row.iter().map(String::as_str).collect();
         let _ = writeln!(out, "{}", line(&cells));
@@ -319,7 +357,7 @@ pub fn html_section(r: &SweepResult) -> String {
         let _ = writeln!(h, "<p>{}</p>", html::escape(&v));
     }
     let rows = rows(r, o);
-    h.push_str(&html::table(&TABLE_HEAD, &rows, &[4], None));
+    h.push_str(&html::table(&table_head(r), &rows, &[4], None));
     if let Some(g) = recommended_group(r, o) {
         let _ = writeln!(
             h,
@@ -342,7 +380,7 @@ pub fn md_section(r: &SweepResult) -> String {
     if let Some(v) = verdict(r) {
         let _ = writeln!(m, "{v}\n");
     }
-    m.push_str(&super::markdown::table(&TABLE_HEAD, &rows(r, o), &[4]));
+    m.push_str(&super::markdown::table(&table_head(r), &rows(r, o), &[4]));
     let _ = writeln!(m, "\nFull table: [{FILE}]({FILE}).\n");
     m
 }
