@@ -144,6 +144,12 @@ pub struct SweepArgs {
     /// out/<config name>/shard-K-of-N/].
     #[arg(long, value_name = "K/N", allow_hyphen_values = true)]
     pub shard: Option<String>,
+    /// Also find the free split fractions that minimise the objective for each cascade count
+    /// and resolution, starting from the best λ (csm-lab's own pipeline and the unity,
+    /// unity-urp, godot and filament presets); writes optimized_splits.csv. Also
+    /// `[sweep] optimize_splits = true`.
+    #[arg(long)]
+    pub optimize_splits: bool,
 }
 
 #[derive(Debug, Args)]
@@ -270,6 +276,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             no_plots: args.no_plots,
             format: args.format,
             shard: args.shard,
+            optimize_splits: args.optimize_splits,
         }),
         Command::Check(args) => match (&args.init, &args.thresholds) {
             (Some(file), _) => check::init(&check::InitRequest {

@@ -84,6 +84,7 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
         no_plots: args.no_plots,
         format: args.format,
         shard: None,
+        optimize_splits: false,
     };
     let (config, grid, command) = plan(&request).map_err(|e| {
         Error::from(ShardError::Set(format!(
@@ -101,7 +102,19 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
         .into());
     }
     let rows = shard::join(shards, &grid)?;
-    let result = SweepResult::new(config, grid, rows, command);
+    let mut result = SweepResult::new(config, grid, rows, command);
+    // `[sweep] optimize_splits`, which each shard left out, runs on the joined rows, as the
+    // unsharded sweep runs it.
+    if result.config.sweep.as_ref().is_some_and(|s| s.optimize_splits) {
+        crate::commands::optimize::check_free(&result.config, "sweep.optimize_splits")?;
+        result.optimized = Some(crate::commands::optimize::optimize(
+            &result.config,
+            &result.grid,
+            &result.rows,
+            result.objective,
+            None,
+        )?);
+    }
     // sweep.csv is streamed when the set is written (execute).
     let files = report::sweep::render_all_but_csv(&result, !args.no_plots)?;
     Ok((result, files))

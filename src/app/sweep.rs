@@ -50,6 +50,32 @@ pub(crate) fn shard_hash(path: &Path, config: &Config, grid: &Grid, command: &st
 pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::RenderedFiles, super::progress::Progress)> {
     let shard = args.shard.as_deref().map(Shard::parse).transpose()?;
     let (config, grid, command) = plan(args)?;
+    // --optimize-splits (or `[sweep] optimize_splits`): refused before any work for a preset
+    // whose splits are not free; a shard holds part of each group, so it leaves it to the
+    // unsharded sweep.
+    let optimize_source = if args.optimize_splits {
+        Some("--optimize-splits")
+    } else if config.sweep.as_ref().is_some_and(|s| s.optimize_splits) {
+        Some("sweep.optimize_splits")
+    } else {
+        None
+    };
+    if let Some(source) = optimize_source {
+        crate::commands::optimize::check_free(&config, source)?;
+        if shard.is_some() {
+            if args.optimize_splits {
+                return Err(Error::flag(
+                    "--optimize-splits",
+                    "",
+                    "a shard holds only part of each cascade count's λ values; run --optimize-splits on the unsharded sweep",
+                ));
+            }
+            if !args.quiet {
+                eprintln!("note: sweep.optimize_splits left out: a shard holds only part of the grid");
+            }
+        }
+    }
+    let optimize = optimize_source.is_some() && shard.is_none();
     let mut settings = grid.settings();
     let mut indices = Vec::new();
     if let Some(s) = shard {
@@ -78,7 +104,26 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         Some(s) => format!("{command} --shard {}/{}", s.k, s.n),
         None => command,
     };
-    let result = SweepResult::new(config, grid, rows, shown_command);
+    let mut result = SweepResult::new(config, grid, rows, shown_command);
+    if optimize {
+        let start = std::time::Instant::now();
+        let found = crate::commands::optimize::optimize(
+            &result.config,
+            &result.grid,
+            &result.rows,
+            result.objective,
+            args.threads.map(usize::from),
+        )?;
+        if !args.quiet {
+            progress.note(&format!(
+                "optimised the splits of {} groups ({} analyses) in {:.1} ms",
+                found.groups.len(),
+                found.groups.iter().map(|g| g.evaluations).sum::<usize>(),
+                start.elapsed().as_secs_f64() * 1e3
+            ));
+        }
+        result.optimized = Some(found);
+    }
     // sweep.csv is streamed when the set is written (execute), not rendered here.
     let mut files = report::sweep::render_all_but_csv(&result, !args.no_plots)?;
     if let Some(m) = manifest {
@@ -114,6 +159,8 @@ pub struct SweepRequest {
     pub format: Format,
     /// `--shard K/N`, unparsed.
     pub shard: Option<String>,
+    /// `--optimize-splits`.
+    pub optimize_splits: bool,
 }
 
 /// The `sweep` command.

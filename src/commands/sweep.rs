@@ -1236,6 +1236,8 @@ pub struct SweepResult {
     pub command: String,
     /// The metric the recommendation minimises ([`default_objective`]).
     pub objective: SummaryMetric,
+    /// The free split fractions of `--optimize-splits`, when asked for.
+    pub optimized: Option<super::optimize::Optimized>,
 }
 
 impl SweepResult {
@@ -1257,6 +1259,7 @@ impl SweepResult {
             recommendation,
             budget_mib,
             command,
+            optimized: None,
         }
     }
 

@@ -205,6 +205,7 @@ pub struct Written {
     pub cascades: bool,
     pub resolution: bool,
     pub lambda: bool,
+    pub splits: bool,
     pub fit: bool,
     pub snap: bool,
     pub fit_depth_to_scene: bool,

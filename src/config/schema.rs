@@ -137,6 +137,8 @@ pub(crate) struct RawShadow {
     pub(crate) max_distance: Option<f64>,
     pub(crate) cascades: Option<i64>,
     pub(crate) lambda: Option<f64>,
+    /// Explicit split fractions of the split range (instead of λ).
+    pub(crate) splits: Option<Vec<f64>>,
     pub(crate) resolution: Option<i64>,
     pub(crate) fit: Option<Spanned<String>>,
     pub(crate) snap: Option<bool>,

@@ -35,6 +35,8 @@ pub struct SweepSpec {
     /// `objective`: the name of the summary metric the recommendation minimises (None: the
     /// default). The name is checked against the metric registry when the file is loaded.
     pub objective: Option<String>,
+    /// `optimize_splits = true`: also search free split fractions (`sweep --optimize-splits`).
+    pub optimize_splits: bool,
 }
 
 pub const DEFAULT_MAX_CONFIGS: usize = 100_000;
@@ -200,6 +202,7 @@ pub(crate) struct RawSweep {
     memory_budget_mib: Option<f64>,
     max_configs: Option<i64>,
     objective: Option<String>,
+    optimize_splits: Option<bool>,
 }
 
 pub fn fmt_list<T: std::fmt::Display>(v: &[T]) -> String {
@@ -431,5 +434,6 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
         memory_budget_mib,
         max_configs,
         objective: raw.objective,
+        optimize_splits: raw.optimize_splits.unwrap_or(false),
     })
 }

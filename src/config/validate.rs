@@ -147,6 +147,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         cascades: s.cascades.is_some(),
         resolution: s.resolution.is_some(),
         lambda: s.lambda.is_some(),
+        splits: s.splits.is_some(),
         fit: s.fit.is_some(),
         snap: s.snap.is_some(),
         fit_depth_to_scene: s.fit_depth_to_scene.is_some(),
@@ -166,6 +167,10 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     if !(0.0..=1.0).contains(&lambda) {
         return Err(v.invalid("shadow.lambda", lambda, "a number in [0, 1] (0 uniform, 1 logarithmic)"));
     }
+    let splits = match &s.splits {
+        None => None,
+        Some(x) => Some(split_fractions(v, x, cascades)?),
+    };
     let resolution = v.int_range("shadow.resolution", s.resolution.unwrap_or(2048), 16, 16384)? as u32;
     let precision = match s.precision.as_deref() {
         None => Precision::F64,
@@ -188,6 +193,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             max_distance,
             cascades,
             lambda,
+            splits,
             resolution,
             fit: match &s.fit {
                 Some(f) => v.one_of("shadow.fit", f, &[("sphere", Fit::Sphere), ("aabb", Fit::Aabb)])?,
@@ -569,4 +575,40 @@ fn scene(
         scene: Arc::new(crate::visibility::SceneGeometry::new(mesh)),
     };
     Ok((bounds, Some(geometry)))
+}
+
+/// `shadow.splits`: `cascades − 1` fractions of the split range, strictly increasing inside
+/// (0, 1). The error names the key, the value and what is allowed.
+fn split_fractions(v: &Validator<'_>, x: &[f64], cascades: usize) -> Result<crate::core::free_splits::SplitFractions> {
+    let allowed = format!(
+        "{} fraction{} of the split range (shadow.cascades − 1), strictly increasing and strictly between 0 and 1, \
+         e.g. {}",
+        cascades - 1,
+        if cascades == 2 { "" } else { "s" },
+        example_fractions(cascades)
+    );
+    let shown = format!("{x:?}");
+    if x.len() + 1 != cascades {
+        return Err(v.invalid(
+            "shadow.splits",
+            &shown,
+            &format!("{allowed} (got {} for {cascades} cascades)", x.len()),
+        ));
+    }
+    crate::core::free_splits::SplitFractions::new(x).ok_or_else(|| v.invalid("shadow.splits", &shown, &allowed))
+}
+
+/// An example of `cascades − 1` valid split fractions (the logarithmic split of 0.1 to 100).
+fn example_fractions(cascades: usize) -> String {
+    let space = crate::core::free_splits::FractionSpace {
+        lo: 0.0,
+        hi: 100.0,
+        start: 0.1,
+    };
+    let f: Vec<String> = space
+        .practical(cascades, 0.75)
+        .iter()
+        .map(|p| crate::core::free_splits::round_significant(*p, 2).to_string())
+        .collect();
+    format!("[{}]", f.join(", "))
 }

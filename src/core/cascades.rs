@@ -181,14 +181,18 @@ pub struct Rig {
 }
 
 impl Rig {
-    /// csm-lab's own rig for a set-up (practical splits over its depth range), or None when
+    /// csm-lab's own rig for a set-up (practical splits over its depth range, or the
+    /// explicit `shadow.splits` fractions of it), or None when
     /// the scene needs no cascades. (Engine presets build theirs with [`Rig::with_scheme`].)
     pub fn for_setup(setup: &Setup) -> Option<Rig> {
         let DepthRange::Range { z_lo, z_hi } = depth_range::for_setup(setup) else {
             return None;
         };
         let s = &setup.shadow;
-        let splits = splits::practical(z_lo, z_hi, s.cascades, s.lambda);
+        let splits = match &s.splits {
+            Some(f) if f.len() + 1 == s.cascades => splits::from_positions(z_lo, z_hi, f.as_slice()),
+            _ => splits::practical(z_lo, z_hi, s.cascades, s.lambda),
+        };
         Some(Rig::new(
             setup.camera.lens(),
             LightBasis::new(setup.light_direction),

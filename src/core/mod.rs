@@ -10,6 +10,7 @@
 pub mod cascades;
 pub mod depth_range;
 pub mod fitting;
+pub mod free_splits;
 pub mod geometry;
 pub mod mesh;
 pub mod metrics;

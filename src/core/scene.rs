@@ -64,6 +64,11 @@ pub struct ShadowParams {
     /// Move each window in whole texels on a world-anchored grid. Removes shimmer under camera
     /// translation (and rotation, for the sphere fit).
     pub snap: bool,
+    /// Explicit split fractions of the split range `[z_lo, z_hi]` (`shadow.splits`, one fewer
+    /// than the cascades) instead of the practical split: what `sweep --optimize-splits` finds.
+    /// None: the practical split with `lambda`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub splits: Option<crate::core::free_splits::SplitFractions>,
     /// Split only the depths where the scene bounds are visible; skips empty depth.
     pub fit_depth_to_scene: bool,
     /// Split only the view depths where geometry is visible (needs [`Setup::geometry`]).

@@ -48,6 +48,8 @@ impl Config {
             return Err(self.refuse("shadow.lambda", lambda, "a number in [0, 1] (0 uniform, 1 logarithmic)"));
         }
         self.shadow.lambda = lambda;
+        // A λ replaces explicit split fractions: the practical split applies again.
+        self.shadow.splits = None;
         Ok(())
     }
 
@@ -56,6 +58,10 @@ impl Config {
             return Err(self.refuse("shadow.cascades", n, "an integer in 1..=16"));
         }
         self.shadow.cascades = n;
+        // Explicit split fractions hold for one count only.
+        if self.shadow.splits.is_some_and(|f| f.len() + 1 != n) {
+            self.shadow.splits = None;
+        }
         Ok(())
     }
 
@@ -71,6 +77,27 @@ impl Config {
     pub fn with_lambda(&self, lambda: f64) -> Result<Config> {
         let mut c = self.clone();
         c.set_lambda(lambda)?;
+        c.checked()
+    }
+
+    /// The config with explicit split fractions (`shadow.splits`: one fewer than the cascades,
+    /// strictly increasing inside (0, 1)) instead of the practical split.
+    pub fn with_splits(&self, fractions: &[f64]) -> Result<Config> {
+        let mut c = self.clone();
+        let n = c.shadow.cascades;
+        match crate::core::free_splits::SplitFractions::new(fractions) {
+            Some(f) if f.len() + 1 == n => c.shadow.splits = Some(f),
+            _ => {
+                return Err(self.refuse(
+                    "shadow.splits",
+                    format!("{fractions:?}"),
+                    &format!(
+                        "{} fractions (shadow.cascades − 1), strictly increasing and strictly between 0 and 1",
+                        n - 1
+                    ),
+                ))
+            }
+        }
         c.checked()
     }
 

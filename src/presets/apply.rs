@@ -127,6 +127,7 @@ fn resolve(
     };
     for (written, key, what) in [
         (w.lambda, "shadow.lambda", "the preset's own split rule applies"),
+        (w.splits, "shadow.splits", "the preset's own split knobs apply"),
         (w.fit, "shadow.fit", "the preset's own fit applies"),
         (w.snap, "shadow.snap", "the preset's own snapping applies"),
         (

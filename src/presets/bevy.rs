@@ -22,6 +22,7 @@ pub struct BevyTable {
     minimum_distance: Option<f64>,
     first_cascade_far_bound: Option<f64>,
     overlap_proportion: Option<f64>,
+    bounds: Option<Vec<f64>>,
 }
 
 /// Bevy `CascadeShadowConfigBuilder` (maximum_distance is `shadow.max_distance`).
@@ -30,6 +31,11 @@ pub struct BevyKnobs {
     pub minimum_distance: f64,
     pub first_cascade_far_bound: f64,
     pub overlap_proportion: f64,
+    /// Explicit far bounds of every cascade but the last (Bevy's `CascadeShadowConfig::bounds`
+    /// without the maximum distance), strictly increasing; used when they hold cascades − 1
+    /// values, instead of the geometric series (`sweep --optimize-splits` finds them).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<Vec<f64>>,
 }
 
 /// Bevy far bounds: `first·(max/first)^(i/(N−1))`, or just `max` for one cascade.
@@ -92,6 +98,23 @@ impl Engine for Bevy {
                 false,
                 true,
             )?,
+            bounds: match &t.bounds {
+                None => None,
+                Some(b) => {
+                    let ok = !b.is_empty()
+                        && b.len() < 16
+                        && b.iter().all(|x| x.is_finite() && *x > 0.0 && *x <= crate::config::MAX_WORLD)
+                        && b.windows(2).all(|w| w[0] < w[1]);
+                    if !ok {
+                        return Err(v.invalid(
+                            "bevy.bounds",
+                            format!("{b:?}"),
+                            "the far bounds of every cascade but the last: 1 to 15 distances, strictly increasing, in (0, 1e9]",
+                        ));
+                    }
+                    Some(b.clone())
+                }
+            },
         })
     }
 
@@ -127,6 +150,28 @@ impl Engine for Bevy {
                 ),
             ));
         }
+        if let Some(b) = &k.bounds {
+            if b.len() + 1 != cascades {
+                return Err(v.invalid(
+                    "bevy.bounds",
+                    format!("{b:?}"),
+                    &format!(
+                        "{} far bounds (one per cascade but the last) for {cascades} cascades",
+                        cascades - 1
+                    ),
+                ));
+            }
+            if !(b[0] > k.minimum_distance && b[b.len() - 1] < max_distance) {
+                return Err(v.invalid(
+                    "bevy.bounds",
+                    format!("{b:?}"),
+                    &format!(
+                        "far bounds between bevy.minimum_distance ({}) and the maximum distance ({max_distance})",
+                        k.minimum_distance
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
 
@@ -153,7 +198,10 @@ impl Engine for Bevy {
     }
 
     fn layout(k: &BevyKnobs, cascades: usize, max_distance: f64, _near: f64, _far: f64) -> Layout {
-        let fars = bevy_far_bounds(cascades, k.first_cascade_far_bound, max_distance);
+        let fars = match k.bounds.as_ref().filter(|b| b.len() + 1 == cascades) {
+            Some(b) => b.iter().copied().chain([max_distance]).collect(),
+            None => bevy_far_bounds(cascades, k.first_cascade_far_bound, max_distance),
+        };
         let nears: Vec<f64> = (0..cascades)
             .map(|i| {
                 if i == 0 {
@@ -193,6 +241,15 @@ impl Engine for Bevy {
     }
 
     fn split_rule(k: &BevyKnobs) -> String {
+        if let Some(b) = &k.bounds {
+            return format!(
+                "far bounds {b:?} then max_distance ({} cascades; otherwise geometric from {}), cascade 0 from {}, overlap {}",
+                b.len() + 1,
+                k.first_cascade_far_bound,
+                k.minimum_distance,
+                k.overlap_proportion
+            );
+        }
         format!(
             "geometric from {} to max_distance, cascade 0 from {}, overlap {}",
             k.first_cascade_far_bound, k.minimum_distance, k.overlap_proportion
@@ -233,6 +290,9 @@ let cascade_shadow_config = CascadeShadowConfigBuilder {
             minimum_distance: Some(f.num("minimum_distance", "bevy.minimum_distance")?),
             first_cascade_far_bound: Some(f.num("first_cascade_far_bound", "bevy.first_cascade_far_bound")?),
             overlap_proportion: Some(f.num("overlap_proportion", "bevy.overlap_proportion")?),
+            // The builder's file holds the geometric series only; explicit `bounds` are not
+            // written (see `terms`).
+            bounds: None,
         };
         let dims = Dims {
             cascades: f.count("num_cascades", "shadow.cascades")?,

@@ -15,6 +15,7 @@
 mod apply;
 mod closest;
 mod engine;
+mod free_splits;
 mod report;
 mod rig;
 mod shared;
@@ -24,6 +25,7 @@ mod terms;
 pub use apply::*;
 pub use closest::*;
 pub use engine::*;
+pub use free_splits::*;
 pub use report::*;
 pub use rig::*;
 pub use shared::*;

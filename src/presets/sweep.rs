@@ -94,6 +94,10 @@ pub fn set_cascades(config: &mut Config, n: usize) -> Result<()> {
         return Err(PresetError::CascadeCount { count: n }.into());
     }
     config.shadow.cascades = n;
+    // Explicit far bounds (Bevy's) hold for one count only.
+    if let Some(p) = &mut config.shadow.preset {
+        drop_stale_bounds(&mut p.knobs, n);
+    }
     Ok(())
 }
 

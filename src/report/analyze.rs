@@ -278,13 +278,24 @@ pub fn summary_table(a: &Analysis) -> String {
             let _ = writeln!(out, "  note: {n}");
         }
     } else {
+        // Explicit split fractions replace λ.
+        let split = match &c.shadow.splits {
+            Some(f) => format!(
+                "split fractions [{}]",
+                f.as_slice()
+                    .iter()
+                    .map(|x| x.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            None => format!("lambda {}", c.shadow.lambda),
+        };
         let _ = writeln!(
             out,
-            "{}: {} x {}^2, lambda {}, fit {}, snap {}",
+            "{}: {} x {}^2, {split}, fit {}, snap {}",
             c.name,
             crate::output::count(c.shadow.cascades as u64, "cascade"),
             c.shadow.resolution,
-            c.shadow.lambda,
             c.shadow.fit,
             if c.shadow.snap { "on" } else { "off" }
         );

@@ -11,6 +11,7 @@ pub mod defs;
 pub mod html;
 pub mod junit;
 pub mod markdown;
+pub mod optimize;
 pub mod stress;
 pub mod sweep;
 pub mod terms;

@@ -120,6 +120,9 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
         "memory_budget_mib": r.budget_mib,
         "pareto_front": r.front.iter().map(|&i| row_json(&r.rows[i])).collect::<Vec<_>>(),
     });
+    if let Some(o) = &r.optimized {
+        v["optimized_splits"] = super::optimize::json(r, o);
+    }
     match (r.recommendation.as_ref(), r.recommended()) {
         (Some(rec), Some(row)) => {
             v["within_budget"] = rec.within_budget.into();
@@ -768,6 +771,7 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
         h.push_str("<h2>Why the main rivals lost</h2>\n");
         h.push_str(&html::list(&rivals, None));
     }
+    h.push_str(&super::optimize::html_section(r));
     let _ = writeln!(
         h,
         "<h2>Sweep</h2>\n<p>{} (closed-form aliasing, shimmer with and without snapping along the motion path, coverage).</p>",
@@ -858,6 +862,7 @@ pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> 
         }
         m.push('\n');
     }
+    m.push_str(&super::optimize::md_section(r));
     let _ = writeln!(m, "## Sweep\n\n{}.\n", grid_sentence(r));
     m.push_str("## Scene\n\n| | |\n|---|---|\n");
     for (k, v) in scene_facts(&r.config, &r.rows) {
@@ -919,6 +924,9 @@ pub fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::output:
     for ((stem, _, svg), png) in figures.iter().zip(pngs) {
         files.push((format!("{stem}.svg"), svg.clone()));
         files.push((format!("{stem}.png"), png));
+    }
+    if let Some(o) = &r.optimized {
+        files.push((super::optimize::FILE.to_string(), super::optimize::csv(r, o)?));
     }
     files.push(("report.html".to_string(), report_html(r, &figures)));
     files.push(("report.md".to_string(), report_md(r, &figures)));
@@ -1045,6 +1053,10 @@ pub fn stdout_table(r: &SweepResult) -> String {
     for l in alternative_lines(r) {
         let _ = writeln!(out, "  {l}");
     }
+    if let Some(v) = super::optimize::verdict(r) {
+        let _ = writeln!(out, "  {v}");
+    }
+    out.push_str(&super::optimize::stdout(r));
     out
 }
 

@@ -19,6 +19,7 @@ mod figures;
 mod geometry;
 mod golden_outputs;
 mod memory;
+mod optimize_splits;
 mod output_sets;
 mod pictures;
 mod precision;

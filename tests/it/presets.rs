@@ -330,6 +330,7 @@ fn non_default_splits_follow_each_rule() {
         minimum_distance: 0.5,
         first_cascade_far_bound: 5.0,
         overlap_proportion: 0.5,
+        bounds: None,
     });
     let l = layout(&k, 3, 1000.0, 0.1, 2000.0);
     let mid = 5.0 * 200f64.sqrt();
@@ -798,6 +799,7 @@ fn bevy_window_misses_the_slice_by_up_to_one_texel_in_the_constructed_case() {
         minimum_distance: 8.0,
         first_cascade_far_bound: 10.0,
         overlap_proportion: 0.2,
+        bounds: None,
     });
     let light = DVec3::new(0.3, -1.0, 0.2);
     let l = layout(&knobs, 1, far, 8.0, 1000.0);

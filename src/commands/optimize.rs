@@ -1,0 +1,449 @@
+//! `sweep --optimize-splits`: free split positions that minimise the sweep's objective.
+//!
+//! For each group of the grid that differs only in λ (cascade count × resolution × fit ×
+//! split range × distance), with more than one cascade, the search starts from the best
+//! practical-λ split of that group and moves the split fractions with Nelder-Mead (argmin) in
+//! the coordinates of [`FractionSpace::from_params`] (log-depth gaps, always strictly
+//! increasing). Every evaluation is the same analysis a sweep row gets (the point's config with
+//! explicit fractions, [`analyze`] with the summary only), so the numbers compare one to one;
+//! a configuration that is not acceptable for a recommendation (coverage misses, unstable when
+//! snapped) costs +∞. The best point is then printed to 4 significant digits (more when 4 lose
+//! more than 0.1 % or the rounded point is no longer better than the start): the reported
+//! objective is that of the printed fractions, so they paste back to the same value.
+//!
+//! Method, stopping rule and cost: `docs/optimize.md`.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use argmin::core::{CostFunction, Executor, State};
+use argmin::solver::neldermead::NelderMead;
+use rayon::prelude::*;
+
+use crate::analysis::{analyze, AnalysisOptions, Summary};
+use crate::config::Config;
+use crate::core::free_splits::{round_significant, valid, FractionSpace};
+use crate::error::{Error, GridError, Result};
+use crate::metric::SummaryMetric;
+
+use super::sweep::{acceptable, decimal_range, Grid, Row, Setting};
+
+/// Nelder-Mead iterations per run, per free split (two runs: the second restarts from the
+/// best point of the first with a smaller simplex).
+pub const ITERATIONS_PER_SPLIT: u64 = 60;
+/// The first simplex: each vertex moves one log-depth gap by this much (in log units).
+pub const FIRST_STEP: f64 = 0.5;
+/// A run stops when the objective's standard deviation over the simplex falls below this
+/// fraction of the start's objective.
+pub const RELATIVE_TOLERANCE: f64 = 1e-6;
+/// Printed fractions may cost at most this fraction of the optimum's objective.
+pub const ROUNDING_LOSS: f64 = 1e-3;
+
+/// Where the free-split search runs: csm-lab's own pipeline or a preset with free fractions.
+/// Refused (naming the flag or key and the preset) for a preset whose splits are not free.
+pub fn check_free(config: &Config, source: &str) -> Result<()> {
+    if let Some(p) = &config.shadow.preset {
+        if !crate::presets::has_free_splits(p.name) {
+            let free = crate::presets::FREE_SPLIT_ENGINES.map(|e| e.as_str()).join(", ");
+            return Err(GridError::Unusable {
+                context: format!("{source} with the {} preset", p.name),
+                message: format!(
+                    "its splits are not free fractions ({}); split fractions can be optimised for csm-lab's own \
+                     pipeline (no preset) and the presets {free}",
+                    crate::presets::split_rule(&p.knobs)
+                ),
+            }
+            .into());
+        }
+    }
+    Ok(())
+}
+
+/// A split the search evaluated: fractions and the analysis' summary.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Evaluated {
+    pub fractions: Vec<f64>,
+    pub summary: Summary,
+}
+
+/// The free-split optimum of one group of the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OptimizedGroup {
+    /// The group's setting with the λ of the best practical split.
+    pub setting: Setting,
+    /// What the fractions are fractions of.
+    pub space: FractionSpace,
+    /// The best practical-λ split (the start), and its λ.
+    pub start_lambda: f64,
+    pub start: Evaluated,
+    /// The sweep row of the start, for csm-lab's own pipeline (None for a preset, whose
+    /// practical splits are evaluated here).
+    pub start_row: Option<usize>,
+    /// The preset's configured split for this count (None for csm-lab's own pipeline).
+    pub configured: Option<Evaluated>,
+    /// The optimum, as printed.
+    pub best: Evaluated,
+    /// Analyses run for this group.
+    pub evaluations: usize,
+}
+
+impl OptimizedGroup {
+    /// The objective of the start and of the optimum.
+    pub fn values(&self, objective: SummaryMetric) -> (f64, f64) {
+        (
+            objective.value(&self.start.summary),
+            objective.value(&self.best.summary),
+        )
+    }
+}
+
+/// Everything `--optimize-splits` found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Optimized {
+    pub groups: Vec<OptimizedGroup>,
+    /// The λ values the start was chosen from, as a spec (`0:1:0.05`).
+    pub lambdas: String,
+    /// Groups left out, and why (one cascade: no split; no cascade needed; nothing acceptable).
+    pub notes: Vec<String>,
+}
+
+/// The point's config with split fractions: `shadow.splits`, or the preset's split knob.
+pub fn with_fractions(point: &Config, fractions: &[f64]) -> Result<Config> {
+    match &point.shadow.preset {
+        None => point.with_splits(fractions),
+        Some(_) => {
+            let mut c = point.clone();
+            let n = c.shadow.cascades;
+            let max_distance = c.shadow.max_distance;
+            let p = c.shadow.preset.as_mut().expect("checked");
+            crate::presets::set_fractions(&mut p.knobs, n, max_distance, fractions)?;
+            crate::presets::check_point(&c)?;
+            c.rechecked()
+        }
+    }
+}
+
+/// Analyses the point with `fractions` (the summary a sweep row would have); None when the
+/// fractions are not a valid split for it.
+pub fn evaluate(point: &Config, fractions: &[f64]) -> Option<Summary> {
+    if !valid(fractions) {
+        return None;
+    }
+    let c = with_fractions(point, fractions).ok()?;
+    Some(analyze(&c, &AnalysisOptions::summary_only()).summary)
+}
+
+/// The search's cost: the objective of an acceptable configuration, +∞ otherwise.
+fn cost(setting: &Setting, summary: &Summary, objective: SummaryMetric) -> f64 {
+    let row = Row {
+        setting: *setting,
+        summary: summary.clone(),
+    };
+    if acceptable(&row) {
+        objective.value(summary)
+    } else {
+        f64::INFINITY
+    }
+}
+
+struct Problem<'a> {
+    f: &'a (dyn Fn(&[f64]) -> f64 + Sync),
+}
+
+impl CostFunction for Problem<'_> {
+    type Param = Vec<f64>;
+    type Output = f64;
+
+    fn cost(&self, y: &Vec<f64>) -> std::result::Result<f64, argmin::core::Error> {
+        // Nelder-Mead orders vertices by cost: +∞ sorts last, as the largest finite value does.
+        Ok((self.f)(y).min(f64::MAX))
+    }
+}
+
+/// Nelder-Mead from `y0` with a first simplex of side `step`, at most `iters` iterations:
+/// the best point and its cost.
+fn nelder_mead(f: &(dyn Fn(&[f64]) -> f64 + Sync), y0: &[f64], step: f64, iters: u64, tol: f64) -> (Vec<f64>, f64) {
+    let mut simplex = vec![y0.to_vec()];
+    for i in 0..y0.len() {
+        let mut v = y0.to_vec();
+        v[i] += step;
+        simplex.push(v);
+    }
+    let solver = NelderMead::new(simplex)
+        .with_sd_tolerance(tol)
+        .expect("a positive tolerance");
+    let fallback = (y0.to_vec(), f(y0));
+    match Executor::new(Problem { f }, solver)
+        .configure(|s| s.max_iters(iters))
+        .run()
+    {
+        Ok(res) => {
+            let state = res.state();
+            match state.get_best_param() {
+                Some(p) if state.get_best_cost() <= fallback.1 => (p.clone(), state.get_best_cost()),
+                _ => fallback,
+            }
+        }
+        Err(_) => fallback,
+    }
+}
+
+/// The settings of the grid grouped by everything but λ (and a preset's split knob, which the
+/// free fractions replace: Bevy's first far bound), in grid order, with their row indices.
+fn groups(settings: &[Setting], preset: bool) -> Vec<Vec<usize>> {
+    let key = |s: &Setting| Setting {
+        lambda: 0.0,
+        knob: if preset { None } else { s.knob },
+        ..*s
+    };
+    let mut out: Vec<(Setting, Vec<usize>)> = Vec::new();
+    for (i, s) in settings.iter().enumerate() {
+        match out.iter_mut().find(|(k, _)| *k == key(s)) {
+            Some((_, v)) => v.push(i),
+            None => out.push((key(s), vec![i])),
+        }
+    }
+    out.into_iter().map(|(_, v)| v).collect()
+}
+
+/// The λ values a preset's practical starting splits are drawn from.
+pub const PRESET_LAMBDAS: &str = "0:1:0.05";
+
+/// Optimises the split fractions of every group of `rows` (the sweep's rows, in grid order).
+pub fn optimize(
+    base: &Config,
+    grid: &Grid,
+    rows: &[Row],
+    objective: SummaryMetric,
+    threads: Option<usize>,
+) -> Result<Optimized> {
+    let preset = base.shadow.preset.is_some();
+    let groups = groups(&rows.iter().map(|r| r.setting).collect::<Vec<_>>(), preset);
+    let work = || {
+        groups
+            .par_iter()
+            .map(|g| optimize_group(base, rows, g, objective))
+            .collect::<Result<Vec<_>>>()
+    };
+    let found = match threads {
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| {
+                Error::flag(
+                    "--threads",
+                    &n.to_string(),
+                    format!("cannot start the thread pool: {e}"),
+                )
+            })?
+            .install(work),
+        None => work(),
+    }?;
+    let mut out = Optimized {
+        groups: Vec::new(),
+        lambdas: if preset {
+            PRESET_LAMBDAS.to_string()
+        } else {
+            grid.lambda.spec.clone()
+        },
+        notes: Vec::new(),
+    };
+    let mut single = false;
+    for f in found {
+        match f {
+            GroupOutcome::Done(g) => out.groups.push(*g),
+            GroupOutcome::OneCascade => single = true,
+            GroupOutcome::Skipped(why) => out.notes.push(why),
+        }
+    }
+    if single {
+        out.notes.insert(
+            0,
+            "one cascade has no split to place: counts of 1 are left out".to_string(),
+        );
+    }
+    Ok(out)
+}
+
+enum GroupOutcome {
+    Done(Box<OptimizedGroup>),
+    OneCascade,
+    Skipped(String),
+}
+
+fn optimize_group(base: &Config, rows: &[Row], group: &[usize], objective: SummaryMetric) -> Result<GroupOutcome> {
+    let first = rows[group[0]].setting;
+    let m = first.cascades;
+    if m < 2 {
+        return Ok(GroupOutcome::OneCascade);
+    }
+    let label = |s: &Setting| {
+        let mut l = s.label();
+        // "4 x 2048^2, lambda 0.4, sphere" → without the λ, which the group varies.
+        if let Some(i) = l.find(", lambda ") {
+            let rest = &l[i + 9..];
+            let end = rest.find(',').map_or(l.len(), |j| i + 9 + j);
+            l.replace_range(i..end, "");
+        }
+        l
+    };
+    let point = first.apply(base)?;
+    let evaluations = AtomicUsize::new(0);
+    let eval = |fr: &[f64]| {
+        evaluations.fetch_add(1, Ordering::Relaxed);
+        evaluate(&point, fr)
+    };
+    // The start: the best practical-λ split (acceptable first, then the objective).
+    let rank = |s: &Summary| {
+        let ok = acceptable(&Row {
+            setting: first,
+            summary: s.clone(),
+        });
+        (!ok, objective.value(s))
+    };
+    let better = |a: &Summary, b: &Summary| {
+        let (x, y) = (rank(a), rank(b));
+        x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)).is_lt()
+    };
+    let (space, start_lambda, start, start_row, configured) = match &base.shadow.preset {
+        None => {
+            let needed: Vec<usize> = group
+                .iter()
+                .copied()
+                .filter(|&i| rows[i].summary.cascades_needed)
+                .collect();
+            let Some(&best) = needed.iter().reduce(|a, b| {
+                if better(&rows[*b].summary, &rows[*a].summary) {
+                    b
+                } else {
+                    a
+                }
+            }) else {
+                return Ok(GroupOutcome::Skipped(format!(
+                    "{}: the scene needs no cascades",
+                    label(&first)
+                )));
+            };
+            let s = &rows[best].summary;
+            let space = FractionSpace {
+                lo: s.z_lo,
+                hi: s.z_hi,
+                start: s.z_lo,
+            };
+            let lambda = rows[best].setting.lambda;
+            let fr = space.practical(m, lambda);
+            (
+                space,
+                lambda,
+                Evaluated {
+                    fractions: fr,
+                    summary: s.clone(),
+                },
+                Some(best),
+                None,
+            )
+        }
+        Some(p) => {
+            let Some(space) = crate::presets::preset_fraction_space(&point, &p.knobs) else {
+                return Ok(GroupOutcome::Skipped(format!(
+                    "{}: the shadow range is empty",
+                    label(&first)
+                )));
+            };
+            let mut best: Option<(f64, Evaluated)> = None;
+            for lambda in decimal_range(0.0, 1.0, 0.05).expect("valid") {
+                let fr = space.practical(m, lambda);
+                if let Some(s) = eval(&fr) {
+                    if best.as_ref().is_none_or(|(_, b)| better(&s, &b.summary)) {
+                        best = Some((
+                            lambda,
+                            Evaluated {
+                                fractions: fr,
+                                summary: s,
+                            },
+                        ));
+                    }
+                }
+            }
+            let configured = crate::presets::configured_fractions(&point, &p.knobs, m).and_then(|fr| {
+                eval(&fr).map(|s| Evaluated {
+                    fractions: fr,
+                    summary: s,
+                })
+            });
+            let Some((lambda, start)) = best else {
+                return Ok(GroupOutcome::Skipped(format!(
+                    "{}: no practical split is a valid split for the engine",
+                    label(&first)
+                )));
+            };
+            (space, lambda, start, None, configured)
+        }
+    };
+    if !start.summary.cascades_needed {
+        return Ok(GroupOutcome::Skipped(format!(
+            "{}: the scene needs no cascades",
+            label(&first)
+        )));
+    }
+    let setting = Setting {
+        lambda: start_lambda,
+        ..first
+    };
+    let start_cost = cost(&setting, &start.summary, objective);
+    if !start_cost.is_finite() {
+        return Ok(GroupOutcome::Skipped(format!(
+            "{}: no practical split is acceptable (coverage misses or shimmer when snapped), so there is no start",
+            label(&first)
+        )));
+    }
+    let Some(y0) = space.to_params(&start.fractions) else {
+        return Ok(GroupOutcome::Skipped(format!(
+            "{}: the start's first split lies before the first cascade",
+            label(&first)
+        )));
+    };
+    let f = |y: &[f64]| {
+        let fr = space.from_params(y);
+        match eval(&fr) {
+            Some(s) => cost(&setting, &s, objective),
+            None => f64::INFINITY,
+        }
+    };
+    let tol = RELATIVE_TOLERANCE * start_cost.abs().max(1e-300);
+    let iters = ITERATIONS_PER_SPLIT * (m as u64 - 1);
+    let (y1, c1) = nelder_mead(&f, &y0, FIRST_STEP, iters, tol);
+    let (y2, c2) = nelder_mead(&f, &y1, FIRST_STEP / 4.0, iters, tol);
+    let (y, c) = if c2 <= c1 { (y2, c2) } else { (y1, c1) };
+    // The optimum as printed: the fewest significant digits (from 4) that keep it within
+    // ROUNDING_LOSS of the unrounded optimum and strictly better than the start.
+    let mut best = start.clone();
+    if c < start_cost {
+        let exact = space.from_params(&y);
+        for digits in (4..=17).chain([0]) {
+            let fr: Vec<f64> = if digits == 0 {
+                exact.clone()
+            } else {
+                exact.iter().map(|&p| round_significant(p, digits)).collect()
+            };
+            let Some(s) = eval(&fr) else { continue };
+            let v = cost(&setting, &s, objective);
+            if v < start_cost && (v <= c + ROUNDING_LOSS * c.abs() || digits == 0) {
+                best = Evaluated {
+                    fractions: fr,
+                    summary: s,
+                };
+                break;
+            }
+        }
+    }
+    Ok(GroupOutcome::Done(Box::new(OptimizedGroup {
+        setting,
+        space,
+        start_lambda,
+        start,
+        start_row,
+        configured,
+        best,
+        evaluations: evaluations.load(Ordering::Relaxed),
+    })))
+}
