@@ -9,4 +9,5 @@ pub mod check;
 pub mod compare;
 pub mod shard;
 pub mod stress;
+pub mod sun_sweep;
 pub mod sweep;
