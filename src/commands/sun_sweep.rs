@@ -27,7 +27,7 @@ use crate::config::sweep_spec::{sun_azimuth_ok, sun_elevation_ok};
 use crate::config::Config;
 use crate::error::Result;
 use crate::metric::SummaryMetric;
-use crate::sun::SunAngles;
+use crate::core::sun::SunAngles;
 
 /// A sun position of a sweep, in degrees as written on the command line or in the file.
 #[derive(Debug, Clone, Copy, PartialEq)]
