@@ -25,9 +25,9 @@ use glam::DVec3;
 use super::sweep::{parse_number_spec, Axis, Row};
 use crate::config::sweep_spec::{sun_azimuth_ok, sun_elevation_ok};
 use crate::config::Config;
+use crate::core::sun::SunAngles;
 use crate::error::Result;
 use crate::metric::SummaryMetric;
-use crate::core::sun::SunAngles;
 
 /// A sun position of a sweep, in degrees as written on the command line or in the file.
 #[derive(Debug, Clone, Copy, PartialEq)]
