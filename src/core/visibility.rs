@@ -132,9 +132,25 @@ pub struct Hits {
     pub rows: u32,
     /// Row-major, `cols x rows`; None where the ray meets nothing between near and far.
     pub hits: Vec<Option<Hit>>,
+    /// The indices of the hits in increasing depth (ties in index order): the receivers of any
+    /// light come out of it sorted by depth, without a sort per light.
+    pub by_depth: Vec<u32>,
 }
 
 impl Hits {
+    fn new(view: View, cols: u32, rows: u32, hits: Vec<Option<Hit>>) -> Hits {
+        let mut by_depth: Vec<u32> = (0..hits.len() as u32).filter(|&k| hits[k as usize].is_some()).collect();
+        let depth = |k: u32| hits[k as usize].map_or(0.0, |h| h.depth);
+        by_depth.par_sort_by(|&a, &b| depth(a).total_cmp(&depth(b)).then(a.cmp(&b)));
+        Hits {
+            view,
+            cols,
+            rows,
+            hits,
+            by_depth,
+        }
+    }
+
     /// The pass of `view`: each hit shaded under `view.light` (the lit flag and the
     /// geometric factor), the receivers sorted by depth. The same, bit for bit, as casting
     /// the rays again for that light.
@@ -156,7 +172,27 @@ impl Hits {
                 })
             })
             .collect();
-        Visibility::of_samples(*view, self.cols, self.rows, samples)
+        // The lit samples in depth order; equal depths then by factor, so the list is the
+        // one sorting every (depth, factor) pair would give.
+        let mut receivers: Vec<(f64, f64)> = self
+            .by_depth
+            .iter()
+            .filter_map(|&k| samples[k as usize].filter(|s| s.lit).map(|s| (s.depth, s.factor)))
+            .collect();
+        let mut start = 0;
+        while start < receivers.len() {
+            let d = receivers[start].0;
+            let end = start
+                + receivers[start..]
+                    .iter()
+                    .take_while(|r| r.0.total_cmp(&d).is_eq())
+                    .count();
+            if end - start > 1 {
+                receivers[start..end].sort_unstable_by(|a, b| a.1.total_cmp(&b.1));
+            }
+            start = end;
+        }
+        Visibility::of_samples(*view, self.cols, self.rows, samples, receivers)
     }
 }
 
@@ -179,15 +215,14 @@ pub struct Visibility {
 }
 
 impl Visibility {
-    /// The pass from its samples: the sorted receivers, the self-shadowed count and the ranges.
-    fn of_samples(view: View, cols: u32, rows: u32, samples: Vec<Option<Sample>>) -> Visibility {
-        let mut receivers: Vec<(f64, f64)> = samples
-            .iter()
-            .flatten()
-            .filter(|s| s.lit)
-            .map(|s| (s.depth, s.factor))
-            .collect();
-        receivers.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    /// The pass from its samples and sorted receivers: the self-shadowed count and the ranges.
+    fn of_samples(
+        view: View,
+        cols: u32,
+        rows: u32,
+        samples: Vec<Option<Sample>>,
+        receivers: Vec<(f64, f64)>,
+    ) -> Visibility {
         let self_shadowed = samples.iter().flatten().filter(|s| !s.lit).count();
         let depth_range = samples.iter().flatten().fold(None, |r: Option<(f64, f64)>, s| {
             Some(r.map_or((s.depth, s.depth), |(lo, hi)| (lo.min(s.depth), hi.max(s.depth))))
@@ -367,12 +402,7 @@ impl SceneGeometry {
                 self.hit(tracer, view, u, v)
             })
             .collect();
-        Hits {
-            view: *view,
-            cols,
-            rows,
-            hits,
-        }
+        Hits::new(*view, cols, rows, hits)
     }
 
     fn hit(&self, tracer: &Tracer, view: &View, u: f64, v: f64) -> Option<Hit> {
@@ -464,6 +494,16 @@ mod tests {
             let fresh = SceneGeometry::new(mesh.clone()).visibility(&view);
             let reused = shared.visibility(&view);
             assert_eq!(*reused, *fresh, "{l}");
+            // The receivers are exactly the lit samples sorted by (depth, factor).
+            let mut sorted: Vec<(f64, f64)> = reused
+                .samples
+                .iter()
+                .flatten()
+                .filter(|s| s.lit)
+                .map(|s| (s.depth, s.factor))
+                .collect();
+            sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+            assert_eq!(reused.receivers, sorted, "{l}");
             // One set of rays for every light.
             assert_eq!(shared.hits_cache.lock().unwrap().len(), 1);
             // Independently: the ground's samples are lit exactly when the light comes down,
