@@ -249,10 +249,11 @@ pub fn bounds_only_note(config: &Config, fits: &[crate::config::Fit]) -> Option<
     }
     let sphere_only = fits.iter().all(|f| *f == crate::config::Fit::Sphere);
     Some(format!(
-        "bounds only: the depth range, the splits and the memory cannot depend on the light; with a sphere \
-         fit neither can the texel size, and so neither can the texel density and aliasing metrics \
-         (max/mean aliasing, under-sampling) - only the light-space depth range, AABB fits' windows, and the \
-         coverage and shimmer of non-sphere fits change with the sun{}",
+        "bounds only: the depth range, the splits and the memory cannot depend on the light, and with a sphere \
+         fit neither can the texel size, so neither can the texel density and aliasing metrics (max_aliasing, \
+         mean_aliasing, mean_log_aliasing, undersampled_fraction); what the sun changes is the light-space depth \
+         range, the windows of AABB fits (and with them their aliasing, coverage and shimmer) and the unsnapped \
+         shimmer of every fit{}",
         if sphere_only {
             ". Every setting here has a sphere fit: its aliasing is the same at every sun angle"
         } else {
