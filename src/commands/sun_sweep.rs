@@ -46,9 +46,20 @@ impl Sun {
         }
     }
 
-    /// The unit direction the light travels in under this sun.
+    /// The unit direction the light travels in under this sun ([`SunAngles::light_direction`]),
+    /// with the components the degrees make exactly zero set to zero: at azimuth 90° the
+    /// radians give cos = 6e-17, not 0, and a wall parallel to the light would then count as
+    /// lit at a grazing angle (aliasing at the clamp, 1e6) at 270° but not at 90°.
     pub fn light_direction(self) -> DVec3 {
-        self.angles().light_direction()
+        let mut d = self.angles().light_direction();
+        let whole = |x: f64, m: f64| x.rem_euclid(m) == 0.0;
+        if whole(self.azimuth_deg, 180.0) || self.elevation_deg == 90.0 {
+            d.x = 0.0; // sin a = 0 (north or south), or cos e = 0 (zenith)
+        }
+        if whole(self.azimuth_deg - 90.0, 180.0) || self.elevation_deg == 90.0 {
+            d.z = 0.0; // cos a = 0 (east or west), or cos e = 0 (zenith)
+        }
+        d
     }
 
     /// The sun of a config's light (azimuth brought into [0, 360)).
@@ -351,6 +362,39 @@ mod tests {
                 assert_eq!(sun_rows.rows_of(j).len(), 6);
             }
         }
+    }
+
+    #[test]
+    fn compass_points_give_exact_zeros_and_agree_with_the_core_convention() {
+        let (s30, c30) = (0.5f64, 3f64.sqrt() / 2.0);
+        for (a, want) in [
+            (0.0, DVec3::new(0.0, -s30, c30)),
+            (90.0, DVec3::new(-c30, -s30, 0.0)),
+            (180.0, DVec3::new(0.0, -s30, -c30)),
+            (270.0, DVec3::new(c30, -s30, 0.0)),
+        ] {
+            let d = Sun {
+                azimuth_deg: a,
+                elevation_deg: 30.0,
+            }
+            .light_direction();
+            assert!((d - want).length() < 1e-15, "{a}: {d}");
+            // The zero components are exactly zero.
+            assert_eq!(d.x == 0.0, want.x == 0.0, "{a}: {d}");
+            assert_eq!(d.z == 0.0, want.z == 0.0, "{a}: {d}");
+        }
+        let zenith = Sun {
+            azimuth_deg: 45.0,
+            elevation_deg: 90.0,
+        }
+        .light_direction();
+        assert_eq!(zenith, DVec3::new(0.0, -1.0, 0.0));
+        // Elsewhere it is the core's direction, bit for bit.
+        let s = Sun {
+            azimuth_deg: 135.0,
+            elevation_deg: 40.0,
+        };
+        assert_eq!(s.light_direction(), s.angles().light_direction());
     }
 
     #[test]
