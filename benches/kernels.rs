@@ -197,12 +197,73 @@ fn engine_terms(c: &mut Criterion) {
     });
 }
 
+/// One sun angle of a sun-angle sweep of the default scene (the configured setting): what each
+/// of the 408 angles of `--sun-azimuth 0:345:15 --sun-elevation 5:85:5` costs. Bounds only, it
+/// is one analysis; with screen metrics, the rays are cast once (shared by every angle) and each
+/// angle shades them (lit flag, geometric factor, receivers sorted) before its analysis.
+fn sun_angle(c: &mut Criterion) {
+    use csm_lab::sweep::Sun;
+    let config = default_config();
+    let mut bounds_only = config.clone();
+    bounds_only.geometry = None;
+    // More angles than the pass cache holds, so every iteration shades afresh.
+    let suns: Vec<Sun> = (0..24)
+        .map(|k| Sun {
+            azimuth_deg: 15.0 * k as f64,
+            elevation_deg: 5.0 + 3.0 * k as f64,
+        })
+        .collect();
+    let lit = |base: &Config, k: usize| {
+        base.with_light_direction(suns[k % suns.len()].light_direction())
+            .expect("a valid light")
+    };
+    let bounds_configs: Vec<Config> = (0..suns.len()).map(|k| lit(&bounds_only, k)).collect();
+    let screen_configs: Vec<Config> = (0..suns.len()).map(|k| lit(&config, k)).collect();
+    let _ = screen_configs[0].setup().visibility_hits();
+    let mut group = c.benchmark_group("sun");
+    let mut k = 0;
+    group.bench_function("one_angle_bounds_only", |b| {
+        b.iter(|| {
+            k += 1;
+            black_box(analyze(&bounds_configs[k % suns.len()], &AnalysisOptions::summary_only()).summary)
+        })
+    });
+    group.bench_function("one_angle_screen_metrics", |b| {
+        b.iter(|| {
+            k += 1;
+            black_box(analyze(&screen_configs[k % suns.len()], &AnalysisOptions::summary_only()).summary)
+        })
+    });
+    // The two parts of the visibility pass alone: casting the rays (once per sweep) and
+    // shading them under one light (once per angle).
+    let setup = config.setup();
+    let view = setup.view().expect("a view");
+    let scene = setup.geometry.as_ref().unwrap().scene.clone();
+    // The rays of a fresh scene, its BVH build included (as a sweep pays it once).
+    group.bench_function("visibility_cast_rays", |b| {
+        b.iter(|| black_box(SceneGeometry::new(scene.mesh.clone()).hits(&view).hits.len()))
+    });
+    let hits = scene.hits(&view);
+    group.bench_function("visibility_shade_one_light", |b| {
+        b.iter(|| {
+            k += 1;
+            let v = csm_lab::visibility::View {
+                light: suns[k % suns.len()].light_direction(),
+                ..view
+            };
+            black_box(hits.shade(&v).receivers.len())
+        })
+    });
+    group.finish();
+}
+
 criterion_group!(
     benches,
     cascade_build,
     one_analysis,
     default_sweep,
     visibility_pass,
-    engine_terms
+    engine_terms,
+    sun_angle
 );
 criterion_main!(benches);

@@ -124,6 +124,14 @@ pub struct SweepArgs {
     /// Shadow distances (shadow.max_distance), world units: a range (50:200:50) or a list (50,100,150).
     #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub distance: Option<String>,
+    /// Sun compass bearings, degrees from north toward east, in [0, 360): a range (0:345:15) or a
+    /// list (90,180). Every setting runs under every sun angle and is judged by its worst.
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
+    pub sun_azimuth: Option<String>,
+    /// Sun elevations, degrees above the horizon, in (0, 90]: a range (5:85:5) or a list (20,60).
+    /// The axis not given stays at the configured light's angle.
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
+    pub sun_elevation: Option<String>,
     /// Worker threads, 1..=256 [default: one per core]. Results are identical at any count.
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u16).range(1..=256))]
     pub threads: Option<u16>,
@@ -270,6 +278,8 @@ pub fn run(cli: Cli) -> Result<Outcome> {
                 split_range: args.split_range,
                 knob: args.knob,
                 distance: args.distance,
+                sun_azimuth: args.sun_azimuth,
+                sun_elevation: args.sun_elevation,
             },
             threads: args.threads,
             quiet: args.quiet,

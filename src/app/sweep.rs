@@ -87,6 +87,7 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
     let start = std::time::Instant::now();
     let rows = run_settings(&config, &settings, args.threads.map(usize::from), &|| progress.inc(1))?;
     let compute = start.elapsed();
+    let analysed = rows.len();
     progress.writing();
     let manifest = match shard {
         Some(s) => Some(shard::Manifest {
@@ -133,13 +134,20 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         ));
         files.push((
             shard::ROWS_FILE.to_string(),
-            shard::rows_text(indices.iter().copied().zip(&result.rows)).into_bytes(),
+            // Every row the shard ran (in a sun sweep, each (sun, setting) row).
+            shard::rows_text(
+                indices
+                    .iter()
+                    .copied()
+                    .zip(result.sun.as_ref().map_or(&result.rows, |s| &s.all)),
+            )
+            .into_bytes(),
         ));
     }
     if !args.quiet {
         progress.note(&format!(
             "analysed {} configurations in {:.1} ms",
-            result.rows.len(),
+            analysed,
             compute.as_secs_f64() * 1e3
         ));
     }

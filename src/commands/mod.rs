@@ -11,5 +11,6 @@ pub mod compare;
 pub mod optimize;
 pub mod shard;
 pub mod stress;
+pub mod sun_sweep;
 pub mod sweep;
 pub mod terms;

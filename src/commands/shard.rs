@@ -230,6 +230,9 @@ pub fn config_hash(
     if grid.knob.is_some() || grid.distance.is_some() {
         h.eat(format!("{:?}", (&grid.knob, &grid.distance)).as_bytes());
     }
+    if let Some(sun) = &grid.sun {
+        h.eat(format!("{sun:?}").as_bytes());
+    }
     h.eat(command.as_bytes());
     h.hex()
 }
@@ -242,7 +245,7 @@ const ROW_COLUMNS: &str =
     "index\tlambda\tcascades\tresolution\tfit\tsplit_range\tcascades_needed\tz_lo\tz_hi\tmax_aliasing\t\
 mean_aliasing\tmean_log_aliasing\tundersampled_fraction\tshimmer\tshimmer_snapped\tshimmer_unsnapped\tsize_jitter\t\
 coverage_violations\tmemory_bytes\tlookup_error_max\tlookup_error_rms\toverlap_area_fraction\tband_pixel_share\t\
-seam_crossings\tscreen\tknob\tdistance";
+seam_crossings\tscreen\tknob\tdistance\tsun_azimuth\tsun_elevation";
 
 fn hex(x: f64) -> String {
     format!("{:016x}", x.to_bits())
@@ -340,7 +343,12 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
                 out.push_str(&all.join(","));
             }
         }
-        for x in [st.knob, st.distance] {
+        for x in [
+            st.knob,
+            st.distance,
+            st.sun.map(|s| s.azimuth_deg),
+            st.sun.map(|s| s.elevation_deg),
+        ] {
             let _ = write!(out, "\t{}", x.map_or_else(|| "-".to_string(), hex));
         }
         out.push('\n');
@@ -369,8 +377,8 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
     for (i, line) in lines {
         let n = i + 1;
         let f: Vec<&str> = line.split('\t').collect();
-        if f.len() != 27 {
-            return Err(bad(n, format!("{} fields; a row has 27", f.len())));
+        if f.len() != 29 {
+            return Err(bad(n, format!("{} fields; a row has 29", f.len())));
         }
         let float = |s: &str| {
             u64::from_str_radix(s, 16)
@@ -439,6 +447,14 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                     split_range,
                     knob: optional_float(f[25])?,
                     distance: optional_float(f[26])?,
+                    sun: match (optional_float(f[27])?, optional_float(f[28])?) {
+                        (None, None) => None,
+                        (Some(azimuth_deg), Some(elevation_deg)) => Some(crate::sweep::Sun {
+                            azimuth_deg,
+                            elevation_deg,
+                        }),
+                        _ => return Err(bad(n, "a sun azimuth without an elevation, or the reverse".into())),
+                    },
                 },
                 summary: Summary {
                     cascades_needed,
@@ -595,6 +611,11 @@ pub fn join(shards: Vec<ShardInput>, grid: &Grid) -> Result<Vec<Row>> {
                     && p.split_range == row.setting.split_range
                     && p.knob.map(f64::to_bits) == row.setting.knob.map(f64::to_bits)
                     && p.distance.map(f64::to_bits) == row.setting.distance.map(f64::to_bits)
+                    && p.sun.map(|s| (s.azimuth_deg.to_bits(), s.elevation_deg.to_bits()))
+                        == row
+                            .setting
+                            .sun
+                            .map(|s| (s.azimuth_deg.to_bits(), s.elevation_deg.to_bits()))
             });
             if !same || slots[index].is_some() {
                 return Err(ShardError::dir(

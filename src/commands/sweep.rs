@@ -15,6 +15,8 @@ use crate::config::{Config, Fit, SplitRange};
 use crate::error::{Error, GridError, Result};
 use crate::metric::SummaryMetric;
 
+pub use crate::commands::sun_sweep::{parse_sun_azimuth_spec, parse_sun_elevation_spec, Sun, SunGrid, SunRows};
+
 pub use crate::config::sweep_spec::{
     cascades_ok, check_values, decimal_range, fmt_list, lambda_ok, resolution_ok, Axis, SweepSpec, DEFAULT_BUDGET_MIB,
     DEFAULT_MAX_CONFIGS,
@@ -33,6 +35,9 @@ pub struct Grid {
     pub knob: Option<Axis<f64>>,
     /// Shadow distances (`shadow.max_distance`), when swept.
     pub distance: Option<Axis<f64>>,
+    /// Sun angles (`--sun-azimuth`, `--sun-elevation`), when swept: every setting runs under
+    /// every sun position ([`crate::commands::sun_sweep`]).
+    pub sun: Option<SunGrid>,
     /// What was left out of the `[sweep]` table because the preset has no such axis or value.
     pub notes: Vec<String>,
 }
@@ -212,11 +217,15 @@ pub struct GridFlags {
     pub knob: Option<String>,
     /// `--distance`: shadow distances.
     pub distance: Option<String>,
+    /// `--sun-azimuth`: sun compass bearings, degrees.
+    pub sun_azimuth: Option<String>,
+    /// `--sun-elevation`: sun elevations, degrees.
+    pub sun_elevation: Option<String>,
 }
 
 impl GridFlags {
     /// The flags' names without dashes, in the order of [`GridFlags::values`].
-    pub const KEYS: [&'static str; 8] = [
+    pub const KEYS: [&'static str; 10] = [
         "preset",
         "lambda",
         "cascades",
@@ -225,9 +234,11 @@ impl GridFlags {
         "split_range",
         "knob",
         "distance",
+        "sun_azimuth",
+        "sun_elevation",
     ];
 
-    pub fn values(&self) -> [&Option<String>; 8] {
+    pub fn values(&self) -> [&Option<String>; 10] {
         [
             &self.preset,
             &self.lambda,
@@ -237,6 +248,8 @@ impl GridFlags {
             &self.split_range,
             &self.knob,
             &self.distance,
+            &self.sun_azimuth,
+            &self.sun_elevation,
         ]
     }
 
@@ -251,6 +264,8 @@ impl GridFlags {
             split_range: get("split_range"),
             knob: get("knob"),
             distance: get("distance"),
+            sun_azimuth: get("sun_azimuth"),
+            sun_elevation: get("sun_elevation"),
         }
     }
 
@@ -264,6 +279,12 @@ impl GridFlags {
             split_range: self.split_range.as_deref().map(parse_split_range_spec).transpose()?,
             knob: self.knob.as_deref().map(parse_knob_spec).transpose()?,
             distance: self.distance.as_deref().map(parse_distance_spec).transpose()?,
+            sun_azimuth: self.sun_azimuth.as_deref().map(parse_sun_azimuth_spec).transpose()?,
+            sun_elevation: self
+                .sun_elevation
+                .as_deref()
+                .map(parse_sun_elevation_spec)
+                .transpose()?,
         })
     }
 }
@@ -293,6 +314,8 @@ pub struct GridOverrides {
     pub split_range: Option<Axis<SplitRange>>,
     pub knob: Option<Axis<f64>>,
     pub distance: Option<Axis<f64>>,
+    pub sun_azimuth: Option<Axis<f64>>,
+    pub sun_elevation: Option<Axis<f64>>,
 }
 
 impl Grid {
@@ -512,6 +535,7 @@ impl Grid {
             split_range,
             knob,
             distance,
+            sun: SunGrid::resolve(config, overrides.sun_azimuth.clone(), overrides.sun_elevation.clone()),
             notes,
         };
         let n = grid.len();
@@ -524,6 +548,10 @@ impl Grid {
             if let Some(d) = &grid.distance {
                 extra.push_str(&format!(" × {} distances", d.values.len()));
                 more_flags.push_str(", --distance");
+            }
+            if let Some(sun) = &grid.sun {
+                extra.push_str(&format!(" × {} sun angles", sun.len()));
+                more_flags.push_str(", --sun-azimuth, --sun-elevation");
             }
             return Err(GridError::TooLarge {
                 configs: n,
@@ -579,15 +607,35 @@ impl Grid {
             * self.split_range.values.len()
             * self.knob.as_ref().map_or(1, |a| a.values.len())
             * self.distance.as_ref().map_or(1, |a| a.values.len())
+            * self.sun.as_ref().map_or(1, SunGrid::len)
+    }
+
+    /// Settings per sun angle: the grid without its sun axes.
+    pub fn settings_per_sun(&self) -> usize {
+        self.len() / self.sun.as_ref().map_or(1, SunGrid::len).max(1)
     }
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
-    /// All settings in row order: split range, then fit, then distance, then resolution, then
-    /// cascades, then the knob, then λ (innermost).
+    /// All settings in row order: the sun's elevation and azimuth when swept (outermost), then
+    /// split range, then fit, then distance, then resolution, then cascades, then the knob,
+    /// then λ (innermost).
     pub fn settings(&self) -> Vec<Setting> {
+        let base = self.settings_without_sun();
+        match &self.sun {
+            None => base,
+            Some(sun) => sun
+                .suns()
+                .into_iter()
+                .flat_map(|sun| base.iter().map(move |s| Setting { sun: Some(sun), ..*s }))
+                .collect(),
+        }
+    }
+
+    /// [`Grid::settings`] under the configured light only (every setting once).
+    pub fn settings_without_sun(&self) -> Vec<Setting> {
         let opt = |a: &Option<Axis<f64>>| {
             a.as_ref()
                 .map_or(vec![None], |a| a.values.iter().map(|&v| Some(v)).collect())
@@ -609,6 +657,7 @@ impl Grid {
                                         split_range,
                                         knob,
                                         distance,
+                                        sun: None,
                                     });
                                 }
                             }
@@ -644,6 +693,9 @@ impl Grid {
         if let Some(d) = &self.distance {
             out.push_str(&format!(" --distance {}", d.spec));
         }
+        if let Some(sun) = &self.sun {
+            out.push_str(&sun.cli_args());
+        }
         out
     }
 }
@@ -660,6 +712,8 @@ pub struct Setting {
     pub knob: Option<f64>,
     /// The shadow distance (None: not swept; the config's own).
     pub distance: Option<f64>,
+    /// The sun position (None: not swept; the configured light).
+    pub sun: Option<Sun>,
 }
 
 impl Setting {
@@ -668,6 +722,14 @@ impl Setting {
     /// engine's; [`Grid::resolve`] has already checked every point, so this does not fail for
     /// a resolved grid.
     pub fn apply(&self, base: &Config) -> Result<Config> {
+        let c = self.apply_but_sun(base)?;
+        match self.sun {
+            None => Ok(c),
+            Some(sun) => c.with_light_direction(sun.light_direction()),
+        }
+    }
+
+    fn apply_but_sun(&self, base: &Config) -> Result<Config> {
         if base.shadow.preset.is_none() {
             let c = base.with_sweep_point(self.lambda, self.cascades, self.resolution, self.fit, self.split_range)?;
             return match self.distance {
@@ -710,6 +772,9 @@ impl Setting {
         if let Some(d) = self.distance {
             extra.push_str(&format!(", distance {d}"));
         }
+        if let Some(sun) = self.sun {
+            extra.push_str(&format!(", sun {}", sun.label()));
+        }
         format!(
             "{} x {}^2, lambda {}, {}{range}{extra}",
             self.cascades, self.resolution, self.lambda, self.fit
@@ -751,7 +816,14 @@ pub fn run_settings(
     };
     for s in settings {
         // The visibility pass is made once, before the parallel part, and shared by every row.
-        let _ = point(s)?.setup().visibility();
+        // Under swept sun angles only its rays are: each angle shades them in the parallel
+        // part (the rows of one angle are consecutive and share that shading).
+        let setup = point(s)?.setup();
+        if s.sun.is_some() {
+            let _ = setup.visibility_hits();
+        } else {
+            let _ = setup.visibility();
+        }
     }
     let work = || {
         settings
@@ -1228,7 +1300,11 @@ fn axis_error(source_key: &str, spec: &str, e: Error) -> Error {
 pub struct SweepResult {
     pub config: Config,
     pub grid: Grid,
+    /// One row per setting. In a sun sweep, each setting's judged row (its worst sun angle,
+    /// [`crate::commands::sun_sweep::judge`]); every (sun, setting) row is in [`Self::sun`].
     pub rows: Vec<Row>,
+    /// Every row of a sun sweep and each setting's worst sun; None without sun axes.
+    pub sun: Option<SunRows>,
     pub front: Vec<usize>,
     pub recommendation: Option<Recommendation>,
     pub budget_mib: f64,
@@ -1241,6 +1317,8 @@ pub struct SweepResult {
 }
 
 impl SweepResult {
+    /// The result of a sweep's rows, in grid order ([`Grid::settings`]; with sun axes every
+    /// (sun, setting) row, judged here per setting by its worst sun angle).
     pub fn new(config: Config, grid: Grid, rows: Vec<Row>, command: String) -> Self {
         let budget_mib = config
             .sweep
@@ -1248,6 +1326,13 @@ impl SweepResult {
             .and_then(|s| s.memory_budget_mib)
             .unwrap_or(DEFAULT_BUDGET_MIB);
         let objective = default_objective(&config);
+        let (rows, sun) = match &grid.sun {
+            None => (rows, None),
+            Some(_) => {
+                let (judged, sun) = crate::commands::sun_sweep::judge(rows, objective);
+                (judged, Some(sun))
+            }
+        };
         let front = pareto_front_by(&rows, objective);
         let recommendation = recommend_by(&rows, budget_mib, objective);
         SweepResult {
@@ -1255,6 +1340,7 @@ impl SweepResult {
             config,
             grid,
             rows,
+            sun,
             front,
             recommendation,
             budget_mib,
@@ -1438,6 +1524,7 @@ mod tests {
                 split_range: SplitRange::Bounds,
                 knob: None,
                 distance: None,
+                sun: None,
             },
             summary: Summary {
                 cascades_needed,

@@ -28,6 +28,11 @@ pub struct SweepSpec {
     pub knob: Option<Axis<f64>>,
     /// `distance = [...]`: shadow distances (`shadow.max_distance`), world units.
     pub distance: Option<Axis<f64>>,
+    /// `sun_azimuth = [...]`: compass bearings of the sun, degrees in [0, 360) (a condition the
+    /// recommendation must hold under, not a setting; see `docs/geometry.md`, "Sun angles").
+    pub sun_azimuth: Option<Axis<f64>>,
+    /// `sun_elevation = [...]`: the sun's angle above the horizon, degrees in (0, 90].
+    pub sun_elevation: Option<Axis<f64>>,
     /// Memory budget for the recommendation, MiB (2^20 bytes).
     pub memory_budget_mib: Option<f64>,
     /// A larger grid is an error, not an out-of-memory.
@@ -199,6 +204,8 @@ pub(crate) struct RawSweep {
     split_range: Option<Vec<SplitRange>>,
     knob: Option<RawAxis>,
     distance: Option<RawAxis>,
+    sun_azimuth: Option<RawAxis>,
+    sun_elevation: Option<RawAxis>,
     memory_budget_mib: Option<f64>,
     max_configs: Option<i64>,
     objective: Option<String>,
@@ -281,6 +288,16 @@ fn raw_numbers(raw: RawAxis, allowed: &str, ok: impl Fn(f64) -> bool) -> std::re
     };
     check_values(&axis.values, allowed, ok)?;
     Ok(axis)
+}
+
+/// A sun azimuth a sweep may use, degrees: a compass bearing in [0, 360).
+pub fn sun_azimuth_ok(x: f64) -> bool {
+    (0.0..360.0).contains(&x)
+}
+
+/// A sun elevation a sweep may use, degrees: above the horizon, at most the zenith.
+pub fn sun_elevation_ok(x: f64) -> bool {
+    x > 0.0 && x <= 90.0
 }
 
 /// A shadow distance a sweep may use.
@@ -423,6 +440,28 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
         .map(|r| raw_numbers(r, "(0, 1e9]", distance_ok))
         .transpose()
         .map_err(|why| v.invalid("sweep.distance", "as written", &format!("distances in (0, 1e9]: {why}")))?;
+    let sun_azimuth = raw
+        .sun_azimuth
+        .map(|r| raw_numbers(r, "[0, 360)", sun_azimuth_ok))
+        .transpose()
+        .map_err(|why| {
+            v.invalid(
+                "sweep.sun_azimuth",
+                "as written",
+                &format!("compass bearings in degrees, [0, 360): {why}"),
+            )
+        })?;
+    let sun_elevation = raw
+        .sun_elevation
+        .map(|r| raw_numbers(r, "(0, 90]", sun_elevation_ok))
+        .transpose()
+        .map_err(|why| {
+            v.invalid(
+                "sweep.sun_elevation",
+                "as written",
+                &format!("degrees above the horizon, (0, 90]: {why}"),
+            )
+        })?;
     Ok(SweepSpec {
         lambda,
         cascades,
@@ -431,6 +470,8 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
         split_range,
         knob,
         distance,
+        sun_azimuth,
+        sun_elevation,
         memory_budget_mib,
         max_configs,
         objective: raw.objective,

@@ -14,7 +14,7 @@ use crate::fitting::Fit;
 use crate::geometry::{Aabb, CameraPose, Lens};
 use crate::motion::MotionPath;
 use crate::precision::{Precision, SnapSpace};
-use crate::visibility::{SceneGeometry, View, Visibility};
+use crate::visibility::{Hits, SceneGeometry, View, Visibility};
 
 /// The camera of frame 0 and its lens.
 #[derive(Debug, Clone, PartialEq)]
@@ -177,5 +177,12 @@ impl Setup {
     pub fn visibility(&self) -> Option<Arc<Visibility>> {
         let view = self.view()?;
         Some(self.geometry.as_ref()?.scene.visibility(&view))
+    }
+
+    /// The light-independent part of that pass (the rays cast; made once per camera and screen
+    /// and shared by every light), or None without geometry.
+    pub fn visibility_hits(&self) -> Option<Arc<Hits>> {
+        let view = self.view()?;
+        Some(self.geometry.as_ref()?.scene.hits(&view))
     }
 }

@@ -33,6 +33,11 @@
 //! **Facing.** The normal is turned toward the camera (`n.d < 0`). A hit is a *lit-facing
 //! receiver* when that normal points toward the light: `n . (-light direction) > 0`; other
 //! hits are self-shadowed whatever the map holds.
+//!
+//! **Two parts.** The rays, the hits, their depths and normals depend only on the camera and
+//! the screen ([`Hits`], the costly part: one BVH traversal per pixel); only the lit flag and
+//! the geometric factor depend on the light ([`Hits::shade`]: a few dot products per pixel and
+//! a sort). A sweep over sun angles casts the rays once and shades them once per angle.
 
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -110,6 +115,87 @@ pub struct Sample {
     pub factor: f64,
 }
 
+/// What one sampled pixel's ray hits, whatever the light: the view depth and the unit normal
+/// turned toward the camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    pub depth: f64,
+    pub normal: DVec3,
+}
+
+/// The light-independent part of a pass: every sampled pixel's hit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hits {
+    /// The view the rays were cast for; its `light` is unused (zero).
+    pub view: View,
+    pub cols: u32,
+    pub rows: u32,
+    /// Row-major, `cols x rows`; None where the ray meets nothing between near and far.
+    pub hits: Vec<Option<Hit>>,
+    /// The indices of the hits in increasing depth (ties in index order): the receivers of any
+    /// light come out of it sorted by depth, without a sort per light.
+    pub by_depth: Vec<u32>,
+}
+
+impl Hits {
+    fn new(view: View, cols: u32, rows: u32, hits: Vec<Option<Hit>>) -> Hits {
+        let mut by_depth: Vec<u32> = (0..hits.len() as u32).filter(|&k| hits[k as usize].is_some()).collect();
+        let depth = |k: u32| hits[k as usize].map_or(0.0, |h| h.depth);
+        by_depth.par_sort_by(|&a, &b| depth(a).total_cmp(&depth(b)).then(a.cmp(&b)));
+        Hits {
+            view,
+            cols,
+            rows,
+            hits,
+            by_depth,
+        }
+    }
+
+    /// The pass of `view`: each hit shaded under `view.light` (the lit flag and the
+    /// geometric factor), the receivers sorted by depth. The same, bit for bit, as casting
+    /// the rays again for that light.
+    pub fn shade(&self, view: &View) -> Visibility {
+        let light = LightBasis::new(view.light);
+        let cols = self.cols as usize;
+        let samples: Vec<Option<Sample>> = self
+            .hits
+            .par_iter()
+            .enumerate()
+            .map(|(k, h)| {
+                let h = h.as_ref()?;
+                let (u, v) = view.pixel_centre((k % cols) as u32, (k / cols) as u32);
+                let d = view.ray(u, v);
+                Some(Sample {
+                    depth: h.depth,
+                    lit: h.normal.dot(-view.light) > 0.0,
+                    factor: geometric_factor(view, &light, h.normal, d, h.depth),
+                })
+            })
+            .collect();
+        // The lit samples in depth order; equal depths then by factor, so the list is the
+        // one sorting every (depth, factor) pair would give.
+        let mut receivers: Vec<(f64, f64)> = self
+            .by_depth
+            .iter()
+            .filter_map(|&k| samples[k as usize].filter(|s| s.lit).map(|s| (s.depth, s.factor)))
+            .collect();
+        let mut start = 0;
+        while start < receivers.len() {
+            let d = receivers[start].0;
+            let end = start
+                + receivers[start..]
+                    .iter()
+                    .take_while(|r| r.0.total_cmp(&d).is_eq())
+                    .count();
+            if end - start > 1 {
+                receivers[start..end].sort_unstable_by(|a, b| a.1.total_cmp(&b.1));
+            }
+            start = end;
+        }
+        Visibility::of_samples(*view, self.cols, self.rows, samples, receivers)
+    }
+}
+
 /// The result of one pass.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Visibility {
@@ -129,6 +215,33 @@ pub struct Visibility {
 }
 
 impl Visibility {
+    /// The pass from its samples and sorted receivers: the self-shadowed count and the ranges.
+    fn of_samples(
+        view: View,
+        cols: u32,
+        rows: u32,
+        samples: Vec<Option<Sample>>,
+        receivers: Vec<(f64, f64)>,
+    ) -> Visibility {
+        let self_shadowed = samples.iter().flatten().filter(|s| !s.lit).count();
+        let depth_range = samples.iter().flatten().fold(None, |r: Option<(f64, f64)>, s| {
+            Some(r.map_or((s.depth, s.depth), |(lo, hi)| (lo.min(s.depth), hi.max(s.depth))))
+        });
+        let factor_range = receivers.iter().fold(None, |r: Option<(f64, f64)>, &(_, g)| {
+            Some(r.map_or((g, g), |(lo, hi)| (lo.min(g), hi.max(g))))
+        });
+        Visibility {
+            view,
+            cols,
+            rows,
+            samples,
+            receivers,
+            self_shadowed,
+            depth_range,
+            factor_range,
+        }
+    }
+
     pub fn sample_count(&self) -> usize {
         self.samples.len()
     }
@@ -205,8 +318,22 @@ impl Tracer {
 pub struct SceneGeometry {
     pub mesh: Mesh,
     tracer: OnceLock<Tracer>,
+    /// Shaded passes, one per view (camera, screen and light).
     cache: Mutex<Vec<Arc<Visibility>>>,
+    /// Cast rays, one per view without its light.
+    hits_cache: Mutex<Vec<Arc<Hits>>>,
 }
+
+/// The view without its light: the key of the light-independent part.
+fn unlit(view: &View) -> View {
+    View {
+        light: DVec3::ZERO,
+        ..*view
+    }
+}
+
+/// Passes (and cast rays) a scene keeps: the latest ones.
+const CACHED_PASSES: usize = 8;
 
 impl SceneGeometry {
     pub fn new(mesh: Mesh) -> Self {
@@ -214,7 +341,27 @@ impl SceneGeometry {
             mesh,
             tracer: OnceLock::new(),
             cache: Mutex::new(Vec::new()),
+            hits_cache: Mutex::new(Vec::new()),
         }
+    }
+
+    /// The rays of a view cast (its light ignored), computed once per camera and screen and
+    /// shared by every light.
+    pub fn hits(&self, view: &View) -> Arc<Hits> {
+        let key = unlit(view);
+        {
+            let cache = self.hits_cache.lock().unwrap_or_else(|e| e.into_inner());
+            if let Some(h) = cache.iter().find(|h| h.view == key) {
+                return h.clone();
+            }
+        }
+        let h = Arc::new(self.cast_rays(&key));
+        let mut cache = self.hits_cache.lock().unwrap_or_else(|e| e.into_inner());
+        if cache.len() >= CACHED_PASSES {
+            cache.remove(0);
+        }
+        cache.push(h.clone());
+        h
     }
 
     /// The pass for a view, computed once per view and shared (a sweep's configurations share
@@ -225,8 +372,8 @@ impl SceneGeometry {
         }
         let v = Arc::new(self.cast(view));
         let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
-        // A few views at most (one per camera pose analysed); keep the latest ones.
-        if cache.len() >= 8 {
+        // A few views at most (one per camera pose and light analysed); keep the latest ones.
+        if cache.len() >= CACHED_PASSES {
             cache.remove(0);
         }
         cache.push(v.clone());
@@ -238,45 +385,27 @@ impl SceneGeometry {
         cache.iter().find(|v| v.view == *view).cloned()
     }
 
-    /// The pass itself, without the cache.
+    /// The pass itself, without the pass cache (the cast rays are shared through
+    /// [`Self::hits`]).
     pub fn cast(&self, view: &View) -> Visibility {
+        self.hits(view).shade(view)
+    }
+
+    /// Casts the rays of a view: every sampled pixel's hit.
+    fn cast_rays(&self, view: &View) -> Hits {
         let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
         let (cols, rows) = view.grid();
-        let light = LightBasis::new(view.light);
-        let samples: Vec<Option<Sample>> = (0..cols as usize * rows as usize)
+        let hits: Vec<Option<Hit>> = (0..cols as usize * rows as usize)
             .into_par_iter()
             .map(|k| {
                 let (u, v) = view.pixel_centre((k % cols as usize) as u32, (k / cols as usize) as u32);
-                self.sample(tracer, view, &light, u, v)
+                self.hit(tracer, view, u, v)
             })
             .collect();
-        let mut receivers: Vec<(f64, f64)> = samples
-            .iter()
-            .flatten()
-            .filter(|s| s.lit)
-            .map(|s| (s.depth, s.factor))
-            .collect();
-        receivers.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-        let self_shadowed = samples.iter().flatten().filter(|s| !s.lit).count();
-        let depth_range = samples.iter().flatten().fold(None, |r: Option<(f64, f64)>, s| {
-            Some(r.map_or((s.depth, s.depth), |(lo, hi)| (lo.min(s.depth), hi.max(s.depth))))
-        });
-        let factor_range = receivers.iter().fold(None, |r: Option<(f64, f64)>, &(_, g)| {
-            Some(r.map_or((g, g), |(lo, hi)| (lo.min(g), hi.max(g))))
-        });
-        Visibility {
-            view: *view,
-            cols,
-            rows,
-            samples,
-            receivers,
-            self_shadowed,
-            depth_range,
-            factor_range,
-        }
+        Hits::new(*view, cols, rows, hits)
     }
 
-    fn sample(&self, tracer: &Tracer, view: &View, light: &LightBasis, u: f64, v: f64) -> Option<Sample> {
+    fn hit(&self, tracer: &Tracer, view: &View, u: f64, v: f64) -> Option<Hit> {
         let d = view.ray(u, v);
         let len = d.length();
         // Ray units are world units along the normalised direction: depth t is t |d| along it.
@@ -302,9 +431,7 @@ impl SceneGeometry {
         if !(t >= view.near && t <= view.far) {
             return None;
         }
-        let lit = n.dot(-view.light) > 0.0;
-        let factor = geometric_factor(view, light, n, d, t);
-        Some(Sample { depth: t, lit, factor })
+        Some(Hit { depth: t, normal: n })
     }
 }
 
@@ -323,6 +450,77 @@ impl PartialEq for SceneGeometry {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A ground plane y = 0 and a box on it, seen by a camera looking down the −Z axis.
+    fn scene_and_view(light: DVec3) -> (Mesh, View) {
+        let g = |x: f64, z: f64| DVec3::new(x, 0.0, z);
+        let mut triangles = vec![
+            [g(-100.0, 10.0), g(100.0, 10.0), g(100.0, -200.0)],
+            [g(-100.0, 10.0), g(100.0, -200.0), g(-100.0, -200.0)],
+        ];
+        // A vertical wall facing +Z (toward the camera) at z = -40.
+        let w = |x: f64, y: f64| DVec3::new(x, y, -40.0);
+        triangles.push([w(-10.0, 0.0), w(10.0, 0.0), w(10.0, 8.0)]);
+        triangles.push([w(-10.0, 0.0), w(10.0, 8.0), w(-10.0, 8.0)]);
+        let pose = CameraPose::look_at(DVec3::new(0.0, 5.0, 0.0), DVec3::new(0.0, 0.0, -30.0), DVec3::Y).unwrap();
+        let view = View {
+            pose,
+            lens: Lens::new(1.0, 16.0 / 9.0),
+            near: 0.1,
+            far: 500.0,
+            width: 320,
+            height: 180,
+            scale: 0.5,
+            light: light.normalize(),
+        };
+        (Mesh { triangles }, view)
+    }
+
+    #[test]
+    fn shading_shared_rays_under_another_light_equals_a_fresh_pass_for_that_light() {
+        let lights = [
+            DVec3::new(-0.4, -1.0, -0.3),
+            DVec3::new(0.0, -0.2, 1.0),
+            DVec3::new(1.0, -0.05, 0.0),
+        ];
+        let (mesh, first) = scene_and_view(lights[0]);
+        let shared = SceneGeometry::new(mesh.clone());
+        let _ = shared.visibility(&first);
+        for l in lights {
+            let view = View {
+                light: l.normalize(),
+                ..first
+            };
+            let fresh = SceneGeometry::new(mesh.clone()).visibility(&view);
+            let reused = shared.visibility(&view);
+            assert_eq!(*reused, *fresh, "{l}");
+            // The receivers are exactly the lit samples sorted by (depth, factor).
+            let mut sorted: Vec<(f64, f64)> = reused
+                .samples
+                .iter()
+                .flatten()
+                .filter(|s| s.lit)
+                .map(|s| (s.depth, s.factor))
+                .collect();
+            sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+            assert_eq!(reused.receivers, sorted, "{l}");
+            // One set of rays for every light.
+            assert_eq!(shared.hits_cache.lock().unwrap().len(), 1);
+            // Independently: the ground's samples are lit exactly when the light comes down,
+            // the wall's (normal +Z) when it travels toward −Z; each factor is g of the hit.
+            let light = LightBasis::new(view.light);
+            for (k, s) in reused.samples.iter().enumerate() {
+                let Some(s) = s else { continue };
+                let p = reused.position(k, s.depth);
+                let on_wall = (p.z + 40.0).abs() < 1e-6 && p.y > 1e-6;
+                let n = if on_wall { DVec3::Z } else { DVec3::Y };
+                assert_eq!(s.lit, n.dot(-view.light) > 0.0, "{l} sample {k}");
+                let (u, v) = view.pixel_centre((k % reused.cols as usize) as u32, (k / reused.cols as usize) as u32);
+                let g = geometric_factor(&view, &light, n, view.ray(u, v), s.depth);
+                assert!((s.factor - g).abs() <= 1e-9 * g, "{l} sample {k}: {} vs {g}", s.factor);
+            }
+        }
+    }
 
     #[test]
     fn sigma_min_of_a_diagonal_and_a_rotation() {

@@ -9,6 +9,7 @@ pub mod analyze;
 pub mod bench;
 pub mod compare;
 pub mod screen;
+pub mod sun;
 pub mod sweep;
 pub mod truth;
 

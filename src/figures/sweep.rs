@@ -65,19 +65,21 @@ pub const MAX_HEAT_COLUMNS: usize = 48;
 pub struct HeatmapFigure<'a>(pub &'a SweepResult);
 
 /// One heat-map panel: labelled columns × rows of cells.
-struct HeatPanel {
-    caption: String,
-    x_desc: String,
+pub(crate) struct HeatPanel {
+    pub caption: String,
+    pub x_desc: String,
+    /// What the rows are ("cascades").
+    pub y_desc: String,
     /// Columns.
-    nx: usize,
+    pub nx: usize,
     /// Labelled columns: (column, label).
-    x_ticks: Vec<(usize, String)>,
-    y_labels: Vec<String>,
+    pub x_ticks: Vec<(usize, String)>,
+    pub y_labels: Vec<String>,
     /// (column, row, value, within the memory budget); value None: no cascades needed.
-    cells: Vec<(usize, usize, Option<f64>, bool)>,
+    pub cells: Vec<(usize, usize, Option<f64>, bool)>,
     /// The recommended cell, when it is in this panel.
-    marked: Option<(usize, usize)>,
-    unit: String,
+    pub marked: Option<(usize, usize)>,
+    pub unit: String,
 }
 
 /// The heat-map rows of panels: the objective when it is not mean aliasing, then mean and max.
@@ -209,6 +211,7 @@ impl HeatmapFigure<'_> {
                                 (None, _) => format!("λ (0 uniform → 1 log); a column: the lowest of {per} λ"),
                             },
                             nx: cols,
+                            y_desc: "cascades".to_string(),
                             x_ticks: x_ticks.clone(),
                             y_labels: y_labels.clone(),
                             cells,
@@ -250,6 +253,7 @@ impl HeatmapFigure<'_> {
                         caption,
                         x_desc: "resolution (texels per side)".to_string(),
                         nx: resolutions.len(),
+                        y_desc: "cascades".to_string(),
                         x_ticks: x_ticks.clone(),
                         y_labels: y_labels.clone(),
                         cells,
@@ -264,7 +268,7 @@ impl HeatmapFigure<'_> {
 }
 
 /// The colour bar's title: the metric's unit (the panel's caption names the metric).
-fn metric_unit(m: &SummaryMetric) -> String {
+pub(crate) fn metric_unit(m: &SummaryMetric) -> String {
     if m.name().contains("aliasing") {
         "texel/pixel, log".to_string()
     } else {
@@ -318,7 +322,7 @@ impl Figure for HeatmapFigure<'_> {
 /// Draws one heat-map panel with its own log colour bar (titled with the unit), the budget line
 /// and the recommendation ring. Cells overlap their neighbours by a pixel, so no seam shows
 /// when a browser scales the SVG.
-fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &HeatPanel) -> PlotResult {
+pub(crate) fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &HeatPanel) -> PlotResult {
     let (w, _) = area.dim_in_pixel();
     let (cells_area, bar_area) = area.split_horizontally(w.saturating_sub(100));
     let values: Vec<f64> = p
@@ -351,7 +355,7 @@ fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &HeatPa
         .configure_mesh()
         .disable_mesh()
         .x_desc(p.x_desc.as_str())
-        .y_desc("cascades")
+        .y_desc(p.y_desc.as_str())
         .axis_desc_style((FONT, 12))
         .label_style((FONT, 11))
         .x_label_formatter(&|v| {

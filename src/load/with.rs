@@ -203,4 +203,21 @@ impl Config {
         c.motion.step_as_written = step_as_written;
         c.checked_with_path()
     }
+
+    /// The config with the light travelling along `direction` (any non-zero length, normalised
+    /// exactly as `light.direction` in a file is), as a sun-angle sweep sets it.
+    pub fn with_light_direction(&self, direction: glam::DVec3) -> Result<Config> {
+        let len = direction.length();
+        if !(direction.is_finite() && len > 1e-12 && len.is_finite()) {
+            return Err(self.refuse(
+                "light.direction",
+                format!("{:?}", direction.to_array()),
+                "a non-zero vector (the direction light travels)",
+            ));
+        }
+        let mut c = self.clone();
+        c.light_direction = direction / len;
+        c.light_direction_as_written = direction;
+        c.checked()
+    }
 }

@@ -17,6 +17,10 @@ use crate::sweep::{self, Row, SweepResult};
 /// `sweep.csv`: [`metric::summary_columns`], then these.
 pub const SWEEP_EXTRA_COLUMNS: [&str; 4] = ["cascades_needed", "pareto", "recommended", "preset"];
 
+/// `sweep.csv`'s last columns in a sun sweep: the sun's angles and whether the row is its
+/// setting's worst sun angle.
+pub const SUN_COLUMNS: [&str; 3] = ["sun_azimuth_deg", "sun_elevation_deg", "worst_sun"];
+
 /// `sweep.csv` streamed into the output set: each row is encoded as it is written, so a
 /// 100,000-configuration sweep holds no copy of its CSV text.
 pub struct SweepCsvFile<'a>(pub &'a SweepResult);
@@ -54,7 +58,20 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         .as_ref()
         .and(crate::presets::axes(&r.config).knob.map(|k| k.key));
     let distance = r.grid.distance.is_some();
-    let rows = r.rows.iter().enumerate().map(|(i, row)| {
+    // A sun sweep writes every (sun, setting) row; `pareto` and `recommended` mark every row of
+    // the setting, `worst_sun` the setting's worst angle.
+    let (all, setting_of, worst): (&[Row], Vec<usize>, Vec<bool>) = match &r.sun {
+        None => (&r.rows, (0..r.rows.len()).collect(), Vec::new()),
+        Some(sun) => {
+            let mut worst = vec![false; sun.all.len()];
+            for &w in &sun.worst {
+                worst[w] = true;
+            }
+            (&sun.all, sun.setting_of.clone(), worst)
+        }
+    };
+    let rows = all.iter().enumerate().map(|(k, row)| {
+        let i = setting_of[k];
         let st = &row.setting;
         let mut fields = metric::summary_fields(
             num("lambda", st.lambda)?,
@@ -76,6 +93,11 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         if let (true, Some(d)) = (distance, st.distance) {
             fields.push(num("distance", d)?);
         }
+        if let Some(sun) = st.sun.filter(|_| r.sun.is_some()) {
+            fields.push(num("sun_azimuth_deg", sun.azimuth_deg)?);
+            fields.push(num("sun_elevation_deg", sun.elevation_deg)?);
+            fields.push(worst[k].to_string());
+        }
         Ok(fields)
     });
     let header: Vec<&str> = metric::summary_columns(r.config.geometry.is_some())
@@ -83,6 +105,7 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         .chain(SWEEP_EXTRA_COLUMNS)
         .chain(knob_key)
         .chain(distance.then_some("shadow.max_distance"))
+        .chain(r.sun.iter().flat_map(|_| SUN_COLUMNS))
         .collect();
     crate::output::csv_write_from(out, &header, rows)
 }
@@ -103,6 +126,12 @@ fn row_json(row: &Row) -> serde_json::Value {
     if let Some(d) = row.setting.distance {
         v["distance"] = serde_json::json!(d);
     }
+    if let Some(sun) = row.setting.sun {
+        v["worst_sun"] = serde_json::json!({
+            "azimuth_deg": sun.azimuth_deg,
+            "elevation_deg": sun.elevation_deg,
+        });
+    }
     for (k, x) in metric::summary_json(&row.summary) {
         v[k] = x;
     }
@@ -122,6 +151,14 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
     });
     if let Some(o) = &r.optimized {
         v["optimized_splits"] = super::optimize::json(r, o);
+    }
+    if let (Some(sun), Some(grid)) = (&r.sun, &r.grid.sun) {
+        v["sun_angles"] = grid.len().into();
+        v["sun_rows"] = sun.all.len().into();
+        v["sun_rule"] = crate::commands::sun_sweep::SUN_RULE.into();
+        if let Some(note) = crate::commands::sun_sweep::bounds_only_note(&r.config, &r.grid.fit.values) {
+            v["light_independent"] = note.into();
+        }
     }
     match (r.recommendation.as_ref(), r.recommended()) {
         (Some(rec), Some(row)) => {
@@ -579,7 +616,7 @@ pub fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, &'static str
         || rayon::join(|| HeatmapFigure(r).to_svg(), || LambdaDensityFigure::new(r).to_svg()),
         || rayon::join(|| ShimmerSweepFigure(r).to_svg(), || ParetoFigure(r).to_svg()),
     );
-    Ok(vec![
+    let mut out = vec![
         (
             "heatmap",
             "Max and mean aliasing over λ × cascade count, per resolution",
@@ -596,7 +633,16 @@ pub fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, &'static str
             shimmer?,
         ),
         ("pareto", "Pareto front of memory against mean aliasing", pareto?),
-    ])
+    ];
+    // Only a sun sweep has the sun figure (other sweeps keep their files).
+    if r.sun.is_some() {
+        out.push((
+            "quality_vs_sun",
+            "The objective over sun azimuth × elevation for the recommended setting, its worst sun marked",
+            crate::figures::sun::QualityVsSunFigure(r).to_svg()?,
+        ));
+    }
+    Ok(out)
 }
 
 /// The largest number of Pareto rows a report table shows (the rest are in `sweep.csv`).
@@ -772,6 +818,11 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
         h.push_str(&html::list(&rivals, None));
     }
     h.push_str(&super::optimize::html_section(r));
+    let sun = sun_lines(r);
+    if !sun.is_empty() {
+        h.push_str("<h2>Sun angles</h2>\n");
+        h.push_str(&html::list(&sun, None));
+    }
     let _ = writeln!(
         h,
         "<h2>Sweep</h2>\n<p>{} (closed-form aliasing, shimmer with and without snapping along the motion path, coverage).</p>",
@@ -863,6 +914,14 @@ pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> 
         m.push('\n');
     }
     m.push_str(&super::optimize::md_section(r));
+    let sun = sun_lines(r);
+    if !sun.is_empty() {
+        m.push_str("## Sun angles\n\n");
+        for l in sun {
+            let _ = writeln!(m, "- {l}");
+        }
+        m.push('\n');
+    }
     let _ = writeln!(m, "## Sweep\n\n{}.\n", grid_sentence(r));
     m.push_str("## Scene\n\n| | |\n|---|---|\n");
     for (k, v) in scene_facts(&r.config, &r.rows) {
@@ -947,6 +1006,15 @@ fn ranges_factor(r: &SweepResult) -> String {
     }
     if let Some(a) = &r.grid.distance {
         let _ = write!(out, " × {}", count(a.values.len() as u64, "shadow distance"));
+    }
+    if let Some(sun) = &r.grid.sun {
+        let _ = write!(
+            out,
+            ", each under {} ({} × {})",
+            count(sun.len() as u64, "sun angle"),
+            count(sun.azimuths().len() as u64, "azimuth"),
+            count(sun.elevations().len() as u64, "elevation")
+        );
     }
     out
 }
@@ -1057,6 +1125,50 @@ pub fn stdout_table(r: &SweepResult) -> String {
         let _ = writeln!(out, "  {v}");
     }
     out.push_str(&super::optimize::stdout(r));
+    for l in sun_lines(r) {
+        let _ = writeln!(out, "note: {l}");
+    }
+    out
+}
+
+/// What a sun sweep adds to the verdict: the recommended setting's worst sun angle, the
+/// worst-case rule, and (bounds only) which metrics cannot depend on the light. Empty without
+/// sun axes.
+pub fn sun_lines(r: &SweepResult) -> Vec<String> {
+    let (Some(sun), Some(grid)) = (&r.sun, &r.grid.sun) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    if let Some(rec) = &r.recommendation {
+        let rows = sun.rows_of(rec.index);
+        let worst = &sun.all[sun.worst[rec.index]];
+        let best = rows
+            .iter()
+            .copied()
+            .min_by(|&a, &b| {
+                r.objective
+                    .value(&sun.all[a].summary)
+                    .total_cmp(&r.objective.value(&sun.all[b].summary))
+                    .then(a.cmp(&b))
+            })
+            .map(|i| &sun.all[i]);
+        if let (Some(w), Some(b)) = (worst.setting.sun, best) {
+            let bs = b.setting.sun.map(|s| s.label()).unwrap_or_default();
+            out.push(format!(
+                "the recommended setting is judged at its worst of {}: sun {} ({} {}; at its best angle, {}, {})",
+                count(grid.len() as u64, "sun angle"),
+                w.label(),
+                r.objective.name(),
+                n(r.objective.value(&worst.summary)),
+                bs,
+                n(r.objective.value(&b.summary))
+            ));
+        }
+    }
+    out.push(crate::commands::sun_sweep::SUN_RULE.to_string());
+    if let Some(note) = crate::commands::sun_sweep::bounds_only_note(&r.config, &r.grid.fit.values) {
+        out.push(note);
+    }
     out
 }
 

@@ -585,3 +585,55 @@ fn check_sweep_keys_rows_on_a_presets_knob_and_distance_like_its_sweep_csv() {
         );
     }
 }
+
+#[test]
+fn a_sun_sweeps_shards_merge_into_its_files_byte_for_byte_and_check_reads_its_sun_keys() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Scene geometry (screen metrics), a small grid and both sun axes from the [sweep] table.
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/default.toml"))
+        .unwrap()
+        .replace("frames = 240", "frames = 20");
+    let start = text.find("[sweep]").unwrap();
+    let text = format!(
+        "{}[sweep]\nlambda = [0.5, 0.75]\ncascades = [2, 4]\nresolution = [1024]\nsun_azimuth = [0.0, 120.0, 240.0]\nsun_elevation = {{ start = 20.0, end = 60.0, step = 40.0 }}\n",
+        &text[..start]
+    );
+    let cfg = tmp.path().join("sun.toml");
+    std::fs::write(&cfg, text).unwrap();
+    let cfg = s(&cfg).to_string();
+    let full = tmp.path().join("full");
+    ok(run(&["sweep", &cfg, "--quiet", "--no-plots", "--out", s(&full)]));
+    let expected = files(&full);
+    assert_eq!(read_csv(&full.join("sweep.csv")).len(), 4 * 6);
+    let d = three_shards(&cfg, &tmp.path().join("shards"));
+    let merged = tmp.path().join("merged");
+    let mut args = vec!["merge", "--no-plots", "--out", s(&merged)];
+    args.extend(d.iter().map(|x| s(x)));
+    ok(run(&args));
+    let got = files(&merged);
+    assert_eq!(got.keys().collect::<Vec<_>>(), expected.keys().collect::<Vec<_>>());
+    for (name, bytes) in &expected {
+        assert!(&got[name] == bytes, "{name} differs");
+    }
+    // check --sweep judges every (sun, setting) row, the same from the merged CSV.
+    let rules = tmp.path().join("rules.toml");
+    std::fs::write(&rules, "[[rule]]\nmetric = \"screen_aliasing_p95\"\nmax = 40.0\n").unwrap();
+    let direct = run(&["check", &cfg, "--thresholds", s(&rules), "--sweep", "--format", "json"]);
+    let csv = merged.join("sweep.csv");
+    let from_csv = run(&[
+        "check",
+        &cfg,
+        "--thresholds",
+        s(&rules),
+        "--sweep",
+        "--sweep-csv",
+        s(&csv),
+        "--format",
+        "json",
+    ]);
+    assert!(matches!(direct.status.code(), Some(0 | 1)));
+    assert_eq!(direct.status.code(), from_csv.status.code());
+    assert!(direct.stdout == from_csv.stdout);
+    let report = String::from_utf8_lossy(&direct.stdout);
+    assert!(report.contains("sun_azimuth=240 sun_elevation=60"), "{report}");
+}

@@ -34,3 +34,4 @@ mod regressions;
 mod seams;
 mod shimmer;
 mod shimmer_fast_paths;
+mod sun_sweep;

@@ -39,10 +39,17 @@ pub struct SweepKey {
     pub knob: Option<f64>,
     /// The shadow distance, when swept (the `shadow.max_distance` column).
     pub distance: Option<f64>,
+    /// The sun (azimuth, elevation) in degrees, when swept (the `sun_azimuth_deg` and
+    /// `sun_elevation_deg` columns): a row per sun angle, each judged on its own, so a rule
+    /// must hold at every sun angle.
+    pub sun: Option<(f64, f64)>,
 }
 
 /// The `sweep.csv` column of a swept shadow distance.
 pub const DISTANCE_COLUMN: &str = "shadow.max_distance";
+
+/// The `sweep.csv` columns of a swept sun: azimuth and elevation, degrees.
+pub const SUN_COLUMNS: [&str; 2] = ["sun_azimuth_deg", "sun_elevation_deg"];
 
 impl SweepKey {
     /// The key of a config's own shadow setting.
@@ -55,6 +62,7 @@ impl SweepKey {
             split_range: SplitRange::of(config.shadow.fit_depth_to_visible),
             knob: crate::presets::axes(config).knob.map(|k| k.value),
             distance: None,
+            sun: None,
         }
     }
 
@@ -71,6 +79,9 @@ impl SweepKey {
         }
         if let Some(d) = self.distance {
             extra.push_str(&format!(" distance={d}"));
+        }
+        if let Some((a, e)) = self.sun {
+            extra.push_str(&format!(" sun_azimuth={a} sun_elevation={e}"));
         }
         format!(
             "lambda={} cascades={} resolution={} fit={}{range}{extra}",
@@ -90,6 +101,8 @@ impl Ord for SweepKey {
             .then(self.split_range.cmp(&other.split_range))
             .then(opt_cmp(self.knob, other.knob))
             .then(opt_cmp(self.distance, other.distance))
+            .then(opt_cmp(self.sun.map(|s| s.0), other.sun.map(|s| s.0)))
+            .then(opt_cmp(self.sun.map(|s| s.1), other.sun.map(|s| s.1)))
     }
 }
 
@@ -276,6 +289,7 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
         .iter()
         .position(|h| h.trim().contains('.') && h.trim() != DISTANCE_COLUMN);
     let distance_idx = column(DISTANCE_COLUMN);
+    let sun_idx = column(SUN_COLUMNS[0]).zip(column(SUN_COLUMNS[1]));
     let metric_cols: Vec<(usize, SummaryMetric)> = headers
         .iter()
         .enumerate()
@@ -318,6 +332,10 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
         let key = SweepKey {
             knob: knob_idx.map(|i| number(i, "knob")).transpose()?,
             distance: distance_idx.map(|i| number(i, DISTANCE_COLUMN)).transpose()?,
+            sun: match sun_idx {
+                Some((a, e)) => Some((number(a, SUN_COLUMNS[0])?, number(e, SUN_COLUMNS[1])?)),
+                None => None,
+            },
             lambda: number(key_idx[0], "lambda")?,
             cascades: int(key_idx[1], "cascades")?,
             resolution: int(key_idx[2], "resolution")?,
@@ -377,14 +395,12 @@ pub fn sweep_rows_from_csv(config: &Config, path: &Path) -> Result<Vec<SweepRow>
             || k.cascades as usize != s.cascades
             || k.resolution != s.resolution
             || k.fit != s.fit.name()
+            || k.sun != s.sun.map(|x| (x.azimuth_deg, x.elevation_deg))
         {
             return Err(mismatch(format!(
-                "row {} is lambda={} cascades={} resolution={} fit={} where this config's grid has {}",
+                "row {} is {} where this config's grid has {}",
                 i + 1,
-                k.lambda,
-                k.cascades,
-                k.resolution,
-                k.fit,
+                k.label(),
                 s.label()
             )));
         }
@@ -409,6 +425,7 @@ pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
                 split_range: r.setting.split_range,
                 knob: r.setting.knob,
                 distance: r.setting.distance,
+                sun: r.setting.sun.map(|x| (x.azimuth_deg, x.elevation_deg)),
             },
             metrics: SummaryMetric::all().map(|m| (m.name(), m.value(&r.summary))).collect(),
         })
@@ -429,6 +446,7 @@ mod tests {
             split_range: SplitRange::Bounds,
             knob: None,
             distance: None,
+            sun: None,
         };
         assert_eq!(k(0.5, "sphere"), k(0.5, "sphere"));
         assert!(k(0.25, "sphere") < k(0.5, "aabb"));
