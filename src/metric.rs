@@ -313,6 +313,72 @@ pub const SUMMARY: &[SummaryDef] = &[
         value: |s| Value::Real(s.seam_crossings.unwrap_or(0.0)),
     },
     SummaryDef {
+        name: "light_crawl",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "moving light: RMS sub-texel drift (S3) over the frame pairs whose used light direction did not change (between updates), with the configured snapping, worst over the motion paths; only when the light moves",
+        brief: "moving light: drift between light updates (RMS texels)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.crawl)),
+    },
+    SummaryDef {
+        name: "light_crawl_snapped",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "light_crawl with snapping",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.crawl_snapped)),
+    },
+    SummaryDef {
+        name: "light_crawl_unsnapped",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "light_crawl without snapping",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.crawl_unsnapped)),
+    },
+    SummaryDef {
+        name: "light_jump",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "moving light: the largest move of a world-fixed probe's texel coordinates (not wrapped) between the two frames of a light update, with the configured snapping, worst over the motion paths; only when the light moves",
+        brief: "moving light: largest probe move at an update (texels)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.jump)),
+    },
+    SummaryDef {
+        name: "light_jump_snapped",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "light_jump with snapping (includes the window's whole-texel re-snap at the update)",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.jump_snapped)),
+    },
+    SummaryDef {
+        name: "light_jump_unsnapped",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "light_jump without snapping",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.jump_unsnapped)),
+    },
+    SummaryDef {
         name: "screen_receiver_fraction",
         unit: "",
         direction: Direction::LowerIsWorse,
@@ -523,8 +589,14 @@ pub fn summary_json(s: &Summary) -> Vec<(&'static str, serde_json::Value)> {
 
 /// Whether a metric belongs in the outputs of a summary: screen metrics only with geometry.
 fn shown_for(d: &SummaryDef, s: &Summary) -> bool {
-    (!d.screen || s.screen.is_some()) && (d.name != SEAM_CROSSINGS || s.seam_crossings.is_some())
+    (!d.screen || s.screen.is_some())
+        && (d.name != SEAM_CROSSINGS || s.seam_crossings.is_some())
+        && (!d.name.starts_with(LIGHT_PREFIX) || s.light.is_some())
 }
+
+/// The moving-light metrics (`light_crawl*`, `light_jump*`): only when the light moves
+/// ([`Summary::light`]), absent from every output under a still light.
+const LIGHT_PREFIX: &str = "light_";
 
 /// The one summary metric an analysis computes only on request ([`crate::analysis::AnalysisOptions::seams`]):
 /// absent from the outputs of analyses without it (sweep rows).

@@ -13,7 +13,7 @@
 
 use std::fmt::Write as _;
 
-use crate::analysis::Summary;
+use crate::analysis::{LightSummary, Summary};
 use crate::config::Config;
 use crate::config::{Fit, SplitRange};
 use crate::error::{Error, Result, ShardError};
@@ -242,7 +242,7 @@ const ROW_COLUMNS: &str =
     "index\tlambda\tcascades\tresolution\tfit\tsplit_range\tcascades_needed\tz_lo\tz_hi\tmax_aliasing\t\
 mean_aliasing\tmean_log_aliasing\tundersampled_fraction\tshimmer\tshimmer_snapped\tshimmer_unsnapped\tsize_jitter\t\
 coverage_violations\tmemory_bytes\tlookup_error_max\tlookup_error_rms\toverlap_area_fraction\tband_pixel_share\t\
-seam_crossings\tscreen\tknob\tdistance";
+seam_crossings\tscreen\tknob\tdistance\tlight";
 
 fn hex(x: f64) -> String {
     format!("{:016x}", x.to_bits())
@@ -275,6 +275,7 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
             band_pixel_share,
             seam_crossings,
             screen,
+            light,
         } = &row.summary;
         let _ = write!(
             out,
@@ -343,6 +344,29 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
         for x in [st.knob, st.distance] {
             let _ = write!(out, "\t{}", x.map_or_else(|| "-".to_string(), hex));
         }
+        out.push('\t');
+        match light {
+            None => out.push('-'),
+            Some(LightSummary {
+                crawl,
+                crawl_snapped,
+                crawl_unsnapped,
+                jump,
+                jump_snapped,
+                jump_unsnapped,
+            }) => {
+                let all = [
+                    crawl,
+                    crawl_snapped,
+                    crawl_unsnapped,
+                    jump,
+                    jump_snapped,
+                    jump_unsnapped,
+                ]
+                .map(|x| hex(*x));
+                out.push_str(&all.join(","));
+            }
+        }
         out.push('\n');
     }
     out
@@ -369,8 +393,8 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
     for (i, line) in lines {
         let n = i + 1;
         let f: Vec<&str> = line.split('\t').collect();
-        if f.len() != 27 {
-            return Err(bad(n, format!("{} fields; a row has 27", f.len())));
+        if f.len() != 28 {
+            return Err(bad(n, format!("{} fields; a row has 28", f.len())));
         }
         let float = |s: &str| {
             u64::from_str_radix(s, 16)
@@ -463,6 +487,24 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                         s => Some(float(s)?),
                     },
                     screen,
+                    light: match f[27] {
+                        "-" => None,
+                        s => {
+                            let x: Vec<f64> = s.split(',').map(float).collect::<Result<_>>()?;
+                            let [crawl, crawl_snapped, crawl_unsnapped, jump, jump_snapped, jump_unsnapped] = x[..]
+                            else {
+                                return Err(bad(n, format!("the light field has {} numbers; it has 6", x.len())));
+                            };
+                            Some(LightSummary {
+                                crawl,
+                                crawl_snapped,
+                                crawl_unsnapped,
+                                jump,
+                                jump_snapped,
+                                jump_unsnapped,
+                            })
+                        }
+                    },
                 },
             },
         ));

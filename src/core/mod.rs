@@ -11,6 +11,7 @@ pub mod cascades;
 pub mod depth_range;
 pub mod fitting;
 pub mod geometry;
+pub mod light_motion;
 pub mod mesh;
 pub mod metrics;
 pub mod motion;

@@ -17,6 +17,7 @@ mod engine_axes;
 mod figures;
 mod geometry;
 mod golden_outputs;
+mod light_motion;
 mod memory;
 mod output_sets;
 mod precision;

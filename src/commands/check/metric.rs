@@ -121,6 +121,14 @@ mod tests {
             band_pixel_share: 0.0,
             seam_crossings: Some(0.375),
             screen: None,
+            light: Some(crate::analysis::LightSummary {
+                crawl: 0.5,
+                crawl_snapped: 0.5,
+                crawl_unsnapped: 0.75,
+                jump: 1.5,
+                jump_snapped: 1.5,
+                jump_unsnapped: 1.25,
+            }),
         };
         let json = serde_json::to_value(&s).unwrap();
         // The registry writes every key as serde would (same JSON type: bool, integer, float).
