@@ -118,7 +118,8 @@ pub struct LightSummary {
     pub crawl_snapped: f64,
     #[serde(rename = "light_crawl_unsnapped")]
     pub crawl_unsnapped: f64,
-    /// Largest probe move (not wrapped) at an update, with the configured snapping.
+    /// Largest probe move (not wrapped) at an update, in windows without snapping (the
+    /// visible part; see `docs/metrics.md`).
     #[serde(rename = "light_jump")]
     pub jump: f64,
     #[serde(rename = "light_jump_snapped")]
@@ -143,11 +144,11 @@ impl LightSummary {
             o.jump_unsnapped = o.jump_unsnapped.max(u.jump_max);
         }
         out.map(|mut o| {
-            (o.crawl, o.jump) = if snap {
-                (o.crawl_snapped, o.jump_snapped)
-            } else {
-                (o.crawl_unsnapped, o.jump_unsnapped)
-            };
+            o.crawl = if snap { o.crawl_snapped } else { o.crawl_unsnapped };
+            // The snapped windows' jump adds their whole-texel re-snap, which moves no shadow
+            // on the ground (the grid stays world-anchored): the visible jump is the
+            // unsnapped one whatever the snapping.
+            o.jump = o.jump_unsnapped;
             o
         })
     }

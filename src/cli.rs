@@ -119,6 +119,10 @@ pub struct SweepArgs {
     /// Shadow distances (shadow.max_distance), world units: a range (50:200:50) or a list (50,100,150).
     #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub distance: Option<String>,
+    /// Light update rules of a moving light (shadow.light_update): every:1,2,4,8 and/or
+    /// quantize:0.1,0.25,0.5 (degrees).
+    #[arg(long, value_name = "SPEC")]
+    pub light_update: Option<String>,
     /// Worker threads, 1..=256 [default: one per core]. Results are identical at any count.
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u16).range(1..=256))]
     pub threads: Option<u16>,
@@ -258,6 +262,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
                 split_range: args.split_range,
                 knob: args.knob,
                 distance: args.distance,
+                light_update: args.light_update,
             },
             threads: args.threads,
             quiet: args.quiet,

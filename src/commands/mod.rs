@@ -7,6 +7,7 @@
 pub mod bench;
 pub mod check;
 pub mod compare;
+pub mod light_sweep;
 pub mod shard;
 pub mod stress;
 pub mod sweep;

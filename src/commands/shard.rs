@@ -17,6 +17,7 @@ use crate::analysis::{LightSummary, Summary};
 use crate::config::Config;
 use crate::config::{Fit, SplitRange};
 use crate::error::{Error, Result, ShardError};
+use crate::light_motion::LightUpdate;
 use crate::screen::ScreenStats;
 use crate::sweep::{Grid, GridFlags, Row, Setting};
 
@@ -230,6 +231,9 @@ pub fn config_hash(
     if grid.knob.is_some() || grid.distance.is_some() {
         h.eat(format!("{:?}", (&grid.knob, &grid.distance)).as_bytes());
     }
+    if let Some(u) = &grid.light_update {
+        h.eat(format!("{u:?}").as_bytes());
+    }
     h.eat(command.as_bytes());
     h.hex()
 }
@@ -242,7 +246,7 @@ const ROW_COLUMNS: &str =
     "index\tlambda\tcascades\tresolution\tfit\tsplit_range\tcascades_needed\tz_lo\tz_hi\tmax_aliasing\t\
 mean_aliasing\tmean_log_aliasing\tundersampled_fraction\tshimmer\tshimmer_snapped\tshimmer_unsnapped\tsize_jitter\t\
 coverage_violations\tmemory_bytes\tlookup_error_max\tlookup_error_rms\toverlap_area_fraction\tband_pixel_share\t\
-seam_crossings\tscreen\tknob\tdistance\tlight";
+seam_crossings\tscreen\tknob\tdistance\tlight\tlight_update";
 
 fn hex(x: f64) -> String {
     format!("{:016x}", x.to_bits())
@@ -367,6 +371,13 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
                 out.push_str(&all.join(","));
             }
         }
+        out.push('\t');
+        out.push_str(&match st.light_update {
+            None => "-".to_string(),
+            Some(LightUpdate::EveryFrame) => "every:1".to_string(),
+            Some(LightUpdate::EveryFrames(k)) => format!("every:{k}"),
+            Some(LightUpdate::Quantize(q)) => format!("quantize:{}", hex(q)),
+        });
         out.push('\n');
     }
     out
@@ -393,8 +404,8 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
     for (i, line) in lines {
         let n = i + 1;
         let f: Vec<&str> = line.split('\t').collect();
-        if f.len() != 28 {
-            return Err(bad(n, format!("{} fields; a row has 28", f.len())));
+        if f.len() != 29 {
+            return Err(bad(n, format!("{} fields; a row has 29", f.len())));
         }
         let float = |s: &str| {
             u64::from_str_radix(s, 16)
@@ -463,6 +474,12 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                     split_range,
                     knob: optional_float(f[25])?,
                     distance: optional_float(f[26])?,
+                    light_update: match f[28].split_once(':') {
+                        None if f[28] == "-" => None,
+                        Some(("every", k)) => Some(LightUpdate::EveryFrames(small(k)?.max(1))),
+                        Some(("quantize", q)) => Some(LightUpdate::Quantize(float(q)?)),
+                        _ => return Err(bad(n, format!("{:?} is not a light update rule", f[28]))),
+                    },
                 },
                 summary: Summary {
                     cascades_needed,
@@ -637,6 +654,7 @@ pub fn join(shards: Vec<ShardInput>, grid: &Grid) -> Result<Vec<Row>> {
                     && p.split_range == row.setting.split_range
                     && p.knob.map(f64::to_bits) == row.setting.knob.map(f64::to_bits)
                     && p.distance.map(f64::to_bits) == row.setting.distance.map(f64::to_bits)
+                    && p.light_update == row.setting.light_update
             });
             if !same || slots[index].is_some() {
                 return Err(ShardError::dir(

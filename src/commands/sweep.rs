@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use crate::analysis::{analyze, AnalysisOptions, Summary};
 use crate::config::{Config, Fit, SplitRange};
 use crate::error::{Error, GridError, Result};
+use crate::light_motion::LightUpdate;
 use crate::metric::SummaryMetric;
 
 pub use crate::config::sweep_spec::{
@@ -33,6 +34,8 @@ pub struct Grid {
     pub knob: Option<Axis<f64>>,
     /// Shadow distances (`shadow.max_distance`), when swept.
     pub distance: Option<Axis<f64>>,
+    /// The light update rule (`shadow.light_update`), when swept (a moving light only).
+    pub light_update: Option<Axis<LightUpdate>>,
     /// What was left out of the `[sweep]` table because the preset has no such axis or value.
     pub notes: Vec<String>,
 }
@@ -137,6 +140,16 @@ pub fn parse_knob_spec(spec: &str) -> Result<Axis<f64>> {
     parse_number_spec("--knob", spec, "finite numbers", f64::is_finite)
 }
 
+/// `--light-update RULES`: `every:1,2,4,8`, `quantize:0.1,0.25,0.5`, or both.
+pub fn parse_light_update_spec(spec: &str) -> Result<Axis<LightUpdate>> {
+    crate::config::parse_light_update_list(spec)
+        .map(|values| Axis {
+            values,
+            spec: spec.to_string(),
+        })
+        .map_err(|why| Error::flag("--light-update", spec, why))
+}
+
 /// `--distance VALUES`: shadow distances in world units.
 pub fn parse_distance_spec(spec: &str) -> Result<Axis<f64>> {
     parse_number_spec("--distance", spec, "(0, 1e9]", crate::config::sweep_spec::distance_ok)
@@ -212,11 +225,13 @@ pub struct GridFlags {
     pub knob: Option<String>,
     /// `--distance`: shadow distances.
     pub distance: Option<String>,
+    /// `--light-update`: the light update rules.
+    pub light_update: Option<String>,
 }
 
 impl GridFlags {
     /// The flags' names without dashes, in the order of [`GridFlags::values`].
-    pub const KEYS: [&'static str; 8] = [
+    pub const KEYS: [&'static str; 9] = [
         "preset",
         "lambda",
         "cascades",
@@ -225,9 +240,10 @@ impl GridFlags {
         "split_range",
         "knob",
         "distance",
+        "light_update",
     ];
 
-    pub fn values(&self) -> [&Option<String>; 8] {
+    pub fn values(&self) -> [&Option<String>; 9] {
         [
             &self.preset,
             &self.lambda,
@@ -237,6 +253,7 @@ impl GridFlags {
             &self.split_range,
             &self.knob,
             &self.distance,
+            &self.light_update,
         ]
     }
 
@@ -251,6 +268,7 @@ impl GridFlags {
             split_range: get("split_range"),
             knob: get("knob"),
             distance: get("distance"),
+            light_update: get("light_update"),
         }
     }
 
@@ -264,6 +282,7 @@ impl GridFlags {
             split_range: self.split_range.as_deref().map(parse_split_range_spec).transpose()?,
             knob: self.knob.as_deref().map(parse_knob_spec).transpose()?,
             distance: self.distance.as_deref().map(parse_distance_spec).transpose()?,
+            light_update: self.light_update.as_deref().map(parse_light_update_spec).transpose()?,
         })
     }
 }
@@ -293,6 +312,7 @@ pub struct GridOverrides {
     pub split_range: Option<Axis<SplitRange>>,
     pub knob: Option<Axis<f64>>,
     pub distance: Option<Axis<f64>>,
+    pub light_update: Option<Axis<LightUpdate>>,
 }
 
 impl Grid {
@@ -504,6 +524,19 @@ impl Grid {
                 ));
             }
         }
+        let light_source = source(overrides.light_update.is_some(), "--light-update", "sweep.light_update");
+        let light_update = overrides.light_update.clone().or(spec.light_update.clone());
+        if let Some(axis) = &light_update {
+            if !config.motion.light.moves() {
+                return Err(Error::flag(
+                    &light_source,
+                    &axis.spec,
+                    "needs a moving light (motion.light_path = \"sun\" or \"file\"): a still light is \
+                     never re-aimed; set motion.light_path or drop the light update axis"
+                        .to_string(),
+                ));
+            }
+        }
         let grid = Grid {
             lambda,
             cascades,
@@ -512,6 +545,7 @@ impl Grid {
             split_range,
             knob,
             distance,
+            light_update,
             notes,
         };
         let n = grid.len();
@@ -524,6 +558,10 @@ impl Grid {
             if let Some(d) = &grid.distance {
                 extra.push_str(&format!(" × {} distances", d.values.len()));
                 more_flags.push_str(", --distance");
+            }
+            if let Some(u) = &grid.light_update {
+                extra.push_str(&format!(" × {} light updates", u.values.len()));
+                more_flags.push_str(", --light-update");
             }
             return Err(GridError::TooLarge {
                 configs: n,
@@ -579,6 +617,7 @@ impl Grid {
             * self.split_range.values.len()
             * self.knob.as_ref().map_or(1, |a| a.values.len())
             * self.distance.as_ref().map_or(1, |a| a.values.len())
+            * self.light_update.as_ref().map_or(1, |a| a.values.len())
     }
 
     pub fn is_empty(&self) -> bool {
@@ -586,13 +625,17 @@ impl Grid {
     }
 
     /// All settings in row order: split range, then fit, then distance, then resolution, then
-    /// cascades, then the knob, then λ (innermost).
+    /// cascades, then the knob, then the light update, then λ (innermost).
     pub fn settings(&self) -> Vec<Setting> {
         let opt = |a: &Option<Axis<f64>>| {
             a.as_ref()
                 .map_or(vec![None], |a| a.values.iter().map(|&v| Some(v)).collect())
         };
         let (knobs, distances) = (opt(&self.knob), opt(&self.distance));
+        let updates: Vec<Option<LightUpdate>> = self
+            .light_update
+            .as_ref()
+            .map_or(vec![None], |a| a.values.iter().map(|&v| Some(v)).collect());
         let mut out = Vec::with_capacity(self.len());
         for &split_range in &self.split_range.values {
             for &fit in &self.fit.values {
@@ -600,16 +643,19 @@ impl Grid {
                     for &resolution in &self.resolution.values {
                         for &cascades in &self.cascades.values {
                             for &knob in &knobs {
-                                for &lambda in &self.lambda.values {
-                                    out.push(Setting {
-                                        lambda,
-                                        cascades,
-                                        resolution,
-                                        fit,
-                                        split_range,
-                                        knob,
-                                        distance,
-                                    });
+                                for &light_update in &updates {
+                                    for &lambda in &self.lambda.values {
+                                        out.push(Setting {
+                                            lambda,
+                                            cascades,
+                                            resolution,
+                                            fit,
+                                            split_range,
+                                            knob,
+                                            distance,
+                                            light_update,
+                                        });
+                                    }
                                 }
                             }
                         }
@@ -644,6 +690,9 @@ impl Grid {
         if let Some(d) = &self.distance {
             out.push_str(&format!(" --distance {}", d.spec));
         }
+        if let Some(u) = &self.light_update {
+            out.push_str(&format!(" --light-update {}", u.spec));
+        }
         out
     }
 }
@@ -660,6 +709,8 @@ pub struct Setting {
     pub knob: Option<f64>,
     /// The shadow distance (None: not swept; the config's own).
     pub distance: Option<f64>,
+    /// The light update rule (None: not swept; the config's own).
+    pub light_update: Option<LightUpdate>,
 }
 
 impl Setting {
@@ -668,6 +719,15 @@ impl Setting {
     /// engine's; [`Grid::resolve`] has already checked every point, so this does not fail for
     /// a resolved grid.
     pub fn apply(&self, base: &Config) -> Result<Config> {
+        let mut c = self.apply_shadow(base)?;
+        if let Some(u) = self.light_update {
+            c.motion.light.update = u;
+        }
+        Ok(c)
+    }
+
+    /// [`Setting::apply`] without the light update rule (which changes no checked value).
+    fn apply_shadow(&self, base: &Config) -> Result<Config> {
         if base.shadow.preset.is_none() {
             let c = base.with_sweep_point(self.lambda, self.cascades, self.resolution, self.fit, self.split_range)?;
             return match self.distance {
@@ -709,6 +769,9 @@ impl Setting {
         }
         if let Some(d) = self.distance {
             extra.push_str(&format!(", distance {d}"));
+        }
+        if let Some(u) = self.light_update {
+            extra.push_str(&format!(", light update {}", crate::config::light_update_label(u)));
         }
         format!(
             "{} x {}^2, lambda {}, {}{range}{extra}",
@@ -1435,6 +1498,7 @@ mod tests {
                 split_range: SplitRange::Bounds,
                 knob: None,
                 distance: None,
+                light_update: None,
             },
             summary: Summary {
                 cascades_needed,

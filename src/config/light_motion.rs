@@ -241,3 +241,54 @@ pub fn read_light_file(path: &Path) -> Result<Vec<DVec3>> {
     }
     Ok(rows)
 }
+
+/// A list of light update rules as a sweep axis takes them: `every:1,2,4,8`,
+/// `quantize:0.1,0.25,0.5`, or both (`every:1,4,quantize:0.5`); a value without a prefix keeps
+/// the kind of the one before. `K` is a whole number in 1..=1000000, `q` degrees in (0, 90].
+pub fn parse_light_update_list(spec: &str) -> std::result::Result<Vec<LightUpdate>, String> {
+    let mut kind: Option<&str> = None;
+    let mut out = Vec::new();
+    for token in spec.split(',').map(str::trim) {
+        let value = match token.split_once(':') {
+            Some((k, v)) => {
+                let k = k.trim();
+                if k != "every" && k != "quantize" {
+                    return Err(format!("{k:?} is not an update rule; use every:K or quantize:DEG"));
+                }
+                kind = Some(if k == "every" { "every" } else { "quantize" });
+                v.trim()
+            }
+            None => token,
+        };
+        let update = match kind {
+            None => {
+                return Err(format!(
+                    "{token:?} has no rule; start with every:K (every K frames) or quantize:DEG (a DEG-degree grid)"
+                ))
+            }
+            Some("every") => match value.parse::<usize>() {
+                Ok(k) if (1..=1_000_000).contains(&k) => LightUpdate::EveryFrames(k),
+                _ => return Err(format!("every:{value} is not a frame count in 1..=1000000")),
+            },
+            Some(_) => match value.parse::<f64>() {
+                Ok(q) if q.is_finite() && q > 0.0 && q <= 90.0 => LightUpdate::Quantize(q.to_radians()),
+                _ => return Err(format!("quantize:{value} is not a grid step in (0, 90] degrees")),
+            },
+        };
+        if out.contains(&update) {
+            return Err(format!("{token:?} twice; each rule at most once"));
+        }
+        out.push(update);
+    }
+    Ok(out)
+}
+
+/// A light update rule as a sweep names it: `every:K` or `quantize:DEG` (DEG back in degrees,
+/// to 9 decimals).
+pub fn light_update_label(u: LightUpdate) -> String {
+    match u {
+        LightUpdate::EveryFrame => "every:1".to_string(),
+        LightUpdate::EveryFrames(k) => format!("every:{k}"),
+        LightUpdate::Quantize(q) => format!("quantize:{}", (q.to_degrees() * 1e9).round() / 1e9),
+    }
+}

@@ -8,6 +8,7 @@
 
 mod gltf_file;
 mod light_motion;
+pub use light_motion::{light_update_label, parse_light_update_list};
 mod location;
 mod path_file;
 mod schema;

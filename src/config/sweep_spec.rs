@@ -28,6 +28,9 @@ pub struct SweepSpec {
     pub knob: Option<Axis<f64>>,
     /// `distance = [...]`: shadow distances (`shadow.max_distance`), world units.
     pub distance: Option<Axis<f64>>,
+    /// `light_update = ["every:1", "every:4", "quantize:0.5"]`: the engine's light update rule
+    /// (a moving light only).
+    pub light_update: Option<Axis<crate::light_motion::LightUpdate>>,
     /// Memory budget for the recommendation, MiB (2^20 bytes).
     pub memory_budget_mib: Option<f64>,
     /// A larger grid is an error, not an out-of-memory.
@@ -197,6 +200,7 @@ pub(crate) struct RawSweep {
     split_range: Option<Vec<SplitRange>>,
     knob: Option<RawAxis>,
     distance: Option<RawAxis>,
+    light_update: Option<Vec<String>>,
     memory_budget_mib: Option<f64>,
     max_configs: Option<i64>,
     objective: Option<String>,
@@ -420,6 +424,21 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
         .map(|r| raw_numbers(r, "(0, 1e9]", distance_ok))
         .transpose()
         .map_err(|why| v.invalid("sweep.distance", "as written", &format!("distances in (0, 1e9]: {why}")))?;
+    let light_update = raw
+        .light_update
+        .map(|list| {
+            let spec = list.join(",");
+            super::parse_light_update_list(&spec)
+                .map(|values| Axis { values, spec })
+                .map_err(|why| {
+                    v.invalid(
+                        "sweep.light_update",
+                        format!("{list:?}"),
+                        &format!("rules every:K or quantize:DEG, each once: {why}"),
+                    )
+                })
+        })
+        .transpose()?;
     Ok(SweepSpec {
         lambda,
         cascades,
@@ -428,6 +447,7 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
         split_range,
         knob,
         distance,
+        light_update,
         memory_budget_mib,
         max_configs,
         objective: raw.objective,

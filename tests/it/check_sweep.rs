@@ -23,6 +23,7 @@ fn key(lambda: f64, cascades: u32, resolution: u32, fit: &str) -> SweepKey {
         split_range: csm_lab::config::SplitRange::Bounds,
         knob: None,
         distance: None,
+        light_update: None,
     }
 }
 

@@ -309,3 +309,88 @@ fn bad_light_motion_names_the_key_the_value_and_what_is_allowed() {
         "{e}"
     );
 }
+
+/// The sunset config's sweep table with the light update axis, as a small grid.
+fn sunset() -> Config {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/sunset.toml")).unwrap();
+    Config::from_toml_str(&text, "sunset.toml", None).unwrap()
+}
+
+#[test]
+fn each_light_update_row_is_the_analysis_of_a_file_with_that_rule() {
+    use csm_lab::sweep::{run, Grid, GridOverrides, SweepResult};
+    let c = sunset();
+    let grid = Grid::resolve(&c, &GridOverrides::default()).unwrap();
+    assert_eq!(grid.len(), 2 * 2 * 2 * 6);
+    let rows = run(&c, &grid, Some(2), &|| {}).unwrap();
+    let base = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/sunset.toml")).unwrap();
+    for row in rows.iter().step_by(5) {
+        let st = row.setting;
+        let rule = match st.light_update.unwrap() {
+            csm_lab::light_motion::LightUpdate::EveryFrames(k) => format!("{{ every_frames = {k} }}"),
+            csm_lab::light_motion::LightUpdate::Quantize(q) => format!("{{ quantize_deg = {} }}", q.to_degrees()),
+            other => panic!("{other:?}"),
+        };
+        let text = base
+            .replace("light_update = { every_frames = 4 }", &format!("light_update = {rule}"))
+            .replace("lambda = 0.75\n", &format!("lambda = {}\n", st.lambda))
+            .replace("cascades = 4\n", &format!("cascades = {}\n", st.cascades))
+            .replace("resolution = 2048\n", &format!("resolution = {}\n", st.resolution));
+        let a = analyze(&config(&text), &AnalysisOptions::summary_only());
+        let (l, r) = (a.summary.light.unwrap(), row.summary.light.unwrap());
+        assert!(
+            (l.jump - r.jump).abs() <= 1e-9 * l.jump.max(1.0),
+            "{st:?}: {l:?} vs {r:?}"
+        );
+        assert_eq!(l.crawl, r.crawl, "{st:?}");
+    }
+    // The named step is the largest of its kind whose jump is under one texel, at the
+    // configured setting (nothing is recommended: the turning sun makes every setting drift).
+    let result = SweepResult::new(c.clone(), grid, rows, String::new());
+    let choice = csm_lab::commands::light_sweep::choose(&result).unwrap();
+    let at = result.rows[choice.at].setting;
+    assert_eq!((at.lambda, at.cascades, at.resolution), (0.75, 4, 2048));
+    assert_eq!(choice.rows.len(), 6);
+    let calm_every: Vec<_> = choice
+        .rows
+        .iter()
+        .filter(|x| matches!(x.update, csm_lab::light_motion::LightUpdate::EveryFrames(_)) && x.jump < 1.0)
+        .collect();
+    assert_eq!(choice.every.unwrap().update, calm_every.last().unwrap().update);
+    assert!(
+        choice.rows.iter().any(|x| x.jump >= 1.0),
+        "the grid reaches a visible jump"
+    );
+    // Jumps grow with the update step: every K frames turns the sun K times as far.
+    let jumps: Vec<f64> = choice.rows[..4].iter().map(|x| x.jump).collect();
+    assert!(jumps.windows(2).all(|w| w[1] > 1.8 * w[0]), "{jumps:?}");
+}
+
+#[test]
+fn a_light_update_axis_needs_a_moving_light_and_valid_rules() {
+    use csm_lab::sweep::{parse_light_update_spec, Grid, GridOverrides};
+    let still = config(&with(&[]));
+    let o = GridOverrides {
+        light_update: Some(parse_light_update_spec("every:1,2").unwrap()),
+        ..Default::default()
+    };
+    let e = Grid::resolve(&still, &o).unwrap_err().to_string();
+    assert!(e.contains("--light-update") && e.contains("moving light"), "{e}");
+    for (spec, needle) in [
+        ("every:0", "1..=1000000"),
+        ("4", "has no rule"),
+        ("quantize:0", "(0, 90]"),
+        ("hourly:2", "not an update rule"),
+        ("every:2,2", "twice"),
+    ] {
+        let e = parse_light_update_spec(spec).unwrap_err().to_string();
+        assert!(e.contains("--light-update") && e.contains(needle), "{spec}: {e}");
+    }
+    let text = sunset_text().replace("\"every:8\"", "\"every:-1\"");
+    let e = rejected(&text);
+    assert!(e.contains("sweep.light_update") && e.contains("every:-1"), "{e}");
+}
+
+fn sunset_text() -> String {
+    std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/sunset.toml")).unwrap()
+}

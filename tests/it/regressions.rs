@@ -176,6 +176,7 @@ fn sweeping_to_a_fit_binary32_cannot_hold_is_refused_naming_the_key_before_any_w
         split_range: None,
         knob: None,
         distance: None,
+        light_update: None,
     };
     let grid = Grid::resolve(&base, &overrides).unwrap();
     let done = std::sync::atomic::AtomicUsize::new(0);

@@ -39,10 +39,15 @@ pub struct SweepKey {
     pub knob: Option<f64>,
     /// The shadow distance, when swept (the `shadow.max_distance` column).
     pub distance: Option<f64>,
+    /// The light update rule, when swept (the `shadow.light_update` column: `every:4`, ...).
+    pub light_update: Option<String>,
 }
 
 /// The `sweep.csv` column of a swept shadow distance.
 pub const DISTANCE_COLUMN: &str = "shadow.max_distance";
+
+/// The `sweep.csv` column of a swept light update rule.
+pub const LIGHT_UPDATE_COLUMN: &str = "shadow.light_update";
 
 impl SweepKey {
     /// The key of a config's own shadow setting.
@@ -55,6 +60,7 @@ impl SweepKey {
             split_range: SplitRange::of(config.shadow.fit_depth_to_visible),
             knob: crate::presets::axes(config).knob.map(|k| k.value),
             distance: None,
+            light_update: None,
         }
     }
 
@@ -71,6 +77,9 @@ impl SweepKey {
         }
         if let Some(d) = self.distance {
             extra.push_str(&format!(" distance={d}"));
+        }
+        if let Some(u) = &self.light_update {
+            extra.push_str(&format!(" light_update={u}"));
         }
         format!(
             "lambda={} cascades={} resolution={} fit={}{range}{extra}",
@@ -90,6 +99,7 @@ impl Ord for SweepKey {
             .then(self.split_range.cmp(&other.split_range))
             .then(opt_cmp(self.knob, other.knob))
             .then(opt_cmp(self.distance, other.distance))
+            .then_with(|| self.light_update.cmp(&other.light_update))
     }
 }
 
@@ -274,8 +284,9 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
     // A swept engine knob is the column named by its config key (`<engine>.<knob>`).
     let knob_idx = headers
         .iter()
-        .position(|h| h.trim().contains('.') && h.trim() != DISTANCE_COLUMN);
+        .position(|h| h.trim().contains('.') && h.trim() != DISTANCE_COLUMN && h.trim() != LIGHT_UPDATE_COLUMN);
     let distance_idx = column(DISTANCE_COLUMN);
+    let light_update_idx = column(LIGHT_UPDATE_COLUMN);
     let metric_cols: Vec<(usize, SummaryMetric)> = headers
         .iter()
         .enumerate()
@@ -318,6 +329,7 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
         let key = SweepKey {
             knob: knob_idx.map(|i| number(i, "knob")).transpose()?,
             distance: distance_idx.map(|i| number(i, DISTANCE_COLUMN)).transpose()?,
+            light_update: light_update_idx.map(|i| field(i).to_string()),
             lambda: number(key_idx[0], "lambda")?,
             cascades: int(key_idx[1], "cascades")?,
             resolution: int(key_idx[2], "resolution")?,
@@ -409,6 +421,7 @@ pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
                 split_range: r.setting.split_range,
                 knob: r.setting.knob,
                 distance: r.setting.distance,
+                light_update: r.setting.light_update.map(crate::config::light_update_label),
             },
             metrics: SummaryMetric::all().map(|m| (m.name(), m.value(&r.summary))).collect(),
         })
@@ -429,6 +442,7 @@ mod tests {
             split_range: SplitRange::Bounds,
             knob: None,
             distance: None,
+            light_update: None,
         };
         assert_eq!(k(0.5, "sphere"), k(0.5, "sphere"));
         assert!(k(0.25, "sphere") < k(0.5, "aabb"));
