@@ -134,7 +134,7 @@ impl LightSummary {
     fn of<'a>(snap: bool, paths: impl IntoIterator<Item = (&'a PathResult, &'a PathResult)>) -> Option<Self> {
         let mut out: Option<LightSummary> = None;
         for (s, u) in paths {
-            let (Some(s), Some(u)) = (s.light, u.light) else {
+            let (Some(s), Some(u)) = (&s.light, &u.light) else {
                 continue;
             };
             let o = out.get_or_insert_with(LightSummary::default);
@@ -194,6 +194,42 @@ pub struct CascadeReport {
     /// the light-space rectangle around its receiver points over its window's area.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub screen: Option<CascadeScreen>,
+    /// A moving light: this cascade's crawl and jump (see [`LightSummary`]); None under a
+    /// still light, and then absent from every output.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub light: Option<CascadeLight>,
+}
+
+/// One cascade's crawl (configured snapping) and jump (windows without snapping) under a
+/// moving light, the worst over the motion paths (texels).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct CascadeLight {
+    #[serde(rename = "light_crawl")]
+    pub crawl: f64,
+    #[serde(rename = "light_jump")]
+    pub jump: f64,
+}
+
+impl CascadeLight {
+    /// Cascade `i`'s values from the two snap modes' walks of the paths; None when no walk
+    /// measured a moving light.
+    fn of<'a>(snap: bool, i: usize, paths: impl IntoIterator<Item = (&'a PathResult, &'a PathResult)>) -> Option<Self> {
+        let mut out: Option<CascadeLight> = None;
+        for (s, u) in paths {
+            let (Some(s), Some(u)) = (&s.light, &u.light) else {
+                continue;
+            };
+            let o = out.get_or_insert_with(CascadeLight::default);
+            let crawl = if snap { s } else { u }
+                .cascade_crawl_rms
+                .get(i)
+                .copied()
+                .unwrap_or(0.0);
+            o.crawl = o.crawl.max(crawl);
+            o.jump = o.jump.max(u.cascade_jump_max.get(i).copied().unwrap_or(0.0));
+        }
+        out
+    }
 }
 
 /// The per-cascade screen metrics (scene geometry only).
@@ -735,6 +771,11 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
                     band_pixels: at_split(&band_pixels, i),
                     texel_utilization: utilization[i],
                 }),
+                light: CascadeLight::of(
+                    config.shadow.snap,
+                    i,
+                    std::iter::once((&snapped, &unsnapped)).chain(extra.iter().map(|e| (&e.snapped, &e.unsnapped))),
+                ),
             }
         })
         .collect();

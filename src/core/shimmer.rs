@@ -200,7 +200,7 @@ pub struct PathResult {
 
 /// Crawl and jumps of a moving light along the path, for one snap mode (texels; see
 /// `docs/metrics.md`).
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
 pub struct LightStats {
     /// RMS of S3 over the frame pairs whose used light direction did not change.
     pub crawl_rms: f64,
@@ -211,6 +211,9 @@ pub struct LightStats {
     pub jump_max: f64,
     /// Frame pairs (times cascades) at an update.
     pub update_pairs: usize,
+    /// Per cascade: crawl RMS and largest jump.
+    pub cascade_crawl_rms: Vec<f64>,
+    pub cascade_jump_max: Vec<f64>,
 }
 
 /// True when [`along_path`] evaluates probes with these options: for S4, on request, or

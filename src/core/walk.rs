@@ -104,14 +104,18 @@ pub struct PathTotals {
     light: Option<LightTotals>,
 }
 
-/// Crawl and jumps of a moving light, accumulated along the path (see [`PathTotals`]).
-#[derive(Debug, Clone, Copy, Default)]
+/// Crawl and jumps of a moving light, accumulated along the path (see [`PathTotals`]), in
+/// all and per cascade.
+#[derive(Debug, Clone, Default)]
 struct LightTotals {
     crawl_sum_ms: f64,
     crawl_pairs: usize,
     crawl_max_sq: f64,
     jump_max_sq: f64,
     update_pairs: usize,
+    cascade_crawl_sum_ms: Vec<f64>,
+    cascade_crawl_pairs: Vec<usize>,
+    cascade_jump_max_sq: Vec<f64>,
 }
 
 /// Slice corners outside a window, accumulated over corners (and frames).
@@ -273,6 +277,13 @@ impl PathTotals {
                 .then(|| if pairs > 0 { self.flip_sum / pairs as f64 } else { 0.0 }),
         };
         let light = self.light.map(|l| LightStats {
+            cascade_crawl_rms: l
+                .cascade_crawl_sum_ms
+                .iter()
+                .zip(&l.cascade_crawl_pairs)
+                .map(|(&s, &n)| if n > 0 { (s / n as f64).sqrt() } else { 0.0 })
+                .collect(),
+            cascade_jump_max: l.cascade_jump_max_sq.iter().map(|x| x.sqrt()).collect(),
             crawl_rms: if l.crawl_pairs > 0 {
                 (l.crawl_sum_ms / l.crawl_pairs as f64).sqrt()
             } else {
@@ -447,7 +458,12 @@ where
     let moving = model.light_moves();
     let mut states: [ModeState<M>; K] = modes.map(|snapped| ModeState {
         totals: PathTotals {
-            light: moving.then(LightTotals::default),
+            light: moving.then(|| LightTotals {
+                cascade_crawl_sum_ms: vec![0.0; m],
+                cascade_crawl_pairs: vec![0; m],
+                cascade_jump_max_sq: vec![0.0; m],
+                ..LightTotals::default()
+            }),
             ..PathTotals::new(snapped, m)
         },
         prev: (0..m).map(|_| None).collect(),
@@ -520,12 +536,16 @@ where
                     if updated {
                         l.update_pairs += 1;
                         if probes && !same {
-                            l.jump_max_sq = l.jump_max_sq.max(jump_kernel(pl, landings));
+                            let j = jump_kernel(pl, landings);
+                            l.jump_max_sq = l.jump_max_sq.max(j);
+                            l.cascade_jump_max_sq[i] = l.cascade_jump_max_sq[i].max(j);
                         }
                     } else if let Some((ms, mx_sq, _)) = drift {
                         l.crawl_sum_ms += ms;
                         l.crawl_pairs += 1;
                         l.crawl_max_sq = l.crawl_max_sq.max(mx_sq);
+                        l.cascade_crawl_sum_ms[i] += ms;
+                        l.cascade_crawl_pairs[i] += 1;
                     }
                 }
                 if let Some(d) = drift {

@@ -67,6 +67,10 @@ fn between_updates_a_snapped_sphere_fit_does_not_crawl() {
             let ls = a.summary.light.unwrap();
             assert_eq!(ls.crawl_snapped, 0.0);
             assert_eq!(ls.crawl, 0.0);
+            // Per cascade (cascades.csv): no crawl, and the largest jump is the summary's.
+            let per: Vec<_> = a.cascades.iter().map(|x| x.light.unwrap()).collect();
+            assert!(per.iter().all(|x| x.crawl == 0.0));
+            assert_eq!(per.iter().map(|x| x.jump).fold(0.0, f64::max), ls.jump);
             if path == "strafe" {
                 // Without snapping the strafing camera drifts between updates too.
                 assert!(ls.crawl_unsnapped > 1e-3, "{path} K={k}: {}", ls.crawl_unsnapped);
