@@ -101,6 +101,57 @@ pub struct Summary {
     /// bounds-only mode, and then absent from every output.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub screen: Option<ScreenStats>,
+    /// Crawl and jumps of a moving light; None under a still light, and then absent from
+    /// every output.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub light: Option<LightSummary>,
+}
+
+/// Crawl and jumps of a moving light, the worst over the motion paths (texels; see
+/// `docs/metrics.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct LightSummary {
+    /// RMS S3 over the frame pairs between updates, with the configured snapping.
+    #[serde(rename = "light_crawl")]
+    pub crawl: f64,
+    #[serde(rename = "light_crawl_snapped")]
+    pub crawl_snapped: f64,
+    #[serde(rename = "light_crawl_unsnapped")]
+    pub crawl_unsnapped: f64,
+    /// Largest probe move (not wrapped) at an update, in windows without snapping (the
+    /// visible part; see `docs/metrics.md`).
+    #[serde(rename = "light_jump")]
+    pub jump: f64,
+    #[serde(rename = "light_jump_snapped")]
+    pub jump_snapped: f64,
+    #[serde(rename = "light_jump_unsnapped")]
+    pub jump_unsnapped: f64,
+}
+
+impl LightSummary {
+    /// From the two snap modes' walks of the paths (the worst over the paths); None when no
+    /// walk measured a moving light.
+    fn of<'a>(snap: bool, paths: impl IntoIterator<Item = (&'a PathResult, &'a PathResult)>) -> Option<Self> {
+        let mut out: Option<LightSummary> = None;
+        for (s, u) in paths {
+            let (Some(s), Some(u)) = (&s.light, &u.light) else {
+                continue;
+            };
+            let o = out.get_or_insert_with(LightSummary::default);
+            o.crawl_snapped = o.crawl_snapped.max(s.crawl_rms);
+            o.crawl_unsnapped = o.crawl_unsnapped.max(u.crawl_rms);
+            o.jump_snapped = o.jump_snapped.max(s.jump_max);
+            o.jump_unsnapped = o.jump_unsnapped.max(u.jump_max);
+        }
+        out.map(|mut o| {
+            o.crawl = if snap { o.crawl_snapped } else { o.crawl_unsnapped };
+            // The snapped windows' jump adds their whole-texel re-snap, which moves no shadow
+            // on the ground (the grid stays world-anchored): the visible jump is the
+            // unsnapped one whatever the snapping.
+            o.jump = o.jump_unsnapped;
+            o
+        })
+    }
 }
 
 /// One cascade as built for the configured camera (frame 0).
@@ -143,6 +194,42 @@ pub struct CascadeReport {
     /// the light-space rectangle around its receiver points over its window's area.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub screen: Option<CascadeScreen>,
+    /// A moving light: this cascade's crawl and jump (see [`LightSummary`]); None under a
+    /// still light, and then absent from every output.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub light: Option<CascadeLight>,
+}
+
+/// One cascade's crawl (configured snapping) and jump (windows without snapping) under a
+/// moving light, the worst over the motion paths (texels).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct CascadeLight {
+    #[serde(rename = "light_crawl")]
+    pub crawl: f64,
+    #[serde(rename = "light_jump")]
+    pub jump: f64,
+}
+
+impl CascadeLight {
+    /// Cascade `i`'s values from the two snap modes' walks of the paths; None when no walk
+    /// measured a moving light.
+    fn of<'a>(snap: bool, i: usize, paths: impl IntoIterator<Item = (&'a PathResult, &'a PathResult)>) -> Option<Self> {
+        let mut out: Option<CascadeLight> = None;
+        for (s, u) in paths {
+            let (Some(s), Some(u)) = (&s.light, &u.light) else {
+                continue;
+            };
+            let o = out.get_or_insert_with(CascadeLight::default);
+            let crawl = if snap { s } else { u }
+                .cascade_crawl_rms
+                .get(i)
+                .copied()
+                .unwrap_or(0.0);
+            o.crawl = o.crawl.max(crawl);
+            o.jump = o.jump.max(u.cascade_jump_max.get(i).copied().unwrap_or(0.0));
+        }
+        out
+    }
 }
 
 /// The per-cascade screen metrics (scene geometry only).
@@ -260,6 +347,20 @@ pub fn rig(config: &Config) -> Option<Rig> {
     }
 }
 
+/// The light of every frame as the walks read it, when the light moves (None under a still
+/// light): the used direction of each frame, turned into a basis by the pipeline's rule.
+pub fn light_track(config: &Config, first_frame: usize) -> Option<crate::light_motion::LightTrack<'_>> {
+    config.motion.light.moves().then(|| crate::light_motion::LightTrack {
+        motion: &config.motion.light,
+        start: config.light_direction,
+        basis: match &config.shadow.preset {
+            Some(p) => crate::presets::light_basis_rule(p),
+            None => crate::geometry::LightBasis::new,
+        },
+        first_frame,
+    })
+}
+
 /// Why a config cannot run with the binary32 pipeline (completes "use precision = ..."), or
 /// None; see [`precision::f32_range_problem`].
 pub fn f32_range_problem(config: &Config) -> Option<String> {
@@ -297,7 +398,10 @@ pub fn each_frame_row(
         probe_drift: false,
         frame_rows: true,
     };
-    let probes = if config.shadow.precision == Precision::F32 || shimmer::needs_probes(&rig, sopts) {
+    let probes = if config.shadow.precision == Precision::F32
+        || config.motion.light.moves()
+        || shimmer::needs_probes(&rig, sopts)
+    {
         shimmer::probes(&rig, &pose0, &config.scene, config.analysis.probes)
     } else {
         Vec::new()
@@ -315,7 +419,10 @@ pub fn each_frame_row(
                     .take(take)
                     .map(|p| p.expect("validated when the config was loaded"));
                 let rows = match config.shadow.precision {
-                    Precision::F64 => shimmer::along_path(&rig, poses, &probes, snapped, sopts).frames,
+                    Precision::F64 => {
+                        let light = light_track(config, start);
+                        shimmer::along_path_lit(&rig, poses, &probes, light, snapped, sopts).frames
+                    }
                     Precision::F32 => {
                         let space = config.shadow.snap_space;
                         precision::along_path(&rig, poses, &probes, space, snapped, sopts)
@@ -434,6 +541,7 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
                 screen: visibility
                     .as_ref()
                     .map(|vis| screen::stats(vis, &[0.0, 0.0], &[0.0], visible)),
+                light: config.motion.light.moves().then(LightSummary::default),
             },
             preset: config
                 .shadow
@@ -470,7 +578,10 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
     };
     // Probes cost more than the rest of a sphere-fit analysis; place them only when used
     // (the f32 emulation always looks probes up: its drift and lookup error are per probe).
-    let probes = if config.shadow.precision == Precision::F32 || shimmer::needs_probes(&rig, sopts) {
+    let probes = if config.shadow.precision == Precision::F32
+        || config.motion.light.moves()
+        || shimmer::needs_probes(&rig, sopts)
+    {
         shimmer::probes(&rig, &pose0, &config.scene, config.analysis.probes)
     } else {
         Vec::new()
@@ -524,9 +635,10 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
         let batch = rayon::current_thread_index().is_some();
         let walked = match config.shadow.precision {
             Precision::F64 => {
-                let one = |snapped| shimmer::along_path(&rig, poses(), &probes, snapped, sopts);
+                let light = light_track(config, 0);
+                let one = |snapped| shimmer::along_path_lit(&rig, poses(), &probes, light, snapped, sopts);
                 let (s, u) = if batch {
-                    shimmer::along_path_both(&rig, poses(), &probes, sopts)
+                    shimmer::along_path_both_lit(&rig, poses(), &probes, light, sopts)
                 } else {
                     rayon::join(|| one(true), || one(false))
                 };
@@ -659,6 +771,11 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
                     band_pixels: at_split(&band_pixels, i),
                     texel_utilization: utilization[i],
                 }),
+                light: CascadeLight::of(
+                    config.shadow.snap,
+                    i,
+                    std::iter::once((&snapped, &unsnapped)).chain(extra.iter().map(|e| (&e.snapped, &e.unsnapped))),
+                ),
             }
         })
         .collect();
@@ -687,6 +804,10 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
         band_pixel_share: band_pixels.iter().sum(),
         seam_crossings,
         screen: screen_stats,
+        light: LightSummary::of(
+            config.shadow.snap,
+            std::iter::once((&snapped, &unsnapped)).chain(extra.iter().map(|e| (&e.snapped, &e.unsnapped))),
+        ),
     };
     let preset = config
         .shadow

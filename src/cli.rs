@@ -132,6 +132,10 @@ pub struct SweepArgs {
     /// The axis not given stays at the configured light's angle.
     #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub sun_elevation: Option<String>,
+    /// Light update rules of a moving light (shadow.light_update): every:1,2,4,8 and/or
+    /// quantize:0.1,0.25,0.5 (degrees).
+    #[arg(long, value_name = "SPEC")]
+    pub light_update: Option<String>,
     /// Worker threads, 1..=256 [default: one per core]. Results are identical at any count.
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u16).range(1..=256))]
     pub threads: Option<u16>,
@@ -280,6 +284,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
                 distance: args.distance,
                 sun_azimuth: args.sun_azimuth,
                 sun_elevation: args.sun_elevation,
+                light_update: args.light_update,
             },
             threads: args.threads,
             quiet: args.quiet,

@@ -31,8 +31,8 @@ pub mod suggest;
 // Short paths for the modules most callers use.
 pub use crate::commands::{bench, check, compare, stress, sweep};
 pub use crate::core::{
-    cascades, depth_range, fitting, geometry, mesh, metrics, motion, precision, rng, scene, screen, seams, shade,
-    shimmer, snapping, splits, sun, visibility, walk,
+    cascades, depth_range, fitting, geometry, light_motion, mesh, metrics, motion, precision, rng, scene, screen,
+    seams, shade, shimmer, snapping, splits, sun, visibility, walk,
 };
 pub use crate::figures as plots;
 

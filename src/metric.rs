@@ -313,6 +313,72 @@ pub const SUMMARY: &[SummaryDef] = &[
         value: |s| Value::Real(s.seam_crossings.unwrap_or(0.0)),
     },
     SummaryDef {
+        name: "light_crawl",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "moving light: RMS sub-texel drift (S3) over the frame pairs whose used light direction did not change (between updates), with the configured snapping, worst over the motion paths; only when the light moves",
+        brief: "moving light: drift between light updates (RMS texels)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.crawl)),
+    },
+    SummaryDef {
+        name: "light_crawl_snapped",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "light_crawl with snapping",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.crawl_snapped)),
+    },
+    SummaryDef {
+        name: "light_crawl_unsnapped",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "light_crawl without snapping",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.crawl_unsnapped)),
+    },
+    SummaryDef {
+        name: "light_jump",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "moving light: the largest move of a world-fixed probe's texel coordinates (not wrapped) between the two frames of a light update, in windows without snapping (a snapped window's whole-texel re-snap moves no shadow), worst over the motion paths; only when the light moves",
+        brief: "moving light: largest probe move at an update (texels)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.jump)),
+    },
+    SummaryDef {
+        name: "light_jump_snapped",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "light_jump in the snapped windows: adds their whole-texel re-snap at the update",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.jump_snapped)),
+    },
+    SummaryDef {
+        name: "light_jump_unsnapped",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "light_jump without snapping",
+        brief: "",
+        shown: Shown::Never,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.light.map_or(0.0, |l| l.jump_unsnapped)),
+    },
+    SummaryDef {
         name: "screen_receiver_fraction",
         unit: "",
         direction: Direction::LowerIsWorse,
@@ -523,7 +589,16 @@ pub fn summary_json(s: &Summary) -> Vec<(&'static str, serde_json::Value)> {
 
 /// Whether a metric belongs in the outputs of a summary: screen metrics only with geometry.
 fn shown_for(d: &SummaryDef, s: &Summary) -> bool {
-    (!d.screen || s.screen.is_some()) && (d.name != SEAM_CROSSINGS || s.seam_crossings.is_some())
+    (!d.screen || s.screen.is_some())
+        && (d.name != SEAM_CROSSINGS || s.seam_crossings.is_some())
+        && (!is_light_motion(d.name) || s.light.is_some())
+}
+
+/// The moving-light metrics (`light_crawl*`, `light_jump*`, in the summary and per cascade):
+/// only when the light moves ([`Summary::light`]), absent from every output under a still
+/// light. (`light_near` and `light_far` are not among them.)
+fn is_light_motion(name: &str) -> bool {
+    name.starts_with("light_crawl") || name.starts_with("light_jump")
 }
 
 /// The one summary metric an analysis computes only on request ([`crate::analysis::AnalysisOptions::seams`]):
@@ -796,6 +871,22 @@ pub const CASCADE: &[CascadeDef] = &[
         value: |c| Value::Real(c.overlap_area_fraction),
     },
     CascadeDef {
+        name: "light_crawl",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "moving light: this cascade's RMS sub-texel drift (S3) over the frame pairs between light updates, with the configured snapping, worst over the motion paths; only when the light moves",
+        screen: false,
+        value: |c| Value::Real(c.light.map_or(0.0, |l| l.crawl)),
+    },
+    CascadeDef {
+        name: "light_jump",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "moving light: this cascade's largest move of a world-fixed probe's texel coordinates at a light update, in windows without snapping, worst over the motion paths; only when the light moves",
+        screen: false,
+        value: |c| Value::Real(c.light.map_or(0.0, |l| l.jump)),
+    },
+    CascadeDef {
         name: "screen_pixels",
         unit: "",
         direction: Direction::Neither,
@@ -836,16 +927,24 @@ impl CascadeMetric {
 }
 
 /// The columns of `cascades.csv` (the screen columns only with scene geometry).
-pub fn cascade_columns(screen: bool) -> Vec<&'static str> {
+pub fn cascade_columns(screen: bool, light: bool) -> Vec<&'static str> {
     std::iter::once("cascade")
-        .chain(CASCADE.iter().filter(|d| screen || !d.screen).map(|d| d.name))
+        .chain(
+            CASCADE
+                .iter()
+                .filter(|d| (screen || !d.screen) && (light || !is_light_motion(d.name)))
+                .map(|d| d.name),
+        )
         .collect()
 }
 
 /// The fields of [`cascade_columns`] for one cascade.
 pub fn cascade_fields(c: &CascadeReport) -> Result<Vec<String>> {
     let mut fields = vec![c.cascade.to_string()];
-    for d in CASCADE.iter().filter(|d| !d.screen || c.screen.is_some()) {
+    for d in CASCADE
+        .iter()
+        .filter(|d| (!d.screen || c.screen.is_some()) && (!is_light_motion(d.name) || c.light.is_some()))
+    {
         fields.push((d.value)(c).csv(d.name)?);
     }
     Ok(fields)

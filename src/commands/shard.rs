@@ -13,10 +13,11 @@
 
 use std::fmt::Write as _;
 
-use crate::analysis::Summary;
+use crate::analysis::{LightSummary, Summary};
 use crate::config::Config;
 use crate::config::{Fit, SplitRange};
 use crate::error::{Error, Result, ShardError};
+use crate::light_motion::LightUpdate;
 use crate::screen::ScreenStats;
 use crate::sweep::{Grid, GridFlags, Row, Setting};
 
@@ -233,6 +234,9 @@ pub fn config_hash(
     if let Some(sun) = &grid.sun {
         h.eat(format!("{sun:?}").as_bytes());
     }
+    if let Some(u) = &grid.light_update {
+        h.eat(format!("{u:?}").as_bytes());
+    }
     h.eat(command.as_bytes());
     h.hex()
 }
@@ -245,7 +249,7 @@ const ROW_COLUMNS: &str =
     "index\tlambda\tcascades\tresolution\tfit\tsplit_range\tcascades_needed\tz_lo\tz_hi\tmax_aliasing\t\
 mean_aliasing\tmean_log_aliasing\tundersampled_fraction\tshimmer\tshimmer_snapped\tshimmer_unsnapped\tsize_jitter\t\
 coverage_violations\tmemory_bytes\tlookup_error_max\tlookup_error_rms\toverlap_area_fraction\tband_pixel_share\t\
-seam_crossings\tscreen\tknob\tdistance\tsun_azimuth\tsun_elevation";
+seam_crossings\tscreen\tknob\tdistance\tsun_azimuth\tsun_elevation\tlight\tlight_update";
 
 fn hex(x: f64) -> String {
     format!("{:016x}", x.to_bits())
@@ -278,6 +282,7 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
             band_pixel_share,
             seam_crossings,
             screen,
+            light,
         } = &row.summary;
         let _ = write!(
             out,
@@ -351,6 +356,36 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
         ] {
             let _ = write!(out, "\t{}", x.map_or_else(|| "-".to_string(), hex));
         }
+        out.push('\t');
+        match light {
+            None => out.push('-'),
+            Some(LightSummary {
+                crawl,
+                crawl_snapped,
+                crawl_unsnapped,
+                jump,
+                jump_snapped,
+                jump_unsnapped,
+            }) => {
+                let all = [
+                    crawl,
+                    crawl_snapped,
+                    crawl_unsnapped,
+                    jump,
+                    jump_snapped,
+                    jump_unsnapped,
+                ]
+                .map(|x| hex(*x));
+                out.push_str(&all.join(","));
+            }
+        }
+        out.push('\t');
+        out.push_str(&match st.light_update {
+            None => "-".to_string(),
+            Some(LightUpdate::EveryFrame) => "every:1".to_string(),
+            Some(LightUpdate::EveryFrames(k)) => format!("every:{k}"),
+            Some(LightUpdate::Quantize(q)) => format!("quantize:{}", hex(q)),
+        });
         out.push('\n');
     }
     out
@@ -377,8 +412,8 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
     for (i, line) in lines {
         let n = i + 1;
         let f: Vec<&str> = line.split('\t').collect();
-        if f.len() != 29 {
-            return Err(bad(n, format!("{} fields; a row has 29", f.len())));
+        if f.len() != 31 {
+            return Err(bad(n, format!("{} fields; a row has 31", f.len())));
         }
         let float = |s: &str| {
             u64::from_str_radix(s, 16)
@@ -455,6 +490,12 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                         }),
                         _ => return Err(bad(n, "a sun azimuth without an elevation, or the reverse".into())),
                     },
+                    light_update: match f[30].split_once(':') {
+                        None if f[30] == "-" => None,
+                        Some(("every", k)) => Some(LightUpdate::EveryFrames(small(k)?.max(1))),
+                        Some(("quantize", q)) => Some(LightUpdate::Quantize(float(q)?)),
+                        _ => return Err(bad(n, format!("{:?} is not a light update rule", f[30]))),
+                    },
                 },
                 summary: Summary {
                     cascades_needed,
@@ -479,6 +520,24 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                         s => Some(float(s)?),
                     },
                     screen,
+                    light: match f[29] {
+                        "-" => None,
+                        s => {
+                            let x: Vec<f64> = s.split(',').map(float).collect::<Result<_>>()?;
+                            let [crawl, crawl_snapped, crawl_unsnapped, jump, jump_snapped, jump_unsnapped] = x[..]
+                            else {
+                                return Err(bad(n, format!("the light field has {} numbers; it has 6", x.len())));
+                            };
+                            Some(LightSummary {
+                                crawl,
+                                crawl_snapped,
+                                crawl_unsnapped,
+                                jump,
+                                jump_snapped,
+                                jump_unsnapped,
+                            })
+                        }
+                    },
                 },
             },
         ));
@@ -616,6 +675,7 @@ pub fn join(shards: Vec<ShardInput>, grid: &Grid) -> Result<Vec<Row>> {
                             .setting
                             .sun
                             .map(|s| (s.azimuth_deg.to_bits(), s.elevation_deg.to_bits()))
+                    && p.light_update == row.setting.light_update
             });
             if !same || slots[index].is_some() {
                 return Err(ShardError::dir(

@@ -291,8 +291,10 @@ mod tests {
                 knob: None,
                 distance: None,
                 sun: Some(sun),
+                light_update: None,
             },
             summary: Summary {
+                light: None,
                 cascades_needed: true,
                 z_lo: 1.0,
                 z_hi: 2.0,

@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use crate::analysis::{analyze, AnalysisOptions, Summary};
 use crate::config::{Config, Fit, SplitRange};
 use crate::error::{Error, GridError, Result};
+use crate::light_motion::LightUpdate;
 use crate::metric::SummaryMetric;
 
 pub use crate::commands::sun_sweep::{parse_sun_azimuth_spec, parse_sun_elevation_spec, Sun, SunGrid, SunRows};
@@ -38,6 +39,8 @@ pub struct Grid {
     /// Sun angles (`--sun-azimuth`, `--sun-elevation`), when swept: every setting runs under
     /// every sun position ([`crate::commands::sun_sweep`]).
     pub sun: Option<SunGrid>,
+    /// The light update rule (`shadow.light_update`), when swept (a moving light only).
+    pub light_update: Option<Axis<LightUpdate>>,
     /// What was left out of the `[sweep]` table because the preset has no such axis or value.
     pub notes: Vec<String>,
 }
@@ -142,6 +145,16 @@ pub fn parse_knob_spec(spec: &str) -> Result<Axis<f64>> {
     parse_number_spec("--knob", spec, "finite numbers", f64::is_finite)
 }
 
+/// `--light-update RULES`: `every:1,2,4,8`, `quantize:0.1,0.25,0.5`, or both.
+pub fn parse_light_update_spec(spec: &str) -> Result<Axis<LightUpdate>> {
+    crate::config::parse_light_update_list(spec)
+        .map(|values| Axis {
+            values,
+            spec: spec.to_string(),
+        })
+        .map_err(|why| Error::flag("--light-update", spec, why))
+}
+
 /// `--distance VALUES`: shadow distances in world units.
 pub fn parse_distance_spec(spec: &str) -> Result<Axis<f64>> {
     parse_number_spec("--distance", spec, "(0, 1e9]", crate::config::sweep_spec::distance_ok)
@@ -221,11 +234,13 @@ pub struct GridFlags {
     pub sun_azimuth: Option<String>,
     /// `--sun-elevation`: sun elevations, degrees.
     pub sun_elevation: Option<String>,
+    /// `--light-update`: the light update rules.
+    pub light_update: Option<String>,
 }
 
 impl GridFlags {
     /// The flags' names without dashes, in the order of [`GridFlags::values`].
-    pub const KEYS: [&'static str; 10] = [
+    pub const KEYS: [&'static str; 11] = [
         "preset",
         "lambda",
         "cascades",
@@ -236,9 +251,10 @@ impl GridFlags {
         "distance",
         "sun_azimuth",
         "sun_elevation",
+        "light_update",
     ];
 
-    pub fn values(&self) -> [&Option<String>; 10] {
+    pub fn values(&self) -> [&Option<String>; 11] {
         [
             &self.preset,
             &self.lambda,
@@ -250,6 +266,7 @@ impl GridFlags {
             &self.distance,
             &self.sun_azimuth,
             &self.sun_elevation,
+            &self.light_update,
         ]
     }
 
@@ -266,6 +283,7 @@ impl GridFlags {
             distance: get("distance"),
             sun_azimuth: get("sun_azimuth"),
             sun_elevation: get("sun_elevation"),
+            light_update: get("light_update"),
         }
     }
 
@@ -285,6 +303,7 @@ impl GridFlags {
                 .as_deref()
                 .map(parse_sun_elevation_spec)
                 .transpose()?,
+            light_update: self.light_update.as_deref().map(parse_light_update_spec).transpose()?,
         })
     }
 }
@@ -316,6 +335,7 @@ pub struct GridOverrides {
     pub distance: Option<Axis<f64>>,
     pub sun_azimuth: Option<Axis<f64>>,
     pub sun_elevation: Option<Axis<f64>>,
+    pub light_update: Option<Axis<LightUpdate>>,
 }
 
 impl Grid {
@@ -527,6 +547,19 @@ impl Grid {
                 ));
             }
         }
+        let light_source = source(overrides.light_update.is_some(), "--light-update", "sweep.light_update");
+        let light_update = overrides.light_update.clone().or(spec.light_update.clone());
+        if let Some(axis) = &light_update {
+            if !config.motion.light.moves() {
+                return Err(Error::flag(
+                    &light_source,
+                    &axis.spec,
+                    "needs a moving light (motion.light_path = \"sun\" or \"file\"): a still light is \
+                     never re-aimed; set motion.light_path or drop the light update axis"
+                        .to_string(),
+                ));
+            }
+        }
         let grid = Grid {
             lambda,
             cascades,
@@ -536,6 +569,7 @@ impl Grid {
             knob,
             distance,
             sun: SunGrid::resolve(config, overrides.sun_azimuth.clone(), overrides.sun_elevation.clone()),
+            light_update,
             notes,
         };
         let n = grid.len();
@@ -552,6 +586,10 @@ impl Grid {
             if let Some(sun) = &grid.sun {
                 extra.push_str(&format!(" × {} sun angles", sun.len()));
                 more_flags.push_str(", --sun-azimuth, --sun-elevation");
+            }
+            if let Some(u) = &grid.light_update {
+                extra.push_str(&format!(" × {} light updates", u.values.len()));
+                more_flags.push_str(", --light-update");
             }
             return Err(GridError::TooLarge {
                 configs: n,
@@ -608,6 +646,7 @@ impl Grid {
             * self.knob.as_ref().map_or(1, |a| a.values.len())
             * self.distance.as_ref().map_or(1, |a| a.values.len())
             * self.sun.as_ref().map_or(1, SunGrid::len)
+            * self.light_update.as_ref().map_or(1, |a| a.values.len())
     }
 
     /// Settings per sun angle: the grid without its sun axes.
@@ -621,7 +660,7 @@ impl Grid {
 
     /// All settings in row order: the sun's elevation and azimuth when swept (outermost), then
     /// split range, then fit, then distance, then resolution, then cascades, then the knob,
-    /// then λ (innermost).
+    /// then the light update, then λ (innermost).
     pub fn settings(&self) -> Vec<Setting> {
         let base = self.settings_without_sun();
         match &self.sun {
@@ -641,6 +680,10 @@ impl Grid {
                 .map_or(vec![None], |a| a.values.iter().map(|&v| Some(v)).collect())
         };
         let (knobs, distances) = (opt(&self.knob), opt(&self.distance));
+        let updates: Vec<Option<LightUpdate>> = self
+            .light_update
+            .as_ref()
+            .map_or(vec![None], |a| a.values.iter().map(|&v| Some(v)).collect());
         let mut out = Vec::with_capacity(self.len());
         for &split_range in &self.split_range.values {
             for &fit in &self.fit.values {
@@ -648,17 +691,20 @@ impl Grid {
                     for &resolution in &self.resolution.values {
                         for &cascades in &self.cascades.values {
                             for &knob in &knobs {
-                                for &lambda in &self.lambda.values {
-                                    out.push(Setting {
-                                        lambda,
-                                        cascades,
-                                        resolution,
-                                        fit,
-                                        split_range,
-                                        knob,
-                                        distance,
-                                        sun: None,
-                                    });
+                                for &light_update in &updates {
+                                    for &lambda in &self.lambda.values {
+                                        out.push(Setting {
+                                            lambda,
+                                            cascades,
+                                            resolution,
+                                            fit,
+                                            split_range,
+                                            knob,
+                                            distance,
+                                            light_update,
+                                            sun: None,
+                                        });
+                                    }
                                 }
                             }
                         }
@@ -696,6 +742,9 @@ impl Grid {
         if let Some(sun) = &self.sun {
             out.push_str(&sun.cli_args());
         }
+        if let Some(u) = &self.light_update {
+            out.push_str(&format!(" --light-update {}", u.spec));
+        }
         out
     }
 }
@@ -714,6 +763,8 @@ pub struct Setting {
     pub distance: Option<f64>,
     /// The sun position (None: not swept; the configured light).
     pub sun: Option<Sun>,
+    /// The light update rule (None: not swept; the config's own).
+    pub light_update: Option<LightUpdate>,
 }
 
 impl Setting {
@@ -722,14 +773,19 @@ impl Setting {
     /// engine's; [`Grid::resolve`] has already checked every point, so this does not fail for
     /// a resolved grid.
     pub fn apply(&self, base: &Config) -> Result<Config> {
-        let c = self.apply_but_sun(base)?;
+        let mut c = self.apply_shadow(base)?;
+        if let Some(u) = self.light_update {
+            c.motion.light.update = u;
+        }
         match self.sun {
             None => Ok(c),
             Some(sun) => c.with_light_direction(sun.light_direction()),
         }
     }
 
-    fn apply_but_sun(&self, base: &Config) -> Result<Config> {
+    /// [`Setting::apply`] without the light update rule and the sun (neither changes a value
+    /// the shadow checks look at).
+    fn apply_shadow(&self, base: &Config) -> Result<Config> {
         if base.shadow.preset.is_none() {
             let c = base.with_sweep_point(self.lambda, self.cascades, self.resolution, self.fit, self.split_range)?;
             return match self.distance {
@@ -774,6 +830,9 @@ impl Setting {
         }
         if let Some(sun) = self.sun {
             extra.push_str(&format!(", sun {}", sun.label()));
+        }
+        if let Some(u) = self.light_update {
+            extra.push_str(&format!(", light update {}", crate::config::light_update_label(u)));
         }
         format!(
             "{} x {}^2, lambda {}, {}{range}{extra}",
@@ -1525,6 +1584,7 @@ mod tests {
                 knob: None,
                 distance: None,
                 sun: None,
+                light_update: None,
             },
             summary: Summary {
                 cascades_needed,
@@ -1546,6 +1606,7 @@ mod tests {
                 band_pixel_share: 0.0,
                 seam_crossings: None,
                 screen: None,
+                light: None,
             },
         }
     }

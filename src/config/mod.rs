@@ -7,6 +7,8 @@
 //! result in [`ShadowSettings::preset`].
 
 mod gltf_file;
+mod light_motion;
+pub use light_motion::{light_update_label, parse_light_update_list};
 mod location;
 mod path_file;
 mod schema;
@@ -247,6 +249,9 @@ pub struct MotionSettings {
     /// Further paths of `motion.paths` after the first (empty with a single path). Each is
     /// walked from the configured camera; the summary's path metrics take the worst of all.
     pub extra: Vec<ExtraPath>,
+    /// The light's motion (`motion.light_path`) and the engine's update rule
+    /// (`shadow.light_update`); still by default.
+    pub light: crate::light_motion::LightMotion,
 }
 
 /// A further motion path of `motion.paths`, with its own step.
@@ -266,10 +271,33 @@ impl MotionSettings {
     }
 }
 
+/// The light's motion in the echo (nothing under a still light, so the echo is as before).
+fn light_echo(light: &crate::light_motion::LightMotion, motion: &mut serde_json::Value) {
+    use crate::light_motion::{LightPath, LightUpdate};
+    match &light.path {
+        LightPath::Still => return,
+        LightPath::Sun { azimuth, elevation } => {
+            motion["light_path"] = "sun".into();
+            motion["sun_azimuth_step_deg"] = azimuth.to_degrees().into();
+            motion["sun_elevation_step_deg"] = elevation.to_degrees().into();
+        }
+        LightPath::File { path, .. } => {
+            motion["light_path"] = "file".into();
+            motion["light_file"] = path.display().to_string().into();
+        }
+    }
+    motion["light_update"] = match light.update {
+        LightUpdate::EveryFrame => serde_json::json!({ "every_frames": 1 }),
+        LightUpdate::EveryFrames(k) => serde_json::json!({ "every_frames": k }),
+        LightUpdate::Quantize(q) => serde_json::json!({ "quantize_deg": q.to_degrees() }),
+    };
+}
+
 fn step_unit(path: &MotionPath) -> &'static str {
     match path {
         MotionPath::Strafe | MotionPath::Dolly => "world units per frame",
         MotionPath::File { .. } => "unused (poses from file)",
+        MotionPath::Still => "unused (the camera is still)",
         _ => "degrees per frame",
     }
 }
@@ -376,6 +404,9 @@ impl Config {
             obj.remove("analysis");
             if let Some(m) = obj.get_mut("motion").and_then(|m| m.as_object_mut()) {
                 m.remove("file");
+                m.remove("light_file");
+                // A shadow setting, which a baseline comparison may vary.
+                m.remove("light_update");
             }
         }
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
@@ -416,6 +447,7 @@ impl Config {
         if let MotionPath::File { path, .. } = &self.motion.path {
             motion["file"] = serde_json::Value::String(path.display().to_string());
         }
+        light_echo(&self.motion.light, &mut motion);
         if !self.motion.extra.is_empty() {
             motion["paths"] = self
                 .motion
@@ -477,6 +509,7 @@ impl Config {
                 frames: self.motion.frames,
                 step: self.motion.step,
             },
+            light: self.motion.light.clone(),
         }
     }
 

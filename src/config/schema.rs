@@ -147,6 +147,15 @@ pub(crate) struct RawShadow {
     pub(crate) precision: Option<String>,
     pub(crate) snap_space: Option<String>,
     pub(crate) preset: Option<String>,
+    pub(crate) light_update: Option<RawLightUpdate>,
+}
+
+/// `[shadow] light_update = { every_frames = K }` or `{ quantize_deg = Q }`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawLightUpdate {
+    pub(crate) every_frames: Option<i64>,
+    pub(crate) quantize_deg: Option<f64>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -160,6 +169,11 @@ pub(crate) struct RawMotion {
     pub(crate) frames: Option<i64>,
     pub(crate) step: Option<f64>,
     pub(crate) file: Option<String>,
+    /// The light's path: "still" (default), "sun" or "file".
+    pub(crate) light_path: Option<String>,
+    pub(crate) sun_azimuth_step_deg: Option<f64>,
+    pub(crate) sun_elevation_step_deg: Option<f64>,
+    pub(crate) light_file: Option<String>,
 }
 
 #[derive(Debug, Default, Deserialize)]

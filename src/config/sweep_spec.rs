@@ -33,6 +33,9 @@ pub struct SweepSpec {
     pub sun_azimuth: Option<Axis<f64>>,
     /// `sun_elevation = [...]`: the sun's angle above the horizon, degrees in (0, 90].
     pub sun_elevation: Option<Axis<f64>>,
+    /// `light_update = ["every:1", "every:4", "quantize:0.5"]`: the engine's light update rule
+    /// (a moving light only).
+    pub light_update: Option<Axis<crate::light_motion::LightUpdate>>,
     /// Memory budget for the recommendation, MiB (2^20 bytes).
     pub memory_budget_mib: Option<f64>,
     /// A larger grid is an error, not an out-of-memory.
@@ -206,6 +209,7 @@ pub(crate) struct RawSweep {
     distance: Option<RawAxis>,
     sun_azimuth: Option<RawAxis>,
     sun_elevation: Option<RawAxis>,
+    light_update: Option<Vec<String>>,
     memory_budget_mib: Option<f64>,
     max_configs: Option<i64>,
     objective: Option<String>,
@@ -462,6 +466,21 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
                 &format!("degrees above the horizon, (0, 90]: {why}"),
             )
         })?;
+    let light_update = raw
+        .light_update
+        .map(|list| {
+            let spec = list.join(",");
+            super::parse_light_update_list(&spec)
+                .map(|values| Axis { values, spec })
+                .map_err(|why| {
+                    v.invalid(
+                        "sweep.light_update",
+                        format!("{list:?}"),
+                        &format!("rules every:K or quantize:DEG, each once: {why}"),
+                    )
+                })
+        })
+        .transpose()?;
     Ok(SweepSpec {
         lambda,
         cascades,
@@ -472,6 +491,7 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
         distance,
         sun_azimuth,
         sun_elevation,
+        light_update,
         memory_budget_mib,
         max_configs,
         objective: raw.objective,

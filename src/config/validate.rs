@@ -141,7 +141,8 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let (scene, geometry) = scene(&raw.scene, v, base_dir, world_offset, &moved)?;
 
     // Shadow.
-    let s = raw.shadow;
+    let mut s = raw.shadow;
+    let light_update = s.light_update.take();
     let written = Written {
         max_distance: s.max_distance.is_some(),
         cascades: s.cascades.is_some(),
@@ -227,7 +228,14 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     };
 
     // Motion.
-    let m = raw.motion;
+    let mut m = raw.motion;
+    let m_light = super::schema::RawMotion {
+        light_path: m.light_path.take(),
+        sun_azimuth_step_deg: m.sun_azimuth_step_deg,
+        sun_elevation_step_deg: m.sun_elevation_step_deg,
+        light_file: m.light_file.take(),
+        ..Default::default()
+    };
     let frames = v.int_range("motion.frames", m.frames.unwrap_or(240), 2, 1_000_000)? as usize;
     let step_as_written = v.finite("motion.step", m.step.unwrap_or(0.05))?;
     let file = m.file;
@@ -243,7 +251,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
                     ),
                 ));
             }
-            if step_as_written == 0.0 {
+            if step_as_written == 0.0 && name != "still" {
                 return Err(v.invalid(
                     if key == "motion.paths" {
                         "motion.steps"
@@ -373,6 +381,8 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         }
     }
 
+    let light = super::light_motion::parse(&m_light, light_update.as_ref(), v, base_dir, light_direction, frames)?;
+
     let a = raw.analysis;
     let analysis = AnalysisSettings {
         density_samples: v.int_range(
@@ -416,6 +426,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             step,
             step_as_written,
             extra,
+            light,
         },
         analysis,
         sweep,

@@ -301,9 +301,15 @@ impl Rig {
 
     /// Cascade `i`'s light basis in the frame of `lp`.
     pub fn basis(&self, i: usize, lp: &LightPose) -> LightBasis {
+        self.basis_with(i, lp, &self.light)
+    }
+
+    /// Cascade `i`'s light basis in the frame of `lp` when the light of that frame has the
+    /// basis `light` (a moving light; [`Rig::basis`] is this with the rig's own light).
+    pub fn basis_with(&self, i: usize, lp: &LightPose, light: &LightBasis) -> LightBasis {
         match &self.scheme.basis {
-            BasisRule::Fixed => self.light,
-            BasisRule::CameraRight => camera_right_basis(self.light.z, lp.pose.right).unwrap_or(self.light),
+            BasisRule::Fixed => *light,
+            BasisRule::CameraRight => camera_right_basis(light.z, lp.pose.right).unwrap_or(*light),
             BasisRule::LookAtFrom(eye) => {
                 let s = &self.slices[i];
                 // The 8 corners of a symmetric slice average to its axis point at mid-depth.
@@ -312,7 +318,7 @@ impl Rig {
                 if dir.length() > 1e-12 * (1.0 + eye.length()) {
                     LightBasis::new(dir)
                 } else {
-                    self.light
+                    *light
                 }
             }
         }
@@ -324,6 +330,17 @@ impl Rig {
             (self.light, *lp)
         } else {
             let b = self.basis(i, lp);
+            (b, LightPose::new(&b, &lp.pose))
+        }
+    }
+
+    /// [`Rig::cascade_pose`] for a frame whose light has the basis `light`, with `lp` the
+    /// camera frame in that basis.
+    pub fn cascade_pose_with(&self, i: usize, lp: &LightPose, light: &LightBasis) -> (LightBasis, LightPose) {
+        if self.fixed_basis() {
+            (*light, *lp)
+        } else {
+            let b = self.basis_with(i, lp, light);
             (b, LightPose::new(&b, &lp.pose))
         }
     }

@@ -12,6 +12,7 @@ pub mod depth_range;
 pub mod fitting;
 pub mod free_splits;
 pub mod geometry;
+pub mod light_motion;
 pub mod mesh;
 pub mod metrics;
 pub mod motion;

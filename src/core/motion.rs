@@ -26,6 +26,8 @@ pub enum MotionPath {
     Pitch,
     /// Circling the target about the up vector, `step` radians per frame.
     Orbit,
+    /// A camera that does not move: the configured pose in every frame (the step is unused).
+    Still,
     /// Poses read from a CSV file: (position, target) per frame.
     File { path: PathBuf, poses: Vec<(DVec3, DVec3)> },
 }
@@ -33,12 +35,13 @@ pub enum MotionPath {
 impl MotionPath {
     /// The paths generated from the configured camera, by name: a new path is a variant here,
     /// its name in [`MotionPath::name`] and its poses in [`camera_path`], nothing else.
-    pub const GENERATED: [MotionPath; 5] = [
+    pub const GENERATED: [MotionPath; 6] = [
         MotionPath::Strafe,
         MotionPath::Dolly,
         MotionPath::Yaw,
         MotionPath::Pitch,
         MotionPath::Orbit,
+        MotionPath::Still,
     ];
 
     /// The generated path of a name (`"strafe"`, ...); None for `"file"` and unknown names.
@@ -70,6 +73,7 @@ impl MotionPath {
             MotionPath::Yaw => "yaw",
             MotionPath::Pitch => "pitch",
             MotionPath::Orbit => "orbit",
+            MotionPath::Still => "still",
             MotionPath::File { .. } => "file",
         }
     }
@@ -157,6 +161,7 @@ impl Poses<'_> {
                 let q = DQuat::from_axis_angle(up.normalize(), s);
                 CameraPose::look_at(cam.target + q * (cam.position - cam.target), cam.target, up)
             }
+            MotionPath::Still => Some(pose0),
             MotionPath::File { .. } => unreachable!("handled above"),
         };
         let pose = pose.ok_or_else(|| bad(t))?;

@@ -150,6 +150,9 @@ pub struct Setup {
     pub geometry: Option<Geometry>,
     pub shadow: ShadowParams,
     pub motion: Motion,
+    /// How the light moves along the path (still by default): the direction of frame `t` is
+    /// `light.used_direction(light_direction, t)`.
+    pub light: crate::light_motion::LightMotion,
 }
 
 impl Setup {

@@ -33,6 +33,7 @@ use glam::{DVec2, DVec3};
 use crate::cascades::{bounds_2d, LightPose, Rig};
 use crate::fitting::{Fit, Window};
 use crate::geometry::{Aabb, CameraPose, LightBasis};
+use crate::light_motion::LightTrack;
 use crate::rng::halton;
 use crate::walk::{closed_form_drift, walk, Landing, PathModel, PathTotals};
 
@@ -193,6 +194,26 @@ pub struct PathResult {
     pub stats: ShimmerStats,
     pub coverage: Coverage,
     pub frames: Vec<FrameShimmer>,
+    /// Crawl and jumps, when the light moves (None under a still light).
+    pub light: Option<LightStats>,
+}
+
+/// Crawl and jumps of a moving light along the path, for one snap mode (texels; see
+/// `docs/metrics.md`).
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+pub struct LightStats {
+    /// RMS of S3 over the frame pairs whose used light direction did not change.
+    pub crawl_rms: f64,
+    /// Largest S3 over those pairs.
+    pub crawl_max: f64,
+    /// Largest move of a world-fixed probe's texel coordinates (not wrapped) over the pairs
+    /// at an update of the used light direction.
+    pub jump_max: f64,
+    /// Frame pairs (times cascades) at an update.
+    pub update_pairs: usize,
+    /// Per cascade: crawl RMS and largest jump.
+    pub cascade_crawl_rms: Vec<f64>,
+    pub cascade_jump_max: Vec<f64>,
 }
 
 /// True when [`along_path`] evaluates probes with these options: for S4, on request, or
@@ -227,8 +248,32 @@ where
     I: IntoIterator<Item = P>,
     I::IntoIter: ExactSizeIterator,
 {
-    let [r] = walk(&mut RigPath::new(rig, probes), poses, [snapped], opts);
+    along_path_lit(rig, poses, probes, None, snapped, opts)
+}
+
+/// [`along_path`] under a moving light (`light`; None or a still light is [`along_path`]).
+pub fn along_path_lit<P: Borrow<CameraPose>, I>(
+    rig: &Rig,
+    poses: I,
+    probes: &[Vec<DVec3>],
+    light: Option<LightTrack<'_>>,
+    snapped: bool,
+    opts: ShimmerOptions,
+) -> PathResult
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
+    let [r] = walk(&mut model(rig, probes, light), poses, [snapped], opts);
     r.finish(opts)
+}
+
+fn model<'a>(rig: &'a Rig, probes: &'a [Vec<DVec3>], light: Option<LightTrack<'a>>) -> RigPath<'a> {
+    let m = RigPath::new(rig, probes);
+    match light {
+        Some(l) => m.with_light(l),
+        None => m,
+    }
 }
 
 /// Both snap modes in one walk, `(snapped, unsnapped)`: the same results as two calls of
@@ -243,7 +288,22 @@ where
     I: IntoIterator<Item = P>,
     I::IntoIter: ExactSizeIterator,
 {
-    let [s, u] = walk(&mut RigPath::new(rig, probes), poses, [true, false], opts);
+    along_path_both_lit(rig, poses, probes, None, opts)
+}
+
+/// [`along_path_both`] under a moving light (see [`along_path_lit`]).
+pub fn along_path_both_lit<P: Borrow<CameraPose>, I>(
+    rig: &Rig,
+    poses: I,
+    probes: &[Vec<DVec3>],
+    light: Option<LightTrack<'_>>,
+    opts: ShimmerOptions,
+) -> (PathResult, PathResult)
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
+    let [s, u] = walk(&mut model(rig, probes, light), poses, [true, false], opts);
     (s.finish(opts), u.finish(opts))
 }
 
@@ -294,6 +354,11 @@ pub struct RigPath<'a> {
     /// window so that the fixed-basis walk copies no basis per frame.
     frame: Vec<(LightBasis, LightPose)>,
     prev_basis: Vec<Option<LightBasis>>,
+    /// A moving light: the light of each frame, this frame's light basis and whether it
+    /// differs from the previous frame's (an update).
+    light: Option<LightTrack<'a>>,
+    frame_light: Option<LightBasis>,
+    updated: bool,
 }
 
 /// One cascade's window of a [`RigPath`]: the window in its cascade's basis, which cascade it
@@ -325,7 +390,22 @@ impl<'a> RigPath<'a> {
             lp: None,
             frame: Vec::new(),
             prev_basis: vec![None; rig.cascade_count()],
+            light: None,
+            frame_light: None,
+            updated: false,
         }
+    }
+
+    /// The model under a moving light: every frame reads the light basis of `light` (a still
+    /// light changes nothing).
+    pub fn with_light(mut self, light: LightTrack<'a>) -> Self {
+        if light.motion.moves() {
+            self.light = Some(light);
+            self.fixed = false;
+            self.fast = false;
+            self.probe_xy = Vec::new();
+        }
+        self
     }
 
     /// Cascade `i`'s camera frame in its own basis, this frame.
@@ -357,12 +437,21 @@ impl PathModel for RigPath<'_> {
     }
 
     fn probes_needed(&self, opts: ShimmerOptions) -> bool {
-        needs_probes(self.rig, opts)
+        self.light.is_some() || needs_probes(self.rig, opts)
     }
 
     #[inline]
-    fn begin_frame(&mut self, _t: usize, pose: &CameraPose) {
-        let lp = LightPose::new(&self.rig.light, pose);
+    fn begin_frame(&mut self, t: usize, pose: &CameraPose) {
+        let light = match &self.light {
+            None => self.rig.light,
+            Some(track) => {
+                let b = track.basis_at(t);
+                self.updated = self.frame_light.is_some_and(|p| p != b);
+                self.frame_light = Some(b);
+                b
+            }
+        };
+        let lp = LightPose::new(&light, pose);
         self.lp = Some(lp);
         if !self.fixed {
             for (prev, (b, _)) in self.prev_basis.iter_mut().zip(&self.frame) {
@@ -372,8 +461,16 @@ impl PathModel for RigPath<'_> {
             let rig = self.rig;
             self.frame.clear();
             self.frame
-                .extend((0..rig.cascade_count()).map(|i| rig.cascade_pose(i, &lp)));
+                .extend((0..rig.cascade_count()).map(|i| rig.cascade_pose_with(i, &lp, &light)));
         }
+    }
+
+    fn light_moves(&self) -> bool {
+        self.light.is_some()
+    }
+
+    fn light_updated(&self) -> bool {
+        self.updated
     }
 
     #[inline]

@@ -14,7 +14,7 @@ use std::borrow::Borrow;
 use glam::DVec2;
 
 use crate::geometry::CameraPose;
-use crate::shimmer::{wrap, Coverage, FrameShimmer, PathResult, ShimmerOptions, ShimmerStats};
+use crate::shimmer::{wrap, Coverage, FrameShimmer, LightStats, PathResult, ShimmerOptions, ShimmerStats};
 
 /// Where one probe lands in one window: its texel coordinates `s` (0 at the window's minimum
 /// edge, N at the maximum) and the centre of the texel it samples, in the model's light-space
@@ -69,6 +69,16 @@ pub trait PathModel {
     fn same_landings(&self, _p: &Self::Win, _w: &Self::Win) -> bool {
         false
     }
+    /// True when the light used for the shadows can change along the path (a moving light):
+    /// the walk then splits the frame pairs into crawl and jumps.
+    fn light_moves(&self) -> bool {
+        false
+    }
+    /// True when the light used in the current frame differs from the previous frame's (an
+    /// update; see [`crate::light_motion`]).
+    fn light_updated(&self) -> bool {
+        false
+    }
 }
 
 /// Running totals of one snap mode along a path: coverage, S1, S3, S4, S7 and the per-frame
@@ -89,6 +99,23 @@ pub struct PathTotals {
     pub(crate) lookup_sq: Vec<f64>,
     pub(crate) lookup_max: Vec<f64>,
     pub(crate) lookup_count: Vec<usize>,
+    /// A moving light: S3 over the frame pairs between updates (mean squares summed, pairs,
+    /// largest square), and the largest squared probe move at an update and the update pairs.
+    light: Option<LightTotals>,
+}
+
+/// Crawl and jumps of a moving light, accumulated along the path (see [`PathTotals`]), in
+/// all and per cascade.
+#[derive(Debug, Clone, Default)]
+struct LightTotals {
+    crawl_sum_ms: f64,
+    crawl_pairs: usize,
+    crawl_max_sq: f64,
+    jump_max_sq: f64,
+    update_pairs: usize,
+    cascade_crawl_sum_ms: Vec<f64>,
+    cascade_crawl_pairs: Vec<usize>,
+    cascade_jump_max_sq: Vec<f64>,
 }
 
 /// Slice corners outside a window, accumulated over corners (and frames).
@@ -145,6 +172,7 @@ impl PathTotals {
             lookup_sq: vec![0.0; m],
             lookup_max: vec![0.0; m],
             lookup_count: vec![0; m],
+            light: None,
         }
     }
 
@@ -248,10 +276,28 @@ impl PathTotals {
                 .cell_flips
                 .then(|| if pairs > 0 { self.flip_sum / pairs as f64 } else { 0.0 }),
         };
+        let light = self.light.map(|l| LightStats {
+            cascade_crawl_rms: l
+                .cascade_crawl_sum_ms
+                .iter()
+                .zip(&l.cascade_crawl_pairs)
+                .map(|(&s, &n)| if n > 0 { (s / n as f64).sqrt() } else { 0.0 })
+                .collect(),
+            cascade_jump_max: l.cascade_jump_max_sq.iter().map(|x| x.sqrt()).collect(),
+            crawl_rms: if l.crawl_pairs > 0 {
+                (l.crawl_sum_ms / l.crawl_pairs as f64).sqrt()
+            } else {
+                0.0
+            },
+            crawl_max: l.crawl_max_sq.sqrt(),
+            jump_max: l.jump_max_sq.sqrt(),
+            update_pairs: l.update_pairs,
+        });
         PathResult {
             stats,
             coverage: self.coverage,
             frames: self.frames,
+            light,
         }
     }
 }
@@ -348,6 +394,17 @@ fn flip_kernel<M: PathModel>(
     (flipped, served)
 }
 
+/// The largest squared move of a probe's texel coordinates, not wrapped, over the probes
+/// served in both windows: how far a world-fixed point moved within the map (a jump, when the
+/// light was updated between the two frames).
+#[inline(never)]
+fn jump_kernel(prev: &[Option<Landing>], cur: &[Option<Landing>]) -> f64 {
+    prev.iter()
+        .zip(cur)
+        .filter_map(|(a, b)| Some((b.as_ref()?.s - a.as_ref()?.s).length_squared()))
+        .fold(0.0, f64::max)
+}
+
 /// One snap mode of a walk: its totals, each cascade's previous window and landings.
 struct ModeState<M: PathModel> {
     totals: PathTotals,
@@ -398,8 +455,17 @@ where
     let m = model.cascade_count();
     let probes = model.probes_needed(opts);
     let stride = crate::shimmer::frame_row_stride(poses.len());
+    let moving = model.light_moves();
     let mut states: [ModeState<M>; K] = modes.map(|snapped| ModeState {
-        totals: PathTotals::new(snapped, m),
+        totals: PathTotals {
+            light: moving.then(|| LightTotals {
+                cascade_crawl_sum_ms: vec![0.0; m],
+                cascade_crawl_pairs: vec![0; m],
+                cascade_jump_max_sq: vec![0.0; m],
+                ..LightTotals::default()
+            }),
+            ..PathTotals::new(snapped, m)
+        },
         prev: (0..m).map(|_| None).collect(),
         prev_landings: vec![Vec::new(); m],
         current: Vec::new(),
@@ -464,6 +530,24 @@ where
                         }
                     }
                 };
+                if moving {
+                    let updated = model.light_updated();
+                    let l = st.totals.light.as_mut().expect("a moving light keeps light totals");
+                    if updated {
+                        l.update_pairs += 1;
+                        if probes && !same {
+                            let j = jump_kernel(pl, landings);
+                            l.jump_max_sq = l.jump_max_sq.max(j);
+                            l.cascade_jump_max_sq[i] = l.cascade_jump_max_sq[i].max(j);
+                        }
+                    } else if let Some((ms, mx_sq, _)) = drift {
+                        l.crawl_sum_ms += ms;
+                        l.crawl_pairs += 1;
+                        l.crawl_max_sq = l.crawl_max_sq.max(mx_sq);
+                        l.cascade_crawl_sum_ms[i] += ms;
+                        l.cascade_crawl_pairs[i] += 1;
+                    }
+                }
                 if let Some(d) = drift {
                     st.totals.pair(t, i, size_change, d, opts.frame_rows && t % stride == 0);
                 }

@@ -105,6 +105,17 @@ fn sweep_objective(config: &Config, v: &Validator<'_>) -> Result<()> {
 /// binary32 must be able to hold every texel coordinate the emulated pipeline computes.
 fn binary32_range(config: &Config, v: &Validator<'_>) -> Result<()> {
     if config.shadow.precision == Precision::F32 {
+        if config.motion.light.moves() {
+            return Err(v.invalid(
+                "shadow.precision",
+                "\"f32\"",
+                &format!(
+                    "\"f64\" when the light moves (motion.light_path = {:?}): the binary32 pipeline is \
+                     measured under a still light only",
+                    config.motion.light.path.name()
+                ),
+            ));
+        }
         if let Some(why) = crate::analysis::f32_range_problem(config) {
             return Err(v.invalid("shadow.precision", "\"f32\"", &why));
         }

@@ -256,6 +256,8 @@ pub trait DynEngine: Sync {
     fn layout(&self, k: &Knobs, cascades: usize, max_distance: f64, near: f64, far: f64) -> Layout;
     fn snap_rule(&self, k: &Knobs) -> SnapRule;
     fn light_basis(&self, direction: DVec3) -> LightBasis;
+    /// [`DynEngine::light_basis`] as a function, for a walk under a moving light.
+    fn light_basis_fn(&self) -> fn(DVec3) -> LightBasis;
     fn scheme(&self, k: &Knobs, f: &Fitting<'_>) -> EngineScheme;
     fn split_rule(&self, k: &Knobs) -> String;
     fn snap_anchor(&self, k: &Knobs) -> &'static str;
@@ -352,6 +354,10 @@ impl<E: KnobsOf> DynEngine for E {
 
     fn light_basis(&self, direction: DVec3) -> LightBasis {
         E::light_basis(direction)
+    }
+
+    fn light_basis_fn(&self) -> fn(DVec3) -> LightBasis {
+        E::light_basis
     }
 
     fn scheme(&self, k: &Knobs, f: &Fitting<'_>) -> EngineScheme {

@@ -55,6 +55,12 @@ pub fn rig_for_layout(
     ))
 }
 
+/// How the engine of `preset` builds its light basis from a light direction (the basis of
+/// every frame under a moving light).
+pub fn light_basis_rule(preset: &Preset) -> fn(DVec3) -> crate::geometry::LightBasis {
+    preset.knobs.engine().light_basis_fn()
+}
+
 /// The rig of a config whose preset is `preset`, or None when no visible depth reads a cascade.
 pub fn rig(config: &Config, preset: &Preset) -> Option<Rig> {
     let s = &config.shadow;

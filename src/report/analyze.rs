@@ -49,7 +49,10 @@ impl Exporter<Analysis> for CascadesCsv {
             .iter()
             .map(metric::cascade_fields)
             .collect::<Result<Vec<_>>>()?;
-        csv_bytes(&metric::cascade_columns(a.config.geometry.is_some()), &rows)
+        csv_bytes(
+            &metric::cascade_columns(a.config.geometry.is_some(), a.config.motion.light.moves()),
+            &rows,
+        )
     }
 }
 

@@ -559,6 +559,9 @@ fn key_json(k: &SweepKey) -> Value {
     if let Some(x) = k.distance {
         v["distance"] = json!(x);
     }
+    if let Some(x) = &k.light_update {
+        v["light_update"] = json!(x);
+    }
     v
 }
 

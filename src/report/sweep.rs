@@ -58,6 +58,10 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         .as_ref()
         .and(crate::presets::axes(&r.config).knob.map(|k| k.key));
     let distance = r.grid.distance.is_some();
+    // A moving light adds its crawl and jump (configured snapping); a swept update rule its
+    // column.
+    let light = r.config.motion.light.moves();
+    let light_update = r.grid.light_update.is_some();
     // A sun sweep writes every (sun, setting) row; `pareto` and `recommended` mark every row of
     // the setting, `worst_sun` the setting's worst angle.
     let (all, setting_of, worst): (&[Row], Vec<usize>, Vec<bool>) = match &r.sun {
@@ -93,6 +97,14 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         if let (true, Some(d)) = (distance, st.distance) {
             fields.push(num("distance", d)?);
         }
+        if light {
+            let l = row.summary.light.unwrap_or_default();
+            fields.push(num("light_crawl", l.crawl)?);
+            fields.push(num("light_jump", l.jump)?);
+        }
+        if let (true, Some(u)) = (light_update, st.light_update) {
+            fields.push(crate::config::light_update_label(u));
+        }
         if let Some(sun) = st.sun.filter(|_| r.sun.is_some()) {
             fields.push(num("sun_azimuth_deg", sun.azimuth_deg)?);
             fields.push(num("sun_elevation_deg", sun.elevation_deg)?);
@@ -105,6 +117,8 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         .chain(SWEEP_EXTRA_COLUMNS)
         .chain(knob_key)
         .chain(distance.then_some("shadow.max_distance"))
+        .chain(light.then_some(["light_crawl", "light_jump"]).into_iter().flatten())
+        .chain(light_update.then_some(crate::check::sweep::LIGHT_UPDATE_COLUMN))
         .chain(r.sun.iter().flat_map(|_| SUN_COLUMNS))
         .collect();
     crate::output::csv_write_from(out, &header, rows)
@@ -131,6 +145,9 @@ fn row_json(row: &Row) -> serde_json::Value {
             "azimuth_deg": sun.azimuth_deg,
             "elevation_deg": sun.elevation_deg,
         });
+    }
+    if let Some(u) = row.setting.light_update {
+        v["light_update"] = serde_json::json!(crate::config::light_update_label(u));
     }
     for (k, x) in metric::summary_json(&row.summary) {
         v[k] = x;
@@ -231,6 +248,23 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
             }
             v["no_recommendation"] = none;
         }
+    }
+    if let Some(c) = crate::commands::light_sweep::choose(r) {
+        // A kind none of whose steps stays calm (or that was not swept) has no key: no null.
+        let mut u = serde_json::json!({
+            "why": crate::commands::light_sweep::text(&c),
+            "at": row_json(&r.rows[c.at]),
+        });
+        for (key, x) in [("largest_calm_every", c.every), ("largest_calm_quantize", c.quantize)] {
+            if let Some(x) = x {
+                u[key] = serde_json::json!({
+                    "rule": crate::config::light_update_label(x.update),
+                    "light_jump": x.jump,
+                    "light_crawl": x.crawl,
+                });
+            }
+        }
+        v["light_update"] = u;
     }
     v
 }
@@ -897,6 +931,9 @@ pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> 
         why_text(r),
         sweep::objective_text(r.objective)
     );
+    if let Some(c) = crate::commands::light_sweep::choose(r) {
+        let _ = writeln!(m, "{}\n", crate::commands::light_sweep::text(&c));
+    }
     let alts = alternative_lines(r);
     if !alts.is_empty() {
         m.push_str("## Alternatives\n\n");
@@ -1127,6 +1164,9 @@ pub fn stdout_table(r: &SweepResult) -> String {
     out.push_str(&super::optimize::stdout(r));
     for l in sun_lines(r) {
         let _ = writeln!(out, "note: {l}");
+    }
+    if let Some(c) = crate::commands::light_sweep::choose(r) {
+        let _ = writeln!(out, "{}", crate::commands::light_sweep::text(&c));
     }
     out
 }

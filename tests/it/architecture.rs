@@ -28,9 +28,9 @@ const LAYERS: &[&str] = &[
 /// Short paths re-exported by `lib.rs`, resolved to the module they name.
 fn module_of(name: &str) -> &str {
     match name {
-        "cascades" | "depth_range" | "fitting" | "geometry" | "mesh" | "metrics" | "motion" | "precision" | "rng"
-        | "scene" | "screen" | "seams" | "shade" | "shimmer" | "snapping" | "splits" | "sun" | "visibility"
-        | "walk" => "core",
+        "cascades" | "depth_range" | "fitting" | "geometry" | "light_motion" | "mesh" | "metrics" | "motion"
+        | "precision" | "rng" | "scene" | "screen" | "seams" | "shade" | "shimmer" | "snapping" | "splits" | "sun"
+        | "visibility" | "walk" => "core",
         "bench" | "check" | "compare" | "stress" | "sweep" => "commands",
         "plots" => "figures",
         "Error" | "Result" => "error",

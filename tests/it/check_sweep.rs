@@ -24,6 +24,7 @@ fn key(lambda: f64, cascades: u32, resolution: u32, fit: &str) -> SweepKey {
         knob: None,
         distance: None,
         sun: None,
+        light_update: None,
     }
 }
 

@@ -292,7 +292,7 @@ fn analyze_presets() -> Vec<Case> {
 
 fn bundled_runs() -> Vec<Case> {
     let mut cases = Vec::new();
-    for name in ["default", "indoor", "open_world", "top_down", "village"] {
+    for name in ["default", "indoor", "open_world", "top_down", "village", "sunset"] {
         let file = format!("{name}.toml");
         let mut files = vec![bundled(&file)];
         if name == "village" {

@@ -1120,7 +1120,7 @@ fn every_enum_valued_key_names_itself_and_its_values() {
             "",
             "path = ",
             "`motion.path` = \"spin\"",
-            "one of \"strafe\", \"dolly\", \"yaw\", \"pitch\", \"orbit\", \"file\"",
+            "one of \"strafe\", \"dolly\", \"yaw\", \"pitch\", \"orbit\", \"still\", \"file\"",
         ),
         (
             "",

@@ -178,6 +178,7 @@ fn sweeping_to_a_fit_binary32_cannot_hold_is_refused_naming_the_key_before_any_w
         distance: None,
         sun_azimuth: None,
         sun_elevation: None,
+        light_update: None,
     };
     let grid = Grid::resolve(&base, &overrides).unwrap();
     let done = std::sync::atomic::AtomicUsize::new(0);

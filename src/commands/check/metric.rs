@@ -121,6 +121,14 @@ mod tests {
             band_pixel_share: 0.0,
             seam_crossings: Some(0.375),
             screen: None,
+            light: Some(crate::analysis::LightSummary {
+                crawl: 0.5,
+                crawl_snapped: 0.5,
+                crawl_unsnapped: 0.75,
+                jump: 1.5,
+                jump_snapped: 1.5,
+                jump_unsnapped: 1.25,
+            }),
         };
         let json = serde_json::to_value(&s).unwrap();
         // The registry writes every key as serde would (same JSON type: bool, integer, float).
@@ -173,6 +181,10 @@ mod tests {
             band_far: 18.0,
             overlap_area_fraction: 0.5,
             screen: None,
+            light: Some(crate::analysis::CascadeLight {
+                crawl: 0.25,
+                jump: 1.75,
+            }),
         };
         let json = serde_json::to_value(&c).unwrap();
         let obj = json.as_object().unwrap();
@@ -199,11 +211,12 @@ mod tests {
         dedup.sort_unstable();
         dedup.dedup();
         assert_eq!(dedup.len(), names.len());
-        // Five names are both summary and per-cascade metrics (max_aliasing,
-        // coverage_violations, lookup_error_max, lookup_error_rms, overlap_area_fraction).
+        // Seven names are both summary and per-cascade metrics (max_aliasing,
+        // coverage_violations, lookup_error_max, lookup_error_rms, overlap_area_fraction,
+        // light_crawl, light_jump).
         assert_eq!(
             names.len(),
-            SummaryMetric::all().count() + CascadeMetric::all().count() - 5 + DepthMetric::ALL.len()
+            SummaryMetric::all().count() + CascadeMetric::all().count() - 7 + DepthMetric::ALL.len()
         );
     }
 

@@ -43,6 +43,8 @@ pub struct SweepKey {
     /// `sun_elevation_deg` columns): a row per sun angle, each judged on its own, so a rule
     /// must hold at every sun angle.
     pub sun: Option<(f64, f64)>,
+    /// The light update rule, when swept (the `shadow.light_update` column: `every:4`, ...).
+    pub light_update: Option<String>,
 }
 
 /// The `sweep.csv` column of a swept shadow distance.
@@ -50,6 +52,8 @@ pub const DISTANCE_COLUMN: &str = "shadow.max_distance";
 
 /// The `sweep.csv` columns of a swept sun: azimuth and elevation, degrees.
 pub const SUN_COLUMNS: [&str; 2] = ["sun_azimuth_deg", "sun_elevation_deg"];
+/// The `sweep.csv` column of a swept light update rule.
+pub const LIGHT_UPDATE_COLUMN: &str = "shadow.light_update";
 
 impl SweepKey {
     /// The key of a config's own shadow setting.
@@ -63,6 +67,7 @@ impl SweepKey {
             knob: crate::presets::axes(config).knob.map(|k| k.value),
             distance: None,
             sun: None,
+            light_update: None,
         }
     }
 
@@ -82,6 +87,9 @@ impl SweepKey {
         }
         if let Some((a, e)) = self.sun {
             extra.push_str(&format!(" sun_azimuth={a} sun_elevation={e}"));
+        }
+        if let Some(u) = &self.light_update {
+            extra.push_str(&format!(" light_update={u}"));
         }
         format!(
             "lambda={} cascades={} resolution={} fit={}{range}{extra}",
@@ -103,6 +111,7 @@ impl Ord for SweepKey {
             .then(opt_cmp(self.distance, other.distance))
             .then(opt_cmp(self.sun.map(|s| s.0), other.sun.map(|s| s.0)))
             .then(opt_cmp(self.sun.map(|s| s.1), other.sun.map(|s| s.1)))
+            .then_with(|| self.light_update.cmp(&other.light_update))
     }
 }
 
@@ -287,9 +296,10 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
     // A swept engine knob is the column named by its config key (`<engine>.<knob>`).
     let knob_idx = headers
         .iter()
-        .position(|h| h.trim().contains('.') && h.trim() != DISTANCE_COLUMN);
+        .position(|h| h.trim().contains('.') && h.trim() != DISTANCE_COLUMN && h.trim() != LIGHT_UPDATE_COLUMN);
     let distance_idx = column(DISTANCE_COLUMN);
     let sun_idx = column(SUN_COLUMNS[0]).zip(column(SUN_COLUMNS[1]));
+    let light_update_idx = column(LIGHT_UPDATE_COLUMN);
     let metric_cols: Vec<(usize, SummaryMetric)> = headers
         .iter()
         .enumerate()
@@ -336,6 +346,7 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
                 Some((a, e)) => Some((number(a, SUN_COLUMNS[0])?, number(e, SUN_COLUMNS[1])?)),
                 None => None,
             },
+            light_update: light_update_idx.map(|i| field(i).to_string()),
             lambda: number(key_idx[0], "lambda")?,
             cascades: int(key_idx[1], "cascades")?,
             resolution: int(key_idx[2], "resolution")?,
@@ -426,6 +437,7 @@ pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
                 knob: r.setting.knob,
                 distance: r.setting.distance,
                 sun: r.setting.sun.map(|x| (x.azimuth_deg, x.elevation_deg)),
+                light_update: r.setting.light_update.map(crate::config::light_update_label),
             },
             metrics: SummaryMetric::all().map(|m| (m.name(), m.value(&r.summary))).collect(),
         })
@@ -447,6 +459,7 @@ mod tests {
             knob: None,
             distance: None,
             sun: None,
+            light_update: None,
         };
         assert_eq!(k(0.5, "sphere"), k(0.5, "sphere"));
         assert!(k(0.25, "sphere") < k(0.5, "aabb"));
