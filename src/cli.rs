@@ -68,6 +68,10 @@ pub struct AnalyzeArgs {
     /// (by default a path longer than 1,000 frames keeps every k-th frame's rows).
     #[arg(long)]
     pub all_frames: bool,
+    /// Sample the shadow maps against the exact answer (acne, leaks, S5 flicker, the bias
+    /// needed per cascade; bias.csv); as [analysis] ground_truth = true. Needs scene geometry.
+    #[arg(long)]
+    pub ground_truth: bool,
 }
 
 #[derive(Debug, Args)]
@@ -245,6 +249,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             preset: args.preset,
             quiet: args.quiet,
             all_frames: args.all_frames,
+            ground_truth: args.ground_truth,
         }),
         Command::Sweep(args) => sweep::execute(&sweep::SweepRequest {
             config: args.config,

@@ -275,6 +275,8 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
             band_pixel_share,
             seam_crossings,
             screen,
+            // Ground truth is not part of a sweep row (only `analyze` runs it).
+            truth: _,
         } = &row.summary;
         let _ = write!(
             out,
@@ -463,6 +465,7 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                         s => Some(float(s)?),
                     },
                     screen,
+                    truth: None,
                 },
             },
         ));

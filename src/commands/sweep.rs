@@ -1456,6 +1456,7 @@ mod tests {
                 band_pixel_share: 0.0,
                 seam_crossings: None,
                 screen: None,
+                truth: None,
             },
         }
     }

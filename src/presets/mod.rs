@@ -11,6 +11,7 @@
 //! about a preset) and `sweep` (the axes a sweep may vary).
 
 mod apply;
+pub mod bias;
 mod engine;
 mod report;
 mod rig;

@@ -30,6 +30,9 @@ pub fn exporters_for(a: &Analysis) -> Vec<&'static dyn Exporter<Analysis>> {
         v.push(&figures::screen::ScreenAliasingPng);
         v.push(&figures::screen::ScreenCascadesPng);
     }
+    if a.ground_truth.is_some() {
+        v.push(&super::ground_truth::BiasCsv);
+    }
     v
 }
 
@@ -49,7 +52,10 @@ impl Exporter<Analysis> for CascadesCsv {
             .iter()
             .map(metric::cascade_fields)
             .collect::<Result<Vec<_>>>()?;
-        csv_bytes(&metric::cascade_columns(a.config.geometry.is_some()), &rows)
+        csv_bytes(
+            &metric::cascade_columns(a.config.geometry.is_some(), a.ground_truth.is_some()),
+            &rows,
+        )
     }
 }
 
@@ -351,6 +357,9 @@ pub fn summary_table(a: &Analysis) -> String {
                 let _ = writeln!(out, "  {k:<29} {v:>12}  {what}");
             }
         }
+    }
+    if let Some(g) = &a.ground_truth {
+        out.push_str(&super::ground_truth::recommendation(a, g));
     }
     if f32_block {
         let _ = writeln!(

@@ -31,3 +31,4 @@ mod regressions;
 mod seams;
 mod shimmer;
 mod shimmer_fast_paths;
+mod truth;

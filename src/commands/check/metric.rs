@@ -121,6 +121,7 @@ mod tests {
             band_pixel_share: 0.0,
             seam_crossings: Some(0.375),
             screen: None,
+            truth: None,
         };
         let json = serde_json::to_value(&s).unwrap();
         // The registry writes every key as serde would (same JSON type: bool, integer, float).
@@ -173,6 +174,7 @@ mod tests {
             band_far: 18.0,
             overlap_area_fraction: 0.5,
             screen: None,
+            truth: None,
         };
         let json = serde_json::to_value(&c).unwrap();
         let obj = json.as_object().unwrap();
@@ -199,11 +201,12 @@ mod tests {
         dedup.sort_unstable();
         dedup.dedup();
         assert_eq!(dedup.len(), names.len());
-        // Five names are both summary and per-cascade metrics (max_aliasing,
-        // coverage_violations, lookup_error_max, lookup_error_rms, overlap_area_fraction).
+        // Seven names are both summary and per-cascade metrics (max_aliasing,
+        // coverage_violations, lookup_error_max, lookup_error_rms, overlap_area_fraction,
+        // acne_fraction, leak_fraction).
         assert_eq!(
             names.len(),
-            SummaryMetric::all().count() + CascadeMetric::all().count() - 5 + DepthMetric::ALL.len()
+            SummaryMetric::all().count() + CascadeMetric::all().count() - 7 + DepthMetric::ALL.len()
         );
     }
 
