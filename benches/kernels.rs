@@ -257,6 +257,63 @@ fn sun_angle(c: &mut Criterion) {
     group.finish();
 }
 
+/// Ground truth on the default scene: the frame-0 pass (one texel ray and one truth ray per
+/// receiver) and one unsnapped path frame (every texel new), reported as rays per second by
+/// criterion's throughput; the texel-cache hit rate of a whole 240-frame walk is printed.
+fn ground_truth(c: &mut Criterion) {
+    use csm_lab::core::truth::{self, DepthFormat, Sampling};
+    let config = default_config();
+    let setup = config.setup();
+    let vis = setup.visibility().expect("default scene has geometry");
+    let scene = setup.geometry.as_ref().unwrap().scene.clone();
+    let rig = csm_lab::analysis::rig(&config).expect("cascades");
+    let pose = config.camera.pose();
+    let points = truth::receivers(&scene, &vis);
+    let m = rig.cascade_count();
+    let s = Sampling {
+        bias: vec![truth::Bias::depth(0.05); m],
+        format: Some(DepthFormat::D32F),
+        ranges: vec![(-500.0, 500.0); m],
+        pcf: 1,
+    };
+    let poses = || csm_lab::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
+    for snapped in [true, false] {
+        let f = truth::flicker(&scene, &rig, &rig.light, poses(), snapped, &points, &s, &mut |_, _| {});
+        println!(
+            "ground truth walk, {} frames, snapped {snapped}: {} texel reads, {} rays, cache hit rate {:.4}",
+            f.frames,
+            f.stats.reads,
+            f.stats.rays,
+            f.stats.hit_rate()
+        );
+    }
+    let mut group = c.benchmark_group("ground_truth");
+    group.sample_size(10);
+    // Frame 0: one texel ray and one truth ray per receiver.
+    group.throughput(criterion::Throughput::Elements(2 * points.len() as u64));
+    group.bench_function("frame0_rays", |b| {
+        b.iter(|| black_box(truth::frame_zero(&scene, &rig, &rig.light, &pose, true, &points, &s)))
+    });
+    // One unsnapped frame after frame 0: every receiver's texel is a new ray.
+    let two: Vec<_> = poses().take(2).collect();
+    group.throughput(criterion::Throughput::Elements(2 * points.len() as u64));
+    group.bench_function("two_unsnapped_frames_rays", |b| {
+        b.iter(|| {
+            black_box(truth::flicker(
+                &scene,
+                &rig,
+                &rig.light,
+                two.iter().copied(),
+                false,
+                &points,
+                &s,
+                &mut |_, _| {},
+            ))
+        })
+    });
+    group.finish();
+}
+
 criterion_group!(
     benches,
     cascade_build,
@@ -264,6 +321,7 @@ criterion_group!(
     default_sweep,
     visibility_pass,
     engine_terms,
-    sun_angle
+    sun_angle,
+    ground_truth
 );
 criterion_main!(benches);

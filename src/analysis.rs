@@ -13,6 +13,8 @@ use crate::shimmer::{self, PathResult, ShimmerOptions};
 use crate::visibility::Visibility;
 use glam::DVec2;
 
+pub mod ground_truth;
+
 /// Which optional parts to compute. The summary metrics are always computed and never depend
 /// on these switches (but `seams`, which adds `seam_crossings` or leaves it out), so a sweep
 /// row equals what `analyze` reports for the same config.
@@ -30,6 +32,9 @@ pub struct AnalysisOptions {
     /// summary metric that depends on a switch: without it the summary holds None and every
     /// output leaves the key out).
     pub seams: bool,
+    /// The ground-truth pass, when the config asks for it (`[analysis] ground_truth`); sweeps
+    /// leave it out.
+    pub ground_truth: bool,
 }
 
 impl AnalysisOptions {
@@ -41,6 +46,7 @@ impl AnalysisOptions {
             density_profile: true,
             light_depth: true,
             seams: true,
+            ground_truth: true,
         }
     }
 
@@ -52,6 +58,7 @@ impl AnalysisOptions {
             density_profile: false,
             light_depth: false,
             seams: false,
+            ground_truth: false,
         }
     }
 }
@@ -105,6 +112,9 @@ pub struct Summary {
     /// every output.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub light: Option<LightSummary>,
+    /// The ground-truth metrics (acne, leaks, S5), when the pass ran; the registry writes them.
+    #[serde(skip)]
+    pub truth: Option<ground_truth::TruthSummary>,
 }
 
 /// Crawl and jumps of a moving light, the worst over the motion paths (texels; see
@@ -198,6 +208,9 @@ pub struct CascadeReport {
     /// still light, and then absent from every output.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub light: Option<CascadeLight>,
+    /// This cascade's ground truth at frame 0, when the pass ran; the registry writes it.
+    #[serde(skip)]
+    pub truth: Option<crate::core::truth::CascadeTruth>,
 }
 
 /// One cascade's crawl (configured snapping) and jump (windows without snapping) under a
@@ -256,6 +269,8 @@ pub struct Analysis {
     pub summary: Summary,
     /// The preset's split/fit/snap rules, selection and light-depth findings (None without a preset).
     pub preset: Option<crate::presets::PresetReport>,
+    /// The ground-truth pass (`[analysis] ground_truth`), when it ran.
+    pub ground_truth: Option<ground_truth::GroundTruth>,
 }
 
 /// The result of an analysis: the scene is not visible within the shadow distance, or the
@@ -542,7 +557,9 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
                     .as_ref()
                     .map(|vis| screen::stats(vis, &[0.0, 0.0], &[0.0], visible)),
                 light: config.motion.light.moves().then(LightSummary::default),
+                truth: None,
             },
+            ground_truth: None,
             preset: config
                 .shadow
                 .preset
@@ -733,6 +750,11 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
             .map(|(i, w)| rig.light_depth(i, &lp0, w, &config.scene))
             .collect::<Vec<_>>()
     });
+    let truth = if config.truth.enabled && opts.ground_truth {
+        ground_truth::run(config, &rig)
+    } else {
+        None
+    };
     let cascades = windows0
         .iter()
         .enumerate()
@@ -776,6 +798,7 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
                     i,
                     std::iter::once((&snapped, &unsnapped)).chain(extra.iter().map(|e| (&e.snapped, &e.unsnapped))),
                 ),
+                truth: truth.as_ref().map(|t| t.cascades[i].clone()),
             }
         })
         .collect();
@@ -808,6 +831,7 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
             config.shadow.snap,
             std::iter::once((&snapped, &unsnapped)).chain(extra.iter().map(|e| (&e.snapped, &e.unsnapped))),
         ),
+        truth: truth.as_ref().map(|t| t.summary),
     };
     let preset = config
         .shadow
@@ -820,6 +844,7 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
         preset,
         cascades,
         density,
+        ground_truth: truth,
         outcome: Outcome::Cascades(Box::new(Measured {
             rig,
             aggregates,

@@ -73,6 +73,10 @@ pub struct AnalyzeArgs {
     /// place of the engine's table and the [shadow] count, map size and shadow distance.
     #[arg(long, value_name = "FILE")]
     pub engine_settings: Option<PathBuf>,
+    /// Sample the shadow maps against the exact answer (acne, leaks, S5 flicker, the bias
+    /// needed per cascade; bias.csv); as [analysis] ground_truth = true. Needs scene geometry.
+    #[arg(long)]
+    pub ground_truth: bool,
 }
 
 #[derive(Debug, Args)]
@@ -269,6 +273,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             quiet: args.quiet,
             all_frames: args.all_frames,
             engine_settings: args.engine_settings,
+            ground_truth: args.ground_truth,
         }),
         Command::Sweep(args) => sweep::execute(&sweep::SweepRequest {
             config: args.config,

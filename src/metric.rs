@@ -379,6 +379,50 @@ pub const SUMMARY: &[SummaryDef] = &[
         value: |s| Value::Real(s.light.map_or(0.0, |l| l.jump_unsnapped)),
     },
     SummaryDef {
+        name: "acne_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "ground truth: share of the receiver points at frame 0 that are truly lit but the sampled map shadows (acne); only with ground_truth",
+        brief: "truly lit points the map shadows (acne)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: true,
+        value: |s| Value::Real(s.truth.map_or(0.0, |t| t.acne_fraction)),
+    },
+    SummaryDef {
+        name: "leak_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "ground truth: share of the receiver points at frame 0 that are truly shadowed but the sampled map lights (peter-panning, leaks); only with ground_truth",
+        brief: "truly shadowed points the map lights (leaks)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: true,
+        value: |s| Value::Real(s.truth.map_or(0.0, |t| t.leak_fraction)),
+    },
+    SummaryDef {
+        name: "flicker_snapped",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "S5 with snapping: share of receiver points whose lit/shadowed answer changes between consecutive frames (same cascade), over the path; only with ground_truth",
+        brief: "S5 flicker, snapped (state changes per point and frame)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: true,
+        value: |s| Value::Real(s.truth.map_or(0.0, |t| t.flicker_snapped)),
+    },
+    SummaryDef {
+        name: "flicker_unsnapped",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "S5 without snapping (see flicker_snapped); only with ground_truth",
+        brief: "S5 flicker, unsnapped",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: true,
+        value: |s| Value::Real(s.truth.map_or(0.0, |t| t.flicker_unsnapped)),
+    },
+    SummaryDef {
         name: "screen_receiver_fraction",
         unit: "",
         direction: Direction::LowerIsWorse,
@@ -592,6 +636,7 @@ fn shown_for(d: &SummaryDef, s: &Summary) -> bool {
     (!d.screen || s.screen.is_some())
         && (d.name != SEAM_CROSSINGS || s.seam_crossings.is_some())
         && (!is_light_motion(d.name) || s.light.is_some())
+        && (!TRUTH_SUMMARY.contains(&d.name) || s.truth.is_some())
 }
 
 /// The moving-light metrics (`light_crawl*`, `light_jump*`, in the summary and per cascade):
@@ -600,6 +645,18 @@ fn shown_for(d: &SummaryDef, s: &Summary) -> bool {
 fn is_light_motion(name: &str) -> bool {
     name.starts_with("light_crawl") || name.starts_with("light_jump")
 }
+
+/// The summary metrics of the ground-truth pass: only in the outputs of analyses that ran it.
+pub const TRUTH_SUMMARY: [&str; 4] = ["acne_fraction", "leak_fraction", "flicker_snapped", "flicker_unsnapped"];
+
+/// The per-cascade metrics of the ground-truth pass: only in `cascades.csv` when it ran.
+pub const TRUTH_CASCADE: [&str; 5] = [
+    "acne_fraction",
+    "leak_fraction",
+    "bias_needed",
+    "slope_bias_needed",
+    "peter_pan",
+];
 
 /// The one summary metric an analysis computes only on request ([`crate::analysis::AnalysisOptions::seams`]):
 /// absent from the outputs of analyses without it (sweep rows).
@@ -887,6 +944,46 @@ pub const CASCADE: &[CascadeDef] = &[
         value: |c| Value::Real(c.light.map_or(0.0, |l| l.jump)),
     },
     CascadeDef {
+        name: "acne_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "ground truth: share of this cascade's receiver points at frame 0 that are truly lit but the map shadows",
+        screen: true,
+        value: |c| Value::Real(c.truth.as_ref().map_or(0.0, |t| t.acne_fraction)),
+    },
+    CascadeDef {
+        name: "leak_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "ground truth: share of this cascade's receiver points at frame 0 that are truly shadowed but the map lights",
+        screen: true,
+        value: |c| Value::Real(c.truth.as_ref().map_or(0.0, |t| t.leak_fraction)),
+    },
+    CascadeDef {
+        name: "bias_needed",
+        unit: "world units",
+        direction: Direction::HigherIsWorse,
+        help: "ground truth: smallest depth bias (along the light) leaving acne on at most 0.1 % of this cascade's points, for the configured depth format (bias.csv has every format)",
+        screen: true,
+        value: |c| Value::Real(c.truth.as_ref().map_or(0.0, |t| t.chosen_bias)),
+    },
+    CascadeDef {
+        name: "slope_bias_needed",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "ground truth: smallest slope bias alone (times the depth slope per texel) doing the same, exact depths",
+        screen: true,
+        value: |c| Value::Real(c.truth.as_ref().map_or(0.0, |t| t.slope_bias)),
+    },
+    CascadeDef {
+        name: "peter_pan",
+        unit: "world units",
+        direction: Direction::HigherIsWorse,
+        help: "ground truth: largest distance along the receiver from a caster to where its shadow starts, at bias_needed",
+        screen: true,
+        value: |c| Value::Real(c.truth.as_ref().map_or(0.0, |t| t.peter_pan)),
+    },
+    CascadeDef {
         name: "screen_pixels",
         unit: "",
         direction: Direction::Neither,
@@ -926,13 +1023,19 @@ impl CascadeMetric {
     }
 }
 
-/// The columns of `cascades.csv` (the screen columns only with scene geometry).
-pub fn cascade_columns(screen: bool, light: bool) -> Vec<&'static str> {
+/// The columns of `cascades.csv` (the screen columns only with scene geometry, the
+/// moving-light columns only when the light moves, the ground-truth columns only when that pass
+/// ran).
+pub fn cascade_columns(screen: bool, light: bool, truth: bool) -> Vec<&'static str> {
     std::iter::once("cascade")
         .chain(
             CASCADE
                 .iter()
-                .filter(|d| (screen || !d.screen) && (light || !is_light_motion(d.name)))
+                .filter(|d| {
+                    (screen || !d.screen)
+                        && (light || !is_light_motion(d.name))
+                        && (truth || !TRUTH_CASCADE.contains(&d.name))
+                })
                 .map(|d| d.name),
         )
         .collect()
@@ -941,10 +1044,11 @@ pub fn cascade_columns(screen: bool, light: bool) -> Vec<&'static str> {
 /// The fields of [`cascade_columns`] for one cascade.
 pub fn cascade_fields(c: &CascadeReport) -> Result<Vec<String>> {
     let mut fields = vec![c.cascade.to_string()];
-    for d in CASCADE
-        .iter()
-        .filter(|d| (!d.screen || c.screen.is_some()) && (!is_light_motion(d.name) || c.light.is_some()))
-    {
+    for d in CASCADE.iter().filter(|d| {
+        (!d.screen || c.screen.is_some())
+            && (!is_light_motion(d.name) || c.light.is_some())
+            && (c.truth.is_some() || !TRUTH_CASCADE.contains(&d.name))
+    }) {
         fields.push((d.value)(c).csv(d.name)?);
     }
     Ok(fields)

@@ -24,6 +24,8 @@ pub struct AnalyzeRequest {
     /// `--engine-settings FILE`: an engine's `recommendation.<engine>.txt` in place of its
     /// table and the `[shadow]` count, map size and distance.
     pub engine_settings: Option<PathBuf>,
+    /// `--ground-truth`: run the ground-truth pass (as `[analysis] ground_truth = true`).
+    pub ground_truth: bool,
 }
 
 /// The `analyze` command.
@@ -38,6 +40,16 @@ pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
             Error::Config(ConfigError::Invalid { allowed, .. }) => Error::flag("--precision", p.name(), allowed),
             other => other,
         })?;
+    }
+    if args.ground_truth {
+        if config.geometry.is_none() {
+            return Err(Error::flag(
+                "--ground-truth",
+                &args.config.display().to_string(),
+                "needs scene geometry in the config: add scene.ground, [[scene.box]] or scene.gltf (the maps sample real casters)",
+            ));
+        }
+        config.truth.enabled = true;
     }
     let progress = super::progress::Progress::new(args.quiet, frames_walked(&config), "frames");
     let analysis = analyze_with_progress(&config, &AnalysisOptions::full(), &|n| progress.inc(n));

@@ -283,6 +283,8 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
             seam_crossings,
             screen,
             light,
+            // Ground truth is not part of a sweep row (only `analyze` runs it).
+            truth: _,
         } = &row.summary;
         let _ = write!(
             out,
@@ -538,6 +540,7 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                             })
                         }
                     },
+                    truth: None,
                 },
             },
         ));

@@ -1607,6 +1607,7 @@ mod tests {
                 seam_crossings: None,
                 screen: None,
                 light: None,
+                truth: None,
             },
         }
     }

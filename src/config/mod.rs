@@ -390,6 +390,62 @@ pub struct Config {
     pub sweep: Option<sweep_spec::SweepSpec>,
     /// What [`crate::presets`] reads to apply the file's engine preset.
     pub preset_input: PresetInput,
+    /// The ground-truth pass: whether it runs, and how the maps are sampled.
+    pub truth: TruthSettings,
+}
+
+/// `[analysis] ground_truth` and the `[shadow]` keys of the sampled maps (docs/ground-truth.md).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TruthSettings {
+    /// Run the ground-truth pass (`[analysis] ground_truth` or `analyze --ground-truth`).
+    pub enabled: bool,
+    /// `[shadow] depth_bias` (world units along the light); None: the preset's, else 0.
+    pub depth_bias: Option<f64>,
+    /// `[shadow] slope_bias` (times the receiver's depth slope per texel).
+    pub slope_bias: Option<f64>,
+    /// `[shadow] normal_bias` (texels along the normal).
+    pub normal_bias: Option<f64>,
+    pub depth_format: crate::core::truth::DepthFormat,
+    /// PCF kernel width in texels: 1, 3 or 5.
+    pub pcf: u32,
+}
+
+impl Default for TruthSettings {
+    fn default() -> Self {
+        TruthSettings {
+            enabled: false,
+            depth_bias: None,
+            slope_bias: None,
+            normal_bias: None,
+            depth_format: crate::core::truth::DepthFormat::D32F,
+            pcf: 1,
+        }
+    }
+}
+
+impl TruthSettings {
+    /// Whether any bias key was written (then they replace the preset's bias).
+    pub fn bias_written(&self) -> bool {
+        self.depth_bias.is_some() || self.slope_bias.is_some() || self.normal_bias.is_some()
+    }
+
+    /// The echo in `summary.json` (only when the pass runs).
+    pub fn echo(&self) -> serde_json::Value {
+        let mut v = serde_json::json!({
+            "depth_format": self.depth_format.name(),
+            "pcf": self.pcf,
+        });
+        for (k, x) in [
+            ("depth_bias", self.depth_bias),
+            ("slope_bias", self.slope_bias),
+            ("normal_bias", self.normal_bias),
+        ] {
+            if let Some(x) = x {
+                v[k] = x.into();
+            }
+        }
+        v
+    }
 }
 
 impl Config {
@@ -461,7 +517,7 @@ impl Config {
         if let Some(g) = &self.geometry {
             scene["geometry"] = g.echo();
         }
-        serde_json::json!({
+        let mut echo = serde_json::json!({
             "camera": self.camera,
             "screen": self.screen,
             "light": {
@@ -472,7 +528,11 @@ impl Config {
             "shadow": self.shadow,
             "motion": motion,
             "analysis": self.analysis,
-        })
+        });
+        if self.truth.enabled {
+            echo["ground_truth"] = self.truth.echo();
+        }
+        echo
     }
 
     /// Effective far end of the shadow range before scene clipping: min(far, max_distance).

@@ -148,6 +148,12 @@ pub(crate) struct RawShadow {
     pub(crate) snap_space: Option<String>,
     pub(crate) preset: Option<String>,
     pub(crate) light_update: Option<RawLightUpdate>,
+    /// Ground truth's bias model (`crate::core::truth`).
+    pub(crate) depth_bias: Option<f64>,
+    pub(crate) slope_bias: Option<f64>,
+    pub(crate) normal_bias: Option<f64>,
+    pub(crate) depth_format: Option<Spanned<String>>,
+    pub(crate) pcf: Option<i64>,
 }
 
 /// `[shadow] light_update = { every_frames = K }` or `{ quantize_deg = Q }`.
@@ -182,4 +188,5 @@ pub(crate) struct RawAnalysis {
     pub(crate) density_samples: Option<i64>,
     pub(crate) probes: Option<i64>,
     pub(crate) screen_scale: Option<f64>,
+    pub(crate) ground_truth: Option<bool>,
 }

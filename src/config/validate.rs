@@ -189,6 +189,48 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         })?,
     };
     let s_preset = s.preset;
+    let bias_key = |key: &str, x: Option<f64>, allowed: &str| -> Result<Option<f64>> {
+        match x {
+            Some(b) if !(b.is_finite() && (0.0..=MAX_WORLD).contains(&b)) => Err(v.invalid(key, b, allowed)),
+            x => Ok(x),
+        }
+    };
+    let mut truth = crate::config::TruthSettings {
+        depth_bias: bias_key(
+            "shadow.depth_bias",
+            s.depth_bias,
+            "a number >= 0: world units added along the light to the stored depth",
+        )?,
+        slope_bias: bias_key(
+            "shadow.slope_bias",
+            s.slope_bias,
+            "a number >= 0: times the receiver's depth slope per texel",
+        )?,
+        normal_bias: bias_key(
+            "shadow.normal_bias",
+            s.normal_bias,
+            "a number >= 0: texels the receiver moves along its normal",
+        )?,
+        ..Default::default()
+    };
+    if let Some(f) = &s.depth_format {
+        use crate::core::truth::DepthFormat;
+        truth.depth_format = v.one_of(
+            "shadow.depth_format",
+            f,
+            &[
+                ("d16", DepthFormat::D16),
+                ("d24", DepthFormat::D24),
+                ("d32f", DepthFormat::D32F),
+            ],
+        )?;
+    }
+    if let Some(k) = s.pcf {
+        if ![1, 3, 5].contains(&k) {
+            return Err(v.invalid("shadow.pcf", k, "1, 3 or 5: the PCF kernel's width in texels"));
+        }
+        truth.pcf = k as u32;
+    }
     let shadow = ShadowSettings {
         params: ShadowParams {
             max_distance,
@@ -384,6 +426,16 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let light = super::light_motion::parse(&m_light, light_update.as_ref(), v, base_dir, light_direction, frames)?;
 
     let a = raw.analysis;
+    if let Some(on) = a.ground_truth {
+        if on && geometry.is_none() {
+            return Err(v.invalid(
+                "analysis.ground_truth",
+                true,
+                "false without scene geometry: add scene.ground, [[scene.box]] or scene.gltf (the map samples real casters)",
+            ));
+        }
+        truth.enabled = on;
+    }
     let analysis = AnalysisSettings {
         density_samples: v.int_range(
             "analysis.density_samples",
@@ -435,6 +487,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             written,
             ..PresetInput::default()
         },
+        truth,
     };
     check_camera_path(&config, v)?;
     // The binary32 range check needs the cascades, which an engine preset may change: it runs

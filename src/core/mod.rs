@@ -26,5 +26,6 @@ pub mod shimmer;
 pub mod snapping;
 pub mod splits;
 pub mod sun;
+pub mod truth;
 pub mod visibility;
 pub mod walk;

@@ -435,6 +435,39 @@ impl SceneGeometry {
     }
 }
 
+/// The nearest surface along a ray: its distance along the (unit) ray and its triangle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TriangleHit {
+    /// Ray distance, recomputed in f64 from the triangle's plane (the BVH's binary32 answer
+    /// only picks the triangle).
+    pub t: f64,
+    /// Index into the mesh's triangles.
+    pub triangle: usize,
+}
+
+impl SceneGeometry {
+    /// The nearest triangle along `origin + t dir` (unit `dir`) with `tmin <= t <= tmax`, if
+    /// any, with its f64 ray distance. Shared by every ray the ground-truth pass casts.
+    pub fn first_hit(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Option<TriangleHit> {
+        let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
+        // A negative zero component (a negated light along an axis plane) makes the BVH's
+        // traversal miss every node: adding +0 turns -0 into +0 and changes nothing else.
+        let dir = dir + DVec3::ZERO;
+        let id = tracer.nearest(origin, dir, tmin, tmax)?;
+        let [a, b, c] = self.mesh.triangles[id];
+        let n = (b - a).cross(c - a);
+        let nd = n.dot(dir);
+        let t = if nd != 0.0 { n.dot(a - origin) / nd } else { tmin };
+        Some(TriangleHit { t, triangle: id })
+    }
+
+    /// Unit normal of triangle `id` (winding order; not oriented).
+    pub fn triangle_normal(&self, id: usize) -> DVec3 {
+        let [a, b, c] = self.mesh.triangles[id];
+        (b - a).cross(c - a).normalize_or_zero()
+    }
+}
+
 impl std::fmt::Debug for SceneGeometry {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SceneGeometry").field("mesh", &self.mesh).finish()

@@ -13,6 +13,7 @@
 //! knobs matched to csm-lab's cascades).
 
 mod apply;
+pub mod bias;
 mod closest;
 mod engine;
 mod free_splits;

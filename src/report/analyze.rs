@@ -30,6 +30,9 @@ pub fn exporters_for(a: &Analysis) -> Vec<&'static dyn Exporter<Analysis>> {
         v.push(&figures::screen::ScreenAliasingPng);
         v.push(&figures::screen::ScreenCascadesPng);
     }
+    if a.ground_truth.is_some() {
+        v.push(&super::ground_truth::BiasCsv);
+    }
     v
 }
 
@@ -50,7 +53,11 @@ impl Exporter<Analysis> for CascadesCsv {
             .map(metric::cascade_fields)
             .collect::<Result<Vec<_>>>()?;
         csv_bytes(
-            &metric::cascade_columns(a.config.geometry.is_some(), a.config.motion.light.moves()),
+            &metric::cascade_columns(
+                a.config.geometry.is_some(),
+                a.config.motion.light.moves(),
+                a.ground_truth.is_some(),
+            ),
             &rows,
         )
     }
@@ -365,6 +372,9 @@ pub fn summary_table(a: &Analysis) -> String {
                 let _ = writeln!(out, "  {k:<29} {v:>12}  {what}");
             }
         }
+    }
+    if let Some(g) = &a.ground_truth {
+        out.push_str(&super::ground_truth::recommendation(a, g));
     }
     if f32_block {
         let _ = writeln!(

@@ -36,3 +36,4 @@ mod seams;
 mod shimmer;
 mod shimmer_fast_paths;
 mod sun_sweep;
+mod truth;

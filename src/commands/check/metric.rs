@@ -129,6 +129,7 @@ mod tests {
                 jump_snapped: 1.5,
                 jump_unsnapped: 1.25,
             }),
+            truth: None,
         };
         let json = serde_json::to_value(&s).unwrap();
         // The registry writes every key as serde would (same JSON type: bool, integer, float).
@@ -185,6 +186,7 @@ mod tests {
                 crawl: 0.25,
                 jump: 1.75,
             }),
+            truth: None,
         };
         let json = serde_json::to_value(&c).unwrap();
         let obj = json.as_object().unwrap();
@@ -211,12 +213,12 @@ mod tests {
         dedup.sort_unstable();
         dedup.dedup();
         assert_eq!(dedup.len(), names.len());
-        // Seven names are both summary and per-cascade metrics (max_aliasing,
+        // Nine names are both summary and per-cascade metrics (max_aliasing,
         // coverage_violations, lookup_error_max, lookup_error_rms, overlap_area_fraction,
-        // light_crawl, light_jump).
+        // light_crawl, light_jump, acne_fraction, leak_fraction).
         assert_eq!(
             names.len(),
-            SummaryMetric::all().count() + CascadeMetric::all().count() - 7 + DepthMetric::ALL.len()
+            SummaryMetric::all().count() + CascadeMetric::all().count() - 9 + DepthMetric::ALL.len()
         );
     }
 

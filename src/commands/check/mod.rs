@@ -30,6 +30,7 @@ pub fn check_options() -> AnalysisOptions {
     AnalysisOptions {
         light_depth: true,
         seams: true,
+        ground_truth: true,
         ..AnalysisOptions::summary_only()
     }
 }

@@ -1,0 +1,249 @@
+//! The ground-truth pass of one analysis: frame 0's receivers sampled through the maps with the
+//! configured bias (acne, leaks, the bias needed per cascade, peter-panning) and S5 flicker along
+//! the motion path in both snap modes, with the pictures' data (frame-0 states, flip rates and
+//! every k-th frame's states). The math is [`crate::core::truth`].
+
+use crate::cascades::{LightPose, Rig};
+use crate::config::Config;
+use crate::core::shade::{FlipImage, ShadeImage};
+use crate::core::truth::{self, Bias, CacheStats, CascadeTruth, Flicker, NormalOffset, PointZero, Receiver, Sampling};
+use crate::presets::bias::{engine_bias, EngineBias};
+
+/// At most this many frames of the path are kept as pictures for the animation (every k-th).
+pub const ANIMATION_FRAMES: usize = 24;
+
+/// The flat ground-truth metrics of the summary.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct TruthSummary {
+    pub acne_fraction: f64,
+    pub leak_fraction: f64,
+    pub flicker_snapped: f64,
+    pub flicker_unsnapped: f64,
+}
+
+/// One snap mode's pictures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModePictures {
+    /// Frame 0's states.
+    pub frame0: ShadeImage,
+    /// How often each receiver pixel flipped along the path.
+    pub flips: FlipImage,
+    /// Every k-th frame's states (k = ceil(frames / [`ANIMATION_FRAMES`])), with its frame index.
+    pub animation: Vec<(usize, ShadeImage)>,
+}
+
+/// Everything the pass measured.
+#[derive(Debug, Clone)]
+pub struct GroundTruth {
+    pub summary: TruthSummary,
+    /// Per cascade, frame 0 with the configured snap mode.
+    pub cascades: Vec<CascadeTruth>,
+    /// The bias each cascade was sampled with (world units; normal offset in texels).
+    pub bias: Vec<Bias>,
+    /// Frame 0's light depth range per cascade (the depth formats' range).
+    pub ranges: Vec<(f64, f64)>,
+    /// Texel size per cascade at frame 0.
+    pub texel: Vec<f64>,
+    /// The engine's bias rule, when the preset's bias is modelled and no `[shadow]` bias key
+    /// replaced it.
+    pub engine: Option<EngineBias>,
+    pub receivers: usize,
+    pub snapped: Flicker,
+    pub unsnapped: Flicker,
+    pub pictures_snapped: ModePictures,
+    pub pictures_unsnapped: ModePictures,
+    /// Texel reads and rays of the whole pass.
+    pub cache: CacheStats,
+    /// The receiver points (frame 0's lit-facing pixels).
+    pub points: Vec<Receiver>,
+    /// Frame 0's answers (configured snap mode), one per receiver.
+    pub zero: Vec<PointZero>,
+}
+
+impl GroundTruth {
+    /// The `(S5 snapped, S5 unsnapped)` pair, for the flicker-versus-shimmer figure.
+    pub fn s5(&self) -> (f64, f64) {
+        (self.summary.flicker_snapped, self.summary.flicker_unsnapped)
+    }
+
+    /// A cascade's recommended depth bias (configured format) in the engine's own unit, or in
+    /// world units without an engine rule.
+    pub fn recommended_own(&self, i: usize, format: truth::DepthFormat) -> f64 {
+        let c = &self.cascades[i];
+        let world = c.depth_bias[DepthFormatIndex::of(format)];
+        match &self.engine {
+            Some(e) => e.own_value(world, self.texel[i], self.ranges[i].1 - self.ranges[i].0),
+            None => world,
+        }
+    }
+}
+
+struct DepthFormatIndex;
+
+impl DepthFormatIndex {
+    fn of(f: truth::DepthFormat) -> usize {
+        truth::DepthFormat::ALL.iter().position(|x| *x == f).unwrap_or(2)
+    }
+}
+
+/// The pass for a config whose scene has geometry and cascades; None otherwise.
+pub fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
+    let setup = config.setup();
+    let vis = setup.visibility()?;
+    let scene = &setup.geometry.as_ref()?.scene;
+    let pose0 = config.camera.pose();
+    let lp0 = LightPose::new(&rig.light, &pose0);
+    let m = rig.cascade_count();
+    let snap = config.shadow.snap;
+    let windows0: Vec<_> = (0..m).map(|i| rig.window(i, &lp0, snap)).collect();
+    let ranges: Vec<(f64, f64)> = windows0
+        .iter()
+        .enumerate()
+        .map(|(i, w)| {
+            let d = rig.light_depth(i, &lp0, w, &config.scene);
+            (d.near, d.far)
+        })
+        .collect();
+    let texel: Vec<f64> = windows0.iter().map(|w| w.texel_size()).collect();
+    let t = &config.truth;
+    let engine = if t.bias_written() {
+        None
+    } else {
+        config.shadow.preset.as_ref().and_then(|p| engine_bias(p.name))
+    };
+    let bias: Vec<Bias> = (0..m)
+        .map(|i| match &engine {
+            Some(e) => e.rule.for_cascade(texel[i], ranges[i].1 - ranges[i].0),
+            None => Bias {
+                depth: t.depth_bias.unwrap_or(0.0),
+                slope: t.slope_bias.unwrap_or(0.0),
+                normal: t.normal_bias.unwrap_or(0.0),
+                offset: NormalOffset::Along,
+            },
+        })
+        .collect();
+    let sampling = Sampling {
+        bias: bias.clone(),
+        format: Some(t.depth_format),
+        ranges: ranges.clone(),
+        pcf: t.pcf,
+    };
+    let points: Vec<Receiver> = truth::receivers(scene, &vis);
+    let (zero, zero_stats) = truth::frame_zero(scene, rig, &rig.light, &pose0, snap, &points, &sampling);
+    let truly_lit: Vec<bool> = zero.iter().map(|p| p.truly_lit).collect();
+    let cascades = truth::cascade_truth(&zero, m, &sampling);
+    let (acne, leak) = truth::fractions(&zero);
+
+    let frames = crate::motion::poses(&setup.camera, &setup.motion).len();
+    let every = frames.div_ceil(ANIMATION_FRAMES).max(1);
+    let (cols, rows) = (vis.cols, vis.rows);
+    let walk = |snapped: bool| {
+        let poses = crate::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
+        let mut frame0 = ShadeImage::empty(cols, rows);
+        let mut animation = Vec::new();
+        let f = truth::flicker(
+            scene,
+            rig,
+            &rig.light,
+            poses,
+            snapped,
+            &points,
+            &sampling,
+            &mut |k, states| {
+                if k == 0 {
+                    frame0 = truth::shade_image(cols, rows, &points, &truly_lit, states);
+                }
+                if k % every == 0 {
+                    animation.push((k, truth::shade_image(cols, rows, &points, &truly_lit, states)));
+                }
+            },
+        );
+        let flips = truth::flip_image(cols, rows, &points, &f);
+        (
+            f,
+            ModePictures {
+                frame0,
+                flips,
+                animation,
+            },
+        )
+    };
+    let ((snapped, pictures_snapped), (unsnapped, pictures_unsnapped)) = rayon::join(|| walk(true), || walk(false));
+    let mut cache = zero_stats;
+    cache.add(snapped.stats);
+    cache.add(unsnapped.stats);
+    Some(GroundTruth {
+        summary: TruthSummary {
+            acne_fraction: acne,
+            leak_fraction: leak,
+            flicker_snapped: snapped.s5,
+            flicker_unsnapped: unsnapped.s5,
+        },
+        cascades,
+        bias,
+        ranges,
+        texel,
+        engine,
+        receivers: points.len(),
+        snapped,
+        unsnapped,
+        pictures_snapped,
+        pictures_unsnapped,
+        cache,
+        points,
+        zero,
+    })
+}
+
+/// One configuration's proxies and its measured flicker, per snap mode: the points of the
+/// flicker-versus-shimmer figure.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct FlickerPoint {
+    pub snapped: bool,
+    /// S3: RMS sub-texel drift (texels per frame).
+    pub s3: f64,
+    /// S4: probe cell-flip rate (None when not computed).
+    pub s4: Option<f64>,
+    /// S5: measured state changes per receiver and frame step.
+    pub s5: f64,
+}
+
+/// The (S3, S4, S5) points of configurations (both snap modes each), each analysed with
+/// cell flips and the ground-truth pass; configurations without geometry or cascades give
+/// none. A sweep's rows (or a sample of them) passed here give the figure's data.
+pub fn flicker_points(configs: &[Config]) -> Vec<FlickerPoint> {
+    use rayon::prelude::*;
+    let opts = crate::analysis::AnalysisOptions {
+        cell_flips: true,
+        ground_truth: true,
+        ..crate::analysis::AnalysisOptions::summary_only()
+    };
+    configs
+        .par_iter()
+        .map(|c| {
+            let mut c = c.clone();
+            c.truth.enabled = c.geometry.is_some();
+            let a = crate::analysis::analyze(&c, &opts);
+            match (&a.ground_truth, a.snapped(), a.unsnapped()) {
+                (Some(g), Some(s), Some(u)) => vec![
+                    FlickerPoint {
+                        snapped: true,
+                        s3: s.stats.rms,
+                        s4: s.stats.cell_flip_rate,
+                        s5: g.summary.flicker_snapped,
+                    },
+                    FlickerPoint {
+                        snapped: false,
+                        s3: u.stats.rms,
+                        s4: u.stats.cell_flip_rate,
+                        s5: g.summary.flicker_unsnapped,
+                    },
+                ],
+                _ => Vec::new(),
+            }
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .flatten()
+        .collect()
+}

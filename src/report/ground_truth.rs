@@ -1,0 +1,134 @@
+//! The ground-truth pass's outputs: `bias.csv` (per cascade: the bias sampled with, acne and
+//! leaks, the bias needed per depth format, peter-panning) and the recommended bias printed by
+//! `analyze`, in the engine's own setting when the preset's bias is modelled.
+
+use std::fmt::Write as _;
+
+use crate::analysis::ground_truth::GroundTruth;
+use crate::analysis::Analysis;
+use crate::core::truth::DepthFormat;
+use crate::error::Result;
+use crate::output::{csv_bytes, num, short_number, Exporter};
+
+pub struct BiasCsv;
+
+/// The columns of `bias.csv`.
+pub const BIAS_COLUMNS: [&str; 20] = [
+    "cascade",
+    "points",
+    "texel_size",
+    "light_depth_range",
+    "depth_bias",
+    "slope_bias",
+    "normal_bias_texels",
+    "acne_fraction",
+    "leak_fraction",
+    "bias_needed_exact",
+    "step_d16",
+    "step_d24",
+    "step_d32f",
+    "bias_needed_d16",
+    "bias_needed_d24",
+    "bias_needed_d32f",
+    "slope_bias_needed",
+    "peter_pan",
+    "recommended",
+    "recommended_unit",
+];
+
+impl Exporter<Analysis> for BiasCsv {
+    fn file_name(&self) -> &'static str {
+        "bias.csv"
+    }
+
+    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
+        let Some(g) = &a.ground_truth else {
+            return csv_bytes(&BIAS_COLUMNS, &[]);
+        };
+        let format = a.config.truth.depth_format;
+        let unit = g.engine.map_or("world units", |e| e.unit);
+        let rows = g
+            .cascades
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let b = &g.bias[i];
+                let f = |name: &str, v: f64| num(name, v);
+                Ok(vec![
+                    i.to_string(),
+                    c.points.to_string(),
+                    f("texel_size", g.texel[i])?,
+                    f("light_depth_range", g.ranges[i].1 - g.ranges[i].0)?,
+                    f("depth_bias", b.depth)?,
+                    f("slope_bias", b.slope)?,
+                    f("normal_bias_texels", b.normal)?,
+                    f("acne_fraction", c.acne_fraction)?,
+                    f("leak_fraction", c.leak_fraction)?,
+                    f("bias_needed_exact", c.depth_bias_exact)?,
+                    f("step_d16", c.step[0])?,
+                    f("step_d24", c.step[1])?,
+                    f("step_d32f", c.step[2])?,
+                    f("bias_needed_d16", c.depth_bias[0])?,
+                    f("bias_needed_d24", c.depth_bias[1])?,
+                    f("bias_needed_d32f", c.depth_bias[2])?,
+                    f("slope_bias_needed", c.slope_bias)?,
+                    f("peter_pan", c.peter_pan)?,
+                    f("recommended", g.recommended_own(i, format))?,
+                    unit.to_string(),
+                ])
+            })
+            .collect::<Result<Vec<_>>>()?;
+        csv_bytes(&BIAS_COLUMNS, &rows)
+    }
+}
+
+/// `analyze`'s stdout lines for the pass: receivers, cache, and the recommended depth bias
+/// per cascade (configured depth format), in the engine's setting when it is modelled.
+pub fn recommendation(a: &Analysis, g: &GroundTruth) -> String {
+    let mut out = String::new();
+    let format = a.config.truth.depth_format;
+    let _ = writeln!(
+        out,
+        "ground truth: {} receiver points, {} frames x 2 snap modes; texel cache {} reads, {} rays (hit rate {})",
+        g.receivers,
+        g.snapped.frames,
+        g.cache.reads,
+        g.cache.rays,
+        short_number(g.cache.hit_rate())
+    );
+    let (setting, unit) = match &g.engine {
+        Some(e) => (e.setting, e.unit),
+        None => ("shadow.depth_bias", "world units"),
+    };
+    let _ = writeln!(
+        out,
+        "  recommended depth bias ({}, acne <= 0.1 % per cascade): {setting} in {unit}",
+        format.name().to_uppercase()
+    );
+    let mut largest: f64 = 0.0;
+    for (i, c) in g.cascades.iter().enumerate() {
+        let own = g.recommended_own(i, format);
+        largest = largest.max(own);
+        let _ = writeln!(
+            out,
+            "  cascade {i}: {:>10}  (world {}, slope bias alone {}, peter-pan {} world units, {} points)",
+            short_number(own),
+            short_number(c.depth_bias[format_index(format)]),
+            short_number(c.slope_bias),
+            short_number(c.peter_pan),
+            c.points
+        );
+    }
+    if g.engine.is_some_and(|e| e.one_for_all) {
+        let _ = writeln!(
+            out,
+            "  one value for every cascade: {setting} = {}",
+            short_number(largest)
+        );
+    }
+    out
+}
+
+fn format_index(f: DepthFormat) -> usize {
+    DepthFormat::ALL.iter().position(|x| *x == f).unwrap_or(2)
+}

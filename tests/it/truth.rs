@@ -1,0 +1,574 @@
+//! Ground truth (issue 11): the sampled shadow maps checked against closed forms and an
+//! independent brute-force rasterisation written here.
+
+use csm_lab::analysis::ground_truth::GroundTruth;
+use csm_lab::cascades::LightPose;
+use csm_lab::core::truth::{self, Bias, BiasRule, DepthFormat, NormalOffset, Receiver, Sampling};
+use csm_lab::fitting::Window;
+use csm_lab::geometry::{Aabb, LightBasis};
+use csm_lab::mesh::Mesh;
+use csm_lab::visibility::SceneGeometry;
+use csm_lab::{analyze, AnalysisOptions, Config};
+use glam::{DVec2, DVec3};
+use proptest::prelude::*;
+
+fn load(text: &str) -> Config {
+    Config::from_toml_str(text, "test.toml", None).unwrap()
+}
+
+fn err(text: &str) -> String {
+    Config::from_toml_str(text, "test.toml", None).unwrap_err().to_string()
+}
+
+/// A small scene: ground, one box, a camera looking at the box's shadow.
+fn scene_text(path: &str, snap: bool, extra: &str) -> String {
+    format!(
+        r#"
+[camera]
+position = [0.0, 6.0, 12.0]
+target = [0.0, 0.0, -6.0]
+up = [0.0, 1.0, 0.0]
+fov_y_deg = 60.0
+near = 0.1
+far = 200.0
+
+[screen]
+width = 320
+height = 180
+
+[light]
+direction = [-0.4, -1.0, -0.3]
+
+[scene]
+min = [-60.0, 0.0, -60.0]
+max = [60.0, 10.0, 60.0]
+ground = 0.0
+
+[[scene.box]]
+min = [-2.3, 0.0, -8.7]
+max = [1.9, 3.1, -4.4]
+
+[shadow]
+max_distance = 60.0
+cascades = 2
+lambda = 0.75
+resolution = 256
+fit = "sphere"
+snap = {snap}
+{extra}
+
+[motion]
+path = "{path}"
+frames = 24
+step = 0.05
+
+[analysis]
+screen_scale = 0.25
+ground_truth = true
+"#
+    )
+}
+
+fn ground_truth(text: &str) -> (Config, csm_lab::Analysis) {
+    let c = load(text);
+    let a = analyze(&c, &AnalysisOptions::full());
+    (c, a)
+}
+
+fn truth_of(a: &csm_lab::Analysis) -> &GroundTruth {
+    a.ground_truth.as_ref().expect("ground truth ran")
+}
+
+/// The ground plane y = 0 as a mesh.
+fn ground(half: f64) -> SceneGeometry {
+    let mut m = Mesh::default();
+    m.add_ground(0.0, -half, half, -half, half);
+    SceneGeometry::new(m)
+}
+
+/// The light basis turned by `beta` about the light direction.
+fn turned(light: DVec3, beta: f64) -> LightBasis {
+    let b = LightBasis::new(light);
+    let (s, c) = beta.sin_cos();
+    LightBasis {
+        x: b.x * c + b.y * s,
+        y: -b.x * s + b.y * c,
+        z: b.z,
+        vertical_fallback: false,
+    }
+}
+
+/// The point of the plane y = 0 with light-space x/y `q` in basis `b`.
+fn on_ground(b: &LightBasis, q: DVec2) -> DVec3 {
+    let d = -(b.x.y * q.x + b.y.y * q.y) / b.z.y;
+    b.x * q.x + b.y * q.y + b.z * d
+}
+
+fn sampling(bias: Bias) -> Sampling {
+    Sampling {
+        bias: vec![bias],
+        format: Some(DepthFormat::D32F),
+        ranges: vec![(-200.0, 200.0)],
+        pcf: 1,
+    }
+}
+
+#[test]
+fn ground_plane_depth_bias_for_zero_acne_is_the_closed_form() {
+    let scene = ground(50.0);
+    let t = 0.05;
+    let w = Window {
+        texel: DVec2::splat(t),
+        origin_texels: DVec2::splat(-32.0),
+        resolution: 64,
+    };
+    let mut checked = 0;
+    for theta in [0.1f64, 0.5, 0.9, 1.2] {
+        for phi in [0.3f64, 2.0] {
+            let light = DVec3::new(theta.sin() * phi.cos(), -theta.cos(), theta.sin() * phi.sin());
+            for beta in [0.0f64, 0.4, 1.1, 2.5, -0.7] {
+                let b = turned(light, beta);
+                // The four corners of three texels (the far corners just inside).
+                let inside = 1.0 - 1e-12;
+                let mut points = Vec::new();
+                for g in [(0.0, 0.0), (3.0, -5.0), (-10.0, 7.0)] {
+                    for (u, v) in [(0.0, 0.0), (inside, 0.0), (0.0, inside), (inside, inside)] {
+                        let q = DVec2::new(g.0 + u, g.1 + v) * t;
+                        points.push(Receiver {
+                            pixel: 0,
+                            p: on_ground(&b, q),
+                            n: DVec3::Y,
+                            triangle: 0,
+                        });
+                    }
+                }
+                let cascades = vec![Some(0); points.len()];
+                let (zero, _) = truth::frame_zero_in(&scene, &b, &[(b, w)], &cascades, &points, &sampling(Bias::ZERO));
+                let mut excess: Vec<f64> = zero.iter().map(|p| p.excess).collect();
+                let needed = truth::smallest_bias(&mut excess, 0);
+                let expected = theta.tan() * t / 2.0 * (beta.cos().abs() + beta.sin().abs());
+                assert!(
+                    (needed - expected).abs() <= 1e-9 * expected,
+                    "theta {theta} phi {phi} beta {beta}: {needed} vs {expected}"
+                );
+                // With that bias, no acne; slightly less, some.
+                let run = |bias: f64| {
+                    let (z, _) = truth::frame_zero_in(
+                        &scene,
+                        &b,
+                        &[(b, w)],
+                        &cascades,
+                        &points,
+                        &Sampling {
+                            format: None,
+                            ..sampling(Bias::depth(bias))
+                        },
+                    );
+                    truth::fractions(&z).0
+                };
+                assert_eq!(run(expected * 1.001), 0.0);
+                assert!(run(expected * 0.99) > 0.0);
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 40);
+}
+
+/// The first surface along `origin + s dir` (s >= 0) among the ground (y = 0, |x|, |z| <= 60)
+/// and an AABB, by slabs: the parameter s, or infinity.
+fn first_surface(origin: DVec3, dir: DVec3, b: &Aabb) -> f64 {
+    let mut best = f64::INFINITY;
+    if dir.y != 0.0 {
+        let s = -origin.y / dir.y;
+        let hit = origin + dir * s;
+        if s >= 0.0 && hit.x.abs() <= 60.0 && hit.z.abs() <= 60.0 {
+            best = s;
+        }
+    }
+    let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
+    for k in 0..3 {
+        let (o, d, a, c) = (origin[k], dir[k], b.min[k], b.max[k]);
+        if d == 0.0 {
+            if o < a || o > c {
+                return best;
+            }
+            continue;
+        }
+        let (t0, t1) = ((a - o) / d, (c - o) / d);
+        lo = lo.max(t0.min(t1));
+        hi = hi.min(t0.max(t1));
+    }
+    if lo <= hi {
+        best = best.min(lo);
+    }
+    best
+}
+
+#[test]
+fn a_box_on_the_ground_equals_a_brute_force_rasterisation_of_the_whole_map() {
+    let text = scene_text("strafe", true, "depth_bias = 0.01")
+        .replace("cascades = 2", "cascades = 1")
+        .replace("resolution = 256", "resolution = 64");
+    let (c, a) = ground_truth(&text);
+    let g = truth_of(&a);
+    let rig = a.rig().unwrap();
+    let pose = c.camera.pose();
+    let lp = LightPose::new(&rig.light, &pose);
+    let w = rig.window(0, &lp, true);
+    let b = rig.light;
+    let bx = Aabb::new(DVec3::new(-2.3, 0.0, -8.7), DVec3::new(1.9, 3.1, -4.4));
+    // Every texel of the 64 x 64 map: its centre's first surface along the light.
+    let n = 64usize;
+    let start = -500.0;
+    let mut map = vec![0.0; n * n];
+    for j in 0..n {
+        for i in 0..n {
+            let cxy = (w.origin_texels + DVec2::new(i as f64 + 0.5, j as f64 + 0.5)) * w.texel;
+            let origin = b.x * cxy.x + b.y * cxy.y + b.z * start;
+            map[j * n + i] = start + first_surface(origin, b.z, &bx);
+        }
+    }
+    let mut compared = 0;
+    let (mut lit, mut shadowed) = (0, 0);
+    for (r, z) in g.points.iter().zip(&g.zero) {
+        let Some(map_lit) = z.map_lit else { continue };
+        let s = DVec2::new(b.x.dot(r.p), b.y.dot(r.p)) / w.texel - w.origin_texels;
+        let (i, j) = (s.x.floor() as usize, s.y.floor() as usize);
+        let expected = b.z.dot(r.p) <= map[j * n + i] + 0.01;
+        assert_eq!(map_lit, expected, "receiver at {:?}", r.p);
+        compared += 1;
+        if expected {
+            lit += 1;
+        } else {
+            shadowed += 1;
+        }
+    }
+    assert!(
+        compared > 1000 && lit > 100 && shadowed > 100,
+        "{compared} {lit} {shadowed}"
+    );
+}
+
+#[test]
+fn snapped_sphere_fits_never_flicker_and_unsnapped_ones_do_with_a_shadow_edge_in_view() {
+    for path in ["strafe", "dolly", "yaw", "pitch", "orbit"] {
+        let (_, a) = ground_truth(&scene_text(path, true, "depth_bias = 0.05"));
+        let g = truth_of(&a);
+        assert_eq!(g.summary.flicker_snapped, 0.0, "{path}");
+        assert!(g.snapped.steps.iter().sum::<u32>() > 1000, "{path}: steps counted");
+        assert!(
+            g.summary.flicker_unsnapped > 0.0,
+            "{path}: unsnapped S5 {}",
+            g.summary.flicker_unsnapped
+        );
+        // Flip images agree with the flip counts.
+        let flipped = g
+            .pictures_unsnapped
+            .flips
+            .flips
+            .iter()
+            .flatten()
+            .filter(|&&x| x > 0.0)
+            .count();
+        assert!(flipped > 0, "{path}");
+    }
+}
+
+#[test]
+fn the_exact_answer_leaves_the_surface_by_epsilon_and_sees_the_box() {
+    let mut m = Mesh::default();
+    m.add_ground(0.0, -50.0, 50.0, -50.0, 50.0);
+    let bx = Aabb::new(DVec3::new(-1.0, 0.0, -1.0), DVec3::new(1.0, 2.0, 1.0));
+    m.add_box(&bx);
+    let scene = SceneGeometry::new(m);
+    let eps = truth::epsilon(&scene);
+    assert_eq!(eps, truth::EPSILON_REL * 50.0);
+    let light = DVec3::new(0.0, -1.0, -1.0).normalize();
+    let at = |p: DVec3, n: DVec3| Receiver {
+        pixel: 0,
+        p,
+        n,
+        triangle: 0,
+    };
+    // Open ground, the box's top and its lit side: no self-hit.
+    assert_eq!(
+        truth::occluder(&scene, light, &at(DVec3::new(10.0, 0.0, 10.0), DVec3::Y), eps),
+        None
+    );
+    assert_eq!(
+        truth::occluder(&scene, light, &at(DVec3::new(0.3, 2.0, 0.2), DVec3::Y), eps),
+        None
+    );
+    assert_eq!(
+        truth::occluder(&scene, light, &at(DVec3::new(0.3, 1.0, 1.0), DVec3::Z), eps),
+        None
+    );
+    // Behind the box (light travels toward -z): the ray back toward +z meets the box's face
+    // z = -1 after (|z| - 1) * sqrt 2, from 0.5 above the ground.
+    let d = truth::occluder(&scene, light, &at(DVec3::new(0.0, 0.0, -1.5), DVec3::Y), eps).unwrap();
+    assert!((d - 0.5 * 2f64.sqrt()).abs() < 1e-3, "{d}");
+    // Just beyond the shadow's far end (2 units past the face): lit.
+    assert_eq!(
+        truth::occluder(&scene, light, &at(DVec3::new(0.0, 0.0, -3.01), DVec3::Y), eps),
+        None
+    );
+}
+
+/// A plane through the origin with unit normal `n` (turned toward the light), as a big quad.
+fn tilted_plane(n: DVec3) -> SceneGeometry {
+    let u = n.cross(DVec3::X).normalize();
+    let v = n.cross(u);
+    let c = |a: f64, b: f64| u * a + v * b;
+    let mut m = Mesh::default();
+    m.push([c(-40.0, -40.0), c(40.0, -40.0), c(40.0, 40.0)]);
+    m.push([c(-40.0, -40.0), c(40.0, 40.0), c(-40.0, 40.0)]);
+    SceneGeometry::new(m)
+}
+
+fn plane_points(n: DVec3, count: usize) -> Vec<Receiver> {
+    let u = n.cross(DVec3::X).normalize();
+    let v = n.cross(u);
+    // A low-discrepancy set over 10 x 10 units of the plane.
+    (0..count)
+        .map(|k| {
+            let a = (k as f64 * 0.618_033_988_749_894_9).fract() * 10.0 - 5.0;
+            let b = (k as f64 * 0.754_877_666_246_692_7).fract() * 10.0 - 5.0;
+            Receiver {
+                pixel: k,
+                p: u * a + v * b,
+                n,
+                triangle: 0,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn zero_bias_on_a_lit_tilted_plane_gives_acne_on_about_half_of_its_points() {
+    let light = DVec3::new(-0.4, -1.0, -0.3).normalize();
+    for n in [
+        DVec3::new(0.3, 1.0, 0.2),
+        DVec3::new(-0.5, 0.8, 0.4),
+        DVec3::new(0.0, 0.2, 1.0),
+    ] {
+        let n = n.normalize();
+        assert!(n.dot(-light) > 0.0);
+        let scene = tilted_plane(n);
+        let b = LightBasis::new(light);
+        let w = Window::centred(DVec2::ZERO, DVec2::splat(30.0), 512, None);
+        let points = plane_points(n, 4000);
+        let (zero, _) = truth::frame_zero_in(
+            &scene,
+            &b,
+            &[(b, w)],
+            &vec![Some(0); points.len()],
+            &points,
+            &sampling(Bias::ZERO),
+        );
+        let (acne, leak) = truth::fractions(&zero);
+        assert!((acne - 0.5).abs() < 0.05, "normal {n}: acne {acne}");
+        assert_eq!(leak, 0.0);
+        // PCF 3 and 5 on the same plane vote the same way about half the time too; a bias of
+        // the closed form's worst case (slope bias 1) removes all of it.
+        let no_acne = Sampling {
+            bias: vec![Bias {
+                slope: 1.0,
+                ..Bias::ZERO
+            }],
+            format: None,
+            ..sampling(Bias::ZERO)
+        };
+        let (z, _) = truth::frame_zero_in(&scene, &b, &[(b, w)], &vec![Some(0); points.len()], &points, &no_acne);
+        assert_eq!(truth::fractions(&z).0, 0.0, "normal {n}");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, .. ProptestConfig::default() })]
+
+    #[test]
+    fn more_bias_never_increases_acne(
+        b1 in 0.0f64..0.2, db in 0.0f64..0.2, s1 in 0.0f64..1.5, ds in 0.0f64..1.5,
+        normal in 0.0f64..2.0, pcf in prop::sample::select(vec![1u32, 3, 5]),
+        fmt in prop::sample::select(DepthFormat::ALL.to_vec()),
+    ) {
+        let light = DVec3::new(-0.4, -1.0, -0.3).normalize();
+        let n = DVec3::new(0.3, 1.0, 0.2).normalize();
+        let scene = tilted_plane(n);
+        let b = LightBasis::new(light);
+        let w = Window::centred(DVec2::ZERO, DVec2::splat(30.0), 256, None);
+        let points = plane_points(n, 600);
+        let cascades = vec![Some(0); points.len()];
+        let acne = |depth: f64, slope: f64| {
+            let s = Sampling {
+                bias: vec![Bias { depth, slope, normal, offset: NormalOffset::Along }],
+                format: Some(fmt),
+                ranges: vec![(-30.0, 30.0)],
+                pcf,
+            };
+            truth::fractions(&truth::frame_zero_in(&scene, &b, &[(b, w)], &cascades, &points, &s).0).0
+        };
+        let (lo, hi) = (acne(b1, s1), acne(b1 + db, s1 + ds));
+        prop_assert!(hi <= lo, "acne {lo} at ({b1}, {s1}), {hi} at ({}, {})", b1 + db, s1 + ds);
+    }
+}
+
+#[test]
+fn bad_bias_keys_name_the_key_and_what_is_allowed() {
+    let base = scene_text("strafe", true, "");
+    for (line, key, allowed) in [
+        ("depth_bias = -0.1", "shadow.depth_bias", ">= 0"),
+        ("slope_bias = -1.0", "shadow.slope_bias", ">= 0"),
+        ("normal_bias = -2.0", "shadow.normal_bias", ">= 0"),
+        (
+            "depth_format = \"d15\"",
+            "shadow.depth_format",
+            "\"d16\", \"d24\", \"d32f\"",
+        ),
+        ("pcf = 2", "shadow.pcf", "1, 3 or 5"),
+    ] {
+        let text = base.replace("snap = true", &format!("snap = true\n{line}"));
+        let e = err(&text);
+        assert!(e.contains(key) && e.contains(allowed), "{line}: {e}");
+    }
+    // Ground truth needs geometry.
+    let text = base
+        .replace("ground = 0.0\n", "")
+        .replace("[[scene.box]]\nmin = [-2.3, 0.0, -8.7]\nmax = [1.9, 3.1, -4.4]\n", "");
+    let e = err(&text);
+    assert!(e.contains("analysis.ground_truth"), "{e}");
+}
+
+#[test]
+fn depth_formats_quantise_to_their_step() {
+    let (near, far) = (10.0, 110.0);
+    for f in DepthFormat::ALL {
+        let step = f.step(far - near);
+        for k in 0..200 {
+            let d = near + (k as f64 * 0.379_1).fract() * (far - near);
+            let q = f.quantise(d, near, far);
+            assert!((q - d).abs() <= 0.5 * step * (1.0 + 1e-9), "{f:?} {d} -> {q}");
+        }
+        assert_eq!(f.quantise(f64::INFINITY, near, far), f64::INFINITY);
+        assert_eq!(DepthFormat::from_name(f.name()), Some(f));
+    }
+    assert_eq!(DepthFormat::D16.step(65_535.0), 1.0);
+}
+
+#[test]
+fn engine_bias_rules_convert_per_cascade_and_back() {
+    // Godot: bias / 100 x the depth range.
+    let godot = BiasRule::RangeFraction {
+        fraction: 0.1 / 100.0,
+        normal_texels: 2.0,
+        offset: NormalOffset::Lateral,
+    };
+    let b = godot.for_cascade(0.05, 250.0);
+    assert!((b.depth - 0.25).abs() < 1e-15);
+    assert!((godot.depth_in_own_units(0.25, 0.05, 250.0) - 0.001).abs() < 1e-15);
+    // Unity: texels.
+    let unity = BiasRule::Texels {
+        depth_texels: 1.0,
+        normal_texels: 1.0,
+    };
+    assert_eq!(unity.for_cascade(0.04, 10.0).depth, 0.04);
+    assert_eq!(unity.depth_in_own_units(0.1, 0.04, 10.0), 2.5);
+    // The preset's default reaches the analysis: Godot's bias is 0.1 % of each cascade's range.
+    let text = scene_text("strafe", true, "").replace("[shadow]", "[shadow]\npreset = \"godot\"");
+    let (_, a) = ground_truth(&text);
+    let g = truth_of(&a);
+    for (i, b) in g.bias.iter().enumerate() {
+        let range = g.ranges[i].1 - g.ranges[i].0;
+        assert!((b.depth - 0.001 * range).abs() <= 1e-12 * range, "cascade {i}");
+        assert_eq!(b.normal, 2.0);
+        assert_eq!(b.offset, NormalOffset::Lateral);
+    }
+    assert!(g.engine.is_some());
+}
+
+#[test]
+fn sweeps_leave_the_pass_out_and_analyze_without_it_writes_what_it_did() {
+    let (c, a) = ground_truth(&scene_text("strafe", true, ""));
+    let quick = analyze(&c, &AnalysisOptions::summary_only());
+    assert!(quick.ground_truth.is_none() && quick.summary.truth.is_none());
+    assert!(a.summary.truth.is_some());
+    // The summary without the pass equals the one with it, but for the truth metrics.
+    let mut s = a.summary.clone();
+    s.truth = None;
+    let mut off = c.clone();
+    off.truth.enabled = false;
+    assert_eq!(analyze(&off, &AnalysisOptions::full()).summary, s);
+}
+
+#[test]
+fn analyze_ground_truth_writes_bias_csv_and_the_recommendation() {
+    use std::process::Command;
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("scene.toml");
+    let text = scene_text("strafe", true, "").replace("ground_truth = true\n", "");
+    std::fs::write(&cfg, &text).unwrap();
+    let out = dir.path().join("out");
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+            .args([
+                "analyze",
+                cfg.to_str().unwrap(),
+                "--quiet",
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    // Without the flag: no bias.csv, no truth column.
+    let plain = run(&[]);
+    assert!(plain.status.success());
+    assert!(!out.join("bias.csv").exists());
+    let cascades = std::fs::read_to_string(out.join("cascades.csv")).unwrap();
+    assert!(!cascades.contains("acne_fraction"));
+    let o = run(&["--ground-truth"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("recommended depth bias (D32F"), "{stdout}");
+    let bias = std::fs::read_to_string(out.join("bias.csv")).unwrap();
+    assert!(bias.starts_with("cascade,points,texel_size,"), "{bias}");
+    assert_eq!(bias.lines().count(), 3, "header and two cascades");
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let s = &summary;
+    assert!(
+        s["acne_fraction"].as_f64().unwrap() > 0.3,
+        "zero bias: acne on lit surfaces {s}"
+    );
+    assert_eq!(s["flicker_snapped"].as_f64(), Some(0.0));
+    let cascades = std::fs::read_to_string(out.join("cascades.csv")).unwrap();
+    assert!(cascades
+        .lines()
+        .next()
+        .unwrap()
+        .contains("bias_needed,slope_bias_needed,peter_pan"));
+    // Without geometry the flag is refused, naming it (exit 2).
+    let bare = text
+        .replace("ground = 0.0\n", "")
+        .replace("[[scene.box]]\nmin = [-2.3, 0.0, -8.7]\nmax = [1.9, 3.1, -4.4]\n", "");
+    std::fs::write(&cfg, bare).unwrap();
+    let e = run(&["--ground-truth"]);
+    assert_eq!(e.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&e.stderr).contains("--ground-truth"));
+}
+
+#[test]
+fn flicker_points_pair_the_proxies_with_s5_per_snap_mode() {
+    let c = load(&scene_text("yaw", true, "depth_bias = 0.05"));
+    let pts = csm_lab::analysis::ground_truth::flicker_points(&[c.clone(), c.with_resolution(512).unwrap()]);
+    assert_eq!(pts.len(), 4);
+    for p in &pts {
+        assert!(p.s4.is_some());
+        if p.snapped {
+            assert_eq!(p.s5, 0.0);
+        } else {
+            assert!(p.s3 > 0.0 && p.s5 > 0.0, "{p:?}");
+        }
+    }
+}
