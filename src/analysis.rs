@@ -138,6 +138,16 @@ pub struct LightSummary {
     pub jump_unsnapped: f64,
 }
 
+impl Summary {
+    /// The snapped shimmer the recommendation's stability rule reads: `shimmer_snapped`, or
+    /// under a moving light the snapped crawl between light updates (`light_crawl_snapped`). An
+    /// update moves every shadow on purpose; how far is `light_jump`, judged on its own by the
+    /// light-update axis, so it does not make every setting "unstable".
+    pub fn snapped_drift(&self) -> f64 {
+        self.light.map_or(self.shimmer_snapped, |l| l.crawl_snapped)
+    }
+}
+
 impl LightSummary {
     /// From the two snap modes' walks of the paths (the worst over the paths); None when no
     /// walk measured a moving light.

@@ -238,6 +238,11 @@ pub fn judge(all: Vec<Row>, objective: SummaryMetric) -> (Vec<Row>, SunRows) {
             s.coverage_violations = s.coverage_violations.max(x.coverage_violations);
             s.shimmer_snapped = s.shimmer_snapped.max(x.shimmer_snapped);
             s.shimmer = s.shimmer.max(x.shimmer);
+            if let (Some(l), Some(xl)) = (s.light.as_mut(), x.light) {
+                // The stability gate under a moving light reads the crawl (`snapped_drift`).
+                l.crawl_snapped = l.crawl_snapped.max(xl.crawl_snapped);
+                l.crawl = l.crawl.max(xl.crawl);
+            }
         }
         judged.push(row);
         worst.push(w);

@@ -1007,9 +1007,10 @@ pub struct Recommendation {
 
 /// Whether a row may be recommended: its scene needs cascades, it covers every slice
 /// (`coverage_violations` = 0) and it is stable when snapped (`shimmer_snapped` <=
-/// [`STABLE_SHIMMER`]).
+/// [`STABLE_SHIMMER`]; under a moving light, the snapped crawl between updates:
+/// [`Summary::snapped_drift`]).
 pub fn acceptable(r: &Row) -> bool {
-    r.summary.cascades_needed && r.summary.coverage_violations == 0 && r.summary.shimmer_snapped <= STABLE_SHIMMER
+    r.summary.cascades_needed && r.summary.coverage_violations == 0 && r.summary.snapped_drift() <= STABLE_SHIMMER
 }
 
 /// Picks the recommendation by [`OBJECTIVE`]. None when no row needs cascades or none is
@@ -1069,7 +1070,7 @@ pub fn no_recommendation(rows: &[Row], budget_mib: f64, objective: SummaryMetric
         let (x, y) = (&rows[a].summary, &rows[b].summary);
         x.coverage_violations
             .cmp(&y.coverage_violations)
-            .then(x.shimmer_snapped.total_cmp(&y.shimmer_snapped))
+            .then(x.snapped_drift().total_cmp(&y.snapped_drift()))
             .then((x.memory_bytes > budget_bytes).cmp(&(y.memory_bytes > budget_bytes)))
             .then(objective.value(x).total_cmp(&objective.value(y)))
             .then(a.cmp(&b))
@@ -1082,7 +1083,7 @@ pub fn no_recommendation(rows: &[Row], budget_mib: f64, objective: SummaryMetric
             .count(),
         unstable: needed
             .iter()
-            .filter(|&&i| rows[i].summary.shimmer_snapped > STABLE_SHIMMER)
+            .filter(|&&i| rows[i].summary.snapped_drift() > STABLE_SHIMMER)
             .count(),
         closest,
     }
@@ -1275,7 +1276,7 @@ pub fn loss(rows: &[Row], rec: &Recommendation, x: usize, objective: SummaryMetr
         return Loss::CoverageMisses(s.coverage_violations);
     }
     if !acceptable(&rows[x]) {
-        return Loss::Unstable(s.shimmer_snapped);
+        return Loss::Unstable(s.snapped_drift());
     }
     if rec.within_budget && s.memory_bytes > rec.budget_bytes {
         return Loss::OverBudget;
@@ -1491,7 +1492,7 @@ impl SweepResult {
             .collect();
         let key = |i: usize| {
             let s = &self.rows[i].summary;
-            let ok = s.coverage_violations == 0 && s.shimmer_snapped <= STABLE_SHIMMER && s.memory_bytes <= budget;
+            let ok = s.coverage_violations == 0 && s.snapped_drift() <= STABLE_SHIMMER && s.memory_bytes <= budget;
             (!ok, self.objective.value(s), s.max_aliasing, s.memory_bytes, i)
         };
         idx.sort_by(|&a, &b| {

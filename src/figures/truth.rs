@@ -508,7 +508,7 @@ fn flicker_legend<T>(layout: &Layout, panels: &[Panel<'_, T>], stats: &[FlipStat
         }
         let _ = write!(
             body,
-            "<text x=\"{}\" y=\"19\">flip rate: share of consecutive frame pairs in which the map's answer changed</text>",
+            "<text x=\"{}\" y=\"19\">flip rate (share of frame pairs with a changed answer)</text>",
             BAR_X + BAR_LEN + 16.0
         );
     }

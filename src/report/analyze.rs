@@ -32,6 +32,9 @@ pub fn exporters_for(a: &Analysis) -> Vec<&'static dyn Exporter<Analysis>> {
     }
     if a.ground_truth.is_some() {
         v.push(&super::ground_truth::BiasCsv);
+        v.push(&super::ground_truth::ShadowPng);
+        v.push(&super::ground_truth::FlickerPng);
+        v.push(&super::ground_truth::ShadowApng);
     }
     v
 }

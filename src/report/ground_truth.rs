@@ -132,3 +132,81 @@ pub fn recommendation(a: &Analysis, g: &GroundTruth) -> String {
 fn format_index(f: DepthFormat) -> usize {
     DepthFormat::ALL.iter().position(|x| *x == f).unwrap_or(2)
 }
+
+/// `shadow.png`: frame 0 as the sampled maps shade it, snapped beside unsnapped.
+pub struct ShadowPng;
+/// `flicker.png`: how often each receiver pixel flipped along the path, snapped beside unsnapped.
+pub struct FlickerPng;
+/// `shadow.apng`: the path's kept frames (every k-th, as the pass kept them), both snap modes.
+pub struct ShadowApng;
+
+fn truth_of(a: &Analysis) -> Result<&GroundTruth> {
+    a.ground_truth.as_ref().ok_or_else(|| {
+        crate::error::Error::from(crate::error::PlotError::Draw(
+            "the ground-truth pictures need the ground-truth pass".to_string(),
+        ))
+    })
+}
+
+impl Exporter<Analysis> for ShadowPng {
+    fn file_name(&self) -> &'static str {
+        "shadow.png"
+    }
+
+    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
+        use crate::figures::truth::{shadow_png, Panel};
+        let g = truth_of(a)?;
+        shadow_png(&[
+            Panel::snapped(&g.pictures_snapped.frame0),
+            Panel::unsnapped(&g.pictures_unsnapped.frame0),
+        ])
+    }
+}
+
+impl Exporter<Analysis> for FlickerPng {
+    fn file_name(&self) -> &'static str {
+        "flicker.png"
+    }
+
+    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
+        use crate::figures::truth::{flicker_png, Panel};
+        let g = truth_of(a)?;
+        flicker_png(&[
+            Panel::snapped(&g.pictures_snapped.flips),
+            Panel::unsnapped(&g.pictures_unsnapped.flips),
+        ])
+    }
+}
+
+impl Exporter<Analysis> for ShadowApng {
+    fn file_name(&self) -> &'static str {
+        crate::figures::truth::SHADOW_APNG
+    }
+
+    fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
+        use crate::figures::truth::{write_animation, AnimationPlan, ANIMATION_CAPS};
+        let g = truth_of(a)?;
+        let (s, u) = (&g.pictures_snapped.animation, &g.pictures_unsnapped.animation);
+        let frame0 = &g.pictures_snapped.frame0;
+        // The pass kept every k-th path frame of both modes (at most a few dozen small images):
+        // the animation shows each of them once, held for k path frames' time.
+        let mut plan = AnimationPlan::new(
+            s.len().min(u.len()),
+            frame0.cols,
+            frame0.rows,
+            &["snapped", "unsnapped"],
+            &ANIMATION_CAPS,
+        )?;
+        let k = match s.as_slice() {
+            [a, b, ..] => b.0 - a.0,
+            _ => 1,
+        };
+        plan.delay_ms = (1000.0 * (k * plan.every) as f64 / ANIMATION_CAPS.path_fps)
+            .round()
+            .clamp(40.0, 500.0) as u16;
+        let frames = s.iter().zip(u).map(|((_, a), (_, b))| vec![a.clone(), b.clone()]);
+        let mut out = Vec::new();
+        write_animation(&plan, frames, &mut out)?;
+        Ok(out)
+    }
+}

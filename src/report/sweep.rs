@@ -402,7 +402,7 @@ fn why_text(r: &SweepResult) -> String {
         .filter(|x| {
             x.summary.cascades_needed
                 && x.summary.coverage_violations == 0
-                && x.summary.shimmer_snapped <= sweep::STABLE_SHIMMER
+                && x.summary.snapped_drift() <= sweep::STABLE_SHIMMER
                 && x.summary.memory_bytes as f64 <= r.budget_mib * 1048576.0
         })
         .count();
@@ -694,7 +694,7 @@ fn status(r: &SweepResult, i: usize) -> String {
     let s = &r.rows[i].summary;
     if s.coverage_violations > 0 {
         "misses slice corners".into()
-    } else if s.shimmer_snapped > sweep::STABLE_SHIMMER {
+    } else if s.snapped_drift() > sweep::STABLE_SHIMMER {
         "unstable when snapped".into()
     } else if s.memory_bytes as f64 > r.budget_mib * 1048576.0 {
         "over budget".into()

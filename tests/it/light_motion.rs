@@ -348,9 +348,21 @@ fn each_light_update_row_is_the_analysis_of_a_file_with_that_rule() {
         );
         assert_eq!(l.crawl, r.crawl, "{st:?}");
     }
-    // The named step is the largest of its kind whose jump is under one texel, at the
-    // configured setting (nothing is recommended: the turning sun makes every setting drift).
+    // Under a moving light the stability gate reads the snapped crawl between updates, not the
+    // snapped shimmer, which counts every update's (deliberate) move: the snapped sphere fits
+    // do not crawl, so they qualify although their shimmer_snapped is far above the gate.
     let result = SweepResult::new(c.clone(), grid, rows, String::new());
+    let rec = result.recommended().expect("the snapped sphere fits qualify");
+    let light = rec.summary.light.unwrap();
+    assert_eq!(rec.summary.snapped_drift(), light.crawl_snapped);
+    assert!(light.crawl_snapped <= csm_lab::sweep::STABLE_SHIMMER);
+    assert!(
+        rec.summary.shimmer_snapped > 10.0 * csm_lab::sweep::STABLE_SHIMMER,
+        "{:?}",
+        rec.summary
+    );
+    // The named step is the largest of its kind whose jump is under one texel, at the
+    // recommended setting.
     let choice = csm_lab::commands::light_sweep::choose(&result).unwrap();
     let at = result.rows[choice.at].setting;
     assert_eq!((at.lambda, at.cascades, at.resolution), (0.75, 4, 2048));

@@ -522,10 +522,11 @@ fn analyze_ground_truth_writes_bias_csv_and_the_recommendation() {
             .output()
             .unwrap()
     };
-    // Without the flag: no bias.csv, no truth column.
+    // Without the flag: no bias.csv, no pictures, no truth column.
     let plain = run(&[]);
     assert!(plain.status.success());
     assert!(!out.join("bias.csv").exists());
+    assert!(!out.join("shadow.png").exists() && !out.join("shadow.apng").exists());
     let cascades = std::fs::read_to_string(out.join("cascades.csv")).unwrap();
     assert!(!cascades.contains("acne_fraction"));
     let o = run(&["--ground-truth"]);
@@ -548,6 +549,21 @@ fn analyze_ground_truth_writes_bias_csv_and_the_recommendation() {
         .next()
         .unwrap()
         .contains("bias_needed,slope_bias_needed,peter_pan"));
+    // The pictures of the pass: two panels each, decoded; the animation has the kept frames.
+    for name in ["shadow.png", "flicker.png", "shadow.apng"] {
+        let bytes = std::fs::read(out.join(name)).unwrap();
+        let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+        let reader = decoder.read_info().unwrap();
+        let info = reader.info();
+        assert!(info.width >= 960, "{name}: two panels side by side ({} px)", info.width);
+        if name == "shadow.apng" {
+            let frames = info.animation_control().expect("an animated PNG").num_frames;
+            assert!((2..=48).contains(&frames), "{name}: {frames} frames");
+        } else {
+            assert!(info.animation_control().is_none(), "{name} is a still");
+        }
+    }
+
     // Without geometry the flag is refused, naming it (exit 2).
     let bare = text
         .replace("ground = 0.0\n", "")
