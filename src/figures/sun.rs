@@ -101,7 +101,7 @@ impl QualityVsSunFigure<'_> {
                 y_labels,
                 cells,
                 marked: None,
-                unit: "settings, log".to_string(),
+                unit: "settings (count)".to_string(),
             });
         }
         out

@@ -401,8 +401,18 @@ pub(crate) fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>,
         chart.draw_series(std::iter::once(Circle::new(c, 8, WHITE.stroke_width(5))))?;
         chart.draw_series(std::iter::once(Circle::new(c, 8, palette::MARKED.stroke_width(3))))?;
     }
-    // The colour bar, titled with the metric and unit.
-    let ticks = nice_ticks(lo, hi, true);
+    // The colour bar, titled with the metric and unit. Counts (every value whole) get whole
+    // ticks only: a bar of "1.02 settings" says nothing.
+    let mut ticks = nice_ticks(lo, hi, true);
+    if values.iter().all(|v| v.fract() == 0.0) {
+        ticks.retain(|t| t.fract() == 0.0);
+        for v in [lo.ceil(), hi.floor()] {
+            if v >= lo && v <= hi && !ticks.contains(&v) {
+                ticks.push(v);
+            }
+        }
+        ticks.sort_by(f64::total_cmp);
+    }
     // Tick labels and the title sit right of the bar, clear of the cells and of the bar itself.
     let mut bar = ChartBuilder::on(&bar_area)
         .caption(&p.unit, (FONT, 11))
