@@ -6,7 +6,7 @@
 use crate::cascades::{LightPose, Rig};
 use crate::config::Config;
 use crate::core::shade::{FlipImage, ShadeImage};
-use crate::core::truth::{self, Bias, CacheStats, CascadeTruth, Flicker, NormalOffset, PointZero, Receiver, Sampling};
+use crate::core::truth::{self, Bias, CacheStats, CascadeTruth, Flicker, PointZero, Receiver, Sampling};
 use crate::presets::bias::{engine_bias, EngineBias};
 
 /// At most this many frames of the path are kept as pictures for the animation (every k-th).
@@ -118,7 +118,7 @@ pub fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
                 depth: t.depth_bias.unwrap_or(0.0),
                 slope: t.slope_bias.unwrap_or(0.0),
                 normal: t.normal_bias.unwrap_or(0.0),
-                offset: NormalOffset::Along,
+                ..Bias::ZERO
             },
         })
         .collect();

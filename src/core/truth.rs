@@ -120,6 +120,34 @@ pub enum NormalOffset {
     Lateral,
 }
 
+/// A depth-bias term that depends on the angle `θ` between the receiver's normal and the
+/// direction toward the light (`cos θ = n.l`), in world units.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub enum Facing {
+    /// No such term.
+    None,
+    /// Adds `k * min(tan θ, cap)`, with `tan θ = sqrt(1 - c²) / c` and `c = |n.l|` (`cap`
+    /// when `c` is 0): Unreal's slope term, computed from the normal.
+    Tangent { k: f64, cap: f64 },
+    /// The depth term becomes `max(depth, k * (1 - n.l))`: the LearnOpenGL-style bias.
+    OneMinusCos { k: f64 },
+}
+
+impl Facing {
+    /// The depth bias of a receiver with `cos θ = c` whose other terms add up to `depth`.
+    pub fn apply(self, depth: f64, c: f64) -> f64 {
+        match self {
+            Facing::None => depth,
+            Facing::Tangent { k, cap } => {
+                let a = c.abs().min(1.0);
+                let tan = if a > 0.0 { (1.0 - a * a).sqrt() / a } else { cap };
+                depth + k * tan.clamp(0.0, cap)
+            }
+            Facing::OneMinusCos { k } => depth.max(k * (1.0 - c)),
+        }
+    }
+}
+
 /// One cascade's bias in world units (the normal offset in texels of that cascade).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Bias {
@@ -130,6 +158,8 @@ pub struct Bias {
     /// The receiver moves along its normal by this many texels before the lookup.
     pub normal: f64,
     pub offset: NormalOffset,
+    /// A term of the receiver's angle to the light (engine rules only).
+    pub facing: Facing,
 }
 
 impl Bias {
@@ -138,6 +168,7 @@ impl Bias {
         slope: 0.0,
         normal: 0.0,
         offset: NormalOffset::Along,
+        facing: Facing::None,
     };
 
     /// Only a depth bias.
@@ -164,6 +195,16 @@ pub enum BiasRule {
     },
     /// A depth bias in texels of the cascade (world size = value x texel size).
     Texels { depth_texels: f64, normal_texels: f64 },
+    /// A depth bias in texels of the cascade plus `tangent_texels` texels times the tangent of
+    /// the receiver's angle to the light, the tangent capped at `cap` (Unreal's rule).
+    TexelsTangent {
+        depth_texels: f64,
+        tangent_texels: f64,
+        cap: f64,
+    },
+    /// `max(factor * (1 - n.l), floor)` in fractions of the cascade's light depth range (the
+    /// LearnOpenGL-style bias in normalised depth).
+    RangeFacing { factor: f64, floor: f64 },
 }
 
 impl BiasRule {
@@ -180,6 +221,7 @@ impl BiasRule {
                 slope,
                 normal: normal_texels,
                 offset,
+                facing: Facing::None,
             },
             BiasRule::RangeFraction {
                 fraction,
@@ -190,6 +232,7 @@ impl BiasRule {
                 slope: 0.0,
                 normal: normal_texels,
                 offset,
+                facing: Facing::None,
             },
             BiasRule::Texels {
                 depth_texels,
@@ -199,6 +242,24 @@ impl BiasRule {
                 slope: 0.0,
                 normal: normal_texels,
                 offset: NormalOffset::Along,
+                facing: Facing::None,
+            },
+            BiasRule::TexelsTangent {
+                depth_texels,
+                tangent_texels,
+                cap,
+            } => Bias {
+                depth: depth_texels * texel,
+                facing: Facing::Tangent {
+                    k: tangent_texels * texel,
+                    cap,
+                },
+                ..Bias::ZERO
+            },
+            BiasRule::RangeFacing { factor, floor } => Bias {
+                depth: floor * range,
+                facing: Facing::OneMinusCos { k: factor * range },
+                ..Bias::ZERO
             },
         }
     }
@@ -208,14 +269,14 @@ impl BiasRule {
     pub fn depth_in_own_units(&self, world: f64, texel: f64, range: f64) -> f64 {
         match self {
             BiasRule::World { .. } => world,
-            BiasRule::RangeFraction { .. } => {
+            BiasRule::RangeFraction { .. } | BiasRule::RangeFacing { .. } => {
                 if range > 0.0 {
                     world / range
                 } else {
                     0.0
                 }
             }
-            BiasRule::Texels { .. } => {
+            BiasRule::Texels { .. } | BiasRule::TexelsTangent { .. } => {
                 if texel > 0.0 {
                     world / texel
                 } else {
@@ -600,7 +661,7 @@ fn place(basis: LightBasis, texel: DVec2, fraction: DVec2, r: &Receiver, bias: &
         texel: (s.x.floor() as i64, s.y.floor() as i64),
         depth: basis.z.dot(p),
         slope,
-        bias: bias.depth + bias.slope * slope,
+        bias: bias.facing.apply(bias.depth + bias.slope * slope, r.n.dot(-basis.z)),
     }
 }
 

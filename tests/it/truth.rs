@@ -402,7 +402,7 @@ proptest! {
         let cascades = vec![Some(0); points.len()];
         let acne = |depth: f64, slope: f64| {
             let s = Sampling {
-                bias: vec![Bias { depth, slope, normal, offset: NormalOffset::Along }],
+                bias: vec![Bias { depth, slope, normal, ..Bias::ZERO }],
                 format: Some(fmt),
                 ranges: vec![(-30.0, 30.0)],
                 pcf,
