@@ -242,7 +242,7 @@ impl Engine for Threejs {
 
     const TERMS: Terms = Terms {
         comment: "//",
-        language: "JavaScript, three.js: the CSM addon's constructor options",
+        language: "JavaScript, three.js: the CSM addon's constructor options and its fade property",
         template: "\
 const csm = new CSM({
   maxFar: {{maxFar}},
