@@ -46,13 +46,18 @@ pub struct KnobContext<'a> {
 }
 
 /// What a window rule is built from: the lens, the engine's light basis, the map size, the
-/// fitted slices and the snap rule.
+/// fitted slices, the snap rule, the camera planes and the shadow distance.
 pub struct Fitting<'a> {
     pub lens: Lens,
     pub light: LightBasis,
     pub resolution: u32,
     pub fitted: &'a [(f64, f64)],
     pub snap_rule: SnapRule,
+    /// Camera near and far planes.
+    pub near: f64,
+    pub far: f64,
+    /// The shadow distance (as [`Engine::layout`] got it).
+    pub max_distance: f64,
 }
 
 impl Fitting<'_> {

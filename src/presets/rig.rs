@@ -10,8 +10,11 @@ use crate::geometry::Lens;
 use super::*;
 
 /// Builds a preset's rig for a layout. `light_direction` is the configured (unit) light
-/// direction, from which the engine builds its basis; `near`/`far` the camera planes. None when
-/// no visible depth reads any cascade.
+/// direction, from which the engine builds its basis; `near`/`far` the camera planes and
+/// `max_distance` the shadow distance the layout was built for. None when no visible depth
+/// reads any cascade.
+// The camera planes and the shadow distance are three plain numbers a window rule may need.
+#[allow(clippy::too_many_arguments)]
 pub fn rig_for_layout(
     knobs: &Knobs,
     lens: Lens,
@@ -20,6 +23,7 @@ pub fn rig_for_layout(
     lay: &Layout,
     near: f64,
     far: f64,
+    max_distance: f64,
 ) -> Option<Rig> {
     let selection = clip_selection(&lay.selection, near, far)?;
     let engine = knobs.engine();
@@ -33,6 +37,9 @@ pub fn rig_for_layout(
             resolution,
             fitted: &lay.fitted,
             snap_rule: rule,
+            near,
+            far,
+            max_distance,
         },
     );
     Some(Rig::with_scheme(
@@ -75,5 +82,6 @@ pub fn rig(config: &Config, preset: &Preset) -> Option<Rig> {
         &lay,
         cam.near,
         cam.far,
+        s.max_distance,
     )
 }

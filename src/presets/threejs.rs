@@ -1,5 +1,6 @@
 //! three.js: the CSM addon (r185 and later): breaks of min(far, maxFar), slice-diameter windows
-//! at the light-space box centre, floor snapping, fixed light near/far with a margin.
+//! at the light-space box centre, floor snapping, fixed light near/far with a margin; with
+//! `fade` (a property set after construction) blend bands between cascades and grown windows.
 
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
@@ -29,15 +30,36 @@ pub struct ThreejsTable {
     light_margin: Option<f64>,
     light_near: Option<f64>,
     light_far: Option<f64>,
+    fade: Option<bool>,
 }
 
-/// three.js CSM (constructor parameters).
+/// three.js CSM (constructor parameters, and `fade`, set on the object after construction).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ThreejsKnobs {
     pub mode: ThreejsMode,
     pub light_margin: f64,
     pub light_near: f64,
     pub light_far: f64,
+    /// `csm.fade`: blend bands between cascades and windows grown by the fade margin. Not
+    /// serialised when off, so reports of settings without it read as before.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub fade: bool,
+}
+
+/// The fade band around a break `b` (a fraction of `F`, read as linear depth `ld = d/(F − n)`):
+/// `[b − b²/8, b + b²/8]` in linear depth, where the shader reads both neighbouring cascades
+/// (margin `b²/4`, half of it on each side of the break).
+pub fn threejs_fade_band(b: f64) -> (f64, f64) {
+    let half = 0.125 * b * b;
+    (b - half, b + half)
+}
+
+/// How much fade grows a cascade's window side: `0.25·(z/(Fmax − n))²·(Fmax − n)` for a
+/// cascade ending at view depth `z`, with `Fmax = max(camera far, maxFar)`.
+pub fn threejs_fade_growth(z_far: f64, near: f64, far: f64, max_far: f64) -> f64 {
+    let span = far.max(max_far) - near;
+    let ld = z_far / span;
+    0.25 * ld * ld * span
 }
 
 /// three.js `breaks`: far end of each cascade as a fraction of `far`, the last one 1.
@@ -91,6 +113,7 @@ impl Engine for Threejs {
             light_margin,
             light_near,
             light_far,
+            fade: t.fade.unwrap_or(false),
         })
     }
 
@@ -137,6 +160,30 @@ impl Engine for Threejs {
             .collect();
         let mut selection = vec![f64::NEG_INFINITY];
         selection.extend(b.iter().map(|x| x * (f - near)));
+        if !k.fade || cascades < 2 {
+            return Layout { fitted, selection };
+        }
+        // With fade, cascade i is read on [x − x²/8, y + y²/8) in linear depth (x, y its
+        // breaks; the last one up to the end of the shadows, where it fades out): around each
+        // interior break both neighbours are read, and the coarser one counts for selection.
+        let u = f - near;
+        let bands: Vec<(f64, f64)> = b[..cascades - 1]
+            .iter()
+            .map(|&x| {
+                let (lo, hi) = threejs_fade_band(x);
+                (lo * u, hi * u)
+            })
+            .collect();
+        let fitted = (0..cascades)
+            .map(|i| {
+                let lo = if i == 0 { near } else { bands[i - 1].0 };
+                let hi = if i + 1 == cascades { f } else { bands[i].1 };
+                (lo, hi)
+            })
+            .collect();
+        for (j, band) in bands.iter().enumerate() {
+            selection[j + 1] = band.0;
+        }
         Layout { fitted, selection }
     }
 
@@ -146,10 +193,25 @@ impl Engine for Threejs {
 
     fn scheme(k: &ThreejsKnobs, f: &Fitting<'_>) -> EngineScheme {
         let k2 = f.lens.k2();
+        let sides = if k.fade {
+            // The side is the diameter of the cascade's own slice [b_{i-1} F, b_i F] (not of
+            // the faded interval the layout fits), grown by the fade margin of its far end.
+            let m = f.fitted.len();
+            let fe = f.far.min(f.max_distance);
+            let b = threejs_breaks(k.mode, m, f.near, fe);
+            (0..m)
+                .map(|i| {
+                    let (a, z) = (if i == 0 { f.near } else { b[i - 1] * fe }, b[i] * fe);
+                    slice_diameter(a, z, k2) + threejs_fade_growth(z, f.near, f.far, f.max_distance)
+                })
+                .collect()
+        } else {
+            f.each(|a, b| slice_diameter(a, b, k2))
+        };
         EngineScheme::fixed(
             "diameter",
             WindowRule::BoxCentred,
-            f.each(|a, b| slice_diameter(a, b, k2)),
+            sides,
             LightDepthRule::Margin {
                 margin: k.light_margin,
                 near: k.light_near,
@@ -159,10 +221,15 @@ impl Engine for Threejs {
     }
 
     fn split_rule(k: &ThreejsKnobs) -> String {
-        match k.mode {
+        let rule = match k.mode {
             ThreejsMode::Practical => "practical, λ fixed at 0.5, breaks of min(far, maxFar) (r185)".to_string(),
             ThreejsMode::Uniform => "uniform breaks of min(far, maxFar) (r185)".to_string(),
             ThreejsMode::Logarithmic => "logarithmic breaks of min(far, maxFar) (r185)".to_string(),
+        };
+        if k.fade {
+            format!("{rule}; fade on: bands b ± b²/8 of linear depth, windows grown by the fade margin")
+        } else {
+            rule
         }
     }
 
@@ -175,7 +242,7 @@ impl Engine for Threejs {
 
     const TERMS: Terms = Terms {
         comment: "//",
-        language: "JavaScript, three.js: the CSM addon's constructor options",
+        language: "JavaScript, three.js: the CSM addon's constructor options and its fade property",
         template: "\
 const csm = new CSM({
   maxFar: {{maxFar}},
@@ -188,7 +255,9 @@ const csm = new CSM({
   parent: scene,
   camera: camera,
   lightDirection: lightDirection,
-});",
+});
+csm.fade = {{fade}};
+csm.updateFrustums();",
     };
 
     fn terms(k: &ThreejsKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
@@ -205,6 +274,7 @@ const csm = new CSM({
             .num("lightNear", k.light_near)
             .num("lightFar", k.light_far)
             .num("lightMargin", k.light_margin)
+            .bool("fade", k.fade)
     }
 
     fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(ThreejsKnobs, Dims)> {
@@ -222,6 +292,7 @@ const csm = new CSM({
             light_margin: Some(f.num("lightMargin", "threejs.light_margin")?),
             light_near: Some(f.num("lightNear", "threejs.light_near")?),
             light_far: Some(f.num("lightFar", "threejs.light_far")?),
+            fade: Some(f.bool("fade", "threejs.fade")?),
         };
         let dims = Dims {
             cascades: f.count("cascades", "shadow.cascades")?,

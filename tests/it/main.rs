@@ -37,4 +37,5 @@ mod seams;
 mod shimmer;
 mod shimmer_fast_paths;
 mod sun_sweep;
+mod threejs_fade;
 mod truth;

@@ -409,6 +409,7 @@ fn non_default_splits_follow_each_rule() {
             light_margin: 200.0,
             light_near: 1.0,
             light_far: 2000.0,
+            fade: false,
         })
     };
     let l = layout(&tk(ThreejsMode::Uniform), 2, 101.0, 1.0, 5000.0);
@@ -553,7 +554,7 @@ fn threejs_window_is_the_slice_diameter() {
     let k = default_knobs("threejs");
     let l = layout(&k, 4, 1e5, 0.1, 200.0);
     let ln = lens(60.0, 16.0 / 9.0);
-    let rig = rig_for_layout(&k, ln, DVec3::new(-0.4, -1.0, -0.3), 2048, &l, 0.1, 200.0).unwrap();
+    let rig = rig_for_layout(&k, ln, DVec3::new(-0.4, -1.0, -0.3), 2048, &l, 0.1, 200.0, 1e5).unwrap();
     // reference: 59.758 for [0.1, 25.372] at 60 deg, 16:9; texel 0.029179 at 2048.
     assert!((rig.sphere_side[0] - 59.758).abs() < 5e-4, "{}", rig.sphere_side[0]);
     assert!((rig.sphere_side[0] / 2048.0 - 0.029179).abs() < 5e-7);
@@ -618,6 +619,7 @@ fn dart_corner_average_costs_the_reference_overhead_over_the_minimal_sphere() {
             2048,
             &Layout::contiguous(splits.clone()),
             0.1,
+            1000.0,
             1000.0,
         )
         .unwrap();
@@ -803,7 +805,7 @@ fn bevy_window_misses_the_slice_by_up_to_one_texel_in_the_constructed_case() {
     });
     let light = DVec3::new(0.3, -1.0, 0.2);
     let l = layout(&knobs, 1, far, 8.0, 1000.0);
-    let rig = rig_for_layout(&knobs, ln, light, 2048, &l, 8.0, 1000.0).unwrap();
+    let rig = rig_for_layout(&knobs, ln, light, 2048, &l, 8.0, 1000.0, far).unwrap();
     assert_eq!(rig.sphere_side, vec![40.0], "no slack from the ceil");
     let (mut misses, mut worst, mut unsnapped_worst) = (0, 0.0f64, 0.0f64);
     for pose in random_poses(2, 20_000) {
@@ -824,7 +826,7 @@ fn bevy_window_misses_the_slice_by_up_to_one_texel_in_the_constructed_case() {
     // The default cascade 1 ([8, 24.66]) keeps about 7 texels of slack (reference: 7.10).
     let knobs = default_knobs("bevy");
     let l = layout(&knobs, 4, 150.0, 0.1, 1000.0);
-    let rig = rig_for_layout(&knobs, ln, light, 2048, &l, 0.1, 1000.0).unwrap();
+    let rig = rig_for_layout(&knobs, ln, light, 2048, &l, 0.1, 1000.0, 150.0).unwrap();
     let mut slack = f64::INFINITY;
     for pose in random_poses(5, 20_000) {
         let lp = LightPose::new(&rig.light, &pose);
