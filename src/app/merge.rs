@@ -85,6 +85,7 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
         format: args.format,
         shard: None,
         optimize_splits: false,
+        ground_truth: false,
     };
     let (config, grid, command) = plan(&request).map_err(|e| {
         Error::from(ShardError::Set(format!(
