@@ -167,7 +167,7 @@ pub struct SweepArgs {
     #[arg(long)]
     pub optimize_splits: bool,
     /// Also measure the shadow-map flicker S5 of a sample of the rows (every row of a grid of
-    /// at most 32, else 32 evenly spaced rows with the recommended one) beside S3 and S4;
+    /// at most 12, else 12 rows spread over the grid, with the recommended one) beside S3 and S4;
     /// writes flicker.csv and flicker_vs_shimmer.svg/png. Needs scene geometry. Also
     /// `[sweep] ground_truth = true`.
     #[arg(long)]

@@ -2,7 +2,7 @@
 //! sample of the sweep's rows (docs/ground-truth.md, "In a sweep").
 //!
 //! The ground-truth pass casts rays per receiver and frame, so a sweep runs it on at most
-//! [`SAMPLE_MAX`] rows: every row of a small grid, else `SAMPLE_MAX` evenly spaced rows with the
+//! [`SAMPLE_MAX`] rows: every row of a small grid, else `SAMPLE_MAX` rows spread over the grid with the
 //! recommended row among them ([`sample_indices`]). Nothing here writes a file.
 
 use rayon::prelude::*;

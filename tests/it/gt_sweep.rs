@@ -285,3 +285,41 @@ fn sweep_ground_truth_bad_input_names_the_flag_or_key() {
     assert_eq!(e.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&e.stderr).contains("--ground-truth"));
 }
+
+#[test]
+fn the_config_key_samples_in_a_sweep_and_in_the_merge_of_its_shards_not_in_a_shard() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("scene.toml");
+    std::fs::write(
+        &cfg,
+        scene(0.75, 2, &SWEEP.replace("[sweep]\n", "[sweep]\nground_truth = true\n")),
+    )
+    .unwrap();
+    let full = dir.path().join("full");
+    assert!(sweep(&cfg, &full, &[]).status.success());
+    assert!(full.join("flicker.csv").exists());
+    let shards: Vec<_> = (1..=2).map(|k| dir.path().join(format!("s{k}"))).collect();
+    for (k, d) in shards.iter().enumerate() {
+        let mut a = vec!["sweep", cfg.to_str().unwrap(), "--out", d.to_str().unwrap()];
+        let spec = format!("{}/2", k + 1);
+        a.extend(["--shard", &spec]);
+        let o = csm(&a);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(String::from_utf8_lossy(&o.stderr).contains("note: sweep.ground_truth left out"));
+        assert!(!d.join("flicker.csv").exists());
+    }
+    let merged = dir.path().join("merged");
+    let o = csm(&[
+        "merge",
+        "--quiet",
+        "--out",
+        merged.to_str().unwrap(),
+        shards[0].to_str().unwrap(),
+        shards[1].to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (f, m) = (files(&full), files(&merged));
+    for name in ["flicker.csv", "flicker_vs_shimmer.svg", "report.md", "sweep.csv"] {
+        assert_eq!(f[name], m[name], "{name}");
+    }
+}
