@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 cargo build --release --locked
 bin=target/release/csm-lab
 "$bin" analyze configs/default.toml --out reports/default
-"$bin" sweep configs/default.toml --quiet --out reports/default
+"$bin" sweep configs/default.toml --quiet --ground-truth --out reports/default
 "$bin" compare configs/default.toml --defaults --out reports/default
 "$bin" stress --out reports/stress
 "$bin" bench --out reports/bench

@@ -166,6 +166,12 @@ pub struct SweepArgs {
     /// `[sweep] optimize_splits = true`.
     #[arg(long)]
     pub optimize_splits: bool,
+    /// Also measure the shadow-map flicker S5 of a sample of the rows (every row of a grid of
+    /// at most 12, else 12 rows spread over the grid, with the recommended one) beside S3 and S4;
+    /// writes flicker.csv and flicker_vs_shimmer.svg/png. Needs scene geometry. Also
+    /// `[sweep] ground_truth = true`.
+    #[arg(long)]
+    pub ground_truth: bool,
 }
 
 #[derive(Debug, Args)]
@@ -297,6 +303,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             format: args.format,
             shard: args.shard,
             optimize_splits: args.optimize_splits,
+            ground_truth: args.ground_truth,
         }),
         Command::Check(args) => match (&args.init, &args.thresholds) {
             (Some(file), _) => check::init(&check::InitRequest {

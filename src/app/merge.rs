@@ -85,6 +85,7 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
         format: args.format,
         shard: None,
         optimize_splits: false,
+        ground_truth: false,
     };
     let (config, grid, command) = plan(&request).map_err(|e| {
         Error::from(ShardError::Set(format!(
@@ -114,6 +115,11 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
             result.objective,
             None,
         )?);
+    }
+    // So does `[sweep] ground_truth`'s sample, which is drawn from all the rows.
+    if result.config.sweep.as_ref().is_some_and(|s| s.ground_truth) {
+        crate::commands::flicker_sample::refuse_without_geometry(&result.config, "sweep.ground_truth")?;
+        result.flicker = Some(crate::commands::flicker_sample::measure(&result, None)?);
     }
     // sweep.csv is streamed when the set is written (execute).
     let files = report::sweep::render_all_but_csv(&result, !args.no_plots)?;

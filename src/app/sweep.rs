@@ -76,6 +76,31 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         }
     }
     let optimize = optimize_source.is_some() && shard.is_none();
+    // --ground-truth (or `[sweep] ground_truth`): refused before any work without geometry; a
+    // shard holds only part of the rows, so the sample is left to the unsharded sweep.
+    let truth_source = if args.ground_truth {
+        Some("--ground-truth")
+    } else if config.sweep.as_ref().is_some_and(|s| s.ground_truth) {
+        Some("sweep.ground_truth")
+    } else {
+        None
+    };
+    if let Some(source) = truth_source {
+        crate::commands::flicker_sample::refuse_without_geometry(&config, source)?;
+        if shard.is_some() {
+            if args.ground_truth {
+                return Err(Error::flag(
+                    "--ground-truth",
+                    "",
+                    "a shard holds only part of the rows the sample is drawn from; run --ground-truth on the unsharded sweep",
+                ));
+            }
+            if !args.quiet {
+                eprintln!("note: sweep.ground_truth left out: a shard holds only part of the grid");
+            }
+        }
+    }
+    let ground_truth = truth_source.is_some() && shard.is_none();
     let mut settings = grid.settings();
     let mut indices = Vec::new();
     if let Some(s) = shard {
@@ -125,6 +150,18 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         }
         result.optimized = Some(found);
     }
+    if ground_truth {
+        let start = std::time::Instant::now();
+        let sample = crate::commands::flicker_sample::measure(&result, args.threads.map(usize::from))?;
+        if !args.quiet {
+            progress.note(&format!(
+                "measured the ground truth of {} rows in {:.1} ms",
+                sample.indices.len(),
+                start.elapsed().as_secs_f64() * 1e3
+            ));
+        }
+        result.flicker = Some(sample);
+    }
     // sweep.csv is streamed when the set is written (execute), not rendered here.
     let mut files = report::sweep::render_all_but_csv(&result, !args.no_plots)?;
     if let Some(m) = manifest {
@@ -169,6 +206,8 @@ pub struct SweepRequest {
     pub shard: Option<String>,
     /// `--optimize-splits`.
     pub optimize_splits: bool,
+    /// `--ground-truth`.
+    pub ground_truth: bool,
 }
 
 /// The `sweep` command.
@@ -189,6 +228,13 @@ pub fn execute(args: &SweepRequest) -> Result<Outcome> {
         &dir,
     )?;
     print_engine_settings(args.format, &result)?;
+    // Which rows have S5, and how well S3 and S4 predict it (the JSON output stays one document).
+    if let (Format::Table, Some(s)) = (args.format, &result.flicker) {
+        println!("\nground truth:");
+        for l in report::flicker_sample::lines(s) {
+            println!("  {l}");
+        }
+    }
     Ok(Outcome::Success)
 }
 

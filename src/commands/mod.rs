@@ -8,6 +8,7 @@
 pub mod bench;
 pub mod check;
 pub mod compare;
+pub mod flicker_sample;
 pub mod light_sweep;
 pub mod optimize;
 pub mod shard;

@@ -1374,6 +1374,8 @@ pub struct SweepResult {
     pub objective: SummaryMetric,
     /// The free split fractions of `--optimize-splits`, when asked for.
     pub optimized: Option<super::optimize::Optimized>,
+    /// S3, S4 and the measured flicker S5 of a sample of the rows (`--ground-truth`).
+    pub flicker: Option<super::flicker_sample::FlickerSample>,
 }
 
 impl SweepResult {
@@ -1406,6 +1408,7 @@ impl SweepResult {
             budget_mib,
             command,
             optimized: None,
+            flicker: None,
         }
     }
 

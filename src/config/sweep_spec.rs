@@ -45,6 +45,9 @@ pub struct SweepSpec {
     pub objective: Option<String>,
     /// `optimize_splits = true`: also search free split fractions (`sweep --optimize-splits`).
     pub optimize_splits: bool,
+    /// `ground_truth = true`: also measure the flicker S5 of a sample of the rows
+    /// (`sweep --ground-truth`).
+    pub ground_truth: bool,
 }
 
 pub const DEFAULT_MAX_CONFIGS: usize = 100_000;
@@ -214,6 +217,7 @@ pub(crate) struct RawSweep {
     max_configs: Option<i64>,
     objective: Option<String>,
     optimize_splits: Option<bool>,
+    ground_truth: Option<bool>,
 }
 
 pub fn fmt_list<T: std::fmt::Display>(v: &[T]) -> String {
@@ -496,5 +500,6 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
         max_configs,
         objective: raw.objective,
         optimize_splits: raw.optimize_splits.unwrap_or(false),
+        ground_truth: raw.ground_truth.unwrap_or(false),
     })
 }

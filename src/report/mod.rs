@@ -8,6 +8,7 @@ pub mod bench;
 pub mod check;
 pub mod compare;
 pub mod defs;
+pub mod flicker_sample;
 pub mod ground_truth;
 pub mod html;
 pub mod junit;

@@ -669,6 +669,8 @@ pub fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, &'static str
         ("pareto", "Pareto front of memory against mean aliasing", pareto?),
     ];
     // Only a sun sweep has the sun figure (other sweeps keep their files).
+    // Only a sweep with a ground-truth sample has the flicker scatter.
+    out.extend(super::flicker_sample::figure(r)?);
     if r.sun.is_some() {
         out.push((
             "quality_vs_sun",
@@ -852,6 +854,7 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
         h.push_str(&html::list(&rivals, None));
     }
     h.push_str(&super::optimize::html_section(r));
+    h.push_str(&super::flicker_sample::html_section(r));
     let sun = sun_lines(r);
     if !sun.is_empty() {
         h.push_str("<h2>Sun angles</h2>\n");
@@ -951,6 +954,7 @@ pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> 
         m.push('\n');
     }
     m.push_str(&super::optimize::md_section(r));
+    m.push_str(&super::flicker_sample::md_section(r));
     let sun = sun_lines(r);
     if !sun.is_empty() {
         m.push_str("## Sun angles\n\n");
@@ -1023,6 +1027,12 @@ pub fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::output:
     }
     if let Some(o) = &r.optimized {
         files.push((super::optimize::FILE.to_string(), super::optimize::csv(r, o)?));
+    }
+    if let Some(s) = &r.flicker {
+        files.push((
+            super::flicker_sample::FILE.to_string(),
+            super::flicker_sample::csv(r, s)?,
+        ));
     }
     files.push(("report.html".to_string(), report_html(r, &figures)));
     files.push(("report.md".to_string(), report_md(r, &figures)));

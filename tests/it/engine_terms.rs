@@ -153,6 +153,7 @@ fn every_engine_reads_its_sweep_recommendation_back_to_the_same_cascades() {
             format: csm_lab::app::Format::Table,
             shard: None,
             optimize_splits: false,
+            ground_truth: false,
         };
         let (result, files, _progress) = sweep_files(&req).unwrap();
         let s = for_sweep(&result).unwrap().expect("a preset sweep has engine settings");

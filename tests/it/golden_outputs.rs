@@ -596,6 +596,11 @@ fn geometry_runs() -> Vec<Case> {
             &SMALL_GEO_SWEEP,
         ),
         case(
+            "geo_sweep_ground_truth",
+            vec![("g.toml".to_string(), geometry_base())],
+            &[&SMALL_GEO_SWEEP[..], &["--ground-truth"]].concat(),
+        ),
+        case(
             "geo_sweep_fitted_small",
             vec![("g.toml".to_string(), edit(&geometry_base(), &fitted))],
             &SMALL_GEO_SWEEP,

@@ -19,6 +19,7 @@ mod engine_terms;
 mod figures;
 mod geometry;
 mod golden_outputs;
+mod gt_sweep;
 mod light_motion;
 mod memory;
 mod optimize_splits;
