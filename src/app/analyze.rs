@@ -49,6 +49,16 @@ pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
                 "needs scene geometry in the config: add scene.ground, [[scene.box]] or scene.gltf (the maps sample real casters)",
             ));
         }
+        if config.motion.light.moves() {
+            return Err(Error::flag(
+                "--ground-truth",
+                &args.config.display().to_string(),
+                format!(
+                    "{}; leave the flag out or set motion.light_path = \"still\"",
+                    crate::commands::flicker_sample::MOVING_LIGHT
+                ),
+            ));
+        }
         config.truth.enabled = true;
     }
     let progress = super::progress::Progress::new(args.quiet, frames_walked(&config), "frames");

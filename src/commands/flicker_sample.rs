@@ -101,19 +101,31 @@ impl FlickerSample {
     }
 }
 
-/// Where `--ground-truth` came from: the flag or the config key.
+/// Refuses `--ground-truth` (or `sweep.ground_truth`, named by `source`) for a config the pass
+/// cannot sample: one without scene geometry, or one whose light moves.
 pub fn refuse_without_geometry(result_config: &crate::config::Config, source: &str) -> Result<()> {
     if result_config.geometry.is_none() {
         return Err(GridError::Unusable {
             context: source.to_string(),
-            message: "the ground truth samples the shadow maps at receivers on scene geometry, and this config has no \
-                      [geometry] (a glTF file or the built-in scene); add one or leave the flag out"
+            message: "the ground truth samples the shadow maps at receivers on scene geometry, and this config has \
+                      none; add scene.ground, [[scene.box]] or scene.gltf, or leave it out"
                 .to_string(),
+        }
+        .into());
+    }
+    if result_config.motion.light.moves() {
+        return Err(GridError::Unusable {
+            context: source.to_string(),
+            message: format!("{MOVING_LIGHT}; leave it out or set motion.light_path = \"still\""),
         }
         .into());
     }
     Ok(())
 }
+
+/// Why the ground-truth pass refuses a moving light.
+pub const MOVING_LIGHT: &str =
+    "the ground-truth pass samples the maps under one still light, and motion.light_path moves the light";
 
 /// Runs the ground-truth pass on the sampled rows of a finished sweep (in `threads` threads, or
 /// rayon's default pool), in index order whatever the thread count.

@@ -434,6 +434,13 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
                 "false without scene geometry: add scene.ground, [[scene.box]] or scene.gltf (the map samples real casters)",
             ));
         }
+        if on && light.moves() {
+            return Err(v.invalid(
+                "analysis.ground_truth",
+                true,
+                "false while motion.light_path moves the light: the ground-truth pass samples the maps under one still light",
+            ));
+        }
         truth.enabled = on;
     }
     let analysis = AnalysisSettings {

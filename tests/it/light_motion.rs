@@ -410,3 +410,42 @@ fn a_light_update_axis_needs_a_moving_light_and_valid_rules() {
 fn sunset_text() -> String {
     std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/sunset.toml")).unwrap()
 }
+
+#[test]
+fn ground_truth_refuses_a_moving_light_naming_the_flag_or_key() {
+    use std::process::Command;
+    let dir = tempfile::tempdir().unwrap();
+    let base = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/default.toml")).unwrap();
+    let moving = base.replace(
+        "[motion]\n",
+        "[motion]\nlight_path = \"sun\"\nsun_azimuth_step_deg = 0.05\n",
+    );
+    assert_ne!(moving, base, "the default config has a [motion] table");
+    let cfg = dir.path().join("moving.toml");
+    std::fs::write(&cfg, &moving).unwrap();
+    let keyed = dir.path().join("keyed.toml");
+    std::fs::write(&keyed, format!("{moving}\n[analysis]\nground_truth = true\n")).unwrap();
+    let out = dir.path().join("out");
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+            .args(args)
+            .args(["--quiet", "--out", out.to_str().unwrap()])
+            .output()
+            .unwrap();
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let c = cfg.to_str().unwrap();
+    for (args, named) in [
+        (vec!["analyze", c, "--ground-truth"], "--ground-truth"),
+        (vec!["sweep", c, "--ground-truth", "--no-plots"], "--ground-truth"),
+        (vec!["analyze", keyed.to_str().unwrap()], "analysis.ground_truth"),
+    ] {
+        let (code, err) = run(&args);
+        assert_eq!(code, Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains(named) && err.contains("motion.light_path"),
+            "{args:?}: {err}"
+        );
+    }
+    assert!(!out.exists(), "nothing is written");
+}
