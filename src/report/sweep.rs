@@ -474,6 +474,29 @@ fn why_text(r: &SweepResult) -> String {
     t
 }
 
+/// The ground-truth pictures of one setting (`shadow.png`, `flicker.png`, the animation when
+/// small enough to embed) as a report section; empty when the pass cannot run or draw.
+fn truth_pictures(mut cfg: crate::config::Config, label: &str) -> String {
+    use super::ground_truth::{FlickerPng, ShadowApng, ShadowPng};
+    use super::truth::{section, Animation, TruthPictures, INLINE_ANIMATION_LIMIT};
+    use crate::output::Exporter;
+    cfg.truth.enabled = true;
+    let a = crate::analysis::analyze(&cfg, &crate::analysis::AnalysisOptions::full());
+    if a.ground_truth.is_none() {
+        return String::new();
+    }
+    let pictures = TruthPictures {
+        shadow_png: ShadowPng.render(&a).ok(),
+        flicker_png: FlickerPng.render(&a).ok(),
+        animation: ShadowApng
+            .render(&a)
+            .ok()
+            .filter(|b| b.len() <= INLINE_ANIMATION_LIMIT)
+            .map(Animation::Bytes),
+    };
+    section(label, &pictures)
+}
+
 /// "3 cascades of 2048² texels, λ = 0.8, sphere fit": a row's setting in the sweep's words.
 fn setting_text(r: &SweepResult, x: &Row) -> String {
     format!(
@@ -871,8 +894,13 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
     if let (Some(rec), Some(_)) = (r.recommended(), &r.config.geometry) {
         if let Ok(cfg) = rec.setting.apply(&r.config) {
             let a = crate::analysis::analyze(&cfg, &crate::analysis::AnalysisOptions::summary_only());
-            let images = crate::figures::screen::captioned(&a, &format!("recommended ({})", rec.setting.label()));
+            let label = format!("recommended ({})", setting_text(r, rec));
+            let images = crate::figures::screen::captioned(&a, &label);
             h.push_str(&html::png_figures(&images));
+            // A ground-truth sweep shows what the recommended setting's maps do on screen.
+            if r.flicker.is_some() {
+                h.push_str(&truth_pictures(cfg, &label));
+            }
         }
     }
     if !figures.is_empty() {

@@ -203,7 +203,18 @@ fn sweep_ground_truth_samples_rows_and_matches_analyze() {
     assert!(stdout.contains("S5 ≈ "), "{stdout}");
     let report = String::from_utf8(f1["report.md"].clone()).unwrap();
     assert!(report.contains("## Does shimmer predict flicker?") && report.contains("S5 computed for 12 of 15 rows"));
-    assert!(String::from_utf8_lossy(&f1["report.html"]).contains("Does shimmer predict flicker?"));
+    let html = String::from_utf8_lossy(&f1["report.html"]);
+    assert!(html.contains("Does shimmer predict flicker?"));
+    // The recommended setting's ground-truth pictures are embedded (stills and animation).
+    assert!(
+        html.contains("<h2>Shadow-map ground truth</h2>"),
+        "the pictures' section"
+    );
+    assert!(
+        html.matches("data:image/png;base64,").count() >= 4,
+        "camera views and the two stills"
+    );
+    assert!(html.contains("data:image/apng;base64,") || html.contains("shadow.apng"));
 
     let mut unsnapped_positive = 0;
     for r in &rows {
