@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --locked
 bin=target/release/csm-lab
-"$bin" analyze configs/default.toml --out reports/default
+"$bin" analyze configs/default.toml --ground-truth --out reports/default
 "$bin" sweep configs/default.toml --quiet --ground-truth --out reports/default
 "$bin" compare configs/default.toml --defaults --out reports/default
 "$bin" stress --out reports/stress
