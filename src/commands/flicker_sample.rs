@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use super::sweep::{Row, SweepResult};
 use crate::analysis::ground_truth::{flicker_points, FlickerPoint};
-use crate::error::{Error, GridError, Result};
+use crate::error::{GridError, Result};
 
 /// The most rows a sweep computes S5 for (a ground-truth pass costs about a second of one core
 /// on the default scene; see docs/ground-truth.md, "In a sweep").
@@ -148,20 +148,7 @@ pub fn measure(r: &SweepResult, threads: Option<usize>) -> Result<FlickerSample>
             })
             .collect::<Result<Vec<_>>>()
     };
-    let measured = match threads {
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .map_err(|e| {
-                Error::flag(
-                    "--threads",
-                    &n.to_string(),
-                    format!("cannot start the thread pool: {e}"),
-                )
-            })?
-            .install(work)?,
-        None => work()?,
-    };
+    let measured = super::sweep::in_pool(threads, work)?;
     Ok(FlickerSample {
         rows: r.rows.len(),
         indices,

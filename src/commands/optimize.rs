@@ -22,7 +22,7 @@ use rayon::prelude::*;
 use crate::analysis::{analyze, AnalysisOptions, Summary};
 use crate::config::Config;
 use crate::core::free_splits::{round_significant, valid, FractionSpace};
-use crate::error::{Error, GridError, Result};
+use crate::error::{GridError, Result};
 use crate::metric::SummaryMetric;
 
 use super::sweep::{acceptable, decimal_range, Grid, Row, Setting};
@@ -224,20 +224,7 @@ pub fn optimize(
             .map(|g| optimize_group(base, rows, g, objective))
             .collect::<Result<Vec<_>>>()
     };
-    let found = match threads {
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .map_err(|e| {
-                Error::flag(
-                    "--threads",
-                    &n.to_string(),
-                    format!("cannot start the thread pool: {e}"),
-                )
-            })?
-            .install(work),
-        None => work(),
-    }?;
+    let found = super::sweep::in_pool(threads, work)?;
     let mut out = Optimized {
         groups: Vec::new(),
         lambdas: if preset {

@@ -897,17 +897,24 @@ pub fn run_settings(
             })
             .collect::<Result<Vec<_>>>()
     };
+    in_pool(threads, work)
+}
+
+/// Runs `work` in a pool of `threads` threads (`--threads`), or in rayon's default pool. The
+/// one place a command builds a pool; a failure names the flag.
+pub fn in_pool<T: Send>(threads: Option<usize>, work: impl FnOnce() -> Result<T> + Send) -> Result<T> {
     match threads {
-        Some(n) => {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| {
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| {
                 Error::flag(
                     "--threads",
                     &n.to_string(),
                     format!("cannot start the thread pool: {e}"),
                 )
-            })?;
-            pool.install(work)
-        }
+            })?
+            .install(work),
         None => work(),
     }
 }
