@@ -213,37 +213,46 @@ pub struct FlickerPoint {
 /// none. A sweep's rows (or a sample of them) passed here give the figure's data.
 pub fn flicker_points(configs: &[Config]) -> Vec<FlickerPoint> {
     use rayon::prelude::*;
+    configs
+        .par_iter()
+        .map(|c| points_of(&analyze_for_flicker(c)))
+        .collect::<Vec<_>>()
+        .into_iter()
+        .flatten()
+        .collect()
+}
+
+/// One configuration analysed as [`flicker_points`] does: cell flips and the ground-truth
+/// pass (when the scene has geometry).
+pub fn analyze_for_flicker(c: &Config) -> crate::analysis::Analysis {
     let opts = crate::analysis::AnalysisOptions {
         cell_flips: true,
         ground_truth: true,
         ..crate::analysis::AnalysisOptions::summary_only()
     };
-    configs
-        .par_iter()
-        .map(|c| {
-            let mut c = c.clone();
-            c.truth.enabled = c.geometry.is_some();
-            let a = crate::analysis::analyze(&c, &opts);
-            match (&a.ground_truth, a.snapped(), a.unsnapped()) {
-                (Some(g), Some(s), Some(u)) => vec![
-                    FlickerPoint {
-                        snapped: true,
-                        s3: s.stats.rms,
-                        s4: s.stats.cell_flip_rate,
-                        s5: g.summary.flicker_snapped,
-                    },
-                    FlickerPoint {
-                        snapped: false,
-                        s3: u.stats.rms,
-                        s4: u.stats.cell_flip_rate,
-                        s5: g.summary.flicker_unsnapped,
-                    },
-                ],
-                _ => Vec::new(),
-            }
-        })
-        .collect::<Vec<_>>()
-        .into_iter()
-        .flatten()
-        .collect()
+    let mut c = c.clone();
+    c.truth.enabled = c.geometry.is_some();
+    crate::analysis::analyze(&c, &opts)
+}
+
+/// The (S3, S4, S5) points of an analysis from [`analyze_for_flicker`]: snapped, then
+/// unsnapped; none without the pass or cascades.
+pub fn points_of(a: &crate::analysis::Analysis) -> Vec<FlickerPoint> {
+    match (&a.ground_truth, a.snapped(), a.unsnapped()) {
+        (Some(g), Some(s), Some(u)) => vec![
+            FlickerPoint {
+                snapped: true,
+                s3: s.stats.rms,
+                s4: s.stats.cell_flip_rate,
+                s5: g.summary.flicker_snapped,
+            },
+            FlickerPoint {
+                snapped: false,
+                s3: u.stats.rms,
+                s4: u.stats.cell_flip_rate,
+                s5: g.summary.flicker_unsnapped,
+            },
+        ],
+        _ => Vec::new(),
+    }
 }

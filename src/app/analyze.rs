@@ -42,23 +42,7 @@ pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
         })?;
     }
     if args.ground_truth {
-        if config.geometry.is_none() {
-            return Err(Error::flag(
-                "--ground-truth",
-                &args.config.display().to_string(),
-                "needs scene geometry in the config: add scene.ground, [[scene.box]] or scene.gltf (the maps sample real casters)",
-            ));
-        }
-        if config.motion.light.moves() {
-            return Err(Error::flag(
-                "--ground-truth",
-                &args.config.display().to_string(),
-                format!(
-                    "{}; leave the flag out or set motion.light_path = \"still\"",
-                    crate::commands::flicker_sample::MOVING_LIGHT
-                ),
-            ));
-        }
+        crate::commands::flicker_sample::refuse_ground_truth(&config, "--ground-truth")?;
         config.truth.enabled = true;
     }
     let progress = super::progress::Progress::new(args.quiet, frames_walked(&config), "frames");

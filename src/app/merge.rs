@@ -118,7 +118,7 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
     }
     // So does `[sweep] ground_truth`'s sample, which is drawn from all the rows.
     if result.config.sweep.as_ref().is_some_and(|s| s.ground_truth) {
-        crate::commands::flicker_sample::refuse_without_geometry(&result.config, "sweep.ground_truth")?;
+        crate::commands::flicker_sample::refuse_ground_truth(&result.config, "sweep.ground_truth")?;
         result.flicker = Some(crate::commands::flicker_sample::measure(&result, None)?);
     }
     // sweep.csv is streamed when the set is written (execute).

@@ -86,7 +86,7 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         None
     };
     if let Some(source) = truth_source {
-        crate::commands::flicker_sample::refuse_without_geometry(&config, source)?;
+        crate::commands::flicker_sample::refuse_ground_truth(&config, source)?;
         if shard.is_some() {
             if args.ground_truth {
                 return Err(Error::flag(

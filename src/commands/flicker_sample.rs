@@ -8,7 +8,7 @@
 use rayon::prelude::*;
 
 use super::sweep::{Row, SweepResult};
-use crate::analysis::ground_truth::{flicker_points, FlickerPoint};
+use crate::analysis::ground_truth::{analyze_for_flicker, points_of, FlickerPoint};
 use crate::error::{GridError, Result};
 
 /// The most rows a sweep computes S5 for (a ground-truth pass costs about a second of one core
@@ -63,7 +63,7 @@ pub struct SampledRow {
 }
 
 /// The flicker of a sweep's sample.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct FlickerSample {
     /// The sweep's row count (M).
     pub rows: usize,
@@ -72,6 +72,9 @@ pub struct FlickerSample {
     /// The sampled rows that have cascades (a row whose scene needs none has no S5), in
     /// index order.
     pub measured: Vec<SampledRow>,
+    /// The recommended row's ground-truth pass (its pictures go into the report), when the
+    /// sweep recommends a row.
+    pub recommended_truth: Option<std::sync::Arc<crate::analysis::ground_truth::GroundTruth>>,
 }
 
 impl FlickerSample {
@@ -103,7 +106,7 @@ impl FlickerSample {
 
 /// Refuses `--ground-truth` (or `sweep.ground_truth`, named by `source`) for a config the pass
 /// cannot sample: one without scene geometry, or one whose light moves.
-pub fn refuse_without_geometry(result_config: &crate::config::Config, source: &str) -> Result<()> {
+pub fn refuse_ground_truth(result_config: &crate::config::Config, source: &str) -> Result<()> {
     if result_config.geometry.is_none() {
         return Err(GridError::Unusable {
             context: source.to_string(),
@@ -132,27 +135,37 @@ pub const MOVING_LIGHT: &str =
 pub fn measure(r: &SweepResult, threads: Option<usize>) -> Result<FlickerSample> {
     let indices = sample_indices(r.rows.len(), r.recommendation.as_ref().map(|x| x.index));
     let rows: &[Row] = &r.rows;
+    let recommended = r.recommendation.as_ref().map(|x| x.index);
     let work = || {
         indices
             .par_iter()
             .map(|&i| {
-                let c = rows[i].setting.apply(&r.config)?;
-                Ok(match flicker_points(std::slice::from_ref(&c)).as_slice() {
+                let a = analyze_for_flicker(&rows[i].setting.apply(&r.config)?);
+                let row = match points_of(&a).as_slice() {
                     [s, u] => Some(SampledRow {
                         index: i,
                         snapped: *s,
                         unsnapped: *u,
                     }),
                     _ => None,
-                })
+                };
+                // The recommended row is always sampled: its pass is kept for the report's
+                // pictures rather than run again.
+                let truth = (Some(i) == recommended).then_some(a.ground_truth).flatten();
+                Ok((row, truth))
             })
             .collect::<Result<Vec<_>>>()
     };
-    let measured = super::sweep::in_pool(threads, work)?;
+    let (mut sampled, mut recommended_truth) = (Vec::new(), None);
+    for (row, truth) in super::sweep::in_pool(threads, work)? {
+        sampled.extend(row);
+        recommended_truth = recommended_truth.or(truth.map(std::sync::Arc::new));
+    }
     Ok(FlickerSample {
         rows: r.rows.len(),
         indices,
-        measured: measured.into_iter().flatten().collect(),
+        measured: sampled,
+        recommended_truth,
     })
 }
 

@@ -154,12 +154,7 @@ impl Exporter<Analysis> for ShadowPng {
     }
 
     fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
-        use crate::figures::truth::{shadow_png, Panel};
-        let g = truth_of(a)?;
-        shadow_png(&[
-            Panel::snapped(&g.pictures_snapped.frame0),
-            Panel::unsnapped(&g.pictures_unsnapped.frame0),
-        ])
+        shadow_png_of(truth_of(a)?)
     }
 }
 
@@ -169,12 +164,7 @@ impl Exporter<Analysis> for FlickerPng {
     }
 
     fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
-        use crate::figures::truth::{flicker_png, Panel};
-        let g = truth_of(a)?;
-        flicker_png(&[
-            Panel::snapped(&g.pictures_snapped.flips),
-            Panel::unsnapped(&g.pictures_unsnapped.flips),
-        ])
+        flicker_png_of(truth_of(a)?)
     }
 }
 
@@ -184,29 +174,51 @@ impl Exporter<Analysis> for ShadowApng {
     }
 
     fn render(&self, a: &Analysis) -> Result<Vec<u8>> {
-        use crate::figures::truth::{write_animation, AnimationPlan, ANIMATION_CAPS};
-        let g = truth_of(a)?;
-        let (s, u) = (&g.pictures_snapped.animation, &g.pictures_unsnapped.animation);
-        let frame0 = &g.pictures_snapped.frame0;
-        // The pass kept every k-th path frame of both modes (at most a few dozen small images):
-        // the animation shows each of them once, held for k path frames' time.
-        let mut plan = AnimationPlan::new(
-            s.len().min(u.len()),
-            frame0.cols,
-            frame0.rows,
-            &["snapped", "unsnapped"],
-            &ANIMATION_CAPS,
-        )?;
-        let k = match s.as_slice() {
-            [a, b, ..] => b.0 - a.0,
-            _ => 1,
-        };
-        plan.delay_ms = (1000.0 * (k * plan.every) as f64 / ANIMATION_CAPS.path_fps)
-            .round()
-            .clamp(40.0, 500.0) as u16;
-        let frames = s.iter().zip(u).map(|((_, a), (_, b))| vec![a.clone(), b.clone()]);
-        let mut out = Vec::new();
-        write_animation(&plan, frames, &mut out)?;
-        Ok(out)
+        animation_of(truth_of(a)?)
     }
+}
+
+/// `shadow.png` of a ground-truth pass: frame 0, snapped beside unsnapped.
+pub fn shadow_png_of(g: &GroundTruth) -> Result<Vec<u8>> {
+    use crate::figures::truth::{shadow_png, Panel};
+    shadow_png(&[
+        Panel::snapped(&g.pictures_snapped.frame0),
+        Panel::unsnapped(&g.pictures_unsnapped.frame0),
+    ])
+}
+
+/// `flicker.png` of a ground-truth pass: flip rates, snapped beside unsnapped.
+pub fn flicker_png_of(g: &GroundTruth) -> Result<Vec<u8>> {
+    use crate::figures::truth::{flicker_png, Panel};
+    flicker_png(&[
+        Panel::snapped(&g.pictures_snapped.flips),
+        Panel::unsnapped(&g.pictures_unsnapped.flips),
+    ])
+}
+
+/// `shadow.apng` of a ground-truth pass: its kept frames, both snap modes.
+pub fn animation_of(g: &GroundTruth) -> Result<Vec<u8>> {
+    use crate::figures::truth::{write_animation, AnimationPlan, ANIMATION_CAPS};
+    let (s, u) = (&g.pictures_snapped.animation, &g.pictures_unsnapped.animation);
+    let frame0 = &g.pictures_snapped.frame0;
+    // The pass kept every k-th path frame of both modes (at most a few dozen small images):
+    // the animation shows each of them once, held for k path frames' time.
+    let mut plan = AnimationPlan::new(
+        s.len().min(u.len()),
+        frame0.cols,
+        frame0.rows,
+        &["snapped", "unsnapped"],
+        &ANIMATION_CAPS,
+    )?;
+    let k = match s.as_slice() {
+        [a, b, ..] => b.0 - a.0,
+        _ => 1,
+    };
+    plan.delay_ms = (1000.0 * (k * plan.every) as f64 / ANIMATION_CAPS.path_fps)
+        .round()
+        .clamp(40.0, 500.0) as u16;
+    let frames = s.iter().zip(u).map(|((_, a), (_, b))| vec![a.clone(), b.clone()]);
+    let mut out = Vec::new();
+    write_animation(&plan, frames, &mut out)?;
+    Ok(out)
 }

@@ -474,22 +474,15 @@ fn why_text(r: &SweepResult) -> String {
     t
 }
 
-/// The ground-truth pictures of one setting (`shadow.png`, `flicker.png`, the animation when
-/// small enough to embed) as a report section; empty when the pass cannot run or draw.
-fn truth_pictures(mut cfg: crate::config::Config, label: &str) -> String {
-    use super::ground_truth::{FlickerPng, ShadowApng, ShadowPng};
+/// The ground-truth pictures of a pass (`shadow.png`, `flicker.png`, the animation when small
+/// enough to embed) as a report section.
+fn truth_pictures(g: &crate::analysis::ground_truth::GroundTruth, label: &str) -> String {
+    use super::ground_truth::{animation_of, flicker_png_of, shadow_png_of};
     use super::truth::{section, Animation, TruthPictures, INLINE_ANIMATION_LIMIT};
-    use crate::output::Exporter;
-    cfg.truth.enabled = true;
-    let a = crate::analysis::analyze(&cfg, &crate::analysis::AnalysisOptions::full());
-    if a.ground_truth.is_none() {
-        return String::new();
-    }
     let pictures = TruthPictures {
-        shadow_png: ShadowPng.render(&a).ok(),
-        flicker_png: FlickerPng.render(&a).ok(),
-        animation: ShadowApng
-            .render(&a)
+        shadow_png: shadow_png_of(g).ok(),
+        flicker_png: flicker_png_of(g).ok(),
+        animation: animation_of(g)
             .ok()
             .filter(|b| b.len() <= INLINE_ANIMATION_LIMIT)
             .map(Animation::Bytes),
@@ -897,9 +890,10 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
             let label = format!("recommended ({})", setting_text(r, rec));
             let images = crate::figures::screen::captioned(&a, &label);
             h.push_str(&html::png_figures(&images));
-            // A ground-truth sweep shows what the recommended setting's maps do on screen.
-            if r.flicker.is_some() {
-                h.push_str(&truth_pictures(cfg, &label));
+            // A ground-truth sweep shows what the recommended setting's maps do on screen (the
+            // pass its sample already ran).
+            if let Some(g) = r.flicker.as_ref().and_then(|f| f.recommended_truth.as_deref()) {
+                h.push_str(&truth_pictures(g, &label));
             }
         }
     }
