@@ -13,8 +13,13 @@ use glam::{DMat4, DVec3};
 
 /// The world-space triangles of the file's default scene, or why they cannot be read (a
 /// sentence for the error message; never a panic).
-pub fn read_gltf(path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+///
+/// The file and each buffer file must be regular files of at most [`MAX_GLTF_BYTES`] (a FIFO
+/// or `/dev/zero` is refused before a byte is read). A buffer URI that leaves the glTF's folder
+/// (an absolute path, a `..` component, another scheme) is refused unless `outside_buffers`
+/// (`scene.gltf_outside_buffers = true`).
+pub fn read_gltf(path: &Path, outside_buffers: bool) -> Result<Vec<[DVec3; 3]>, String> {
+    let bytes = read_file(path)?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| format!("not a valid glTF file: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut buffers = Vec::new();
@@ -24,7 +29,7 @@ pub fn read_gltf(path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
                 .blob
                 .clone()
                 .ok_or("buffer refers to a GLB binary chunk the file does not have")?,
-            gltf::buffer::Source::Uri(uri) => read_uri(dir, uri)?,
+            gltf::buffer::Source::Uri(uri) => read_uri(dir, uri, outside_buffers)?,
         };
         if data.len() < buffer.length() {
             return Err(format!(
@@ -65,22 +70,35 @@ fn visit(
             if primitive.mode() != gltf::mesh::Mode::Triangles {
                 continue;
             }
-            let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-            let positions: Vec<DVec3> = reader
-                .read_positions()
-                .ok_or_else(|| format!("mesh {} has a primitive without readable positions", mesh.index()))?
-                .map(|p| world.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into())))
+            let at = |accessor: Option<usize>| Place {
+                mesh: mesh.index(),
+                primitive: primitive.index(),
+                accessor,
+            };
+            let position = primitive
+                .get(&gltf::Semantic::Positions)
+                .ok_or_else(|| format!("{}: it has no POSITION attribute", at(None)))?;
+            let place = at(Some(position.index()));
+            let positions: Vec<DVec3> = read_accessor(&position, Semantic::Position, buffers, &place)?
+                .chunks_exact(3)
+                .map(|p| world.transform_point3(DVec3::new(p[0], p[1], p[2])))
                 .collect();
-            let indices: Vec<u32> = match reader.read_indices() {
-                Some(i) => i.into_u32().collect(),
+            let indices: Vec<u32> = match primitive.indices() {
+                Some(a) => {
+                    let place = at(Some(a.index()));
+                    read_accessor(&a, Semantic::Index, buffers, &place)?
+                        .into_iter()
+                        .map(|i| i as u32)
+                        .collect()
+                }
                 None => (0..positions.len() as u32).collect(),
             };
             for t in indices.chunks_exact(3) {
                 let get = |i: u32| {
                     positions.get(i as usize).copied().ok_or_else(|| {
                         format!(
-                            "mesh {} has an index {i} past its {} vertices",
-                            mesh.index(),
+                            "{}: index {i} is past its {} vertices",
+                            at(primitive.indices().map(|a| a.index())),
                             positions.len()
                         )
                     })
@@ -98,13 +116,286 @@ fn visit(
     Ok(())
 }
 
-fn read_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
+/// Most elements of an accessor without a buffer view (all zeros but its sparse values): 16 M.
+const MAX_VIEWLESS_ELEMENTS: usize = 1 << 24;
+
+/// Where an accessor is used, for error messages: "mesh 0, primitive 1, accessor 3".
+struct Place {
+    mesh: usize,
+    primitive: usize,
+    accessor: Option<usize>,
+}
+
+impl std::fmt::Display for Place {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "mesh {}, primitive {}", self.mesh, self.primitive)?;
+        if let Some(a) = self.accessor {
+            write!(f, ", accessor {a}")?;
+        }
+        Ok(())
+    }
+}
+
+/// The two kinds of accessor csm-lab reads.
+#[derive(Clone, Copy, PartialEq)]
+enum Semantic {
+    /// `POSITION`: VEC3 of FLOAT.
+    Position,
+    /// Triangle indices: SCALAR of UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT.
+    Index,
+}
+
+/// Reads an accessor's elements as f64 components (`count` x 3 for positions, `count` for
+/// indices), after checking everything the glTF 2.0 specification requires of it for this use:
+/// component and element type, normalisation, `byteStride` (at least the element size and a
+/// multiple of the component size), offsets and counts inside the buffer view and the buffer,
+/// and the same for a sparse accessor's indices and values (indices ascending, below `count`).
+/// Nothing here can panic or read out of bounds: every range is checked before it is sliced.
+/// Elements are read in full only once every check has passed, so the allocation is bounded by
+/// the bytes the buffers really hold.
+fn read_accessor(
+    a: &gltf::Accessor<'_>,
+    semantic: Semantic,
+    buffers: &[Vec<u8>],
+    place: &Place,
+) -> Result<Vec<f64>, String> {
+    use gltf::accessor::{DataType, Dimensions};
+    let bad = |m: String| format!("{place}: {m}");
+    let (what, want_dims) = match semantic {
+        Semantic::Position => ("POSITION", Dimensions::Vec3),
+        Semantic::Index => ("index", Dimensions::Scalar),
+    };
+    let component = a.data_type();
+    let type_ok = match semantic {
+        Semantic::Position => component == DataType::F32,
+        Semantic::Index => matches!(component, DataType::U8 | DataType::U16 | DataType::U32),
+    };
+    if !type_ok {
+        return Err(bad(format!(
+            "a {what} accessor has component type {component:?}; it must be {}",
+            match semantic {
+                Semantic::Position => "FLOAT (5126)",
+                Semantic::Index => "UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT (5121, 5123, 5125)",
+            }
+        )));
+    }
+    if a.dimensions() != want_dims {
+        return Err(bad(format!(
+            "a {what} accessor has type {:?}; it must be {want_dims:?}",
+            a.dimensions()
+        )));
+    }
+    if semantic == Semantic::Index && a.normalized() {
+        return Err(bad("an index accessor is marked normalized; indices never are".into()));
+    }
+    let width = component.size();
+    let n_comp = want_dims.multiplicity();
+    let element = width * n_comp;
+    let count = a.count();
+    let read_component = |bytes: &[u8]| -> f64 {
+        match component {
+            DataType::U8 => f64::from(bytes[0]),
+            DataType::U16 => f64::from(u16::from_le_bytes([bytes[0], bytes[1]])),
+            DataType::U32 => f64::from(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
+            _ => f64::from(f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
+        }
+    };
+    // The bytes of `count` elements at `offset` in `view`, with their stride, all checked.
+    let span = |view: &gltf::buffer::View<'_>,
+                offset: usize,
+                count: usize,
+                element: usize,
+                width: usize,
+                strided: bool,
+                part: &str|
+     -> Result<(&[u8], usize), String> {
+        let buffer = buffers
+            .get(view.buffer().index())
+            .ok_or_else(|| bad(format!("{part}buffer view {} names a missing buffer", view.index())))?;
+        let declared = view.buffer().length().min(buffer.len());
+        let view_end = view
+            .offset()
+            .checked_add(view.length())
+            .filter(|&e| e <= declared)
+            .ok_or_else(|| {
+                bad(format!(
+                    "{part}buffer view {} (bytes {}..+{}) runs past its buffer {} of {declared} bytes",
+                    view.index(),
+                    view.offset(),
+                    view.length(),
+                    view.buffer().index()
+                ))
+            })?;
+        let stride = match view.stride() {
+            Some(s) if strided => {
+                if s < element || s % width != 0 {
+                    return Err(bad(format!(
+                        "{part}buffer view {} has byteStride {s}; an element of this accessor takes {element}                          bytes, so the stride must be at least {element} and a multiple of {width}",
+                        view.index()
+                    )));
+                }
+                s
+            }
+            Some(s) => {
+                return Err(bad(format!(
+                    "{part}buffer view {} has byteStride {s}, which this kind of data may not have",
+                    view.index()
+                )))
+            }
+            None => element,
+        };
+        if offset % width != 0 {
+            return Err(bad(format!(
+                "{part}byteOffset {offset} is not a multiple of the component size {width}"
+            )));
+        }
+        let need = match count {
+            0 => Some(0),
+            c => (c - 1).checked_mul(stride).and_then(|x| x.checked_add(element)),
+        };
+        let fits = need
+            .and_then(|need| offset.checked_add(need))
+            .and_then(|end| view.offset().checked_add(end).map(|abs| (abs, end)))
+            .filter(|&(_, end)| end <= view.length());
+        let Some(_) = fits else {
+            return Err(bad(format!(
+                "{part}{count} elements of {element} bytes (stride {stride}) from byteOffset {offset} run past \
+                 buffer view {} of {} bytes",
+                view.index(),
+                view.length()
+            )));
+        };
+        Ok((&buffer[view.offset() + offset..view_end], stride))
+    };
+    // The sparse part's byte ranges, checked before anything is allocated.
+    let sparse = match a.sparse() {
+        None => None,
+        Some(sparse) => {
+            let n = sparse.count();
+            if n > count {
+                return Err(bad(format!("sparse count {n} is above the accessor's count {count}")));
+            }
+            let indices = sparse.indices();
+            let index_width = match indices.index_type() {
+                gltf::accessor::sparse::IndexType::U8 => 1,
+                gltf::accessor::sparse::IndexType::U16 => 2,
+                gltf::accessor::sparse::IndexType::U32 => 4,
+            };
+            let (index_bytes, _) = span(
+                &indices.view(),
+                indices.offset(),
+                n,
+                index_width,
+                index_width,
+                false,
+                "sparse indices: ",
+            )?;
+            let values = sparse.values();
+            let (value_bytes, _) = span(
+                &values.view(),
+                values.offset(),
+                n,
+                element,
+                width,
+                false,
+                "sparse values: ",
+            )?;
+            Some((n, index_width, index_bytes, value_bytes))
+        }
+    };
+    let mut out = match a.view() {
+        Some(view) => {
+            let (bytes, stride) = span(&view, a.offset(), count, element, width, true, "")?;
+            let mut out = Vec::with_capacity(count * n_comp);
+            for k in 0..count {
+                for c in 0..n_comp {
+                    let at = k * stride + c * width;
+                    out.push(read_component(&bytes[at..at + width]));
+                }
+            }
+            out
+        }
+        None if sparse.is_some() => {
+            // Zeros, then the sparse values. The count is not backed by bytes here: bound it.
+            if count > MAX_VIEWLESS_ELEMENTS {
+                return Err(bad(format!(
+                    "an accessor without a buffer view declares {count} elements; at most {MAX_VIEWLESS_ELEMENTS}"
+                )));
+            }
+            vec![0.0; count * n_comp]
+        }
+        None => {
+            return Err(bad(format!(
+                "a {what} accessor has no buffer view and no sparse values"
+            )));
+        }
+    };
+    if let Some((n, index_width, index_bytes, value_bytes)) = sparse {
+        let mut last: Option<usize> = None;
+        for k in 0..n {
+            let at = k * index_width;
+            let i = match index_width {
+                1 => usize::from(index_bytes[at]),
+                2 => usize::from(u16::from_le_bytes([index_bytes[at], index_bytes[at + 1]])),
+                _ => u32::from_le_bytes([
+                    index_bytes[at],
+                    index_bytes[at + 1],
+                    index_bytes[at + 2],
+                    index_bytes[at + 3],
+                ]) as usize,
+            };
+            if i >= count || last.is_some_and(|l| i <= l) {
+                return Err(bad(format!(
+                    "sparse index {i} (entry {k}) is not below the count {count} and above the entry before it"
+                )));
+            }
+            last = Some(i);
+            for c in 0..n_comp {
+                let at = k * element + c * width;
+                out[i * n_comp + c] = read_component(&value_bytes[at..at + width]);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Largest glTF file, and largest buffer file, read (1 GiB each).
+pub const MAX_GLTF_BYTES: u64 = 1 << 30;
+
+fn read_file(path: &Path) -> Result<Vec<u8>, String> {
+    super::read_bytes_bounded(path, MAX_GLTF_BYTES, "a glTF file or buffer").map_err(|e| e.to_string())
+}
+
+fn read_uri(dir: &Path, uri: &str, outside_buffers: bool) -> Result<Vec<u8>, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (_, data) = rest.split_once(";base64,").ok_or("a data: URI that is not base64")?;
         return base64_decode(data).ok_or_else(|| "a data: URI with invalid base64".to_string());
     }
+    let relative = Path::new(uri);
+    let leaves = relative.is_absolute()
+        || uri.contains(':')
+        || uri.starts_with('\\')
+        || relative
+            .components()
+            .any(|c| !matches!(c, std::path::Component::Normal(_) | std::path::Component::CurDir));
+    if leaves && !outside_buffers {
+        return Err(format!(
+            "buffer URI {:?} points outside the glTF's folder {}; set scene.gltf_outside_buffers = true \
+             to read it",
+            shorten(uri),
+            dir.display()
+        ));
+    }
     let file = dir.join(uri);
-    std::fs::read(&file).map_err(|e| format!("cannot read buffer {}: {e}", file.display()))
+    read_file(&file).map_err(|e| format!("buffer {:?}: {e}", shorten(uri)))
+}
+
+/// At most the first 200 characters of `text`, for an error message.
+fn shorten(text: &str) -> String {
+    match text.char_indices().nth(200) {
+        Some((at, _)) => format!("{}...", &text[..at]),
+        None => text.to_string(),
+    }
 }
 
 /// Standard base64 (with or without padding); None on any other character.
@@ -152,12 +443,12 @@ mod tests {
 
     #[test]
     fn a_missing_or_corrupt_file_is_an_error() {
-        assert!(read_gltf(Path::new("/nonexistent/x.glb"))
+        assert!(read_gltf(Path::new("/nonexistent/x.glb"), false)
             .unwrap_err()
             .contains("cannot read"));
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("bad.gltf");
         std::fs::write(&p, "{ not json").unwrap();
-        assert!(read_gltf(&p).unwrap_err().contains("not a valid glTF"));
+        assert!(read_gltf(&p, false).unwrap_err().contains("not a valid glTF"));
     }
 }

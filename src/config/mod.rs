@@ -52,6 +52,8 @@ pub fn open_bounded(
     what: &'static str,
 ) -> crate::Result<std::io::Take<std::fs::File>> {
     use std::io::Read;
+    // Checked before opening: opening a FIFO blocks until someone writes to it.
+    regular_file(path)?;
     let file = std::fs::File::open(path).map_err(|e| crate::Error::read(path, e))?;
     let meta = file.metadata().map_err(|e| crate::Error::read(path, e))?;
     let too_large = |size: u64| -> crate::Error {
@@ -63,10 +65,50 @@ pub fn open_bounded(
         }
         .into()
     };
-    if meta.is_file() && meta.len() > max {
+    if !meta.is_file() {
+        return Err(not_regular(path));
+    }
+    if meta.len() > max {
         return Err(too_large(meta.len()));
     }
     Ok(file.take(max + 1))
+}
+
+fn not_regular(path: &std::path::Path) -> crate::Error {
+    crate::Error::read(
+        path,
+        std::io::Error::other("not a regular file (a FIFO, device or directory is not read)"),
+    )
+}
+
+/// Refuses `path` unless it is a regular file (after following symbolic links), without
+/// opening it.
+pub fn regular_file(path: &std::path::Path) -> crate::Result<()> {
+    let meta = std::fs::metadata(path).map_err(|e| crate::Error::read(path, e))?;
+    if meta.is_file() {
+        Ok(())
+    } else {
+        Err(not_regular(path))
+    }
+}
+
+/// The bytes of a regular file of at most `max` bytes (see [`open_bounded`]).
+pub fn read_bytes_bounded(path: &std::path::Path, max: u64, what: &'static str) -> crate::Result<Vec<u8>> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    open_bounded(path, max, what)?
+        .read_to_end(&mut bytes)
+        .map_err(|e| crate::Error::read(path, e))?;
+    if bytes.len() as u64 > max {
+        return Err(crate::error::IoError::TooLarge {
+            path: path.to_path_buf(),
+            what,
+            size: bytes.len() as u64,
+            max,
+        }
+        .into());
+    }
+    Ok(bytes)
 }
 
 /// The whole text of a file of at most `max` bytes (see [`open_bounded`]).

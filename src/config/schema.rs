@@ -119,6 +119,9 @@ pub(crate) struct RawScene {
     #[serde(rename = "box")]
     pub(crate) boxes: Option<Vec<RawBox>>,
     pub(crate) gltf: Option<String>,
+    /// Lets a glTF's buffer URIs leave its folder (absolute paths, `..`).
+    #[serde(default)]
+    pub(crate) gltf_outside_buffers: bool,
 }
 
 /// One `[[scene.box]]`: a solid box.

@@ -589,8 +589,8 @@ fn scene(
                 _ => p,
             };
             let allowed = |why: &str| format!("a readable glTF 2.0 file (.gltf or .glb) with triangles: {why}");
-            let tris =
-                super::read_gltf(&p).map_err(|why| v.invalid("scene.gltf", format!("{name:?}"), &allowed(&why)))?;
+            let tris = super::read_gltf(&p, raw.gltf_outside_buffers)
+                .map_err(|why| v.invalid("scene.gltf", format!("{name:?}"), &allowed(&why)))?;
             if tris.is_empty() {
                 return Err(v.invalid(
                     "scene.gltf",

@@ -1,6 +1,7 @@
 //! The integration tests, built as one test crate (one link instead of one per file).
 
 mod architecture;
+mod bad_gltf;
 mod bad_inputs;
 mod check_sweep;
 mod cli_accuracy;
