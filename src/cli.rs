@@ -22,6 +22,10 @@ pub use crate::app::{Format, Outcome};
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+    /// When another csm-lab run is writing the output directory, stop with an error (exit 2)
+    /// instead of waiting for it to finish.
+    #[arg(long, global = true)]
+    pub no_wait: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -269,6 +273,7 @@ pub struct CompareArgs {
 
 /// Runs the parsed command.
 pub fn run(cli: Cli) -> Result<Outcome> {
+    crate::output::set_wait_for_lock(!cli.no_wait);
     match cli.command {
         Command::Analyze(args) => analyze::execute(&analyze::AnalyzeRequest {
             config: args.config,

@@ -18,62 +18,19 @@ pub trait Exporter<T: ?Sized> {
     fn render(&self, data: &T) -> Result<Vec<u8>>;
 }
 
-/// Writes `bytes` to `path` atomically: temporary file in the same directory, flush, fsync,
-/// rename.
+/// Writes `bytes` to `path` atomically: a one-file set ([`write_set`]) in the file's directory,
+/// so the temporary is inside a marked staging directory of this run, under the directory's
+/// lock.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(&format!(
-            ".{}.",
-            path.file_name().map(|s| s.to_string_lossy()).unwrap_or_default()
-        ))
-        .suffix(".tmp")
-        .tempfile_in(&dir)
-        .map_err(|e| Error::write(path, e))?;
-    tmp.write_all(bytes).map_err(|e| Error::write(path, e))?;
-    // Temporary files are created private (0600); the result should be an ordinary file.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        tmp.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(0o644))
-            .map_err(|e| Error::write(path, e))?;
-    }
-    tmp.as_file().sync_all().map_err(|e| Error::write(path, e))?;
-    tmp.persist(path).map_err(|e| Error::write(path, e.error))?;
-    Ok(())
-}
-
-/// Whether `entry` is a temporary file [`write_atomic`] makes for `name`:
-/// `.{name}.XXXXXX.tmp`, with six ASCII letters or digits.
-pub fn is_temporary_of(entry: &str, name: &str) -> bool {
-    entry
-        .strip_prefix('.')
-        .and_then(|r| r.strip_prefix(name))
-        .and_then(|r| r.strip_prefix('.'))
-        .and_then(|r| r.strip_suffix(".tmp"))
-        .is_some_and(|mid| mid.len() == 6 && mid.bytes().all(|b| b.is_ascii_alphanumeric()))
-}
-
-/// Removes from `dir` the temporaries a killed run left for the files `names` (only files
-/// matching [`is_temporary_of`] one of them; nothing else is touched). Returns how many.
-/// Best effort: a file that cannot be removed is left, and the write goes on.
-pub fn remove_stale_temporaries(dir: &Path, names: &[&str]) -> usize {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return 0;
-    };
-    entries
-        .filter_map(|e| e.ok())
-        .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
-        .filter(|e| {
-            let entry = e.file_name().to_string_lossy().into_owned();
-            names.iter().any(|n| is_temporary_of(&entry, n))
-        })
-        .filter(|e| std::fs::remove_file(e.path()).is_ok())
-        .count()
+    let name = path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .ok_or_else(|| Error::write(path, std::io::Error::other("not a file name")))?;
+    write_set(&dir, &[(name, bytes.to_vec())], &[], None).map(|_| ())
 }
 
 /// Creates `dir` (and parents) with a message that names it.
@@ -115,27 +72,161 @@ pub fn write_files_streamed<N: AsRef<str> + Sync>(
 }
 
 /// Name prefix of the staging directories [`write_files`] makes in an output directory:
-/// `.csm-lab-staging-<pid>-XXXXXX`.
+/// `.csm-lab-staging-<run id>-XXXXXX`, the run id being 16 random hex digits ([`run_id`]).
 pub const STAGING_PREFIX: &str = ".csm-lab-staging-";
 
 /// The file a staging directory holds once every file of its set is written and synced: from
 /// then on the set is moved into place, and an interrupted move is completed by the next run.
 pub const STAGING_COMPLETE: &str = ".complete";
 
+/// The marker a staging directory holds from its creation: `csm-lab staging <run id>` on the
+/// first line, then the names of the set's files, one a line. Recovery touches a staging
+/// directory only when its marker names the run id of the directory's own name, and then only
+/// the files the marker lists.
+pub const STAGING_MARKER: &str = ".csm-lab-run";
+
+/// The lock file of an output directory, where the directory itself cannot be locked.
+pub const LOCK_FILE: &str = ".csm-lab.lock";
+
+static WAIT_FOR_LOCK: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
+
+/// Whether a run waits for another run that is writing the same output directory (the
+/// default) or stops with an error (`--no-wait`).
+pub fn set_wait_for_lock(wait: bool) {
+    WAIT_FOR_LOCK.store(wait, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// This process's run id: 16 hex digits from the operating system's random source (the
+/// process id and time if that fails), the same for every set the process writes.
+pub fn run_id() -> &'static str {
+    static ID: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    ID.get_or_init(|| {
+        let x = getrandom::u64().unwrap_or_else(|_| {
+            let t = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos() as u64);
+            t ^ (u64::from(std::process::id()) << 32)
+        });
+        format!("{x:016x}")
+    })
+}
+
+fn marker_text(id: &str, names: &[&str]) -> String {
+    let mut t = format!("csm-lab staging {id}\n");
+    for n in names {
+        t.push_str(n);
+        t.push('\n');
+    }
+    t
+}
+
+/// The run id in a staging directory's name, if it has the form csm-lab gives it.
+fn staging_id(entry: &str) -> Option<&str> {
+    let rest = entry.strip_prefix(STAGING_PREFIX)?;
+    let (id, suffix) = rest.split_once('-')?;
+    (id.len() == 16
+        && id.bytes().all(|b| b.is_ascii_hexdigit() && !b.is_ascii_uppercase())
+        && suffix.len() == 6
+        && suffix.bytes().all(|b| b.is_ascii_alphanumeric()))
+    .then_some(id)
+}
+
+/// The names a staging directory's marker lists, when the marker is valid: a regular file whose
+/// first line names the run id of the directory's name. None for anything else.
+fn marked_names(staging: &Path, id: &str) -> Option<Vec<String>> {
+    let marker = staging.join(STAGING_MARKER);
+    let meta = std::fs::symlink_metadata(&marker).ok()?;
+    if !meta.is_file() || meta.len() > 1 << 20 {
+        return None;
+    }
+    let text = std::fs::read_to_string(&marker).ok()?;
+    let mut lines = text.lines();
+    (lines.next()? == format!("csm-lab staging {id}")).then(|| {
+        lines
+            .filter(|n| !n.is_empty() && !n.contains('/') && !n.contains('\\') && *n != "." && *n != "..")
+            .map(str::to_string)
+            .collect()
+    })
+}
+
+/// An output directory's advisory lock, held while a set is written into it (released when
+/// dropped). Taken on the directory itself where the platform allows (no file is added), else
+/// on [`LOCK_FILE`] inside it. An advisory lock (`flock`) is kept by the kernel for the open
+/// file, so it holds across processes of other PID namespaces that share the file system, and
+/// a killed run's lock is released with its last descriptor: no process id is ever judged.
+pub struct DirLock {
+    _file: std::fs::File,
+}
+
+impl DirLock {
+    /// Takes `dir`'s lock: waits for another run that holds it (saying so once), or, after
+    /// `--no-wait`, fails with "another csm-lab run is writing DIR".
+    pub fn acquire(dir: &Path) -> Result<DirLock> {
+        use fs4::FileExt;
+        let file = Self::open(dir)?;
+        match FileExt::try_lock(&file) {
+            Ok(()) => return Ok(DirLock { _file: file }),
+            Err(fs4::TryLockError::WouldBlock) => {}
+            Err(fs4::TryLockError::Error(e)) => return Err(Error::write(dir, e)),
+        }
+        if !WAIT_FOR_LOCK.load(std::sync::atomic::Ordering::Relaxed) {
+            return Err(Error::write(
+                dir,
+                std::io::Error::other(
+                    "another csm-lab run is writing this directory (drop --no-wait to wait for it, or choose another --out)",
+                ),
+            ));
+        }
+        eprintln!(
+            "another csm-lab run is writing {}: waiting for it to finish",
+            dir.display()
+        );
+        FileExt::lock(&file).map_err(|e| Error::write(dir, e))?;
+        Ok(DirLock { _file: file })
+    }
+
+    fn open(dir: &Path) -> Result<std::fs::File> {
+        #[cfg(unix)]
+        if let Ok(f) = std::fs::File::open(dir) {
+            use fs4::FileExt;
+            // A file system that cannot lock a directory descriptor (some network file
+            // systems) falls back to the lock file.
+            match FileExt::try_lock_shared(&f) {
+                Ok(()) => {
+                    let _ = FileExt::unlock(&f);
+                    return Ok(f);
+                }
+                Err(fs4::TryLockError::WouldBlock) => return Ok(f),
+                Err(fs4::TryLockError::Error(_)) => {}
+            }
+        }
+        std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(dir.join(LOCK_FILE))
+            .map_err(|e| Error::write(&dir.join(LOCK_FILE), e))
+    }
+}
+
 /// Writes a set of files into `dir`, all or nothing:
 ///
-/// 1. Recovers what an interrupted run left ([`recover`]): its stale temporaries and staging
-///    directories are removed, and a staged set that was complete when the run stopped is
-///    moved into place first.
-/// 2. Writes every file into a new staging directory inside `dir` (same file system), syncs
-///    each, then marks the set complete ([`STAGING_COMPLETE`]) and syncs the directory.
+/// 0. Takes the directory's lock ([`DirLock`]) for the rest of the write: two runs into one
+///    directory write their sets one after the other, never interleaved.
+/// 1. Recovers what an interrupted run left ([`recover`]): its marked staging directories are
+///    removed, and a staged set that was complete when the run stopped is moved into place
+///    first.
+/// 2. Writes the marker ([`STAGING_MARKER`]: this run's id and the set's names) into a new
+///    staging directory inside `dir` (same file system), then every file, syncs each, then
+///    marks the set complete ([`STAGING_COMPLETE`]) and syncs the directory.
 /// 3. Renames each file over its name in `dir` (no data is written any more: renames only),
 ///    syncs `dir`, and removes the staging directory.
 ///
 /// A failure in step 2 (a full disk, a bad value, a kill) leaves the previous files untouched
 /// and no new file beside them. Only a kill within step 3 can leave a mix; the staging
 /// directory is then marked complete, and the next run into `dir` completes the move before
-/// anything else. Files in `dir` that are not of this set are never touched.
+/// anything else. Files in `dir` that are not of this set are never touched, whatever their
+/// names.
 fn write_set<N: AsRef<str> + Sync>(
     dir: &Path,
     files: &[(N, Vec<u8>)],
@@ -148,7 +239,8 @@ fn write_set<N: AsRef<str> + Sync>(
         .map(|(n, _)| n.as_ref())
         .chain(streamed.iter().map(|f| f.file_name()))
         .collect();
-    let (completed, removed) = recover(dir, &names);
+    let _lock = DirLock::acquire(dir)?;
+    let (completed, removed) = recover(dir);
     if completed > 0 {
         eprintln!(
             "completed the output set of an interrupted run in {} before writing this one",
@@ -157,8 +249,8 @@ fn write_set<N: AsRef<str> + Sync>(
     }
     if removed > 0 {
         eprintln!(
-            "removed {removed} stale temporary file{} (left by an interrupted run) from {}",
-            if removed == 1 { "" } else { "s" },
+            "removed {removed} incomplete staging director{} (left by an interrupted run) from {}",
+            if removed == 1 { "y" } else { "ies" },
             dir.display()
         );
     }
@@ -173,9 +265,14 @@ fn write_set<N: AsRef<str> + Sync>(
         }
     }
     let staging = tempfile::Builder::new()
-        .prefix(&format!("{STAGING_PREFIX}{}-", std::process::id()))
+        .prefix(&format!("{STAGING_PREFIX}{}-", run_id()))
         .tempdir_in(dir)
         .map_err(|e| Error::write(dir, e))?;
+    write_synced(
+        &staging.path().join(STAGING_MARKER),
+        marker_text(run_id(), &names).as_bytes(),
+    )
+    .map_err(|e| Error::write(dir, e))?;
     // Each file is written and synced on its own; in parallel, the syncs overlap (they were
     // most of the wall time of a small sweep).
     use rayon::prelude::*;
@@ -209,7 +306,7 @@ fn write_set<N: AsRef<str> + Sync>(
         })
         .collect::<Result<Vec<_>>>()?;
     sync_dir(dir);
-    // Only the marker is left; dropping the staging directory removes it.
+    // Only the markers are left; dropping the staging directory removes them.
     drop(staging);
     Ok(paths)
 }
@@ -239,66 +336,59 @@ fn sync_dir(dir: &Path) {
     }
 }
 
-/// The process id in a staging directory's name, if it is one.
-fn staging_pid(entry: &str) -> Option<u32> {
-    let rest = entry.strip_prefix(STAGING_PREFIX)?;
-    let (pid, suffix) = rest.split_once('-')?;
-    (suffix.len() == 6 && suffix.bytes().all(|b| b.is_ascii_alphanumeric()))
-        .then(|| pid.parse().ok())
-        .flatten()
-}
-
-/// Whether the process that made a staging directory may still be writing it.
-fn still_running(pid: u32) -> bool {
-    if pid == std::process::id() {
-        return true;
-    }
-    #[cfg(target_os = "linux")]
-    {
-        Path::new(&format!("/proc/{pid}")).exists()
-    }
-    #[cfg(not(target_os = "linux"))]
-    {
-        false
-    }
-}
-
-/// Cleans up after interrupted runs in `dir`, touching only csm-lab's own entries: staging
-/// directories of processes that are gone (a complete one is first moved into place, file by
-/// file; an incomplete one is removed) and the temporaries of earlier versions for the files
-/// `names` ([`remove_stale_temporaries`]). Returns (sets completed, entries removed). Best
-/// effort: what cannot be recovered is left, and the write goes on.
-pub fn recover(dir: &Path, names: &[&str]) -> (usize, usize) {
+/// Cleans up after interrupted runs in `dir`, with the directory's lock held (so no other run
+/// is writing it), touching only staging directories csm-lab can prove it made: a directory
+/// (not a link) named `.csm-lab-staging-<run id>-XXXXXX` holding a valid marker
+/// ([`STAGING_MARKER`]). A complete one is first moved into place, file by file (the files its
+/// marker lists); an incomplete one is removed. Only the files the marker lists and the two
+/// markers are deleted; a staging directory that still holds anything else is left. Returns
+/// (sets completed, staging directories removed). Best effort: what cannot be recovered is
+/// left, and the write goes on. Files of the user are never touched, whatever their names.
+pub fn recover(dir: &Path) -> (usize, usize) {
     let mut completed = 0;
-    let mut removed = remove_stale_temporaries(dir, names);
+    let mut removed = 0;
     let Ok(entries) = std::fs::read_dir(dir) else {
         return (completed, removed);
     };
     for e in entries.filter_map(|e| e.ok()) {
         let entry = e.file_name().to_string_lossy().into_owned();
-        let Some(pid) = staging_pid(&entry) else {
+        let Some(id) = staging_id(&entry) else {
             continue;
         };
-        if !e.file_type().is_ok_and(|t| t.is_dir()) || still_running(pid) {
+        // file_type does not follow links: a link named like a staging directory is not one.
+        if !e.file_type().is_ok_and(|t| t.is_dir()) {
             continue;
         }
         let staging = e.path();
-        if staging.join(STAGING_COMPLETE).is_file() {
-            let Ok(staged) = std::fs::read_dir(&staging) else {
-                continue;
-            };
-            for f in staged.filter_map(|f| f.ok()) {
-                let name = f.file_name();
-                if name != STAGING_COMPLETE && f.file_type().is_ok_and(|t| t.is_file()) {
-                    let _ = std::fs::rename(f.path(), dir.join(&name));
-                }
+        let Some(names) = marked_names(&staging, id) else {
+            // A run killed between making its staging directory and writing the marker leaves
+            // it empty; removing an empty directory removes nothing of anyone's.
+            if std::fs::remove_dir(&staging).is_ok() {
+                removed += 1;
             }
+            continue;
+        };
+        let complete = std::fs::symlink_metadata(staging.join(STAGING_COMPLETE)).is_ok_and(|m| m.is_file());
+        for name in &names {
+            let staged = staging.join(name);
+            if !std::fs::symlink_metadata(&staged).is_ok_and(|m| m.is_file()) {
+                continue;
+            }
+            if complete {
+                let _ = std::fs::rename(&staged, dir.join(name));
+            } else {
+                let _ = std::fs::remove_file(&staged);
+            }
+        }
+        if complete {
             sync_dir(dir);
             completed += 1;
-        } else {
+        }
+        let _ = std::fs::remove_file(staging.join(STAGING_COMPLETE));
+        let _ = std::fs::remove_file(staging.join(STAGING_MARKER));
+        if std::fs::remove_dir(&staging).is_ok() && !complete {
             removed += 1;
         }
-        let _ = std::fs::remove_dir_all(&staging);
     }
     (completed, removed)
 }
@@ -574,55 +664,103 @@ mod set_tests {
         assert_eq!(listing(dir.path()), expected("new", true));
     }
 
+    /// A staging directory as a run with id `id` leaves it: the marker listing `names`, then
+    /// the files `staged` (name, contents), then, when `complete`, the completion marker.
+    fn staged(
+        dir: &Path,
+        id: &str,
+        suffix: &str,
+        names: &[&str],
+        staged: &[(String, Vec<u8>)],
+        complete: bool,
+    ) -> PathBuf {
+        let d = dir.join(format!("{STAGING_PREFIX}{id}-{suffix}"));
+        std::fs::create_dir(&d).unwrap();
+        std::fs::write(d.join(STAGING_MARKER), marker_text(id, names)).unwrap();
+        for (n, b) in staged {
+            std::fs::write(d.join(n), b).unwrap();
+        }
+        if complete {
+            std::fs::write(d.join(STAGING_COMPLETE), names.join("\n")).unwrap();
+        }
+        d
+    }
+
     /// A run killed while moving its staged set into place: the next run completes that set
     /// before it writes its own; a run killed while staging leaves a staging directory that
-    /// the next run removes. Other entries (a user's file, a directory of another tool's
-    /// with a similar name) are left alone.
+    /// the next run removes. Entries without a valid marker (a user's file, a directory of
+    /// another tool's with a similar name, a marker naming another id, a user's temporaries)
+    /// are left alone, whatever their names.
     #[test]
     fn the_next_run_completes_or_removes_what_an_interrupted_run_left() {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
         std::fs::write(d.join("notes.txt"), "mine\n").unwrap();
         write_files(d, &set("old")).unwrap();
-        // A complete staged set of a dead process (pid 0 never names one), half moved.
-        let staged = d.join(format!("{STAGING_PREFIX}0-AbC123"));
-        std::fs::create_dir(&staged).unwrap();
-        for (n, b) in set("killed") {
-            std::fs::write(staged.join(&n), b).unwrap();
-        }
-        std::fs::write(staged.join(STAGING_COMPLETE), "a.csv\nb.json\nc.svg").unwrap();
-        std::fs::rename(staged.join("a.csv"), d.join("a.csv")).unwrap();
-        // An incomplete one, a stale temporary of an earlier version, and lookalikes that are
-        // not csm-lab's (wrong suffix length; a file, not a directory).
-        let partial = d.join(format!("{STAGING_PREFIX}0-XyZ789"));
-        std::fs::create_dir(&partial).unwrap();
-        std::fs::write(partial.join("a.csv"), "partial").unwrap();
-        std::fs::write(d.join(".a.csv.Q1w2E3.tmp"), "stale").unwrap();
-        std::fs::create_dir(d.join(format!("{STAGING_PREFIX}0-notours"))).unwrap();
-        std::fs::write(d.join(format!("{STAGING_PREFIX}0-File12")), "a file").unwrap();
-        assert_eq!(recover(d, &["a.csv", "b.json", "c.svg"]), (1, 2));
-        let mut want = expected("killed", true);
-        want.push((format!("{STAGING_PREFIX}0-File12"), "a file".to_string()));
-        want.push((format!("{STAGING_PREFIX}0-notours"), "<dir>".to_string()));
-        want.sort();
-        assert_eq!(listing(d), want);
+        let names = ["a.csv", "b.json", "c.svg"];
+        // A complete staged set of a killed run, half moved.
+        let complete = staged(d, "0123456789abcdef", "AbC123", &names, &set("killed"), true);
+        std::fs::rename(complete.join("a.csv"), d.join("a.csv")).unwrap();
+        // An incomplete one (one file written), and one killed before its marker (empty).
+        staged(d, "fedcba9876543210", "XyZ789", &names, &set("partial")[..1], false);
+        std::fs::create_dir(d.join(format!("{STAGING_PREFIX}00000000000000aa-Empty1"))).unwrap();
+        // Lookalikes that are not csm-lab's: no marker, a marker of another id, a user file in
+        // a marked directory, a file named like a staging directory, user temporaries.
+        let unmarked = d.join(format!("{STAGING_PREFIX}1111111111111111-mywork"));
+        std::fs::create_dir(&unmarked).unwrap();
+        std::fs::write(unmarked.join("notes"), "mine").unwrap();
+        let forged = staged(d, "2222222222222222", "Forged", &names, &set("forged"), true);
+        std::fs::write(forged.join(STAGING_MARKER), marker_text("3333333333333333", &names)).unwrap();
+        let with_user_file = staged(d, "4444444444444444", "Mixed1", &["a.csv"], &set("mixed")[..1], false);
+        std::fs::write(with_user_file.join("keep.txt"), "mine").unwrap();
+        std::fs::write(d.join(format!("{STAGING_PREFIX}5555555555555555-File12")), "a file").unwrap();
+        std::fs::write(d.join(".a.csv.Q1w2E3.tmp"), "mine").unwrap();
+        std::fs::write(d.join(".a.csv.backup.tmp"), "mine").unwrap();
+        assert_eq!(recover(d), (1, 2));
+        let user = |mut want: Vec<(String, String)>| {
+            want.push((format!("{STAGING_PREFIX}1111111111111111-mywork"), "<dir>".to_string()));
+            want.push((format!("{STAGING_PREFIX}2222222222222222-Forged"), "<dir>".to_string()));
+            want.push((format!("{STAGING_PREFIX}4444444444444444-Mixed1"), "<dir>".to_string()));
+            want.push((format!("{STAGING_PREFIX}5555555555555555-File12"), "a file".to_string()));
+            want.push((".a.csv.Q1w2E3.tmp".to_string(), "mine".to_string()));
+            want.push((".a.csv.backup.tmp".to_string(), "mine".to_string()));
+            want.sort();
+            want
+        };
+        assert_eq!(listing(d), user(expected("killed", true)));
+        assert_eq!(std::fs::read_to_string(unmarked.join("notes")).unwrap(), "mine");
+        assert_eq!(listing(&forged).len(), 5, "a forged marker's directory was touched");
+        assert_eq!(
+            listing(&with_user_file),
+            vec![("keep.txt".to_string(), "mine".to_string())],
+            "only the marked set's files go"
+        );
         write_files(d, &set("new")).unwrap();
-        let mut want = expected("new", true);
-        want.push((format!("{STAGING_PREFIX}0-File12"), "a file".to_string()));
-        want.push((format!("{STAGING_PREFIX}0-notours"), "<dir>".to_string()));
-        want.sort();
-        assert_eq!(listing(d), want);
+        assert_eq!(listing(d), user(expected("new", true)));
     }
 
     #[test]
-    fn a_live_process_staging_directory_is_left_alone() {
+    fn a_staging_directory_of_a_run_holding_the_lock_is_left_alone() {
+        // recover runs under the directory's lock; here the lock is held by "another run", so
+        // a writer waits (or, with --no-wait, fails) instead of recovering.
         let dir = tempfile::tempdir().unwrap();
-        let mine = dir
-            .path()
-            .join(format!("{STAGING_PREFIX}{}-AbC123", std::process::id()));
-        std::fs::create_dir(&mine).unwrap();
-        assert_eq!(recover(dir.path(), &["a.csv"]), (0, 0));
-        assert!(mine.is_dir());
+        let held = DirLock::acquire(dir.path()).unwrap();
+        let live = staged(
+            dir.path(),
+            "0123456789abcdef",
+            "Live12",
+            &["a.csv"],
+            &set("live")[..1],
+            false,
+        );
+        set_wait_for_lock(false);
+        let e = write_files(dir.path(), &set("new")).unwrap_err().to_string();
+        set_wait_for_lock(true);
+        assert!(e.contains("another csm-lab run is writing"), "{e}");
+        assert!(live.join("a.csv").is_file());
+        drop(held);
+        write_files(dir.path(), &set("new")).unwrap();
+        assert!(!live.exists());
     }
 
     #[test]
@@ -631,6 +769,8 @@ mod set_tests {
         std::fs::create_dir(dir.path().join("b.json")).unwrap();
         let e = write_files(dir.path(), &set("new")).unwrap_err().to_string();
         assert!(e.contains("b.json") && e.contains("directory"), "{e}");
-        assert_eq!(listing(dir.path()), vec![("b.json".to_string(), "<dir>".to_string())]);
+        let mut l = listing(dir.path());
+        l.retain(|(n, _)| n != LOCK_FILE);
+        assert_eq!(l, vec![("b.json".to_string(), "<dir>".to_string())]);
     }
 }

@@ -406,58 +406,6 @@ fn an_engine_distance_knob_beyond_the_world_bound_is_rejected_by_name() {
 }
 
 #[test]
-fn a_killed_runs_stale_temporaries_are_removed_by_the_next_run_and_nothing_else_is_touched() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out");
-    std::fs::create_dir(&out).unwrap();
-    let stale = [".cascades.csv.N629vS.tmp", ".summary.json.a1B2c3.tmp"];
-    let others = [
-        "notes.txt",
-        ".cascades.csv.tmp",
-        ".cascades.csv.toolong1.tmp",
-        ".mine.csv.N629vS.tmp",
-        "cascades.csv.N629vS.tmp",
-    ];
-    for n in stale.iter().chain(&others) {
-        std::fs::write(out.join(n), "left over").unwrap();
-    }
-    let o = bin()
-        .args(["analyze", "configs/default.toml", "--out", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(0));
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(err.matches("removed 2 stale temporary files").count(), 1, "{err}");
-    for n in stale {
-        assert!(!out.join(n).exists(), "{n} is still there");
-    }
-    for n in others {
-        assert_eq!(
-            std::fs::read_to_string(out.join(n)).unwrap(),
-            "left over",
-            "{n} was touched"
-        );
-    }
-    // A clean directory: nothing said.
-    let o = bin()
-        .args(["analyze", "configs/default.toml", "--out", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(!String::from_utf8_lossy(&o.stderr).contains("stale"));
-}
-
-#[test]
-fn only_the_write_pattern_counts_as_a_temporary() {
-    use csm_lab::output::is_temporary_of;
-    assert!(is_temporary_of(".sweep.csv.N629vS.tmp", "sweep.csv"));
-    assert!(!is_temporary_of(".sweep.csv.N629v.tmp", "sweep.csv"));
-    assert!(!is_temporary_of(".sweep.csv.N6-9vS.tmp", "sweep.csv"));
-    assert!(!is_temporary_of("sweep.csv.N629vS.tmp", "sweep.csv"));
-    assert!(!is_temporary_of(".sweep.csv.N629vS.tmp", "sweep.cs"));
-    assert!(!is_temporary_of(".sweep.csv.N629vS.tmpx", "sweep.csv"));
-}
-
-#[test]
 fn a_long_path_keeps_a_bounded_number_of_frame_rows_and_exact_summaries() {
     use csm_lab::analysis::{analyze, AnalysisOptions};
     use csm_lab::shimmer::{frame_row_stride, MAX_FRAME_ROWS};
