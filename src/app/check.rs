@@ -39,8 +39,22 @@ pub struct CheckRequest<'a> {
 
 /// The `check` command. Every input is read and validated before anything is analysed, and
 /// nothing is printed unless the whole check succeeded. When it cannot run (exit 2), the
-/// JUnit file, if asked for, is replaced by one that reports the error.
+/// JUnit file, if asked for, is replaced by one that reports the error. Before any work, the
+/// JUnit file is replaced by one that reports an unfinished run: whatever ends the run (a
+/// panic, a kill, an out-of-memory abort), the file a CI reads never says pass for it, and it
+/// says pass only once the run wrote its final report.
 pub fn execute(args: &CheckRequest) -> Result<Outcome> {
+    if let Some(p) = args.junit {
+        let xml = crate::report::junit::render_error(
+            &args.config.display().to_string(),
+            "csm-lab check started and has not finished: it was stopped (a crash, a kill, a timeout) \
+             before it wrote its report",
+        );
+        if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+            output::ensure_dir(dir)?;
+        }
+        output::write_atomic(p, xml.as_bytes())?;
+    }
     let result = run(args);
     if let (Err(e), Some(p)) = (&result, args.junit) {
         let xml = crate::report::junit::render_error(&args.config.display().to_string(), &e.to_string());

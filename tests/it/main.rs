@@ -36,6 +36,7 @@ mod prop_toml;
 mod readme_ci;
 mod readme_clean;
 mod regressions;
+mod reliability;
 mod seams;
 mod shimmer;
 mod shimmer_fast_paths;

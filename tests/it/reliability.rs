@@ -1,0 +1,83 @@
+//! Regression tests of issue 25's reliability cases that are not about glTF (`bad_gltf.rs`) or
+//! output directories (`output_owner.rs`): a JUnit file that never says pass for a run that did
+//! not finish, bounded inputs, preset and engine-settings values the arithmetic cannot carry.
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::common::{with, BASE};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+/// `errors` and `failures` of a JUnit file's root.
+fn junit_counts(path: &Path) -> (String, String) {
+    let xml = std::fs::read_to_string(path).unwrap();
+    let doc = roxmltree::Document::parse(&xml).unwrap();
+    let root = doc.root_element();
+    (
+        root.attribute("errors").unwrap().to_string(),
+        root.attribute("failures").unwrap().to_string(),
+    )
+}
+
+#[cfg(unix)]
+#[test]
+fn a_check_killed_mid_run_leaves_a_junit_file_that_does_not_say_pass() {
+    let dir = tempfile::tempdir().unwrap();
+    let t = write(dir.path(), "t.toml", "[[rule]]\nmetric = \"max_aliasing\"\nmax = 1e9\n");
+    let quick = write(dir.path(), "quick.toml", BASE);
+    let junit = dir.path().join("junit.xml");
+    let j = junit.to_str().unwrap();
+    // A passing run first: the file a CI would read says pass.
+    let o = bin()
+        .args(["check", &quick, "--thresholds", &t, "--junit", j])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(junit_counts(&junit), ("0".to_string(), "0".to_string()));
+    // A long run (300,000 frames), killed as soon as it has started.
+    let slow = write(dir.path(), "slow.toml", &with(&[("motion.frames", "frames = 300000")]));
+    let mut child = bin()
+        .args(["check", &slow, "--thresholds", &t, "--junit", j])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while junit_counts(&junit).0 == "0" {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "the run never marked its JUnit file"
+        );
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before the file changed"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(junit_counts(&junit).0, "1");
+    let xml = std::fs::read_to_string(&junit).unwrap();
+    assert!(xml.contains("has not finished"), "{xml}");
+    // A run that finishes replaces the marker with its report.
+    let o = bin()
+        .args(["check", &quick, "--thresholds", &t, "--junit", j])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(junit_counts(&junit), ("0".to_string(), "0".to_string()));
+}
