@@ -12,6 +12,8 @@ pub use light_motion::{light_update_label, parse_light_update_list};
 mod location;
 mod path_file;
 mod schema;
+/// Exactly three numbers (a fourth is an error) for `[x, y, z]` keys of preset tables too.
+pub(crate) use schema::opt_vec3;
 pub mod sweep_spec;
 mod validate;
 

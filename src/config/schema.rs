@@ -32,7 +32,7 @@ impl RawFile {
 }
 
 /// Exactly three numbers: `[0, 10, 0, 1]` is an error, not a silently dropped fourth number.
-fn vec3<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+pub(crate) fn vec3<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
     struct V;
     impl<'de> serde::de::Visitor<'de> for V {
         type Value = [f64; 3];
@@ -59,7 +59,7 @@ fn vec3<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
     d.deserialize_seq(V)
 }
 
-fn opt_vec3<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]>, D::Error> {
+pub(crate) fn opt_vec3<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]>, D::Error> {
     vec3(d).map(Some)
 }
 

@@ -18,6 +18,7 @@ pub struct Eevee;
 pub struct EeveeTable {
     cascade_exponent: Option<f64>,
     fade: Option<f64>,
+    #[serde(default, deserialize_with = "crate::config::opt_vec3")]
     lamp_position: Option<[f64; 3]>,
     clip_start: Option<f64>,
     clip_end: Option<f64>,
@@ -63,7 +64,7 @@ impl Engine for Eevee {
         let cascade_exponent = unit(v, "eevee.cascade_exponent", t.cascade_exponent.unwrap_or(0.8))?;
         let fade = unit(v, "eevee.fade", t.fade.unwrap_or(0.1))?;
         let clip_start = non_negative(v, "eevee.clip_start", t.clip_start.unwrap_or(0.05))?;
-        let clip_end = v.finite("eevee.clip_end", t.clip_end.unwrap_or(40.0))?;
+        let clip_end = signed_distance(v, "eevee.clip_end", t.clip_end.unwrap_or(40.0))?;
         ordered(v, "eevee.clip_start", clip_start, "eevee.clip_end", clip_end)?;
         // Default lamp: up-sun of the scene, so the scene's point nearest the light sits
         // exactly at clip_start (the best a user can place a lamp for this clip range).

@@ -20,6 +20,7 @@ pub struct LearnOpenGlTable {
     planes: Option<Vec<f64>>,
     pad_xy: Option<f64>,
     pad_z: Option<f64>,
+    #[serde(default, deserialize_with = "crate::config::opt_vec3")]
     light_position: Option<[f64; 3]>,
 }
 
@@ -45,13 +46,13 @@ impl Engine for LearnOpenGl {
         let planes = t.planes.clone().unwrap_or_else(|| vec![5.0, 15.0, 30.0, 100.0]);
         let ok = planes.len() >= 2
             && planes.len() <= 17
-            && planes.iter().all(|p| p.is_finite() && *p > 0.0)
+            && planes.iter().all(|p| p.is_finite() && *p > 0.0 && *p <= crate::config::MAX_WORLD)
             && planes.windows(2).all(|w| w[0] < w[1]);
         if !ok {
             return Err(v.invalid(
                 "learnopengl.planes",
                 format!("{planes:?}"),
-                "2 to 17 increasing positive view depths (cascade i spans planes[i]..planes[i+1])",
+                "2 to 17 increasing positive view depths, at most 1e9 (cascade i spans planes[i]..planes[i+1])",
             ));
         }
         let pad_xy = non_negative(v, "learnopengl.pad_xy", t.pad_xy.unwrap_or(2.0))?;

@@ -176,6 +176,19 @@ pub fn non_negative(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
     check_range(v, key, x, 0.0, crate::config::MAX_WORLD, false, false)
 }
 
+/// A signed distance (a clip plane may sit behind the light), within ±1e9 world units.
+pub fn signed_distance(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
+    check_range(
+        v,
+        key,
+        x,
+        -crate::config::MAX_WORLD,
+        crate::config::MAX_WORLD,
+        false,
+        false,
+    )
+}
+
 /// A distance > 0, at most 1e9 world units.
 pub fn positive(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
     check_range(v, key, x, 0.0, crate::config::MAX_WORLD, true, false)
@@ -207,7 +220,8 @@ pub fn fractions<const N: usize>(
 /// A point, or `default` when not written.
 pub fn point_or(v: &Validator<'_>, key: &str, x: Option<[f64; 3]>, default: DVec3) -> Result<DVec3> {
     match x {
-        Some(a) => v.vec3(key, a),
+        // Bounded like every world position: 1e308 was accepted, then the fit's centre was NaN.
+        Some(a) => v.point(key, a),
         None => Ok(default),
     }
 }

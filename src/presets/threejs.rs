@@ -93,8 +93,8 @@ impl Engine for Threejs {
         // three.js falls back to the default for any falsy value, 0 included.
         let falsy = |x: Option<f64>, d: f64| x.filter(|x| *x != 0.0).unwrap_or(d);
         let light_margin = non_negative(v, "threejs.light_margin", falsy(t.light_margin, 200.0))?;
-        let light_near = v.finite("threejs.light_near", falsy(t.light_near, 1.0))?;
-        let light_far = v.finite("threejs.light_far", falsy(t.light_far, 2000.0))?;
+        let light_near = signed_distance(v, "threejs.light_near", falsy(t.light_near, 1.0))?;
+        let light_far = signed_distance(v, "threejs.light_far", falsy(t.light_far, 2000.0))?;
         ordered(v, "threejs.light_near", light_near, "threejs.light_far", light_far)?;
         let mode = match &t.mode {
             Some(m) => v.one_of(
