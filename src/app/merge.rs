@@ -9,7 +9,7 @@ use super::sweep::{plan, shard_hash, SweepRequest};
 use super::{default_out_dir, print_result, Format, Outcome};
 use crate::commands::shard::{self, Manifest, ShardInput};
 use crate::commands::sweep::SweepResult;
-use crate::error::{Error, IoError, Result, ShardError};
+use crate::error::{Error, Result, ShardError};
 use crate::output;
 use crate::report;
 
@@ -29,26 +29,18 @@ const MAX_SHARD_FILE: u64 = 1 << 30;
 
 fn read_text(dir: &Path, name: &str) -> Result<String> {
     let path = dir.join(name);
-    let meta = std::fs::metadata(&path).map_err(|e| {
+    if let Err(e) = std::fs::metadata(&path) {
         if e.kind() == std::io::ErrorKind::NotFound {
-            Error::from(ShardError::dir(
+            return Err(ShardError::dir(
                 dir,
                 format!("not a shard of a sweep: it has no {name} (`csm-lab sweep --shard K/N` writes one)"),
-            ))
-        } else {
-            Error::read(&path, e)
+            )
+            .into());
         }
-    })?;
-    if meta.len() > MAX_SHARD_FILE {
-        return Err(IoError::TooLarge {
-            path,
-            what: "a shard file",
-            size: meta.len(),
-            max: MAX_SHARD_FILE,
-        }
-        .into());
     }
-    std::fs::read_to_string(&path).map_err(|e| Error::read(&path, e))
+    // A regular file of at most MAX_SHARD_FILE bytes (a link to /dev/zero or a FIFO is refused
+    // before it is read).
+    crate::config::read_bounded(&path, MAX_SHARD_FILE, "a shard file")
 }
 
 /// Reads one shard directory.
@@ -61,7 +53,11 @@ pub fn read_shard(dir: &Path) -> Result<ShardInput> {
         .into());
     }
     let manifest = Manifest::from_json(dir, &read_text(dir, shard::MANIFEST_FILE)?)?;
-    let rows = shard::parse_rows(&dir.join(shard::ROWS_FILE), &read_text(dir, shard::ROWS_FILE)?)?;
+    let rows = shard::parse_rows(
+        &dir.join(shard::ROWS_FILE),
+        &read_text(dir, shard::ROWS_FILE)?,
+        &manifest,
+    )?;
     Ok(ShardInput {
         dir: dir.to_path_buf(),
         manifest,

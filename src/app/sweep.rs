@@ -173,6 +173,7 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
             shard::ROWS_FILE.to_string(),
             // Every row the shard ran (in a sun sweep, each (sun, setting) row).
             shard::rows_text(
+                &m,
                 indices
                     .iter()
                     .copied()

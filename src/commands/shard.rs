@@ -10,6 +10,13 @@
 //! K and N, the grid size, the command of the unsharded sweep and a hash of everything that
 //! decides the rows. Merging rebuilds the exact rows, so the merged files are byte for byte
 //! those of the unsharded sweep. Nothing here reads or writes a file: [`crate::app`] does.
+//!
+//! Merge trusts nothing it reads: each row ends in a digest of the row's text keyed by the
+//! shard's `config_hash` and K/N, and the manifest carries a digest of its own fields
+//! (`manifest_digest`). An edited row is an error naming the shard and the line; an edited
+//! manifest (a `config_hash` pasted from another run, say) is an error naming the shard, and
+//! so are its rows, whose digests were made with the hash the shard really ran. The digests
+//! (64-bit FNV-1a) catch edits and mix-ups, not forgery: they are not signatures.
 
 use std::fmt::Write as _;
 
@@ -26,7 +33,7 @@ pub const MANIFEST_FILE: &str = "shard.json";
 /// The shard's rows, lossless.
 pub const ROWS_FILE: &str = "shard-rows.tsv";
 /// First line of [`ROWS_FILE`] (the format's version).
-const ROWS_MAGIC: &str = "# csm-lab shard rows v1";
+const ROWS_MAGIC: &str = "# csm-lab shard rows v2";
 /// Most shards a grid may be split into.
 pub const MAX_SHARDS: usize = 100_000;
 
@@ -118,58 +125,96 @@ pub fn tool() -> String {
     format!("csm-lab {}", env!("CARGO_PKG_VERSION"))
 }
 
+/// [`MANIFEST_FILE`] as serde writes and reads it; the grid flags given (one key per
+/// [`GridFlags::KEYS`] entry that was given) sit beside the named fields.
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
+struct ManifestFile {
+    tool: String,
+    shard: usize,
+    shards: usize,
+    grid_configurations: usize,
+    rows: usize,
+    rows_file: String,
+    config: String,
+    command: String,
+    config_hash: String,
+    manifest_digest: String,
+    #[serde(flatten)]
+    flags: std::collections::BTreeMap<String, String>,
+}
+
 impl Manifest {
-    pub fn to_json(&self) -> serde_json::Value {
-        let mut v = serde_json::json!({
-            "tool": self.tool,
-            "shard": self.shard.k,
-            "shards": self.shard.n,
-            "grid_configurations": self.grid_configurations,
-            "rows": self.shard.len_of(self.grid_configurations),
-            "rows_file": ROWS_FILE,
-            "config": self.config,
-            "command": self.command,
-            "config_hash": self.config_hash,
-        });
-        for (key, value) in GridFlags::KEYS.into_iter().zip(self.flags.values()) {
-            if let Some(s) = value {
-                v[key] = s.clone().into();
-            }
+    /// The digest of every field of the manifest ([`MANIFEST_FILE`]'s `manifest_digest`).
+    pub fn digest(&self) -> String {
+        let mut h = Fnv::default();
+        for field in [
+            self.tool.as_str(),
+            &self.shard.k.to_string(),
+            &self.shard.n.to_string(),
+            &self.grid_configurations.to_string(),
+            &self.config,
+            &self.command,
+            &self.config_hash,
+        ] {
+            h.eat(field.as_bytes());
         }
-        v
+        for (key, value) in GridFlags::KEYS.into_iter().zip(self.flags.values()) {
+            h.eat(key.as_bytes());
+            h.eat(value.as_deref().unwrap_or("\u{0}").as_bytes());
+        }
+        h.hex()
     }
 
-    /// Reads a manifest back; `dir` names the shard in errors.
+    pub fn to_json(&self) -> serde_json::Value {
+        let file = ManifestFile {
+            tool: self.tool.clone(),
+            shard: self.shard.k,
+            shards: self.shard.n,
+            grid_configurations: self.grid_configurations,
+            rows: self.shard.len_of(self.grid_configurations),
+            rows_file: ROWS_FILE.to_string(),
+            config: self.config.clone(),
+            command: self.command.clone(),
+            config_hash: self.config_hash.clone(),
+            manifest_digest: self.digest(),
+            flags: GridFlags::KEYS
+                .into_iter()
+                .zip(self.flags.values())
+                .filter_map(|(k, v)| v.clone().map(|v| (k.to_string(), v)))
+                .collect(),
+        };
+        // Through a Value: its map orders the keys, as the manifest always has.
+        serde_json::to_value(file).unwrap_or_default()
+    }
+
+    /// Reads a manifest back; `dir` names the shard in errors. A manifest of this csm-lab
+    /// version must carry the digest of its own fields (one of another version is left to
+    /// [`check_set`], which names the version).
     pub fn from_json(dir: &std::path::Path, text: &str) -> Result<Manifest> {
         let bad = |m: String| Error::from(ShardError::dir(dir, format!("{MANIFEST_FILE}: {m}")));
-        let v: serde_json::Value =
+        let file: ManifestFile =
             serde_json::from_str(text).map_err(|e| bad(format!("not a csm-lab shard manifest ({e})")))?;
-        let string = |key: &str| {
-            v.get(key)
-                .and_then(|x| x.as_str())
-                .map(str::to_string)
-                .ok_or_else(|| bad(format!("`{key}` is missing or not a string")))
-        };
-        let count = |key: &str| {
-            v.get(key)
-                .and_then(|x| x.as_u64())
-                .and_then(|x| usize::try_from(x).ok())
-                .ok_or_else(|| bad(format!("`{key}` is missing or not a whole number")))
-        };
-        let (k, n) = (count("shard")?, count("shards")?);
+        let (k, n) = (file.shard, file.shards);
         if n == 0 || n > MAX_SHARDS || k == 0 || k > n {
             return Err(bad(format!("shard {k} of {n} is not a valid K/N")));
         }
-        let optional = |key: &str| v.get(key).and_then(|x| x.as_str()).map(str::to_string);
-        Ok(Manifest {
-            tool: string("tool")?,
+        let manifest = Manifest {
+            tool: file.tool,
             shard: Shard { k, n },
-            grid_configurations: count("grid_configurations")?,
-            config: string("config")?,
-            flags: GridFlags::from_keys(optional),
-            command: string("command")?,
-            config_hash: string("config_hash")?,
-        })
+            grid_configurations: file.grid_configurations,
+            config: file.config,
+            flags: GridFlags::from_keys(|key| file.flags.get(key).cloned()),
+            command: file.command,
+            config_hash: file.config_hash,
+        };
+        if manifest.tool == tool() && manifest.digest() != file.manifest_digest {
+            return Err(bad(format!(
+                "its fields do not match its manifest_digest {}: the file was edited after the shard ran \
+                 (a config_hash pasted from another run, say); run the shard again",
+                file.manifest_digest
+            )));
+        }
+        Ok(manifest)
     }
 }
 
@@ -249,16 +294,30 @@ const ROW_COLUMNS: &str =
     "index\tlambda\tcascades\tresolution\tfit\tsplit_range\tcascades_needed\tz_lo\tz_hi\tmax_aliasing\t\
 mean_aliasing\tmean_log_aliasing\tundersampled_fraction\tshimmer\tshimmer_snapped\tshimmer_unsnapped\tsize_jitter\t\
 coverage_violations\tmemory_bytes\tlookup_error_max\tlookup_error_rms\toverlap_area_fraction\tband_pixel_share\t\
-seam_crossings\tscreen\tknob\tdistance\tsun_azimuth\tsun_elevation\tlight\tlight_update";
+seam_crossings\tscreen\tknob\tdistance\tsun_azimuth\tsun_elevation\tlight\tlight_update\tdigest";
+
+/// Fields of a row of [`ROWS_FILE`] (the columns of [`ROW_COLUMNS`]).
+const ROW_FIELDS: usize = 32;
+
+/// The digest that ends a row: its text before the digest, keyed by the shard's
+/// `config_hash` and K/N (a row of another shard or run does not match).
+fn row_digest(m: &Manifest, text: &str) -> String {
+    let mut h = Fnv::default();
+    h.eat(m.config_hash.as_bytes());
+    h.eat(format!("{}/{}", m.shard.k, m.shard.n).as_bytes());
+    h.eat(text.as_bytes());
+    h.hex()
+}
 
 fn hex(x: f64) -> String {
     format!("{:016x}", x.to_bits())
 }
 
-/// [`ROWS_FILE`]'s text for rows `(grid index, row)`.
-pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String {
+/// [`ROWS_FILE`]'s text for rows `(grid index, row)` of the shard `m` describes.
+pub fn rows_text<'a>(m: &Manifest, rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String {
     let mut out = format!("{ROWS_MAGIC}\n{ROW_COLUMNS}\n");
     for (index, row) in rows {
+        let start = out.len();
         let st = &row.setting;
         // Destructured without `..`: a new field of Summary fails to compile here until it is
         // carried, so merging never silently drops a value.
@@ -388,13 +447,17 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
             Some(LightUpdate::EveryFrames(k)) => format!("every:{k}"),
             Some(LightUpdate::Quantize(q)) => format!("quantize:{}", hex(q)),
         });
+        let digest = row_digest(m, &out[start..]);
+        out.push('\t');
+        out.push_str(&digest);
         out.push('\n');
     }
     out
 }
 
-/// Reads [`rows_text`] back: (grid index, row) per line. `file` names the file in errors.
-pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)>> {
+/// Reads [`rows_text`] back: (grid index, row) per line, each checked against its digest for
+/// the shard `m` describes. `file` names the file in errors.
+pub fn parse_rows(file: &std::path::Path, text: &str, m: &Manifest) -> Result<Vec<(usize, Row)>> {
     let mut lines = text.lines().enumerate();
     let bad = |line: usize, m: String| Error::data_file(file, line, m);
     match lines.next() {
@@ -414,8 +477,19 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
     for (i, line) in lines {
         let n = i + 1;
         let f: Vec<&str> = line.split('\t').collect();
-        if f.len() != 31 {
-            return Err(bad(n, format!("{} fields; a row has 31", f.len())));
+        if f.len() != ROW_FIELDS {
+            return Err(bad(n, format!("{} fields; a row has {ROW_FIELDS}", f.len())));
+        }
+        let (body, digest) = line.rsplit_once('\t').unwrap_or_default();
+        if row_digest(m, body) != digest {
+            return Err(bad(
+                n,
+                format!(
+                    "the row does not match its digest {digest:?}: it was edited after shard {} of {} ran, or the \
+                     shard's {MANIFEST_FILE} is not the one it ran with; run the shard again",
+                    m.shard.k, m.shard.n
+                ),
+            ));
         }
         let float = |s: &str| {
             u64::from_str_radix(s, 16)

@@ -637,3 +637,76 @@ fn a_sun_sweeps_shards_merge_into_its_files_byte_for_byte_and_check_reads_its_su
     let report = String::from_utf8_lossy(&direct.stdout);
     assert!(report.contains("sun_azimuth=240 sun_elevation=60"), "{report}");
 }
+
+/// Merge trusts nothing it reads: an edited row is an error naming the shard's rows file and
+/// line; a `config_hash` pasted into a shard's manifest (the one merge prints for an edited
+/// config) is an error naming the shard, not a merge of stale rows; shard files that are links
+/// to a device are refused before they are read.
+#[test]
+fn edited_rows_pasted_hashes_and_device_links_are_refused_naming_the_shard() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = small_config(tmp.path(), "small.toml", 1000.0);
+    let d = three_shards(&cfg, tmp.path());
+    let rows = d[1].join("shard-rows.tsv");
+    let text = std::fs::read_to_string(&rows).unwrap();
+    // Edit one hex digit of a metric on line 4 (the second row).
+    let lines: Vec<&str> = text.lines().collect();
+    let mut fields: Vec<String> = lines[3].split('\t').map(str::to_string).collect();
+    let f = &mut fields[9];
+    let last = f.pop().unwrap();
+    f.push(if last == '0' { '1' } else { '0' });
+    let mut edited: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+    edited[3] = fields.join("\t");
+    std::fs::write(&rows, edited.join("\n") + "\n").unwrap();
+    let err = fails_with_2(merge(&d, &tmp.path().join("m")));
+    assert!(
+        err.contains(&format!("{}:4", s(&rows))) && err.contains("does not match its digest"),
+        "{err}"
+    );
+    std::fs::write(&rows, &text).unwrap();
+    ok(merge(&d, &tmp.path().join("m")));
+    // The config changes; merge says the new hash; the user pastes it into every manifest.
+    let original = std::fs::read_to_string(&cfg).unwrap();
+    std::fs::write(&cfg, original.replace("far = 1000\n", "far = 900\n")).unwrap();
+    let err = fails_with_2(merge(&d, &tmp.path().join("m2")));
+    let new_hash = err
+        .split("its config_hash is ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .unwrap_or_else(|| panic!("{err}"))
+        .to_string();
+    let manifests: Vec<String> = d
+        .iter()
+        .map(|dir| std::fs::read_to_string(dir.join("shard.json")).unwrap())
+        .collect();
+    for dir in &d {
+        let m = dir.join("shard.json");
+        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&m).unwrap()).unwrap();
+        let old = json["config_hash"].as_str().unwrap().to_string();
+        let t = std::fs::read_to_string(&m).unwrap();
+        std::fs::write(&m, t.replace(&old, &new_hash)).unwrap();
+    }
+    let err = fails_with_2(merge(&d, &tmp.path().join("m3")));
+    assert!(
+        err.contains("shard.json") && err.contains("manifest_digest") && err.contains(s(&d[0])),
+        "{err}"
+    );
+    assert!(!tmp.path().join("m3").exists());
+    // A rows file that is a link to /dev/zero: refused, not read until memory runs out.
+    #[cfg(unix)]
+    {
+        std::fs::write(&cfg, &original).unwrap();
+        for (dir, m) in d.iter().zip(&manifests) {
+            std::fs::write(dir.join("shard.json"), m).unwrap();
+        }
+        let zero = tmp.path().join("zero-shard");
+        std::fs::create_dir(&zero).unwrap();
+        std::fs::copy(d[0].join("shard.json"), zero.join("shard.json")).unwrap();
+        std::os::unix::fs::symlink("/dev/zero", zero.join("shard-rows.tsv")).unwrap();
+        let err = fails_with_2(merge(
+            &[zero.clone(), d[1].clone(), d[2].clone()],
+            &tmp.path().join("m4"),
+        ));
+        assert!(err.contains("not a regular file"), "{err}");
+    }
+}
