@@ -463,6 +463,10 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         },
     };
 
+    if geometry.is_some() {
+        sampled_pixels_fit(v, width, height, analysis.screen_scale())?;
+    }
+
     let sweep = raw
         .sweep
         .map(|s| super::sweep_spec::validate_raw(s, v, geometry.is_some()))
@@ -525,6 +529,38 @@ pub fn check_camera_path(config: &Config, v: &Validator<'_>) -> Result<()> {
                 &format!("a motion that keeps a valid camera in every frame: {why}"),
             ),
         })
+}
+
+/// Most pixels the visibility pass samples (`round(width·s) × round(height·s)`): 2^25, an 8K
+/// screen (7680 × 4320) at `screen_scale = 1`.
+pub const MAX_SAMPLED_PIXELS: u64 = 1 << 25;
+
+/// Bytes the visibility pass holds per sampled pixel, about (hit, normal, depth and the
+/// per-cascade lookups: 16384² sampled pixels asked for 10 GiB at once).
+const BYTES_PER_SAMPLED_PIXEL: f64 = 40.0;
+
+/// Refuses, before any work, a screen and `analysis.screen_scale` whose sampled pixel count
+/// exceeds [`MAX_SAMPLED_PIXELS`]: the largest accepted screen at the default scale asked for
+/// 687 GB in one allocation and aborted. The message gives the estimate and the scale that fits.
+fn sampled_pixels_fit(v: &Validator<'_>, width: u32, height: u32, scale: f64) -> Result<()> {
+    let n = |x: u32| ((f64::from(x) * scale).round() as u64).clamp(1, u64::from(x));
+    let (w, h) = (n(width), n(height));
+    let pixels = w * h;
+    if pixels <= MAX_SAMPLED_PIXELS {
+        return Ok(());
+    }
+    let fits = (MAX_SAMPLED_PIXELS as f64 / (f64::from(width) * f64::from(height))).sqrt();
+    Err(v.invalid(
+        "analysis.screen_scale",
+        scale,
+        &format!(
+            "a scale whose sampled grid has at most {MAX_SAMPLED_PIXELS} pixels: the {width} x {height} screen at this \
+             scale samples {w} x {h} = {pixels} pixels (about {:.1} GB); set analysis.screen_scale to at most {} or use \
+             a smaller screen",
+            pixels as f64 * BYTES_PER_SAMPLED_PIXEL / 1e9,
+            (fits * 1e4).floor() / 1e4
+        ),
+    ))
 }
 
 /// The scene's bounds and geometry. Without geometry `min` and `max` are required; with it

@@ -81,3 +81,52 @@ fn a_check_killed_mid_run_leaves_a_junit_file_that_does_not_say_pass() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert_eq!(junit_counts(&junit), ("0".to_string(), "0".to_string()));
 }
+
+#[test]
+fn a_sampled_pixel_count_beyond_the_limit_is_refused_up_front_with_the_estimate() {
+    use csm_lab::config::Config;
+    let load = |edits: &[(&str, &str)]| {
+        let mut e = vec![("scene.ground", "ground = 0.0")];
+        e.extend_from_slice(edits);
+        Config::from_toml_str(&with(&e), "scene.toml", None)
+    };
+    // The largest screen at the default scale (0.125): 131072² pixels, about 687 GB.
+    let e = load(&[
+        ("screen.width", "width = 1048576"),
+        ("screen.height", "height = 1048576"),
+    ])
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("analysis.screen_scale")
+            && e.contains("131072 x 131072 = 17179869184 pixels")
+            && e.contains("687.2 GB"),
+        "{e}"
+    );
+    // 16384² at scale 1: 268435456 pixels; the scale that fits is sqrt(2^25 / 2^28).
+    let e = load(&[
+        ("screen.width", "width = 16384"),
+        ("screen.height", "height = 16384"),
+        ("analysis.screen_scale", "screen_scale = 1.0"),
+    ])
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("268435456 pixels") && e.contains("at most 0.3535"), "{e}");
+    // At the limit: 8K at scale 1 is accepted.
+    load(&[
+        ("screen.width", "width = 7680"),
+        ("screen.height", "height = 4320"),
+        ("analysis.screen_scale", "screen_scale = 1.0"),
+    ])
+    .unwrap();
+    // Without geometry nothing is sampled, and nothing is refused.
+    Config::from_toml_str(
+        &with(&[
+            ("screen.width", "width = 1048576"),
+            ("screen.height", "height = 1048576"),
+        ]),
+        "scene.toml",
+        None,
+    )
+    .unwrap();
+}
