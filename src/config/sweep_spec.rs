@@ -129,15 +129,21 @@ pub fn decimal_range(start: f64, end: f64, step: f64) -> std::result::Result<Vec
                 .collect()
         }
         // The three numbers' magnitudes are more than ~20 decades apart, so the exact form
-        // does not fit an i128: the count is then either 1 (a step beyond the span) or huge.
+        // does not fit an i128: a step beyond the span gives the start alone; anything else
+        // cannot be computed exactly and is refused (it was once accepted with values in
+        // binary floating point, silently off the decimal grid).
         None => {
             let approx = ((end - start) / step).floor();
             if approx.is_nan() || approx >= MAX_RANGE_VALUES as f64 {
                 return too_many(format!("{approx:e}"));
             }
-            Ok((0..=approx as u64)
-                .map(|i| (start + i as f64 * step).min(end))
-                .collect())
+            if approx >= 1.0 {
+                return Err(format!(
+                    "start {start}, end {end} and step {step} are too many decades apart to count the range's \
+                     values exactly (the count does not fit a 128-bit integer); list the values instead"
+                ));
+            }
+            Ok(vec![start])
         }
     }
 }

@@ -130,3 +130,21 @@ fn a_sampled_pixel_count_beyond_the_limit_is_refused_up_front_with_the_estimate(
     )
     .unwrap();
 }
+
+#[test]
+fn a_range_whose_exact_count_overflows_is_an_error_naming_the_key() {
+    use csm_lab::config::sweep_spec::decimal_range;
+    // 1e-39 .. 1 step 0.5: the decimal form needs 10^39, beyond an i128.
+    let e = decimal_range(1e-39, 1.0, 0.5).unwrap_err();
+    assert!(e.contains("decades apart"), "{e}");
+    // A step beyond the span is the start alone, as before.
+    assert_eq!(decimal_range(1e-39, 1.0, 1e30).unwrap(), vec![1e-39]);
+    let text = format!(
+        "{}\n[sweep]\nlambda = {{ start = 1e-39, end = 1.0, step = 0.5 }}\n",
+        with(&[("scene.ground", "ground = 0.0")])
+    );
+    let e = csm_lab::config::Config::from_toml_str(&text, "scene.toml", None)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("sweep.lambda") && e.contains("decades apart"), "{e}");
+}
