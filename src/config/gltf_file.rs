@@ -382,20 +382,12 @@ fn read_uri(dir: &Path, uri: &str, outside_buffers: bool) -> Result<Vec<u8>, Str
         return Err(format!(
             "buffer URI {:?} points outside the glTF's folder {}; set scene.gltf_outside_buffers = true \
              to read it",
-            shorten(uri),
+            super::excerpt(uri),
             dir.display()
         ));
     }
     let file = dir.join(uri);
-    read_file(&file).map_err(|e| format!("buffer {:?}: {e}", shorten(uri)))
-}
-
-/// At most the first 200 characters of `text`, for an error message.
-fn shorten(text: &str) -> String {
-    match text.char_indices().nth(200) {
-        Some((at, _)) => format!("{}...", &text[..at]),
-        None => text.to_string(),
-    }
+    read_file(&file).map_err(|e| format!("buffer {:?}: {e}", super::excerpt(uri)))
 }
 
 /// Standard base64 (with or without padding); None on any other character.

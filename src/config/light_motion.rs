@@ -182,7 +182,7 @@ pub fn read_light_file(path: &Path) -> Result<Vec<DVec3>> {
             1,
             format!(
                 "header is {:?}; expected the columns x,y,z",
-                headers.iter().collect::<Vec<_>>().join(",")
+                crate::config::excerpt(&headers.iter().collect::<Vec<_>>().join(","))
             ),
         ));
     }
@@ -210,7 +210,11 @@ pub fn read_light_file(path: &Path) -> Result<Vec<DVec3>> {
                 Error::data_file(
                     path,
                     line,
-                    format!("column {} = {field:?} is not a finite number", expected[j]),
+                    format!(
+                        "column {} = {:?} is not a finite number",
+                        expected[j],
+                        crate::config::excerpt(field)
+                    ),
                 )
             })?;
         }

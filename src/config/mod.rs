@@ -94,6 +94,15 @@ pub fn regular_file(path: &std::path::Path) -> crate::Result<()> {
     }
 }
 
+/// At most the first 200 characters of `text` for an error message, with the full length when
+/// cut: a path file whose first line is 500 MB long is not echoed whole.
+pub fn excerpt(text: &str) -> String {
+    match text.char_indices().nth(200) {
+        Some((at, _)) => format!("{}... ({} characters in all)", &text[..at], text.chars().count()),
+        None => text.to_string(),
+    }
+}
+
 /// The bytes of a regular file of at most `max` bytes (see [`open_bounded`]).
 pub fn read_bytes_bounded(path: &std::path::Path, max: u64, what: &'static str) -> crate::Result<Vec<u8>> {
     use std::io::Read;

@@ -28,7 +28,7 @@ pub fn read_path_file(path: &Path) -> Result<Vec<(DVec3, DVec3)>> {
             1,
             format!(
                 "header is {:?}; expected the columns px,py,pz,tx,ty,tz",
-                headers.iter().collect::<Vec<_>>().join(",")
+                crate::config::excerpt(&headers.iter().collect::<Vec<_>>().join(","))
             ),
         ));
     }
@@ -56,7 +56,11 @@ pub fn read_path_file(path: &Path) -> Result<Vec<(DVec3, DVec3)>> {
                 Error::data_file(
                     path,
                     line,
-                    format!("column {} = {field:?} is not a finite number", expected[j]),
+                    format!(
+                        "column {} = {:?} is not a finite number",
+                        expected[j],
+                        crate::config::excerpt(field)
+                    ),
                 )
             })?;
         }

@@ -148,3 +148,20 @@ fn a_range_whose_exact_count_overflows_is_an_error_naming_the_key() {
         .to_string();
     assert!(e.contains("sweep.lambda") && e.contains("decades apart"), "{e}");
 }
+
+#[test]
+fn a_path_file_with_a_huge_first_line_is_quoted_to_200_characters() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("path.csv");
+    std::fs::write(&p, format!("{}\n", "x".repeat(1_000_000))).unwrap();
+    let e = csm_lab::config::read_path_file(&p).unwrap_err().to_string();
+    assert!(e.len() < 600, "{} bytes", e.len());
+    assert!(
+        e.contains(&"x".repeat(200)) && e.contains("1000000 characters in all"),
+        "{e}"
+    );
+    // A field too.
+    std::fs::write(&p, format!("px,py,pz,tx,ty,tz\n0,0,0,0,0,{}\n", "9".repeat(400) + "z")).unwrap();
+    let e = csm_lab::config::read_path_file(&p).unwrap_err().to_string();
+    assert!(e.len() < 600 && e.contains("401 characters in all"), "{e}");
+}
