@@ -3,7 +3,7 @@
 //! user changes, so a recommended world-unit bias can be given back in the engine's terms.
 //! The conversions are documented in `docs/presets.md`.
 
-use crate::core::truth::{BiasRule, NormalOffset};
+use csm_core::truth::{BiasRule, NormalOffset};
 
 use super::PresetName;
 

@@ -158,7 +158,7 @@ pub struct LightDepth {
     pub casters_outside: f64,
 }
 
-pub use crate::walk::FrameCoverage;
+use crate::walk::FrameCoverage;
 
 /// Everything fixed over a motion path.
 #[derive(Debug, Clone)]

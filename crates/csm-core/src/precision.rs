@@ -73,85 +73,10 @@ use glam::{DVec2, DVec3};
 use crate::cascades::{LightPose, Rig, WindowRule};
 use crate::fitting::Window;
 use crate::geometry::{Aabb, CameraPose, Corner, LightBasis};
+use crate::scene::SnapSpace;
 use crate::shimmer::{PathResult, ShimmerOptions};
 use crate::snapping::SnapMode;
 use crate::walk::{walk, Landing, PathModel, PathTotals};
-
-/// Arithmetic of the cascade pipeline (`[shadow] precision`, `--precision`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Precision {
-    /// Exact: texel-unit windows, snapped shimmer exactly 0 at any world offset.
-    #[default]
-    F64,
-    /// An engine's binary32 pipeline, emulated operation by operation.
-    F32,
-}
-
-impl Precision {
-    pub fn name(self) -> &'static str {
-        match self {
-            Precision::F64 => "f64",
-            Precision::F32 => "f32",
-        }
-    }
-
-    pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "f64" => Some(Precision::F64),
-            "f32" => Some(Precision::F32),
-            _ => None,
-        }
-    }
-}
-
-impl std::str::FromStr for Precision {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, String> {
-        Precision::from_name(s).ok_or_else(|| format!("{s:?} is not one of f64, f32"))
-    }
-}
-
-impl std::fmt::Display for Precision {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// Where the binary32 pipeline computes (`[shadow] snap_space`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SnapSpace {
-    /// Absolute world coordinates rounded to f32 (what engines do by default).
-    #[default]
-    World,
-    /// Positions relative to a camera-near, grid-aligned anchor, subtracted in f64.
-    CameraRelative,
-}
-
-impl SnapSpace {
-    pub fn name(self) -> &'static str {
-        match self {
-            SnapSpace::World => "world",
-            SnapSpace::CameraRelative => "camera_relative",
-        }
-    }
-
-    pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "world" => Some(SnapSpace::World),
-            "camera_relative" => Some(SnapSpace::CameraRelative),
-            _ => None,
-        }
-    }
-}
-
-impl std::fmt::Display for SnapSpace {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
 
 /// Spacing of binary32 numbers at `|x|`: the distance from `|x|` (rounded to f32) to the next
 /// larger f32. `ulp32(1e5) = 2^-7`.
