@@ -150,6 +150,6 @@ pub fn execute(args: &MergeRequest) -> Result<Outcome> {
         written.len(),
         &dir,
     )?;
-    super::sweep::print_engine_settings(args.format, &result)?;
+    super::sweep::print_engine_settings(args.format, &result);
     Ok(Outcome::Success)
 }

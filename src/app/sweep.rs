@@ -234,7 +234,7 @@ pub fn execute(args: &SweepRequest) -> Result<Outcome> {
         written.len(),
         &dir,
     )?;
-    print_engine_settings(args.format, &result)?;
+    print_engine_settings(args.format, &result);
     // Which rows have S5, and how well S3 and S4 predict it (the JSON output stays one document).
     if let (Format::Table, Some(s)) = (args.format, &result.flicker) {
         println!("\nground truth:");
@@ -247,11 +247,10 @@ pub fn execute(args: &SweepRequest) -> Result<Outcome> {
 
 /// With a preset, `recommendation.<engine>.txt` closes the table output (`sweep`, `merge`);
 /// the JSON output stays one document.
-pub(crate) fn print_engine_settings(format: Format, result: &SweepResult) -> Result<()> {
+pub(crate) fn print_engine_settings(format: Format, result: &SweepResult) {
     if format == Format::Table {
         if let Some(s) = &result.engine_setting {
             print!("\n{}:\n{}", s.file_name(), report::terms::text(s));
         }
     }
-    Ok(())
 }

@@ -324,12 +324,12 @@ impl Grid {
     /// rule has one (otherwise the single value it uses), its allowed cascade counts, its map
     /// sizes; the fit is the preset's. Every point is checked here, before any work starts.
     pub fn resolve(config: &Config, overrides: &SweepAxes) -> Result<Grid> {
-        let table = config.sweep.as_ref().map(|s| s.axes.clone()).unwrap_or_default();
+        let none = SweepAxes::default();
         let max_configs = config.sweep.as_ref().map_or(DEFAULT_MAX_CONFIGS, |s| s.max_configs);
         let mut r = Resolve {
             config,
             flags: overrides,
-            table: &table,
+            table: config.sweep.as_ref().map_or(&none, |s| &s.axes),
             axes: crate::presets::axes(config),
             notes: Vec::new(),
         };
