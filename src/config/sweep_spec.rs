@@ -277,22 +277,8 @@ pub fn resolution_ok(x: u32) -> bool {
     (16..=16384).contains(&x)
 }
 
-fn raw_lambda(raw: RawAxis) -> std::result::Result<Axis<f64>, String> {
-    let axis = match raw {
-        RawAxis::List(values) => Axis {
-            spec: fmt_list(&values),
-            values,
-        },
-        RawAxis::Range(r) => Axis {
-            values: decimal_range(r.start, r.end, r.step)?,
-            spec: format!("{}:{}:{}", r.start, r.end, r.step),
-        },
-    };
-    check_values(&axis.values, "[0, 1]", lambda_ok)?;
-    Ok(axis)
-}
-
-/// A finite-number axis (`knob`, `distance`): a list or a decimal-exact range.
+/// A number axis (`lambda`, `knob`, `distance`, the sun angles): a list or a decimal-exact
+/// range, each value `ok`.
 fn raw_numbers(raw: RawAxis, allowed: &str, ok: impl Fn(f64) -> bool) -> std::result::Result<Axis<f64>, String> {
     let axis = match raw {
         RawAxis::List(values) => Axis {
@@ -363,7 +349,7 @@ fn int_axis<T: TryFrom<i64> + Copy + PartialOrd + std::fmt::Display>(
 pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool) -> Result<SweepSpec> {
     let lambda = raw
         .lambda
-        .map(raw_lambda)
+        .map(|r| raw_numbers(r, "[0, 1]", lambda_ok))
         .transpose()
         .map_err(|why| v.invalid("sweep.lambda", "as written", &format!("values in [0, 1]: {why}")))?;
     let cascades = raw

@@ -333,24 +333,17 @@ impl Grid {
             axes: crate::presets::axes(config),
             notes: Vec::new(),
         };
-        let lambda = r.lambda()?;
-        let cascades = r.cascades();
-        let resolution = r.resolution();
-        let fit = r.fit()?;
-        let split_range = r.split_range()?;
-        let knob = r.knob()?;
-        let distance = r.distance()?;
-        let light_update = r.light_update()?;
+        // The steps run in field order: the first axis at fault is the one an error names.
         let grid = Grid {
-            lambda,
-            cascades,
-            resolution,
-            fit,
-            split_range,
-            knob,
-            distance,
+            lambda: r.lambda()?,
+            cascades: r.cascades(),
+            resolution: r.resolution(),
+            fit: r.fit()?,
+            split_range: r.split_range()?,
+            knob: r.knob()?,
+            distance: r.distance()?,
             sun: SunGrid::resolve(config, overrides.sun_azimuth.clone(), overrides.sun_elevation.clone()),
-            light_update,
+            light_update: r.light_update()?,
             notes: r.notes,
         };
         grid.check_size(max_configs)?;
