@@ -12,7 +12,7 @@ use crate::config::Config;
 use crate::error::Result;
 use csm_core::free_splits::{valid, FractionSpace};
 
-use super::filament::FilamentSplit;
+use super::engines::{bevy, filament, filament::FilamentSplit};
 use super::*;
 
 /// The engines whose split positions are free fractions.

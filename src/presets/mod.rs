@@ -16,6 +16,7 @@ mod apply;
 pub mod bias;
 mod closest;
 mod engine;
+pub mod engines;
 mod free_splits;
 mod report;
 mod rig;
@@ -26,6 +27,7 @@ mod terms;
 pub use apply::*;
 pub use closest::*;
 pub use engine::*;
+pub use engines::{Knobs, PresetName, ENGINES};
 pub use free_splits::*;
 pub use report::*;
 pub use rig::*;
@@ -36,99 +38,6 @@ pub use terms::*;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-
-/// Declares the engine modules and the registry: [`PresetName`], [`Knobs`] and [`ENGINES`] list
-/// them in this order (the order reports use).
-macro_rules! engines {
-    ($($module:ident :: $engine:ident),* $(,)?) => {
-        $(pub mod $module;)*
-
-        /// The implementations csm-lab reproduces.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-        pub enum PresetName {
-            $($engine,)*
-        }
-
-        const COUNT: usize = [$(stringify!($engine)),*].len();
-
-        impl PresetName {
-            pub const ALL: [PresetName; COUNT] = [$(PresetName::$engine),*];
-
-            /// The engine's rules.
-            pub fn engine(self) -> &'static dyn DynEngine {
-                ENGINES[self as usize]
-            }
-        }
-
-        /// Every engine, in [`PresetName`] order.
-        pub static ENGINES: [&dyn DynEngine; COUNT] = [$(&$module::$engine),*];
-
-        /// A preset's engine knobs, resolved (defaults applied, validated).
-        #[derive(Debug, Clone, PartialEq)]
-        pub enum Knobs {
-            $($engine(<$module::$engine as Engine>::Knobs),)*
-        }
-
-        impl Knobs {
-            pub fn name(&self) -> PresetName {
-                match self {
-                    $(Knobs::$engine(_) => PresetName::$engine,)*
-                }
-            }
-        }
-
-        impl Serialize for Knobs {
-            fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-                match self {
-                    $(Knobs::$engine(k) => s.serialize_newtype_variant(
-                        "Knobs",
-                        PresetName::$engine as u32,
-                        <$module::$engine as Engine>::NAME,
-                        k,
-                    ),)*
-                }
-            }
-        }
-
-        $(
-            impl KnobsOf for $module::$engine {
-                fn get(k: &Knobs) -> Option<&Self::Knobs> {
-                    match k {
-                        Knobs::$engine(x) => Some(x),
-                        #[allow(unreachable_patterns)]
-                        _ => None,
-                    }
-                }
-
-                fn get_mut(k: &mut Knobs) -> Option<&mut Self::Knobs> {
-                    match k {
-                        Knobs::$engine(x) => Some(x),
-                        #[allow(unreachable_patterns)]
-                        _ => None,
-                    }
-                }
-
-                fn wrap(k: Self::Knobs) -> Knobs {
-                    Knobs::$engine(k)
-                }
-            }
-        )*
-    };
-}
-
-engines! {
-    dart::Dart,
-    threejs::Threejs,
-    unity_sample::UnitySample,
-    eevee::Eevee,
-    learnopengl::LearnOpenGl,
-    bevy::Bevy,
-    godot::Godot,
-    unreal::Unreal,
-    unity::Unity,
-    unity_urp::UnityUrp,
-    filament::Filament,
-}
 
 // ---------------------------------------------------------------------------------------------
 // Names
@@ -327,7 +236,7 @@ mod tests {
             let lens = Lens::new(rng.range(0.1, 2.0), rng.range(0.3, 3.0));
             let n = rng.range(0.05, 50.0);
             let f = n * rng.range(1.01, 100.0);
-            let u = unreal::unreal_sphere(n, f, &lens);
+            let u = engines::unreal::unreal_sphere(n, f, &lens);
             let m = minimal_sphere(n, f, lens.k2());
             assert!((u.radius - m.radius).abs() <= 1e-9 * m.radius, "{u:?} {m:?}");
             assert!((u.centre_depth - m.centre_depth).abs() <= 1e-9 * f);

@@ -7,10 +7,10 @@ use csm_core::fitting::{corner_average_sphere, minimal_sphere, slice_diameter};
 use csm_core::geometry::{CameraPose, Lens, LightBasis};
 use csm_lab::analysis::{analyze, AnalysisOptions};
 use csm_lab::config::Config;
-use csm_lab::presets::*;
-use csm_lab::presets::{
+use csm_lab::presets::engines::{
     bevy::*, dart::*, eevee::*, filament::*, godot::*, learnopengl::*, threejs::*, unity::*, unreal::*,
 };
+use csm_lab::presets::*;
 use glam::{DQuat, DVec3};
 
 /// A scene without `[shadow]` settings, so every preset runs at its defaults unless `extra`
