@@ -12,6 +12,7 @@ use csm_core::fitting::Sphere;
 use csm_core::geometry::{Aabb, Lens, LightBasis};
 use csm_core::snapping::{SnapMode, SnapRule};
 
+use super::bias::BiasModel;
 use super::{fit_split_knob, Dims, Fields, Knobs, Layout, Target, Terms, Values};
 
 /// Which cascade counts a preset takes.
@@ -214,6 +215,10 @@ pub trait Engine: Sync + 'static {
     /// The light depth rule in words.
     fn light_depth_rule(k: &Self::Knobs) -> String;
 
+    /// The engine's default shadow bias as the ground truth models it, or why it models none
+    /// (no default: an engine must answer).
+    fn bias() -> BiasModel;
+
     /// How the engine writes a setting in its own configuration language
     /// (`recommendation.<engine>.txt`; [`super::terms`]).
     const TERMS: Terms;
@@ -267,6 +272,7 @@ pub trait DynEngine: Sync {
     fn split_rule(&self, k: &Knobs) -> String;
     fn snap_anchor(&self, k: &Knobs) -> &'static str;
     fn light_depth_rule(&self, k: &Knobs) -> String;
+    fn bias(&self) -> BiasModel;
     fn terms(&self) -> &'static Terms;
     fn terms_values(&self, k: &Knobs, d: &Dims, near: f64, far: f64) -> Values;
     fn read_terms(&self, f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(Knobs, Dims)>;
@@ -379,6 +385,10 @@ impl<E: KnobsOf> DynEngine for E {
 
     fn light_depth_rule(&self, k: &Knobs) -> String {
         E::light_depth_rule(own::<E>(k))
+    }
+
+    fn bias(&self) -> BiasModel {
+        E::bias()
     }
 
     fn terms(&self) -> &'static Terms {

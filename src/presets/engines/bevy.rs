@@ -13,6 +13,8 @@ use csm_core::geometry::LightBasis;
 use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Bevy;
 
@@ -79,6 +81,23 @@ impl Engine for Bevy {
     const NAME: &'static str = "bevy";
     const SOURCE: &'static str = "Bevy bevy_light/src/cascade.rs @ 4805ca792c3e";
     const POWER_OF_TWO_MAPS: bool = true;
+
+    /// Receiver moved by normal x normal_bias x texel (normal_bias pre-multiplied by sqrt 2)
+    /// and by depth_bias toward the light; defaults 0.02 and 1.8.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::World {
+                depth: 0.02,
+                slope: 0.0,
+                normal_texels: 1.8 * std::f64::consts::SQRT_2,
+                offset: NormalOffset::Along,
+            },
+            setting: "DirectionalLight::shadow_depth_bias",
+            unit: "world units",
+            scale: 1.0,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &BevyTable, cx: &KnobContext<'_>) -> Result<BevyKnobs> {
         let v = cx.v;

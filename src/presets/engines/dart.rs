@@ -9,6 +9,7 @@ use crate::error::Result;
 use csm_core::fitting::corner_average_sphere;
 
 use super::*;
+use crate::presets::bias::BiasModel;
 
 pub struct Dart;
 
@@ -42,6 +43,13 @@ impl Engine for Dart {
     type Table = DartTable;
     const NAME: &'static str = "dart";
     const SOURCE: &'static str = "Dart computeCascades (API documentation)";
+
+    fn bias() -> BiasModel {
+        BiasModel::NotModelled(concat!(
+            "the Dart engine's documents state no shadow bias; ",
+            "the [shadow] bias keys apply (0 by default)"
+        ))
+    }
 
     fn knobs(t: &DartTable, cx: &KnobContext<'_>) -> Result<DartKnobs> {
         Ok(DartKnobs {

@@ -12,6 +12,8 @@ use csm_core::fitting::corner_average_sphere;
 use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Filament;
 
@@ -66,6 +68,23 @@ impl Engine for Filament {
     const NAME: &'static str = "filament";
     const SOURCE: &'static str = "Filament ShadowMap.cpp, ShadowMapManager.cpp, stable mode";
     const POWER_OF_TWO_MAPS: bool = true;
+
+    /// Light camera moved by constantBias (world units); normal bias 0.5 x normalBias x
+    /// texel; polygon offset slope 2 (its constant 0.5 is in depth-buffer steps: left out).
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::World {
+                depth: 0.001,
+                slope: 2.0,
+                normal_texels: 0.5,
+                offset: NormalOffset::Along,
+            },
+            setting: "ShadowOptions.constantBias",
+            unit: "world units",
+            scale: 1.0,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &FilamentTable, cx: &KnobContext<'_>) -> Result<FilamentKnobs> {
         let v = cx.v;

@@ -10,6 +10,8 @@ use csm_core::fitting::corner_average_sphere;
 use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Godot;
 
@@ -35,6 +37,22 @@ impl Engine for Godot {
     type Table = GodotTable;
     const NAME: &'static str = "godot";
     const SOURCE: &'static str = "Godot 4 renderer_scene_cull.cpp, light_3d.cpp";
+
+    /// Depth bias = bias / 100 x the cascade's depth range; normal bias x texel x
+    /// (1 - max(0, N.L)) with its part along the light removed; defaults 0.1 and 2.0.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::RangeFraction {
+                fraction: 0.1 / 100.0,
+                normal_texels: 2.0,
+                offset: NormalOffset::Lateral,
+            },
+            setting: "DirectionalLight3D.shadow_bias",
+            unit: "percent of the cascade's depth range",
+            scale: 100.0,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &GodotTable, cx: &KnobContext<'_>) -> Result<GodotKnobs> {
         let v = cx.v;

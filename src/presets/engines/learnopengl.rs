@@ -11,6 +11,8 @@ use crate::error::Result;
 use csm_core::fitting::minimal_sphere;
 
 use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::BiasRule;
 
 pub struct LearnOpenGl;
 
@@ -39,6 +41,21 @@ impl Engine for LearnOpenGl {
     const HAS_DISTANCE: bool = false;
     const FIT: Fit = Fit::Aabb;
     const SNAPS: bool = false;
+
+    /// The seed's shader: max(0.05 (1 - N.L), 0.005) in depth normalised over each cascade's
+    /// padded light depth range.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::RangeFacing {
+                factor: 0.05,
+                floor: 0.005,
+            },
+            setting: "the 0.005 floor of max(0.05 (1 - N.L), 0.005)",
+            unit: "normalised depth",
+            scale: 1.0,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &LearnOpenGlTable, cx: &KnobContext<'_>) -> Result<LearnOpenGlKnobs> {
         let v = cx.v;

@@ -11,6 +11,8 @@ use csm_core::fitting::slice_diameter;
 use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Threejs;
 
@@ -87,6 +89,21 @@ impl Engine for Threejs {
     type Table = ThreejsTable;
     const NAME: &'static str = "threejs";
     const SOURCE: &'static str = "three.js CSM addon, r185 and later";
+
+    /// shadowBias 1e-6 in normalised depth: a fraction of the light depth range.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::RangeFraction {
+                fraction: 1e-6,
+                normal_texels: 0.0,
+                offset: NormalOffset::Along,
+            },
+            setting: "CSM shadowBias",
+            unit: "normalised depth",
+            scale: 1.0,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &ThreejsTable, cx: &KnobContext<'_>) -> Result<ThreejsKnobs> {
         let v = cx.v;

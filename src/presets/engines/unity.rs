@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 
 use super::*;
+use crate::presets::bias::BiasModel;
 
 pub struct Unity;
 
@@ -28,6 +29,13 @@ impl Engine for Unity {
     type Table = UnityTable;
     const NAME: &'static str = "unity";
     const SOURCE: &'static str = "Unity built-in render pipeline, Stable Fit (vendor documentation)";
+
+    fn bias() -> BiasModel {
+        BiasModel::NotModelled(concat!(
+            "Unity built-in's default bias and its per-cascade scaling are not published; ",
+            "the [shadow] bias keys apply (0 by default)"
+        ))
+    }
 
     fn knobs(t: &UnityTable, cx: &KnobContext<'_>) -> Result<UnityKnobs> {
         let v = cx.v;

@@ -7,6 +7,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 
 use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::BiasRule;
 
 pub struct UnityUrp;
 
@@ -31,6 +33,20 @@ impl Engine for UnityUrp {
     type Table = UnityUrpTable;
     const NAME: &'static str = "unity-urp";
     const SOURCE: &'static str = "Unity URP UniversalRenderPipelineAsset.cs, Shadows.hlsl";
+
+    /// Depth and normal bias scale with each cascade's texel size; defaults 1 and 1.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::Texels {
+                depth_texels: 1.0,
+                normal_texels: 1.0,
+            },
+            setting: "Depth Bias",
+            unit: "texels of the cascade",
+            scale: 1.0,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &UnityUrpTable, cx: &KnobContext<'_>) -> Result<UnityUrpKnobs> {
         let v = cx.v;

@@ -11,6 +11,8 @@ use csm_core::geometry::Lens;
 use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::BiasRule;
 
 pub struct Unreal;
 
@@ -65,6 +67,26 @@ impl Engine for Unreal {
     type Table = UnrealTable;
     const NAME: &'static str = "unreal";
     const SOURCE: &'static str = "Unreal Engine CSM: DirectionalLightComponent.cpp, ShadowSetup.cpp";
+
+    /// Per cascade: CSMDepthBias (10) x ShadowBias (0.5) x sphere radius / resolution, and
+    /// that times CSMSlopeScaleDepthBias (3) x ShadowSlopeBias (0.5) x the tangent of the
+    /// receiver's angle to the light, capped at 1. The radius over the resolution is half a
+    /// texel, so 2.5 texels plus 3.75 texels x min(tan, 1).
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::TexelsTangent {
+                depth_texels: UNREAL_CSM_DEPTH_BIAS * UNREAL_SHADOW_BIAS / 2.0,
+                tangent_texels: UNREAL_CSM_DEPTH_BIAS * UNREAL_SHADOW_BIAS / 2.0
+                    * UNREAL_CSM_SLOPE_SCALE
+                    * UNREAL_SHADOW_SLOPE_BIAS,
+                cap: UNREAL_MAX_SLOPE,
+            },
+            setting: "DirectionalLight Shadow Bias (ShadowBias)",
+            unit: "Unreal's Shadow Bias (1 = r.Shadow.CSMDepthBias 10 x half a texel of the cascade)",
+            scale: 2.0 / UNREAL_CSM_DEPTH_BIAS,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &UnrealTable, cx: &KnobContext<'_>) -> Result<UnrealKnobs> {
         let v = cx.v;
@@ -195,3 +217,18 @@ End Object",
         Ok((Self::knobs(&table, cx)?, dims))
     }
 }
+
+/// Unreal's `r.Shadow.CSMDepthBias` default.
+const UNREAL_CSM_DEPTH_BIAS: f64 = 10.0;
+
+/// Unreal's `r.Shadow.CSMSlopeScaleDepthBias` default.
+const UNREAL_CSM_SLOPE_SCALE: f64 = 3.0;
+
+/// The directional light's `ShadowBias` default.
+const UNREAL_SHADOW_BIAS: f64 = 0.5;
+
+/// The directional light's `ShadowSlopeBias` default.
+const UNREAL_SHADOW_SLOPE_BIAS: f64 = 0.5;
+
+/// Unreal's `r.Shadow.ShadowMaxSlopeScaleDepthBias` default: the tangent's cap.
+const UNREAL_MAX_SLOPE: f64 = 1.0;
