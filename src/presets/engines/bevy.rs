@@ -13,6 +13,8 @@ use csm_core::geometry::LightBasis;
 use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
+use crate::presets::free_splits::{FreeSplitKnob, FreeSplits};
+use csm_core::free_splits::FractionSpace;
 use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::{BiasRule, NormalOffset};
 
@@ -98,6 +100,47 @@ impl Engine for Bevy {
             one_for_all: true,
         })
     }
+
+    /// `CascadeShadowConfig::bounds`: the far bounds of every cascade but the last, as fractions
+    /// of the maximum distance (the knob holds distances).
+    const FREE_SPLITS: Option<FreeSplits<BevyKnobs>> = Some(FreeSplits {
+        knob: |_| FreeSplitKnob {
+            key: "bevy.bounds",
+            term: "CascadeShadowConfig.bounds",
+            of: "far bounds as fractions of the maximum distance",
+        },
+        space: |k, p| FractionSpace {
+            lo: 0.0,
+            hi: p.max_distance,
+            start: k.minimum_distance.max(p.near),
+        },
+        configured: |k, cascades, p| {
+            let max = p.max_distance;
+            let fars = match k.bounds.as_ref().filter(|b| b.len() + 1 == cascades) {
+                Some(b) => b.clone(),
+                None => bevy_far_bounds(cascades, k.first_cascade_far_bound, max)[..cascades - 1].to_vec(),
+            };
+            fars.iter().map(|d| d / max).collect()
+        },
+        values: |_, _, max_distance, fractions| fractions.iter().map(|p| p * max_distance).collect(),
+        set: |k, _, v| k.bounds = Some(v),
+        setting: |k, s| {
+            format!(
+                "CascadeShadowConfig {{ bounds: vec![{}, {}], overlap_proportion: {}, minimum_distance: {} }}",
+                s.values.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(", "),
+                s.max_distance,
+                k.overlap_proportion,
+                k.minimum_distance
+            )
+        },
+        paste_prefix: "",
+        scalar_when_one: false,
+        fit_count: |k, cascades| {
+            if k.bounds.as_ref().is_some_and(|b| b.len() + 1 != cascades) {
+                k.bounds = None;
+            }
+        },
+    });
 
     fn knobs(t: &BevyTable, cx: &KnobContext<'_>) -> Result<BevyKnobs> {
         let v = cx.v;

@@ -12,6 +12,8 @@ use csm_core::fitting::corner_average_sphere;
 use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
+use crate::presets::free_splits::{keep, padded_to_three, FreeSplitKnob, FreeSplits};
+use csm_core::free_splits::FractionSpace;
 use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::{BiasRule, NormalOffset};
 
@@ -85,6 +87,36 @@ impl Engine for Filament {
             one_for_all: true,
         })
     }
+
+    /// `cascadeSplitPositions`: fractions of [near, shadowFar]; setting them switches the split
+    /// mode to explicit positions.
+    const FREE_SPLITS: Option<FreeSplits<FilamentKnobs>> = Some(FreeSplits {
+        knob: |_| FreeSplitKnob {
+            key: "filament.split_positions",
+            term: "ShadowOptions.cascadeSplitPositions",
+            of: "fractions of [near, shadowFar]",
+        },
+        space: |_, p| FractionSpace {
+            lo: p.near,
+            hi: p.max_distance,
+            start: p.near,
+        },
+        configured: |k, cascades, p| filament_positions(k, cascades, p.near, p.max_distance),
+        values: |k, cascades, _, fractions| padded_to_three(k.split_positions, cascades, fractions),
+        set: |k, _, v| {
+            k.split_mode = FilamentSplit::Positions;
+            k.split_positions = [v[0], v[1], v[2]];
+        },
+        setting: |_, s| {
+            format!(
+                "ShadowOptions.cascadeSplitPositions = {{ {} }}",
+                s.fractions.iter().map(|x| format!("{x}f")).collect::<Vec<_>>().join(", ")
+            )
+        },
+        paste_prefix: "split_mode = \"positions\"\n",
+        scalar_when_one: true,
+        fit_count: keep,
+    });
 
     fn knobs(t: &FilamentTable, cx: &KnobContext<'_>) -> Result<FilamentKnobs> {
         let v = cx.v;

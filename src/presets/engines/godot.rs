@@ -10,6 +10,8 @@ use csm_core::fitting::corner_average_sphere;
 use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
+use crate::presets::free_splits::{keep, padded_to_three, FreeSplitKnob, FreeSplits};
+use csm_core::free_splits::FractionSpace;
 use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::{BiasRule, NormalOffset};
 
@@ -53,6 +55,39 @@ impl Engine for Godot {
             one_for_all: true,
         })
     }
+
+    /// `directional_shadow_split_1..3`: fractions of [near, max distance].
+    const FREE_SPLITS: Option<FreeSplits<GodotKnobs>> = Some(FreeSplits {
+        knob: |_| FreeSplitKnob {
+            key: "godot.splits",
+            term: "DirectionalLight3D.directional_shadow_split_1..3",
+            of: "fractions of [near, max distance]",
+        },
+        space: |_, p| {
+            let max_d = p.far.min(p.max_distance).max(p.near + 0.001);
+            let min_d = p.near.min(max_d);
+            FractionSpace {
+                lo: min_d,
+                hi: max_d,
+                start: min_d,
+            }
+        },
+        configured: |k, cascades, _| k.splits[..cascades - 1].to_vec(),
+        values: |k, cascades, _, fractions| padded_to_three(k.splits, cascades, fractions),
+        set: |k, _, v| k.splits = [v[0], v[1], v[2]],
+        setting: |_, s| {
+            s.values
+                .iter()
+                .take(s.cascades - 1)
+                .enumerate()
+                .map(|(i, v)| format!("directional_shadow_split_{} = {v}", i + 1))
+                .collect::<Vec<_>>()
+                .join(", ")
+        },
+        paste_prefix: "",
+        scalar_when_one: true,
+        fit_count: keep,
+    });
 
     fn knobs(t: &GodotTable, cx: &KnobContext<'_>) -> Result<GodotKnobs> {
         let v = cx.v;

@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 
 use super::*;
+use crate::presets::free_splits::{as_given, keep, shadow_distance_space, unity_vector_setting, FreeSplitKnob, FreeSplits, OF_SHADOW_DISTANCE};
 use crate::presets::bias::BiasModel;
 
 pub struct Unity;
@@ -36,6 +37,35 @@ impl Engine for Unity {
             "the [shadow] bias keys apply (0 by default)"
         ))
     }
+
+    const FREE_SPLITS: Option<FreeSplits<UnityKnobs>> = Some(FreeSplits {
+        knob: |cascades| match cascades {
+            2 => FreeSplitKnob {
+                key: "unity.cascade2_split",
+                term: "QualitySettings.shadowCascade2Split",
+                of: OF_SHADOW_DISTANCE,
+            },
+            _ => FreeSplitKnob {
+                key: "unity.cascade4_split",
+                term: "QualitySettings.shadowCascade4Split",
+                of: OF_SHADOW_DISTANCE,
+            },
+        },
+        space: shadow_distance_space,
+        configured: |k, cascades, _| match cascades {
+            2 => vec![k.cascade2_split],
+            _ => k.cascade4_split.to_vec(),
+        },
+        values: as_given,
+        set: |k, cascades, v| match cascades {
+            2 => k.cascade2_split = v[0],
+            _ => k.cascade4_split = [v[0], v[1], v[2]],
+        },
+        setting: unity_vector_setting,
+        paste_prefix: "",
+        scalar_when_one: true,
+        fit_count: keep,
+    });
 
     fn knobs(t: &UnityTable, cx: &KnobContext<'_>) -> Result<UnityKnobs> {
         let v = cx.v;

@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 
 use super::*;
+use crate::presets::free_splits::{as_given, keep, shadow_distance_space, unity_vector_setting, FreeSplitKnob, FreeSplits, OF_SHADOW_DISTANCE};
 use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::BiasRule;
 
@@ -47,6 +48,42 @@ impl Engine for UnityUrp {
             one_for_all: true,
         })
     }
+
+    const FREE_SPLITS: Option<FreeSplits<UnityUrpKnobs>> = Some(FreeSplits {
+        knob: |cascades| match cascades {
+            2 => FreeSplitKnob {
+                key: "unity-urp.cascade2_split",
+                term: "UniversalRenderPipelineAsset.cascade2Split",
+                of: OF_SHADOW_DISTANCE,
+            },
+            3 => FreeSplitKnob {
+                key: "unity-urp.cascade3_split",
+                term: "UniversalRenderPipelineAsset.cascade3Split",
+                of: OF_SHADOW_DISTANCE,
+            },
+            _ => FreeSplitKnob {
+                key: "unity-urp.cascade4_split",
+                term: "UniversalRenderPipelineAsset.cascade4Split",
+                of: OF_SHADOW_DISTANCE,
+            },
+        },
+        space: shadow_distance_space,
+        configured: |k, cascades, _| match cascades {
+            2 => vec![k.cascade2_split],
+            3 => k.cascade3_split.to_vec(),
+            _ => k.cascade4_split.to_vec(),
+        },
+        values: as_given,
+        set: |k, cascades, v| match cascades {
+            2 => k.cascade2_split = v[0],
+            3 => k.cascade3_split = [v[0], v[1]],
+            _ => k.cascade4_split = [v[0], v[1], v[2]],
+        },
+        setting: unity_vector_setting,
+        paste_prefix: "",
+        scalar_when_one: true,
+        fit_count: keep,
+    });
 
     fn knobs(t: &UnityUrpTable, cx: &KnobContext<'_>) -> Result<UnityUrpKnobs> {
         let v = cx.v;
