@@ -658,8 +658,9 @@ fn scene(
         let lo = moved("scene.box.min", b.min)?;
         let hi = moved("scene.box.max", b.max)?;
         if lo.cmpgt(hi).any() {
-            return Err(v.invalid(
+            return Err(v.invalid_found(
                 "scene.box.max",
+                &format!("scene.box[{i}].max"),
                 format!("{:?} (box {})", b.max, i + 1),
                 &format!("each component >= that box's min {:?}", b.min),
             ));
