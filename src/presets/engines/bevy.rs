@@ -2,20 +2,23 @@
 //! band, windows of the slice diameter rounded up to whole units, floor snapping, and the
 //! light's own look-to basis (x mirrored against csm-lab's).
 
+use crate::presets::{
+    around, check_range, non_negative, positive, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, Knob,
+    KnobContext, Layout, Terms, Values,
+};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use csm_core::cascades::{LightDepthRule, WindowRule};
 use crate::config::Validator;
 use crate::error::Result;
+use csm_core::cascades::{LightDepthRule, WindowRule};
 use csm_core::fitting::slice_diameter;
 use csm_core::geometry::LightBasis;
 use csm_core::snapping::{SnapMode, SnapRule};
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
 use crate::presets::free_splits::{FreeSplitKnob, FreeSplits};
 use csm_core::free_splits::FractionSpace;
-use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Bevy;
@@ -165,7 +168,8 @@ impl Engine for Bevy {
                 Some(b) => {
                     let ok = !b.is_empty()
                         && b.len() < 16
-                        && b.iter().all(|x| x.is_finite() && *x > 0.0 && *x <= crate::config::MAX_WORLD)
+                        && b.iter()
+                            .all(|x| x.is_finite() && *x > 0.0 && *x <= crate::config::MAX_WORLD)
                         && b.windows(2).all(|w| w[0] < w[1]);
                     if !ok {
                         return Err(v.invalid(

@@ -1,14 +1,13 @@
 //! Dart: the reference `computeCascades` (API documentation): practical split on
 //! [near, shadow distance] with the last boundary from the formula, corner-average spheres.
 
+use crate::presets::{unit, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Terms, Values};
 use serde::{Deserialize, Serialize};
 
-
-use csm_core::cascades::LightDepthRule;
 use crate::error::Result;
+use csm_core::cascades::LightDepthRule;
 use csm_core::fitting::corner_average_sphere;
 
-use super::*;
 use crate::presets::bias::BiasModel;
 
 pub struct Dart;

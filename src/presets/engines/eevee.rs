@@ -1,15 +1,18 @@
 //! Blender EEVEE (2017, `eevee_shadow_cascade_setup`): practical split with a fade overlap,
 //! far-cap-centred spheres, round snapping on a grid through the lamp, the lamp's clip range.
 
+use crate::presets::{
+    centre, half_extent_along, non_negative, ordered, point_or, unit, Counts, Dims, Engine, EngineScheme, Fields,
+    Fitting, KnobContext, Layout, Terms, Values,
+};
 use serde::{Deserialize, Serialize};
 
 use glam::DVec3;
 
-use csm_core::cascades::{BasisRule, LightDepthRule};
 use crate::error::Result;
+use csm_core::cascades::{BasisRule, LightDepthRule};
 use csm_core::fitting::far_cap_sphere;
 
-use super::*;
 use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::{BiasRule, NormalOffset};
 

@@ -2,19 +2,22 @@
 //! [near, shadowFar or far], corner-average spheres on mapSize − 2 texels, fmod snapping in a
 //! light basis that turns with the camera.
 
+use crate::presets::{
+    complete_fractions, fractions, snap, unit, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext,
+    Layout, Target, Terms, Values,
+};
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
-use csm_core::cascades::{BasisRule, LightDepthRule};
 use crate::error::Result;
+use csm_core::cascades::{BasisRule, LightDepthRule};
 use csm_core::fitting::corner_average_sphere;
 use csm_core::snapping::{SnapMode, SnapRule};
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
 use crate::presets::free_splits::{keep, padded_to_three, FreeSplitKnob, FreeSplits};
 use csm_core::free_splits::FractionSpace;
-use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Filament;
@@ -110,7 +113,11 @@ impl Engine for Filament {
         setting: |_, s| {
             format!(
                 "ShadowOptions.cascadeSplitPositions = {{ {} }}",
-                s.fractions.iter().map(|x| format!("{x}f")).collect::<Vec<_>>().join(", ")
+                s.fractions
+                    .iter()
+                    .map(|x| format!("{x}f"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             )
         },
         paste_prefix: "split_mode = \"positions\"\n",

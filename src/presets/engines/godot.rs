@@ -2,17 +2,20 @@
 //! optional blend splits, corner-average spheres with a texel of border, 2-texel round snap,
 //! a pancaked caster range.
 
+use crate::presets::{
+    complete_fractions, fractions, non_negative, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting,
+    KnobContext, Layout, Target, Terms, Values,
+};
 use serde::{Deserialize, Serialize};
 
-use csm_core::cascades::LightDepthRule;
 use crate::error::Result;
+use csm_core::cascades::LightDepthRule;
 use csm_core::fitting::corner_average_sphere;
 use csm_core::snapping::{SnapMode, SnapRule};
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
 use crate::presets::free_splits::{keep, padded_to_three, FreeSplitKnob, FreeSplits};
 use csm_core::free_splits::FractionSpace;
-use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Godot;

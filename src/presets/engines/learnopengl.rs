@@ -1,16 +1,19 @@
 //! A C++/OpenGL tutorial-style implementation (LearnOpenGL's cascade chapter): fixed planes,
 //! an off-by-one cascade selection, padded boxes seen from a light position.
 
+use crate::presets::{
+    centre, non_negative, point_or, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Target,
+    Terms, Values,
+};
 use serde::{Deserialize, Serialize};
 
 use glam::{DVec2, DVec3};
 
-use csm_core::cascades::{BasisRule, LightDepthRule, WindowRule};
 use crate::config::Fit;
 use crate::error::Result;
+use csm_core::cascades::{BasisRule, LightDepthRule, WindowRule};
 use csm_core::fitting::minimal_sphere;
 
-use super::*;
 use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::BiasRule;
 

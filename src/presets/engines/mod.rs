@@ -1,9 +1,9 @@
 //! The engines csm-lab reproduces, one file each, and the registry that lists them: the
 //! `engines!` line below is an engine's only mention outside its own file.
 
-// The engine files import the presets' shared parts through this glob.
-#[allow(unused_imports)]
-use super::*;
+use serde::Serialize;
+
+use super::{DynEngine, Engine, KnobsOf};
 
 /// Declares the engine modules and the registry: [`PresetName`], [`Knobs`] and [`ENGINES`] list
 /// them in this order (the order reports use).

@@ -2,15 +2,18 @@
 //! at the light-space box centre, floor snapping, fixed light near/far with a margin; with
 //! `fade` (a property set after construction) blend bands between cascades and grown windows.
 
+use crate::presets::{
+    log_misfit, non_negative, ordered, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout,
+    Target, Terms, Values,
+};
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
-use csm_core::cascades::{LightDepthRule, WindowRule};
 use crate::error::Result;
+use csm_core::cascades::{LightDepthRule, WindowRule};
 use csm_core::fitting::slice_diameter;
 use csm_core::snapping::{SnapMode, SnapRule};
 
-use super::*;
 use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::{BiasRule, NormalOffset};
 

@@ -1,14 +1,14 @@
 //! The Unity C# sample (a blog's cascade code): fixed fractions of the far plane, tight boxes
 //! whose centre is discarded (the window sits on the light axis through the world origin).
 
+use crate::presets::{Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Terms, Values};
 use serde::{Deserialize, Serialize};
 
-use csm_core::cascades::{LightDepthRule, WindowRule};
 use crate::config::Fit;
 use crate::error::Result;
+use csm_core::cascades::{LightDepthRule, WindowRule};
 use csm_core::fitting::minimal_sphere;
 
-use super::*;
 use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::{BiasRule, NormalOffset};
 

@@ -2,13 +2,18 @@
 //! fractions of the shadow distance, one atlas of 2048 (tiles of 1024 from two cascades on),
 //! modelled like Unity's built-in pipeline for the fit and snap.
 
+use crate::presets::{
+    check_range, complete_fractions, distance_fractions, fractions, minimal_sphere_scheme, Counts, Dims, Engine,
+    EngineScheme, Fields, Fitting, KnobContext, Layout, Target, Terms, Values,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 
-use super::*;
-use crate::presets::free_splits::{as_given, keep, shadow_distance_space, unity_vector_setting, FreeSplitKnob, FreeSplits, OF_SHADOW_DISTANCE};
 use crate::presets::bias::{BiasModel, EngineBias};
+use crate::presets::free_splits::{
+    as_given, keep, shadow_distance_space, unity_vector_setting, FreeSplitKnob, FreeSplits, OF_SHADOW_DISTANCE,
+};
 use csm_core::truth::BiasRule;
 
 pub struct UnityUrp;
@@ -179,7 +184,11 @@ urp.cascade4Split = new Vector3({{cascade4Split.x}}f, {{cascade4Split.y}}f, {{ca
         let cascades = f.count("shadowCascadeCount", "shadow.cascades")?;
         let dims = Dims {
             cascades,
-            resolution: f.tile("mainLightShadowmapResolution", "shadow.resolution", if cascades > 1 { 2 } else { 1 })?,
+            resolution: f.tile(
+                "mainLightShadowmapResolution",
+                "shadow.resolution",
+                if cascades > 1 { 2 } else { 1 },
+            )?,
             max_distance: Some(f.num("shadowDistance", "shadow.max_distance")?),
         };
         Ok((Self::knobs(&table, cx)?, dims))

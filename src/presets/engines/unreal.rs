@@ -2,15 +2,18 @@
 //! with a transition band, Unreal's bounding sphere with a 4-texel border, fmod snapping.
 //! Centimetre constants are converted to metres.
 
+use crate::presets::{
+    around, check_range, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, Knob, KnobContext, Layout, Terms,
+    Values,
+};
 use serde::{Deserialize, Serialize};
 
-use csm_core::cascades::LightDepthRule;
 use crate::error::Result;
+use csm_core::cascades::LightDepthRule;
 use csm_core::fitting::Sphere;
 use csm_core::geometry::Lens;
 use csm_core::snapping::{SnapMode, SnapRule};
 
-use super::*;
 use crate::presets::bias::{BiasModel, EngineBias};
 use csm_core::truth::BiasRule;
 
@@ -179,7 +182,8 @@ impl Engine for Unreal {
 
     const TERMS: Terms = Terms {
         comment: ";",
-        language: "Unreal Engine: DefaultEngine.ini and the DirectionalLightComponent's properties, distances in centimetres",
+        language:
+            "Unreal Engine: DefaultEngine.ini and the DirectionalLightComponent's properties, distances in centimetres",
         template: "\
 [SystemSettings]
 r.Shadow.MaxCSMResolution={{r.Shadow.MaxCSMResolution}}
@@ -195,7 +199,10 @@ End Object",
     fn terms(k: &UnrealKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
         Values::new()
             .int("r.Shadow.MaxCSMResolution", d.resolution)
-            .num("DynamicShadowDistanceMovableLight", d.max_distance.unwrap_or(200.0) * 100.0)
+            .num(
+                "DynamicShadowDistanceMovableLight",
+                d.max_distance.unwrap_or(200.0) * 100.0,
+            )
             .int("DynamicShadowCascades", d.cascades)
             .num("CascadeDistributionExponent", k.cascade_distribution_exponent)
             .num("CascadeTransitionFraction", k.transition_fraction)
@@ -203,10 +210,9 @@ End Object",
 
     fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(UnrealKnobs, Dims)> {
         let table = UnrealTable {
-            cascade_distribution_exponent: Some(f.num(
-                "CascadeDistributionExponent",
-                "unreal.cascade_distribution_exponent",
-            )?),
+            cascade_distribution_exponent: Some(
+                f.num("CascadeDistributionExponent", "unreal.cascade_distribution_exponent")?,
+            ),
             transition_fraction: Some(f.num("CascadeTransitionFraction", "unreal.transition_fraction")?),
         };
         let dims = Dims {
