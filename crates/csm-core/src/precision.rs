@@ -97,41 +97,31 @@ pub trait Real:
     fn trunc_(self) -> Self;
 }
 
-impl Real for f32 {
-    fn of(x: f64) -> Self {
-        x as f32
-    }
-    fn to_f64(self) -> f64 {
-        self as f64
-    }
-    fn round_half_away(self) -> Self {
-        self.round()
-    }
-    fn floor_(self) -> Self {
-        self.floor()
-    }
-    fn trunc_(self) -> Self {
-        self.trunc()
-    }
+// The two arithmetics differ only in their type: each operation is the type's own (rounding
+// to that type), so one body serves both.
+macro_rules! impl_real {
+    ($t:ty) => {
+        impl Real for $t {
+            fn of(x: f64) -> Self {
+                x as $t
+            }
+            fn to_f64(self) -> f64 {
+                self as f64
+            }
+            fn round_half_away(self) -> Self {
+                self.round()
+            }
+            fn floor_(self) -> Self {
+                self.floor()
+            }
+            fn trunc_(self) -> Self {
+                self.trunc()
+            }
+        }
+    };
 }
-
-impl Real for f64 {
-    fn of(x: f64) -> Self {
-        x
-    }
-    fn to_f64(self) -> f64 {
-        self
-    }
-    fn round_half_away(self) -> Self {
-        self.round()
-    }
-    fn floor_(self) -> Self {
-        self.floor()
-    }
-    fn trunc_(self) -> Self {
-        self.trunc()
-    }
-}
+impl_real!(f32);
+impl_real!(f64);
 
 fn v3<R: Real>(p: DVec3) -> [R; 3] {
     [R::of(p.x), R::of(p.y), R::of(p.z)]
