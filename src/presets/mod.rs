@@ -24,16 +24,27 @@ mod shared;
 mod sweep;
 mod terms;
 
-pub use apply::*;
-pub use closest::*;
-pub use engine::*;
+pub use apply::{apply, PresetChoice};
+pub use closest::{complete_fractions, far_ends, fit_1d, fit_split_knob, log_misfit, Target};
+pub use engine::{snap, Counts, DynEngine, Engine, EngineScheme, Fitting, Knob, KnobContext, KnobsOf};
 pub use engines::{Knobs, PresetName, ENGINES};
-pub use free_splits::*;
-pub use report::*;
-pub use rig::*;
-pub use shared::*;
-pub use sweep::*;
-pub use terms::*;
+pub use free_splits::{
+    as_given, configured_fractions, drop_stale_bounds, engine_setting, free_split_engines, free_split_knob,
+    has_free_splits, keep, padded_to_three, paste_lines, preset_fraction_space, set_fractions, shadow_distance_space,
+    unity_vector_setting, FreeSplitKnob, FreeSplits, Planes, Setting, OF_SHADOW_DISTANCE,
+};
+pub use report::{light_depth_description, light_depths, report, snap_description, split_rule, PresetReport};
+pub use rig::{light_basis_rule, rig, rig_for_layout};
+pub(crate) use shared::join;
+pub use shared::{
+    around, centre, check_range, clip_selection, distance_fractions, engine_table, fraction_splits, fractions,
+    half_extent_along, is_generic_note, layout, minimal_sphere_scheme, non_negative, ordered, point_or, positive, unit,
+    Layout,
+};
+pub use sweep::{
+    axes, check_point, preset_axes, set_cascades, set_distance, set_knob, set_lambda, set_resolution, Axes,
+};
+pub use terms::{apply_terms, engine_of, number, read, render, Dims, Field, Fields, Terms, Values};
 
 use serde::Serialize;
 
