@@ -63,18 +63,18 @@ pub struct Setting<'a> {
 }
 
 /// [`FreeSplits::values`] for a knob that holds the fractions themselves.
-pub fn as_given<K>(_: &K, _: usize, _: f64, fractions: &[f64]) -> Vec<f64> {
+pub(crate) fn as_given<K>(_: &K, _: usize, _: f64, fractions: &[f64]) -> Vec<f64> {
     fractions.to_vec()
 }
 
 /// [`FreeSplits::fit_count`] for a knob that needs no change with the count.
-pub fn keep<K>(_: &mut K, _: usize) {}
+pub(crate) fn keep<K>(_: &mut K, _: usize) {}
 
 /// [`FreeSplits::values`] of a knob holding three fractions whatever the count (Godot's
 /// splits, Filament's positions): the fractions, followed by the configured entries after them
 /// when those still increase, else by entries spread evenly between the last fraction and 1
 /// (the engine reads only the first ones).
-pub fn padded_to_three(configured: [f64; 3], cascades: usize, fractions: &[f64]) -> Vec<f64> {
+pub(crate) fn padded_to_three(configured: [f64; 3], cascades: usize, fractions: &[f64]) -> Vec<f64> {
     let mut out = fractions.to_vec();
     let tail = &configured[cascades - 1..];
     let last = fractions.last().copied().unwrap_or(0.0);
@@ -88,11 +88,11 @@ pub fn padded_to_three(configured: [f64; 3], cascades: usize, fractions: &[f64])
 }
 
 /// What Unity's and URP's split knobs hold.
-pub const OF_SHADOW_DISTANCE: &str = "fractions of the shadow distance";
+pub(crate) const OF_SHADOW_DISTANCE: &str = "fractions of the shadow distance";
 
 /// [`FreeSplits::space`] of fractions of the shadow distance (Unity, URP): from 0 to the
 /// shadow distance (at most the far plane), the first cascade starting at the near plane.
-pub fn shadow_distance_space<K>(_: &K, p: Planes) -> FractionSpace {
+pub(crate) fn shadow_distance_space<K>(_: &K, p: Planes) -> FractionSpace {
     FractionSpace {
         lo: 0.0,
         hi: p.far.min(p.max_distance),
@@ -102,7 +102,7 @@ pub fn shadow_distance_space<K>(_: &K, p: Planes) -> FractionSpace {
 
 /// [`FreeSplits::setting`] of Unity's and URP's split knobs: a float, a `Vector2` or a
 /// `Vector3` by the number of values.
-pub fn unity_vector_setting<K>(_: &K, s: &Setting<'_>) -> String {
+pub(crate) fn unity_vector_setting<K>(_: &K, s: &Setting<'_>) -> String {
     let floats = |v: &[f64]| v.iter().map(|x| format!("{x}f")).collect::<Vec<_>>().join(", ");
     let term = s.knob.term;
     match s.values.len() {
@@ -113,7 +113,7 @@ pub fn unity_vector_setting<K>(_: &K, s: &Setting<'_>) -> String {
 }
 
 /// The engines whose split positions are free fractions, in registry order.
-pub fn free_split_engines() -> Vec<PresetName> {
+pub(crate) fn free_split_engines() -> Vec<PresetName> {
     PresetName::ALL.into_iter().filter(|p| has_free_splits(*p)).collect()
 }
 

@@ -28,10 +28,10 @@ pub use apply::{apply, PresetChoice};
 pub use closest::{complete_fractions, far_ends, fit_1d, fit_split_knob, log_misfit, Target};
 pub use engine::{snap, Counts, DynEngine, Engine, EngineScheme, Fitting, Knob, KnobContext, KnobsOf};
 pub use engines::{Knobs, PresetName, ENGINES};
+pub(crate) use free_splits::free_split_engines;
 pub use free_splits::{
-    as_given, configured_fractions, drop_stale_bounds, engine_setting, free_split_engines, free_split_knob,
-    has_free_splits, keep, padded_to_three, paste_lines, preset_fraction_space, set_fractions, shadow_distance_space,
-    unity_vector_setting, FreeSplitKnob, FreeSplits, Planes, Setting, OF_SHADOW_DISTANCE,
+    configured_fractions, drop_stale_bounds, engine_setting, free_split_knob, has_free_splits, paste_lines,
+    preset_fraction_space, set_fractions, FreeSplitKnob, FreeSplits, Planes, Setting,
 };
 pub use report::{light_depth_description, light_depths, report, snap_description, split_rule, PresetReport};
 pub use rig::{light_basis_rule, rig, rig_for_layout};
