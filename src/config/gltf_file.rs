@@ -382,12 +382,12 @@ fn read_uri(dir: &Path, uri: &str, outside_buffers: bool) -> Result<Vec<u8>, Str
         return Err(format!(
             "buffer URI {:?} points outside the glTF's folder {}; set scene.gltf_outside_buffers = true \
              to read it",
-            super::excerpt(uri),
+            super::clip_quote(uri),
             dir.display()
         ));
     }
     let file = dir.join(uri);
-    read_file(&file).map_err(|e| format!("buffer {:?}: {e}", super::excerpt(uri)))
+    read_file(&file).map_err(|e| format!("buffer {:?}: {e}", super::clip_quote(uri)))
 }
 
 /// Standard base64 (with or without padding); None on any other character.

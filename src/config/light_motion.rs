@@ -182,7 +182,7 @@ pub fn read_light_file(path: &Path) -> Result<Vec<DVec3>> {
             1,
             format!(
                 "header is {:?}; expected the columns x,y,z",
-                crate::config::excerpt(&headers.iter().collect::<Vec<_>>().join(","))
+                crate::config::clip_quote(&headers.iter().collect::<Vec<_>>().join(","))
             ),
         ));
     }
@@ -213,7 +213,7 @@ pub fn read_light_file(path: &Path) -> Result<Vec<DVec3>> {
                     format!(
                         "column {} = {:?} is not a finite number",
                         expected[j],
-                        crate::config::excerpt(field)
+                        crate::config::clip_quote(field)
                     ),
                 )
             })?;

@@ -17,6 +17,7 @@ pub(crate) use schema::opt_vec3;
 pub mod sweep_spec;
 mod validate;
 
+pub(crate) use location::{excerpt, locate};
 pub use location::{line_column, locate_key, locate_table, toml_error, Validator};
 pub use schema::SECTIONS;
 pub use validate::{check_camera_path, parse};
@@ -96,7 +97,7 @@ pub fn regular_file(path: &std::path::Path) -> crate::Result<()> {
 
 /// At most the first 200 characters of `text` for an error message, with the full length when
 /// cut: a path file whose first line is 500 MB long is not echoed whole.
-pub fn excerpt(text: &str) -> String {
+pub fn clip_quote(text: &str) -> String {
     match text.char_indices().nth(200) {
         Some((at, _)) => format!("{}... ({} characters in all)", &text[..at], text.chars().count()),
         None => text.to_string(),

@@ -28,7 +28,7 @@ pub fn read_path_file(path: &Path) -> Result<Vec<(DVec3, DVec3)>> {
             1,
             format!(
                 "header is {:?}; expected the columns px,py,pz,tx,ty,tz",
-                crate::config::excerpt(&headers.iter().collect::<Vec<_>>().join(","))
+                crate::config::clip_quote(&headers.iter().collect::<Vec<_>>().join(","))
             ),
         ));
     }
@@ -59,7 +59,7 @@ pub fn read_path_file(path: &Path) -> Result<Vec<(DVec3, DVec3)>> {
                     format!(
                         "column {} = {:?} is not a finite number",
                         expected[j],
-                        crate::config::excerpt(field)
+                        crate::config::clip_quote(field)
                     ),
                 )
             })?;
