@@ -219,6 +219,7 @@ pub fn evaluate(rule: &Rule, a: &Analysis) -> Result<RuleResult> {
                 m.name(),
                 m.how_to_measure()
             ),
+            excerpt: String::new(),
         })),
         Target::Cascade(..) | Target::Depth(..) if !a.summary.cascades_needed => {
             Ok(RuleResult::not_applicable(rule, no_cascades))
@@ -336,6 +337,7 @@ fn unmeasured(rule: &Rule, m: crate::metric::SummaryMetric, config: &str) -> Err
             m.name(),
             m.how_to_measure().unwrap_or("it is not measured for this config")
         ),
+        excerpt: String::new(),
     })
 }
 

@@ -81,6 +81,7 @@ pub fn check_rows(
                         m.name(),
                         m.how_to_measure().unwrap_or("it is not a sweep column")
                     ),
+                    excerpt: String::new(),
                 }
                 .into());
             }
