@@ -149,6 +149,10 @@ pub struct CheckArgs {
     /// With --sweep: list every configuration instead of a summary.
     #[arg(long)]
     pub verbose: bool,
+    /// With --sweep: gate every configuration of the grid, not only what the sweep decides
+    /// (the recommendation and the configured setting).
+    #[arg(long, requires = "sweep")]
+    pub all_rows: bool,
     /// Also write a JUnit XML report to this file.
     #[arg(long)]
     pub junit: Option<PathBuf>,
@@ -199,6 +203,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
                 sweep: args.sweep,
                 sweep_csv: args.sweep_csv.as_deref(),
                 verbose: args.verbose,
+                all_rows: args.all_rows,
                 junit: args.junit.as_deref(),
                 format: args.format,
             }),

@@ -609,8 +609,37 @@ impl SummaryMetric {
     }
 
     /// The value as a number; booleans read 1 (true) or 0 (false), counts as their value.
+    /// Only meaningful when [`Self::measured`]: an unmeasured metric has no value.
     pub fn value(self, s: &Summary) -> f64 {
         self.typed(s).as_f64()
+    }
+
+    /// Whether the analysis behind `s` measured this metric (screen metrics need scene
+    /// geometry, the moving-light ones a moving light, the ground-truth ones that pass,
+    /// `seam_crossings` its pass). An unmeasured metric is absent from every output, never 0.
+    pub fn measured(self, s: &Summary) -> bool {
+        shown_for(self.def(), s)
+    }
+
+    /// How to measure this metric when a summary does not have it (None: always measured).
+    pub fn how_to_measure(self) -> Option<&'static str> {
+        let name = self.name();
+        if TRUTH_SUMMARY.contains(&name) {
+            Some("it comes from the ground-truth pass: set `[analysis] ground_truth = true` in the config (it needs scene geometry)")
+        } else if self.def().screen {
+            Some("it is a screen metric: give the config scene geometry (scene.ground, [[scene.box]] or scene.gltf)")
+        } else if is_light_motion(name) {
+            Some("it is measured only under a moving light: give the config a light motion ([motion.light])")
+        } else if name == SEAM_CROSSINGS {
+            Some("it is measured by `analyze` and `check`, not in sweep rows")
+        } else {
+            None
+        }
+    }
+
+    /// A fraction (a share of something, in [0, 1]).
+    pub fn is_fraction(self) -> bool {
+        self.def().unit.is_empty() && self.name().ends_with("_fraction")
     }
 }
 
@@ -1020,6 +1049,27 @@ handle!(
 impl CascadeMetric {
     pub fn value(self, c: &CascadeReport) -> f64 {
         (self.def().value)(c).as_f64()
+    }
+
+    /// Whether cascade `c`'s analysis measured this metric (as [`SummaryMetric::measured`]).
+    pub fn measured(self, c: &CascadeReport) -> bool {
+        let d = self.def();
+        (!d.screen || c.screen.is_some() || TRUTH_CASCADE.contains(&d.name))
+            && (!is_light_motion(d.name) || c.light.is_some())
+            && (!TRUTH_CASCADE.contains(&d.name) || c.truth.is_some())
+    }
+
+    /// How to measure this metric when a cascade does not have it.
+    pub fn how_to_measure(self) -> &'static str {
+        if TRUTH_CASCADE.contains(&self.name()) {
+            "it comes from the ground-truth pass: set `[analysis] ground_truth = true` in the config (it needs scene geometry)"
+        } else if self.def().screen {
+            "it is a screen metric: give the config scene geometry (scene.ground, [[scene.box]] or scene.gltf)"
+        } else if is_light_motion(self.name()) {
+            "it is measured only under a moving light: give the config a light motion ([motion.light])"
+        } else {
+            "it is not measured for this config"
+        }
     }
 }
 

@@ -32,6 +32,8 @@ pub struct CheckRequest<'a> {
     pub sweep_csv: Option<&'a Path>,
     /// With `sweep`: every configuration instead of the summary.
     pub verbose: bool,
+    /// With `sweep`: gate every row, not only the recommendation and the configured setting.
+    pub all_rows: bool,
     /// Also write a JUnit XML report here.
     pub junit: Option<&'a Path>,
     pub format: Format,
@@ -116,7 +118,13 @@ fn run(args: &CheckRequest) -> Result<Outcome> {
             .into());
         }
         let label = args.baseline.as_ref().map(|p| p.display().to_string());
-        check_rows(&config, &rows, &thresholds, label.as_deref().zip(base_rows.as_deref()))?
+        check_rows(
+            &config,
+            &rows,
+            &thresholds,
+            label.as_deref().zip(base_rows.as_deref()),
+            args.all_rows,
+        )?
     } else {
         let base = match &args.baseline {
             Some(p) => Some(

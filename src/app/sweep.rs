@@ -46,8 +46,8 @@ pub(crate) fn shard_hash(path: &Path, config: &Config, grid: &Grid, command: &st
 }
 
 /// Runs a sweep as the CLI does, without printing: (result, rendered files; `sweep.csv` is not
-/// among them: [`execute`] streams it into the set). With `--shard`
-/// the result holds the shard's slice, and the files include the shard's manifest and rows.
+/// among them: [`execute`] streams it into the set). With `--shard` the result holds the
+/// shard's slice ([`SweepResult::slice`]), and the files are only the shard's manifest and rows.
 /// The progress bar is returned still up, for the writing.
 pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::RenderedFiles, super::progress::Progress)> {
     let shard = args.shard.as_deref().map(Shard::parse).transpose()?;
@@ -169,8 +169,15 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         }
         result.flicker = Some(sample);
     }
-    // sweep.csv is streamed when the set is written (execute), not rendered here.
-    let mut files = report::sweep::render_all_but_csv(&result, !args.no_plots)?;
+    // sweep.csv is streamed when the set is written (execute), not rendered here. A shard
+    // decides nothing: it writes its rows and manifest, and only `merge` writes the rest.
+    let mut files = match shard {
+        Some(s) => {
+            result = result.into_slice(s);
+            Vec::new()
+        }
+        None => report::sweep::render_all_but_csv(&result, !args.no_plots)?,
+    };
     if let Some(m) = manifest {
         files.push((
             shard::MANIFEST_FILE.to_string(),
@@ -228,6 +235,25 @@ pub fn execute(args: &SweepRequest) -> Result<Outcome> {
     };
     let written = output::write_files_streamed(&dir, &files, &[&report::sweep::SweepCsvFile(&result)])?;
     progress.finish();
+    if let Some(s) = result.slice {
+        // The slice and where the decision is made; no verdict.
+        let total = result.grid.len();
+        print_result(
+            args.format,
+            || report::sweep::slice_text(&result.config.name, s, total),
+            // The JSON output is the shard's manifest (always among its files).
+            || {
+                Ok(files
+                    .iter()
+                    .find(|(name, _)| name == shard::MANIFEST_FILE)
+                    .map(|(_, bytes)| bytes.clone())
+                    .unwrap_or_default())
+            },
+            written.len(),
+            &dir,
+        )?;
+        return Ok(Outcome::Success);
+    }
     print_result(
         args.format,
         || report::sweep::stdout_table(&result),

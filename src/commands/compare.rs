@@ -37,6 +37,101 @@ pub struct Comparison {
     /// The split ranges of csm-lab's own pipeline added after the presets (`--split-range`).
     pub own: Vec<SplitRange>,
     pub analyses: Vec<Analysis>,
+    /// Which valid entry is best by the objective, and why the others are left out
+    /// ([`verdict`]): the reports only read it.
+    pub verdict: Verdict,
+}
+
+/// What `compare` decides: the valid entries (every slice corner covered, no receiver clipped,
+/// cascades needed) ranked by the objective a sweep of this scene minimises, and the invalid
+/// ones apart with their reasons.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Verdict {
+    /// The metric ranked on ([`crate::commands::sweep::rank::default_objective`]).
+    pub objective: crate::metric::SummaryMetric,
+    /// Indices into `analyses` of the valid entries, best (lowest objective) first; ties keep
+    /// the order given.
+    pub ranked: Vec<usize>,
+    /// Indices into `analyses` of the invalid entries and why, in the order given.
+    pub invalid: Vec<(usize, String)>,
+}
+
+impl Verdict {
+    /// The best valid entry.
+    pub fn best(&self) -> Option<usize> {
+        self.ranked.first().copied()
+    }
+
+    /// The verdict in one line: the best and by how much it beats the runner-up.
+    pub fn line(&self, analyses: &[Analysis]) -> String {
+        let name = self.objective.name();
+        let value = |i: usize| self.objective.value(&analyses[i].summary);
+        match self.ranked.as_slice() {
+            [] => format!(
+                "no best: none of the {} entries is valid (every one misses slice corners, clips receivers or needs no cascades)",
+                analyses.len()
+            ),
+            [b] => format!(
+                "best: {} ({name} {}), the only valid entry",
+                label(&analyses[*b]),
+                short_number(value(*b))
+            ),
+            [b, r, ..] => {
+                let (vb, vr) = (value(*b), value(*r));
+                // Entries that give the same maps (unity and unity-urp) tie.
+                let by = if vr > vb {
+                    format!("{} % lower than", short_number(100.0 * (vr - vb) / vr))
+                } else {
+                    "tied with".to_string()
+                };
+                format!(
+                    "best: {} ({name} {}), {by} the runner-up {} ({}), of {} valid entries",
+                    label(&analyses[*b]),
+                    short_number(vb),
+                    label(&analyses[*r]),
+                    short_number(vr),
+                    self.ranked.len()
+                )
+            }
+        }
+    }
+
+    /// One line per invalid entry: its name and why it is left out.
+    pub fn invalid_lines(&self, analyses: &[Analysis]) -> Vec<String> {
+        self.invalid
+            .iter()
+            .map(|(i, why)| format!("{}: {why}", label(&analyses[*i])))
+            .collect()
+    }
+}
+
+/// Ranks the valid analyses by the objective of `scene` (lowest first) and sets the invalid
+/// apart ([`invalid_reason`]; an entry whose scene needs no cascades is not valid either).
+pub fn verdict(scene: &Config, analyses: &[Analysis]) -> Verdict {
+    let objective = crate::commands::sweep::rank::default_objective(scene);
+    let mut invalid = Vec::new();
+    let mut ranked = Vec::new();
+    for (i, a) in analyses.iter().enumerate() {
+        let why = invalid_reason(a).or_else(|| {
+            (!a.summary.cascades_needed)
+                .then(|| "no cascades: the scene is not visible within its shadow distance".to_string())
+        });
+        match why {
+            Some(w) => invalid.push((i, w)),
+            None => ranked.push(i),
+        }
+    }
+    ranked.sort_by(|&a, &b| {
+        objective
+            .value(&analyses[a].summary)
+            .total_cmp(&objective.value(&analyses[b].summary))
+            .then(a.cmp(&b))
+    });
+    Verdict {
+        objective,
+        ranked,
+        invalid,
+    }
 }
 
 impl Comparison {
@@ -150,11 +245,13 @@ pub fn run_with_progress(
             a
         })
         .collect();
+    let analyses: Vec<Analysis> = analyses;
     Ok(Comparison {
         config_path: path.to_path_buf(),
         name,
         engine_defaults,
         own: own.to_vec(),
+        verdict: verdict(&scene, &analyses),
         analyses,
     })
 }

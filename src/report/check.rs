@@ -19,7 +19,7 @@ impl CheckReport {
     /// unless `verbose`, which lists every configuration.
     pub fn table_with(&self, verbose: bool) -> String {
         match &self.body {
-            Body::Sweep { rows, baseline } if !verbose => self.sweep_summary(rows, baseline.as_ref()),
+            Body::Sweep { rows, baseline, gated } if !verbose => self.sweep_summary(rows, baseline.as_ref(), gated),
             _ => self.table(),
         }
     }
@@ -31,6 +31,7 @@ impl CheckReport {
         &self,
         rows: &[crate::commands::check::sweep::RowReport],
         baseline: Option<&crate::commands::check::report::SweepBaseline>,
+        gated: &str,
     ) -> String {
         let mut out = String::new();
         let c = self.counts();
@@ -42,6 +43,7 @@ impl CheckReport {
             rows.len(),
             plural(rows.len())
         );
+        let _ = writeln!(out, "{gated}");
         let rule_count = rows.first().map_or(0, |r| r.results.len());
         // Each distinct note once, with the rules it concerns.
         let mut notes: Vec<(String, Vec<String>)> = Vec::new();
@@ -213,7 +215,7 @@ impl CheckReport {
                     }
                 }
             }
-            Body::Sweep { rows, baseline } => {
+            Body::Sweep { rows, baseline, gated } => {
                 let _ = writeln!(
                     out,
                     "check --sweep {} against {}: {} configuration{}",
@@ -222,6 +224,7 @@ impl CheckReport {
                     rows.len(),
                     plural(rows.len())
                 );
+                let _ = writeln!(out, "{gated}");
                 for row in rows {
                     let _ = writeln!(
                         out,
@@ -325,8 +328,9 @@ impl CheckReport {
                     );
                 }
             }
-            Body::Sweep { rows, baseline } => {
+            Body::Sweep { rows, baseline, gated } => {
                 obj.insert("mode".into(), "sweep".into());
+                obj.insert("gated".into(), gated.as_str().into());
                 obj.insert(
                     "configurations".into(),
                     rows.iter()

@@ -254,6 +254,18 @@ impl Exporter<Comparison> for CompareHtml {
         let (header, rows) = table(c);
         let mut h = String::new();
         let _ = writeln!(h, "<p>Reproduce: <code>{}</code></p>", html::escape(&c.command()));
+        h.push_str("<h2>Verdict</h2>\n");
+        let _ = writeln!(
+            h,
+            "<div class=\"rec-box\"><p>{}</p><p><em>Ranked by</em> {}.</p></div>",
+            html::escape(&c.verdict.line(&c.analyses)),
+            html::escape(&ranking_text(c))
+        );
+        let invalid = c.verdict.invalid_lines(&c.analyses);
+        if !invalid.is_empty() {
+            h.push_str("<h3>Invalid, not ranked</h3>\n");
+            h.push_str(&html::list(&invalid, None));
+        }
         h.push_str("<h2>Scene</h2>\n");
         h.push_str(&html::list(&scene_lines(c), None));
         h.push_str("<h2>Results</h2>\n");
@@ -263,8 +275,15 @@ impl Exporter<Comparison> for CompareHtml {
         h.push_str(&html::figure(&DensityOverlay(c).to_svg()?, DENSITY_CAPTION));
         h.push_str(&html::figure(&ShimmerCoverageBars(c).to_svg()?, SHIMMER_CAPTION));
         h.push_str("<h2>Presets</h2>\n");
-        for a in &c.analyses {
+        for (i, a) in c.analyses.iter().enumerate() {
             let _ = writeln!(h, "<h3>{}</h3>", html::escape(label(a).as_str()));
+            if let Some((_, why)) = c.verdict.invalid.iter().find(|(j, _)| *j == i) {
+                let _ = writeln!(
+                    h,
+                    "<p style=\"background:#fff3e0;border-left:5px solid #d9480f;padding:0.5em 1em\"><strong>INVALID, not ranked:</strong> {} (its pictures below show what it draws, not a usable result)</p>",
+                    html::escape(why)
+                );
+            }
             h.push_str(&html::list(&preset_lines(a), Some("notes")));
             let name = label(a);
             let images = crate::figures::screen::captioned(a, &name);
@@ -279,6 +298,16 @@ impl Exporter<Comparison> for CompareHtml {
             "",
         ))
     }
+}
+
+/// How the verdict ranks, in words.
+fn ranking_text(c: &Comparison) -> String {
+    let o = c.verdict.objective;
+    format!(
+        "the lowest {} ({}) among the valid entries: every slice corner covered, no receiver clipped by the light's depth range",
+        o.name(),
+        o.description()
+    )
 }
 
 /// What the columns of the results table measure.
@@ -299,6 +328,20 @@ impl Exporter<Comparison> for CompareMd {
         let mut m = String::new();
         let _ = writeln!(m, "# Cascaded shadow maps by engine: {}\n", c.name);
         let _ = writeln!(m, "Reproduce: `{}`\n", c.command());
+        let _ = writeln!(
+            m,
+            "## Verdict\n\n{}\n\n*Ranked by* {}.\n",
+            c.verdict.line(&c.analyses),
+            ranking_text(c)
+        );
+        let invalid = c.verdict.invalid_lines(&c.analyses);
+        if !invalid.is_empty() {
+            let _ = writeln!(m, "Invalid, not ranked:\n");
+            for l in invalid {
+                let _ = writeln!(m, "- {l}");
+            }
+            let _ = writeln!(m);
+        }
         let _ = writeln!(m, "## Scene\n");
         for l in scene_lines(c) {
             let _ = writeln!(m, "- {l}");
@@ -419,6 +462,10 @@ pub fn summary_table(c: &Comparison) -> String {
             "{}",
             invalid_reason(a).map_or(String::new(), |w| format!("  INVALID: {w}"))
         );
+    }
+    let _ = writeln!(out, "{}", c.verdict.line(&c.analyses));
+    for l in c.verdict.invalid_lines(&c.analyses) {
+        let _ = writeln!(out, "  not ranked: {l}");
     }
     out
 }

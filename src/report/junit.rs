@@ -153,7 +153,7 @@ fn suites(report: &CheckReport) -> Vec<Suite> {
                 });
             }
         }
-        Body::Sweep { rows, baseline } => {
+        Body::Sweep { rows, baseline, .. } => {
             for row in rows {
                 out.push(Suite {
                     name: format!("thresholds {} on {}", report.thresholds, row.key.label()),

@@ -88,10 +88,18 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
             st.split_range,
             &row.summary,
         )?;
+        // A shard's slice decides nothing: its pareto and recommended cells are empty.
+        let decided = |b: bool| {
+            if r.slice.is_some() {
+                String::new()
+            } else {
+                b.to_string()
+            }
+        };
         fields.extend([
             row.summary.cascades_needed.to_string(),
-            on_front[i].to_string(),
-            (rec == Some(i)).to_string(),
+            decided(on_front[i]),
+            decided(rec == Some(i)),
             preset.clone(),
         ]);
         if let (Some(_), Some(k)) = (knob_key, st.knob) {
@@ -111,7 +119,7 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         if let Some(sun) = st.sun.filter(|_| r.sun.is_some()) {
             fields.push(num("sun_azimuth_deg", sun.azimuth_deg)?);
             fields.push(num("sun_elevation_deg", sun.elevation_deg)?);
-            fields.push(worst[k].to_string());
+            fields.push(decided(worst[k]));
         }
         Ok(fields)
     });
@@ -179,6 +187,24 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
         if let Some(note) = &r.sun_note {
             v["light_independent"] = note.as_str().into();
         }
+    }
+    // The swept axes the recommendation sits at the first or last value of (empty when none,
+    // and without a recommendation); each with the range to try next.
+    v["range_edges"] = r.range_edges.iter().map(|e| e.axis).collect::<Vec<_>>().into();
+    if !r.range_edges.is_empty() {
+        v["range_edge_suggestions"] = r
+            .range_edges
+            .iter()
+            .map(|e| {
+                serde_json::json!({
+                    "axis": e.axis,
+                    "value": e.value,
+                    "edge": if e.high { "last" } else { "first" },
+                    "try": e.suggestion(),
+                })
+            })
+            .collect::<Vec<_>>()
+            .into();
     }
     match (r.recommendation.as_ref(), r.recommended()) {
         (Some(rec), Some(row)) => {
@@ -655,6 +681,12 @@ fn rival_text(r: &SweepResult, x: &Rival) -> String {
     format!("{who} ({}) {why}.", setting_text(r, row))
 }
 
+/// One sentence per swept axis the recommendation sits at the edge of
+/// ([`SweepResult::range_edges`]).
+pub fn edge_lines(r: &SweepResult) -> Vec<String> {
+    r.range_edges.iter().map(|e| e.text()).collect()
+}
+
 /// One sentence per main rival ([`SweepResult::rivals`]).
 fn rival_lines(r: &SweepResult) -> Vec<String> {
     r.rivals.iter().map(|x| rival_text(r, x)).collect()
@@ -862,6 +894,11 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
         "<p><em>Objective:</em> {}.</p></div>",
         html::escape(&r.objective_text)
     );
+    let edges = edge_lines(r);
+    if !edges.is_empty() {
+        h.push_str("<h2>Edges of the range</h2>\n");
+        h.push_str(&html::list(&edges, None));
+    }
     let alts = alternative_lines(r);
     if !alts.is_empty() {
         h.push_str("<h2>Alternatives</h2>\n");
@@ -961,6 +998,14 @@ pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> 
     );
     if let Some(c) = &r.light_update {
         let _ = writeln!(m, "{}\n", c.sentence);
+    }
+    let edges = edge_lines(r);
+    if !edges.is_empty() {
+        m.push_str("## Edges of the range\n\n");
+        for l in edges {
+            let _ = writeln!(m, "- {l}");
+        }
+        m.push('\n');
     }
     let alts = alternative_lines(r);
     if !alts.is_empty() {
@@ -1104,6 +1149,45 @@ fn axis_cells(r: &SweepResult, x: &Row) -> Vec<(&'static str, String)> {
 }
 
 /// The short table printed on stdout.
+/// What `sweep --shard K/N` prints: which configurations of the grid it ran (1-based, in
+/// `sweep.csv` order), and that it decides nothing.
+pub fn slice_text(name: &str, shard: crate::commands::sweep::shard::Shard, total: usize) -> String {
+    let rows: Vec<usize> = shard.indices(total).map(|i| i + 1).collect();
+    let (first, last) = (rows[0], rows[rows.len() - 1]);
+    let which = if shard.n == 1 {
+        format!("configurations {first}–{last} of {total}")
+    } else if rows.len() <= 3 {
+        let list: Vec<String> = rows.iter().map(ToString::to_string).collect();
+        format!("configurations {} of {total}", list.join(", "))
+    } else {
+        format!(
+            "configurations {first}, {}, {}, …, {last} of {total} ({} rows: every {} in grid order)",
+            rows[1],
+            rows[2],
+            rows.len(),
+            ordinal(shard.n)
+        )
+    };
+    format!(
+        "{name}: shard {} of {}: {which}\n\
+         no Pareto front, recommendation or report: a shard holds part of the grid; \
+         `csm-lab merge` of all {} shard directories decides\n",
+        shard.k, shard.n, shard.n
+    )
+}
+
+/// "2nd", "3rd", "11th", "21st".
+fn ordinal(n: usize) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
+}
+
 pub fn stdout_table(r: &SweepResult) -> String {
     let mut out = String::new();
     let _ = writeln!(
@@ -1190,6 +1274,9 @@ pub fn stdout_table(r: &SweepResult) -> String {
         }
     }
     let _ = writeln!(out, "recommended (budget {} MiB): {}", n(r.budget_mib), why_text(r));
+    for l in edge_lines(r) {
+        let _ = writeln!(out, "range edge: {l}");
+    }
     for l in alternative_lines(r) {
         let _ = writeln!(out, "  {l}");
     }
@@ -1346,4 +1433,30 @@ fn changes(r: &SweepResult, o: &Row, x: &Row) -> Vec<String> {
         ));
     }
     out
+}
+
+#[cfg(test)]
+mod slice_tests {
+    use super::*;
+    use crate::commands::sweep::shard::Shard;
+
+    #[test]
+    fn a_shard_names_its_rows_one_based_and_decides_nothing() {
+        // Brute force: the 1-based rows r of 1..=672 with (r - 1) mod 3 == 1.
+        let rows: Vec<usize> = (1..=672).filter(|r| (r - 1) % 3 == 1).collect();
+        assert_eq!((rows.len(), rows[0], rows[rows.len() - 1]), (224, 2, 671));
+        let t = slice_text("default", Shard { k: 2, n: 3 }, 672);
+        assert_eq!(
+            t.lines().next().unwrap(),
+            "default: shard 2 of 3: configurations 2, 5, 8, …, 671 of 672 (224 rows: every 3rd in grid order)"
+        );
+        assert!(t.contains("`csm-lab merge` of all 3 shard directories decides"));
+        assert!(slice_text("d", Shard { k: 1, n: 1 }, 5).starts_with("d: shard 1 of 1: configurations 1–5 of 5\n"));
+        assert!(slice_text("d", Shard { k: 3, n: 4 }, 10).starts_with("d: shard 3 of 4: configurations 3, 7 of 10\n"));
+        let names: Vec<String> = [1, 2, 3, 4, 11, 12, 13, 21, 22, 101, 111].map(ordinal).to_vec();
+        assert_eq!(
+            names,
+            ["1st", "2nd", "3rd", "4th", "11th", "12th", "13th", "21st", "22nd", "101st", "111th"]
+        );
+    }
 }

@@ -759,7 +759,7 @@ fn sweep_mode_judges_summary_rules_per_row_and_marks_the_others_not_applicable()
         ),
     );
     let junit = case.path("s.xml");
-    let (code, report) = case.check_json(&cfg, &t, &["--sweep", "--junit", junit.to_str().unwrap()]);
+    let (code, report) = case.check_json(&cfg, &t, &["--sweep", "--all-rows", "--junit", junit.to_str().unwrap()]);
     // The per-cascade and per-depth rules would fail, but they do not apply to sweep rows;
     // the λ = 0.5 row fails the summary rule.
     assert_eq!(code, 1);
@@ -839,7 +839,8 @@ fn sweep_mode_compares_with_a_sweep_csv_baseline_by_key() {
 #[test]
 fn the_same_input_gives_byte_identical_reports() {
     let case = Case::new();
-    let cfg = case.file("scene.toml", BASE);
+    // The shipped rules include screen rules: a scene with geometry.
+    let cfg = repo("configs/default.toml");
     let t = repo("configs/thresholds.toml");
     let mut outputs = Vec::new();
     for name in ["a.xml", "b.xml"] {
@@ -858,4 +859,188 @@ fn bounds_only_metric_count() -> usize {
     SummaryMetric::all()
         .filter(|m| !m.def().screen && !m.name().starts_with("light_crawl") && !m.name().starts_with("light_jump"))
         .count()
+}
+
+/// The `[[rule]]`s of a thresholds file: (metric, bound, limit).
+fn rules_of(path: &Path) -> Vec<(String, String, f64)> {
+    let v: toml::Value = toml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    v["rule"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            let t = r.as_table().unwrap();
+            let (bound, lim) = t.iter().find(|(k, _)| *k == "min" || *k == "max").unwrap();
+            let lim = lim.as_float().or_else(|| lim.as_integer().map(|i| i as f64)).unwrap();
+            (t["metric"].as_str().unwrap().to_string(), bound.clone(), lim)
+        })
+        .collect()
+}
+
+#[test]
+fn init_on_a_bounds_only_run_limits_only_what_was_measured_with_limits_that_can_fail() {
+    let case = Case::new();
+    let cfg = case.file("bounds.toml", BASE);
+    let gate = case.path("gate.toml");
+    let out = bin().arg("check").arg(&cfg).arg("--init").arg(&gate).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let rules = rules_of(&gate);
+    let names: Vec<&str> = rules.iter().map(|r| r.0.as_str()).collect();
+    // No ground truth, no geometry, a still light: none of their metrics is limited.
+    for unmeasured in [
+        "acne_fraction",
+        "leak_fraction",
+        "flicker_snapped",
+        "flicker_unsnapped",
+        "light_crawl",
+        "light_jump",
+        "screen_aliasing_p95",
+        "screen_undersampled_fraction",
+    ] {
+        assert!(!names.contains(&unmeasured), "{unmeasured}: {names:?}");
+    }
+    let text = std::fs::read_to_string(&gate).unwrap();
+    assert!(
+        text.contains("# Not measured for this config, so not limited"),
+        "{text}"
+    );
+    assert!(text.contains("acne_fraction"), "{text}");
+    // Memory is discrete: 4 cascades of 2048² 32-bit texels, exactly.
+    let memory = rules.iter().find(|r| r.0 == "memory_bytes").unwrap();
+    assert_eq!((memory.1.as_str(), memory.2), ("max", (4 * 2048 * 2048 * 4) as f64));
+    // A fraction at its bound gets no rule; any other fraction's limit stays below 1.
+    let a = analysis(BASE);
+    let under = a.summary.undersampled_fraction;
+    assert_eq!(names.contains(&"undersampled_fraction"), under < 1.0, "{under}");
+    for (name, bound, lim) in &rules {
+        if name.ends_with("_fraction") && bound == "max" {
+            assert!(*lim < 1.0, "{name} max {lim}");
+        }
+    }
+    // The gate passes today, and every rule on a real value fails 10 % worse (5 % headroom).
+    let pass = case.check(&cfg, &gate, &[]);
+    assert_eq!(pass.status.code(), Some(0), "{}", stdout(&pass));
+    let mean = rules.iter().find(|r| r.0 == "mean_aliasing").unwrap();
+    assert!(
+        mean.2 > a.summary.mean_aliasing && mean.2 < a.summary.mean_aliasing * 1.1,
+        "{mean:?}"
+    );
+}
+
+#[test]
+fn a_rule_on_an_unmeasured_metric_is_an_error_naming_the_rule_and_how_to_measure_it() {
+    let case = Case::new();
+    let cfg = case.file("bounds.toml", BASE);
+    for (metric, how) in [
+        ("acne_fraction", "[analysis] ground_truth = true"),
+        ("flicker_snapped", "[analysis] ground_truth = true"),
+        ("screen_aliasing_p95", "scene geometry"),
+        ("light_crawl", "moving light"),
+    ] {
+        let rules = case.file(
+            "rules.toml",
+            &format!(
+                "[[rule]]\nmetric = \"mean_aliasing\"\nmax = 100.0\n\n[[rule]]\nmetric = \"{metric}\"\nmax = 0.5\n"
+            ),
+        );
+        let out = case.check(&cfg, &rules, &[]);
+        assert_eq!(out.status.code(), Some(2), "{metric}: {}", stdout(&out));
+        let err = stderr(&out);
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(
+            err.contains("rule[2].metric") && err.contains(metric) && err.contains(how),
+            "{metric}: {err}"
+        );
+        assert!(err.contains("rules.toml:5:1"), "{metric}: {err}");
+        assert!(!stdout(&out).contains("PASS"), "{metric}");
+    }
+    // A per-cascade ground-truth metric likewise.
+    let rules = case.file(
+        "rules.toml",
+        "[[rule]]\nmetric = \"bias_needed\"\ncascade = 0\nmax = 0.5\n",
+    );
+    let err = stderr(&case.check(&cfg, &rules, &[]));
+    assert!(
+        err.contains("rule[1].metric") && err.contains("bias_needed") && err.contains("ground_truth = true"),
+        "{err}"
+    );
+}
+
+#[test]
+fn check_sweep_gates_the_recommendation_and_the_configured_setting_unless_all_rows() {
+    let case = Case::new();
+    let cfg = repo("configs/default.toml");
+    let t = repo("configs/thresholds.toml");
+    // What the sweep decides, read from its own sweep.csv.
+    let out_dir = case.path("sweep");
+    let o = bin()
+        .args([
+            "sweep",
+            cfg.to_str().unwrap(),
+            "--quiet",
+            "--no-plots",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let mut reader = csv::Reader::from_path(out_dir.join("sweep.csv")).unwrap();
+    let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+    let rows: Vec<Vec<String>> = reader
+        .records()
+        .map(|r| r.unwrap().iter().map(String::from).collect())
+        .collect();
+    let label = |r: &Vec<String>| {
+        let range = if r[col("split_range")] == "visible" {
+            " split_range=visible"
+        } else {
+            ""
+        };
+        format!(
+            "lambda={} cascades={} resolution={} fit={}{range}",
+            r[col("lambda")],
+            r[col("cascades")],
+            r[col("resolution")],
+            r[col("fit")]
+        )
+    };
+    // configs/default.toml configures λ 0.75, 4 cascades of 2048², sphere, bounds.
+    let configured = "lambda=0.75 cascades=4 resolution=2048 fit=sphere";
+    let recommended: Vec<String> = rows
+        .iter()
+        .filter(|r| r[col("recommended")] == "true")
+        .map(label)
+        .collect();
+    assert_eq!(recommended.len(), 1);
+    assert_ne!(recommended[0], configured);
+    assert!(rows.iter().any(|r| label(r) == configured));
+    let (_, report) = case.check_json(&cfg, &t, &["--sweep"]);
+    let labels: Vec<&str> = report["configurations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["label"].as_str().unwrap())
+        .collect();
+    let mut expected = vec![recommended[0].as_str(), configured];
+    expected.sort_unstable();
+    let mut got = labels.clone();
+    got.sort_unstable();
+    assert_eq!(got, expected);
+    assert_eq!(
+        report["gated"],
+        format!(
+            "gated: the recommendation and the configured setting: 2 of the grid's {} configurations (--all-rows gates every one)",
+            rows.len()
+        )
+    );
+    let table = stdout(&case.check(&cfg, &t, &["--sweep"]));
+    assert!(
+        table.contains("gated: the recommendation and the configured setting: 2 of the grid's"),
+        "{table}"
+    );
+    // --all-rows judges every row of the grid.
+    let (_, all) = case.check_json(&cfg, &t, &["--sweep", "--all-rows"]);
+    assert_eq!(all["configurations"].as_array().unwrap().len(), rows.len());
 }

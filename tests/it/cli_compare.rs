@@ -304,3 +304,80 @@ fn compare_shows_every_engine_in_binary32_far_from_the_origin() {
         }
     }
 }
+
+#[test]
+fn compare_names_the_best_valid_preset_by_the_objective_and_lists_the_invalid_apart() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("out");
+    let out = bin()
+        .current_dir(root)
+        .args(["compare", "configs/default.toml", "--out"])
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // From compare.csv alone: valid = no missed slice corner and no clipped receiver; the scene
+    // has geometry, so the objective is the on-screen 95th percentile.
+    let mut reader = csv::Reader::from_path(out_dir.join("compare.csv")).unwrap();
+    let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+    let rows: Vec<Vec<String>> = reader
+        .records()
+        .map(|r| r.unwrap().iter().map(String::from).collect())
+        .collect();
+    let f = |r: &Vec<String>, n: &str| r[col(n)].parse::<f64>().unwrap();
+    let (valid, invalid): (Vec<&Vec<String>>, Vec<&Vec<String>>) = rows
+        .iter()
+        .partition(|r| f(r, "coverage_violations") == 0.0 && f(r, "receivers_outside_depth") == 0.0);
+    assert!(
+        valid.len() >= 2 && !invalid.is_empty(),
+        "{} valid, {} invalid",
+        valid.len(),
+        invalid.len()
+    );
+    let mut ranked = valid.clone();
+    ranked.sort_by(|a, b| f(a, "screen_aliasing_p95").total_cmp(&f(b, "screen_aliasing_p95")));
+    let (best, runner) = (&ranked[0][col("preset")], &ranked[1][col("preset")]);
+    let (vb, vr) = (f(ranked[0], "screen_aliasing_p95"), f(ranked[1], "screen_aliasing_p95"));
+    assert!(vb <= vr);
+    let md = std::fs::read_to_string(out_dir.join("compare.md")).unwrap();
+    let verdicts: Vec<&str> = md.lines().filter(|l| l.contains("best")).collect();
+    assert_eq!(verdicts.len(), 1, "{md}");
+    let line = verdicts[0];
+    assert!(
+        line.starts_with(&format!("best: {best} (screen_aliasing_p95 "))
+            && line.contains(&format!("the runner-up {runner} (")),
+        "{line}"
+    );
+    // By how much: the percentage the line states is (runner - best) / runner (or a tie).
+    if vr == vb {
+        assert!(line.contains(&format!("tied with the runner-up {runner} (")), "{line}");
+    } else {
+        let pct: f64 = line
+            .split(" % lower than")
+            .next()
+            .unwrap()
+            .rsplit(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            (pct - 100.0 * (vr - vb) / vr).abs() < 0.01 * pct.max(1.0),
+            "{pct} vs {}",
+            100.0 * (vr - vb) / vr
+        );
+    }
+    assert!(line.contains(&format!("of {} valid entries", valid.len())), "{line}");
+    // Every invalid preset is listed apart with its reason, and never wins.
+    let apart = &md[md.find("Invalid, not ranked:").expect("the invalid list")..];
+    for r in &invalid {
+        let name = &r[col("preset")];
+        assert_ne!(name, best);
+        assert!(apart.contains(&format!("- {name}: ")), "{name}: {apart}");
+    }
+    let html = std::fs::read_to_string(out_dir.join("compare.html")).unwrap();
+    assert!(html.contains(&format!("best: {best} (")) && html.contains("INVALID, not ranked:"));
+    assert!(String::from_utf8_lossy(&out.stdout).contains(&format!("best: {best} (")));
+}

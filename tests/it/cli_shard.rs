@@ -148,24 +148,64 @@ fn a_shard_holds_every_nth_row_of_the_grid_with_the_unsharded_values() {
     let all = read_csv(&full.join("sweep.csv"));
     assert_eq!(all.len(), 12);
     let shard = tmp.path().join("s2");
-    ok(run(&[
-        "sweep",
-        &cfg,
-        "--quiet",
-        "--no-plots",
-        "--shard",
-        "2/5",
-        "--out",
-        s(&shard),
-    ]));
+    // Plots are not asked away: a shard writes none anyway.
+    let out = ok(run(&["sweep", &cfg, "--shard", "2/5", "--out", s(&shard)]));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    // Rows 2, 7 and 12 (1-based) of 12, and no verdict.
+    assert!(
+        stdout.starts_with("small: shard 2 of 5: configurations 2, 7, 12 of 12\n"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("`csm-lab merge` of all 5 shard directories decides"),
+        "{stdout}"
+    );
+    for verdict in ["recommended", "Pareto front (", "λ =", "worst"] {
+        assert!(!stdout.contains(verdict), "{verdict}: {stdout}");
+    }
+    // Its rows and manifest, nothing that decides.
+    let mut names: Vec<String> = files(&shard).into_keys().collect();
+    names.sort();
+    assert_eq!(names, ["shard-rows.tsv", "shard.json", "sweep.csv"]);
     let part = read_csv(&shard.join("sweep.csv"));
-    // Rows 1, 6 and 11 (0-based) of the grid: the setting and every metric as unsharded; only
-    // the pareto and recommended columns (last but one and two) are the slice's own.
+    // Rows 1, 6 and 11 (0-based) of the grid: the setting and every metric as unsharded; the
+    // pareto and recommended columns (last but one and two) are empty: a slice decides nothing.
     assert_eq!(part.len(), 3);
     for (row, i) in part.iter().zip([1, 6, 11]) {
         let n = row.len();
         assert_eq!(row[..n - 3], all[i][..n - 3], "row {i}");
+        assert_eq!((row[n - 3].as_str(), row[n - 2].as_str()), ("", ""), "row {i}");
+        assert!(["true", "false"].contains(&all[i][n - 3].as_str()), "row {i}");
+        assert_eq!(row[n - 1], all[i][n - 1], "row {i}");
     }
+    // --format json prints the manifest (the shard's own account of itself).
+    let json = ok(run(&[
+        "sweep",
+        &cfg,
+        "--quiet",
+        "--shard",
+        "1/1",
+        "--format",
+        "json",
+        "--out",
+        s(&tmp.path().join("s1")),
+    ]));
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(
+        (v["shard"].as_u64(), v["shards"].as_u64(), v["rows"].as_u64()),
+        (Some(1), Some(1), Some(12))
+    );
+    assert!(v.get("recommended").is_none(), "{v}");
+    let whole = ok(run(&[
+        "sweep",
+        &cfg,
+        "--quiet",
+        "--shard",
+        "1/1",
+        "--out",
+        s(&tmp.path().join("s1t")),
+    ]));
+    assert!(String::from_utf8_lossy(&whole.stdout).starts_with("small: shard 1 of 1: configurations 1–12 of 12\n"));
     let manifest: serde_json::Value =
         serde_json::from_slice(&std::fs::read(shard.join("shard.json")).unwrap()).unwrap();
     assert_eq!(manifest["shard"], 2);

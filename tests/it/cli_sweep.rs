@@ -467,3 +467,87 @@ fn a_preset_sweep_varies_only_the_axes_that_engine_has_and_each_row_equals_analy
     }
     assert!(!dir.path().join("bad").exists());
 }
+
+/// The recommended row of a `sweep.csv` and the distinct values of column `axis` (min, max).
+fn recommended_and_extremes(csv: &Path, axis: &str) -> (f64, f64, f64) {
+    let (header, rows) = read_csv(csv);
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("{name}: {header:?}"))
+    };
+    let (a, rec) = (col(axis), col("recommended"));
+    let values: Vec<f64> = rows.iter().map(|r| r[a].parse().unwrap()).collect();
+    let chosen = rows.iter().find(|r| r[rec] == "true").expect("a recommended row");
+    (
+        chosen[a].parse().unwrap(),
+        values.iter().copied().fold(f64::INFINITY, f64::min),
+        values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    )
+}
+
+#[test]
+fn a_recommendation_at_the_edge_of_a_swept_range_is_named_with_the_range_to_try_and_trying_it_moves_inside() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let run = |out: &Path, extra: &[&str]| {
+        let o = bin()
+            .current_dir(root)
+            .args([
+                "sweep",
+                "configs/default.toml",
+                "--preset",
+                "bevy",
+                "--no-plots",
+                "--out",
+            ])
+            .arg(out)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+        let rec: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("recommendation.json")).unwrap()).unwrap();
+        (String::from_utf8_lossy(&o.stdout).to_string(), rec)
+    };
+    let knob = "bevy.first_cascade_far_bound";
+    let first = tmp.path().join("first");
+    let (stdout, rec) = run(&first, &[]);
+    // From sweep.csv alone: the knob's recommended value is its largest (20 of 2.5 ... 20).
+    let (chosen, lo, hi) = recommended_and_extremes(&first.join("sweep.csv"), knob);
+    assert_eq!((chosen, lo, hi), (20.0, 2.5, 20.0));
+    // Bevy takes at most 4 cascades and 4096² is over the budget: the knob is the only edge.
+    let (c, _, c_hi) = recommended_and_extremes(&first.join("sweep.csv"), "cascades");
+    assert_eq!((c, c_hi), (4.0, 4.0));
+    assert_eq!(rec["range_edges"], serde_json::json!([knob]));
+    assert_eq!(rec["range_edge_suggestions"][0]["try"], "--knob 20,25,30,35,40,45");
+    assert!(
+        stdout.contains(
+            "range edge: bevy.first_cascade_far_bound 20 is the largest value swept: the best may lie beyond it; \
+             try --knob 20,25,30,35,40,45"
+        ),
+        "{stdout}"
+    );
+    let md = std::fs::read_to_string(first.join("report.md")).unwrap();
+    assert!(
+        md.contains("## Edges of the range\n\n- bevy.first_cascade_far_bound 20 is the largest"),
+        "{md}"
+    );
+    let html = std::fs::read_to_string(first.join("report.html")).unwrap();
+    assert!(html.contains("<h2>Edges of the range</h2>"));
+    // Sweeping what it suggests finds a better setting inside the new range, with no edge.
+    let next = tmp.path().join("next");
+    let (stdout, rec2) = run(&next, &["--knob", "20,25,30,35,40,45"]);
+    let (chosen2, lo2, hi2) = recommended_and_extremes(&next.join("sweep.csv"), knob);
+    assert!(lo2 < chosen2 && chosen2 < hi2, "{chosen2} in [{lo2}, {hi2}]");
+    assert_eq!(rec2["range_edges"], serde_json::json!([]));
+    assert!(!stdout.contains("range edge"), "{stdout}");
+    let objective = |v: &serde_json::Value| v["recommended"]["screen_aliasing_p95"].as_f64().unwrap();
+    assert!(
+        objective(&rec2) < objective(&rec),
+        "{} vs {}",
+        objective(&rec2),
+        objective(&rec)
+    );
+}

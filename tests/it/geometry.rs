@@ -329,7 +329,7 @@ fn gltf_triangles_carry_their_node_transforms() {
 }
 
 #[test]
-fn a_screen_rule_on_a_bounds_only_scene_is_not_applicable() {
+fn a_screen_rule_on_a_bounds_only_scene_is_an_error_saying_how_to_measure_it() {
     let dir = tempfile::tempdir().unwrap();
     let cfg = dir.path().join("scene.toml");
     std::fs::write(&cfg, crate::common::BASE).unwrap();
@@ -339,9 +339,15 @@ fn a_screen_rule_on_a_bounds_only_scene_is_not_applicable() {
         .args(["check", cfg.to_str().unwrap(), "--thresholds", t.to_str().unwrap()])
         .output()
         .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(out.status.code(), Some(0), "{stdout}");
-    assert!(stdout.contains("needs scene geometry"), "{stdout}");
+    // Not measured: no verdict on it (it used to read N/A and the gate passed).
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("rule[1].metric")
+            && stderr.contains("screen_aliasing_p95")
+            && stderr.contains("scene geometry"),
+        "{stderr}"
+    );
 }
 
 /// One sweep over both split ranges holds, row for row, the sweep fitted to the bounds and the

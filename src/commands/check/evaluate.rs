@@ -204,14 +204,23 @@ pub fn judge_value(rule: &Rule, v: Located) -> RuleResult {
 pub fn evaluate(rule: &Rule, a: &Analysis) -> Result<RuleResult> {
     let no_cascades = "no cascades: the scene is not visible within the shadow distance";
     match rule.target {
-        Target::Summary(m) if m.def().screen && a.summary.screen.is_none() => Ok(RuleResult::not_applicable(
-            rule,
-            format!(
-                "`{}` is a screen metric: it needs scene geometry (scene.ground, [[scene.box]] or scene.gltf)",
-                m.name()
-            ),
-        )),
+        // A rule on a metric this analysis did not measure cannot be judged: passing it on a
+        // 0 would hide a gate that checks nothing.
+        Target::Summary(m) if !m.measured(&a.summary) => Err(unmeasured(rule, m, &a.config.name)),
         Target::Summary(m) => Ok(judge_value(rule, Located::bare(m.value(&a.summary)))),
+        Target::Cascade(m, _) if a.cascades.iter().any(|c| !m.measured(c)) => Err(Error::from(ConfigError::Invalid {
+            location: format!("{}: ", rule.location),
+            key: format!("rule[{}].metric", rule.index),
+            value: format!("\"{}\"", m.name()),
+            allowed: format!(
+                "a metric the analysis of {} measures: the per-cascade `{}` was not measured, and a rule on it \
+                 would judge nothing; {}, or remove the rule",
+                a.config.name,
+                m.name(),
+                m.how_to_measure()
+            ),
+            excerpt: String::new(),
+        })),
         Target::Cascade(..) | Target::Depth(..) if !a.summary.cascades_needed => {
             Ok(RuleResult::not_applicable(rule, no_cascades))
         }
@@ -313,6 +322,23 @@ pub fn evaluate(rule: &Rule, a: &Analysis) -> Result<RuleResult> {
             })
         }
     }
+}
+
+/// The error of a rule on a summary metric `config` did not measure: the rule, its place and
+/// how to measure the metric.
+fn unmeasured(rule: &Rule, m: crate::metric::SummaryMetric, config: &str) -> Error {
+    Error::from(ConfigError::Invalid {
+        location: format!("{}: ", rule.location),
+        key: format!("rule[{}].metric", rule.index),
+        value: format!("\"{}\"", m.name()),
+        allowed: format!(
+            "a metric the analysis of {config} measures: `{}` was not measured, and a rule on it would judge \
+             nothing; {}, or remove the rule",
+            m.name(),
+            m.how_to_measure().unwrap_or("it is not measured for this config")
+        ),
+        excerpt: String::new(),
+    })
 }
 
 /// Evaluates every rule, in file order.

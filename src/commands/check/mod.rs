@@ -64,8 +64,32 @@ pub fn check_rows(
     rows: &[sweep::SweepRow],
     thresholds: &Thresholds,
     baseline: Option<(&str, &[sweep::SweepRow])>,
+    all_rows: bool,
 ) -> Result<CheckReport> {
-    let reports = sweep::evaluate_rows(&thresholds.rules, rows);
+    // A rule on a metric no row measured judges nothing: an error, as for one configuration.
+    for rule in &thresholds.rules {
+        if let thresholds::Target::Summary(m) = rule.target {
+            if !rows.is_empty() && rows.iter().all(|r| !r.metrics.contains_key(m.name())) {
+                return Err(crate::error::ConfigError::Invalid {
+                    location: format!("{}: ", rule.location),
+                    key: format!("rule[{}].metric", rule.index),
+                    value: format!("\"{}\"", m.name()),
+                    allowed: format!(
+                        "a metric the sweep rows of {} measure: `{}` was not measured in any row, and a rule on it \
+                         would judge nothing; {}, or remove the rule",
+                        config.name,
+                        m.name(),
+                        m.how_to_measure().unwrap_or("it is not a sweep column")
+                    ),
+                    excerpt: String::new(),
+                }
+                .into());
+            }
+        }
+    }
+    // What the sweep decides is gated; the baseline still compares every row.
+    let (gated_rows, gated) = sweep::gated_rows(config, rows.to_vec(), all_rows);
+    let reports = sweep::evaluate_rows(&thresholds.rules, &gated_rows);
     let baseline = baseline
         .map(|(file, base)| {
             Ok::<_, Error>(report::SweepBaseline {
@@ -82,6 +106,7 @@ pub fn check_rows(
         body: Body::Sweep {
             rows: reports,
             baseline,
+            gated,
         },
     })
 }

@@ -30,6 +30,8 @@ pub enum Body {
     Sweep {
         rows: Vec<RowReport>,
         baseline: Option<SweepBaseline>,
+        /// Which rows the rules judge, in one sentence ([`super::sweep::gated_rows`]).
+        gated: String,
     },
 }
 
@@ -88,7 +90,7 @@ impl CheckReport {
                     count_comparisons(&mut c, &b.comparisons);
                 }
             }
-            Body::Sweep { rows, baseline } => {
+            Body::Sweep { rows, baseline, .. } => {
                 count_results(&mut c, rows.iter().flat_map(|r| &r.results));
                 if let Some(b) = baseline {
                     count_comparisons(&mut c, b.comparison.matched.iter().flat_map(|r| &r.comparisons));

@@ -140,9 +140,12 @@ impl Eq for SweepKey {}
 #[derive(Debug, Clone, PartialEq)]
 pub struct SweepRow {
     pub key: SweepKey,
-    /// Metric name -> value (booleans as 1/0). The names are the registry's own (`&'static`):
-    /// a 100,000-row table holds no copy of them.
+    /// Metric name -> value (booleans as 1/0), the measured metrics only. The names are the
+    /// registry's own (`&'static`): a 100,000-row table holds no copy of them.
     pub metrics: BTreeMap<&'static str, f64>,
+    /// The sweep recommends this row's setting (`sweep.csv`'s `recommended` column; in a sun
+    /// sweep every sun angle's row of the setting).
+    pub recommended: bool,
 }
 
 impl SweepRow {
@@ -171,6 +174,63 @@ impl RowReport {
     pub fn passed(&self) -> bool {
         self.count(Status::Fail) == 0
     }
+}
+
+/// Whether `key` is the configured setting of `config` (as `csm-lab sweep` finds it: the swept
+/// knob and distance, when swept, at their configured values; every sun angle and light update
+/// rule of it).
+pub fn is_configured(config: &Config, key: &SweepKey) -> bool {
+    let c = &config.shadow;
+    let knob = crate::presets::axes(config).knob.map(|k| k.value);
+    key.knob.is_none_or(|k| Some(k) == knob)
+        && key.distance.is_none_or(|d| d == c.max_distance)
+        && key.lambda == c.lambda
+        && key.cascades as usize == c.cascades
+        && key.resolution == c.resolution
+        && key.fit == c.fit.name()
+        && key.split_range == SplitRange::of(c.fit_depth_to_visible)
+}
+
+/// The rows `check --sweep` gates: what the sweep decides, the recommendation's rows and the
+/// configured setting's rows (every row with `all_rows`), and the sentence that says so.
+pub fn gated_rows(config: &Config, rows: Vec<SweepRow>, all_rows: bool) -> (Vec<SweepRow>, String) {
+    let total = rows.len();
+    if all_rows {
+        return (
+            rows,
+            format!("gated: every one of the {total} configurations of the grid (--all-rows)"),
+        );
+    }
+    let rec = rows.iter().filter(|r| r.recommended).count();
+    let conf = rows.iter().filter(|r| is_configured(config, &r.key)).count();
+    let both = rows
+        .iter()
+        .filter(|r| r.recommended && is_configured(config, &r.key))
+        .count();
+    let kept: Vec<SweepRow> = rows
+        .into_iter()
+        .filter(|r| r.recommended || is_configured(config, &r.key))
+        .collect();
+    let what = |n: usize, name: &str| match n {
+        0 => format!("no {name} (not in the grid)"),
+        1 => format!("the {name}"),
+        n => format!("the {name} ({n} rows)"),
+    };
+    let recommendation = if rec == 0 {
+        "no recommendation (the sweep recommends nothing)".to_string()
+    } else {
+        what(rec, "recommendation")
+    };
+    let same = if both > 0 && both == rec && both == conf {
+        ", which is the configured setting".to_string()
+    } else {
+        format!(" and {}", what(conf, "configured setting"))
+    };
+    let text = format!(
+        "gated: {recommendation}{same}: {} of the grid's {total} configurations (--all-rows gates every one)",
+        kept.len()
+    );
+    (kept, text)
 }
 
 /// Judges every rule on every row, rows in the given order, rules in file order.
@@ -300,6 +360,7 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
     let distance_idx = column(DISTANCE_COLUMN);
     let sun_idx = column(SUN_COLUMNS[0]).zip(column(SUN_COLUMNS[1]));
     let light_update_idx = column(LIGHT_UPDATE_COLUMN);
+    let recommended_idx = column("recommended");
     let metric_cols: Vec<(usize, SummaryMetric)> = headers
         .iter()
         .enumerate()
@@ -366,7 +427,12 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
             .iter()
             .map(|&(i, m)| Ok((m.name(), number(i, m.name())?)))
             .collect::<Result<BTreeMap<_, _>>>()?;
-        rows.push(SweepRow { key, metrics });
+        let recommended = recommended_idx.is_some_and(|i| field(i) == "true");
+        rows.push(SweepRow {
+            key,
+            metrics,
+            recommended,
+        });
     }
     Ok(rows)
 }
@@ -425,9 +491,19 @@ pub fn sweep_rows_from_csv(config: &Config, path: &Path) -> Result<Vec<SweepRow>
 pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
     let grid = crate::commands::sweep::grid::Grid::resolve(config, &crate::config::sweep_spec::SweepAxes::default())?;
     let rows = crate::commands::sweep::run::run(config, &grid, None, &|| {})?;
-    Ok(rows
+    // The recommendation, as `csm-lab sweep` makes it (its `recommended` column).
+    let result = crate::commands::sweep::SweepResult::new(config.clone(), grid, rows, String::new())?;
+    let recommended: Vec<bool> = match (&result.sun, &result.recommendation) {
+        (_, None) => Vec::new(),
+        (None, Some(rec)) => (0..result.rows.len()).map(|i| i == rec.index).collect(),
+        (Some(sun), Some(rec)) => sun.setting_of.iter().map(|&j| j == rec.index).collect(),
+    };
+    let all = result.sun.as_ref().map_or(result.rows.clone(), |s| s.all.clone());
+    Ok(all
         .into_iter()
-        .map(|r| SweepRow {
+        .enumerate()
+        .map(|(i, r)| SweepRow {
+            recommended: recommended.get(i).copied().unwrap_or(false),
             key: SweepKey {
                 lambda: r.setting.lambda,
                 cascades: r.setting.cascades as u32,
@@ -439,7 +515,11 @@ pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
                 sun: r.setting.sun.map(|x| (x.azimuth_deg, x.elevation_deg)),
                 light_update: r.setting.light_update.map(crate::config::light_update_label),
             },
-            metrics: SummaryMetric::all().map(|m| (m.name(), m.value(&r.summary))).collect(),
+            // Only what was measured: an unmeasured metric has no value (never 0).
+            metrics: SummaryMetric::all()
+                .filter(|m| m.measured(&r.summary))
+                .map(|m| (m.name(), m.value(&r.summary)))
+                .collect(),
         })
         .collect())
 }

@@ -28,7 +28,7 @@ use self::flicker::FlickerSample;
 use self::grid::{FitGroup, Grid};
 use self::light::UpdateChoice;
 use self::optimize::Optimized;
-use self::rank::{Alternative, NoRecommendation, Recommendation, Rival};
+use self::rank::{Alternative, NoRecommendation, RangeEdge, Recommendation, Rival};
 use self::run::Row;
 use self::sun::SunRows;
 
@@ -66,6 +66,9 @@ pub struct SweepResult {
     /// The main rivals of the recommendation and why each lost ([`rank::rivals`]); empty
     /// without one.
     pub(crate) rivals: Vec<Rival>,
+    /// The swept axes at whose first or last value the recommendation sits, with the range to
+    /// try next ([`rank::range_edges`]); empty without a recommendation or when none is.
+    pub range_edges: Vec<RangeEdge>,
     /// The distinct fit groups of the rows, in order (one panel or series each in the figures).
     pub(crate) fit_groups: Vec<FitGroup>,
     /// The light update choice of a sweep with a light update axis ([`light::choose`]).
@@ -77,6 +80,10 @@ pub struct SweepResult {
     pub optimized: Option<Optimized>,
     /// S3, S4 and the measured flicker S5 of a sample of the rows (`--ground-truth`).
     pub flicker: Option<FlickerSample>,
+    /// `--shard K/N`: these rows are one slice of the grid, which decides nothing (only `merge`
+    /// of every slice does): the shard writes its rows, and no front, recommendation, report
+    /// or worst sun is read from it ([`SweepResult::into_slice`]).
+    pub slice: Option<shard::Shard>,
 }
 
 impl SweepResult {
@@ -109,6 +116,7 @@ impl SweepResult {
                 rank::rivals(&rows, rec, &ranked, configured, grid.lambda.values.len() > 1, objective),
             ),
         };
+        let range_edges = rank::range_edges(&config, &grid, &rows, recommendation.as_ref());
         let at = recommendation.as_ref().map(|x| x.index).or(configured).unwrap_or(0);
         let light_update = light::choose(&grid, &rows, at);
         let engine_setting = terms::for_sweep(
@@ -137,11 +145,19 @@ impl SweepResult {
             ranked,
             alternatives,
             rivals,
+            range_edges,
             light_update,
             engine_setting,
             optimized: None,
             flicker: None,
+            slice: None,
         })
+    }
+
+    /// The result of shard `shard`'s rows: `new`'s, marked as a slice ([`Self::slice`]).
+    pub fn into_slice(mut self, shard: shard::Shard) -> Self {
+        self.slice = Some(shard);
+        self
     }
 
     pub fn recommended(&self) -> Option<&Row> {

@@ -3,7 +3,7 @@
 
 use std::collections::BTreeSet;
 
-use crate::commands::sweep::grid::{FitGroup, Setting};
+use crate::commands::sweep::grid::{FitGroup, Grid, Setting};
 use crate::commands::sweep::run::Row;
 use crate::config::Config;
 use crate::metric::SummaryMetric;
@@ -505,6 +505,223 @@ pub(crate) fn rivals(
     out
 }
 
+// ---------------------------------------------------------------------------------------------
+// Edges of the swept range
+// ---------------------------------------------------------------------------------------------
+
+/// A swept axis whose recommended value is its smallest or largest value, with allowed values
+/// beyond it: the best may lie outside the range swept.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RangeEdge {
+    /// The axis as `sweep.csv` names its column (`lambda`, `cascades`, `resolution`, the
+    /// preset's knob key, `shadow.max_distance`).
+    pub axis: &'static str,
+    /// The flag that sweeps it (`--lambda`, `--knob`, ...).
+    pub flag: &'static str,
+    /// The recommended value, as written in the axis.
+    pub value: String,
+    /// True at the largest value swept, false at the smallest.
+    pub high: bool,
+    /// The values to sweep next: the edge and up to five steps beyond it, inside what the axis
+    /// allows (and, for more cascades or texels, inside the memory budget).
+    pub next: Vec<String>,
+}
+
+impl RangeEdge {
+    /// "largest" or "smallest".
+    pub fn side(&self) -> &'static str {
+        if self.high {
+            "largest"
+        } else {
+            "smallest"
+        }
+    }
+
+    /// The flag and values to try (`--knob 20,25,30`).
+    pub fn suggestion(&self) -> String {
+        format!("{} {}", self.flag, self.next.join(","))
+    }
+
+    /// One sentence for the reports.
+    pub fn text(&self) -> String {
+        format!(
+            "{} {} is the {} value swept: the best may lie beyond it; try {}",
+            self.axis,
+            self.value,
+            self.side(),
+            self.suggestion()
+        )
+    }
+}
+
+/// An axis, its flag, the recommended value and, when at an edge, (high, the values to try).
+type FoundEdge = (&'static str, &'static str, String, Option<(bool, Vec<String>)>);
+
+/// Most values beyond the edge a suggestion lists.
+const NEXT_STEPS: usize = 5;
+
+/// Rounds away binary noise of `edge ± k × step` (`0.1 × 3`), keeping 9 decimals.
+fn tidy(x: f64) -> f64 {
+    let r = (x * 1e9).round() / 1e9;
+    if r == 0.0 {
+        0.0
+    } else {
+        r
+    }
+}
+
+/// A number axis: the edge the value `v` is at among `values` (None inside or with one value),
+/// and the values to try beyond it, spaced by the step next to the edge, while `allowed`. None
+/// when nothing allowed lies beyond.
+fn number_edge(values: &[f64], v: f64, allowed: impl Fn(f64) -> bool) -> Option<(bool, Vec<f64>)> {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted.dedup();
+    let n = sorted.len();
+    if n < 2 {
+        return None;
+    }
+    let high = if v == sorted[n - 1] {
+        true
+    } else if v == sorted[0] {
+        false
+    } else {
+        return None;
+    };
+    let (step, dir) = if high {
+        (sorted[n - 1] - sorted[n - 2], 1.0)
+    } else {
+        (sorted[1] - sorted[0], -1.0)
+    };
+    let beyond: Vec<f64> = (1..=NEXT_STEPS.min(n.max(2)))
+        .map(|k| tidy(v + dir * step * k as f64))
+        .take_while(|&x| allowed(x))
+        .collect();
+    if beyond.is_empty() {
+        return None;
+    }
+    let mut next: Vec<f64> = std::iter::once(v).chain(beyond).collect();
+    next.sort_by(f64::total_cmp);
+    Some((high, next))
+}
+
+/// An ordered axis of whole values: the edge the value `v` is at among `values`, and the
+/// allowed values beyond it (`candidates`, ascending), for which `fits` holds.
+fn list_edge<T: Copy + PartialOrd>(
+    values: &[T],
+    v: T,
+    candidates: &[T],
+    fits: impl Fn(T) -> bool,
+) -> Option<(bool, Vec<T>)> {
+    let min = values.iter().copied().reduce(|a, b| if b < a { b } else { a })?;
+    let max = values.iter().copied().reduce(|a, b| if b > a { b } else { a })?;
+    if min.partial_cmp(&max) != Some(std::cmp::Ordering::Less) {
+        return None;
+    }
+    let high = if v == max {
+        true
+    } else if v == min {
+        false
+    } else {
+        return None;
+    };
+    let beyond: Vec<T> = if high {
+        candidates
+            .iter()
+            .copied()
+            .filter(|&c| c > v)
+            .take_while(|&c| fits(c))
+            .take(NEXT_STEPS)
+            .collect()
+    } else {
+        let below: Vec<T> = candidates.iter().copied().filter(|&c| c < v).collect();
+        below
+            .into_iter()
+            .rev()
+            .take_while(|&c| fits(c))
+            .take(NEXT_STEPS)
+            .collect()
+    };
+    if beyond.is_empty() {
+        return None;
+    }
+    let mut next: Vec<T> = std::iter::once(v).chain(beyond).collect();
+    next.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+    Some((high, next))
+}
+
+/// The swept axes (more than one value) at whose smallest or largest value the recommended row
+/// sits, with room beyond: values the recommended setting accepts with only that axis changed
+/// ([`Setting::apply`]: λ in [0, 1], the counts and map sizes the pipeline or preset allows, the
+/// preset's knob inside its bounds, a shadow distance above 0), resolutions by doubling or
+/// halving, and more cascades or texels only while the recommendation's memory, scaled by the
+/// count or the texel area, stays within the budget. The fit, split range, sun and light update
+/// axes are choices, not ranges. Empty without a recommendation.
+pub fn range_edges(config: &Config, grid: &Grid, rows: &[Row], rec: Option<&Recommendation>) -> Vec<RangeEdge> {
+    let Some(rec) = rec else {
+        return Vec::new();
+    };
+    let row = &rows[rec.index];
+    let st = row.setting;
+    let memory = row.summary.memory_bytes as f64;
+    let budget = rec.budget_bytes as f64;
+    let axes = crate::presets::axes(config);
+    // The recommended setting with one axis changed still applies to the config.
+    let applies = |s: Setting| s.apply(config).is_ok();
+    let num = |x: f64| x.to_string();
+    let texts = |found: Option<(bool, Vec<f64>)>| found.map(|(h, v)| (h, v.into_iter().map(num).collect()));
+    let whole =
+        |found: Option<(bool, Vec<usize>)>| found.map(|(h, v)| (h, v.iter().map(ToString::to_string).collect()));
+    let mut found: Vec<FoundEdge> = Vec::new();
+    if axes.lambda.is_some() {
+        let edge = number_edge(&grid.lambda.values, st.lambda, |x| {
+            (0.0..=1.0).contains(&x) && applies(Setting { lambda: x, ..st })
+        });
+        found.push(("lambda", "--lambda", num(st.lambda), texts(edge)));
+    }
+    let edge = list_edge(&grid.cascades.values, st.cascades, &axes.cascades, |c| {
+        (c < st.cascades || memory * c as f64 / st.cascades as f64 <= budget) && applies(Setting { cascades: c, ..st })
+    });
+    found.push(("cascades", "--cascades", st.cascades.to_string(), whole(edge)));
+    let ladder: Vec<usize> = (4..=14).map(|p| 1usize << p).collect();
+    let res = st.resolution as usize;
+    let resolutions: Vec<usize> = grid.resolution.values.iter().map(|&r| r as usize).collect();
+    let edge = list_edge(&resolutions, res, &ladder, |r| {
+        (r < res || memory * (r as f64 / res as f64).powi(2) <= budget)
+            && u32::try_from(r).is_ok_and(|r| applies(Setting { resolution: r, ..st }))
+    });
+    found.push(("resolution", "--resolution", res.to_string(), whole(edge)));
+    if let (Some(axis), Some(knob), Some(v)) = (&grid.knob, &axes.knob, st.knob) {
+        let edge = number_edge(&axis.values, v, |x| {
+            (knob.min..=knob.max).contains(&x) && applies(Setting { knob: Some(x), ..st })
+        });
+        found.push((knob.key, "--knob", num(v), texts(edge)));
+    }
+    if let (Some(axis), Some(v)) = (&grid.distance, st.distance) {
+        let edge = number_edge(&axis.values, v, |x| {
+            x > 0.0
+                && x <= 1e9
+                && applies(Setting {
+                    distance: Some(x),
+                    ..st
+                })
+        });
+        found.push(("shadow.max_distance", "--distance", num(v), texts(edge)));
+    }
+    found
+        .into_iter()
+        .filter_map(|(axis, flag, value, edge)| {
+            edge.map(|(high, next)| RangeEdge {
+                axis,
+                flag,
+                value,
+                high,
+                next,
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -743,5 +960,51 @@ mod tests {
         near[1].summary.max_aliasing = 5.0;
         near[2].summary.max_aliasing = 1.0;
         assert_eq!(recommend(&near, 64.0).unwrap().index, 1);
+    }
+
+    #[test]
+    fn number_edges_extend_the_range_by_its_edge_step_inside_the_domain() {
+        let unit = |x: f64| (0.0..=1.0).contains(&x);
+        let positive = |x: f64| x > 0.0;
+        // Inside the range, or a one-value axis: no edge.
+        assert_eq!(number_edge(&[0.2, 0.4, 0.6], 0.4, unit), None);
+        assert_eq!(number_edge(&[0.4], 0.4, unit), None);
+        // At the largest of 2.5, 5, 7.5, 10, 15, 20 (step 5 next to it): 20 and five steps up.
+        let knob = [2.5, 5.0, 7.5, 10.0, 15.0, 20.0];
+        assert_eq!(
+            number_edge(&knob, 20.0, positive),
+            Some((true, vec![20.0, 25.0, 30.0, 35.0, 40.0, 45.0]))
+        );
+        // The domain ends the suggestion: 0.8 of 0.6, 0.7, 0.8 steps to 0.9 and 1 only.
+        assert_eq!(
+            number_edge(&[0.8, 0.6, 0.7], 0.8, unit),
+            Some((true, vec![0.8, 0.9, 1.0]))
+        );
+        // At the domain's own end nothing lies beyond: not an edge to report.
+        assert_eq!(number_edge(&[0.5, 0.75, 1.0], 1.0, unit), None);
+        assert_eq!(number_edge(&[0.0, 0.5], 0.0, unit), None);
+        // The smallest value, an open lower bound: 50 of 50, 100 steps down to 0 (excluded).
+        assert_eq!(number_edge(&[50.0, 100.0], 50.0, positive), None);
+        assert_eq!(
+            number_edge(&[40.0, 60.0, 80.0], 40.0, positive),
+            Some((false, vec![20.0, 40.0]))
+        );
+    }
+
+    #[test]
+    fn whole_value_edges_stop_at_the_allowed_values_and_the_budget() {
+        let counts: Vec<usize> = (1..=16).collect();
+        assert_eq!(
+            list_edge(&[2, 4], 4, &counts, |_| true),
+            Some((true, vec![4, 5, 6, 7, 8, 9]))
+        );
+        assert_eq!(list_edge(&[2, 4], 4, &counts, |c| c <= 5), Some((true, vec![4, 5])));
+        assert_eq!(list_edge(&[2, 4], 4, &counts, |c| c <= 4), None);
+        assert_eq!(list_edge(&[2, 4], 2, &counts, |c| c < 2), Some((false, vec![1, 2])));
+        assert_eq!(list_edge(&[2, 4], 2, &counts, |_| false), None);
+        assert_eq!(list_edge(&[2, 3, 4], 3, &counts, |_| true), None);
+        assert_eq!(list_edge(&[4], 4, &counts, |_| true), None);
+        // A preset allowing 1..=4 cascades has nothing above 4.
+        assert_eq!(list_edge(&[2, 4], 4, &[1, 2, 3, 4], |_| true), None);
     }
 }
