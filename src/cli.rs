@@ -77,6 +77,10 @@ pub struct AnalyzeArgs {
     /// needed per cascade; bias.csv); as [analysis] ground_truth = true. Needs scene geometry.
     #[arg(long)]
     pub ground_truth: bool,
+    /// With --ground-truth: sample the maps with no bias at all (as [shadow] bias = "none"),
+    /// instead of the configured, engine or recommended bias.
+    #[arg(long)]
+    pub raw_bias: bool,
 }
 
 #[derive(Debug, Args)]
@@ -280,6 +284,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             all_frames: args.all_frames,
             engine_settings: args.engine_settings,
             ground_truth: args.ground_truth,
+            raw_bias: args.raw_bias,
         }),
         Command::Sweep(args) => sweep::execute(&sweep::SweepRequest {
             config: args.config,

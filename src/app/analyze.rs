@@ -26,6 +26,8 @@ pub struct AnalyzeRequest {
     pub engine_settings: Option<PathBuf>,
     /// `--ground-truth`: run the ground-truth pass (as `[analysis] ground_truth = true`).
     pub ground_truth: bool,
+    /// `--raw-bias`: the pass samples with no bias (as `[shadow] bias = "none"`).
+    pub raw_bias: bool,
 }
 
 /// The `analyze` command.
@@ -44,6 +46,16 @@ pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
     if args.ground_truth {
         crate::commands::flicker_sample::refuse_ground_truth(&config, "--ground-truth")?;
         config.truth.enabled = true;
+    }
+    if args.raw_bias {
+        if config.truth.bias_written() {
+            return Err(Error::flag(
+                "--raw-bias",
+                "",
+                "not with shadow.depth_bias, shadow.slope_bias or shadow.normal_bias set: those keys are the bias",
+            ));
+        }
+        config.truth.bias_mode = Some(crate::config::BiasMode::None);
     }
     let progress = super::progress::Progress::new(args.quiet, frames_walked(&config), "frames");
     let analysis = analyze_with_progress(&config, &AnalysisOptions::full(), &|n| progress.inc(n));

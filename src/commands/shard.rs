@@ -330,6 +330,11 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
                 aliasing_p99,
                 aliasing_max,
                 undersampled_fraction,
+                visible_mean,
+                visible_p50,
+                visible_p95,
+                visible_p99,
+                visible_max,
                 visible_z_lo,
                 visible_z_hi,
                 cascade_pixels,
@@ -345,6 +350,11 @@ pub fn rows_text<'a>(rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String
                     undersampled_fraction,
                     visible_z_lo,
                     visible_z_hi,
+                    visible_mean,
+                    visible_p50,
+                    visible_p95,
+                    visible_p99,
+                    visible_max,
                 ];
                 let all: Vec<String> = fixed.into_iter().chain(cascade_pixels).map(|x| hex(*x)).collect();
                 out.push_str(&all.join(","));
@@ -451,10 +461,10 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
             "-" => None,
             s => {
                 let x: Vec<f64> = s.split(',').map(float).collect::<Result<_>>()?;
-                if x.len() < 10 {
+                if x.len() < 15 {
                     return Err(bad(
                         n,
-                        format!("the screen field has {} numbers; it has at least 10", x.len()),
+                        format!("the screen field has {} numbers; it has at least 15", x.len()),
                     ));
                 }
                 Some(ScreenStats {
@@ -468,7 +478,12 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                     undersampled_fraction: x[7],
                     visible_z_lo: x[8],
                     visible_z_hi: x[9],
-                    cascade_pixels: x[10..].to_vec(),
+                    visible_mean: x[10],
+                    visible_p50: x[11],
+                    visible_p95: x[12],
+                    visible_p99: x[13],
+                    visible_max: x[14],
+                    cascade_pixels: x[15..].to_vec(),
                 })
             }
         };

@@ -174,3 +174,14 @@ pub const EEVEE_BIAS_FACTOR: f64 = 0.05;
 pub const EEVEE_LAMP_BIAS: f64 = 1.0;
 /// The Unity sample's clip-space bias.
 pub const UNITY_SAMPLE_CLIP_BIAS: f64 = 0.005;
+
+/// The filter of an engine's shadow lookups (docs/presets.md, "Filter"): the two seeds that
+/// compare point-sampled texels read nearest; engines sample with a comparison sampler and
+/// linear filtering (hardware PCF), as csm-lab's own pipeline does.
+pub fn engine_filter(name: PresetName) -> crate::core::truth::PcfFilter {
+    use crate::core::truth::PcfFilter;
+    match name {
+        PresetName::LearnOpenGl | PresetName::UnitySample => PcfFilter::Nearest,
+        _ => PcfFilter::Bilinear,
+    }
+}

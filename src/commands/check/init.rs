@@ -26,7 +26,8 @@ pub fn limit(m: SummaryMetric, value: Value, headroom: f64) -> Option<(&'static 
     }
     let room = |v: f64| (headroom * v.abs()).max(FLOOR);
     match (m.direction(), value) {
-        (Direction::Neither, _) => None,
+        // Nothing measured: nothing to limit.
+        (Direction::Neither, _) | (_, Value::Missing) => None,
         (Direction::HigherIsWorse, Value::Count(n)) => {
             Some(("max", ((n as f64) * (1.0 + headroom)).floor().max(n as f64).to_string()))
         }
