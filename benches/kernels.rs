@@ -9,17 +9,17 @@ use std::path::Path;
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::{DVec2, DVec3};
 
+use csm_core::cascades::{LightPose, Rig};
+use csm_core::depth_range;
+use csm_core::fitting::{minimal_sphere, Window};
+use csm_core::geometry::{Lens, LightBasis};
+use csm_core::mesh::Mesh;
+use csm_core::snapping::SnapRule;
+use csm_core::splits;
+use csm_core::visibility::SceneGeometry;
 use csm_lab::analysis::{analyze, AnalysisOptions};
-use csm_lab::cascades::{LightPose, Rig};
+use csm_lab::commands::sweep::{self, Grid, GridOverrides};
 use csm_lab::config::Config;
-use csm_lab::depth_range;
-use csm_lab::fitting::{minimal_sphere, Window};
-use csm_lab::geometry::{Lens, LightBasis};
-use csm_lab::mesh::Mesh;
-use csm_lab::snapping::SnapRule;
-use csm_lab::splits;
-use csm_lab::sweep::{self, Grid, GridOverrides};
-use csm_lab::visibility::SceneGeometry;
 
 fn default_config() -> Config {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/default.toml");
@@ -202,7 +202,7 @@ fn engine_terms(c: &mut Criterion) {
 /// is one analysis; with screen metrics, the rays are cast once (shared by every angle) and each
 /// angle shades them (lit flag, geometric factor, receivers sorted) before its analysis.
 fn sun_angle(c: &mut Criterion) {
-    use csm_lab::sweep::Sun;
+    use csm_lab::commands::sweep::Sun;
     let config = default_config();
     let mut bounds_only = config.clone();
     bounds_only.geometry = None;
@@ -247,7 +247,7 @@ fn sun_angle(c: &mut Criterion) {
     group.bench_function("visibility_shade_one_light", |b| {
         b.iter(|| {
             k += 1;
-            let v = csm_lab::visibility::View {
+            let v = csm_core::visibility::View {
                 light: suns[k % suns.len()].light_direction(),
                 ..view
             };
@@ -261,7 +261,7 @@ fn sun_angle(c: &mut Criterion) {
 /// receiver) and one unsnapped path frame (every texel new), reported as rays per second by
 /// criterion's throughput; the texel-cache hit rate of a whole 240-frame walk is printed.
 fn ground_truth(c: &mut Criterion) {
-    use csm_lab::core::truth::{self, DepthFormat, Sampling};
+    use csm_core::truth::{self, DepthFormat, Sampling};
     let config = default_config();
     let setup = config.setup();
     let vis = setup.visibility().expect("default scene has geometry");
@@ -277,7 +277,7 @@ fn ground_truth(c: &mut Criterion) {
         pcf: 1,
         filter: truth::PcfFilter::Bilinear,
     };
-    let poses = || csm_lab::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
+    let poses = || csm_core::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
     for snapped in [true, false] {
         let f = truth::flicker(&scene, &rig, &rig.light, poses(), snapped, &points, &s, &mut |_, _| {});
         println!(

@@ -9,12 +9,12 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 
+use csm_core::shade::{FlipImage, Shade, ShadeImage};
 use csm_lab::config::Config;
 use csm_lab::figures::truth::{
     flicker_png, shadow_png, write_animation, AnimationPlan, FlickerVsShimmer, Panel, ShimmerPoint, ANIMATION_CAPS,
 };
 use csm_lab::figures::Figure;
-use csm_lab::shade::{FlipImage, Shade, ShadeImage};
 
 fn default_images() -> (ShadeImage, ShadeImage, FlipImage) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/default.toml");

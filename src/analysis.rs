@@ -1,16 +1,18 @@
 //! One configuration, measured end to end: depth range, splits, windows, density, closed-form
 //! aggregates, shimmer with and without snapping, coverage and light depth ranges.
 
-use crate::cascades::{LightPose, Rig};
 use crate::config::Config;
-use crate::depth_range::{self, DepthRange};
-use crate::geometry::CameraPose;
-use crate::metrics::{self, Aggregates, DensitySample};
-use crate::precision::{self, LookupError, Precision};
-use crate::screen::{self, ScreenStats};
-use crate::seams;
-use crate::shimmer::{self, PathResult, ShimmerOptions};
-use crate::visibility::Visibility;
+use csm_core::cascades::{LightPose, Rig};
+use csm_core::depth_range::{self, DepthRange};
+use csm_core::geometry::CameraPose;
+use csm_core::metrics::{self, Aggregates, DensitySample};
+use csm_core::precision::{self, LookupError};
+use csm_core::rig_path;
+use csm_core::scene::Precision;
+use csm_core::screen::{self, ScreenStats};
+use csm_core::seams;
+use csm_core::shimmer::{PathResult, ShimmerOptions};
+use csm_core::visibility::Visibility;
 use glam::DVec2;
 
 pub mod ground_truth;
@@ -220,7 +222,7 @@ pub struct CascadeReport {
     pub light: Option<CascadeLight>,
     /// This cascade's ground truth at frame 0, when the pass ran; the registry writes it.
     #[serde(skip)]
-    pub truth: Option<crate::core::truth::CascadeTruth>,
+    pub truth: Option<csm_core::truth::CascadeTruth>,
 }
 
 /// One cascade's crawl (configured snapping) and jump (windows without snapping) under a
@@ -374,13 +376,13 @@ pub fn rig(config: &Config) -> Option<Rig> {
 
 /// The light of every frame as the walks read it, when the light moves (None under a still
 /// light): the used direction of each frame, turned into a basis by the pipeline's rule.
-pub fn light_track(config: &Config, first_frame: usize) -> Option<crate::light_motion::LightTrack<'_>> {
-    config.motion.light.moves().then(|| crate::light_motion::LightTrack {
+pub fn light_track(config: &Config, first_frame: usize) -> Option<csm_core::light_motion::LightTrack<'_>> {
+    config.motion.light.moves().then(|| csm_core::light_motion::LightTrack {
         motion: &config.motion.light,
         start: config.light_direction,
         basis: match &config.shadow.preset {
             Some(p) => crate::presets::light_basis_rule(p),
-            None => crate::geometry::LightBasis::new,
+            None => csm_core::geometry::LightBasis::new,
         },
         first_frame,
     })
@@ -392,7 +394,7 @@ pub fn f32_range_problem(config: &Config) -> Option<String> {
     let rig = rig(config)?;
     // An invalid path is reported by its own check; the poses are generated, not kept.
     let setup = config.setup();
-    let poses = crate::motion::poses(&setup.camera, &setup.motion);
+    let poses = csm_core::motion::poses(&setup.camera, &setup.motion);
     if poses.clone().any(|p| p.is_err()) {
         return None;
     }
@@ -401,7 +403,7 @@ pub fn f32_range_problem(config: &Config) -> Option<String> {
 }
 
 /// Frames per walk of [`each_frame_row`]: at most this many frames' rows are in memory.
-const FULL_SERIES_CHUNK: usize = crate::shimmer::MAX_FRAME_ROWS;
+const FULL_SERIES_CHUNK: usize = csm_core::shimmer::MAX_FRAME_ROWS;
 
 /// Every frame's shimmer rows of every motion path, in `shimmer.csv`'s order (path, then the
 /// snapped and the unsnapped mode, then frame, then cascade), handed to `emit` as they are
@@ -412,7 +414,7 @@ const FULL_SERIES_CHUNK: usize = crate::shimmer::MAX_FRAME_ROWS;
 pub fn each_frame_row(
     config: &Config,
     opts: &AnalysisOptions,
-    emit: &mut dyn FnMut(&'static str, &crate::shimmer::FrameShimmer) -> crate::error::Result<()>,
+    emit: &mut dyn FnMut(&'static str, &csm_core::shimmer::FrameShimmer) -> crate::error::Result<()>,
 ) -> crate::error::Result<()> {
     let Some(rig) = rig(config) else {
         return Ok(());
@@ -425,28 +427,28 @@ pub fn each_frame_row(
     };
     let probes = if config.shadow.precision == Precision::F32
         || config.motion.light.moves()
-        || shimmer::needs_probes(&rig, sopts)
+        || rig_path::needs_probes(&rig, sopts)
     {
-        shimmer::probes(&rig, &pose0, &config.scene, config.analysis.probes)
+        rig_path::probes(&rig, &pose0, &config.scene, config.analysis.probes)
     } else {
         Vec::new()
     };
     let setup = config.setup();
     let paths = std::iter::once((config.motion.path.name(), setup.motion.clone())).chain(config.extra_motions());
     for (name, motion) in paths {
-        let frames = crate::motion::poses(&setup.camera, &motion).len();
+        let frames = csm_core::motion::poses(&setup.camera, &motion).len();
         for snapped in [true, false] {
             let mut start = 0;
             while start + 1 < frames {
                 let take = FULL_SERIES_CHUNK.min(frames - start);
-                let poses = crate::motion::poses(&setup.camera, &motion)
+                let poses = csm_core::motion::poses(&setup.camera, &motion)
                     .skip(start)
                     .take(take)
                     .map(|p| p.expect("validated when the config was loaded"));
                 let rows = match config.shadow.precision {
                     Precision::F64 => {
                         let light = light_track(config, start);
-                        shimmer::along_path_lit(&rig, poses, &probes, light, snapped, sopts).frames
+                        rig_path::along_path_lit(&rig, poses, &probes, light, snapped, sopts).frames
                     }
                     Precision::F32 => {
                         let space = config.shadow.snap_space;
@@ -497,7 +499,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
 pub fn frames_walked(config: &Config) -> u64 {
     // A path file has as many frames as rows; every further path has `motion.frames`.
     let setup = config.setup();
-    let first = crate::motion::poses(&setup.camera, &setup.motion).len() as u64;
+    let first = csm_core::motion::poses(&setup.camera, &setup.motion).len() as u64;
     2 * (first + config.motion.extra.len() as u64 * config.motion.frames as u64)
 }
 
@@ -607,9 +609,9 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
     // (the f32 emulation always looks probes up: its drift and lookup error are per probe).
     let probes = if config.shadow.precision == Precision::F32
         || config.motion.light.moves()
-        || shimmer::needs_probes(&rig, sopts)
+        || rig_path::needs_probes(&rig, sopts)
     {
-        shimmer::probes(&rig, &pose0, &config.scene, config.analysis.probes)
+        rig_path::probes(&rig, &pose0, &config.scene, config.analysis.probes)
     } else {
         Vec::new()
     };
@@ -623,7 +625,7 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
         let k = all.len().div_ceil(SEAM_RECEIVERS).max(1);
         all.into_iter().step_by(k).collect()
     } else {
-        shimmer::probes(&rig, &pose0, &config.scene, SEAM_PROBES.min(config.analysis.probes))
+        rig_path::probes(&rig, &pose0, &config.scene, SEAM_PROBES.min(config.analysis.probes))
             .into_iter()
             .flatten()
             .collect()
@@ -633,9 +635,9 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
     // two snap modes walk on their own threads: each mode's totals are the same, bit for bit,
     // as in one walk of both (`along_path_both`).
     let setup = config.setup();
-    let walk = |motion: &crate::scene::Motion| {
+    let walk = |motion: &csm_core::scene::Motion| {
         let generated =
-            || crate::motion::poses(&setup.camera, motion).map(|p| p.expect("validated when the config was loaded"));
+            || csm_core::motion::poses(&setup.camera, motion).map(|p| p.expect("validated when the config was loaded"));
         let frames = generated().len();
         // A path of up to HELD_POSES frames is generated once and read by both walks (a
         // sweep's paths are short: generating each pose twice cost it a sixth of its time);
@@ -663,9 +665,9 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
         let walked = match config.shadow.precision {
             Precision::F64 => {
                 let light = light_track(config, 0);
-                let one = |snapped| shimmer::along_path_lit(&rig, poses(), &probes, light, snapped, sopts);
+                let one = |snapped| rig_path::along_path_lit(&rig, poses(), &probes, light, snapped, sopts);
                 let (s, u) = if batch {
-                    shimmer::along_path_both_lit(&rig, poses(), &probes, light, sopts)
+                    rig_path::along_path_both_lit(&rig, poses(), &probes, light, sopts)
                 } else {
                     rayon::join(|| one(true), || one(false))
                 };
@@ -869,7 +871,12 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
 
 /// Per cascade: the area of the light-space bounding rectangle of the lit-facing receiver
 /// points it serves (clipped to its window) over the window's area; 0 when it serves none.
-pub fn texel_utilization(vis: &Visibility, rig: &Rig, lp: &LightPose, windows: &[crate::fitting::Window]) -> Vec<f64> {
+pub fn texel_utilization(
+    vis: &Visibility,
+    rig: &Rig,
+    lp: &LightPose,
+    windows: &[csm_core::fitting::Window],
+) -> Vec<f64> {
     let m = rig.cascade_count();
     let bases: Vec<_> = (0..m).map(|i| rig.basis(i, lp)).collect();
     let mut lo = vec![DVec2::splat(f64::INFINITY); m];

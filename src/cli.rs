@@ -8,7 +8,7 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::app::{analyze, bench, check, compare, merge, stress, sweep};
 use crate::error::Result;
-use crate::precision::Precision;
+use csm_core::scene::Precision;
 
 pub use crate::app::{Format, Outcome};
 

@@ -3,7 +3,8 @@
 //! spaces. Each row is an ordinary config run through the ordinary analysis.
 
 use crate::config::Config;
-use crate::precision::{ulp32, Precision, SnapSpace};
+use csm_core::precision::ulp32;
+use csm_core::scene::{Precision, SnapSpace};
 
 /// World offsets of the drift table (world units, along +x).
 pub const DRIFT_OFFSETS: [f64; 5] = [0.0, 1e3, 1e4, 1e5, 1e6];
@@ -39,7 +40,7 @@ pub struct DriftRow {
 /// that its snapped window is `window` units wide at 2048², everything moved by
 /// `[offset, 0, 0]`.
 pub fn drift_scene_toml(window: f64, offset: f64, precision: Precision, space: SnapSpace) -> String {
-    let lens = crate::geometry::Lens::new(60f64.to_radians(), 1920.0 / 1080.0);
+    let lens = csm_core::geometry::Lens::new(60f64.to_radians(), 1920.0 / 1080.0);
     let n = DRIFT_RESOLUTION as f64;
     // Far-cap case of the minimal sphere (c = f, R = k f, which holds for k^2 >= 1), and the
     // round rule's border W = 2R N / (N - 1): solve for the far distance.

@@ -10,7 +10,7 @@
 use crate::analysis::{CascadeReport, Summary};
 use crate::error::Result;
 use crate::output::num;
-use crate::scene::SplitRange;
+use csm_core::scene::SplitRange;
 
 /// Which way a metric gets worse.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]

@@ -69,7 +69,7 @@ pub fn metric_suggestion<'a>(name: &str, names: &[&'a str]) -> Option<&'a str> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::check::metric::all_names;
+    use crate::commands::check::metric::all_names;
 
     #[test]
     fn metric_suggestions_know_near_synonyms() {

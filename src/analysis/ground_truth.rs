@@ -1,14 +1,13 @@
 //! The ground-truth pass of one analysis: frame 0's receivers sampled through the maps with the
 //! configured bias (acne, leaks, the bias needed per cascade, peter-panning) and S5 flicker along
 //! the motion path in both snap modes, with the pictures' data (frame-0 states, flip rates and
-//! every k-th frame's states). The math is [`crate::core::truth`].
+//! every k-th frame's states). The math is [`csm_core::truth`].
 
-use crate::cascades::{LightPose, Rig};
-use crate::config::BiasMode;
-use crate::config::Config;
-use crate::core::shade::{FlipImage, ShadeImage};
-use crate::core::truth::{self, Bias, CacheStats, CascadeTruth, Flicker, PcfFilter, PointZero, Receiver, Sampling};
+use crate::config::{BiasMode, Config};
 use crate::presets::bias::{engine_bias, engine_filter, EngineBias};
+use csm_core::cascades::{LightPose, Rig};
+use csm_core::shade::{FlipImage, ShadeImage};
+use csm_core::truth::{self, Bias, CacheStats, CascadeTruth, Flicker, PcfFilter, PointZero, Receiver, Sampling};
 
 /// At most this many frames of the path are kept as pictures for the animation (every k-th).
 pub const ANIMATION_FRAMES: usize = 24;
@@ -213,11 +212,11 @@ pub fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
     let cascades = truth::cascade_truth(&zero, m, &sampling);
     let [acne, edge, leak] = truth::error_fractions(&zero).unwrap_or([0.0; 3]);
 
-    let frames = crate::motion::poses(&setup.camera, &setup.motion).len();
+    let frames = csm_core::motion::poses(&setup.camera, &setup.motion).len();
     let every = frames.div_ceil(ANIMATION_FRAMES).max(1);
     let (cols, rows) = (vis.cols, vis.rows);
     let walk = |snapped: bool| {
-        let poses = crate::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
+        let poses = csm_core::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
         let mut frame0 = ShadeImage::empty(cols, rows);
         let mut animation = Vec::new();
         let f = truth::flicker(

@@ -5,8 +5,8 @@ use super::{default_out_dir, load_with_engine_settings, load_with_preset_flag, p
 use crate::analysis::{analyze_with_progress, frames_walked, AnalysisOptions};
 use crate::error::{ConfigError, Error, Result};
 use crate::output;
-use crate::precision::Precision;
 use crate::report;
+use csm_core::scene::Precision;
 use std::path::PathBuf;
 
 /// What `analyze` was asked to do (the command line's flags, as plain values).

@@ -7,7 +7,7 @@
 //! * **Density profile** (`analysis.density_samples`, log-spaced depths in `density.csv`).
 //!   Integrating the profile (trapezoid rule, in depth and in log depth; linear interpolation
 //!   of the crossing at aliasing 1) should give back the closed-form mean aliasing, mean log
-//!   aliasing and under-sampled fraction of [`crate::metrics::aggregates`].
+//!   aliasing and under-sampled fraction of [`csm_core::metrics::aggregates`].
 //! * **Probes** (`analysis.probes`, world-fixed receivers per cascade). S4 under an unsnapped
 //!   strafe has the closed form `|dx| + |dy| - |dx||dy|` per frame pair (sub-texel shift
 //!   `(dx, dy)` from the window origins); S3 (RMS and max) under a yaw of the tight AABB fit,
@@ -23,12 +23,13 @@
 
 use std::time::Instant;
 
-use crate::cascades::{LightPose, Rig};
 use crate::config::{Config, Fit, MotionPath};
 use crate::error::{Error, GridError, Result};
-use crate::metrics::{self, DensitySample};
-use crate::shimmer::{self, wrap, ShimmerOptions};
-use crate::walk::PathModel;
+use csm_core::cascades::{LightPose, Rig};
+use csm_core::metrics::{self, DensitySample};
+use csm_core::rig_path;
+use csm_core::shimmer::{wrap, ShimmerOptions};
+use csm_core::walk::PathModel;
 
 /// The relative error the summary table asks each metric to reach.
 pub const TARGET_ERROR: f64 = 1e-3;
@@ -173,7 +174,7 @@ fn with_path(config: &Config, path: MotionPath, step_deg: f64, frames: usize, fi
     config.with_fit(fit)?.with_motion(path, frames, step_deg)
 }
 
-fn poses_of(config: &Config) -> Result<Vec<crate::geometry::CameraPose>> {
+fn poses_of(config: &Config) -> Result<Vec<csm_core::geometry::CameraPose>> {
     config.camera_path().map_err(|(frame, why)| {
         unusable(format!(
             "the {} path of this camera is invalid at frame {frame} ({why}); use a camera that is not looking straight up or down",
@@ -271,9 +272,9 @@ fn bench_cell_flips(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -
     let m = rig.cascade_count();
     let mut sum = 0.0;
     let mut pairs = 0usize;
-    let mut prev: Vec<Option<crate::fitting::Window>> = vec![None; m];
-    let mut model = shimmer::RigPath::new(&rig, &[]);
-    crate::walk::each_cascade_frame(&mut model, &poses, |model, _t, i, shared| {
+    let mut prev: Vec<Option<csm_core::fitting::Window>> = vec![None; m];
+    let mut model = rig_path::RigPath::new(&rig, &[]);
+    csm_core::walk::each_cascade_frame(&mut model, &poses, |model, _t, i, shared| {
         let w = model.window(i, shared, false).window;
         if let Some(p) = prev[i] {
             let dx = wrap(p.origin_texels.x - w.origin_texels.x).abs();
@@ -291,8 +292,8 @@ fn bench_cell_flips(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -
     let pose0 = c.camera.pose();
     for n in counts(0, MAX_PROBES_LOG2, config.analysis.probes) {
         let (seconds, result) = best_time(repeats, || {
-            let probes = shimmer::probes(&rig, &pose0, &c.scene, n);
-            shimmer::along_path(&rig, &poses, &probes, false, opts)
+            let probes = rig_path::probes(&rig, &pose0, &c.scene, n);
+            rig_path::along_path(&rig, &poses, &probes, false, opts)
         });
         let estimate = result.stats.cell_flip_rate.expect("requested");
         rows.push(BenchRow::measured(
@@ -313,8 +314,8 @@ fn bench_aabb_drift(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -
     let poses = poses_of(&c)?;
     let pose0 = c.camera.pose();
     let measure = |n: usize| {
-        let probes = shimmer::probes(&rig, &pose0, &c.scene, n);
-        shimmer::along_path(&rig, &poses, &probes, true, NO_PROBE_OPTIONS).stats
+        let probes = rig_path::probes(&rig, &pose0, &c.scene, n);
+        rig_path::along_path(&rig, &poses, &probes, true, NO_PROBE_OPTIONS).stats
     };
     let dense = measure(DENSE_PROBES);
     for n in counts(0, MAX_PROBES_LOG2, config.analysis.probes) {
@@ -342,7 +343,7 @@ fn bench_frames(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Re
     let rig = crate::analysis::rig(&long).expect("checked by the caller");
     let reference = {
         let poses = poses_of(&long)?;
-        shimmer::along_path(&rig, &poses, &[], false, NO_PROBE_OPTIONS)
+        rig_path::along_path(&rig, &poses, &[], false, NO_PROBE_OPTIONS)
             .stats
             .rms
     };
@@ -350,7 +351,7 @@ fn bench_frames(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Re
         let c = with_path(config, MotionPath::Yaw, YAW_STEP_DEG, n, Fit::Sphere)?;
         let (seconds, estimate) = best_time(repeats, || -> Result<f64> {
             let poses = poses_of(&c)?;
-            Ok(shimmer::along_path(&rig, &poses, &[], false, NO_PROBE_OPTIONS)
+            Ok(rig_path::along_path(&rig, &poses, &[], false, NO_PROBE_OPTIONS)
                 .stats
                 .rms)
         });
@@ -463,8 +464,8 @@ pub const DEFAULT_SCENE: &str = include_str!("../../configs/default.toml");
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Lens;
-    use crate::splits::practical;
+    use csm_core::geometry::Lens;
+    use csm_core::splits::practical;
 
     /// The trapezoid integrals of a profile converge on the closed forms as the profile
     /// gets denser (second order: 4x fewer error per doubling, within a margin).
@@ -504,7 +505,7 @@ mod tests {
                 let s = practical(n, f, cascades, 0.75);
                 let t: Vec<f64> = s
                     .windows(2)
-                    .map(|w| 2.0 * crate::fitting::minimal_sphere(w[0], w[1], lens.k2()).radius / 2048.0)
+                    .map(|w| 2.0 * csm_core::fitting::minimal_sphere(w[0], w[1], lens.k2()).radius / 2048.0)
                     .collect();
                 let agg = metrics::aggregates(&s, &t, lens.pixels_per_unit_slope(1080));
                 let err = |count: usize| {

@@ -130,7 +130,7 @@ pub fn run_with_progress(
         .collect::<Result<Vec<_>>>()?;
     let mut configs = configs;
     for &range in own {
-        crate::sweep::check_split_ranges(&scene, &[range], range.name())?;
+        crate::commands::sweep::check_split_ranges(&scene, &[range], range.name())?;
         let mut own_config = scene.clone();
         own_config.shadow.preset = None;
         configs.push(own_config.with_split_range(range)?);

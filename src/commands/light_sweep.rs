@@ -1,8 +1,8 @@
 //! A sweep over the light update rule (`--light-update`, `[sweep] light_update`): the largest
 //! update step whose jumps stay under one texel.
 
-use crate::light_motion::LightUpdate;
-use crate::sweep::SweepResult;
+use crate::commands::sweep::SweepResult;
+use csm_core::light_motion::LightUpdate;
 
 /// A jump under this many texels is no visible jump.
 pub const CALM_JUMP: f64 = 1.0;
@@ -48,8 +48,8 @@ pub fn choose(r: &SweepResult) -> Option<UpdateChoice> {
         .or_else(|| r.configured())
         .unwrap_or(0);
     let base = r.rows.get(at)?.setting;
-    let same = |s: &crate::sweep::Setting| {
-        crate::sweep::Setting {
+    let same = |s: &crate::commands::sweep::Setting| {
+        crate::commands::sweep::Setting {
             light_update: base.light_update,
             ..*s
         } == base

@@ -21,9 +21,9 @@ use rayon::prelude::*;
 
 use crate::analysis::{analyze, AnalysisOptions, Summary};
 use crate::config::Config;
-use crate::core::free_splits::{round_significant, valid, FractionSpace};
 use crate::error::{GridError, Result};
 use crate::metric::SummaryMetric;
+use csm_core::free_splits::{round_significant, valid, FractionSpace};
 
 use super::sweep::{acceptable, decimal_range, Grid, Row, Setting};
 

@@ -14,12 +14,12 @@
 use std::fmt::Write as _;
 
 use crate::analysis::{LightSummary, Summary};
+use crate::commands::sweep::{Grid, GridFlags, Row, Setting};
 use crate::config::Config;
 use crate::config::{Fit, SplitRange};
 use crate::error::{Error, Result, ShardError};
-use crate::light_motion::LightUpdate;
-use crate::screen::ScreenStats;
-use crate::sweep::{Grid, GridFlags, Row, Setting};
+use csm_core::light_motion::LightUpdate;
+use csm_core::screen::ScreenStats;
 
 /// The shard's description, beside its other files.
 pub const MANIFEST_FILE: &str = "shard.json";
@@ -501,7 +501,7 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                     distance: optional_float(f[26])?,
                     sun: match (optional_float(f[27])?, optional_float(f[28])?) {
                         (None, None) => None,
-                        (Some(azimuth_deg), Some(elevation_deg)) => Some(crate::sweep::Sun {
+                        (Some(azimuth_deg), Some(elevation_deg)) => Some(crate::commands::sweep::Sun {
                             azimuth_deg,
                             elevation_deg,
                         }),

@@ -36,8 +36,8 @@ use rayon::prelude::*;
 use crate::analysis::{analyze, Analysis, AnalysisOptions};
 use crate::config::{Config, Fit};
 use crate::error::Result;
-use crate::precision::{Precision, SnapSpace};
-use crate::rng::SplitMix64;
+use csm_core::rng::SplitMix64;
+use csm_core::scene::{Precision, SnapSpace};
 
 /// The largest f64 stabilised drift accepted (texels per frame): rounding residue of an exact
 /// snap, far below anything visible (docs/metrics.md, "Shimmer").

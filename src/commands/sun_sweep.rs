@@ -25,9 +25,9 @@ use glam::DVec3;
 use super::sweep::{parse_number_spec, Axis, Row};
 use crate::config::sweep_spec::{sun_azimuth_ok, sun_elevation_ok};
 use crate::config::Config;
-use crate::core::sun::SunAngles;
 use crate::error::Result;
 use crate::metric::SummaryMetric;
+use csm_core::sun::SunAngles;
 
 /// A sun position of a sweep, in degrees as written on the command line or in the file.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -282,8 +282,8 @@ pub fn bounds_only_note(config: &Config, fits: &[crate::config::Fit]) -> Option<
 mod tests {
     use super::*;
     use crate::analysis::Summary;
+    use crate::commands::sweep::Setting;
     use crate::config::{Fit, SplitRange};
-    use crate::sweep::Setting;
 
     fn row(cascades: usize, sun: Sun, mean: f64, shimmer: f64, misses: u64) -> Row {
         Row {
@@ -326,7 +326,7 @@ mod tests {
 
     #[test]
     fn judging_takes_the_worst_angle_and_the_worst_gate_values_of_each_setting() {
-        let mut rng = crate::rng::SplitMix64::new(3);
+        let mut rng = csm_core::rng::SplitMix64::new(3);
         let suns: Vec<Sun> = (0..6)
             .map(|k| Sun {
                 azimuth_deg: 60.0 * k as f64,

@@ -13,8 +13,8 @@ use rayon::prelude::*;
 use crate::analysis::{analyze, AnalysisOptions, Summary};
 use crate::config::{Config, Fit, SplitRange};
 use crate::error::{Error, GridError, Result};
-use crate::light_motion::LightUpdate;
 use crate::metric::SummaryMetric;
+use csm_core::light_motion::LightUpdate;
 
 pub use crate::commands::sun_sweep::{parse_sun_azimuth_spec, parse_sun_elevation_spec, Sun, SunGrid, SunRows};
 
@@ -1626,7 +1626,7 @@ mod tests {
 
     #[test]
     fn pareto_front_is_exactly_the_non_dominated_rows() {
-        let mut rng = crate::rng::SplitMix64::new(11);
+        let mut rng = csm_core::rng::SplitMix64::new(11);
         for _ in 0..50 {
             let rows: Vec<Row> = (0..60)
                 .map(|_| {
@@ -1664,7 +1664,7 @@ mod tests {
     }
 
     /// Random rows with ties in memory, objective and shimmer, some unacceptable.
-    fn random_rows(rng: &mut crate::rng::SplitMix64, n: usize) -> Vec<Row> {
+    fn random_rows(rng: &mut csm_core::rng::SplitMix64, n: usize) -> Vec<Row> {
         let mib = 1024 * 1024;
         (0..n)
             .map(|_| {
@@ -1690,7 +1690,7 @@ mod tests {
     fn alternatives_are_what_a_brute_force_search_finds() {
         let objective = SummaryMetric::named("mean_aliasing");
         let obj = |r: &Row| r.summary.mean_aliasing;
-        let mut rng = crate::rng::SplitMix64::new(5);
+        let mut rng = csm_core::rng::SplitMix64::new(5);
         let mut seen = [0usize; 3];
         for round in 0..400 {
             let rows = random_rows(&mut rng, 5 + round % 40);

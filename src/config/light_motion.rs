@@ -8,7 +8,7 @@ use glam::DVec3;
 use super::location::Validator;
 use super::schema::{RawLightUpdate, RawMotion};
 use crate::error::{Error, Result};
-use crate::light_motion::{sun_at, LightMotion, LightPath, LightUpdate};
+use csm_core::light_motion::{sun_at, LightMotion, LightPath, LightUpdate};
 
 /// At most this many direction rows (the `motion.frames` limit).
 const MAX_ROWS: usize = super::path_file::MAX_PATH_ROWS;

@@ -25,12 +25,12 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use crate::geometry::{Aabb, CameraPose};
-pub use crate::scene::{ShadowParams, SplitRange};
+use csm_core::geometry::{Aabb, CameraPose};
+pub use csm_core::scene::{ShadowParams, SplitRange};
 
-pub use crate::fitting::Fit;
-pub use crate::motion::MotionPath;
-pub use crate::precision::{Precision, SnapSpace};
+pub use csm_core::fitting::Fit;
+pub use csm_core::scene::MotionPath;
+pub use csm_core::scene::{Precision, SnapSpace};
 pub use gltf_file::read_gltf;
 pub use path_file::read_path_file;
 
@@ -251,7 +251,7 @@ pub struct MotionSettings {
     pub extra: Vec<ExtraPath>,
     /// The light's motion (`motion.light_path`) and the engine's update rule
     /// (`shadow.light_update`); still by default.
-    pub light: crate::light_motion::LightMotion,
+    pub light: csm_core::light_motion::LightMotion,
 }
 
 /// A further motion path of `motion.paths`, with its own step.
@@ -272,8 +272,8 @@ impl MotionSettings {
 }
 
 /// The light's motion in the echo (nothing under a still light, so the echo is as before).
-fn light_echo(light: &crate::light_motion::LightMotion, motion: &mut serde_json::Value) {
-    use crate::light_motion::{LightPath, LightUpdate};
+fn light_echo(light: &csm_core::light_motion::LightMotion, motion: &mut serde_json::Value) {
+    use csm_core::light_motion::{LightPath, LightUpdate};
     match &light.path {
         LightPath::Still => return,
         LightPath::Sun { azimuth, elevation } => {
@@ -344,7 +344,7 @@ pub struct GeometrySettings {
     pub boxes: Vec<Aabb>,
     /// `[scene] gltf`, resolved against the config's folder.
     pub gltf: Option<PathBuf>,
-    pub scene: Arc<crate::visibility::SceneGeometry>,
+    pub scene: Arc<csm_core::visibility::SceneGeometry>,
 }
 
 impl GeometrySettings {
@@ -405,11 +405,11 @@ pub struct TruthSettings {
     pub slope_bias: Option<f64>,
     /// `[shadow] normal_bias` (texels along the normal).
     pub normal_bias: Option<f64>,
-    pub depth_format: crate::core::truth::DepthFormat,
+    pub depth_format: csm_core::truth::DepthFormat,
     /// PCF kernel width in texels: 1, 3 or 5.
     pub pcf: u32,
     /// `[shadow] pcf_filter`; None: the preset engine's filter, else bilinear.
-    pub pcf_filter: Option<crate::core::truth::PcfFilter>,
+    pub pcf_filter: Option<csm_core::truth::PcfFilter>,
     /// `[shadow] bias = "none" | "recommended"` (or `analyze --raw-bias`, which is "none");
     /// None: the bias keys, else the preset's engine bias, else the recommended bias.
     pub bias_mode: Option<BiasMode>,
@@ -440,7 +440,7 @@ impl Default for TruthSettings {
             depth_bias: None,
             slope_bias: None,
             normal_bias: None,
-            depth_format: crate::core::truth::DepthFormat::D32F,
+            depth_format: csm_core::truth::DepthFormat::D32F,
             pcf: 1,
             pcf_filter: None,
             bias_mode: None,
@@ -573,8 +573,8 @@ impl Config {
 
     /// The validated settings as the core's plain domain values (radians, unit light
     /// direction, world offset already applied).
-    pub fn setup(&self) -> crate::scene::Setup {
-        use crate::scene::{Camera, Geometry, Motion, Setup};
+    pub fn setup(&self) -> csm_core::scene::Setup {
+        use csm_core::scene::{Camera, Geometry, Motion, Setup};
         let s = &self.shadow;
         Setup {
             camera: Camera {
@@ -607,17 +607,17 @@ impl Config {
     /// Camera poses of every frame of the motion path, or the first invalid frame and why.
     pub fn camera_path(&self) -> std::result::Result<Vec<CameraPose>, (usize, String)> {
         let setup = self.setup();
-        crate::motion::camera_path(&setup.camera, &setup.motion)
+        csm_core::motion::camera_path(&setup.camera, &setup.motion)
     }
 
     /// Each further path of `motion.paths` (after the first), with its name, as a motion of
     /// the configured frame count.
-    pub fn extra_motions(&self) -> Vec<(&'static str, crate::scene::Motion)> {
+    pub fn extra_motions(&self) -> Vec<(&'static str, csm_core::scene::Motion)> {
         self.motion
             .extra
             .iter()
             .map(|e| {
-                let motion = crate::scene::Motion {
+                let motion = csm_core::scene::Motion {
                     path: e.path.clone(),
                     frames: self.motion.frames,
                     step: e.step,
@@ -637,7 +637,7 @@ impl Config {
             .chain(self.extra_motions().into_iter().map(|(_, m)| m))
             .enumerate()
         {
-            if let Some(Err((frame, why))) = crate::motion::poses(&setup.camera, &motion).find(|p| p.is_err()) {
+            if let Some(Err((frame, why))) = csm_core::motion::poses(&setup.camera, &motion).find(|p| p.is_err()) {
                 return Err((k, frame, why));
             }
         }

@@ -148,7 +148,7 @@ pub(crate) struct RawShadow {
     pub(crate) snap_space: Option<String>,
     pub(crate) preset: Option<String>,
     pub(crate) light_update: Option<RawLightUpdate>,
-    /// Ground truth's bias model (`crate::core::truth`).
+    /// Ground truth's bias model (`csm_core::truth`).
     pub(crate) depth_bias: Option<f64>,
     pub(crate) slope_bias: Option<f64>,
     pub(crate) normal_bias: Option<f64>,

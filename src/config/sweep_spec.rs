@@ -35,7 +35,7 @@ pub struct SweepSpec {
     pub sun_elevation: Option<Axis<f64>>,
     /// `light_update = ["every:1", "every:4", "quantize:0.5"]`: the engine's light update rule
     /// (a moving light only).
-    pub light_update: Option<Axis<crate::light_motion::LightUpdate>>,
+    pub light_update: Option<Axis<csm_core::light_motion::LightUpdate>>,
     /// Memory budget for the recommendation, MiB (2^20 bytes).
     pub memory_budget_mib: Option<f64>,
     /// A larger grid is an error, not an out-of-memory.

@@ -8,8 +8,8 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::error::Result;
-use crate::geometry::Aabb;
-use crate::precision::{Precision, SnapSpace};
+use csm_core::geometry::Aabb;
+use csm_core::scene::{Precision, SnapSpace};
 
 use super::schema::{RawConfig, RawFile};
 use super::*;
@@ -214,7 +214,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         ..Default::default()
     };
     if let Some(f) = &s.depth_format {
-        use crate::core::truth::DepthFormat;
+        use csm_core::truth::DepthFormat;
         truth.depth_format = v.one_of(
             "shadow.depth_format",
             f,
@@ -226,7 +226,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         )?;
     }
     if let Some(f) = &s.pcf_filter {
-        use crate::core::truth::PcfFilter;
+        use csm_core::truth::PcfFilter;
         truth.pcf_filter = Some(v.one_of(
             "shadow.pcf_filter",
             f,
@@ -590,7 +590,7 @@ fn scene(
         })?;
         return Ok((bounds, None));
     }
-    let mut mesh = crate::mesh::Mesh::default();
+    let mut mesh = csm_core::mesh::Mesh::default();
     let mut boxes = Vec::new();
     for (i, b) in raw.boxes.iter().flatten().enumerate() {
         let lo = moved("scene.box.min", b.min)?;
@@ -668,14 +668,14 @@ fn scene(
         ground,
         boxes,
         gltf,
-        scene: Arc::new(crate::visibility::SceneGeometry::new(mesh)),
+        scene: Arc::new(csm_core::visibility::SceneGeometry::new(mesh)),
     };
     Ok((bounds, Some(geometry)))
 }
 
 /// `shadow.splits`: `cascades − 1` fractions of the split range, strictly increasing inside
 /// (0, 1). The error names the key, the value and what is allowed.
-fn split_fractions(v: &Validator<'_>, x: &[f64], cascades: usize) -> Result<crate::core::free_splits::SplitFractions> {
+fn split_fractions(v: &Validator<'_>, x: &[f64], cascades: usize) -> Result<csm_core::free_splits::SplitFractions> {
     let allowed = format!(
         "{} fraction{} of the split range (shadow.cascades − 1), strictly increasing and strictly between 0 and 1, \
          e.g. {}",
@@ -691,12 +691,12 @@ fn split_fractions(v: &Validator<'_>, x: &[f64], cascades: usize) -> Result<crat
             &format!("{allowed} (got {} for {cascades} cascades)", x.len()),
         ));
     }
-    crate::core::free_splits::SplitFractions::new(x).ok_or_else(|| v.invalid("shadow.splits", &shown, &allowed))
+    csm_core::free_splits::SplitFractions::new(x).ok_or_else(|| v.invalid("shadow.splits", &shown, &allowed))
 }
 
 /// An example of `cascades − 1` valid split fractions (the logarithmic split of 0.1 to 100).
 fn example_fractions(cascades: usize) -> String {
-    let space = crate::core::free_splits::FractionSpace {
+    let space = csm_core::free_splits::FractionSpace {
         lo: 0.0,
         hi: 100.0,
         start: 0.1,
@@ -704,7 +704,7 @@ fn example_fractions(cascades: usize) -> String {
     let f: Vec<String> = space
         .practical(cascades, 0.75)
         .iter()
-        .map(|p| crate::core::free_splits::round_significant(*p, 2).to_string())
+        .map(|p| csm_core::free_splits::round_significant(*p, 2).to_string())
         .collect();
     format!("[{}]", f.join(", "))
 }

@@ -9,9 +9,9 @@ use super::{
     texels_per_pixel_chart, tick, Figure, Legend, PlotResult, FONT, LEGEND_FONT,
 };
 use crate::analysis::Analysis;
-use crate::cascades::{bounds_2d, LightPose};
 use crate::error::Result;
 use crate::output::Exporter;
+use csm_core::cascades::{bounds_2d, LightPose};
 
 /// Texels per pixel against view depth, log-log, with split lines and the ideal 1.
 pub struct DensityFigure<'a>(pub &'a Analysis);
@@ -98,10 +98,10 @@ impl Figure for ShimmerFigure<'_> {
             return draw_message(root, &title, "No cascades needed: nothing can shimmer.");
         };
         let frames = a.config.motion.frames;
-        let per_frame = |p: &crate::shimmer::PathResult| -> Vec<(f64, f64)> {
+        let per_frame = |p: &csm_core::shimmer::PathResult| -> Vec<(f64, f64)> {
             let m = a.cascades.len().max(1);
             // Long paths keep every stride-th frame's rows (see `frame_row_stride`).
-            let stride = crate::shimmer::frame_row_stride(frames);
+            let stride = csm_core::shimmer::frame_row_stride(frames);
             let mut acc = vec![0.0; frames / stride + 1];
             for f in &p.frames {
                 acc[f.frame / stride] += f.phase_drift_rms * f.phase_drift_rms / m as f64;

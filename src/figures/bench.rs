@@ -7,7 +7,7 @@ use super::{
     draw_legend_below, legend_frame, legend_height, log_axis, log_range, series_color, tick, Figure, Legend,
     PlotResult, FONT, LEGEND_FONT,
 };
-use crate::bench::{BenchReport, BenchRow, TARGET_ERROR};
+use crate::commands::bench::{BenchReport, BenchRow, TARGET_ERROR};
 use crate::error::Result;
 use crate::output::Exporter;
 

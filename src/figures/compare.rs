@@ -10,7 +10,7 @@ use super::{
     texels_per_pixel_chart, tick, Figure, Legend, PlotResult, FONT, LEGEND_FONT,
 };
 use crate::analysis::Analysis;
-use crate::compare::{coverage_extremes, invalid_reason, label, Comparison};
+use crate::commands::compare::{coverage_extremes, invalid_reason, label, Comparison};
 use crate::error::Result;
 use crate::output::Exporter;
 

@@ -14,8 +14,8 @@ use plotters::style::RGBColor;
 use super::{colormap, encode_png, series_color, svg_to_rgb, FONT};
 use crate::analysis::Analysis;
 use crate::error::Result;
-use crate::metrics::cascade_at;
 use crate::output::Exporter;
+use csm_core::metrics::cascade_at;
 
 const SKY: [u8; 3] = [236, 236, 236];
 const SELF_SHADOWED: [u8; 3] = [70, 70, 70];

@@ -6,7 +6,7 @@ use plotters::prelude::*;
 
 use super::sweep::{draw_heat_panel, focus, metric_unit, setting_words, HeatPanel};
 use super::{draw_message, tick, Figure, PlotResult, FONT};
-use crate::sweep::SweepResult;
+use crate::commands::sweep::SweepResult;
 
 /// The objective over the sun angles of a sun sweep ([`crate::commands::sun_sweep`]).
 pub struct QualityVsSunFigure<'a>(pub &'a SweepResult);

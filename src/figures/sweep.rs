@@ -10,8 +10,8 @@ use super::{
     PlotResult, FONT, LEGEND_FONT,
 };
 use crate::analysis::{analyze, mib, Analysis, AnalysisOptions};
+use crate::commands::sweep::{self, Row, Setting, SweepResult};
 use crate::metric::SummaryMetric;
-use crate::sweep::{self, Row, Setting, SweepResult};
 
 /// The configuration the figures single out: the recommended one, or when nothing qualifies the
 /// one that comes closest (false), or None when no configuration needs cascades.

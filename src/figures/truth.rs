@@ -38,9 +38,9 @@ use super::{
     colormap, draw_legend_below, draw_message, encode_png, legend_frame, legend_height, linear_axis, nice_ticks,
     series_color, short, svg_to_rgb, tick, Figure, Legend, PlotResult, FONT, LEGEND_FONT,
 };
-use crate::core::shade::{FlipImage, Shade, ShadeImage};
 use crate::error::{PlotError, Result};
 use crate::output::StreamedFile;
+use csm_core::shade::{FlipImage, Shade, ShadeImage};
 
 // ---------------------------------------------------------------------------------------------
 // Colours and layout

@@ -85,7 +85,7 @@ impl Config {
     pub fn with_splits(&self, fractions: &[f64]) -> Result<Config> {
         let mut c = self.clone();
         let n = c.shadow.cascades;
-        match crate::core::free_splits::SplitFractions::new(fractions) {
+        match csm_core::free_splits::SplitFractions::new(fractions) {
             Some(f) if f.len() + 1 == n => c.shadow.splits = Some(f),
             _ => {
                 return Err(self.refuse(

@@ -5,12 +5,12 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use crate::cascades::{LightDepthRule, WindowRule};
+use csm_core::cascades::{LightDepthRule, WindowRule};
 use crate::config::Validator;
 use crate::error::Result;
-use crate::fitting::slice_diameter;
-use crate::geometry::LightBasis;
-use crate::snapping::{SnapMode, SnapRule};
+use csm_core::fitting::slice_diameter;
+use csm_core::geometry::LightBasis;
+use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
 

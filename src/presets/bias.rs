@@ -3,7 +3,7 @@
 //! user changes, so a recommended world-unit bias can be given back in the engine's terms.
 //! The conversions are documented in `docs/presets.md`.
 
-use crate::core::truth::{BiasRule, NormalOffset};
+use csm_core::truth::{BiasRule, NormalOffset};
 
 use super::PresetName;
 
@@ -178,8 +178,8 @@ pub const UNITY_SAMPLE_CLIP_BIAS: f64 = 0.005;
 /// The filter of an engine's shadow lookups (docs/presets.md, "Filter"): the two seeds that
 /// compare point-sampled texels read nearest; engines sample with a comparison sampler and
 /// linear filtering (hardware PCF), as csm-lab's own pipeline does.
-pub fn engine_filter(name: PresetName) -> crate::core::truth::PcfFilter {
-    use crate::core::truth::PcfFilter;
+pub fn engine_filter(name: PresetName) -> csm_core::truth::PcfFilter {
+    use csm_core::truth::PcfFilter;
     match name {
         PresetName::LearnOpenGl | PresetName::UnitySample => PcfFilter::Nearest,
         _ => PcfFilter::Bilinear,

@@ -5,9 +5,9 @@ use serde::{Deserialize, Serialize};
 
 use glam::DVec3;
 
-use crate::cascades::{BasisRule, LightDepthRule};
+use csm_core::cascades::{BasisRule, LightDepthRule};
 use crate::error::Result;
-use crate::fitting::far_cap_sphere;
+use csm_core::fitting::far_cap_sphere;
 
 use super::*;
 

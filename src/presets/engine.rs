@@ -5,12 +5,12 @@ use glam::{DVec2, DVec3};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
-use crate::cascades::{BasisRule, LightDepthRule, WindowRule};
 use crate::config::{Fit, Validator};
 use crate::error::Result;
-use crate::fitting::Sphere;
-use crate::geometry::{Aabb, Lens, LightBasis};
-use crate::snapping::{SnapMode, SnapRule};
+use csm_core::cascades::{BasisRule, LightDepthRule, WindowRule};
+use csm_core::fitting::Sphere;
+use csm_core::geometry::{Aabb, Lens, LightBasis};
+use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::{fit_split_knob, Dims, Fields, Knobs, Layout, Target, Terms, Values};
 

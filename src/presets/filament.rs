@@ -7,10 +7,10 @@ use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
-use crate::cascades::{BasisRule, LightDepthRule};
+use csm_core::cascades::{BasisRule, LightDepthRule};
 use crate::error::Result;
-use crate::fitting::corner_average_sphere;
-use crate::snapping::{SnapMode, SnapRule};
+use csm_core::fitting::corner_average_sphere;
+use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
 

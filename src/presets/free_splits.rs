@@ -9,8 +9,8 @@
 //! LearnOpenGL and the Unity sample (fixed fractions in code).
 
 use crate::config::Config;
-use crate::core::free_splits::{valid, FractionSpace};
 use crate::error::Result;
+use csm_core::free_splits::{valid, FractionSpace};
 
 use super::filament::FilamentSplit;
 use super::*;

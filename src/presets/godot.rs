@@ -4,10 +4,10 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::cascades::LightDepthRule;
+use csm_core::cascades::LightDepthRule;
 use crate::error::Result;
-use crate::fitting::corner_average_sphere;
-use crate::snapping::{SnapMode, SnapRule};
+use csm_core::fitting::corner_average_sphere;
+use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
 

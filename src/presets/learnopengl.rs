@@ -5,10 +5,10 @@ use serde::{Deserialize, Serialize};
 
 use glam::{DVec2, DVec3};
 
-use crate::cascades::{BasisRule, LightDepthRule, WindowRule};
+use csm_core::cascades::{BasisRule, LightDepthRule, WindowRule};
 use crate::config::Fit;
 use crate::error::Result;
-use crate::fitting::minimal_sphere;
+use csm_core::fitting::minimal_sphere;
 
 use super::*;
 

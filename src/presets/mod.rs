@@ -7,7 +7,7 @@
 //!
 //! Parts: `engine` (the trait and its object-safe form), `shared` (split, fit and validation
 //! helpers several engines use), `apply` (choosing a preset and applying it to a validated
-//! config), `rig` (the [`crate::cascades::Rig`] of a preset), `report` (what an analysis reports
+//! config), `rig` (the [`csm_core::cascades::Rig`] of a preset), `report` (what an analysis reports
 //! about a preset), `sweep` (the axes a sweep may vary), `terms` (a setting written in the
 //! engine's own configuration language, and read back) and `closest` (the engine's split
 //! knobs matched to csm-lab's cascades).
@@ -286,8 +286,8 @@ pub fn lambda_value(k: &Knobs) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fitting::minimal_sphere;
-    use crate::geometry::Lens;
+    use csm_core::fitting::minimal_sphere;
+    use csm_core::geometry::Lens;
 
     #[test]
     fn closest_names_and_list_parsing() {
@@ -322,7 +322,7 @@ mod tests {
 
     #[test]
     fn unreal_sphere_is_the_minimal_sphere() {
-        let mut rng = crate::rng::SplitMix64::new(11);
+        let mut rng = csm_core::rng::SplitMix64::new(11);
         for _ in 0..200 {
             let lens = Lens::new(rng.range(0.1, 2.0), rng.range(0.3, 3.0));
             let n = rng.range(0.05, 50.0);

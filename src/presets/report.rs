@@ -2,9 +2,9 @@
 
 use serde::Serialize;
 
-use crate::cascades::{LightDepth, LightPose, Rig};
-use crate::geometry::Aabb;
-use crate::snapping::SnapMode;
+use csm_core::cascades::{LightDepth, LightPose, Rig};
+use csm_core::geometry::Aabb;
+use csm_core::snapping::SnapMode;
 
 use super::*;
 

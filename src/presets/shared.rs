@@ -8,7 +8,7 @@ use serde::de::{DeserializeOwned, DeserializeSeed, IgnoredAny, MapAccess, Visito
 
 use crate::config::{toml_error, Validator};
 use crate::error::Result;
-use crate::geometry::Aabb;
+use csm_core::geometry::Aabb;
 
 /// Where a preset's cascades are, before the camera's planes clip the selection.
 #[derive(Debug, Clone, PartialEq)]
@@ -239,16 +239,18 @@ pub fn centre(scene: &Aabb) -> DVec3 {
 /// light depth fitted to the scene: how the closed-source Unity pipelines are modelled.
 pub fn minimal_sphere_scheme(f: &super::Fitting<'_>) -> super::EngineScheme {
     let k2 = f.lens.k2();
-    let s = f.spheres(|a, b| crate::fitting::minimal_sphere(a, b, k2));
+    let s = f.spheres(|a, b| csm_core::fitting::minimal_sphere(a, b, k2));
     let sides = s
         .iter()
-        .map(|s| crate::fitting::Window::side_with_border(2.0 * s.radius, f.resolution, f.snap_rule.max_shift_texels()))
+        .map(|s| {
+            csm_core::fitting::Window::side_with_border(2.0 * s.radius, f.resolution, f.snap_rule.max_shift_texels())
+        })
         .collect();
     super::EngineScheme::fixed(
         "sphere",
         super::Fitting::axis(&s),
         sides,
-        crate::cascades::LightDepthRule::Scene,
+        csm_core::cascades::LightDepthRule::Scene,
     )
 }
 

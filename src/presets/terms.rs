@@ -561,7 +561,7 @@ mod tests {
 
     #[test]
     fn numbers_are_written_so_they_read_back_exactly() {
-        let mut rng = crate::rng::SplitMix64::new(3);
+        let mut rng = csm_core::rng::SplitMix64::new(3);
         for _ in 0..2000 {
             let x = rng.range(-1.0, 1.0) * 10f64.powi((rng.range(-12.0, 12.0)) as i32);
             let s = number(x);

@@ -5,10 +5,10 @@
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
-use crate::cascades::{LightDepthRule, WindowRule};
+use csm_core::cascades::{LightDepthRule, WindowRule};
 use crate::error::Result;
-use crate::fitting::slice_diameter;
-use crate::snapping::{SnapMode, SnapRule};
+use csm_core::fitting::slice_diameter;
+use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
 

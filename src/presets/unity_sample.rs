@@ -3,10 +3,10 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::cascades::{LightDepthRule, WindowRule};
+use csm_core::cascades::{LightDepthRule, WindowRule};
 use crate::config::Fit;
 use crate::error::Result;
-use crate::fitting::minimal_sphere;
+use csm_core::fitting::minimal_sphere;
 
 use super::*;
 

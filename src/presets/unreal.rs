@@ -4,11 +4,11 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::cascades::LightDepthRule;
+use csm_core::cascades::LightDepthRule;
 use crate::error::Result;
-use crate::fitting::Sphere;
-use crate::geometry::Lens;
-use crate::snapping::{SnapMode, SnapRule};
+use csm_core::fitting::Sphere;
+use csm_core::geometry::Lens;
+use csm_core::snapping::{SnapMode, SnapRule};
 
 use super::*;
 

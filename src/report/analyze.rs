@@ -113,7 +113,7 @@ const SHIMMER_COLUMNS: [&str; 8] = [
 ];
 
 /// One row of `shimmer.csv`: path `name`'s frame row `f`.
-fn shimmer_row(name: &str, f: &crate::shimmer::FrameShimmer) -> Result<Vec<String>> {
+fn shimmer_row(name: &str, f: &csm_core::shimmer::FrameShimmer) -> Result<Vec<String>> {
     Ok(vec![
         f.frame.to_string(),
         f.cascade.to_string(),
@@ -223,7 +223,7 @@ pub fn summary_value(a: &Analysis) -> serde_json::Value {
         "cascades".into(),
         serde_json::to_value(&a.cascades).expect("plain struct"),
     );
-    let path_json = |p: Option<&crate::shimmer::PathResult>| {
+    let path_json = |p: Option<&csm_core::shimmer::PathResult>| {
         p.map(|p| {
             serde_json::json!({
                 "rms": p.stats.rms,
@@ -365,7 +365,7 @@ pub fn summary_table(a: &Analysis) -> String {
             r.coverage_violations
         );
     }
-    let f32_block = c.shadow.precision == crate::precision::Precision::F32;
+    let f32_block = c.shadow.precision == csm_core::scene::Precision::F32;
     let screen_line = |k: &str| metric::SummaryMetric::named(k).def().screen;
     for (k, v, what) in metric::summary_lines(s, false) {
         if !screen_line(k) {
@@ -443,7 +443,7 @@ pub fn output_problems(a: &Analysis) -> (usize, Vec<String>) {
 
 /// The heading of the screen block: what was sampled and the visible depths, or why the
 /// block is all zero.
-fn screen_heading(a: &Analysis, st: &crate::screen::ScreenStats) -> String {
+fn screen_heading(a: &Analysis, st: &csm_core::screen::ScreenStats) -> String {
     let c = &a.config;
     let view = c.setup().view();
     let (cols, rows) = view.map_or((0, 0), |v| v.grid());

@@ -2,7 +2,7 @@
 
 use std::fmt::Write as _;
 
-use crate::bench::{BenchReport, TARGET_ERROR};
+use crate::commands::bench::{BenchReport, TARGET_ERROR};
 use crate::error::Result;
 use crate::output::{csv_bytes, num, short_number, Exporter};
 

@@ -5,11 +5,11 @@ use std::fmt::Write as _;
 
 use serde_json::{json, Map, Value};
 
-use crate::check::baseline::{Comparison, Tolerances, Verdict};
-use crate::check::evaluate::{short, Bound, RuleResult, Status};
-use crate::check::report::{Body, CheckReport};
-use crate::check::sweep::SweepKey;
-use crate::check::thresholds::{CascadeSelection, Target};
+use crate::commands::check::baseline::{Comparison, Tolerances, Verdict};
+use crate::commands::check::evaluate::{short, Bound, RuleResult, Status};
+use crate::commands::check::report::{Body, CheckReport};
+use crate::commands::check::sweep::SweepKey;
+use crate::commands::check::thresholds::{CascadeSelection, Target};
 
 /// Offenders listed per rule and regressions listed in the `--sweep` summary.
 const WORST_LISTED: usize = 3;
@@ -29,8 +29,8 @@ impl CheckReport {
     /// its largest regressions.
     fn sweep_summary(
         &self,
-        rows: &[crate::check::sweep::RowReport],
-        baseline: Option<&crate::check::report::SweepBaseline>,
+        rows: &[crate::commands::check::sweep::RowReport],
+        baseline: Option<&crate::commands::check::report::SweepBaseline>,
     ) -> String {
         let mut out = String::new();
         let c = self.counts();
@@ -56,7 +56,7 @@ impl CheckReport {
         ]];
         let mut offenders: Vec<String> = Vec::new();
         for k in 0..rule_count {
-            let results: Vec<(&crate::check::sweep::SweepKey, &RuleResult)> =
+            let results: Vec<(&crate::commands::check::sweep::SweepKey, &RuleResult)> =
                 rows.iter().map(|r| (&r.key, &r.results[k])).collect();
             let first = results[0].1;
             let n = |s: Status| results.iter().filter(|(_, r)| r.status == s).count();
@@ -126,7 +126,7 @@ impl CheckReport {
                 );
             }
             out.push_str(&tolerance_line(&self.tolerances));
-            let mut regressions: Vec<(&crate::check::sweep::SweepKey, &Comparison)> = cmp
+            let mut regressions: Vec<(&crate::commands::check::sweep::SweepKey, &Comparison)> = cmp
                 .matched
                 .iter()
                 .flat_map(|r| r.comparisons.iter().map(move |x| (&r.key, x)))
@@ -165,7 +165,7 @@ impl CheckReport {
         out
     }
 
-    fn result_text(&self, c: &crate::check::report::Counts) -> String {
+    fn result_text(&self, c: &crate::commands::check::report::Counts) -> String {
         if self.passed() {
             "PASS".to_string()
         } else {
@@ -474,7 +474,7 @@ fn rules_table(results: &[RuleResult], indent: &str) -> String {
 }
 
 /// How a sweep matched its baseline: rows matched, new, and gone, one line.
-fn sweep_baseline_line(b: &crate::check::report::SweepBaseline) -> String {
+fn sweep_baseline_line(b: &crate::commands::check::report::SweepBaseline) -> String {
     let cmp = &b.comparison;
     format!(
         "baseline {}: {} configuration{} matched, {} new, {} not in the current sweep\n",

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use super::{defs, html, markdown};
 
 use crate::analysis::{mib, Analysis};
-use crate::compare::{coverage_extremes, fit_label, invalid_reason, label, preset_of, Comparison};
+use crate::commands::compare::{coverage_extremes, fit_label, invalid_reason, label, preset_of, Comparison};
 use crate::error::Result;
 use crate::figures::compare::{DensityOverlay, DensityPng, DensitySvg, ShimmerCoverageBars, ShimmerPng, ShimmerSvg};
 use crate::figures::Figure;

@@ -6,10 +6,10 @@ use std::fmt::Write as _;
 
 use super::html;
 use crate::commands::flicker_sample::FlickerSample;
+use crate::commands::sweep::SweepResult;
 use crate::error::Result;
 use crate::figures::truth::{fit, flicker_vs_shimmer_figure, Fit, ShimmerPoint, FLICKER_VS_SHIMMER_CAPTION};
 use crate::output::{num, short_number};
-use crate::sweep::SweepResult;
 
 /// The file of the sampled rows.
 pub const FILE: &str = "flicker.csv";

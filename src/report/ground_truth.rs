@@ -6,9 +6,9 @@ use std::fmt::Write as _;
 
 use crate::analysis::ground_truth::GroundTruth;
 use crate::analysis::Analysis;
-use crate::core::truth::DepthFormat;
 use crate::error::Result;
 use crate::output::{csv_bytes, num, short_number, Exporter};
+use csm_core::truth::DepthFormat;
 
 pub struct BiasCsv;
 
@@ -122,7 +122,7 @@ pub fn recommendation(a: &Analysis, g: &GroundTruth) -> String {
                 out,
                 "  cascade {i}: too few receivers ({}; at least {} are needed)",
                 c.points,
-                crate::core::truth::MIN_POINTS
+                csm_core::truth::MIN_POINTS
             );
             continue;
         };

@@ -11,9 +11,9 @@ use std::fmt::Write as _;
 
 use super::check::{limit_text, rule_message};
 use super::html::escape;
-use crate::check::baseline::{Comparison, Verdict};
-use crate::check::evaluate::{short, Bound, RuleResult, Status};
-use crate::check::report::{Body, CheckReport};
+use crate::commands::check::baseline::{Comparison, Verdict};
+use crate::commands::check::evaluate::{short, Bound, RuleResult, Status};
+use crate::commands::check::report::{Body, CheckReport};
 
 /// A test case to write.
 struct Case {

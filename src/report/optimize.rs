@@ -5,10 +5,10 @@ use std::fmt::Write as _;
 
 use super::html;
 use crate::commands::optimize::{Optimized, OptimizedGroup};
+use crate::commands::sweep::SweepResult;
 use crate::config::Config;
 use crate::error::Result;
 use crate::output::{csv_bytes, num, percent_change, short_number as n, signed_percent};
-use crate::sweep::SweepResult;
 
 /// The file name.
 pub const FILE: &str = "optimized_splits.csv";
@@ -214,7 +214,7 @@ pub fn verdict(r: &SweepResult) -> Option<String> {
             list(
                 &c.fractions
                     .iter()
-                    .map(|&x| crate::core::free_splits::round_significant(x, 4))
+                    .map(|&x| csm_core::free_splits::round_significant(x, 4))
                     .collect::<Vec<_>>()
             ),
             n(r.objective.value(&c.summary))

@@ -2,9 +2,9 @@
 
 use std::fmt::Write as _;
 
+use crate::commands::stress::{toml_f64, CaseResult, Expect};
 use crate::error::Result;
 use crate::output;
-use crate::stress::{toml_f64, CaseResult, Expect};
 
 /// Columns of `stress.csv`: the inputs, then one column per invariant's worst value, the f32
 /// residuals, which invariants failed, the status and a note (the error of a rejected input,

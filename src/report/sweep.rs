@@ -6,13 +6,13 @@ use std::fmt::Write as _;
 
 use super::{defs, html, markdown};
 use crate::analysis::mib;
+use crate::commands::sweep::{self, Row, SweepResult};
 use crate::config::Config;
 use crate::error::Result;
 use crate::figures::sweep::{HeatmapFigure, LambdaDensityFigure, ParetoFigure, ShimmerSweepFigure};
 use crate::figures::{svg_to_png, Figure};
 use crate::metric;
 use crate::output::{count, json_bytes, num, percent_change, short_number as n, signed_percent};
-use crate::sweep::{self, Row, SweepResult};
 
 /// `sweep.csv`: [`metric::summary_columns`], then these.
 pub const SWEEP_EXTRA_COLUMNS: [&str; 4] = ["cascades_needed", "pareto", "recommended", "preset"];
@@ -118,7 +118,7 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         .chain(knob_key)
         .chain(distance.then_some("shadow.max_distance"))
         .chain(light.then_some(["light_crawl", "light_jump"]).into_iter().flatten())
-        .chain(light_update.then_some(crate::check::sweep::LIGHT_UPDATE_COLUMN))
+        .chain(light_update.then_some(crate::commands::check::sweep::LIGHT_UPDATE_COLUMN))
         .chain(r.sun.iter().flat_map(|_| SUN_COLUMNS))
         .collect();
     crate::output::csv_write_from(out, &header, rows)

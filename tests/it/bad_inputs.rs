@@ -355,7 +355,7 @@ fn rules(n: usize) -> String {
 
 #[test]
 fn a_thresholds_file_of_ten_thousand_rules_is_read_in_linear_time() {
-    use csm_lab::check::thresholds::{Thresholds, MAX_RULES};
+    use csm_lab::commands::check::thresholds::{Thresholds, MAX_RULES};
     let t = std::time::Instant::now();
     let th = Thresholds::from_toml_str(&rules(MAX_RULES), "t.toml").unwrap();
     assert_eq!(th.rules.len(), 10_000);
@@ -371,7 +371,7 @@ fn a_thresholds_file_of_ten_thousand_rules_is_read_in_linear_time() {
 
 #[test]
 fn a_thresholds_file_of_more_rules_than_the_limit_is_refused_before_validation() {
-    use csm_lab::check::thresholds::{Thresholds, MAX_RULES};
+    use csm_lab::commands::check::thresholds::{Thresholds, MAX_RULES};
     let err = Thresholds::from_toml_str(&rules(MAX_RULES + 1), "t.toml")
         .unwrap_err()
         .to_string();
@@ -459,8 +459,8 @@ fn only_the_write_pattern_counts_as_a_temporary() {
 
 #[test]
 fn a_long_path_keeps_a_bounded_number_of_frame_rows_and_exact_summaries() {
+    use csm_core::shimmer::{frame_row_stride, MAX_FRAME_ROWS};
     use csm_lab::analysis::{analyze, AnalysisOptions};
-    use csm_lab::shimmer::{frame_row_stride, MAX_FRAME_ROWS};
     assert_eq!(frame_row_stride(240), 1);
     assert_eq!(frame_row_stride(MAX_FRAME_ROWS), 1);
     assert_eq!(frame_row_stride(MAX_FRAME_ROWS + 1), 2);

@@ -7,11 +7,13 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use common::{with, BASE};
-use csm_lab::check::baseline::{Tolerance, Tolerances, Verdict};
-use csm_lab::check::evaluate::{evaluate, Status};
-use csm_lab::check::metric::SummaryMetric;
-use csm_lab::check::sweep::{compare_rows, evaluate_rows, parse_sweep_csv, sweep_rows_for, SweepKey, SweepRow};
-use csm_lab::check::Thresholds;
+use csm_lab::commands::check::baseline::{Tolerance, Tolerances, Verdict};
+use csm_lab::commands::check::evaluate::{evaluate, Status};
+use csm_lab::commands::check::metric::SummaryMetric;
+use csm_lab::commands::check::sweep::{
+    compare_rows, evaluate_rows, parse_sweep_csv, sweep_rows_for, SweepKey, SweepRow,
+};
+use csm_lab::commands::check::Thresholds;
 use csm_lab::{analyze, AnalysisOptions};
 
 fn key(lambda: f64, cascades: u32, resolution: u32, fit: &str) -> SweepKey {

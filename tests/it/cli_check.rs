@@ -7,10 +7,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use common::{with, BASE};
+use csm_core::metrics::cascade_at;
 use csm_lab::analyze;
-use csm_lab::check::evaluate::short;
-use csm_lab::check::metric::SummaryMetric;
-use csm_lab::metrics::cascade_at;
+use csm_lab::commands::check::evaluate::short;
+use csm_lab::commands::check::metric::SummaryMetric;
 use serde_json::Value;
 
 fn bin() -> Command {
@@ -122,7 +122,7 @@ fn stdout(o: &Output) -> String {
 /// The library's analysis of a config text (the same options `check` uses).
 fn analysis(text: &str) -> csm_lab::Analysis {
     let c = common::config(text);
-    analyze(&c, &csm_lab::check::check_options())
+    analyze(&c, &csm_lab::commands::check::check_options())
 }
 
 fn statuses(report: &Value) -> Vec<String> {
@@ -162,7 +162,7 @@ fn the_shipped_thresholds_pass_on_the_default_scene_with_exit_code_0() {
     assert!(text.contains("result: PASS"), "{text}");
     let xml = std::fs::read_to_string(&junit).unwrap();
     let doc = roxmltree::Document::parse(&xml).unwrap();
-    let rules = csm_lab::check::Thresholds::load(&repo("configs/thresholds.toml"))
+    let rules = csm_lab::commands::check::Thresholds::load(&repo("configs/thresholds.toml"))
         .unwrap()
         .rules;
     assert!(rules.len() >= 10);

@@ -23,7 +23,7 @@ fn stress_passes_the_default_battery_and_writes_one_row_per_case() {
     let out = stress(dir.path(), &["--cases", "12", "--seed", "3"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let stdout = String::from_utf8_lossy(&out.stdout);
-    let n = csm_lab::stress::battery().len() + 12;
+    let n = csm_lab::commands::stress::battery().len() + 12;
     assert!(stdout.contains(&format!("{n} cases, {n} passed, 0 failed")), "{stdout}");
     let text = std::fs::read_to_string(dir.path().join("stress.csv")).unwrap();
     let mut reader = csv::Reader::from_reader(text.as_bytes());
@@ -83,7 +83,7 @@ fn stress_output_depends_only_on_the_seed() {
     let out = stress(&dir.path().join("d"), &["--cases", "0"]);
     assert_eq!(out.status.code(), Some(0));
     let rows = String::from_utf8(read("d")).unwrap().lines().count() - 1;
-    assert_eq!(rows, csm_lab::stress::battery().len());
+    assert_eq!(rows, csm_lab::commands::stress::battery().len());
 }
 
 #[test]

@@ -7,7 +7,7 @@ use crate::common::{config, with};
 
 use std::process::Command;
 
-use csm_lab::sweep::{parse_distance_spec, parse_knob_spec, run, Grid, GridOverrides};
+use csm_lab::commands::sweep::{parse_distance_spec, parse_knob_spec, run, Grid, GridOverrides};
 use csm_lab::{analyze, AnalysisOptions};
 
 fn preset_text(preset: &str, extra: &[(&str, &str)]) -> String {
@@ -23,8 +23,8 @@ fn preset_text(preset: &str, extra: &[(&str, &str)]) -> String {
 fn rows_equal_file_analyses(preset: &str, table: &str, knob: &str, knobs: &str, distances: &str) {
     let base = config(&preset_text(preset, &[]));
     let overrides = GridOverrides {
-        cascades: Some(csm_lab::sweep::parse_cascades_spec("2,4").unwrap()),
-        resolution: Some(csm_lab::sweep::parse_resolution_spec("1024").unwrap()),
+        cascades: Some(csm_lab::commands::sweep::parse_cascades_spec("2,4").unwrap()),
+        resolution: Some(csm_lab::commands::sweep::parse_resolution_spec("1024").unwrap()),
         knob: Some(parse_knob_spec(knobs).unwrap()),
         distance: Some(parse_distance_spec(distances).unwrap()),
         ..Default::default()

@@ -3,14 +3,14 @@
 //! computed here from the cascade's texel size and light depth range, the angle terms applied
 //! where the map is sampled, and the recommendation given back in the engine's own unit.
 
+use csm_core::fitting::Window;
+use csm_core::geometry::LightBasis;
+use csm_core::mesh::Mesh;
+use csm_core::truth::{self, Bias, BiasRule, Facing, NormalOffset, Receiver, Sampling};
+use csm_core::visibility::SceneGeometry;
 use csm_lab::analysis::ground_truth::GroundTruth;
-use csm_lab::core::truth::{self, Bias, BiasRule, Facing, NormalOffset, Receiver, Sampling};
-use csm_lab::fitting::Window;
-use csm_lab::geometry::LightBasis;
-use csm_lab::mesh::Mesh;
 use csm_lab::presets::bias::engine_bias;
 use csm_lab::presets::PresetName;
-use csm_lab::visibility::SceneGeometry;
 use csm_lab::{analyze, Analysis, AnalysisOptions, Config};
 use glam::{DVec2, DVec3};
 

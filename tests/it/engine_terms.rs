@@ -95,7 +95,7 @@ fn assert_same_cascades(a: &Config, b: &Config, what: &str) {
 #[test]
 fn every_engine_reads_its_compare_setting_back_to_the_same_cascades() {
     let presets = PresetName::ALL.to_vec();
-    let c = csm_lab::compare::run(&default_toml(), &presets, false, &[]).unwrap();
+    let c = csm_lab::commands::compare::run(&default_toml(), &presets, false, &[]).unwrap();
     let scene = Config::load_scene(&default_toml()).unwrap();
     let settings = for_compare(&c, &scene).unwrap();
     assert_eq!(settings.len(), PresetName::ALL.len());
@@ -118,7 +118,7 @@ fn free_split_fractions_reproduce_csm_labs_own_cascades() {
         PresetName::Dart,
         PresetName::Eevee,
     ];
-    let c = csm_lab::compare::run(&default_toml(), &presets, false, &[]).unwrap();
+    let c = csm_lab::commands::compare::run(&default_toml(), &presets, false, &[]).unwrap();
     for s in for_compare(&c, &scene).unwrap() {
         let back = through_text(&s);
         let r = rig(&back).unwrap();
@@ -164,7 +164,7 @@ fn every_engine_reads_its_sweep_recommendation_back_to_the_same_cascades() {
         let row = result
             .recommended()
             .or_else(|| {
-                csm_lab::sweep::no_recommendation(&result.rows, result.budget_mib, result.objective)
+                csm_lab::commands::sweep::no_recommendation(&result.rows, result.budget_mib, result.objective)
                     .closest
                     .map(|i| &result.rows[i])
             })

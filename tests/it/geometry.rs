@@ -349,7 +349,7 @@ fn a_screen_rule_on_a_bounds_only_scene_is_not_applicable() {
 /// range, and the recommendation says which range it chose.
 #[test]
 fn a_sweep_puts_bounds_and_visible_splits_side_by_side() {
-    use csm_lab::sweep::{parse_split_range_spec, run, Grid, GridOverrides};
+    use csm_lab::commands::sweep::{parse_split_range_spec, run, Grid, GridOverrides};
     let text = with(&[("scene.ground", "ground = 0.0")])
         + "\n[[scene.box]]\nmin = [-30.0, 0.0, -80.0]\nmax = [-10.0, 30.0, -60.0]\n\
            [sweep]\nlambda = [0.25, 0.75]\ncascades = [2, 4]\nresolution = [1024]\n";
@@ -377,7 +377,7 @@ fn a_sweep_puts_bounds_and_visible_splits_side_by_side() {
     .unwrap();
     assert_eq!(both.len(), 8);
     assert_eq!(both[..4], bounds[..]);
-    let summaries = |rows: &[csm_lab::sweep::Row]| rows.iter().map(|r| r.summary.clone()).collect::<Vec<_>>();
+    let summaries = |rows: &[csm_lab::commands::sweep::Row]| rows.iter().map(|r| r.summary.clone()).collect::<Vec<_>>();
     assert_eq!(summaries(&both[4..]), summaries(&visible));
     for r in &both[4..] {
         let st = r.summary.screen.as_ref().unwrap();
@@ -391,7 +391,7 @@ fn a_sweep_puts_bounds_and_visible_splits_side_by_side() {
 /// The split range is refused where it cannot apply, naming the flag or key.
 #[test]
 fn a_visible_split_range_needs_geometry_and_no_preset() {
-    use csm_lab::sweep::{parse_split_range_spec, Grid, GridOverrides};
+    use csm_lab::commands::sweep::{parse_split_range_spec, Grid, GridOverrides};
     let bounds_only = load(&with(&[]));
     let over = GridOverrides {
         split_range: Some(parse_split_range_spec("bounds,visible").unwrap()),
@@ -446,7 +446,7 @@ fn the_scene_hash_changes_when_a_gltf_vertex_moves() {
 /// per range, each row the analysis `analyze` gives that setting.
 #[test]
 fn compare_puts_the_own_pipeline_on_both_split_ranges_beside_the_presets() {
-    use csm_lab::compare::{label, run};
+    use csm_lab::commands::compare::{label, run};
     use csm_lab::config::SplitRange;
     let dir = tempfile::tempdir().unwrap();
     let text = with(&[("scene.ground", "ground = 0.0")])

@@ -4,10 +4,11 @@
 use crate::common;
 
 use common::{config, with};
+use csm_core::cascades::LightPose;
+use csm_core::geometry::LightBasis;
+use csm_core::rig_path::{along_path_lit, probes};
+use csm_core::shimmer::{PathResult, ShimmerOptions};
 use csm_lab::analysis::{analyze, light_track, AnalysisOptions};
-use csm_lab::cascades::LightPose;
-use csm_lab::geometry::LightBasis;
-use csm_lab::shimmer::{along_path_lit, probes, PathResult, ShimmerOptions};
 use csm_lab::Config;
 use glam::{DQuat, DVec2, DVec3};
 
@@ -322,7 +323,7 @@ fn sunset() -> Config {
 
 #[test]
 fn each_light_update_row_is_the_analysis_of_a_file_with_that_rule() {
-    use csm_lab::sweep::{run, Grid, GridOverrides, SweepResult};
+    use csm_lab::commands::sweep::{run, Grid, GridOverrides, SweepResult};
     let c = sunset();
     let grid = Grid::resolve(&c, &GridOverrides::default()).unwrap();
     assert_eq!(grid.len(), 2 * 2 * 2 * 6);
@@ -331,8 +332,8 @@ fn each_light_update_row_is_the_analysis_of_a_file_with_that_rule() {
     for row in rows.iter().step_by(5) {
         let st = row.setting;
         let rule = match st.light_update.unwrap() {
-            csm_lab::light_motion::LightUpdate::EveryFrames(k) => format!("{{ every_frames = {k} }}"),
-            csm_lab::light_motion::LightUpdate::Quantize(q) => format!("{{ quantize_deg = {} }}", q.to_degrees()),
+            csm_core::light_motion::LightUpdate::EveryFrames(k) => format!("{{ every_frames = {k} }}"),
+            csm_core::light_motion::LightUpdate::Quantize(q) => format!("{{ quantize_deg = {} }}", q.to_degrees()),
             other => panic!("{other:?}"),
         };
         let text = base
@@ -355,9 +356,9 @@ fn each_light_update_row_is_the_analysis_of_a_file_with_that_rule() {
     let rec = result.recommended().expect("the snapped sphere fits qualify");
     let light = rec.summary.light.unwrap();
     assert_eq!(rec.summary.snapped_drift(), light.crawl_snapped);
-    assert!(light.crawl_snapped <= csm_lab::sweep::STABLE_SHIMMER);
+    assert!(light.crawl_snapped <= csm_lab::commands::sweep::STABLE_SHIMMER);
     assert!(
-        rec.summary.shimmer_snapped > 10.0 * csm_lab::sweep::STABLE_SHIMMER,
+        rec.summary.shimmer_snapped > 10.0 * csm_lab::commands::sweep::STABLE_SHIMMER,
         "{:?}",
         rec.summary
     );
@@ -370,7 +371,7 @@ fn each_light_update_row_is_the_analysis_of_a_file_with_that_rule() {
     let calm_every: Vec<_> = choice
         .rows
         .iter()
-        .filter(|x| matches!(x.update, csm_lab::light_motion::LightUpdate::EveryFrames(_)) && x.jump < 1.0)
+        .filter(|x| matches!(x.update, csm_core::light_motion::LightUpdate::EveryFrames(_)) && x.jump < 1.0)
         .collect();
     assert_eq!(choice.every.unwrap().update, calm_every.last().unwrap().update);
     assert!(
@@ -384,7 +385,7 @@ fn each_light_update_row_is_the_analysis_of_a_file_with_that_rule() {
 
 #[test]
 fn a_light_update_axis_needs_a_moving_light_and_valid_rules() {
-    use csm_lab::sweep::{parse_light_update_spec, Grid, GridOverrides};
+    use csm_lab::commands::sweep::{parse_light_update_spec, Grid, GridOverrides};
     let still = config(&with(&[]));
     let o = GridOverrides {
         light_update: Some(parse_light_update_spec("every:1,2").unwrap()),

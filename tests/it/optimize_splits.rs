@@ -5,7 +5,7 @@ use std::process::Command;
 
 use csm_lab::analysis::{analyze, AnalysisOptions};
 use csm_lab::commands::optimize::{evaluate, optimize, Optimized};
-use csm_lab::sweep::{self, acceptable, Grid, GridOverrides, Row};
+use csm_lab::commands::sweep::{self, acceptable, Grid, GridOverrides, Row};
 use csm_lab::Config;
 
 use crate::common::{config, with};
@@ -506,4 +506,12 @@ fn shards_leave_the_search_to_merge() {
             "{f}"
         );
     }
+}
+
+/// Split fractions are written to JSON (`recommendation.json`, the engine files) as a plain
+/// array of numbers.
+#[test]
+fn split_fractions_serialize_as_a_plain_array() {
+    let f = csm_core::free_splits::SplitFractions::new(&[0.25, 0.5]).unwrap();
+    assert_eq!(serde_json::to_string(&f).unwrap(), "[0.25,0.5]");
 }

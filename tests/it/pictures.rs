@@ -2,13 +2,13 @@
 //! decoded and checked pixel by pixel against the layout and colours computed here, the
 //! scatter's fit against sums computed here, and the report section parsed as XML.
 
+use csm_core::shade::{FlipImage, Shade, ShadeImage};
 use csm_lab::figures::truth::{
     self, colours, fit, flicker_png, flip_scale_max, ranks, shadow_png, write_animation, AnimationPlan,
     FlickerVsShimmer, Panel, ShimmerPoint, ANIMATION_CAPS,
 };
 use csm_lab::figures::Figure;
 use csm_lab::report::truth::{section, Animation, TruthPictures};
-use csm_lab::shade::{FlipImage, Shade, ShadeImage};
 
 /// A decoded RGB8 image.
 struct Rgb {

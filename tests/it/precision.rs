@@ -4,14 +4,16 @@
 use crate::common;
 
 use common::{config, with};
+use csm_core::cascades::{LightPose, Rig};
+use csm_core::geometry::{Aabb, CameraPose, Lens, LightBasis};
+use csm_core::precision::{self, along_path, ulp32, EmulatedPath, EnginePipeline};
+use csm_core::rig_path::probes;
+use csm_core::scene::{Precision, SnapSpace};
+use csm_core::shimmer::ShimmerOptions;
+use csm_core::snapping::{SnapMode, SnapRule};
 use csm_lab::analysis::{analyze, AnalysisOptions};
-use csm_lab::cascades::{LightPose, Rig};
 use csm_lab::config::Fit;
 use csm_lab::drift_table::drift_table;
-use csm_lab::geometry::{Aabb, CameraPose, Lens, LightBasis};
-use csm_lab::precision::{self, along_path, ulp32, EmulatedPath, EnginePipeline, Precision, SnapSpace};
-use csm_lab::shimmer::{probes, ShimmerOptions};
-use csm_lab::snapping::{SnapMode, SnapRule};
 use glam::DVec3;
 
 const OPTS: ShimmerOptions = ShimmerOptions {
@@ -67,7 +69,7 @@ fn ulp32_matches_the_reference_table() {
     assert_eq!(ulp32(1e6), 2f64.powi(-4));
     assert_eq!(ulp32(-1e5), 2f64.powi(-7));
     // Independent definition: for |x| in [2^e, 2^(e+1)), ulp = 2^(e - 23).
-    let mut rng = csm_lab::rng::SplitMix64::new(11);
+    let mut rng = csm_core::rng::SplitMix64::new(11);
     for _ in 0..1000 {
         let x = 10f64.powf(rng.range(-3.0, 9.0));
         let e = (x as f32).log2().floor() as i32;
@@ -178,7 +180,7 @@ fn f64_stabilised_shimmer_stays_below_1e_9_at_every_world_offset() {
             let rig = csm_lab::analysis::rig(&c).unwrap();
             let poses = c.camera_path().unwrap();
             let pr = probes(&rig, &poses[0], &c.scene, 64);
-            let r = csm_lab::shimmer::along_path(&rig, &poses, &pr, true, OPTS);
+            let r = csm_core::rig_path::along_path(&rig, &poses, &pr, true, OPTS);
             assert!(r.stats.max < 1e-9, "{offset} {path}: probes {}", r.stats.max);
         }
     }

@@ -2,11 +2,11 @@
 //! of each split rule, the reference window sizes, the snapping behaviour each engine is known
 //! for, the Bevy coverage miss and the three.js fixed light depth range.
 
+use csm_core::cascades::{LightPose, Rig};
+use csm_core::fitting::{corner_average_sphere, minimal_sphere, slice_diameter};
+use csm_core::geometry::{CameraPose, Lens, LightBasis};
 use csm_lab::analysis::{analyze, AnalysisOptions};
-use csm_lab::cascades::{LightPose, Rig};
 use csm_lab::config::Config;
-use csm_lab::fitting::{corner_average_sphere, minimal_sphere, slice_diameter};
-use csm_lab::geometry::{CameraPose, Lens, LightBasis};
 use csm_lab::presets::*;
 use csm_lab::presets::{
     bevy::*, dart::*, eevee::*, filament::*, godot::*, learnopengl::*, threejs::*, unity::*, unreal::*,
@@ -706,8 +706,9 @@ fn each_preset_snaps_as_its_engine_does_under_strafe_and_yaw() {
 /// drift and flips once it turns (yaw).
 #[test]
 fn a_camera_oriented_basis_is_evaluated_probe_by_probe() {
-    use csm_lab::cascades::BasisRule;
-    use csm_lab::shimmer::{along_path, probes, ShimmerOptions};
+    use csm_core::cascades::BasisRule;
+    use csm_core::rig_path::{along_path, probes};
+    use csm_core::shimmer::ShimmerOptions;
     let every = ShimmerOptions {
         cell_flips: true,
         probe_drift: true,
@@ -745,7 +746,7 @@ fn a_camera_oriented_basis_is_evaluated_probe_by_probe() {
 /// axis as the reference turned it by tens of degrees at 45 degrees of yaw).
 #[test]
 fn the_filament_window_keeps_its_orientation_when_the_camera_yaws() {
-    use csm_lab::cascades::{camera_right_basis, BasisRule};
+    use csm_core::cascades::{camera_right_basis, BasisRule};
     let c = load(&scene(
         "path = \"yaw\"\nframes = 46\nstep = 1.0",
         "[shadow]\npreset = \"filament\"\ncascades = 4",
@@ -791,7 +792,7 @@ fn the_filament_window_keeps_its_orientation_when_the_camera_yaws() {
 /// reference becomes (up.z, up.x, up.y) = +Y.
 #[test]
 fn filament_basis_swaps_its_up_reference_for_a_light_along_x() {
-    use csm_lab::cascades::look_to_basis;
+    use csm_core::cascades::look_to_basis;
     for d in [DVec3::X, DVec3::new(1.0, 0.02, -0.01).normalize(), -DVec3::X] {
         let b = look_to_basis(d, DVec3::X).unwrap();
         let y = (DVec3::Y - d * DVec3::Y.dot(d)).normalize();
@@ -834,7 +835,7 @@ fn the_eevee_grid_runs_through_the_lamp_and_stays_stable() {
 
 /// Uniformly random camera orientations (Shoemake) at random positions.
 fn random_poses(seed: u64, count: usize) -> Vec<CameraPose> {
-    let mut rng = csm_lab::rng::SplitMix64::new(seed);
+    let mut rng = csm_core::rng::SplitMix64::new(seed);
     let tau = std::f64::consts::TAU;
     let mut out = Vec::with_capacity(count);
     while out.len() < count {
@@ -1234,7 +1235,7 @@ fn look_to(d: DVec3) -> (DVec3, DVec3, DVec3) {
 
 #[test]
 fn bevy_basis_is_looking_to_with_y_up_and_mirrors_csm_lab_x() {
-    let mut rng = csm_lab::rng::SplitMix64::new(41);
+    let mut rng = csm_core::rng::SplitMix64::new(41);
     let mut n = 0;
     while n < 20 {
         let d = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
@@ -1276,7 +1277,7 @@ fn bevy_floor_snap_moves_windows_toward_minus_bevy_x_which_is_plus_csm_lab_x() {
     for pose in random_poses(9, 200) {
         let lp = LightPose::new(&rig.light, &pose);
         for i in 0..rig.cascade_count() {
-            let centre = |w: &csm_lab::fitting::Window| (w.origin_texels + 0.5 * w.resolution as f64) * w.texel;
+            let centre = |w: &csm_core::fitting::Window| (w.origin_texels + 0.5 * w.resolution as f64) * w.texel;
             let (s, u) = (rig.window(i, &lp, true), rig.window(i, &lp, false));
             let shift = centre(&s) - centre(&u);
             // Floor: never toward +x or +y of Bevy's own basis.
@@ -1402,7 +1403,7 @@ fn seed_004_mirrored_depth_range_puts_cascades_0_and_2_outside_the_depth_range()
         let pose = c.camera.pose();
         let lp = LightPose::new(&rig.light, &pose);
         for i in 0..3 {
-            let corners = csm_lab::cascades::slice_corners_world(&rig, i, &pose);
+            let corners = csm_core::cascades::slice_corners_world(&rig, i, &pose);
             // The reference code's own arithmetic: glm::lookAt from the light to the corners' centroid,
             // view z = -(distance along the view direction); glm::ortho(.., minZ - 10, maxZ + 10).
             let centroid = corners.iter().copied().sum::<DVec3>() / 8.0;

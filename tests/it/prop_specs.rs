@@ -7,7 +7,7 @@ use crate::common;
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-use csm_lab::check::thresholds::Thresholds;
+use csm_lab::commands::check::thresholds::Thresholds;
 use csm_lab::config::sweep_spec::{decimal_range, MAX_RANGE_VALUES};
 use csm_lab::Config;
 use proptest::prelude::*;

@@ -161,8 +161,8 @@ fn far_f32(fit: &str) -> String {
 /// shimmer_snapped is not finite". Sweep points are now built by validating constructors.
 #[test]
 fn sweeping_to_a_fit_binary32_cannot_hold_is_refused_naming_the_key_before_any_work() {
-    use csm_lab::sweep::{parse_cascades_spec, parse_fit_spec, parse_lambda_spec, parse_resolution_spec};
-    use csm_lab::sweep::{run, Grid, GridOverrides};
+    use csm_lab::commands::sweep::{parse_cascades_spec, parse_fit_spec, parse_lambda_spec, parse_resolution_spec};
+    use csm_lab::commands::sweep::{run, Grid, GridOverrides};
     // analyze refuses the AABB version of the file outright.
     let why = rejected(&far_f32("aabb"));
     assert!(why.contains("shadow.precision") && why.contains("collapses"), "{why}");
@@ -199,8 +199,10 @@ fn sweeping_to_a_fit_binary32_cannot_hold_is_refused_naming_the_key_before_any_w
 /// which the f64 walk accepted. Every path model now shares one walk.
 #[test]
 fn an_empty_probe_list_is_measured_by_every_path_model() {
-    use csm_lab::precision::{self, SnapSpace};
-    use csm_lab::shimmer::{self, ShimmerOptions};
+    use csm_core::precision;
+    use csm_core::rig_path;
+    use csm_core::scene::SnapSpace;
+    use csm_core::shimmer::ShimmerOptions;
     let opts = ShimmerOptions {
         cell_flips: true,
         probe_drift: true,
@@ -219,7 +221,7 @@ fn an_empty_probe_list_is_measured_by_every_path_model() {
         let rig = csm_lab::analysis::rig(&c).unwrap();
         let poses = c.camera_path().unwrap();
         for snapped in [true, false] {
-            let r = shimmer::along_path(&rig, &poses, &[], snapped, opts);
+            let r = rig_path::along_path(&rig, &poses, &[], snapped, opts);
             assert!(r.stats.rms.is_finite() && r.stats.max.is_finite());
             for space in [SnapSpace::World, SnapSpace::CameraRelative] {
                 let e = precision::along_path(&rig, &poses, &[], space, snapped, opts);
@@ -227,7 +229,7 @@ fn an_empty_probe_list_is_measured_by_every_path_model() {
                 assert_eq!(e.lookup.max, 0.0);
             }
         }
-        let (s, u) = shimmer::along_path_both(&rig, &poses, &[], opts);
+        let (s, u) = rig_path::along_path_both(&rig, &poses, &[], opts);
         assert!(s.stats.rms.is_finite() && u.stats.rms.is_finite());
     }
 }

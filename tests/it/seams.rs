@@ -1,8 +1,8 @@
 //! Seams and transitions: blend-band pixel shares, the map area the bands cost and
 //! `seam_crossings`, each checked against a computation of its own (brute-force counts).
 
+use csm_core::geometry::CameraPose;
 use csm_lab::analysis::{analyze, AnalysisOptions};
-use csm_lab::geometry::CameraPose;
 use glam::DVec3;
 
 use crate::common::{config, with, BASE};
@@ -76,7 +76,7 @@ fn seam_crossings_of_a_dolly_equal_a_direct_count() {
             )
             .unwrap()
         });
-        let got = csm_lab::seams::seam_crossings(&splits, &points, poses);
+        let got = csm_core::seams::seam_crossings(&splits, &points, poses);
         // Direct count: between frames t-1 and t a point changes cascade when some boundary
         // is crossed: the near end and interior splits are "at or beyond", the far end "beyond".
         let mut changed = 0usize;

@@ -3,9 +3,10 @@
 use crate::common;
 
 use common::{config, with};
+use csm_core::cascades::LightPose;
+use csm_core::rig_path::{along_path, probes};
+use csm_core::shimmer::{wrap, ShimmerOptions};
 use csm_lab::analysis::{analyze, AnalysisOptions};
-use csm_lab::cascades::LightPose;
-use csm_lab::shimmer::{along_path, probes, wrap, ShimmerOptions};
 use proptest::prelude::*;
 
 const PROBE_EVERYTHING: ShimmerOptions = ShimmerOptions {
@@ -14,7 +15,7 @@ const PROBE_EVERYTHING: ShimmerOptions = ShimmerOptions {
     frame_rows: true,
 };
 
-fn path_result(text: &str, snapped: bool) -> csm_lab::shimmer::PathResult {
+fn path_result(text: &str, snapped: bool) -> csm_core::shimmer::PathResult {
     let c = config(text);
     let rig = csm_lab::analysis::rig(&c).unwrap();
     let poses = c.camera_path().unwrap();

@@ -3,8 +3,9 @@
 use crate::common;
 
 use common::{config, with};
-use csm_lab::cascades::LightPose;
-use csm_lab::shimmer::{along_path, along_path_both, probes, ShimmerOptions};
+use csm_core::cascades::LightPose;
+use csm_core::rig_path::{along_path, along_path_both, probes};
+use csm_core::shimmer::ShimmerOptions;
 
 fn all_options() -> [ShimmerOptions; 3] {
     let o = |cell_flips, probe_drift, frame_rows| ShimmerOptions {

@@ -7,10 +7,10 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 use crate::common::{self, BASE};
+use csm_core::sun::SunAngles;
 use csm_lab::analysis::{analyze, AnalysisOptions};
+use csm_lab::commands::sweep::{self, Grid, GridFlags, Row, SweepResult};
 use csm_lab::metric::SummaryMetric;
-use csm_lab::sun::SunAngles;
-use csm_lab::sweep::{self, Grid, GridFlags, Row, SweepResult};
 use csm_lab::Config;
 
 fn bin() -> Command {

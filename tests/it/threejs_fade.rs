@@ -236,7 +236,7 @@ fn the_settings_file_sets_fade_after_construction_and_reads_back() {
         let (r0, r1) = (rig(&c).unwrap(), rig(&back).unwrap());
         assert_eq!(r0.sphere_side, r1.sphere_side);
         assert_eq!(r0.splits, r1.splits);
-        let ends = |r: &csm_lab::cascades::Rig| r.slices.iter().map(|s| (s.near, s.far)).collect::<Vec<_>>();
+        let ends = |r: &csm_core::cascades::Rig| r.slices.iter().map(|s| (s.near, s.far)).collect::<Vec<_>>();
         assert_eq!(ends(&r0), ends(&r1));
     }
     // A bad value names the field and the key.

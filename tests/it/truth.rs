@@ -1,13 +1,13 @@
 //! Ground truth (issue 11): the sampled shadow maps checked against closed forms and an
 //! independent brute-force rasterisation written here.
 
+use csm_core::cascades::LightPose;
+use csm_core::fitting::Window;
+use csm_core::geometry::{Aabb, LightBasis};
+use csm_core::mesh::Mesh;
+use csm_core::truth::{self, Bias, BiasRule, DepthFormat, NormalOffset, PcfFilter, Receiver, Sampling};
+use csm_core::visibility::SceneGeometry;
 use csm_lab::analysis::ground_truth::GroundTruth;
-use csm_lab::cascades::LightPose;
-use csm_lab::core::truth::{self, Bias, BiasRule, DepthFormat, NormalOffset, PcfFilter, Receiver, Sampling};
-use csm_lab::fitting::Window;
-use csm_lab::geometry::{Aabb, LightBasis};
-use csm_lab::mesh::Mesh;
-use csm_lab::visibility::SceneGeometry;
 use csm_lab::{analyze, AnalysisOptions, Config};
 use glam::{DVec2, DVec3};
 use proptest::prelude::*;

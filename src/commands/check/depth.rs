@@ -1,7 +1,7 @@
 //! Exact extremes of the per-depth metrics over a range of view depths.
 //!
 //! Under interval selection cascade `i` serves depths `C_i <= d < C_{i+1}` (the last one also
-//! `d = C_M`), and there the aliasing ratio is `a(d) = K T_i / d` (see [`crate::metrics`]).
+//! `d = C_M`), and there the aliasing ratio is `a(d) = K T_i / d` (see [`csm_core::metrics`]).
 //! Inside one cascade `a` is strictly decreasing in `d`, so over `[lo, hi]` its supremum and
 //! infimum are at the ends of the intersection of `[lo, hi]` with each cascade's interval:
 //! the largest value is `K T_i / max(lo, C_i)` for some `i`, the smallest `K T_i / min(hi,
@@ -13,7 +13,7 @@
 //! `texels_per_pixel` is `1 / a(d)`, so its extremes sit at the same depths, swapped.
 
 use super::metric::DepthMetric;
-use crate::metrics::cascade_at;
+use csm_core::metrics::cascade_at;
 
 /// One extreme: its value, where it is attained (or approached) and which cascade serves it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -90,8 +90,8 @@ pub fn extremes(metric: DepthMetric, splits: &[f64], texel: &[f64], k: f64, lo: 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::SplitMix64;
-    use crate::splits::practical;
+    use csm_core::rng::SplitMix64;
+    use csm_core::splits::practical;
 
     fn value(metric: DepthMetric, splits: &[f64], texel: &[f64], k: f64, d: f64) -> f64 {
         let a = k * texel[cascade_at(splits, d)] / d;

@@ -350,7 +350,7 @@ pub fn summary_map(a: &Analysis) -> std::collections::BTreeMap<&'static str, f64
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::check::metric::{CascadeMetric, DepthMetric};
+    use crate::commands::check::metric::{CascadeMetric, DepthMetric};
     use crate::metric::SummaryMetric;
 
     fn rule(target: Target, min: Option<f64>, max: Option<f64>) -> Rule {

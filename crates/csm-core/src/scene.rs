@@ -6,14 +6,13 @@
 //! these types (or parts of them). Lengths are world units, angles radians, the light direction
 //! is the unit vector along which light travels (conventions in [`crate::geometry`]).
 
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::DVec3;
 
 use crate::fitting::Fit;
 use crate::geometry::{Aabb, CameraPose, Lens};
-use crate::motion::MotionPath;
-use crate::precision::{Precision, SnapSpace};
 use crate::visibility::{Hits, SceneGeometry, View, Visibility};
 
 /// The camera of frame 0 and its lens.
@@ -68,7 +67,7 @@ pub struct ShadowParams {
     /// than the cascades) instead of the practical split: what `sweep --optimize-splits` finds.
     /// None: the practical split with `lambda`.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub splits: Option<crate::core::free_splits::SplitFractions>,
+    pub splits: Option<crate::free_splits::SplitFractions>,
     /// Split only the depths where the scene bounds are visible; skips empty depth.
     pub fit_depth_to_scene: bool,
     /// Split only the view depths where geometry is visible (needs [`Setup::geometry`]).
@@ -187,5 +186,152 @@ impl Setup {
     pub fn visibility_hits(&self) -> Option<Arc<Hits>> {
         let view = self.view()?;
         Some(self.geometry.as_ref()?.scene.hits(&view))
+    }
+}
+
+/// Arithmetic of the cascade pipeline (`[shadow] precision`, `--precision`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Precision {
+    /// Exact: texel-unit windows, snapped shimmer exactly 0 at any world offset.
+    #[default]
+    F64,
+    /// An engine's binary32 pipeline, emulated operation by operation.
+    F32,
+}
+
+impl Precision {
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F64 => "f64",
+            Precision::F32 => "f32",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "f64" => Some(Precision::F64),
+            "f32" => Some(Precision::F32),
+            _ => None,
+        }
+    }
+}
+
+impl std::str::FromStr for Precision {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Precision::from_name(s).ok_or_else(|| format!("{s:?} is not one of f64, f32"))
+    }
+}
+
+impl std::fmt::Display for Precision {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Where the binary32 pipeline computes (`[shadow] snap_space`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SnapSpace {
+    /// Absolute world coordinates rounded to f32 (what engines do by default).
+    #[default]
+    World,
+    /// Positions relative to a camera-near, grid-aligned anchor, subtracted in f64.
+    CameraRelative,
+}
+
+impl SnapSpace {
+    pub fn name(self) -> &'static str {
+        match self {
+            SnapSpace::World => "world",
+            SnapSpace::CameraRelative => "camera_relative",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "world" => Some(SnapSpace::World),
+            "camera_relative" => Some(SnapSpace::CameraRelative),
+            _ => None,
+        }
+    }
+}
+
+impl std::fmt::Display for SnapSpace {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Which way the camera moves along the shimmer path, one pose per frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MotionPath {
+    /// Sideways along the camera's right axis, `step` world units per frame.
+    Strafe,
+    /// Along the view direction, `step` world units per frame.
+    Dolly,
+    /// Turning about the camera's up vector, `step` radians per frame.
+    Yaw,
+    /// Tilting about the camera's right axis, `step` radians per frame.
+    Pitch,
+    /// Circling the target about the up vector, `step` radians per frame.
+    Orbit,
+    /// A camera that does not move: the configured pose in every frame (the step is unused).
+    Still,
+    /// Poses read from a CSV file: (position, target) per frame.
+    File { path: PathBuf, poses: Vec<(DVec3, DVec3)> },
+}
+
+impl MotionPath {
+    /// The paths generated from the configured camera, by name: a new path is a variant here,
+    /// its name in [`MotionPath::name`] and its poses in [`crate::motion::camera_path`], nothing else.
+    pub const GENERATED: [MotionPath; 6] = [
+        MotionPath::Strafe,
+        MotionPath::Dolly,
+        MotionPath::Yaw,
+        MotionPath::Pitch,
+        MotionPath::Orbit,
+        MotionPath::Still,
+    ];
+
+    /// The generated path of a name (`"strafe"`, ...); None for `"file"` and unknown names.
+    pub fn generated(name: &str) -> Option<MotionPath> {
+        Self::GENERATED.into_iter().find(|p| p.name() == name)
+    }
+
+    /// Every name a config may give, quoted, for error messages.
+    pub fn names_quoted() -> String {
+        let mut names: Vec<String> = Self::GENERATED.iter().map(|p| format!("{:?}", p.name())).collect();
+        names.push("\"file\"".to_string());
+        names.join(", ")
+    }
+
+    /// The per-frame step as used from the step as written: world units for translations,
+    /// degrees converted to radians for rotations (degrees exist only in the config).
+    pub fn step_from_written(&self, written: f64) -> f64 {
+        if self.is_translation() {
+            written
+        } else {
+            written.to_radians()
+        }
+    }
+
+    pub fn name(&self) -> &'static str {
+        match self {
+            MotionPath::Strafe => "strafe",
+            MotionPath::Dolly => "dolly",
+            MotionPath::Yaw => "yaw",
+            MotionPath::Pitch => "pitch",
+            MotionPath::Orbit => "orbit",
+            MotionPath::Still => "still",
+            MotionPath::File { .. } => "file",
+        }
+    }
+
+    /// True when every frame differs from the previous one by a pure translation.
+    pub fn is_translation(&self) -> bool {
+        matches!(self, MotionPath::Strafe | MotionPath::Dolly)
     }
 }

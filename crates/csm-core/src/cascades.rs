@@ -72,6 +72,20 @@ pub struct Slice {
     pub sphere: Sphere,
 }
 
+impl Slice {
+    /// The slices of these depth intervals, each with its minimal bounding sphere (`k2` of the
+    /// lens, see [`Lens::k2`]).
+    fn all(intervals: impl Iterator<Item = (f64, f64)>, k2: f64) -> Vec<Slice> {
+        intervals
+            .map(|(near, far)| Slice {
+                near,
+                far,
+                sphere: minimal_sphere(near, far, k2),
+            })
+            .collect()
+    }
+}
+
 /// Which light-space basis a cascade uses in a frame.
 #[derive(Debug, Clone, PartialEq)]
 pub enum BasisRule {
@@ -163,7 +177,7 @@ pub struct LightDepth {
     pub casters_outside: f64,
 }
 
-pub use crate::walk::FrameCoverage;
+use crate::walk::FrameCoverage;
 
 /// Everything fixed over a motion path.
 #[derive(Debug, Clone)]
@@ -210,15 +224,7 @@ impl Rig {
 
     /// csm-lab's own pipeline: fitted slices = selection intervals = consecutive splits.
     pub fn new(lens: Lens, light: LightBasis, fit: Fit, resolution: u32, snap_rule: SnapRule, splits: Vec<f64>) -> Rig {
-        let k2 = lens.k2();
-        let slices: Vec<Slice> = splits
-            .windows(2)
-            .map(|w| Slice {
-                near: w[0],
-                far: w[1],
-                sphere: minimal_sphere(w[0], w[1], k2),
-            })
-            .collect();
+        let slices = Slice::all(splits.windows(2).map(|w| (w[0], w[1])), lens.k2());
         let shift = snap_rule.max_shift_texels();
         let sides = slices
             .iter()
@@ -238,17 +244,7 @@ impl Rig {
             snap_anchor: DVec2::ZERO,
             depth: LightDepthRule::Scene,
         };
-        Rig {
-            lens,
-            light,
-            fit,
-            resolution,
-            snap_rule,
-            splits,
-            slices,
-            sphere_side: sides,
-            scheme,
-        }
+        Rig::assemble(lens, light, fit, resolution, snap_rule, splits, slices, sides, scheme)
     }
 
     /// A rig for an arbitrary scheme: `selection` has one more entry than `fitted`, and
@@ -267,24 +263,33 @@ impl Rig {
     ) -> Rig {
         assert_eq!(selection.len(), fitted.len() + 1, "one selection interval per cascade");
         assert_eq!(sides.len(), fitted.len(), "one window side per cascade");
-        let k2 = lens.k2();
-        let slices = fitted
-            .iter()
-            .map(|&(near, far)| Slice {
-                near,
-                far,
-                sphere: minimal_sphere(near, far, k2),
-            })
-            .collect();
+        let slices = Slice::all(fitted.iter().copied(), lens.k2());
+        Rig::assemble(
+            lens, light, fit, resolution, snap_rule, selection, slices, sides, scheme,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn assemble(
+        lens: Lens,
+        light: LightBasis,
+        fit: Fit,
+        resolution: u32,
+        snap_rule: SnapRule,
+        splits: Vec<f64>,
+        slices: Vec<Slice>,
+        sphere_side: Vec<f64>,
+        scheme: Scheme,
+    ) -> Rig {
         Rig {
             lens,
             light,
             fit,
             resolution,
             snap_rule,
-            splits: selection,
+            splits,
             slices,
-            sphere_side: sides,
+            sphere_side,
             scheme,
         }
     }

@@ -6,83 +6,10 @@
 //! rule about their axis: yaw and orbit about the camera's up vector, pitch about its right
 //! axis. A path given as explicit poses (position, target per frame) is used as is.
 
-use std::path::PathBuf;
-
-use glam::{DQuat, DVec3};
+use glam::DQuat;
 
 use crate::geometry::CameraPose;
-use crate::scene::{Camera, Motion};
-
-/// Which way the camera moves along the shimmer path, one pose per frame.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MotionPath {
-    /// Sideways along the camera's right axis, `step` world units per frame.
-    Strafe,
-    /// Along the view direction, `step` world units per frame.
-    Dolly,
-    /// Turning about the camera's up vector, `step` radians per frame.
-    Yaw,
-    /// Tilting about the camera's right axis, `step` radians per frame.
-    Pitch,
-    /// Circling the target about the up vector, `step` radians per frame.
-    Orbit,
-    /// A camera that does not move: the configured pose in every frame (the step is unused).
-    Still,
-    /// Poses read from a CSV file: (position, target) per frame.
-    File { path: PathBuf, poses: Vec<(DVec3, DVec3)> },
-}
-
-impl MotionPath {
-    /// The paths generated from the configured camera, by name: a new path is a variant here,
-    /// its name in [`MotionPath::name`] and its poses in [`camera_path`], nothing else.
-    pub const GENERATED: [MotionPath; 6] = [
-        MotionPath::Strafe,
-        MotionPath::Dolly,
-        MotionPath::Yaw,
-        MotionPath::Pitch,
-        MotionPath::Orbit,
-        MotionPath::Still,
-    ];
-
-    /// The generated path of a name (`"strafe"`, ...); None for `"file"` and unknown names.
-    pub fn generated(name: &str) -> Option<MotionPath> {
-        Self::GENERATED.into_iter().find(|p| p.name() == name)
-    }
-
-    /// Every name a config may give, quoted, for error messages.
-    pub fn names_quoted() -> String {
-        let mut names: Vec<String> = Self::GENERATED.iter().map(|p| format!("{:?}", p.name())).collect();
-        names.push("\"file\"".to_string());
-        names.join(", ")
-    }
-
-    /// The per-frame step as used from the step as written: world units for translations,
-    /// degrees converted to radians for rotations (degrees exist only in the config).
-    pub fn step_from_written(&self, written: f64) -> f64 {
-        if self.is_translation() {
-            written
-        } else {
-            written.to_radians()
-        }
-    }
-
-    pub fn name(&self) -> &'static str {
-        match self {
-            MotionPath::Strafe => "strafe",
-            MotionPath::Dolly => "dolly",
-            MotionPath::Yaw => "yaw",
-            MotionPath::Pitch => "pitch",
-            MotionPath::Orbit => "orbit",
-            MotionPath::Still => "still",
-            MotionPath::File { .. } => "file",
-        }
-    }
-
-    /// True when every frame differs from the previous one by a pure translation.
-    pub fn is_translation(&self) -> bool {
-        matches!(self, MotionPath::Strafe | MotionPath::Dolly)
-    }
-}
+use crate::scene::{Camera, Motion, MotionPath};
 
 /// Poses for every frame of a motion path, or the first frame whose camera is
 /// invalid (up parallel to the view direction, position equal to target) and why.

@@ -73,85 +73,10 @@ use glam::{DVec2, DVec3};
 use crate::cascades::{LightPose, Rig, WindowRule};
 use crate::fitting::Window;
 use crate::geometry::{Aabb, CameraPose, Corner, LightBasis};
+use crate::scene::SnapSpace;
 use crate::shimmer::{PathResult, ShimmerOptions};
 use crate::snapping::SnapMode;
 use crate::walk::{walk, Landing, PathModel, PathTotals};
-
-/// Arithmetic of the cascade pipeline (`[shadow] precision`, `--precision`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Precision {
-    /// Exact: texel-unit windows, snapped shimmer exactly 0 at any world offset.
-    #[default]
-    F64,
-    /// An engine's binary32 pipeline, emulated operation by operation.
-    F32,
-}
-
-impl Precision {
-    pub fn name(self) -> &'static str {
-        match self {
-            Precision::F64 => "f64",
-            Precision::F32 => "f32",
-        }
-    }
-
-    pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "f64" => Some(Precision::F64),
-            "f32" => Some(Precision::F32),
-            _ => None,
-        }
-    }
-}
-
-impl std::str::FromStr for Precision {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, String> {
-        Precision::from_name(s).ok_or_else(|| format!("{s:?} is not one of f64, f32"))
-    }
-}
-
-impl std::fmt::Display for Precision {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// Where the binary32 pipeline computes (`[shadow] snap_space`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SnapSpace {
-    /// Absolute world coordinates rounded to f32 (what engines do by default).
-    #[default]
-    World,
-    /// Positions relative to a camera-near, grid-aligned anchor, subtracted in f64.
-    CameraRelative,
-}
-
-impl SnapSpace {
-    pub fn name(self) -> &'static str {
-        match self {
-            SnapSpace::World => "world",
-            SnapSpace::CameraRelative => "camera_relative",
-        }
-    }
-
-    pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "world" => Some(SnapSpace::World),
-            "camera_relative" => Some(SnapSpace::CameraRelative),
-            _ => None,
-        }
-    }
-}
-
-impl std::fmt::Display for SnapSpace {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
 
 /// Spacing of binary32 numbers at `|x|`: the distance from `|x|` (rounded to f32) to the next
 /// larger f32. `ulp32(1e5) = 2^-7`.
@@ -172,41 +97,31 @@ pub trait Real:
     fn trunc_(self) -> Self;
 }
 
-impl Real for f32 {
-    fn of(x: f64) -> Self {
-        x as f32
-    }
-    fn to_f64(self) -> f64 {
-        self as f64
-    }
-    fn round_half_away(self) -> Self {
-        self.round()
-    }
-    fn floor_(self) -> Self {
-        self.floor()
-    }
-    fn trunc_(self) -> Self {
-        self.trunc()
-    }
+// The two arithmetics differ only in their type: each operation is the type's own (rounding
+// to that type), so one body serves both.
+macro_rules! impl_real {
+    ($t:ty) => {
+        impl Real for $t {
+            fn of(x: f64) -> Self {
+                x as $t
+            }
+            fn to_f64(self) -> f64 {
+                self as f64
+            }
+            fn round_half_away(self) -> Self {
+                self.round()
+            }
+            fn floor_(self) -> Self {
+                self.floor()
+            }
+            fn trunc_(self) -> Self {
+                self.trunc()
+            }
+        }
+    };
 }
-
-impl Real for f64 {
-    fn of(x: f64) -> Self {
-        x
-    }
-    fn to_f64(self) -> f64 {
-        self
-    }
-    fn round_half_away(self) -> Self {
-        self.round()
-    }
-    fn floor_(self) -> Self {
-        self.floor()
-    }
-    fn trunc_(self) -> Self {
-        self.trunc()
-    }
-}
+impl_real!(f32);
+impl_real!(f64);
 
 fn v3<R: Real>(p: DVec3) -> [R; 3] {
     [R::of(p.x), R::of(p.y), R::of(p.z)]

@@ -3,9 +3,14 @@
 //! Conventions are stated once in [`geometry`]: right-handed world with +Y up, world units for
 //! every length, radians for every angle (degrees exist only in the config file), the light
 //! direction is the way light travels, and light space is a pure rotation named
-//! `light_from_world`. The inputs are the plain values of [`scene`]. Nothing here imports
-//! `config`, `cli`, `report`, `figures`, `presets`, `commands` or `analysis`; those layers
-//! call into the core, and the core depends only on glam, serde derives and std.
+//! `light_from_world`. The inputs are the plain values of [`scene`]. This crate knows no
+//! configuration file, file format, CLI or report: the application crate (`csm-lab`) calls into
+//! it. Its dependencies are glam (vectors), serde (derives only), rayon (parallel walks and
+//! ray casts) and obvhs (the BVH of the visibility pass); the architecture test holds it to that.
+//!
+//! Inside, plain values sit at the bottom ([`scene`], [`geometry`]) and no module circle exists:
+//! [`shimmer`] defines the motion metrics, [`walk`] is the one walk along a camera path,
+//! [`rig_path`] walks the exact f64 rig and [`precision`] the binary32 pipeline.
 
 pub mod cascades;
 pub mod depth_range;
@@ -17,6 +22,7 @@ pub mod mesh;
 pub mod metrics;
 pub mod motion;
 pub mod precision;
+pub mod rig_path;
 pub mod rng;
 pub mod scene;
 pub mod screen;

@@ -29,12 +29,12 @@ use std::hash::{BuildHasherDefault, Hasher};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use crate::core::cascades::{LightPose, Rig};
-use crate::core::fitting::Window;
-use crate::core::geometry::{CameraPose, LightBasis};
-use crate::core::metrics::cascade_at;
-use crate::core::shade::{FlipImage, Shade, ShadeImage};
-use crate::core::visibility::{SceneGeometry, Visibility};
+use crate::cascades::{LightPose, Rig};
+use crate::fitting::Window;
+use crate::geometry::{CameraPose, LightBasis};
+use crate::metrics::cascade_at;
+use crate::shade::{FlipImage, Shade, ShadeImage};
+use crate::visibility::{SceneGeometry, Visibility};
 
 /// The truth ray's origin leaves the surface by this fraction of the scene's coordinate scale.
 pub const EPSILON_REL: f64 = 1e-5;
