@@ -919,7 +919,7 @@ pub struct ShimmerPoint {
 pub const FLICKER_VS_SHIMMER: &str = "flicker_vs_shimmer";
 
 /// The scatter's caption in a report: what to look for.
-pub const FLICKER_VS_SHIMMER_CAPTION: &str = "Flicker S5 against the shimmer proxies S3 and S4, one point per configuration: points close to the fitted line (|r| near 1) mean the proxy predicts the flicker a player sees.";
+pub const FLICKER_VS_SHIMMER_CAPTION: &str = "Flicker S5 against the shimmer proxies S3 and S4, one point per configuration: points close to the fitted line (|r| near 1) mean the proxy predicts the flicker a player sees. The snapped configurations sit at the origin and pull the line; the unsnapped points alone (the report's sentences) say whether the proxy ranks the configurations that flicker.";
 
 /// The ordinary least-squares line `y = a + b x` through points and how well it fits.
 #[derive(Debug, Clone, Copy, PartialEq)]

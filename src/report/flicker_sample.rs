@@ -135,10 +135,15 @@ pub fn lines(s: &FlickerSample) -> Vec<String> {
     let mut sources: Vec<&str> = s.points().map(|x| x.bias_source.name()).collect();
     sources.sort_unstable();
     sources.dedup();
+    let recommended = if sources.contains(&"recommended") {
+        " (recommended: that row's own bias_needed per cascade, acne at most 0.1 %)"
+    } else {
+        ""
+    };
     vec![
         format!("{} (flicker.csv).", s.sentence()),
         format!(
-            "S5 is measured at the bias each row's pass sampled with: bias_source = {} (recommended: that row's own bias_needed per cascade, acne at most 0.1 %).",
+            "S5 is measured at the bias each row's pass sampled with: bias_source = {}{recommended}.",
             sources.join(", ")
         ),
         format!("Against S3, all points: {}.", fit_words("S3", &f.s3)),

@@ -669,8 +669,8 @@ fn each_preset_snaps_as_its_engine_does_under_strafe_and_yaw() {
         ("unreal", true, true),
         ("unity", true, true),
         ("unity-urp", true, true),
-        // The light basis follows the camera's right axis: fixed under strafe, turning under yaw.
-        ("filament", true, false),
+        // A basis fixed in the world (+X up reference) and 2-texel fmod snapping.
+        ("filament", true, true),
         // No snapping; the window stays on the origin axis (size fixed under strafe only).
         ("unity-sample", true, false),
         // Look-at from a light position: every camera move turns each cascade's basis.

@@ -227,9 +227,10 @@ fn each_setting_is_judged_by_its_worst_sun_and_the_recommendation_by_those_worst
             sweep::recommend_by(&worst_rows, result.budget_mib, objective)
         );
         assert_eq!(result.front, sweep::pareto_front_by(&worst_rows, objective));
-        // The default objective: screen p95 with geometry, mean aliasing without.
+        // The default objective: the contrast-weighted screen p95 with geometry, mean aliasing
+        // without.
         let want = if config.geometry.is_some() {
-            "screen_aliasing_p95"
+            "visible_aliasing_p95"
         } else {
             "mean_aliasing"
         };

@@ -792,10 +792,11 @@ pub enum ErrorKind {
     Acne,
     /// Wrong because the texels read hold another surface than the one the exact answer sees:
     /// truly lit but shadowed by a caster's texels, or truly shadowed but lit because the
-    /// texels do not hold the caster (lit even without bias). Only resolution fixes it.
+    /// texels do not hold the caster (lit even without bias, or every texel read holds the
+    /// receiver's own surface). Only resolution fixes it.
     Edge,
-    /// Truly shadowed, lit only because of the bias (shadowed without it): peter-panning and
-    /// light leaks.
+    /// Truly shadowed, lit only because of the bias (shadowed without it) while a texel read
+    /// holds another surface (the caster is in the map): peter-panning and light leaks.
     Leak,
 }
 
@@ -804,7 +805,7 @@ impl Answer {
     pub fn error(self, truly_lit: bool) -> Option<ErrorKind> {
         match (self.lit, truly_lit) {
             (false, true) if self.own_only => Some(ErrorKind::Acne),
-            (true, false) if !self.lit_unbiased => Some(ErrorKind::Leak),
+            (true, false) if !self.lit_unbiased && !self.own_only => Some(ErrorKind::Leak),
             (false, true) | (true, false) => Some(ErrorKind::Edge),
             _ => None,
         }
