@@ -18,7 +18,9 @@ use csm_core::snapping::SnapRule;
 use csm_core::splits;
 use csm_core::visibility::SceneGeometry;
 use csm_lab::analysis::{analyze, AnalysisOptions};
-use csm_lab::commands::sweep::{self, Grid, GridOverrides};
+use csm_lab::commands::sweep::grid::Grid;
+use csm_lab::commands::sweep::run as sweep;
+use csm_lab::config::sweep_spec::SweepAxes;
 use csm_lab::config::Config;
 
 fn default_config() -> Config {
@@ -85,7 +87,7 @@ fn default_sweep(c: &mut Criterion) {
     // The sweep exactly as `csm-lab sweep configs/default.toml` computes it: the grid of the
     // config's [sweep] table (21 λ × 8 counts × 4 resolutions, 240 frames, both snap modes).
     let base = default_config();
-    let grid = Grid::resolve(&base, &GridOverrides::default()).expect("default grid");
+    let grid = Grid::resolve(&base, &SweepAxes::default()).expect("default grid");
     assert_eq!(grid.len(), 672);
     let mut group = c.benchmark_group("sweep");
     group.sample_size(20);
@@ -202,7 +204,7 @@ fn engine_terms(c: &mut Criterion) {
 /// is one analysis; with screen metrics, the rays are cast once (shared by every angle) and each
 /// angle shades them (lit flag, geometric factor, receivers sorted) before its analysis.
 fn sun_angle(c: &mut Criterion) {
-    use csm_lab::commands::sweep::Sun;
+    use csm_lab::commands::sweep::grid::Sun;
     let config = default_config();
     let mut bounds_only = config.clone();
     bounds_only.geometry = None;

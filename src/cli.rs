@@ -289,7 +289,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
         Command::Sweep(args) => sweep::execute(&sweep::SweepRequest {
             config: args.config,
             out: args.out,
-            grid: crate::commands::sweep::GridFlags {
+            grid: crate::commands::sweep::grid::GridFlags {
                 preset: args.preset,
                 lambda: args.lambda,
                 cascades: args.cascades,

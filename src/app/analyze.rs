@@ -44,7 +44,7 @@ pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
         })?;
     }
     if args.ground_truth {
-        crate::commands::flicker_sample::refuse_ground_truth(&config, "--ground-truth")?;
+        crate::commands::sweep::flicker::refuse_ground_truth(&config, "--ground-truth")?;
         config.truth.enabled = true;
     }
     if args.raw_bias {

@@ -28,7 +28,7 @@ pub fn execute(args: &CompareRequest) -> Result<Outcome> {
         None => crate::presets::PresetName::ALL.to_vec(),
     };
     let own = match &args.split_range {
-        Some(spec) => crate::commands::sweep::parse_split_range_spec(spec)?.values,
+        Some(spec) => crate::commands::sweep::grid::parse_split_range_spec(spec)?.values,
         None => Vec::new(),
     };
     let progress = super::progress::Progress::new(args.quiet, (presets.len() + own.len()) as u64, "presets");
@@ -39,7 +39,7 @@ pub fn execute(args: &CompareRequest) -> Result<Outcome> {
         .clone()
         .unwrap_or_else(|| default_out_dir(&comparison.analyses[0].config));
     let scene = crate::config::Config::load_scene(&args.config)?;
-    let settings = crate::commands::terms::for_compare(&comparison, &scene)?;
+    let settings = crate::commands::compare::engine_settings(&comparison, &scene)?;
     let mut files = report::compare::exporters()
         .iter()
         .map(|e| Ok((e.file_name().to_string(), e.render(&comparison)?)))

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use super::sweep::{plan, shard_hash, SweepRequest};
 use super::{default_out_dir, print_result, Format, Outcome};
-use crate::commands::shard::{self, Manifest, ShardInput};
-use crate::commands::sweep::SweepResult;
+use crate::commands::sweep::shard::{self, Manifest, ShardInput};
+use crate::commands::sweep::{flicker, optimize, SweepResult};
 use crate::error::{Error, IoError, Result, ShardError};
 use crate::output;
 use crate::report;
@@ -103,12 +103,12 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
         .into());
     }
     let rows = shard::join(shards, &grid)?;
-    let mut result = SweepResult::new(config, grid, rows, command);
+    let mut result = SweepResult::new(config, grid, rows, command)?;
     // `[sweep] optimize_splits`, which each shard left out, runs on the joined rows, as the
     // unsharded sweep runs it.
     if result.config.sweep.as_ref().is_some_and(|s| s.optimize_splits) {
-        crate::commands::optimize::check_free(&result.config, "sweep.optimize_splits")?;
-        result.optimized = Some(crate::commands::optimize::optimize(
+        optimize::check_free(&result.config, "sweep.optimize_splits")?;
+        result.optimized = Some(optimize::optimize(
             &result.config,
             &result.grid,
             &result.rows,
@@ -118,8 +118,13 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
     }
     // So does `[sweep] ground_truth`'s sample, which is drawn from all the rows.
     if result.config.sweep.as_ref().is_some_and(|s| s.ground_truth) {
-        crate::commands::flicker_sample::refuse_ground_truth(&result.config, "sweep.ground_truth")?;
-        result.flicker = Some(crate::commands::flicker_sample::measure(&result, None)?);
+        flicker::refuse_ground_truth(&result.config, "sweep.ground_truth")?;
+        result.flicker = Some(flicker::measure(
+            &result.config,
+            &result.rows,
+            result.recommendation.as_ref().map(|r| r.index),
+            None,
+        )?);
     }
     // sweep.csv is streamed when the set is written (execute).
     let files = report::sweep::render_all_but_csv(&result, !args.no_plots)?;
@@ -145,6 +150,6 @@ pub fn execute(args: &MergeRequest) -> Result<Outcome> {
         written.len(),
         &dir,
     )?;
-    super::sweep::print_engine_settings(args.format, &result)?;
+    super::sweep::print_engine_settings(args.format, &result);
     Ok(Outcome::Success)
 }

@@ -4,8 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use super::{default_out_dir, load_for_preset_sweep, print_result, Format, Outcome};
-use crate::commands::shard::{self, Shard};
-use crate::commands::sweep::*;
+use crate::commands::sweep::grid::{Grid, GridFlags};
+use crate::commands::sweep::run::run_settings;
+use crate::commands::sweep::shard::{self, Shard};
+use crate::commands::sweep::{flicker, optimize, SweepResult};
 use crate::config::Config;
 use crate::error::{Error, Result};
 use crate::output;
@@ -61,7 +63,7 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         None
     };
     if let Some(source) = optimize_source {
-        crate::commands::optimize::check_free(&config, source)?;
+        optimize::check_free(&config, source)?;
         if shard.is_some() {
             if args.optimize_splits {
                 return Err(Error::flag(
@@ -86,7 +88,7 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         None
     };
     if let Some(source) = truth_source {
-        crate::commands::flicker_sample::refuse_ground_truth(&config, source)?;
+        flicker::refuse_ground_truth(&config, source)?;
         if shard.is_some() {
             if args.ground_truth {
                 return Err(Error::flag(
@@ -130,10 +132,10 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         Some(s) => format!("{command} --shard {}/{}", s.k, s.n),
         None => command,
     };
-    let mut result = SweepResult::new(config, grid, rows, shown_command);
+    let mut result = SweepResult::new(config, grid, rows, shown_command)?;
     if optimize {
         let start = std::time::Instant::now();
-        let found = crate::commands::optimize::optimize(
+        let found = optimize::optimize(
             &result.config,
             &result.grid,
             &result.rows,
@@ -152,7 +154,12 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
     }
     if ground_truth {
         let start = std::time::Instant::now();
-        let sample = crate::commands::flicker_sample::measure(&result, args.threads.map(usize::from))?;
+        let sample = flicker::measure(
+            &result.config,
+            &result.rows,
+            result.recommendation.as_ref().map(|r| r.index),
+            args.threads.map(usize::from),
+        )?;
         if !args.quiet {
             progress.note(&format!(
                 "measured the ground truth of {} rows in {:.1} ms",
@@ -227,7 +234,7 @@ pub fn execute(args: &SweepRequest) -> Result<Outcome> {
         written.len(),
         &dir,
     )?;
-    print_engine_settings(args.format, &result)?;
+    print_engine_settings(args.format, &result);
     // Which rows have S5, and how well S3 and S4 predict it (the JSON output stays one document).
     if let (Format::Table, Some(s)) = (args.format, &result.flicker) {
         println!("\nground truth:");
@@ -240,11 +247,10 @@ pub fn execute(args: &SweepRequest) -> Result<Outcome> {
 
 /// With a preset, `recommendation.<engine>.txt` closes the table output (`sweep`, `merge`);
 /// the JSON output stays one document.
-pub(crate) fn print_engine_settings(format: Format, result: &SweepResult) -> Result<()> {
+pub(crate) fn print_engine_settings(format: Format, result: &SweepResult) {
     if format == Format::Table {
-        if let Some(s) = crate::commands::terms::for_sweep(result)? {
-            print!("\n{}:\n{}", s.file_name(), report::terms::text(&s));
+        if let Some(s) = &result.engine_setting {
+            print!("\n{}:\n{}", s.file_name(), report::terms::text(s));
         }
     }
-    Ok(())
 }

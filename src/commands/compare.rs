@@ -20,9 +20,11 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 use crate::analysis::{analyze, Analysis, AnalysisOptions};
+use crate::commands::terms::EngineSetting;
 use crate::config::{Config, SplitRange};
 use crate::error::{Error, Result};
-use crate::presets::{PresetChoice, PresetName};
+use crate::output::short_number;
+use crate::presets::{Dims, PresetChoice, PresetName, Target};
 
 /// The presets compared and their analyses, in the order given.
 #[derive(Debug, Clone)]
@@ -85,7 +87,7 @@ pub fn invalid_reason(a: &Analysis) -> Option<String> {
     if clipped > 0.0 {
         why.push(format!(
             "receivers clipped by {} world units of light depth",
-            crate::output::short_number(clipped)
+            short_number(clipped)
         ));
     }
     (!why.is_empty()).then(|| why.join("; "))
@@ -130,7 +132,7 @@ pub fn run_with_progress(
         .collect::<Result<Vec<_>>>()?;
     let mut configs = configs;
     for &range in own {
-        crate::commands::sweep::check_split_ranges(&scene, &[range], range.name())?;
+        crate::commands::sweep::grid::check_split_ranges(&scene, &[range], range.name())?;
         let mut own_config = scene.clone();
         own_config.shadow.preset = None;
         configs.push(own_config.with_split_range(range)?);
@@ -175,4 +177,145 @@ pub fn coverage_extremes(a: &Analysis) -> (f64, f64) {
 pub fn fit_label(a: &Analysis) -> String {
     a.rig()
         .map_or_else(|| a.config.shadow.fit.to_string(), |r| r.scheme.fit_label.clone())
+}
+
+/// The count of `list` nearest `n` (the larger on a tie).
+fn nearest_count(list: &[usize], n: usize) -> usize {
+    list.iter()
+        .copied()
+        .min_by_key(|&c| (c.abs_diff(n), std::cmp::Reverse(c)))
+        .unwrap_or(n)
+}
+
+/// A power of two near `n`: `n` itself when it is one, else the next.
+fn power_of_two(n: u32) -> u32 {
+    n.checked_next_power_of_two().unwrap_or(1 << 31)
+}
+
+fn list(xs: &[f64]) -> String {
+    xs.iter().map(|x| short_number(*x)).collect::<Vec<_>>().join(", ")
+}
+
+/// Each compared engine's setting closest to csm-lab's own cascades for the file's `[shadow]`
+/// settings (`scene`: the file without a preset applied). Analyses without a preset (csm-lab's
+/// own, `--split-range`) give none.
+pub fn engine_settings(c: &Comparison, scene: &Config) -> Result<Vec<EngineSetting>> {
+    let mut out = Vec::new();
+    for a in &c.analyses {
+        let Some(name) = preset_of(a) else { continue };
+        let config = &a.config;
+        let engine = name.engine();
+        let preset = config.shadow.preset.as_ref().expect("a preset");
+        let mut knobs = preset.knobs.clone();
+        let counts = engine.counts(&knobs).list();
+        let n = nearest_count(&counts, scene.shadow.cascades);
+        let mut own = scene.clone();
+        own.shadow.preset = None;
+        // csm-lab's own cascades at the engine's count; when there are none (the scene is not
+        // visible, or the count does not fit the file's binary32 range), the setting compared.
+        let own_rig = own.with_cascades(n).map(|o| crate::analysis::rig(&o));
+        let Ok(Some(rig)) = own_rig else {
+            let why = match own_rig {
+                Err(e) => format!("csm-lab's own pipeline cannot run at {n} cascades here ({e})"),
+                _ => "csm-lab's own pipeline needs no cascades for this scene".to_string(),
+            };
+            let comments = vec![
+                format!("from: {}", c.command()),
+                format!("{why}: this is the setting compared"),
+            ];
+            out.extend(EngineSetting::of(config, comments));
+            continue;
+        };
+        let mut ends = vec![rig.slices[0].near];
+        ends.extend(rig.slices.iter().map(|s| s.far));
+        let (near, far) = (config.camera.near, config.camera.far);
+        let distance = *ends.last().expect("a cascade");
+        let engine_distance = if engine.has_distance() {
+            distance
+        } else {
+            config.shadow.max_distance
+        };
+        let target = Target {
+            ends: &ends,
+            distance: engine_distance,
+            near,
+            far,
+        };
+        engine.match_ends(&mut knobs, &target);
+        let resolution = if engine.power_of_two_maps() {
+            power_of_two(scene.shadow.resolution)
+        } else {
+            scene.shadow.resolution
+        };
+        let cascades = engine.counts(&knobs).list();
+        let n_used = nearest_count(&cascades, n);
+        let dims = Dims {
+            cascades: n_used,
+            resolution,
+            max_distance: engine.has_distance().then_some(distance),
+        };
+        let lay = engine.layout(&knobs, n_used, engine_distance, near, far);
+        let engine_ends: Vec<f64> = lay.fitted.iter().map(|s| s.1).collect();
+        let worst = engine_ends
+            .iter()
+            .zip(&ends[1..])
+            .map(|(e, d)| ((e - d) / d).abs())
+            .fold(0.0, f64::max);
+        let mut comments = vec![
+            format!("from: {}", c.command()),
+            format!(
+                "the setting of {name} closest to csm-lab's own cascades for this file's [shadow] settings \
+                 (λ {}, {} cascades of {}², shadow distance {})",
+                short_number(scene.shadow.lambda),
+                n,
+                resolution,
+                short_number(scene.shadow.max_distance)
+            ),
+            format!("csm-lab's cascades end at {}", list(&ends[1..])),
+            format!(
+                "these settings' cascades end at {} (largest difference {} %)",
+                list(&engine_ends),
+                short_number(100.0 * worst)
+            ),
+        ];
+        if n != scene.shadow.cascades {
+            comments.push(format!(
+                "{name} does not take {} cascades: {n}, the nearest count it takes",
+                scene.shadow.cascades
+            ));
+        }
+        if n_used != n {
+            comments.push(format!("the split knobs fix the count at {n_used}"));
+        }
+        if resolution != scene.shadow.resolution {
+            comments.push(format!(
+                "{name} takes power-of-two maps only: {resolution} for the file's {}",
+                scene.shadow.resolution
+            ));
+        }
+        out.push(EngineSetting {
+            preset: name,
+            knobs,
+            dims,
+            near,
+            far,
+            comments,
+        });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_counts_prefer_the_larger_on_a_tie() {
+        assert_eq!(nearest_count(&[1, 2, 4], 3), 4);
+        assert_eq!(nearest_count(&[1, 2, 4], 8), 4);
+        assert_eq!(nearest_count(&[1, 2, 3, 4], 3), 3);
+        assert_eq!(nearest_count(&[4], 1), 4);
+        assert_eq!(power_of_two(1000), 1024);
+        assert_eq!(power_of_two(2048), 2048);
+    }
 }

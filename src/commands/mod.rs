@@ -8,11 +8,6 @@
 pub mod bench;
 pub mod check;
 pub mod compare;
-pub mod flicker_sample;
-pub mod light_sweep;
-pub mod optimize;
-pub mod shard;
 pub mod stress;
-pub mod sun_sweep;
 pub mod sweep;
 pub mod terms;

@@ -14,9 +14,12 @@ pub struct Axis<T> {
     pub spec: String,
 }
 
-/// The `[sweep]` table as validated.
+/// The axes of a sweep, each None when not given. The one list of axes: the `[sweep]` table
+/// holds one ([`SweepSpec::axes`]) and the command line's flags parse into another
+/// (`commands::sweep::grid::GridFlags::overrides`); `Grid::resolve` merges the two, a flag
+/// over its key.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct SweepSpec {
+pub struct SweepAxes {
     pub lambda: Option<Axis<f64>>,
     pub cascades: Option<Axis<usize>>,
     pub resolution: Option<Axis<u32>>,
@@ -36,6 +39,13 @@ pub struct SweepSpec {
     /// `light_update = ["every:1", "every:4", "quantize:0.5"]`: the engine's light update rule
     /// (a moving light only).
     pub light_update: Option<Axis<csm_core::light_motion::LightUpdate>>,
+}
+
+/// The `[sweep]` table as validated.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SweepSpec {
+    /// The axes the table sweeps.
+    pub axes: SweepAxes,
     /// Memory budget for the recommendation, MiB (2^20 bytes).
     pub memory_budget_mib: Option<f64>,
     /// A larger grid is an error, not an out-of-memory.
@@ -267,22 +277,8 @@ pub fn resolution_ok(x: u32) -> bool {
     (16..=16384).contains(&x)
 }
 
-fn raw_lambda(raw: RawAxis) -> std::result::Result<Axis<f64>, String> {
-    let axis = match raw {
-        RawAxis::List(values) => Axis {
-            spec: fmt_list(&values),
-            values,
-        },
-        RawAxis::Range(r) => Axis {
-            values: decimal_range(r.start, r.end, r.step)?,
-            spec: format!("{}:{}:{}", r.start, r.end, r.step),
-        },
-    };
-    check_values(&axis.values, "[0, 1]", lambda_ok)?;
-    Ok(axis)
-}
-
-/// A finite-number axis (`knob`, `distance`): a list or a decimal-exact range.
+/// A number axis (`lambda`, `knob`, `distance`, the sun angles): a list or a decimal-exact
+/// range, each value `ok`.
 fn raw_numbers(raw: RawAxis, allowed: &str, ok: impl Fn(f64) -> bool) -> std::result::Result<Axis<f64>, String> {
     let axis = match raw {
         RawAxis::List(values) => Axis {
@@ -353,7 +349,7 @@ fn int_axis<T: TryFrom<i64> + Copy + PartialOrd + std::fmt::Display>(
 pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool) -> Result<SweepSpec> {
     let lambda = raw
         .lambda
-        .map(raw_lambda)
+        .map(|r| raw_numbers(r, "[0, 1]", lambda_ok))
         .transpose()
         .map_err(|why| v.invalid("sweep.lambda", "as written", &format!("values in [0, 1]: {why}")))?;
     let cascades = raw
@@ -486,16 +482,18 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
         })
         .transpose()?;
     Ok(SweepSpec {
-        lambda,
-        cascades,
-        resolution,
-        fit,
-        split_range,
-        knob,
-        distance,
-        sun_azimuth,
-        sun_elevation,
-        light_update,
+        axes: SweepAxes {
+            lambda,
+            cascades,
+            resolution,
+            fit,
+            split_range,
+            knob,
+            distance,
+            sun_azimuth,
+            sun_elevation,
+            light_update,
+        },
         memory_budget_mib,
         max_configs,
         objective: raw.objective,

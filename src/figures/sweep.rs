@@ -10,7 +10,10 @@ use super::{
     PlotResult, FONT, LEGEND_FONT,
 };
 use crate::analysis::{analyze, mib, Analysis, AnalysisOptions};
-use crate::commands::sweep::{self, Row, Setting, SweepResult};
+use crate::commands::sweep::grid::Setting;
+use crate::commands::sweep::rank::STABLE_SHIMMER;
+use crate::commands::sweep::run::Row;
+use crate::commands::sweep::SweepResult;
 use crate::metric::SummaryMetric;
 
 /// The configuration the figures single out: the recommended one, or when nothing qualifies the
@@ -18,9 +21,7 @@ use crate::metric::SummaryMetric;
 pub fn focus(r: &SweepResult) -> Option<(&Row, bool)> {
     match r.recommended() {
         Some(x) => Some((x, true)),
-        None => sweep::no_recommendation(&r.rows, r.budget_mib, r.objective)
-            .closest
-            .map(|i| (&r.rows[i], false)),
+        None => r.no_recommendation.closest.map(|i| (&r.rows[i], false)),
     }
 }
 
@@ -126,7 +127,7 @@ impl HeatmapFigure<'_> {
 
     /// (panel columns, panel rows).
     fn layout(&self) -> (usize, usize) {
-        let fits = sweep::fits_in(&self.0.rows).len().max(1);
+        let fits = self.0.fit_groups.len().max(1);
         let metrics = heat_metrics(self.0).len();
         if self.lambda_axis() {
             (self.0.grid.resolution.values.len().max(1), metrics * fits)
@@ -149,7 +150,7 @@ impl HeatmapFigure<'_> {
         let y_labels: Vec<String> = counts.iter().map(|c| c.to_string()).collect();
         let within = |x: &Row| mib(x.summary.memory_bytes) <= r.budget_mib;
         let mut out = Vec::new();
-        let fits = sweep::fits_in(&r.rows);
+        let fits = &r.fit_groups;
         if self.lambda_axis() {
             let (cols, per) = self.lambda_bins();
             // Every few columns its λ; binned, round λ values at the column that holds them.
@@ -170,7 +171,7 @@ impl HeatmapFigure<'_> {
                     })
                     .collect()
             };
-            for fit in &fits {
+            for fit in fits {
                 for metric in heat_metrics(r) {
                     for &res in resolutions {
                         let mut cells: Vec<(usize, usize, Option<f64>, bool)> = Vec::new();
@@ -227,7 +228,7 @@ impl HeatmapFigure<'_> {
                 .enumerate()
                 .map(|(i, r)| (i, r.to_string()))
                 .collect();
-            for fit in &fits {
+            for fit in fits {
                 for metric in heat_metrics(r) {
                     let mut cells = Vec::new();
                     let mut marked = None;
@@ -663,7 +664,7 @@ impl Figure for ShimmerSweepFigure<'_> {
                 elements
                     .push(PathElement::new(vec![(x - half, med), (x + half, med)], color.stroke_width(3)).into_dyn());
             }
-            let label = match (snapped, max_sn <= sweep::STABLE_SHIMMER) {
+            let label = match (snapped, max_sn <= STABLE_SHIMMER) {
                 (false, _) => format!("unsnapped (largest {} texels)", super::short(max_un)),
                 (true, true) => format!(
                     "snapped (largest {}: stable, boxes sit on zero)",

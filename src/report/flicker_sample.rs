@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 
 use super::html;
-use crate::commands::flicker_sample::FlickerSample;
+use crate::commands::sweep::flicker::FlickerSample;
 use crate::commands::sweep::SweepResult;
 use crate::error::Result;
 use crate::figures::truth::{fit, flicker_vs_shimmer_figure, Fit, ShimmerPoint, FLICKER_VS_SHIMMER_CAPTION};

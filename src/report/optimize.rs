@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 
 use super::html;
-use crate::commands::optimize::{Optimized, OptimizedGroup};
+use crate::commands::sweep::optimize::{Optimized, OptimizedGroup};
 use crate::commands::sweep::SweepResult;
 use crate::config::Config;
 use crate::error::Result;

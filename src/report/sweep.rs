@@ -6,7 +6,10 @@ use std::fmt::Write as _;
 
 use super::{defs, html, markdown};
 use crate::analysis::mib;
-use crate::commands::sweep::{self, Row, SweepResult};
+use crate::commands::sweep::rank::{AlternativeKind, Loss, Rival, RivalKind, STABLE_SHIMMER};
+use crate::commands::sweep::run::Row;
+use crate::commands::sweep::sun::SUN_RULE;
+use crate::commands::sweep::SweepResult;
 use crate::config::Config;
 use crate::error::Result;
 use crate::figures::sweep::{HeatmapFigure, LambdaDensityFigure, ParetoFigure, ShimmerSweepFigure};
@@ -161,7 +164,7 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
         "name": r.config.name,
         "command": r.command,
         "configurations": r.rows.len(),
-        "objective": sweep::objective_text(r.objective),
+        "objective": r.objective_text,
         "objective_metric": r.objective.name(),
         "memory_budget_mib": r.budget_mib,
         "pareto_front": r.front.iter().map(|&i| row_json(&r.rows[i])).collect::<Vec<_>>(),
@@ -172,9 +175,9 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
     if let (Some(sun), Some(grid)) = (&r.sun, &r.grid.sun) {
         v["sun_angles"] = grid.len().into();
         v["sun_rows"] = sun.all.len().into();
-        v["sun_rule"] = crate::commands::sun_sweep::SUN_RULE.into();
-        if let Some(note) = crate::commands::sun_sweep::bounds_only_note(&r.config, &r.grid.fit.values) {
-            v["light_independent"] = note.into();
+        v["sun_rule"] = SUN_RULE.into();
+        if let Some(note) = &r.sun_note {
+            v["light_independent"] = note.as_str().into();
         }
     }
     match (r.recommendation.as_ref(), r.recommended()) {
@@ -182,7 +185,7 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
             v["within_budget"] = rec.within_budget.into();
             v["recommended"] = row_json(row);
             v["alternatives"] = r
-                .alternatives()
+                .alternatives
                 .iter()
                 .map(|a| {
                     let x = &r.rows[a.index];
@@ -221,7 +224,7 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
                 .collect::<Vec<_>>()
                 .into();
             v["rivals"] = r
-                .rivals()
+                .rivals
                 .iter()
                 .map(|x| {
                     serde_json::json!({
@@ -236,7 +239,7 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
         }
         _ => {
             // No null (every number must be finite): the reasons and the closest row instead.
-            let n = sweep::no_recommendation(&r.rows, r.budget_mib, r.objective);
+            let n = &r.no_recommendation;
             let mut none = serde_json::json!({
                 "why": why_text(r),
                 "configurations_without_cascades": n.no_cascades,
@@ -249,10 +252,10 @@ pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
             v["no_recommendation"] = none;
         }
     }
-    if let Some(c) = crate::commands::light_sweep::choose(r) {
+    if let Some(c) = &r.light_update {
         // A kind none of whose steps stays calm (or that was not swept) has no key: no null.
         let mut u = serde_json::json!({
-            "why": crate::commands::light_sweep::text(&c),
+            "why": c.sentence,
             "at": row_json(&r.rows[c.at]),
         });
         for (key, x) in [("largest_calm_every", c.every), ("largest_calm_quantize", c.quantize)] {
@@ -371,7 +374,7 @@ fn scene_facts(c: &Config, rows: &[Row]) -> Vec<(String, String)> {
 
 fn why_text(r: &SweepResult) -> String {
     let Some(rec) = r.recommended() else {
-        let nr = sweep::no_recommendation(&r.rows, r.budget_mib, r.objective);
+        let nr = &r.no_recommendation;
         let Some(c) = nr.closest else {
             return "The scene is not visible within the shadow distance: no cascades are needed.".to_string();
         };
@@ -382,7 +385,7 @@ fn why_text(r: &SweepResult) -> String {
             count(total as u64, "configuration"),
             nr.coverage_misses,
             nr.unstable,
-            n(sweep::STABLE_SHIMMER),
+            n(STABLE_SHIMMER),
             if nr.no_cascades > 0 {
                 format!(", {} need no cascades", nr.no_cascades)
             } else {
@@ -402,7 +405,7 @@ fn why_text(r: &SweepResult) -> String {
         .filter(|x| {
             x.summary.cascades_needed
                 && x.summary.coverage_violations == 0
-                && x.summary.snapped_drift() <= sweep::STABLE_SHIMMER
+                && x.summary.snapped_drift() <= STABLE_SHIMMER
                 && x.summary.memory_bytes as f64 <= r.budget_mib * 1048576.0
         })
         .count();
@@ -447,7 +450,7 @@ fn why_text(r: &SweepResult) -> String {
             n(r.budget_mib)
         );
     }
-    if let Some(o) = r.configured().map(|i| &r.rows[i]) {
+    if let Some(o) = r.configured.map(|i| &r.rows[i]) {
         let change = changes(r, o, rec);
         if !change.is_empty() && screen {
             let _ = write!(
@@ -535,18 +538,18 @@ fn alternative_lines(r: &SweepResult) -> Vec<String> {
     let Some(rec) = r.recommended() else {
         return Vec::new();
     };
-    let alts = r.alternatives();
+    let alts = &r.alternatives;
     [
-        sweep::AlternativeKind::Cheaper,
-        sweep::AlternativeKind::Sharper,
-        sweep::AlternativeKind::MoreStable,
+        AlternativeKind::Cheaper,
+        AlternativeKind::Sharper,
+        AlternativeKind::MoreStable,
     ]
     .iter()
     .map(|&kind| {
         let head = match kind {
-            sweep::AlternativeKind::Cheaper => "Cheaper",
-            sweep::AlternativeKind::Sharper => "Sharper",
-            sweep::AlternativeKind::MoreStable => "More stable",
+            AlternativeKind::Cheaper => "Cheaper",
+            AlternativeKind::Sharper => "Sharper",
+            AlternativeKind::MoreStable => "More stable",
         };
         match alts.iter().find(|a| a.kind == kind) {
             Some(a) => {
@@ -556,13 +559,13 @@ fn alternative_lines(r: &SweepResult) -> Vec<String> {
             None => format!(
                 "{head}: none. {}",
                 match kind {
-                    sweep::AlternativeKind::Cheaper =>
+                    AlternativeKind::Cheaper =>
                         "No configuration that covers every slice and is stable needs less memory.".to_string(),
-                    sweep::AlternativeKind::Sharper => format!(
+                    AlternativeKind::Sharper => format!(
                         "No configuration that covers every slice and is stable has a {} more than 1 % lower.",
                         r.objective.name()
                     ),
-                    sweep::AlternativeKind::MoreStable => format!(
+                    AlternativeKind::MoreStable => format!(
                         "No configuration within the budget that covers every slice shimmers less (the recommendation's shimmer is {} texel per frame).",
                         n(rec.summary.shimmer)
                     ),
@@ -574,33 +577,33 @@ fn alternative_lines(r: &SweepResult) -> Vec<String> {
 }
 
 /// The `lost_on` word of `recommendation.json`'s rivals.
-fn loss_name(l: sweep::Loss) -> &'static str {
+fn loss_name(l: Loss) -> &'static str {
     match l {
-        sweep::Loss::CoverageMisses(_) => "coverage",
-        sweep::Loss::Unstable(_) => "stability",
-        sweep::Loss::OverBudget => "memory_budget",
-        sweep::Loss::MoreMemory => "memory",
-        sweep::Loss::Objective => "objective",
-        sweep::Loss::MaxAliasing => "max_aliasing",
-        sweep::Loss::TieMemory => "memory_tie",
-        sweep::Loss::TieOrder => "order_tie",
+        Loss::CoverageMisses(_) => "coverage",
+        Loss::Unstable(_) => "stability",
+        Loss::OverBudget => "memory_budget",
+        Loss::MoreMemory => "memory",
+        Loss::Objective => "objective",
+        Loss::MaxAliasing => "max_aliasing",
+        Loss::TieMemory => "memory_tie",
+        Loss::TieOrder => "order_tie",
     }
 }
 
 /// One sentence: which rival, and the budget or metric it lost on, by how much.
-fn rival_text(r: &SweepResult, x: &sweep::Rival) -> String {
+fn rival_text(r: &SweepResult, x: &Rival) -> String {
     let rec = r.recommended().expect("rivals need a recommendation");
     let row = &r.rows[x.index];
     let (a, b) = (&rec.summary, &row.summary);
     let who = match x.kind {
-        sweep::RivalKind::LambdaOne => "The same setting with λ = 1",
-        sweep::RivalKind::OtherCascades => "The best setting with another cascade count",
-        sweep::RivalKind::OtherResolution => "The best setting with another resolution",
-        sweep::RivalKind::OtherFit => "The best setting with the other fit",
-        sweep::RivalKind::Configured => "The configured setting",
+        RivalKind::LambdaOne => "The same setting with λ = 1",
+        RivalKind::OtherCascades => "The best setting with another cascade count",
+        RivalKind::OtherResolution => "The best setting with another resolution",
+        RivalKind::OtherFit => "The best setting with the other fit",
+        RivalKind::Configured => "The configured setting",
     };
     // A group's best that is also the configured setting says so (it is listed once).
-    let who = if x.kind != sweep::RivalKind::Configured && r.configured() == Some(x.index) {
+    let who = if x.kind != RivalKind::Configured && r.configured == Some(x.index) {
         format!("{who}, which is the configured setting")
     } else {
         who.to_string()
@@ -609,16 +612,16 @@ fn rival_text(r: &SweepResult, x: &sweep::Rival) -> String {
     let (va, vb) = (r.objective.value(a), r.objective.value(b));
     let pct = |base: f64, v: f64| percent_change(base, v).map_or(String::new(), |p| format!(", {}", signed_percent(p)));
     let why = match x.loss {
-        sweep::Loss::CoverageMisses(c) => format!(
+        Loss::CoverageMisses(c) => format!(
             "lost on coverage: {} outside their windows along the path (the recommendation has none)",
             count(c, "slice corner")
         ),
-        sweep::Loss::Unstable(v) => format!(
+        Loss::Unstable(v) => format!(
             "lost on stability: it shimmers {} texel per frame when snapped, above the {} texel limit",
             n(v),
-            n(sweep::STABLE_SHIMMER)
+            n(STABLE_SHIMMER)
         ),
-        sweep::Loss::OverBudget => format!(
+        Loss::OverBudget => format!(
             "lost on the memory budget: it needs {} MiB, over the {} MiB budget (the recommendation {} MiB), for {} {} against {}{}",
             n(mib(b.memory_bytes)),
             n(r.budget_mib),
@@ -628,24 +631,24 @@ fn rival_text(r: &SweepResult, x: &sweep::Rival) -> String {
             n(va),
             pct(va, vb)
         ),
-        sweep::Loss::MoreMemory => format!(
+        Loss::MoreMemory => format!(
             "lost on memory: nothing fits the budget, and it needs {} MiB where the recommendation needs {} MiB",
             n(mib(b.memory_bytes)),
             n(mib(a.memory_bytes))
         ),
-        sweep::Loss::Objective => format!("lost on {obj}: {} against {}{}", n(vb), n(va), pct(va, vb)),
-        sweep::Loss::MaxAliasing => format!(
+        Loss::Objective => format!("lost on {obj}: {} against {}{}", n(vb), n(va), pct(va, vb)),
+        Loss::MaxAliasing => format!(
             "tied on {obj} (within 1 %) and lost on max aliasing: {} against {}{}",
             n(b.max_aliasing),
             n(a.max_aliasing),
             pct(a.max_aliasing, b.max_aliasing)
         ),
-        sweep::Loss::TieMemory => format!(
+        Loss::TieMemory => format!(
             "tied on {obj} and max aliasing, and needs more memory: {} MiB against {} MiB",
             n(mib(b.memory_bytes)),
             n(mib(a.memory_bytes))
         ),
-        sweep::Loss::TieOrder => {
+        Loss::TieOrder => {
             "tied on every measure; the recommendation has fewer cascades or comes first in the grid".to_string()
         }
     };
@@ -654,7 +657,7 @@ fn rival_text(r: &SweepResult, x: &sweep::Rival) -> String {
 
 /// One sentence per main rival ([`SweepResult::rivals`]).
 fn rival_lines(r: &SweepResult) -> Vec<String> {
-    r.rivals().iter().map(|x| rival_text(r, x)).collect()
+    r.rivals.iter().map(|x| rival_text(r, x)).collect()
 }
 
 const TOP: usize = 15;
@@ -706,13 +709,13 @@ fn status(r: &SweepResult, i: usize) -> String {
     if r.recommendation.as_ref().is_some_and(|x| x.index == i) {
         return "recommended".into();
     }
-    if let Some(a) = r.alternatives().iter().find(|a| a.index == i) {
+    if let Some(a) = r.alternatives.iter().find(|a| a.index == i) {
         return format!("{} alternative", a.kind.name().replace('_', " "));
     }
     let s = &r.rows[i].summary;
     if s.coverage_violations > 0 {
         "misses slice corners".into()
-    } else if s.snapped_drift() > sweep::STABLE_SHIMMER {
+    } else if s.snapped_drift() > STABLE_SHIMMER {
         "unstable when snapped".into()
     } else if s.memory_bytes as f64 > r.budget_mib * 1048576.0 {
         "over budget".into()
@@ -798,7 +801,7 @@ fn config_table(r: &SweepResult, idx: &[usize]) -> ConfigTable {
             "status",
             &format!(
                 "recommended, one of the alternatives, acceptable (covers every slice, snapped shimmer at most {} texel, within the {} MiB budget), or what rules it out",
-                n(sweep::STABLE_SHIMMER),
+                n(STABLE_SHIMMER),
                 n(r.budget_mib)
             ),
         ),
@@ -815,7 +818,7 @@ fn front_shown(r: &SweepResult) -> (Vec<usize>, usize) {
 
 /// The top rows by the recommendation rule, at most [`TOP`].
 fn top_shown(r: &SweepResult) -> Vec<usize> {
-    r.ranked().into_iter().take(TOP).collect()
+    r.ranked.iter().copied().take(TOP).collect()
 }
 
 /// "N configurations: a λ values × b cascade counts × …, each analysed in full".
@@ -857,7 +860,7 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
     let _ = writeln!(
         h,
         "<p><em>Objective:</em> {}.</p></div>",
-        html::escape(&sweep::objective_text(r.objective))
+        html::escape(&r.objective_text)
     );
     let alts = alternative_lines(r);
     if !alts.is_empty() {
@@ -954,10 +957,10 @@ pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> 
         m,
         "## Verdict\n\n{}\n\n*Objective:* {}.\n",
         why_text(r),
-        sweep::objective_text(r.objective)
+        r.objective_text
     );
-    if let Some(c) = crate::commands::light_sweep::choose(r) {
-        let _ = writeln!(m, "{}\n", crate::commands::light_sweep::text(&c));
+    if let Some(c) = &r.light_update {
+        let _ = writeln!(m, "{}\n", c.sentence);
     }
     let alts = alternative_lines(r);
     if !alts.is_empty() {
@@ -1058,8 +1061,8 @@ pub fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::output:
     }
     files.push(("report.html".to_string(), report_html(r, &figures)));
     files.push(("report.md".to_string(), report_md(r, &figures)));
-    if let Some(s) = crate::commands::terms::for_sweep(r)? {
-        files.push(super::terms::file(&s));
+    if let Some(s) = &r.engine_setting {
+        files.push(super::terms::file(s));
     }
     Ok(files)
 }
@@ -1197,8 +1200,8 @@ pub fn stdout_table(r: &SweepResult) -> String {
     for l in sun_lines(r) {
         let _ = writeln!(out, "note: {l}");
     }
-    if let Some(c) = crate::commands::light_sweep::choose(r) {
-        let _ = writeln!(out, "{}", crate::commands::light_sweep::text(&c));
+    if let Some(c) = &r.light_update {
+        let _ = writeln!(out, "{}", c.sentence);
     }
     out
 }
@@ -1237,10 +1240,8 @@ pub fn sun_lines(r: &SweepResult) -> Vec<String> {
             ));
         }
     }
-    out.push(crate::commands::sun_sweep::SUN_RULE.to_string());
-    if let Some(note) = crate::commands::sun_sweep::bounds_only_note(&r.config, &r.grid.fit.values) {
-        out.push(note);
-    }
+    out.push(SUN_RULE.to_string());
+    out.extend(r.sun_note.clone());
     out
 }
 

@@ -42,7 +42,7 @@ fn a_range_whose_step_dwarfs_its_span_is_one_value_not_a_panic() {
         "sweep.lambda",
         "lambda = { start = 1e-35, end = 1000.0, step = 709347840558070.0 }",
     )]));
-    assert_eq!(c.sweep.unwrap().lambda.unwrap().values, vec![1e-35]);
+    assert_eq!(c.sweep.unwrap().axes.lambda.unwrap().values, vec![1e-35]);
 }
 
 #[test]

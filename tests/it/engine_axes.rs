@@ -7,7 +7,9 @@ use crate::common::{config, with};
 
 use std::process::Command;
 
-use csm_lab::commands::sweep::{parse_distance_spec, parse_knob_spec, run, Grid, GridOverrides};
+use csm_lab::commands::sweep::grid::{parse_distance_spec, parse_knob_spec, Grid};
+use csm_lab::commands::sweep::run::run;
+use csm_lab::config::sweep_spec::SweepAxes;
 use csm_lab::{analyze, AnalysisOptions};
 
 fn preset_text(preset: &str, extra: &[(&str, &str)]) -> String {
@@ -22,9 +24,9 @@ fn preset_text(preset: &str, extra: &[(&str, &str)]) -> String {
 /// the engine parses and validates its own table).
 fn rows_equal_file_analyses(preset: &str, table: &str, knob: &str, knobs: &str, distances: &str) {
     let base = config(&preset_text(preset, &[]));
-    let overrides = GridOverrides {
-        cascades: Some(csm_lab::commands::sweep::parse_cascades_spec("2,4").unwrap()),
-        resolution: Some(csm_lab::commands::sweep::parse_resolution_spec("1024").unwrap()),
+    let overrides = SweepAxes {
+        cascades: Some(csm_lab::commands::sweep::grid::parse_cascades_spec("2,4").unwrap()),
+        resolution: Some(csm_lab::commands::sweep::grid::parse_resolution_spec("1024").unwrap()),
         knob: Some(parse_knob_spec(knobs).unwrap()),
         distance: Some(parse_distance_spec(distances).unwrap()),
         ..Default::default()
@@ -79,25 +81,25 @@ fn bevy_first_far_bound_and_distance_rows_equal_analyses_of_files_with_them_set(
 
 #[test]
 fn default_preset_grids_sweep_the_knob_around_its_configured_value() {
-    let unreal = Grid::resolve(&config(&preset_text("unreal", &[])), &GridOverrides::default()).unwrap();
+    let unreal = Grid::resolve(&config(&preset_text("unreal", &[])), &SweepAxes::default()).unwrap();
     let k = unreal.knob.as_ref().unwrap();
     assert_eq!(k.values, vec![1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0]);
     // 8 counts × 4 sizes × 7 exponents: hundreds, not thousands.
     assert_eq!(unreal.len(), 8 * 4 * 7);
     assert!(unreal.distance.is_none());
     // Bevy's default far bound 10, ×¼ … ×2, all below the 150 shadow distance.
-    let bevy = Grid::resolve(&config(&preset_text("bevy", &[])), &GridOverrides::default()).unwrap();
+    let bevy = Grid::resolve(&config(&preset_text("bevy", &[])), &SweepAxes::default()).unwrap();
     assert_eq!(bevy.knob.unwrap().values, vec![2.5, 5.0, 7.5, 10.0, 15.0, 20.0]);
     // A short shadow distance drops the far bounds beyond it.
     let short = config(&preset_text("bevy", &[("shadow.max_distance", "max_distance = 12")]));
-    let g = Grid::resolve(&short, &GridOverrides::default()).unwrap();
+    let g = Grid::resolve(&short, &SweepAxes::default()).unwrap();
     assert_eq!(g.knob.unwrap().values, vec![2.5, 5.0, 7.5, 10.0]);
     // Presets without a scalar knob, and csm-lab's own pipeline, have no knob axis.
     for p in ["unity", "dart", "godot"] {
-        let g = Grid::resolve(&config(&preset_text(p, &[])), &GridOverrides::default()).unwrap();
+        let g = Grid::resolve(&config(&preset_text(p, &[])), &SweepAxes::default()).unwrap();
         assert!(g.knob.is_none(), "{p}");
     }
-    assert!(Grid::resolve(&config(&with(&[])), &GridOverrides::default())
+    assert!(Grid::resolve(&config(&with(&[])), &SweepAxes::default())
         .unwrap()
         .knob
         .is_none());
@@ -117,7 +119,7 @@ fn the_sweep_table_takes_knob_and_distance_axes() {
             ("sweep.resolution", "resolution = [1024]"),
         ],
     );
-    let g = Grid::resolve(&config(&text), &GridOverrides::default()).unwrap();
+    let g = Grid::resolve(&config(&text), &SweepAxes::default()).unwrap();
     assert_eq!(g.knob.unwrap().values, vec![2.0, 3.0]);
     assert_eq!(g.distance.unwrap().values, vec![100.0, 150.0, 200.0]);
     // A bad distance names the key.

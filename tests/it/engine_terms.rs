@@ -7,8 +7,9 @@ use std::process::Command;
 
 use csm_lab::analysis::{analyze, rig, AnalysisOptions};
 use csm_lab::app::sweep::{sweep_files, SweepRequest};
-use csm_lab::commands::sweep::GridFlags;
-use csm_lab::commands::terms::{for_compare, for_sweep, EngineSetting};
+use csm_lab::commands::compare::engine_settings;
+use csm_lab::commands::sweep::grid::GridFlags;
+use csm_lab::commands::terms::EngineSetting;
 use csm_lab::presets::{apply_terms, PresetChoice, PresetName};
 use csm_lab::Config;
 
@@ -97,7 +98,7 @@ fn every_engine_reads_its_compare_setting_back_to_the_same_cascades() {
     let presets = PresetName::ALL.to_vec();
     let c = csm_lab::commands::compare::run(&default_toml(), &presets, false, &[]).unwrap();
     let scene = Config::load_scene(&default_toml()).unwrap();
-    let settings = for_compare(&c, &scene).unwrap();
+    let settings = engine_settings(&c, &scene).unwrap();
     assert_eq!(settings.len(), PresetName::ALL.len());
     for s in &settings {
         assert_same_cascades(&in_memory(s), &through_text(s), &format!("{} (compare)", s.preset));
@@ -119,7 +120,7 @@ fn free_split_fractions_reproduce_csm_labs_own_cascades() {
         PresetName::Eevee,
     ];
     let c = csm_lab::commands::compare::run(&default_toml(), &presets, false, &[]).unwrap();
-    for s in for_compare(&c, &scene).unwrap() {
+    for s in engine_settings(&c, &scene).unwrap() {
         let back = through_text(&s);
         let r = rig(&back).unwrap();
         assert_eq!(r.slices.len(), own.slices.len(), "{}", s.preset);
@@ -156,7 +157,10 @@ fn every_engine_reads_its_sweep_recommendation_back_to_the_same_cascades() {
             ground_truth: false,
         };
         let (result, files, _progress) = sweep_files(&req).unwrap();
-        let s = for_sweep(&result).unwrap().expect("a preset sweep has engine settings");
+        let s = result
+            .engine_setting
+            .clone()
+            .expect("a preset sweep has engine settings");
         let name = format!("recommendation.{p}.txt");
         let written = files.iter().find(|(n, _)| *n == name).expect("the file is in the set");
         assert_eq!(written.1, csm_lab::report::terms::text(&s).into_bytes());
@@ -164,7 +168,7 @@ fn every_engine_reads_its_sweep_recommendation_back_to_the_same_cascades() {
         let row = result
             .recommended()
             .or_else(|| {
-                csm_lab::commands::sweep::no_recommendation(&result.rows, result.budget_mib, result.objective)
+                csm_lab::commands::sweep::rank::no_recommendation(&result.rows, result.budget_mib, result.objective)
                     .closest
                     .map(|i| &result.rows[i])
             })

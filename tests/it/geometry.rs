@@ -349,7 +349,9 @@ fn a_screen_rule_on_a_bounds_only_scene_is_not_applicable() {
 /// range, and the recommendation says which range it chose.
 #[test]
 fn a_sweep_puts_bounds_and_visible_splits_side_by_side() {
-    use csm_lab::commands::sweep::{parse_split_range_spec, run, Grid, GridOverrides};
+    use csm_lab::commands::sweep::grid::{parse_split_range_spec, Grid};
+    use csm_lab::commands::sweep::run::run;
+    use csm_lab::config::sweep_spec::SweepAxes;
     let text = with(&[("scene.ground", "ground = 0.0")])
         + "\n[[scene.box]]\nmin = [-30.0, 0.0, -80.0]\nmax = [-10.0, 30.0, -60.0]\n\
            [sweep]\nlambda = [0.25, 0.75]\ncascades = [2, 4]\nresolution = [1024]\n";
@@ -357,7 +359,7 @@ fn a_sweep_puts_bounds_and_visible_splits_side_by_side() {
     let grid_of = |spec: &str| {
         Grid::resolve(
             &config,
-            &GridOverrides {
+            &SweepAxes {
                 split_range: Some(parse_split_range_spec(spec).unwrap()),
                 ..Default::default()
             },
@@ -370,14 +372,15 @@ fn a_sweep_puts_bounds_and_visible_splits_side_by_side() {
     assert!(fitted.shadow.fit_depth_to_visible);
     let visible = run(
         &fitted,
-        &Grid::resolve(&fitted, &GridOverrides::default()).unwrap(),
+        &Grid::resolve(&fitted, &SweepAxes::default()).unwrap(),
         Some(1),
         &|| {},
     )
     .unwrap();
     assert_eq!(both.len(), 8);
     assert_eq!(both[..4], bounds[..]);
-    let summaries = |rows: &[csm_lab::commands::sweep::Row]| rows.iter().map(|r| r.summary.clone()).collect::<Vec<_>>();
+    let summaries =
+        |rows: &[csm_lab::commands::sweep::run::Row]| rows.iter().map(|r| r.summary.clone()).collect::<Vec<_>>();
     assert_eq!(summaries(&both[4..]), summaries(&visible));
     for r in &both[4..] {
         let st = r.summary.screen.as_ref().unwrap();
@@ -391,9 +394,10 @@ fn a_sweep_puts_bounds_and_visible_splits_side_by_side() {
 /// The split range is refused where it cannot apply, naming the flag or key.
 #[test]
 fn a_visible_split_range_needs_geometry_and_no_preset() {
-    use csm_lab::commands::sweep::{parse_split_range_spec, Grid, GridOverrides};
+    use csm_lab::commands::sweep::grid::{parse_split_range_spec, Grid};
+    use csm_lab::config::sweep_spec::SweepAxes;
     let bounds_only = load(&with(&[]));
-    let over = GridOverrides {
+    let over = SweepAxes {
         split_range: Some(parse_split_range_spec("bounds,visible").unwrap()),
         ..Default::default()
     };

@@ -141,7 +141,7 @@ fn the_sample_rule_matches_an_independent_computation() {
     // The rule over many grid sizes and recommended rows, against the library's.
     for m in [1, 5, 12, 13, 14, 20, 37, 100, 672, 1000] {
         for rec in [0, m / 3, m / 2, m - 1] {
-            let got = csm_lab::commands::flicker_sample::sample_indices(m, Some(rec));
+            let got = csm_lab::commands::sweep::flicker::sample_indices(m, Some(rec));
             assert_eq!(got, expected_sample(m, rec), "m = {m}, recommended {rec}");
             assert_eq!(got.len(), m.min(12));
             assert!(got.contains(&rec));

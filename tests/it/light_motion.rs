@@ -323,9 +323,12 @@ fn sunset() -> Config {
 
 #[test]
 fn each_light_update_row_is_the_analysis_of_a_file_with_that_rule() {
-    use csm_lab::commands::sweep::{run, Grid, GridOverrides, SweepResult};
+    use csm_lab::commands::sweep::grid::Grid;
+    use csm_lab::commands::sweep::run::run;
+    use csm_lab::commands::sweep::SweepResult;
+    use csm_lab::config::sweep_spec::SweepAxes;
     let c = sunset();
-    let grid = Grid::resolve(&c, &GridOverrides::default()).unwrap();
+    let grid = Grid::resolve(&c, &SweepAxes::default()).unwrap();
     assert_eq!(grid.len(), 2 * 2 * 2 * 6);
     let rows = run(&c, &grid, Some(2), &|| {}).unwrap();
     let base = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/sunset.toml")).unwrap();
@@ -352,19 +355,19 @@ fn each_light_update_row_is_the_analysis_of_a_file_with_that_rule() {
     // Under a moving light the stability gate reads the snapped crawl between updates, not the
     // snapped shimmer, which counts every update's (deliberate) move: the snapped sphere fits
     // do not crawl, so they qualify although their shimmer_snapped is far above the gate.
-    let result = SweepResult::new(c.clone(), grid, rows, String::new());
+    let result = SweepResult::new(c.clone(), grid, rows, String::new()).unwrap();
     let rec = result.recommended().expect("the snapped sphere fits qualify");
     let light = rec.summary.light.unwrap();
     assert_eq!(rec.summary.snapped_drift(), light.crawl_snapped);
-    assert!(light.crawl_snapped <= csm_lab::commands::sweep::STABLE_SHIMMER);
+    assert!(light.crawl_snapped <= csm_lab::commands::sweep::rank::STABLE_SHIMMER);
     assert!(
-        rec.summary.shimmer_snapped > 10.0 * csm_lab::commands::sweep::STABLE_SHIMMER,
+        rec.summary.shimmer_snapped > 10.0 * csm_lab::commands::sweep::rank::STABLE_SHIMMER,
         "{:?}",
         rec.summary
     );
     // The named step is the largest of its kind whose jump is under one texel, at the
     // recommended setting.
-    let choice = csm_lab::commands::light_sweep::choose(&result).unwrap();
+    let choice = result.light_update.clone().unwrap();
     let at = result.rows[choice.at].setting;
     assert_eq!((at.lambda, at.cascades, at.resolution), (0.75, 4, 2048));
     assert_eq!(choice.rows.len(), 6);
@@ -385,9 +388,10 @@ fn each_light_update_row_is_the_analysis_of_a_file_with_that_rule() {
 
 #[test]
 fn a_light_update_axis_needs_a_moving_light_and_valid_rules() {
-    use csm_lab::commands::sweep::{parse_light_update_spec, Grid, GridOverrides};
+    use csm_lab::commands::sweep::grid::{parse_light_update_spec, Grid};
+    use csm_lab::config::sweep_spec::SweepAxes;
     let still = config(&with(&[]));
-    let o = GridOverrides {
+    let o = SweepAxes {
         light_update: Some(parse_light_update_spec("every:1,2").unwrap()),
         ..Default::default()
     };

@@ -4,27 +4,30 @@
 use std::process::Command;
 
 use csm_lab::analysis::{analyze, AnalysisOptions};
-use csm_lab::commands::optimize::{evaluate, optimize, Optimized};
-use csm_lab::commands::sweep::{self, acceptable, Grid, GridOverrides, Row};
+use csm_lab::commands::sweep::grid::{self, Grid};
+use csm_lab::commands::sweep::optimize::{evaluate, optimize, Optimized};
+use csm_lab::commands::sweep::rank::{self, acceptable};
+use csm_lab::commands::sweep::run::{self, Row};
+use csm_lab::config::sweep_spec::SweepAxes;
 use csm_lab::Config;
 
 use crate::common::{config, with};
 
 /// Sweep `c` over `lambda` × `cascades` × `resolution` and optimise its splits.
 fn run(c: &Config, lambda: &str, cascades: &str, resolution: &str) -> (Vec<Row>, Optimized) {
-    let overrides = GridOverrides {
+    let overrides = SweepAxes {
         lambda: c
             .shadow
             .preset
             .is_none()
-            .then(|| sweep::parse_lambda_spec(lambda).unwrap()),
-        cascades: Some(sweep::parse_cascades_spec(cascades).unwrap()),
-        resolution: Some(sweep::parse_resolution_spec(resolution).unwrap()),
-        ..GridOverrides::default()
+            .then(|| grid::parse_lambda_spec(lambda).unwrap()),
+        cascades: Some(grid::parse_cascades_spec(cascades).unwrap()),
+        resolution: Some(grid::parse_resolution_spec(resolution).unwrap()),
+        ..SweepAxes::default()
     };
     let grid = Grid::resolve(c, &overrides).unwrap();
-    let rows = sweep::run(c, &grid, None, &|| {}).unwrap();
-    let o = optimize(c, &grid, &rows, sweep::default_objective(c), None).unwrap();
+    let rows = run::run(c, &grid, None, &|| {}).unwrap();
+    let o = optimize(c, &grid, &rows, rank::default_objective(c), None).unwrap();
     (rows, o)
 }
 
@@ -49,7 +52,7 @@ fn the_optimum_is_never_worse_than_any_lambda_of_the_grid() {
     ];
     for text in &cases {
         let c = config(text);
-        let objective = sweep::default_objective(&c);
+        let objective = rank::default_objective(&c);
         let (rows, o) = run(&c, "0:1:0.1", "1..4", "512,2048");
         // Counts 2, 3 and 4 at two resolutions.
         assert_eq!(o.groups.len(), 6, "{text}");
@@ -156,7 +159,7 @@ fn pasted_fractions_reproduce_the_objective() {
         ("screen.height", "height = 270"),
     ]);
     let c = config(&base);
-    let objective = sweep::default_objective(&c);
+    let objective = rank::default_objective(&c);
     let (_, o) = run(&c, "0:1:0.1", "3", "1024");
     let g = &o.groups[0];
     let list = g

@@ -69,7 +69,7 @@ proptest! {
         prop_assert!(r.is_ok(), "panicked on {key} = {value}");
         match r.unwrap() {
             Ok(c) => {
-                let s = c.sweep.unwrap();
+                let s = c.sweep.unwrap().axes;
                 match key {
                     "lambda" => prop_assert!(s.lambda.unwrap().values.iter().all(|x| (0.0..=1.0).contains(x))),
                     "cascades" => prop_assert!(s.cascades.unwrap().values.iter().all(|x| (1..=16).contains(x))),

@@ -161,14 +161,17 @@ fn far_f32(fit: &str) -> String {
 /// shimmer_snapped is not finite". Sweep points are now built by validating constructors.
 #[test]
 fn sweeping_to_a_fit_binary32_cannot_hold_is_refused_naming_the_key_before_any_work() {
-    use csm_lab::commands::sweep::{parse_cascades_spec, parse_fit_spec, parse_lambda_spec, parse_resolution_spec};
-    use csm_lab::commands::sweep::{run, Grid, GridOverrides};
+    use csm_lab::commands::sweep::grid::{
+        parse_cascades_spec, parse_fit_spec, parse_lambda_spec, parse_resolution_spec, Grid,
+    };
+    use csm_lab::commands::sweep::run::run;
+    use csm_lab::config::sweep_spec::SweepAxes;
     // analyze refuses the AABB version of the file outright.
     let why = rejected(&far_f32("aabb"));
     assert!(why.contains("shadow.precision") && why.contains("collapses"), "{why}");
     // The sphere version is fine, and a sweep of it to the AABB fit is refused the same way.
     let base = config(&far_f32("sphere"));
-    let overrides = GridOverrides {
+    let overrides = SweepAxes {
         lambda: Some(parse_lambda_spec("1").unwrap()),
         cascades: Some(parse_cascades_spec("3").unwrap()),
         resolution: Some(parse_resolution_spec("512").unwrap()),

@@ -9,7 +9,9 @@ use std::process::{Command, Output};
 use crate::common::{self, BASE};
 use csm_core::sun::SunAngles;
 use csm_lab::analysis::{analyze, AnalysisOptions};
-use csm_lab::commands::sweep::{self, Grid, GridFlags, Row, SweepResult};
+use csm_lab::commands::sweep::grid::{Grid, GridFlags};
+use csm_lab::commands::sweep::run::Row;
+use csm_lab::commands::sweep::{rank, run, SweepResult};
 use csm_lab::metric::SummaryMetric;
 use csm_lab::Config;
 
@@ -34,7 +36,7 @@ fn fails_with_2(out: Output) -> String {
 /// The rows of a sweep of `config` with the flags given (as `sweep` runs them).
 fn sweep_rows(config: &Config, flags: &GridFlags) -> (Grid, Vec<Row>) {
     let grid = Grid::resolve(config, &flags.overrides().unwrap()).unwrap();
-    let rows = sweep::run(config, &grid, Some(2), &|| {}).unwrap();
+    let rows = run::run(config, &grid, Some(2), &|| {}).unwrap();
     (grid, rows)
 }
 
@@ -189,7 +191,7 @@ fn each_setting_is_judged_by_its_worst_sun_and_the_recommendation_by_those_worst
     for text in [BASE.to_string(), text] {
         let config = common::config(&text);
         let (grid, rows) = sweep_rows(&config, &flags(Some("0:300:60"), Some("10,45,80")));
-        let result = SweepResult::new(config.clone(), grid, rows.clone(), String::new());
+        let result = SweepResult::new(config.clone(), grid, rows.clone(), String::new()).unwrap();
         let objective = result.objective;
         let sun = result.sun.as_ref().unwrap();
         assert_eq!(sun.all, rows);
@@ -224,9 +226,9 @@ fn each_setting_is_judged_by_its_worst_sun_and_the_recommendation_by_those_worst
         // The recommendation and the front are those of the worst cases.
         assert_eq!(
             result.recommendation,
-            sweep::recommend_by(&worst_rows, result.budget_mib, objective)
+            rank::recommend_by(&worst_rows, result.budget_mib, objective)
         );
-        assert_eq!(result.front, sweep::pareto_front_by(&worst_rows, objective));
+        assert_eq!(result.front, rank::pareto_front_by(&worst_rows, objective));
         // The default objective: the contrast-weighted screen p95 with geometry, mean aliasing
         // without.
         let want = if config.geometry.is_some() {
@@ -393,7 +395,7 @@ fn the_visible_p95_changes_smoothly_over_one_degree_sun_steps() {
     let config = Config::from_toml_str(&std::fs::read_to_string(path).unwrap(), "default.toml", None).unwrap();
     let p95 = SummaryMetric::named("visible_aliasing_p95");
     let raw = SummaryMetric::named("screen_aliasing_p95");
-    assert_eq!(sweep::default_objective(&config), p95);
+    assert_eq!(rank::default_objective(&config), p95);
     for elevation in ["85", "60", "30", "15"] {
         let f = GridFlags {
             lambda: Some("0.75".into()),

@@ -382,7 +382,7 @@ pub fn read_sweep_csv(path: &Path) -> Result<Vec<SweepRow>> {
 /// the config's grid in grid order, so a table of another config or grid is never judged.
 pub fn sweep_rows_from_csv(config: &Config, path: &Path) -> Result<Vec<SweepRow>> {
     let rows = read_sweep_csv(path)?;
-    let grid = crate::commands::sweep::Grid::resolve(config, &crate::commands::sweep::GridOverrides::default())?;
+    let grid = crate::commands::sweep::grid::Grid::resolve(config, &crate::config::sweep_spec::SweepAxes::default())?;
     let settings = grid.settings();
     let mismatch = |message: String| {
         Error::from(BaselineError::Mismatch {
@@ -423,8 +423,8 @@ pub fn sweep_rows_from_csv(config: &Config, path: &Path) -> Result<Vec<SweepRow>
 /// table, or the default grid), run by the sweep runner exactly as `csm-lab sweep` runs it,
 /// so each row equals the corresponding line of `sweep.csv`.
 pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
-    let grid = crate::commands::sweep::Grid::resolve(config, &crate::commands::sweep::GridOverrides::default())?;
-    let rows = crate::commands::sweep::run(config, &grid, None, &|| {})?;
+    let grid = crate::commands::sweep::grid::Grid::resolve(config, &crate::config::sweep_spec::SweepAxes::default())?;
+    let rows = crate::commands::sweep::run::run(config, &grid, None, &|| {})?;
     Ok(rows
         .into_iter()
         .map(|r| SweepRow {

@@ -17,162 +17,13 @@
 //! row, each equal to `analyze` of the config with that light direction.
 //!
 //! Row order: elevation (outermost), then azimuth, then the setting grid of
-//! [`super::sweep::Grid::settings`]: all settings of one light direction are consecutive, so
+//! [`crate::commands::sweep::grid::Grid::settings`]: all settings of one light direction are consecutive, so
 //! the rows of one direction share one visibility pass.
 
-use glam::DVec3;
-
-use super::sweep::{parse_number_spec, Axis, Row};
-use crate::config::sweep_spec::{sun_azimuth_ok, sun_elevation_ok};
+use crate::commands::sweep::grid::Setting;
+use crate::commands::sweep::run::Row;
 use crate::config::Config;
-use crate::error::Result;
 use crate::metric::SummaryMetric;
-use csm_core::sun::SunAngles;
-
-/// A sun position of a sweep, in degrees as written on the command line or in the file.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sun {
-    /// Compass bearing from north (−Z) toward east (+X), degrees in [0, 360).
-    pub azimuth_deg: f64,
-    /// Angle above the horizon, degrees in (0, 90].
-    pub elevation_deg: f64,
-}
-
-impl Sun {
-    pub fn angles(self) -> SunAngles {
-        SunAngles {
-            azimuth: self.azimuth_deg.to_radians(),
-            elevation: self.elevation_deg.to_radians(),
-        }
-    }
-
-    /// The unit direction the light travels in under this sun ([`SunAngles::light_direction`]),
-    /// with the components the degrees make exactly zero set to zero: at azimuth 90° the
-    /// radians give cos = 6e-17, not 0, and a wall parallel to the light would then count as
-    /// lit at a grazing angle (aliasing at the clamp, 1e6) at 270° but not at 90°.
-    pub fn light_direction(self) -> DVec3 {
-        let mut d = self.angles().light_direction();
-        let whole = |x: f64, m: f64| x.rem_euclid(m) == 0.0;
-        if whole(self.azimuth_deg, 180.0) || self.elevation_deg == 90.0 {
-            d.x = 0.0; // sin a = 0 (north or south), or cos e = 0 (zenith)
-        }
-        if whole(self.azimuth_deg - 90.0, 180.0) || self.elevation_deg == 90.0 {
-            d.z = 0.0; // cos a = 0 (east or west), or cos e = 0 (zenith)
-        }
-        d
-    }
-
-    /// The sun of a config's light (azimuth brought into [0, 360)).
-    pub fn of_config(config: &Config) -> Sun {
-        let a = SunAngles::of_light_direction(config.light_direction);
-        let mut azimuth_deg = a.azimuth.to_degrees();
-        if azimuth_deg < 0.0 {
-            azimuth_deg += 360.0;
-        }
-        if azimuth_deg >= 360.0 {
-            azimuth_deg = 0.0;
-        }
-        Sun {
-            azimuth_deg,
-            elevation_deg: a.elevation.to_degrees(),
-        }
-    }
-
-    /// `azimuth 135°, elevation 40°`.
-    pub fn label(self) -> String {
-        format!("azimuth {}°, elevation {}°", self.azimuth_deg, self.elevation_deg)
-    }
-}
-
-/// `--sun-azimuth 0:345:15` or a list, degrees in [0, 360).
-pub fn parse_sun_azimuth_spec(spec: &str) -> Result<Axis<f64>> {
-    parse_number_spec(
-        "--sun-azimuth",
-        spec,
-        "[0, 360) degrees (compass bearing from north toward east)",
-        sun_azimuth_ok,
-    )
-}
-
-/// `--sun-elevation 5:85:5` or a list, degrees in (0, 90].
-pub fn parse_sun_elevation_spec(spec: &str) -> Result<Axis<f64>> {
-    parse_number_spec(
-        "--sun-elevation",
-        spec,
-        "(0, 90] degrees above the horizon",
-        sun_elevation_ok,
-    )
-}
-
-/// The sun axes of a grid: what was swept (None: the configured light's angle) and the
-/// configured sun.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SunGrid {
-    pub azimuth: Option<Axis<f64>>,
-    pub elevation: Option<Axis<f64>>,
-    /// The configured light's sun, for the axis not swept.
-    pub configured: Sun,
-}
-
-impl SunGrid {
-    /// The sun axes from the flags, else the `[sweep]` table; None when neither sweeps the sun.
-    pub fn resolve(config: &Config, azimuth: Option<Axis<f64>>, elevation: Option<Axis<f64>>) -> Option<SunGrid> {
-        let spec = config.sweep.as_ref();
-        let azimuth = azimuth.or_else(|| spec.and_then(|s| s.sun_azimuth.clone()));
-        let elevation = elevation.or_else(|| spec.and_then(|s| s.sun_elevation.clone()));
-        (azimuth.is_some() || elevation.is_some()).then(|| SunGrid {
-            azimuth,
-            elevation,
-            configured: Sun::of_config(config),
-        })
-    }
-
-    pub fn azimuths(&self) -> Vec<f64> {
-        self.azimuth
-            .as_ref()
-            .map_or_else(|| vec![self.configured.azimuth_deg], |a| a.values.clone())
-    }
-
-    pub fn elevations(&self) -> Vec<f64> {
-        self.elevation
-            .as_ref()
-            .map_or_else(|| vec![self.configured.elevation_deg], |a| a.values.clone())
-    }
-
-    /// Every sun position in row order: elevation outer, azimuth inner.
-    pub fn suns(&self) -> Vec<Sun> {
-        let azimuths = self.azimuths();
-        self.elevations()
-            .into_iter()
-            .flat_map(|e| {
-                azimuths.iter().map(move |&a| Sun {
-                    azimuth_deg: a,
-                    elevation_deg: e,
-                })
-            })
-            .collect()
-    }
-
-    pub fn len(&self) -> usize {
-        self.azimuths().len() * self.elevations().len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// ` --sun-azimuth A --sun-elevation E` for the swept axes.
-    pub fn cli_args(&self) -> String {
-        let mut out = String::new();
-        if let Some(a) = &self.azimuth {
-            out.push_str(&format!(" --sun-azimuth {}", a.spec));
-        }
-        if let Some(e) = &self.elevation {
-            out.push_str(&format!(" --sun-elevation {}", e.spec));
-        }
-        out
-    }
-}
 
 /// Every (sun, setting) row of a sun sweep and, per setting, where its worst sun is.
 #[derive(Debug, Clone, PartialEq)]
@@ -203,7 +54,7 @@ pub fn judge(all: Vec<Row>, objective: SummaryMetric) -> (Vec<Row>, SunRows) {
         .iter()
         .enumerate()
         .map(|(i, r)| {
-            let key = format!("{:?}", super::sweep::Setting { sun: None, ..r.setting });
+            let key = format!("{:?}", Setting { sun: None, ..r.setting });
             let j = *ids.entry(key).or_insert_with(|| {
                 members.push(Vec::new());
                 members.len() - 1
@@ -282,7 +133,7 @@ pub fn bounds_only_note(config: &Config, fits: &[crate::config::Fit]) -> Option<
 mod tests {
     use super::*;
     use crate::analysis::Summary;
-    use crate::commands::sweep::Setting;
+    use crate::commands::sweep::grid::Sun;
     use crate::config::{Fit, SplitRange};
 
     fn row(cascades: usize, sun: Sun, mean: f64, shimmer: f64, misses: u64) -> Row {
@@ -369,64 +220,6 @@ mod tests {
                 );
                 assert_eq!(sun_rows.rows_of(j).len(), 6);
             }
-        }
-    }
-
-    #[test]
-    fn compass_points_give_exact_zeros_and_agree_with_the_core_convention() {
-        let (s30, c30) = (0.5f64, 3f64.sqrt() / 2.0);
-        for (a, want) in [
-            (0.0, DVec3::new(0.0, -s30, c30)),
-            (90.0, DVec3::new(-c30, -s30, 0.0)),
-            (180.0, DVec3::new(0.0, -s30, -c30)),
-            (270.0, DVec3::new(c30, -s30, 0.0)),
-        ] {
-            let d = Sun {
-                azimuth_deg: a,
-                elevation_deg: 30.0,
-            }
-            .light_direction();
-            assert!((d - want).length() < 1e-15, "{a}: {d}");
-            // The zero components are exactly zero.
-            assert_eq!(d.x == 0.0, want.x == 0.0, "{a}: {d}");
-            assert_eq!(d.z == 0.0, want.z == 0.0, "{a}: {d}");
-        }
-        let zenith = Sun {
-            azimuth_deg: 45.0,
-            elevation_deg: 90.0,
-        }
-        .light_direction();
-        assert_eq!(zenith, DVec3::new(0.0, -1.0, 0.0));
-        // Elsewhere it is the core's direction, bit for bit.
-        let s = Sun {
-            azimuth_deg: 135.0,
-            elevation_deg: 40.0,
-        };
-        assert_eq!(s.light_direction(), s.angles().light_direction());
-    }
-
-    #[test]
-    fn the_configured_sun_round_trips_and_specs_name_their_flag() {
-        let text = include_str!("../../configs/default.toml")
-            .replace("direction = [-0.4, -1.0, -0.3]", "direction = [0.4, -1.0, 0.3]");
-        assert!(text.contains("[0.4, -1.0, 0.3]"));
-        let config = crate::config::Config::from_toml_str(&text, "t.toml", None).unwrap();
-        let sun = Sun::of_config(&config);
-        // The sun stands north-west (toward −X and −Z): atan2(−0.4, 0.3) = −53.13°, wrapped.
-        let want = 360.0 + (-0.4f64).atan2(0.3).to_degrees();
-        assert!((sun.azimuth_deg - want).abs() < 1e-9 && want > 270.0, "{sun:?}");
-        assert!((sun.light_direction() - config.light_direction).length() < 1e-12);
-        assert_eq!(parse_sun_azimuth_spec("0:345:15").unwrap().values.len(), 24);
-        assert_eq!(parse_sun_elevation_spec("5:85:5").unwrap().values.len(), 17);
-        assert_eq!(parse_sun_elevation_spec("5:85:5").unwrap().values[16], 85.0);
-        for (r, flag) in [
-            (parse_sun_elevation_spec("0"), "--sun-elevation"),
-            (parse_sun_elevation_spec("90.5"), "--sun-elevation"),
-            (parse_sun_azimuth_spec("360"), "--sun-azimuth"),
-            (parse_sun_azimuth_spec("0:90:0"), "--sun-azimuth"),
-        ] {
-            let e = r.unwrap_err().to_string();
-            assert!(e.starts_with(flag), "{e}");
         }
     }
 }

@@ -1,7 +1,8 @@
 //! A sweep over the light update rule (`--light-update`, `[sweep] light_update`): the largest
 //! update step whose jumps stay under one texel.
 
-use crate::commands::sweep::SweepResult;
+use crate::commands::sweep::grid::{Grid, Setting};
+use crate::commands::sweep::run::Row;
 use csm_core::light_motion::LightUpdate;
 
 /// A jump under this many texels is no visible jump.
@@ -27,6 +28,8 @@ pub struct UpdateChoice {
     /// stays under [`CALM_JUMP`]; None for a kind none of whose steps does.
     pub every: Option<UpdateRow>,
     pub quantize: Option<UpdateRow>,
+    /// The choice in one sentence for stdout and the reports.
+    pub(crate) sentence: String,
 }
 
 /// The step of a rule: K frames, or q radians.
@@ -38,24 +41,19 @@ fn step(u: LightUpdate) -> f64 {
     }
 }
 
-/// The choice of a sweep with a light update axis; None without one.
-pub fn choose(r: &SweepResult) -> Option<UpdateChoice> {
-    r.grid.light_update.as_ref()?;
-    let at = r
-        .recommendation
-        .as_ref()
-        .map(|x| x.index)
-        .or_else(|| r.configured())
-        .unwrap_or(0);
-    let base = r.rows.get(at)?.setting;
-    let same = |s: &crate::commands::sweep::Setting| {
-        crate::commands::sweep::Setting {
+/// The choice of a sweep with a light update axis (None without one), made at row `at` of the
+/// (judged) `rows`: the recommended row when there is one, else the configured setting's, else
+/// the first row.
+pub fn choose(grid: &Grid, rows: &[Row], at: usize) -> Option<UpdateChoice> {
+    grid.light_update.as_ref()?;
+    let base = rows.get(at)?.setting;
+    let same = |s: &Setting| {
+        Setting {
             light_update: base.light_update,
             ..*s
         } == base
     };
-    let rows: Vec<UpdateRow> = r
-        .rows
+    let rows: Vec<UpdateRow> = rows
         .iter()
         .filter(|x| same(&x.setting))
         .filter_map(|x| {
@@ -73,24 +71,26 @@ pub fn choose(r: &SweepResult) -> Option<UpdateChoice> {
             .max_by(|a, b| step(a.update).total_cmp(&step(b.update)))
             .copied()
     };
+    let (every, quantize) = (largest(true), largest(false));
     Some(UpdateChoice {
+        sentence: text(&rows, every, quantize),
         at,
-        every: largest(true),
-        quantize: largest(false),
+        every,
+        quantize,
         rows,
     })
 }
 
-/// The choice in one sentence for stdout and the reports.
-pub fn text(c: &UpdateChoice) -> String {
+/// The choice in one sentence: the largest calm step of each kind swept among `rows`.
+fn text(rows: &[UpdateRow], every: Option<UpdateRow>, quantize: Option<UpdateRow>) -> String {
     let label = |x: &UpdateRow| crate::config::light_update_label(x.update);
     let mut parts = Vec::new();
     let kinds = [
-        ("every", c.every, "re-aiming every K frames"),
-        ("quantize", c.quantize, "a q-degree grid"),
+        ("every", every, "re-aiming every K frames"),
+        ("quantize", quantize, "a q-degree grid"),
     ];
     for (kind, best, words) in kinds {
-        let swept = c.rows.iter().any(|x| label(x).starts_with(kind));
+        let swept = rows.iter().any(|x| label(x).starts_with(kind));
         match (swept, best) {
             (false, _) => {}
             (true, Some(x)) => parts.push(format!(
@@ -101,8 +101,7 @@ pub fn text(c: &UpdateChoice) -> String {
             )),
             (true, None) => parts.push(format!(
                 "no step of {words} keeps its jumps under {CALM_JUMP} texel (smallest light_jump {:.3})",
-                c.rows
-                    .iter()
+                rows.iter()
                     .filter(|x| label(x).starts_with(kind))
                     .map(|x| x.jump)
                     .fold(f64::INFINITY, f64::min)

@@ -14,7 +14,8 @@
 use std::fmt::Write as _;
 
 use crate::analysis::{LightSummary, Summary};
-use crate::commands::sweep::{Grid, GridFlags, Row, Setting};
+use crate::commands::sweep::grid::{Grid, GridFlags, Setting, Sun};
+use crate::commands::sweep::run::Row;
 use crate::config::Config;
 use crate::config::{Fit, SplitRange};
 use crate::error::{Error, Result, ShardError};
@@ -501,7 +502,7 @@ pub fn parse_rows(file: &std::path::Path, text: &str) -> Result<Vec<(usize, Row)
                     distance: optional_float(f[26])?,
                     sun: match (optional_float(f[27])?, optional_float(f[28])?) {
                         (None, None) => None,
-                        (Some(azimuth_deg), Some(elevation_deg)) => Some(crate::commands::sweep::Sun {
+                        (Some(azimuth_deg), Some(elevation_deg)) => Some(Sun {
                             azimuth_deg,
                             elevation_deg,
                         }),

@@ -7,8 +7,9 @@
 
 use rayon::prelude::*;
 
-use super::sweep::{Row, SweepResult};
 use crate::analysis::ground_truth::{analyze_for_flicker, points_of, FlickerPoint};
+use crate::commands::sweep::run::{in_pool, Row};
+use crate::config::Config;
 use crate::error::{GridError, Result};
 
 /// The most rows a sweep computes S5 for (a ground-truth pass costs about a second of one core
@@ -106,7 +107,7 @@ impl FlickerSample {
 
 /// Refuses `--ground-truth` (or `sweep.ground_truth`, named by `source`) for a config the pass
 /// cannot sample: one without scene geometry, or one whose light moves.
-pub fn refuse_ground_truth(result_config: &crate::config::Config, source: &str) -> Result<()> {
+pub fn refuse_ground_truth(result_config: &Config, source: &str) -> Result<()> {
     if result_config.geometry.is_none() {
         return Err(GridError::Unusable {
             context: source.to_string(),
@@ -130,17 +131,21 @@ pub fn refuse_ground_truth(result_config: &crate::config::Config, source: &str) 
 pub const MOVING_LIGHT: &str =
     "the ground-truth pass samples the maps under one still light, and motion.light_path moves the light";
 
-/// Runs the ground-truth pass on the sampled rows of a finished sweep (in `threads` threads, or
-/// rayon's default pool), in index order whatever the thread count.
-pub fn measure(r: &SweepResult, threads: Option<usize>) -> Result<FlickerSample> {
-    let indices = sample_indices(r.rows.len(), r.recommendation.as_ref().map(|x| x.index));
-    let rows: &[Row] = &r.rows;
-    let recommended = r.recommendation.as_ref().map(|x| x.index);
+/// Runs the ground-truth pass on the sampled rows of a finished sweep of `config` (its rows, and
+/// the index of the recommended one), in `threads` threads or rayon's default pool, in index
+/// order whatever the thread count.
+pub fn measure(
+    config: &Config,
+    rows: &[Row],
+    recommended: Option<usize>,
+    threads: Option<usize>,
+) -> Result<FlickerSample> {
+    let indices = sample_indices(rows.len(), recommended);
     let work = || {
         indices
             .par_iter()
             .map(|&i| {
-                let a = analyze_for_flicker(&rows[i].setting.apply(&r.config)?);
+                let a = analyze_for_flicker(&rows[i].setting.apply(config)?);
                 let row = match points_of(&a).as_slice() {
                     [s, u] => Some(SampledRow {
                         index: i,
@@ -157,12 +162,12 @@ pub fn measure(r: &SweepResult, threads: Option<usize>) -> Result<FlickerSample>
             .collect::<Result<Vec<_>>>()
     };
     let (mut sampled, mut recommended_truth) = (Vec::new(), None);
-    for (row, truth) in super::sweep::in_pool(threads, work)? {
+    for (row, truth) in in_pool(threads, work)? {
         sampled.extend(row);
         recommended_truth = recommended_truth.or(truth.map(std::sync::Arc::new));
     }
     Ok(FlickerSample {
-        rows: r.rows.len(),
+        rows: rows.len(),
         indices,
         measured: sampled,
         recommended_truth,

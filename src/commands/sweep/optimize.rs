@@ -25,7 +25,10 @@ use crate::error::{GridError, Result};
 use crate::metric::SummaryMetric;
 use csm_core::free_splits::{round_significant, valid, FractionSpace};
 
-use super::sweep::{acceptable, decimal_range, Grid, Row, Setting};
+use crate::commands::sweep::grid::{Grid, Setting};
+use crate::commands::sweep::rank::acceptable;
+use crate::commands::sweep::run::{in_pool, Row};
+use crate::config::sweep_spec::decimal_range;
 
 /// Nelder-Mead iterations per run, per free split (two runs: the second restarts from the
 /// best point of the first with a smaller simplex).
@@ -224,7 +227,7 @@ pub fn optimize(
             .map(|g| optimize_group(base, rows, g, objective))
             .collect::<Result<Vec<_>>>()
     };
-    let found = super::sweep::in_pool(threads, work)?;
+    let found = in_pool(threads, work)?;
     let mut out = Optimized {
         groups: Vec::new(),
         lambdas: if preset {

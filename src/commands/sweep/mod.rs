@@ -1,0 +1,150 @@
+//! Parameter sweeps: every combination of λ × cascade count × resolution (× fit, × the other
+//! axes) of one scene, analysed in parallel, then reduced to a Pareto front and a
+//! recommendation.
+//!
+//! The folder points one way: [`grid`] (the axes and their points) is at the bottom, [`run`]
+//! (parallel evaluation) uses it, [`rank`] (objective, front, recommendation) uses both; the
+//! sun, light update, split optimisation, flicker sample, shard and engine-terms parts use
+//! those three and never each other's parent; this file holds [`SweepResult`], every decision
+//! of a sweep computed once, and is the only one that uses the children.
+
+pub mod flicker;
+pub mod grid;
+pub mod light;
+pub mod optimize;
+pub mod rank;
+pub mod run;
+pub mod shard;
+pub mod sun;
+pub mod terms;
+
+use crate::commands::terms::EngineSetting;
+use crate::config::sweep_spec::DEFAULT_BUDGET_MIB;
+use crate::config::Config;
+use crate::error::Result;
+use crate::metric::SummaryMetric;
+
+use self::flicker::FlickerSample;
+use self::grid::{FitGroup, Grid};
+use self::light::UpdateChoice;
+use self::optimize::Optimized;
+use self::rank::{Alternative, NoRecommendation, Recommendation, Rival};
+use self::run::Row;
+use self::sun::SunRows;
+
+/// Everything a sweep produced, every decision made once ([`SweepResult::new`]): the reports
+/// and figures only read these fields.
+#[derive(Debug, Clone)]
+pub struct SweepResult {
+    pub config: Config,
+    pub grid: Grid,
+    /// One row per setting. In a sun sweep, each setting's judged row (its worst sun angle,
+    /// [`sun::judge`]); every (sun, setting) row is in [`Self::sun`].
+    pub rows: Vec<Row>,
+    /// Every row of a sun sweep and each setting's worst sun; None without sun axes.
+    pub sun: Option<SunRows>,
+    /// A sun sweep without scene geometry: what the light cannot change ([`sun::bounds_only_note`]).
+    pub(crate) sun_note: Option<String>,
+    pub front: Vec<usize>,
+    pub recommendation: Option<Recommendation>,
+    /// How many rows fail each test of the recommendation rule, and the row that comes
+    /// closest ([`rank::no_recommendation`]): what the reports say when nothing is recommended.
+    pub(crate) no_recommendation: NoRecommendation,
+    pub budget_mib: f64,
+    /// The command that reproduces the sweep.
+    pub command: String,
+    /// The metric the recommendation minimises ([`rank::default_objective`]).
+    pub objective: SummaryMetric,
+    /// The recommendation rule in words ([`rank::objective_text`]).
+    pub(crate) objective_text: String,
+    /// The row of the configured setting, when the grid has it ([`rank::configured`]).
+    pub(crate) configured: Option<usize>,
+    /// Rows in objective order, the recommendation first ([`rank::ranked`]).
+    pub(crate) ranked: Vec<usize>,
+    /// The alternatives to the recommendation ([`rank::alternatives`]); empty without one.
+    pub(crate) alternatives: Vec<Alternative>,
+    /// The main rivals of the recommendation and why each lost ([`rank::rivals`]); empty
+    /// without one.
+    pub(crate) rivals: Vec<Rival>,
+    /// The distinct fit groups of the rows, in order (one panel or series each in the figures).
+    pub(crate) fit_groups: Vec<FitGroup>,
+    /// The light update choice of a sweep with a light update axis ([`light::choose`]).
+    pub light_update: Option<UpdateChoice>,
+    /// The engine setting `recommendation.<engine>.txt` holds, for a sweep over a preset
+    /// ([`terms::for_sweep`]).
+    pub engine_setting: Option<EngineSetting>,
+    /// The free split fractions of `--optimize-splits`, when asked for.
+    pub optimized: Option<Optimized>,
+    /// S3, S4 and the measured flicker S5 of a sample of the rows (`--ground-truth`).
+    pub flicker: Option<FlickerSample>,
+}
+
+impl SweepResult {
+    /// The result of a sweep's rows, in grid order ([`Grid::settings`]; with sun axes every
+    /// (sun, setting) row, judged here per setting by its worst sun angle). Fails only when the
+    /// engine setting to write cannot be built.
+    pub fn new(config: Config, grid: Grid, rows: Vec<Row>, command: String) -> Result<Self> {
+        let budget_mib = config
+            .sweep
+            .as_ref()
+            .and_then(|s| s.memory_budget_mib)
+            .unwrap_or(DEFAULT_BUDGET_MIB);
+        let objective = rank::default_objective(&config);
+        let (rows, sun, sun_note) = match &grid.sun {
+            None => (rows, None, None),
+            Some(_) => {
+                let (judged, sun) = sun::judge(rows, objective);
+                (judged, Some(sun), sun::bounds_only_note(&config, &grid.fit.values))
+            }
+        };
+        let front = rank::pareto_front_by(&rows, objective);
+        let recommendation = rank::recommend_by(&rows, budget_mib, objective);
+        let no_recommendation = rank::no_recommendation(&rows, budget_mib, objective);
+        let configured = rank::configured(&config, &rows);
+        let ranked = rank::ranked(&rows, recommendation.as_ref(), budget_mib, objective);
+        let (alternatives, rivals) = match &recommendation {
+            None => (Vec::new(), Vec::new()),
+            Some(rec) => (
+                rank::alternatives(&rows, rec, objective),
+                rank::rivals(&rows, rec, &ranked, configured, grid.lambda.values.len() > 1, objective),
+            ),
+        };
+        let at = recommendation.as_ref().map(|x| x.index).or(configured).unwrap_or(0);
+        let light_update = light::choose(&grid, &rows, at);
+        let engine_setting = terms::for_sweep(
+            &config,
+            &command,
+            objective,
+            &rows,
+            recommendation.as_ref(),
+            &no_recommendation,
+        )?;
+        Ok(SweepResult {
+            objective_text: rank::objective_text(objective),
+            fit_groups: rank::fits_in(&rows),
+            objective,
+            config,
+            grid,
+            rows,
+            sun,
+            sun_note,
+            front,
+            recommendation,
+            no_recommendation,
+            budget_mib,
+            command,
+            configured,
+            ranked,
+            alternatives,
+            rivals,
+            light_update,
+            engine_setting,
+            optimized: None,
+            flicker: None,
+        })
+    }
+
+    pub fn recommended(&self) -> Option<&Row> {
+        self.recommendation.as_ref().map(|r| &self.rows[r.index])
+    }
+}

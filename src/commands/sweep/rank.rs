@@ -1,0 +1,748 @@
+//! Ranking a sweep's rows: the objective, the Pareto front, the recommendation (or why there is
+//! none), its alternatives and rivals, and the fit groups the figures draw.
+
+use std::collections::BTreeSet;
+
+use crate::commands::sweep::grid::{FitGroup, Setting};
+use crate::commands::sweep::run::Row;
+use crate::config::Config;
+use crate::metric::SummaryMetric;
+
+// ---------------------------------------------------------------------------------------------
+// Pareto front and recommendation
+// ---------------------------------------------------------------------------------------------
+
+/// Indices of the rows on the Pareto front of memory against mean aliasing (both minimised),
+/// ordered by memory. Among exact ties the first row in grid order is kept. Rows whose scene
+/// needs no cascades are left out.
+pub fn pareto_front(rows: &[Row]) -> Vec<usize> {
+    pareto_front_by(rows, SummaryMetric::named("mean_aliasing"))
+}
+
+/// [`pareto_front`] of memory against any objective metric.
+pub fn pareto_front_by(rows: &[Row], objective: SummaryMetric) -> Vec<usize> {
+    front_of(
+        rows,
+        (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed),
+        objective,
+    )
+}
+
+/// The Pareto front of memory against `objective` over the rows `candidates`, ordered by memory
+/// (among exact ties the first row in grid order is kept).
+fn front_of(rows: &[Row], candidates: impl Iterator<Item = usize>, objective: SummaryMetric) -> Vec<usize> {
+    let mut idx: Vec<usize> = candidates.collect();
+    idx.sort_by(|&a, &b| {
+        let (ra, rb) = (&rows[a].summary, &rows[b].summary);
+        ra.memory_bytes
+            .cmp(&rb.memory_bytes)
+            .then(objective.value(ra).total_cmp(&objective.value(rb)))
+            .then(a.cmp(&b))
+    });
+    let mut front = Vec::new();
+    let mut best = f64::INFINITY;
+    for i in idx {
+        let m = objective.value(&rows[i].summary);
+        if m < best {
+            best = m;
+            front.push(i);
+        }
+    }
+    front
+}
+
+/// Largest shimmer (RMS texels per frame, snapped) a configuration may have to be recommended.
+pub const STABLE_SHIMMER: f64 = 1e-3;
+
+/// What the recommendation optimises, in words (printed in reports).
+pub const OBJECTIVE: &str = "lowest mean aliasing (the average shadow-texel-to-pixel ratio over the depth range) \
+among configurations that fit the memory budget, cover every slice (coverage_violations = 0) and are stable when \
+snapped (shimmer_snapped <= 1e-3 texel); means within 1% of the lowest count as equal, and among those the lowest \
+max aliasing wins, then less memory, then fewer cascades";
+
+/// The objective of a sweep: `[sweep] objective` if written, else the contrast-weighted 95th
+/// percentile of the per-pixel aliasing on screen (`visible_aliasing_p95`) when the scene has
+/// geometry, else the mean aliasing over depth.
+pub fn default_objective(config: &Config) -> SummaryMetric {
+    // The name was checked against the registry when the file was loaded.
+    if let Some(m) = config.sweep.as_ref().and_then(|s| s.objective.as_deref()) {
+        return SummaryMetric::named(m);
+    }
+    SummaryMetric::named(if config.geometry.is_some() {
+        "visible_aliasing_p95"
+    } else {
+        "mean_aliasing"
+    })
+}
+
+/// [`OBJECTIVE`] for the mean aliasing; the same rule in words for any other objective.
+pub fn objective_text(objective: SummaryMetric) -> String {
+    if objective.name() == "mean_aliasing" {
+        return OBJECTIVE.to_string();
+    }
+    format!(
+        "lowest {} ({}) among configurations that fit the memory budget, cover every slice \
+         (coverage_violations = 0) and are stable when snapped (shimmer_snapped <= 1e-3 texel); values within 1% of \
+         the lowest count as equal, and among those the lowest max aliasing wins, then less memory, then fewer cascades",
+        objective.name(),
+        objective.description()
+    )
+}
+
+/// Mean aliasing within this fraction of the best counts as equal: a 0.2% better mean is not
+/// worth a 20% worse worst case, so near-ties are decided by max aliasing.
+pub const MEAN_TOLERANCE: f64 = 0.01;
+
+/// The recommended row and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recommendation {
+    pub index: usize,
+    pub budget_bytes: u64,
+    /// False when nothing fits the budget: the cheapest acceptable configuration is returned.
+    pub within_budget: bool,
+}
+
+/// Whether a row may be recommended: its scene needs cascades, it covers every slice
+/// (`coverage_violations` = 0) and it is stable when snapped (`shimmer_snapped` <=
+/// [`STABLE_SHIMMER`]; under a moving light, the snapped crawl between updates:
+/// [`Summary::snapped_drift`]).
+pub fn acceptable(r: &Row) -> bool {
+    r.summary.cascades_needed && r.summary.coverage_violations == 0 && r.summary.snapped_drift() <= STABLE_SHIMMER
+}
+
+/// Picks the recommendation by [`OBJECTIVE`]. None when no row needs cascades or none is
+/// acceptable.
+pub fn recommend(rows: &[Row], budget_mib: f64) -> Option<Recommendation> {
+    recommend_by(rows, budget_mib, SummaryMetric::named("mean_aliasing"))
+}
+
+/// [`recommend`] minimising any objective metric.
+pub fn recommend_by(rows: &[Row], budget_mib: f64, objective: SummaryMetric) -> Option<Recommendation> {
+    let budget_bytes = (budget_mib * 1024.0 * 1024.0).floor() as u64;
+    let ok: Vec<usize> = (0..rows.len()).filter(|&i| acceptable(&rows[i])).collect();
+    let within: Vec<usize> = ok
+        .iter()
+        .copied()
+        .filter(|&i| rows[i].summary.memory_bytes <= budget_bytes)
+        .collect();
+    if let Some(index) = pick(rows, &within, objective) {
+        return Some(Recommendation {
+            index,
+            budget_bytes,
+            within_budget: true,
+        });
+    }
+    // Nothing fits the budget: the cheapest acceptable configurations, best among them.
+    let cheapest = ok.iter().map(|&i| rows[i].summary.memory_bytes).min()?;
+    let cheap: Vec<usize> = ok
+        .into_iter()
+        .filter(|&i| rows[i].summary.memory_bytes == cheapest)
+        .collect();
+    pick(rows, &cheap, objective).map(|index| Recommendation {
+        index,
+        budget_bytes,
+        within_budget: false,
+    })
+}
+
+/// Why no configuration qualified, and which one comes closest.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NoRecommendation {
+    /// Rows whose scene needs no cascades.
+    pub no_cascades: usize,
+    /// Rows with slice corners outside their windows.
+    pub coverage_misses: usize,
+    /// Rows that shimmer when snapped (> [`STABLE_SHIMMER`]).
+    pub unstable: usize,
+    /// The closest row: the fewest coverage violations, then the least snapped shimmer, then
+    /// within the budget, then the objective. None when no row needs cascades.
+    pub closest: Option<usize>,
+}
+
+/// The failure analysis of a sweep without a recommendation.
+pub fn no_recommendation(rows: &[Row], budget_mib: f64, objective: SummaryMetric) -> NoRecommendation {
+    let budget_bytes = (budget_mib * 1024.0 * 1024.0).floor() as u64;
+    let needed: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed).collect();
+    let closest = needed.iter().copied().min_by(|&a, &b| {
+        let (x, y) = (&rows[a].summary, &rows[b].summary);
+        x.coverage_violations
+            .cmp(&y.coverage_violations)
+            .then(x.snapped_drift().total_cmp(&y.snapped_drift()))
+            .then((x.memory_bytes > budget_bytes).cmp(&(y.memory_bytes > budget_bytes)))
+            .then(objective.value(x).total_cmp(&objective.value(y)))
+            .then(a.cmp(&b))
+    });
+    NoRecommendation {
+        no_cascades: rows.len() - needed.len(),
+        coverage_misses: needed
+            .iter()
+            .filter(|&&i| rows[i].summary.coverage_violations > 0)
+            .count(),
+        unstable: needed
+            .iter()
+            .filter(|&&i| rows[i].summary.snapped_drift() > STABLE_SHIMMER)
+            .count(),
+        closest,
+    }
+}
+
+/// The best of `candidates` by [`OBJECTIVE`]: the shortlist within [`MEAN_TOLERANCE`] of the
+/// lowest mean aliasing, then the lowest max aliasing, less memory, fewer cascades, grid order.
+fn pick(rows: &[Row], candidates: &[usize], objective: SummaryMetric) -> Option<usize> {
+    let best = candidates
+        .iter()
+        .map(|&i| objective.value(&rows[i].summary))
+        .min_by(f64::total_cmp)?;
+    candidates
+        .iter()
+        .copied()
+        .filter(|&i| objective.value(&rows[i].summary) <= best * (1.0 + MEAN_TOLERANCE))
+        .min_by(|&a, &b| {
+            let (x, y) = (&rows[a].summary, &rows[b].summary);
+            x.max_aliasing
+                .total_cmp(&y.max_aliasing)
+                .then(x.memory_bytes.cmp(&y.memory_bytes))
+                .then(rows[a].setting.cascades.cmp(&rows[b].setting.cascades))
+                .then(a.cmp(&b))
+        })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Alternatives and rivals
+// ---------------------------------------------------------------------------------------------
+
+/// Which way an alternative departs from the recommendation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AlternativeKind {
+    /// Less memory, for a higher objective.
+    Cheaper,
+    /// A lower objective, for more memory.
+    Sharper,
+    /// Less shimmer in the configured snap mode.
+    MoreStable,
+}
+
+impl AlternativeKind {
+    /// The `kind` of `recommendation.json`'s `alternatives`.
+    pub fn name(self) -> &'static str {
+        match self {
+            AlternativeKind::Cheaper => "cheaper",
+            AlternativeKind::Sharper => "sharper",
+            AlternativeKind::MoreStable => "more_stable",
+        }
+    }
+
+    /// The rule that picks it, in words (reports and `recommendation.json`).
+    pub fn rule(self) -> &'static str {
+        match self {
+            AlternativeKind::Cheaper => {
+                "the acceptable Pareto row with the most memory below the recommendation's:                  the lowest objective for less memory"
+            }
+            AlternativeKind::Sharper => {
+                "the acceptable Pareto row with the least memory whose objective is more than 1%                  below the recommendation's: the cheapest real improvement"
+            }
+            AlternativeKind::MoreStable => {
+                "the acceptable row within the budget with the least shimmer (configured snap mode),                  when that is below the recommendation's; ties go to the lower objective, then less memory"
+            }
+        }
+    }
+}
+
+/// One alternative to the recommendation: the row and why it was picked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Alternative {
+    pub kind: AlternativeKind,
+    pub index: usize,
+}
+
+/// The alternatives to a recommendation, at most one of each kind, in the order cheaper,
+/// sharper, more stable. Each comes from the rows [`acceptable`] for a recommendation:
+///
+/// - **cheaper**: on the Pareto front of memory against the objective over the acceptable rows,
+///   the row with the most memory below the recommendation's; that is the lowest objective
+///   any acceptable row with less memory reaches (ties: less memory, then grid order);
+/// - **sharper**: on the same front, the row with the least memory whose objective is below the
+///   recommendation's by more than [`MEAN_TOLERANCE`] (smaller gains count as a tie);
+/// - **more stable**: among the acceptable rows within the budget (within the recommendation's
+///   memory when nothing fits the budget), the row with the least `shimmer` (the configured snap
+///   mode's), when that is below the recommendation's; ties go to the lower objective, then less
+///   memory, then grid order.
+pub fn alternatives(rows: &[Row], rec: &Recommendation, objective: SummaryMetric) -> Vec<Alternative> {
+    let r = &rows[rec.index].summary;
+    let ok = || (0..rows.len()).filter(|&i| acceptable(&rows[i]));
+    let front = front_of(rows, ok(), objective);
+    let mut out = Vec::new();
+    let cheaper = front
+        .iter()
+        .copied()
+        .rfind(|&i| rows[i].summary.memory_bytes < r.memory_bytes);
+    let bound = objective.value(r) * (1.0 - MEAN_TOLERANCE);
+    let sharper = front
+        .iter()
+        .copied()
+        .find(|&i| objective.value(&rows[i].summary) < bound);
+    let limit = if rec.within_budget {
+        rec.budget_bytes
+    } else {
+        r.memory_bytes
+    };
+    let stabler = ok()
+        .filter(|&i| rows[i].summary.memory_bytes <= limit && rows[i].summary.shimmer < r.shimmer)
+        .min_by(|&a, &b| {
+            let (x, y) = (&rows[a].summary, &rows[b].summary);
+            x.shimmer
+                .total_cmp(&y.shimmer)
+                .then(objective.value(x).total_cmp(&objective.value(y)))
+                .then(x.memory_bytes.cmp(&y.memory_bytes))
+                .then(a.cmp(&b))
+        });
+    for (kind, pick) in [
+        (AlternativeKind::Cheaper, cheaper),
+        (AlternativeKind::Sharper, sharper),
+        (AlternativeKind::MoreStable, stabler),
+    ] {
+        if let Some(index) = pick.filter(|&i| i != rec.index && !out.iter().any(|a: &Alternative| a.index == i)) {
+            out.push(Alternative { kind, index });
+        }
+    }
+    out
+}
+
+/// Which rival a row is: the best row of a group the recommendation beat.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RivalKind {
+    /// The recommendation with λ = 1 (purely logarithmic splits) instead of its own λ, when λ
+    /// is swept and the recommendation has more than one cascade.
+    LambdaOne,
+    /// The best row with another cascade count.
+    OtherCascades,
+    /// The best row with another resolution.
+    OtherResolution,
+    /// The best row with the other fit.
+    OtherFit,
+    /// The configured setting itself.
+    Configured,
+}
+
+impl RivalKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            RivalKind::LambdaOne => "best_lambda_1",
+            RivalKind::OtherCascades => "best_other_cascade_count",
+            RivalKind::OtherResolution => "best_other_resolution",
+            RivalKind::OtherFit => "best_other_fit",
+            RivalKind::Configured => "configured",
+        }
+    }
+}
+
+/// Why a rival lost to the recommendation: the first test of the recommendation rule it failed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Loss {
+    /// Slice corners outside their windows (the count).
+    CoverageMisses(u64),
+    /// Snapped shimmer above [`STABLE_SHIMMER`] (the value).
+    Unstable(f64),
+    /// Over the memory budget, which the recommendation fits.
+    OverBudget,
+    /// Nothing fits the budget and the rival needs more memory than the recommendation.
+    MoreMemory,
+    /// A higher objective, beyond the [`MEAN_TOLERANCE`] tie.
+    Objective,
+    /// Tied on the objective; a higher max aliasing.
+    MaxAliasing,
+    /// Tied on the objective and max aliasing; more memory.
+    TieMemory,
+    /// Tied on everything above; more cascades or later in grid order.
+    TieOrder,
+}
+
+/// A rival and why it lost.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rival {
+    pub kind: RivalKind,
+    pub index: usize,
+    pub loss: Loss,
+}
+
+/// Why row `x` lost to the recommendation `rec`, by the rule of [`recommend_by`].
+pub fn loss(rows: &[Row], rec: &Recommendation, x: usize, objective: SummaryMetric) -> Loss {
+    let s = &rows[x].summary;
+    let r = &rows[rec.index].summary;
+    if s.coverage_violations > 0 {
+        return Loss::CoverageMisses(s.coverage_violations);
+    }
+    if !acceptable(&rows[x]) {
+        return Loss::Unstable(s.snapped_drift());
+    }
+    if rec.within_budget && s.memory_bytes > rec.budget_bytes {
+        return Loss::OverBudget;
+    }
+    if !rec.within_budget && s.memory_bytes > r.memory_bytes {
+        return Loss::MoreMemory;
+    }
+    // The shortlist of the rule: within MEAN_TOLERANCE of the best objective among the rows
+    // the recommendation was picked from.
+    let pool = |i: usize| {
+        acceptable(&rows[i])
+            && if rec.within_budget {
+                rows[i].summary.memory_bytes <= rec.budget_bytes
+            } else {
+                rows[i].summary.memory_bytes == r.memory_bytes
+            }
+    };
+    let best = (0..rows.len())
+        .filter(|&i| pool(i))
+        .map(|i| objective.value(&rows[i].summary))
+        .min_by(f64::total_cmp)
+        .unwrap_or(objective.value(r));
+    if objective.value(s) > best * (1.0 + MEAN_TOLERANCE) {
+        Loss::Objective
+    } else if s.max_aliasing > r.max_aliasing {
+        Loss::MaxAliasing
+    } else if s.memory_bytes > r.memory_bytes {
+        Loss::TieMemory
+    } else {
+        Loss::TieOrder
+    }
+}
+
+/// Distinct fit groups of the rows, in order (for plots).
+pub fn fits_in(rows: &[Row]) -> Vec<FitGroup> {
+    rows.iter()
+        .map(|r| r.setting.fit_group())
+        .collect::<BTreeSet<_>>()
+        .into_iter()
+        .collect()
+}
+
+/// The row of the configured setting (the config's own λ, cascade count, resolution and
+/// fit, and the preset's knob and shadow distance when swept), when the grid has it.
+pub(crate) fn configured(config: &Config, rows: &[Row]) -> Option<usize> {
+    let c = &config.shadow;
+    let knob = crate::presets::axes(config).knob.map(|k| k.value);
+    rows.iter().position(|x| {
+        x.setting.knob.is_none_or(|k| Some(k) == knob)
+            && x.setting.distance.is_none_or(|d| d == c.max_distance)
+            && x.setting.lambda == c.lambda
+            && x.setting.cascades == c.cascades
+            && x.setting.resolution == c.resolution
+            && x.setting.fit == c.fit
+            && x.setting.split_range.is_visible() == c.fit_depth_to_visible
+    })
+}
+
+/// Rows in objective order (acceptable within budget first), for the "top" tables; the
+/// recommendation heads them (near-ties in the objective are decided by max aliasing).
+pub(crate) fn ranked(
+    rows: &[Row],
+    rec: Option<&Recommendation>,
+    budget_mib: f64,
+    objective: SummaryMetric,
+) -> Vec<usize> {
+    let budget = rec.map_or((budget_mib * 1048576.0) as u64, |r| r.budget_bytes);
+    let mut idx: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed).collect();
+    let key = |i: usize| {
+        let s = &rows[i].summary;
+        let ok = s.coverage_violations == 0 && s.snapped_drift() <= STABLE_SHIMMER && s.memory_bytes <= budget;
+        (!ok, objective.value(s), s.max_aliasing, s.memory_bytes, i)
+    };
+    idx.sort_by(|&a, &b| {
+        let (ka, kb) = (key(a), key(b));
+        ka.0.cmp(&kb.0)
+            .then(ka.1.total_cmp(&kb.1))
+            .then(ka.2.total_cmp(&kb.2))
+            .then(ka.3.cmp(&kb.3))
+            .then(ka.4.cmp(&kb.4))
+    });
+    if let Some(r) = rec {
+        idx.retain(|&i| i != r.index);
+        idx.insert(0, r.index);
+    }
+    idx
+}
+
+/// The main rivals of the recommendation `rec` and why each lost: the recommendation's setting
+/// with λ = 1 (when λ is swept), the best row (in `ranked` order) with another cascade count,
+/// with another resolution, with the other fit, and the `configured` setting; each row once
+/// (the first group names it), never the recommendation.
+pub(crate) fn rivals(
+    rows: &[Row],
+    rec: &Recommendation,
+    ranked: &[usize],
+    configured: Option<usize>,
+    lambda_swept: bool,
+    objective: SummaryMetric,
+) -> Vec<Rival> {
+    let r = rows[rec.index].setting;
+    let best = |f: &dyn Fn(&Setting) -> bool| ranked.iter().copied().find(|&i| f(&rows[i].setting));
+    let groups: [(RivalKind, Option<usize>); 5] = [
+        (
+            RivalKind::LambdaOne,
+            if lambda_swept && r.lambda != 1.0 && r.cascades > 1 {
+                best(&|s| s.lambda == 1.0 && s.cascades == r.cascades && s.resolution == r.resolution && s.fit == r.fit)
+            } else {
+                None
+            },
+        ),
+        (RivalKind::OtherCascades, best(&|s| s.cascades != r.cascades)),
+        (RivalKind::OtherResolution, best(&|s| s.resolution != r.resolution)),
+        (RivalKind::OtherFit, best(&|s| s.fit != r.fit)),
+        (
+            RivalKind::Configured,
+            configured.filter(|&i| rows[i].summary.cascades_needed),
+        ),
+    ];
+    let mut out: Vec<Rival> = Vec::new();
+    for (kind, index) in groups {
+        if let Some(index) = index.filter(|&i| i != rec.index && !out.iter().any(|x| x.index == i)) {
+            out.push(Rival {
+                kind,
+                index,
+                loss: loss(rows, rec, index, objective),
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::Summary;
+    use crate::config::{Fit, SplitRange};
+
+    fn row(memory: u64, mean: f64, cascades_needed: bool) -> Row {
+        Row {
+            setting: Setting {
+                lambda: 0.5,
+                cascades: 1,
+                resolution: 512,
+                fit: Fit::Sphere,
+                split_range: SplitRange::Bounds,
+                knob: None,
+                distance: None,
+                sun: None,
+                light_update: None,
+            },
+            summary: Summary {
+                cascades_needed,
+                z_lo: 1.0,
+                z_hi: 2.0,
+                max_aliasing: mean * 2.0,
+                mean_aliasing: mean,
+                mean_log_aliasing: mean,
+                undersampled_fraction: 0.0,
+                shimmer: 0.0,
+                shimmer_snapped: 0.0,
+                shimmer_unsnapped: 0.3,
+                size_jitter: 0.0,
+                coverage_violations: 0,
+                memory_bytes: memory,
+                lookup_error_max: 0.0,
+                lookup_error_rms: 0.0,
+                overlap_area_fraction: 0.0,
+                band_pixel_share: 0.0,
+                seam_crossings: None,
+                screen: None,
+                light: None,
+                truth: None,
+            },
+        }
+    }
+
+    #[test]
+    fn pareto_front_is_exactly_the_non_dominated_rows() {
+        let mut rng = csm_core::rng::SplitMix64::new(11);
+        for _ in 0..50 {
+            let rows: Vec<Row> = (0..60)
+                .map(|_| {
+                    row(
+                        1 + (rng.unit() * 8.0) as u64,
+                        (rng.unit() * 20.0).round() / 4.0,
+                        rng.unit() > 0.1,
+                    )
+                })
+                .collect();
+            let front = pareto_front(&rows);
+            let dominated = |i: usize| {
+                rows.iter().enumerate().any(|(j, r)| {
+                    j != i
+                        && r.summary.cascades_needed
+                        && r.summary.memory_bytes <= rows[i].summary.memory_bytes
+                        && r.summary.mean_aliasing <= rows[i].summary.mean_aliasing
+                        && (r.summary.memory_bytes < rows[i].summary.memory_bytes
+                            || r.summary.mean_aliasing < rows[i].summary.mean_aliasing)
+                })
+            };
+            for &i in &front {
+                assert!(rows[i].summary.cascades_needed && !dominated(i));
+            }
+            // Every non-dominated row is on the front or an exact duplicate of a front row.
+            for i in 0..rows.len() {
+                if rows[i].summary.cascades_needed && !dominated(i) {
+                    assert!(front
+                        .iter()
+                        .any(|&f| rows[f].summary.memory_bytes == rows[i].summary.memory_bytes
+                            && rows[f].summary.mean_aliasing == rows[i].summary.mean_aliasing));
+                }
+            }
+        }
+    }
+
+    /// Random rows with ties in memory, objective and shimmer, some unacceptable.
+    fn random_rows(rng: &mut csm_core::rng::SplitMix64, n: usize) -> Vec<Row> {
+        let mib = 1024 * 1024;
+        (0..n)
+            .map(|_| {
+                let mut r = row(
+                    (1 + (rng.unit() * 8.0) as u64) * mib,
+                    (1.0 + rng.unit() * 20.0).round() / 4.0,
+                    rng.unit() > 0.05,
+                );
+                r.summary.max_aliasing = r.summary.mean_aliasing * (1.0 + (rng.unit() * 4.0).round() / 4.0);
+                r.summary.shimmer = (rng.unit() * 4.0).round() / 8.0;
+                if rng.unit() < 0.1 {
+                    r.summary.coverage_violations = 1 + (rng.unit() * 5.0) as u64;
+                }
+                if rng.unit() < 0.1 {
+                    r.summary.shimmer_snapped = 0.01;
+                }
+                r
+            })
+            .collect()
+    }
+
+    #[test]
+    fn alternatives_are_what_a_brute_force_search_finds() {
+        let objective = SummaryMetric::named("mean_aliasing");
+        let obj = |r: &Row| r.summary.mean_aliasing;
+        let mut rng = csm_core::rng::SplitMix64::new(5);
+        let mut seen = [0usize; 3];
+        for round in 0..400 {
+            let rows = random_rows(&mut rng, 5 + round % 40);
+            let budget = 1.0 + (rng.unit() * 8.0).floor();
+            let Some(rec) = recommend_by(&rows, budget, objective) else {
+                continue;
+            };
+            let r = &rows[rec.index];
+            let ok: Vec<usize> = (0..rows.len()).filter(|&i| acceptable(&rows[i])).collect();
+            // Cheaper: the lowest objective among acceptable rows with less memory (then less
+            // memory, then grid order).
+            let cheaper = ok
+                .iter()
+                .copied()
+                .filter(|&i| rows[i].summary.memory_bytes < r.summary.memory_bytes)
+                .min_by(|&a, &b| {
+                    obj(&rows[a])
+                        .total_cmp(&obj(&rows[b]))
+                        .then(rows[a].summary.memory_bytes.cmp(&rows[b].summary.memory_bytes))
+                        .then(a.cmp(&b))
+                });
+            // Sharper: the least memory among acceptable rows more than 1% below (then the
+            // lower objective, then grid order).
+            let sharper = ok
+                .iter()
+                .copied()
+                .filter(|&i| obj(&rows[i]) < obj(r) * 0.99)
+                .min_by(|&a, &b| {
+                    rows[a]
+                        .summary
+                        .memory_bytes
+                        .cmp(&rows[b].summary.memory_bytes)
+                        .then(obj(&rows[a]).total_cmp(&obj(&rows[b])))
+                        .then(a.cmp(&b))
+                });
+            // More stable: the least shimmer within the budget, below the recommendation's.
+            let limit = if rec.within_budget {
+                rec.budget_bytes
+            } else {
+                r.summary.memory_bytes
+            };
+            let stabler = ok
+                .iter()
+                .copied()
+                .filter(|&i| rows[i].summary.memory_bytes <= limit && rows[i].summary.shimmer < r.summary.shimmer)
+                .min_by(|&a, &b| {
+                    rows[a]
+                        .summary
+                        .shimmer
+                        .total_cmp(&rows[b].summary.shimmer)
+                        .then(obj(&rows[a]).total_cmp(&obj(&rows[b])))
+                        .then(rows[a].summary.memory_bytes.cmp(&rows[b].summary.memory_bytes))
+                        .then(a.cmp(&b))
+                });
+            let got = alternatives(&rows, &rec, objective);
+            let find = |k: AlternativeKind| got.iter().find(|a| a.kind == k).map(|a| a.index);
+            let mut expected = Vec::new();
+            for (k, want) in [
+                (AlternativeKind::Cheaper, cheaper),
+                (AlternativeKind::Sharper, sharper),
+                (AlternativeKind::MoreStable, stabler),
+            ] {
+                if let Some(i) = want.filter(|&i| !expected.contains(&i)) {
+                    expected.push(i);
+                    assert_eq!(find(k), Some(i), "{k:?} in round {round}");
+                    seen[k as usize] += 1;
+                } else {
+                    assert_eq!(find(k), None, "{k:?} in round {round}");
+                }
+            }
+            // The cheaper and sharper rows are on the Pareto front of the acceptable rows.
+            for i in [cheaper, sharper].into_iter().flatten() {
+                assert!(!ok.iter().any(|&j| {
+                    let (a, b) = (&rows[j].summary, &rows[i].summary);
+                    a.memory_bytes <= b.memory_bytes
+                        && a.mean_aliasing <= b.mean_aliasing
+                        && (a.memory_bytes < b.memory_bytes || a.mean_aliasing < b.mean_aliasing)
+                }));
+            }
+            // Why every other row lost, by the rule that picked the recommendation.
+            for x in (0..rows.len()).filter(|&i| i != rec.index && rows[i].summary.cascades_needed) {
+                let s = &rows[x].summary;
+                match loss(&rows, &rec, x, objective) {
+                    Loss::CoverageMisses(n) => assert_eq!(n, s.coverage_violations),
+                    Loss::Unstable(v) => assert!(v > STABLE_SHIMMER && s.coverage_violations == 0),
+                    Loss::OverBudget => assert!(rec.within_budget && s.memory_bytes > rec.budget_bytes),
+                    Loss::MoreMemory => assert!(!rec.within_budget && s.memory_bytes > r.summary.memory_bytes),
+                    Loss::Objective => assert!(obj(&rows[x]) > obj(r) && acceptable(&rows[x])),
+                    Loss::MaxAliasing => {
+                        assert!(s.max_aliasing > r.summary.max_aliasing && obj(&rows[x]) <= obj(r) * 1.0101)
+                    }
+                    Loss::TieMemory => {
+                        assert!(s.max_aliasing == r.summary.max_aliasing && s.memory_bytes > r.summary.memory_bytes)
+                    }
+                    Loss::TieOrder => {
+                        assert!(s.max_aliasing == r.summary.max_aliasing && s.memory_bytes == r.summary.memory_bytes)
+                    }
+                }
+            }
+        }
+        // Every kind was exercised, and so was its absence.
+        assert!(seen.iter().all(|&n| n > 20), "{seen:?}");
+    }
+
+    #[test]
+    fn recommendation_respects_the_budget_and_falls_back_to_the_cheapest() {
+        let mib = 1024 * 1024;
+        let rows = vec![
+            row(80 * mib, 1.0, true),
+            row(32 * mib, 2.0, true),
+            row(64 * mib, 1.5, true),
+        ];
+        let r = recommend(&rows, 64.0).unwrap();
+        assert_eq!((r.index, r.within_budget), (2, true));
+        let r = recommend(&rows, 16.0).unwrap();
+        assert_eq!((r.index, r.within_budget), (1, false));
+        let mut unstable = rows.clone();
+        unstable[2].summary.shimmer_snapped = 0.2;
+        assert_eq!(recommend(&unstable, 64.0).unwrap().index, 1);
+        assert!(recommend(&[row(mib, 1.0, false)], 64.0).is_none());
+        // Means within 1% are a tie decided by the worst case; beyond 1% the mean decides.
+        let mut near = vec![row(mib, 1.0, true), row(mib, 1.009, true), row(mib, 1.02, true)];
+        near[0].summary.max_aliasing = 10.0;
+        near[1].summary.max_aliasing = 5.0;
+        near[2].summary.max_aliasing = 1.0;
+        assert_eq!(recommend(&near, 64.0).unwrap().index, 1);
+    }
+}
