@@ -1,7 +1,7 @@
 //! Criterion benchmarks of the kernels: one cascade build, one configuration's analysis, the
 //! default sweep's compute (with and without the screen metrics), the visibility pass and an
 //! engine settings file's fit, writing and reading.
-//! Run with `cargo bench --bench kernels`; figures are in docs/speed.md and the README.
+//! Run with `cargo bench --bench kernels`; figures are in docs/speed.md.
 
 use std::hint::black_box;
 use std::path::Path;

@@ -4,8 +4,8 @@
 //! Everything that lists metrics is generated from these tables: the summary columns of
 //! `sweep.csv` and `compare.csv`, the summary keys of `summary.json` and `recommendation.json`,
 //! `analyze`'s summary on stdout, `check`'s metric names, lookup and "did you mean"
-//! suggestions, and the metric tables of README.md and docs/check.md ([`markdown_table`], kept
-//! in step by a test). Adding a metric means adding its computation and one entry here.
+//! suggestions, and the metric tables of docs/metrics.md and docs/check.md
+//! ([`markdown_table`], kept in step by a test). Adding a metric means adding its computation and one entry here.
 
 use crate::analysis::{CascadeReport, Summary};
 use crate::error::Result;
@@ -1193,7 +1193,7 @@ pub fn cascade_fields(c: &CascadeReport) -> Result<Vec<String>> {
     Ok(fields)
 }
 
-/// The Markdown table of a set of metrics, as README.md and docs/check.md show it.
+/// The Markdown table of a set of metrics, as docs/metrics.md and docs/check.md show it.
 fn table<'a>(rows: impl Iterator<Item = (&'a str, &'a str, &'a str, Direction)>) -> String {
     let mut out = String::from("| metric | unit | meaning | worse |\n|---|---|---|---|\n");
     for (name, unit, help, direction) in rows {
@@ -1203,7 +1203,7 @@ fn table<'a>(rows: impl Iterator<Item = (&'a str, &'a str, &'a str, Direction)>)
     out
 }
 
-/// The docs' table of summary metrics (README.md, docs/check.md).
+/// The docs' table of summary metrics (docs/metrics.md, docs/check.md).
 pub fn markdown_table() -> String {
     table(SUMMARY.iter().map(|d| (d.name, d.unit, d.help, d.direction)))
 }
@@ -1232,10 +1232,10 @@ mod tests {
 
     #[test]
     fn the_docs_show_the_registry() {
-        let readme = include_str!("../README.md");
+        let metrics = include_str!("../docs/metrics.md");
         let check = include_str!("../docs/check.md");
         let summary = markdown_table();
-        assert!(readme.contains(&summary), "README.md: paste\n{summary}");
+        assert!(metrics.contains(&summary), "docs/metrics.md: paste\n{summary}");
         assert!(check.contains(&summary), "docs/check.md: paste\n{summary}");
         let cascade = markdown_cascade_table();
         assert!(check.contains(&cascade), "docs/check.md: paste\n{cascade}");

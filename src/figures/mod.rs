@@ -1,5 +1,5 @@
 //! Charts. A [`Figure`] draws itself on any plotters backend, so the same code yields the SVG
-//! (for reports and the README) and the PNG (for slides). Text is laid out with an embedded
+//! (for reports, the README and docs/) and the PNG (for slides). Text is laid out with an embedded
 //! DejaVu Sans font, so nothing depends on the fonts installed on the machine.
 //!
 //! This module holds what every figure shares: the font, SVG and PNG encoding, the palette,

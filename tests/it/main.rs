@@ -33,6 +33,7 @@ mod prop_specs;
 mod prop_toml;
 mod readme_ci;
 mod readme_clean;
+mod readme_commands;
 mod regressions;
 mod seams;
 mod shimmer;

@@ -1,4 +1,5 @@
-//! The README's CI snippet, run verbatim in a fresh directory holding the bundled configs:
+//! The CI snippet of `docs/check.md` ("Setting a gate up", moved there from the README), run
+//! verbatim in a fresh directory holding the bundled configs:
 //! `--init` and the commit, then the workflow's `run:` step exits 0; after a change that makes
 //! aliasing 10 % worse (shadow.resolution 2048 -> 1861: aliasing is proportional to the texel size) the
 //! same step exits 1. Also the gate's guarantees from issue 14: `snap = false` against a
@@ -16,12 +17,12 @@ fn repo(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
 }
 
-/// The lines of the README block after `marker` (fenced with ```), and the `run: >` command of
-/// the workflow.
+/// The lines of the `docs/check.md` block after the `ci-init` marker (fenced with ```), and the
+/// `run: >` command of the workflow.
 fn snippets() -> (Vec<String>, String) {
-    let readme = std::fs::read_to_string(repo("README.md")).unwrap();
-    let at = readme.find("<!-- ci-init").expect("the ci-init marker");
-    let block = &readme[at..];
+    let doc = std::fs::read_to_string(repo("docs/check.md")).unwrap();
+    let at = doc.find("<!-- ci-init").expect("the ci-init marker");
+    let block = &doc[at..];
     let body = &block[block.find("```sh\n").unwrap() + 6..];
     let body = &body[..body.find("```").unwrap()];
     let init: Vec<String> = body.lines().map(str::to_string).collect();
@@ -37,7 +38,7 @@ fn snippets() -> (Vec<String>, String) {
     (init, run.join(" "))
 }
 
-/// Runs a README command line with `cargo run ... --` replaced by the built binary.
+/// Runs a documented command line with `cargo run ... --` replaced by the built binary.
 fn sh(dir: &Path, line: &str) -> i32 {
     let line = line
         .replace("cargo run --release --locked --", &bin().display().to_string())
@@ -74,7 +75,7 @@ fn fresh_clone() -> tempfile::TempDir {
 }
 
 #[test]
-fn the_readme_ci_snippet_passes_on_a_fresh_clone_and_fails_after_a_10_percent_aliasing_regression() {
+fn the_ci_snippet_passes_on_a_fresh_clone_and_fails_after_a_10_percent_aliasing_regression() {
     let (init, run) = snippets();
     assert!(init.iter().any(|l| l.contains("--init")), "{init:?}");
     assert!(run.contains("--thresholds ci/shadow-gate.toml"), "{run}");
