@@ -540,44 +540,7 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
         screen::visible_range(vis, lo, hi)
     });
     let Some(rig) = rig else {
-        return Analysis {
-            config: config.clone(),
-            range,
-            cascades: Vec::new(),
-            density: Vec::new(),
-            outcome: Outcome::NoCascades,
-            summary: Summary {
-                cascades_needed: false,
-                z_lo: 0.0,
-                z_hi: 0.0,
-                max_aliasing: 0.0,
-                mean_aliasing: 0.0,
-                mean_log_aliasing: 0.0,
-                undersampled_fraction: 0.0,
-                shimmer: 0.0,
-                shimmer_snapped: 0.0,
-                shimmer_unsnapped: 0.0,
-                size_jitter: 0.0,
-                coverage_violations: 0,
-                memory_bytes: memory,
-                lookup_error_max: 0.0,
-                lookup_error_rms: 0.0,
-                overlap_area_fraction: 0.0,
-                band_pixel_share: 0.0,
-                seam_crossings: opts.seams.then_some(0.0),
-                screen: visibility
-                    .as_ref()
-                    .map(|vis| screen::stats(vis, &[0.0, 0.0], &[0.0], visible)),
-                light: config.motion.light.moves().then(LightSummary::default),
-                truth: None,
-            },
-            ground_truth: None,
-            preset: config
-                .shadow
-                .preset
-                .as_ref()
-                .map(|p| crate::presets::report(p, None, Vec::new())),
-        };
+        return no_cascades(config, opts, range, memory, visibility.as_deref(), visible);
     };
     let (z_lo, z_hi) = range.bounds().expect("a rig implies a range");
     let pose0: CameraPose = config.camera.pose();
@@ -607,90 +570,26 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
     };
     // Probes cost more than the rest of a sphere-fit analysis; place them only when used
     // (the f32 emulation always looks probes up: its drift and lookup error are per probe).
-    let probes = if config.shadow.precision == Precision::F32
-        || config.motion.light.moves()
-        || rig_path::needs_probes(&rig, sopts)
-    {
-        rig_path::probes(&rig, &pose0, &config.scene, config.analysis.probes)
-    } else {
-        Vec::new()
-    };
-    // The receivers seam_crossings follows: frame 0's lit-facing pixels with geometry, else
-    // the first probes of each cascade.
-    let seam_points: Vec<glam::DVec3> = if !opts.seams {
-        Vec::new()
-    } else if let Some(vis) = &visibility {
-        let all = seams::receiver_points(vis, &rig.splits);
-        // Every k-th receiver, at most SEAM_RECEIVERS of them (a fixed, deterministic subset).
-        let k = all.len().div_ceil(SEAM_RECEIVERS).max(1);
-        all.into_iter().step_by(k).collect()
-    } else {
-        rig_path::probes(&rig, &pose0, &config.scene, SEAM_PROBES.min(config.analysis.probes))
-            .into_iter()
-            .flatten()
-            .collect()
-    };
+    let probes = probes(config, &rig, &pose0, sopts);
+    let seam_points = seam_points(config, opts.seams, &rig, &pose0, visibility.as_deref());
     // With precision = "f32" every path metric measures the emulated binary32 pipeline.
     // The poses are generated as the walk reads them (a long path is never held), and the
     // two snap modes walk on their own threads: each mode's totals are the same, bit for bit,
     // as in one walk of both (`along_path_both`).
     let setup = config.setup();
+    let walker = Walker {
+        config,
+        setup: &setup,
+        rig: &rig,
+        probes: &probes,
+        seam_points: &seam_points,
+        sopts,
+        seams: opts.seams,
+        on_frames,
+    };
     let walk = |motion: &csm_core::scene::Motion| {
-        let generated =
-            || csm_core::motion::poses(&setup.camera, motion).map(|p| p.expect("validated when the config was loaded"));
-        let frames = generated().len();
-        // A path of up to HELD_POSES frames is generated once and read by both walks (a
-        // sweep's paths are short: generating each pose twice cost it a sixth of its time);
-        // a longer one is generated as each walk reads it, so memory stays flat.
-        let held: Vec<CameraPose> = if frames <= HELD_POSES {
-            generated().collect()
-        } else {
-            Vec::new()
-        };
-        let poses = || {
-            let streamed = (frames > HELD_POSES).then(generated).into_iter().flatten();
-            let all = held.iter().copied().chain(streamed).enumerate().map(|(t, p)| {
-                if (t + 1) % PROGRESS_FRAMES == 0 {
-                    on_frames(PROGRESS_FRAMES as u64);
-                }
-                p
-            });
-            ExactLen(all, frames)
-        };
-        let remainder = (frames % PROGRESS_FRAMES) as u64;
-        // Inside a parallel batch (a sweep, a comparison) every core is busy already: one walk
-        // of both snap modes computes the values they share once per frame. Alone, the two
-        // modes walk on two threads. Either way the totals are the same, bit for bit.
-        let batch = rayon::current_thread_index().is_some();
-        let walked = match config.shadow.precision {
-            Precision::F64 => {
-                let light = light_track(config, 0);
-                let one = |snapped| rig_path::along_path_lit(&rig, poses(), &probes, light, snapped, sopts);
-                let (s, u) = if batch {
-                    rig_path::along_path_both_lit(&rig, poses(), &probes, light, sopts)
-                } else {
-                    rayon::join(|| one(true), || one(false))
-                };
-                (s, u, None)
-            }
-            Precision::F32 => {
-                let space = config.shadow.snap_space;
-                let one = |snapped| precision::along_path(&rig, poses(), &probes, space, snapped, sopts);
-                let (s, u) = if batch {
-                    precision::along_path_both(&rig, poses(), &probes, space, sopts)
-                } else {
-                    rayon::join(|| one(true), || one(false))
-                };
-                let lookup = if config.shadow.snap { s.lookup } else { u.lookup };
-                (s.path, u.path, Some(lookup))
-            }
-        };
-        on_frames(2 * remainder);
-        let crossings = opts.seams.then(|| {
-            let streamed = (frames > HELD_POSES).then(generated).into_iter().flatten();
-            seams::seam_crossings(&rig.splits, &seam_points, held.iter().copied().chain(streamed))
-        });
-        (walked.0, walked.1, walked.2, crossings)
+        let w = walk_path(&walker, motion);
+        (w.snapped, w.unsnapped, w.lookup_error, w.crossings)
     };
     let (snapped, unsnapped, lookup_error, mut seam_crossings) = walk(&setup.motion);
     let extra: Vec<ExtraPathResult> = config
@@ -711,30 +610,13 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
         .collect();
     // Coverage and S7 over every path: violations add up, the worst and the slack take the
     // extreme, S7 the largest of the paths.
-    let mut coverage = if config.shadow.snap { &snapped } else { &unsnapped }.coverage.clone();
-    let mut lookup_error = lookup_error;
-    let (mut worst_snapped, mut worst_unsnapped, mut jitter) = (
-        snapped.stats.rms,
-        unsnapped.stats.rms,
-        snapped.stats.size_jitter.max(unsnapped.stats.size_jitter),
-    );
-    for e in &extra {
-        let c = if config.shadow.snap { &e.snapped } else { &e.unsnapped };
-        coverage.merge(&c.coverage);
-        worst_snapped = worst_snapped.max(e.snapped.stats.rms);
-        worst_unsnapped = worst_unsnapped.max(e.unsnapped.stats.rms);
-        jitter = jitter
-            .max(e.snapped.stats.size_jitter)
-            .max(e.unsnapped.stats.size_jitter);
-        if let (Some(l), Some(x)) = (lookup_error.as_mut(), e.lookup_error.as_ref()) {
-            l.max = l.max.max(x.max);
-            l.rms = l.rms.max(x.rms);
-            for i in 0..l.cascade_max.len() {
-                l.cascade_max[i] = l.cascade_max[i].max(x.cascade_max[i]);
-                l.cascade_rms[i] = l.cascade_rms[i].max(x.cascade_rms[i]);
-            }
-        }
-    }
+    let PathTotals {
+        coverage,
+        lookup_error,
+        worst_snapped,
+        worst_unsnapped,
+        jitter,
+    } = path_totals(config.shadow.snap, &snapped, &unsnapped, lookup_error, &extra);
     let screen_stats = visibility
         .as_ref()
         .map(|vis| screen::stats(vis, &rig.splits, &texel, visible));
@@ -866,6 +748,229 @@ pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames:
             extra,
         })),
         summary,
+    }
+}
+
+/// The analysis of a setting that needs no cascades: nothing measured but the memory and,
+/// with geometry, the screen.
+fn no_cascades(
+    config: &Config,
+    opts: &AnalysisOptions,
+    range: DepthRange,
+    memory: u64,
+    visibility: Option<&Visibility>,
+    visible: Option<(f64, f64)>,
+) -> Analysis {
+    Analysis {
+        config: config.clone(),
+        range,
+        cascades: Vec::new(),
+        density: Vec::new(),
+        outcome: Outcome::NoCascades,
+        summary: Summary {
+            cascades_needed: false,
+            z_lo: 0.0,
+            z_hi: 0.0,
+            max_aliasing: 0.0,
+            mean_aliasing: 0.0,
+            mean_log_aliasing: 0.0,
+            undersampled_fraction: 0.0,
+            shimmer: 0.0,
+            shimmer_snapped: 0.0,
+            shimmer_unsnapped: 0.0,
+            size_jitter: 0.0,
+            coverage_violations: 0,
+            memory_bytes: memory,
+            lookup_error_max: 0.0,
+            lookup_error_rms: 0.0,
+            overlap_area_fraction: 0.0,
+            band_pixel_share: 0.0,
+            seam_crossings: opts.seams.then_some(0.0),
+            screen: visibility
+                .as_ref()
+                .map(|vis| screen::stats(vis, &[0.0, 0.0], &[0.0], visible)),
+            light: config.motion.light.moves().then(LightSummary::default),
+            truth: None,
+        },
+        ground_truth: None,
+        preset: config
+            .shadow
+            .preset
+            .as_ref()
+            .map(|p| crate::presets::report(p, None, Vec::new())),
+    }
+}
+
+/// The probes the walk follows: placed only when used (they cost more than the rest of a
+/// sphere-fit analysis; the f32 emulation always looks probes up: its drift and lookup error
+/// are per probe).
+fn probes(config: &Config, rig: &Rig, pose0: &CameraPose, sopts: ShimmerOptions) -> Vec<Vec<glam::DVec3>> {
+    if config.shadow.precision == Precision::F32 || config.motion.light.moves() || rig_path::needs_probes(rig, sopts) {
+        rig_path::probes(rig, pose0, &config.scene, config.analysis.probes)
+    } else {
+        Vec::new()
+    }
+}
+
+/// The receivers `seam_crossings` follows: frame 0's lit-facing pixels with geometry, else the
+/// first probes of each cascade; none when seams are not measured.
+fn seam_points(
+    config: &Config,
+    seams: bool,
+    rig: &Rig,
+    pose0: &CameraPose,
+    visibility: Option<&Visibility>,
+) -> Vec<glam::DVec3> {
+    if !seams {
+        Vec::new()
+    } else if let Some(vis) = visibility {
+        let all = seams::receiver_points(vis, &rig.splits);
+        // Every k-th receiver, at most SEAM_RECEIVERS of them (a fixed, deterministic subset).
+        let k = all.len().div_ceil(SEAM_RECEIVERS).max(1);
+        all.into_iter().step_by(k).collect()
+    } else {
+        rig_path::probes(rig, pose0, &config.scene, SEAM_PROBES.min(config.analysis.probes))
+            .into_iter()
+            .flatten()
+            .collect()
+    }
+}
+
+/// What every camera path's walk reads.
+struct Walker<'a> {
+    config: &'a Config,
+    setup: &'a csm_core::scene::Setup,
+    rig: &'a Rig,
+    probes: &'a [Vec<glam::DVec3>],
+    seam_points: &'a [glam::DVec3],
+    sopts: ShimmerOptions,
+    seams: bool,
+    on_frames: &'a (dyn Fn(u64) + Sync),
+}
+
+/// One camera path walked in both snap modes.
+struct PathWalk {
+    snapped: PathResult,
+    unsnapped: PathResult,
+    lookup_error: Option<LookupError>,
+    crossings: Option<f64>,
+}
+
+/// Walks one camera path in both snap modes. With precision = "f32" every path metric
+/// measures the emulated binary32 pipeline. The poses are generated as the walk reads them (a
+/// long path is never held), and the two snap modes walk on their own threads: each mode's
+/// totals are the same, bit for bit, as in one walk of both (`along_path_both`).
+fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
+    let generated =
+        || csm_core::motion::poses(&w.setup.camera, motion).map(|p| p.expect("validated when the config was loaded"));
+    let frames = generated().len();
+    // A path of up to HELD_POSES frames is generated once and read by both walks (a
+    // sweep's paths are short: generating each pose twice cost it a sixth of its time);
+    // a longer one is generated as each walk reads it, so memory stays flat.
+    let held: Vec<CameraPose> = if frames <= HELD_POSES {
+        generated().collect()
+    } else {
+        Vec::new()
+    };
+    let poses = || {
+        let streamed = (frames > HELD_POSES).then(generated).into_iter().flatten();
+        let all = held.iter().copied().chain(streamed).enumerate().map(|(t, p)| {
+            if (t + 1) % PROGRESS_FRAMES == 0 {
+                (w.on_frames)(PROGRESS_FRAMES as u64);
+            }
+            p
+        });
+        ExactLen(all, frames)
+    };
+    let remainder = (frames % PROGRESS_FRAMES) as u64;
+    // Inside a parallel batch (a sweep, a comparison) every core is busy already: one walk
+    // of both snap modes computes the values they share once per frame. Alone, the two
+    // modes walk on two threads. Either way the totals are the same, bit for bit.
+    let batch = rayon::current_thread_index().is_some();
+    let walked = match w.config.shadow.precision {
+        Precision::F64 => {
+            let light = light_track(w.config, 0);
+            let one = |snapped| rig_path::along_path_lit(w.rig, poses(), w.probes, light, snapped, w.sopts);
+            let (s, u) = if batch {
+                rig_path::along_path_both_lit(w.rig, poses(), w.probes, light, w.sopts)
+            } else {
+                rayon::join(|| one(true), || one(false))
+            };
+            (s, u, None)
+        }
+        Precision::F32 => {
+            let space = w.config.shadow.snap_space;
+            let one = |snapped| precision::along_path(w.rig, poses(), w.probes, space, snapped, w.sopts);
+            let (s, u) = if batch {
+                precision::along_path_both(w.rig, poses(), w.probes, space, w.sopts)
+            } else {
+                rayon::join(|| one(true), || one(false))
+            };
+            let lookup = if w.config.shadow.snap { s.lookup } else { u.lookup };
+            (s.path, u.path, Some(lookup))
+        }
+    };
+    (w.on_frames)(2 * remainder);
+    let crossings = w.seams.then(|| {
+        let streamed = (frames > HELD_POSES).then(generated).into_iter().flatten();
+        seams::seam_crossings(&w.rig.splits, w.seam_points, held.iter().copied().chain(streamed))
+    });
+    PathWalk {
+        snapped: walked.0,
+        unsnapped: walked.1,
+        lookup_error: walked.2,
+        crossings,
+    }
+}
+
+/// Coverage, shimmer, jitter and lookup error over every camera path.
+struct PathTotals {
+    coverage: csm_core::shimmer::Coverage,
+    lookup_error: Option<LookupError>,
+    worst_snapped: f64,
+    worst_unsnapped: f64,
+    jitter: f64,
+}
+
+/// Coverage and S7 over every path: violations add up, the worst and the slack take the
+/// extreme, S7 the largest of the paths.
+fn path_totals(
+    snap: bool,
+    snapped: &PathResult,
+    unsnapped: &PathResult,
+    lookup_error: Option<LookupError>,
+    extra: &[ExtraPathResult],
+) -> PathTotals {
+    let mut coverage = if snap { snapped } else { unsnapped }.coverage.clone();
+    let mut lookup_error = lookup_error;
+    let (mut worst_snapped, mut worst_unsnapped, mut jitter) = (
+        snapped.stats.rms,
+        unsnapped.stats.rms,
+        snapped.stats.size_jitter.max(unsnapped.stats.size_jitter),
+    );
+    for e in extra {
+        let c = if snap { &e.snapped } else { &e.unsnapped };
+        coverage.merge(&c.coverage);
+        worst_snapped = worst_snapped.max(e.snapped.stats.rms);
+        worst_unsnapped = worst_unsnapped.max(e.unsnapped.stats.rms);
+        jitter = jitter
+            .max(e.snapped.stats.size_jitter)
+            .max(e.unsnapped.stats.size_jitter);
+        if let (Some(l), Some(x)) = (lookup_error.as_mut(), e.lookup_error.as_ref()) {
+            l.max = l.max.max(x.max);
+            l.rms = l.rms.max(x.rms);
+            for i in 0..l.cascade_max.len() {
+                l.cascade_max[i] = l.cascade_max[i].max(x.cascade_max[i]);
+                l.cascade_rms[i] = l.cascade_rms[i].max(x.cascade_rms[i]);
+            }
+        }
+    }
+    PathTotals {
+        coverage,
+        lookup_error,
+        worst_snapped,
+        worst_unsnapped,
+        jitter,
     }
 }
 

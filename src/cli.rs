@@ -8,7 +8,6 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::app::{analyze, bench, check, compare, merge, stress, sweep};
 use crate::error::Result;
-use csm_core::scene::Precision;
 
 pub use crate::app::{Format, Outcome};
 
@@ -27,80 +26,20 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Build the cascades of one scene and shadow setting, measure them, write CSV/JSON/SVG.
-    Analyze(AnalyzeArgs),
+    Analyze(analyze::AnalyzeRequest),
     /// Sweep λ × cascades × resolution (× fit) in parallel; write CSV, plots and a report.
     Sweep(SweepArgs),
     /// Gate on quality: judge threshold rules and compare with a baseline (exit 1 on failure).
     Check(CheckArgs),
     /// Run a battery of pathological inputs through validation and analysis, check invariants,
     /// write stress.csv; exit 1 if an invariant fails.
-    Stress(StressArgs),
+    Stress(stress::StressRequest),
     /// Time against error of every sampled metric; writes bench.csv and bench.svg.
-    Bench(BenchArgs),
+    Bench(bench::BenchRequest),
     /// Run several engine presets on one scene and compare them (CSV, plots, HTML, Markdown).
-    Compare(CompareArgs),
+    Compare(compare::CompareRequest),
     /// Join the shards of a sweep (`sweep --shard K/N`) into the files the unsharded sweep writes.
-    Merge(MergeArgs),
-}
-
-#[derive(Debug, Args)]
-pub struct AnalyzeArgs {
-    /// Scene and shadow settings (TOML).
-    pub config: PathBuf,
-    /// Output directory [default: out/<config name>/].
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// What to print on stdout.
-    #[arg(long, value_enum, default_value_t = Format::Table)]
-    pub format: Format,
-    /// Arithmetic of the cascade pipeline, overriding `[shadow] precision`: f64 (exact) or f32
-    /// (an engine's binary32 pipeline, emulated; see `snap_space`).
-    #[arg(long, value_parser = precision_parser())]
-    pub precision: Option<Precision>,
-    /// Reproduce an engine's cascades instead of csm-lab's own (overrides shadow.preset):
-    /// dart, threejs, unity-sample, eevee, learnopengl, bevy, godot, unreal, unity, unity-urp, filament.
-    #[arg(long)]
-    pub preset: Option<String>,
-    /// No progress bar (it shows only on a terminal, after about a second).
-    #[arg(long)]
-    pub quiet: bool,
-    /// shimmer.csv with every frame's rows, streamed to the file as the path is walked
-    /// (by default a path longer than 1,000 frames keeps every k-th frame's rows).
-    #[arg(long)]
-    pub all_frames: bool,
-    /// An engine settings file as `sweep --preset` and `compare` write it
-    /// (recommendation.<engine>.txt): its engine's cascades with exactly those settings, in
-    /// place of the engine's table and the [shadow] count, map size and shadow distance.
-    #[arg(long, value_name = "FILE")]
-    pub engine_settings: Option<PathBuf>,
-    /// Sample the shadow maps against the exact answer (acne, leaks, S5 flicker, the bias
-    /// needed per cascade; bias.csv); as [analysis] ground_truth = true. Needs scene geometry.
-    #[arg(long)]
-    pub ground_truth: bool,
-    /// With --ground-truth: sample the maps with no bias at all (as [shadow] bias = "none"),
-    /// instead of the configured, engine or recommended bias.
-    #[arg(long)]
-    pub raw_bias: bool,
-}
-
-#[derive(Debug, Args)]
-pub struct StressArgs {
-    /// Output directory for stress.csv.
-    #[arg(long, default_value = "out/stress")]
-    pub out: PathBuf,
-    /// Random cases added to the fixed battery (0..=100000).
-    #[arg(long, default_value_t = 32, allow_negative_numbers = true)]
-    pub cases: u64,
-    /// Seed of the random cases (same seed, same cases, same file).
-    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
-    pub seed: u64,
-    /// Also fail a case whose f32 drift (texels per frame, either snap space) exceeds this.
-    /// By default f32 residuals are reported, not judged.
-    #[arg(long, value_name = "TEXELS", allow_negative_numbers = true)]
-    pub max_f32_drift: Option<f64>,
-    /// No progress bar (it shows only on a terminal, after about a second).
-    #[arg(long)]
-    pub quiet: bool,
+    Merge(merge::MergeRequest),
 }
 
 #[derive(Debug, Args)]
@@ -179,25 +118,6 @@ pub struct SweepArgs {
 }
 
 #[derive(Debug, Args)]
-pub struct MergeArgs {
-    /// The output directories of every `sweep --shard K/N` run of one sweep (any order).
-    #[arg(required = true, value_name = "DIR")]
-    pub dirs: Vec<PathBuf>,
-    /// Output directory [default: out/<config name>/].
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Skip the SVG/PNG figures, as `sweep --no-plots` does.
-    #[arg(long)]
-    pub no_plots: bool,
-    /// No notes on stderr.
-    #[arg(long)]
-    pub quiet: bool,
-    /// What to print on stdout.
-    #[arg(long, value_enum, default_value_t = Format::Table)]
-    pub format: Format,
-}
-
-#[derive(Debug, Args)]
 pub struct CheckArgs {
     /// Scene and shadow settings (TOML).
     pub config: PathBuf,
@@ -233,59 +153,10 @@ pub struct CheckArgs {
     pub format: Format,
 }
 
-#[derive(Debug, Args)]
-pub struct BenchArgs {
-    /// Output directory [default: out/bench/].
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Scene to measure [default: the built-in configs/default.toml].
-    #[arg(long)]
-    pub config: Option<PathBuf>,
-    /// Timed repetitions per point; the best is kept (1..=1000).
-    #[arg(long, default_value_t = 5, allow_negative_numbers = true)]
-    pub repeats: u32,
-    /// No progress bar (it shows only on a terminal, after about a second).
-    #[arg(long)]
-    pub quiet: bool,
-}
-
-#[derive(Debug, Args)]
-pub struct CompareArgs {
-    /// Scene file (TOML); its camera, screen, light, scene and motion are shared by every preset.
-    pub config: PathBuf,
-    /// Comma-separated presets to compare [default: all].
-    #[arg(long)]
-    pub presets: Option<String>,
-    /// Every preset at its own defaults: ignore shadow.cascades, shadow.resolution and shadow.max_distance.
-    #[arg(long)]
-    pub defaults: bool,
-    /// Add csm-lab's own pipeline (the file's [shadow]) with its splits on these depth ranges:
-    /// bounds, visible or bounds,visible (visible needs scene geometry).
-    #[arg(long, value_name = "SPEC")]
-    pub split_range: Option<String>,
-    /// Output directory [default: out/<config name>/].
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// No progress bar (it shows only on a terminal, after about a second).
-    #[arg(long)]
-    pub quiet: bool,
-}
-
 /// Runs the parsed command.
 pub fn run(cli: Cli) -> Result<Outcome> {
     match cli.command {
-        Command::Analyze(args) => analyze::execute(&analyze::AnalyzeRequest {
-            config: args.config,
-            out: args.out,
-            format: args.format,
-            precision: args.precision,
-            preset: args.preset,
-            quiet: args.quiet,
-            all_frames: args.all_frames,
-            engine_settings: args.engine_settings,
-            ground_truth: args.ground_truth,
-            raw_bias: args.raw_bias,
-        }),
+        Command::Analyze(request) => analyze::execute(&request),
         Command::Sweep(args) => sweep::execute(&sweep::SweepRequest {
             config: args.config,
             out: args.out,
@@ -328,43 +199,9 @@ pub fn run(cli: Cli) -> Result<Outcome> {
             }),
             (None, None) => unreachable!("clap requires --thresholds unless --init"),
         },
-        Command::Stress(args) => stress::execute(&stress::StressRequest {
-            out: args.out,
-            cases: args.cases,
-            seed: args.seed,
-            max_f32_drift: args.max_f32_drift,
-            quiet: args.quiet,
-        }),
-        Command::Bench(args) => bench::execute(&bench::BenchRequest {
-            out: args.out,
-            config: args.config,
-            repeats: args.repeats,
-            quiet: args.quiet,
-        }),
-        Command::Merge(args) => merge::execute(&merge::MergeRequest {
-            dirs: args.dirs,
-            out: args.out,
-            no_plots: args.no_plots,
-            quiet: args.quiet,
-            format: args.format,
-        }),
-        Command::Compare(args) => compare::execute(&compare::CompareRequest {
-            config: args.config,
-            presets: args.presets,
-            defaults: args.defaults,
-            out: args.out,
-            split_range: args.split_range,
-            quiet: args.quiet,
-        }),
+        Command::Stress(request) => stress::execute(&request),
+        Command::Bench(request) => bench::execute(&request),
+        Command::Merge(request) => merge::execute(&request),
+        Command::Compare(request) => compare::execute(&request),
     }
-}
-
-/// `--precision`: the core's [`Precision`], listed with a line of help per value.
-fn precision_parser() -> impl clap::builder::TypedValueParser<Value = Precision> {
-    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
-    PossibleValuesParser::new([
-        PossibleValue::new("f64").help("Exact: texel-unit windows, snapped shimmer exactly 0 at any world offset"),
-        PossibleValue::new("f32").help("An engine's binary32 pipeline, emulated operation by operation"),
-    ])
-    .map(|s| Precision::from_name(&s).expect("one of the listed values"))
 }

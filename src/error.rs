@@ -38,22 +38,28 @@ pub enum Error {
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
     /// The TOML text does not parse, or a key is unknown or has the wrong type.
-    #[error("{path}:{line}:{column}: {message}")]
+    #[error("{path}:{line}:{column}: {message}{excerpt}")]
     Toml {
         path: String,
         line: usize,
         column: usize,
         message: String,
+        /// The source line with a caret under the problem, as cargo shows it
+        /// (`config::excerpt`), or empty.
+        excerpt: String,
     },
 
     /// A value parsed but is not allowed.
-    #[error("{location}`{key}` = {value} is not allowed: {allowed}")]
+    #[error("{location}`{key}` = {value} is not allowed: {allowed}{excerpt}")]
     Invalid {
         /// `file:line:column: ` or `file: ` or empty.
         location: String,
         key: String,
         value: String,
         allowed: String,
+        /// The source line with a caret under the value, as cargo shows it
+        /// (`config::excerpt`), or empty.
+        excerpt: String,
     },
 }
 
@@ -262,6 +268,18 @@ pub enum IoError {
 }
 
 impl Error {
+    /// The message without a config error's source excerpt: one line, for one-line reports
+    /// (`stress.csv` and its table).
+    pub(crate) fn without_excerpt(&self) -> String {
+        let text = self.to_string();
+        match self {
+            Error::Config(ConfigError::Invalid { excerpt, .. } | ConfigError::Toml { excerpt, .. }) => text
+                .strip_suffix(excerpt.as_str())
+                .map_or_else(|| text.clone(), str::to_string),
+            _ => text,
+        }
+    }
+
     pub fn read(path: &Path, source: std::io::Error) -> Self {
         IoError::Read {
             path: path.to_path_buf(),
@@ -302,6 +320,7 @@ impl Error {
             key: key.to_string(),
             value: value.to_string(),
             allowed: allowed.into(),
+            excerpt: String::new(),
         }
         .into()
     }

@@ -1,21 +1,9 @@
 //! "Did you mean ...?": the edit distance between two names and the nearest of a list, for
 //! every message that rejects an unknown name (metrics, presets).
 
-/// Levenshtein distance in characters (insert, delete, substitute each cost 1).
+/// Levenshtein distance in characters (insert, delete, substitute each cost 1), by `strsim`.
 pub fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    // One row of the DP table at a time: prev[j] = distance(a[..i], b[..j]).
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut cur = Vec::with_capacity(b.len() + 1);
-        cur.push(i + 1);
-        for (j, &cb) in b.iter().enumerate() {
-            let substitute = prev[j] + usize::from(ca != cb);
-            cur.push(substitute.min(prev[j + 1] + 1).min(cur[j] + 1));
-        }
-        prev = cur;
-    }
-    prev[b.len()]
+    strsim::levenshtein(a, b)
 }
 
 /// The candidate nearest to `name` by edit distance (the first one on ties).

@@ -10,23 +10,43 @@ use csm_core::scene::Precision;
 use std::path::PathBuf;
 
 /// What `analyze` was asked to do (the command line's flags, as plain values).
-#[derive(Debug, Clone)]
+#[derive(clap::Args, Debug, Clone)]
 pub struct AnalyzeRequest {
+    /// Scene and shadow settings (TOML).
     pub config: PathBuf,
+    /// Output directory [default: out/<config name>/].
+    #[arg(long)]
     pub out: Option<PathBuf>,
+    /// What to print on stdout.
+    #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
+    /// Arithmetic of the cascade pipeline, overriding `[shadow] precision`: f64 (exact) or f32
+    /// (an engine's binary32 pipeline, emulated; see `snap_space`).
+    #[arg(long, value_parser = precision_parser())]
     pub precision: Option<Precision>,
+    /// Reproduce an engine's cascades instead of csm-lab's own (overrides shadow.preset):
+    /// dart, threejs, unity-sample, eevee, learnopengl, bevy, godot, unreal, unity, unity-urp, filament.
+    #[arg(long)]
     pub preset: Option<String>,
-    /// No progress bar.
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
     pub quiet: bool,
-    /// `--all-frames`: `shimmer.csv` with every frame, streamed.
+    /// shimmer.csv with every frame's rows, streamed to the file as the path is walked
+    /// (by default a path longer than 1,000 frames keeps every k-th frame's rows).
+    #[arg(long)]
     pub all_frames: bool,
-    /// `--engine-settings FILE`: an engine's `recommendation.<engine>.txt` in place of its
-    /// table and the `[shadow]` count, map size and distance.
+    /// An engine settings file as `sweep --preset` and `compare` write it
+    /// (recommendation.<engine>.txt): its engine's cascades with exactly those settings, in
+    /// place of the engine's table and the [shadow] count, map size and shadow distance.
+    #[arg(long, value_name = "FILE")]
     pub engine_settings: Option<PathBuf>,
-    /// `--ground-truth`: run the ground-truth pass (as `[analysis] ground_truth = true`).
+    /// Sample the shadow maps against the exact answer (acne, leaks, S5 flicker, the bias
+    /// needed per cascade; bias.csv); as [analysis] ground_truth = true. Needs scene geometry.
+    #[arg(long)]
     pub ground_truth: bool,
-    /// `--raw-bias`: the pass samples with no bias (as `[shadow] bias = "none"`).
+    /// With --ground-truth: sample the maps with no bias at all (as [shadow] bias = "none"),
+    /// instead of the configured, engine or recommended bias.
+    #[arg(long)]
     pub raw_bias: bool,
 }
 
@@ -82,4 +102,14 @@ pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
         &dir,
     )?;
     Ok(Outcome::Success)
+}
+
+/// `--precision`: the core's [`Precision`], listed with a line of help per value.
+fn precision_parser() -> impl clap::builder::TypedValueParser<Value = Precision> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new([
+        PossibleValue::new("f64").help("Exact: texel-unit windows, snapped shimmer exactly 0 at any world offset"),
+        PossibleValue::new("f32").help("An engine's binary32 pipeline, emulated operation by operation"),
+    ])
+    .map(|s| Precision::from_name(&s).expect("one of the listed values"))
 }

@@ -10,12 +10,19 @@ use crate::output::{self, Exporter};
 use crate::report;
 
 /// What `bench` was asked to do (the command line's flags, as plain values).
-#[derive(Debug, Clone)]
+#[derive(clap::Args, Debug, Clone)]
 pub struct BenchRequest {
+    /// Output directory [default: out/bench/].
+    #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Scene to measure [default: the built-in configs/default.toml].
+    #[arg(long)]
     pub config: Option<PathBuf>,
+    /// Timed repetitions per point; the best is kept (1..=1000).
+    #[arg(long, default_value_t = 5, allow_negative_numbers = true)]
     pub repeats: u32,
-    /// No progress bar.
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
     pub quiet: bool,
 }
 

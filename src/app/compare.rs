@@ -9,15 +9,25 @@ use crate::output;
 use crate::report;
 
 /// What `compare` was asked to do (the command line's flags, as plain values).
-#[derive(Debug, Clone)]
+#[derive(clap::Args, Debug, Clone)]
 pub struct CompareRequest {
+    /// Scene file (TOML); its camera, screen, light, scene and motion are shared by every preset.
     pub config: PathBuf,
+    /// Comma-separated presets to compare [default: all].
+    #[arg(long)]
     pub presets: Option<String>,
+    /// Every preset at its own defaults: ignore shadow.cascades, shadow.resolution and shadow.max_distance.
+    #[arg(long)]
     pub defaults: bool,
-    pub out: Option<PathBuf>,
-    /// `--split-range`: csm-lab's own pipeline added with its splits on these ranges.
+    /// Add csm-lab's own pipeline (the file's [shadow]) with its splits on these depth ranges:
+    /// bounds, visible or bounds,visible (visible needs scene geometry).
+    #[arg(long, value_name = "SPEC")]
     pub split_range: Option<String>,
-    /// No progress bar.
+    /// Output directory [default: out/<config name>/].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
     pub quiet: bool,
 }
 

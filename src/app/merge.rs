@@ -14,13 +14,22 @@ use crate::output;
 use crate::report;
 
 /// What `merge` was asked to do.
-#[derive(Debug, Clone)]
+#[derive(clap::Args, Debug, Clone)]
 pub struct MergeRequest {
-    /// The shard directories, in any order.
+    /// The output directories of every `sweep --shard K/N` run of one sweep (any order).
+    #[arg(required = true, value_name = "DIR")]
     pub dirs: Vec<PathBuf>,
+    /// Output directory [default: out/<config name>/].
+    #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Skip the SVG/PNG figures, as `sweep --no-plots` does.
+    #[arg(long)]
     pub no_plots: bool,
+    /// No notes on stderr.
+    #[arg(long)]
     pub quiet: bool,
+    /// What to print on stdout.
+    #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
 }
 

@@ -9,13 +9,23 @@ use crate::output;
 use crate::report;
 
 /// What `stress` was asked to do (the command line's flags, as plain values).
-#[derive(Debug, Clone)]
+#[derive(clap::Args, Debug, Clone)]
 pub struct StressRequest {
+    /// Output directory for stress.csv.
+    #[arg(long, default_value = "out/stress")]
     pub out: PathBuf,
+    /// Random cases added to the fixed battery (0..=100000).
+    #[arg(long, default_value_t = 32, allow_negative_numbers = true)]
     pub cases: u64,
+    /// Seed of the random cases (same seed, same cases, same file).
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
+    /// Also fail a case whose f32 drift (texels per frame, either snap space) exceeds this.
+    /// By default f32 residuals are reported, not judged.
+    #[arg(long, value_name = "TEXELS", allow_negative_numbers = true)]
     pub max_f32_drift: Option<f64>,
-    /// No progress bar.
+    /// No progress bar (it shows only on a terminal, after about a second).
+    #[arg(long)]
     pub quiet: bool,
 }
 

@@ -650,7 +650,7 @@ pub fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
         note: String::new(),
     };
     let parsed = inputs.parse(Precision::F64, SnapSpace::World, inputs.fit);
-    let error = parsed.as_ref().err().map(|e| e.to_string());
+    let error = parsed.as_ref().err().map(|e| e.without_excerpt());
     if let Expect::Rejected { key } = case.expect {
         result.checks.push(check_clear_rejection(error.as_deref(), key));
         result.note = error.unwrap_or_else(|| "accepted, but should have been rejected".into());
@@ -684,7 +684,7 @@ pub fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
         match inputs.parse(Precision::F64, SnapSpace::World, Fit::Sphere) {
             Ok(c) => Some(analyze(&c, &full)),
             Err(e) => {
-                notes.push(format!("sphere variant: {e}"));
+                notes.push(format!("sphere variant: {}", e.without_excerpt()));
                 None
             }
         }
@@ -719,7 +719,7 @@ pub fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
                     }
                 }
             }
-            Err(e) => notes.push(format!("f32 {space}: {e}")),
+            Err(e) => notes.push(format!("f32 {space}: {}", e.without_excerpt())),
         }
     }
     result.checks.insert(1, check_finite(nonfinite));

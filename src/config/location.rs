@@ -1,7 +1,11 @@
 //! Where in the file a problem is: line and column of a byte offset, of a `table.key` or a
 //! `[table]` header, and the [`Validator`] that builds "value not allowed" errors from them.
 
+use std::ops::Range;
+
+use annotate_snippets::{Level, Renderer, Snippet};
 use glam::DVec3;
+use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
 use crate::error::{ConfigError, Error, Result};
@@ -33,6 +37,7 @@ pub fn toml_error(path: &str, text: &str, err: &toml::de::Error) -> Error {
         line,
         column,
         message,
+        excerpt: err.span().map(|span| excerpt(text, span)).unwrap_or_default(),
     })
 }
 
@@ -68,44 +73,88 @@ pub fn key_of_value_at(text: &str, offset: usize) -> Option<String> {
     })
 }
 
+/// Where a key is written, as the TOML parser read it: byte ranges of the key and of its value.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Place {
+    pub key: Range<usize>,
+    pub value: Range<usize>,
+}
+
+/// Finds where `table.key` (or the table `table`) is written, by the spans of the TOML parser
+/// (`toml::de::DeTable`, the parser `toml::from_str` uses): None when the text does not parse
+/// or holds no such key. Every line and column of a config error comes from such a span.
+pub(crate) fn locate(text: &str, dotted: &str) -> Option<Place> {
+    let doc = DeTable::parse(text).ok()?;
+    let parts: Vec<&str> = dotted.split('.').collect();
+    locate_in(doc.get_ref(), &parts)
+}
+
+/// [`locate`] below one table. A part `name[i]` is entry `i` of the array of tables `name`;
+/// a plain name of an array of tables (`[[scene.box]]`) is its first entry holding the rest of
+/// the path.
+fn locate_in(table: &DeTable<'_>, parts: &[&str]) -> Option<Place> {
+    let (first, rest) = parts.split_first()?;
+    let (name, index) = match first.split_once('[') {
+        Some((name, i)) => (name, Some(i.strip_suffix(']')?.parse::<usize>().ok()?)),
+        None => (*first, None),
+    };
+    let (key, value) = table.get_key_value(name)?;
+    if rest.is_empty() {
+        return Some(Place {
+            key: key.span(),
+            value: value.span(),
+        });
+    }
+    let in_entry = |item: &toml::Spanned<DeValue<'_>>| match item.get_ref() {
+        DeValue::Table(t) => locate_in(t, rest),
+        _ => None,
+    };
+    match (value.get_ref(), index) {
+        (DeValue::Table(t), None) => locate_in(t, rest),
+        (DeValue::Array(items), None) => items.iter().find_map(in_entry),
+        (DeValue::Array(items), Some(i)) => items.get(i).and_then(in_entry),
+        _ => None,
+    }
+}
+
 /// Finds where `table.key = ...` is written, for error messages about values that parsed
 /// but are out of range. Returns 1-based (line, column) of the key, if found.
 pub fn locate_key(text: &str, dotted: &str) -> Option<(usize, usize)> {
-    let (table, key) = match dotted.rsplit_once('.') {
-        Some((t, k)) => (t, k),
-        None => ("", dotted),
-    };
-    let mut current = String::new();
-    for (i, line) in text.lines().enumerate() {
-        let trimmed = line.trim_start();
-        if let Some(rest) = trimmed.strip_prefix('[') {
-            let rest = rest.trim_start_matches('[');
-            if let Some(end) = rest.find(']') {
-                current = rest[..end].trim().to_string();
-            }
-            continue;
-        }
-        if current != table {
-            continue;
-        }
-        if let Some(after) = trimmed.strip_prefix(key) {
-            if after.trim_start().starts_with('=') {
-                let column = line.len() - trimmed.len() + 1;
-                return Some((i + 1, column));
-            }
-        }
-    }
-    None
+    locate(text, dotted).map(|p| line_column(text, p.key.start))
 }
 
-/// 1-based line and column of a `[name]` table header.
+/// 1-based line and column of a `[name]` table header (its opening bracket).
 pub fn locate_table(text: &str, name: &str) -> Option<(usize, usize)> {
-    text.lines().enumerate().find_map(|(i, line)| {
-        let t = line.trim_start();
-        let rest = t.strip_prefix('[')?;
-        let end = rest.find(']')?;
-        (rest[..end].trim() == name).then(|| (i + 1, line.len() - t.len() + 1))
-    })
+    let key = locate(text, name)?.key;
+    let bracket = text[..key.start].rfind('[')?;
+    let (line, column) = line_column(text, bracket);
+    (line == line_column(text, key.start).0).then_some((line, column))
+}
+
+/// The source line holding `span`, with carets under the span (its first line when it runs
+/// over several), rendered the way cargo shows it (annotate-snippets); empty for an empty text.
+/// Printed after an error's first line.
+pub(crate) fn excerpt(text: &str, span: Range<usize>) -> String {
+    let start = span.start.min(text.len());
+    if text.is_empty() || !text.is_char_boundary(start) {
+        return String::new();
+    }
+    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i);
+    let line = text[line_start..line_end].trim_end_matches('\r');
+    let end = span.end.clamp(start, line_start + line.len());
+    let (number, _) = line_column(text, start);
+    let message = Level::Error.title("").snippet(
+        Snippet::source(line)
+            .line_start(number)
+            .annotation(Level::Error.span(start - line_start..end - line_start)),
+    );
+    let rendered = Renderer::plain().render(message).to_string();
+    // Drop the title line: the error's own first line stands in its place.
+    match rendered.split_once('\n') {
+        Some((_, rest)) => format!("\n{}", rest.trim_end()),
+        None => String::new(),
+    }
 }
 
 /// Builds "value not allowed" errors that point at the key in the file.
@@ -115,20 +164,41 @@ pub struct Validator<'a> {
 }
 
 impl Validator<'_> {
+    /// A value not allowed, located at its key, with the value underlined.
     pub fn invalid(&self, key: &str, value: impl std::fmt::Display, allowed: &str) -> Error {
-        let location = match (self.path.is_empty(), locate_key(self.text, key)) {
-            (_, Some((line, column))) if !self.path.is_empty() => {
-                format!("{}:{line}:{column}: ", self.path)
-            }
-            (_, Some((line, column))) => format!("line {line}, column {column}: "),
-            (false, None) => format!("{}: ", self.path),
-            (true, None) => String::new(),
+        self.invalid_found(key, key, value, allowed)
+    }
+
+    /// [`Validator::invalid`] for a key found at another path than its name: an entry of an
+    /// array of tables (`scene.box[6].max` for box 7's `scene.box.max`).
+    pub(crate) fn invalid_found(&self, key: &str, path: &str, value: impl std::fmt::Display, allowed: &str) -> Error {
+        let place = locate(self.text, path);
+        let at = place.as_ref().map(|p| p.key.start);
+        self.error(key, at, place.map(|p| p.value), value, allowed)
+    }
+
+    /// The "not allowed" error: `file:line:column: ` of byte `at` (of the file alone when
+    /// unknown), and the excerpt with `underline` marked.
+    fn error(
+        &self,
+        key: &str,
+        at: Option<usize>,
+        underline: Option<Range<usize>>,
+        value: impl std::fmt::Display,
+        allowed: &str,
+    ) -> Error {
+        let location = match at.map(|offset| line_column(self.text, offset)) {
+            Some((line, column)) if !self.path.is_empty() => format!("{}:{line}:{column}: ", self.path),
+            Some((line, column)) => format!("line {line}, column {column}: "),
+            None if !self.path.is_empty() => format!("{}: ", self.path),
+            None => String::new(),
         };
         Error::from(ConfigError::Invalid {
             location,
             key: key.to_string(),
             value: value.to_string(),
             allowed: allowed.to_string(),
+            excerpt: underline.map(|span| excerpt(self.text, span)).unwrap_or_default(),
         })
     }
 
@@ -167,26 +237,15 @@ impl Validator<'_> {
         let list: Vec<String> = names.iter().map(|(n, _)| format!("{n:?}")).collect();
         Err(self.invalid_at(
             key,
-            value.span().start,
+            value.span(),
             format!("{:?}", value.get_ref()),
             &format!("one of {}", list.join(", ")),
         ))
     }
 
-    /// Like [`Validator::invalid`], located at a byte offset of the text.
-    pub fn invalid_at(&self, key: &str, offset: usize, value: impl std::fmt::Display, allowed: &str) -> Error {
-        let (line, column) = line_column(self.text, offset);
-        let location = if self.path.is_empty() {
-            format!("line {line}, column {column}: ")
-        } else {
-            format!("{}:{line}:{column}: ", self.path)
-        };
-        Error::from(ConfigError::Invalid {
-            location,
-            key: key.to_string(),
-            value: value.to_string(),
-            allowed: allowed.to_string(),
-        })
+    /// Like [`Validator::invalid`], located at the value's span in the text.
+    pub fn invalid_at(&self, key: &str, span: Range<usize>, value: impl std::fmt::Display, allowed: &str) -> Error {
+        self.error(key, Some(span.start), Some(span), value, allowed)
     }
 
     pub fn int_range(&self, key: &str, v: i64, lo: i64, hi: i64) -> Result<i64> {

@@ -15,6 +15,7 @@ mod schema;
 pub mod sweep_spec;
 mod validate;
 
+pub(crate) use location::{excerpt, locate};
 pub use location::{line_column, locate_key, locate_table, toml_error, Validator};
 pub use schema::SECTIONS;
 pub use validate::{check_camera_path, parse};

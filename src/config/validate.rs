@@ -40,24 +40,97 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         Some(o) => v.point("scene.world_offset", o)?,
         None => DVec3::ZERO,
     };
+    let moved = |key: &str, p: [f64; 3]| moved(v, world_offset, key, p);
 
-    let moved = |key: &str, p: [f64; 3]| -> Result<DVec3> {
-        let q = v.point(key, p)? + world_offset;
-        if q.abs().max_element() <= MAX_WORLD {
-            Ok(q)
-        } else {
-            Err(v.invalid(
-                "scene.world_offset",
-                format!("{:?}", world_offset.to_array()),
-                &format!("an offset that keeps {key} within ±1e9 world units ({p:?} + offset)"),
-            ))
-        }
+    let camera = camera(&raw.camera, v, world_offset, &moved)?;
+    let width = v.int_range("screen.width", raw.screen.width, 1, 1 << 20)? as u32;
+    let height = v.int_range("screen.height", raw.screen.height, 1, 1 << 20)? as u32;
+    let (light_direction, dir_raw) = light_direction(&raw.light, v)?;
+    // Scene: bounds, geometry, and the bounds defaulting to the geometry's.
+    let (scene, geometry) = scene(&raw.scene, v, base_dir, world_offset, &moved)?;
+
+    let mut s = raw.shadow;
+    let light_update = s.light_update.take();
+    let written = written(&s);
+    let (shadow, mut truth) = shadow_settings(&s, v, camera.far, geometry.is_some())?;
+
+    let mut m = raw.motion;
+    let m_light = super::schema::RawMotion {
+        light_path: m.light_path.take(),
+        sun_azimuth_step_deg: m.sun_azimuth_step_deg,
+        sun_elevation_step_deg: m.sun_elevation_step_deg,
+        light_file: m.light_file.take(),
+        ..Default::default()
     };
+    let mut motion = camera_motion(m, v, base_dir, world_offset)?;
+    motion.light = super::light_motion::parse(
+        &m_light,
+        light_update.as_ref(),
+        v,
+        base_dir,
+        light_direction,
+        motion.frames,
+    )?;
 
-    // Camera.
-    let position = moved("camera.position", raw.camera.position)?;
-    let target = moved("camera.target", raw.camera.target)?;
-    let up = match raw.camera.up {
+    truth.enabled = ground_truth(&raw.analysis, v, geometry.is_some(), &motion.light)?.unwrap_or(truth.enabled);
+    let analysis = analysis_settings(&raw.analysis, v)?;
+
+    let sweep = raw
+        .sweep
+        .map(|s| super::sweep_spec::validate_raw(s, v, geometry.is_some()))
+        .transpose()?;
+
+    let config = Config {
+        name: "config".to_string(),
+        path: None,
+        camera,
+        screen: Screen { width, height },
+        light_direction,
+        light_direction_as_written: dir_raw,
+        scene,
+        geometry,
+        world_offset,
+        shadow,
+        motion,
+        analysis,
+        sweep,
+        preset_input: PresetInput {
+            preset: s.preset,
+            written,
+            ..PresetInput::default()
+        },
+        truth,
+    };
+    check_camera_path(&config, v)?;
+    // The binary32 range check needs the cascades, which an engine preset may change: it runs
+    // once the preset is applied (`crate::load`).
+    Ok(config)
+}
+
+/// A written point moved by the world offset, kept within the world bounds.
+fn moved(v: &Validator<'_>, world_offset: DVec3, key: &str, p: [f64; 3]) -> Result<DVec3> {
+    let q = v.point(key, p)? + world_offset;
+    if q.abs().max_element() <= MAX_WORLD {
+        Ok(q)
+    } else {
+        Err(v.invalid(
+            "scene.world_offset",
+            format!("{:?}", world_offset.to_array()),
+            &format!("an offset that keeps {key} within ±1e9 world units ({p:?} + offset)"),
+        ))
+    }
+}
+
+/// `[camera]`: position and target (moved by the world offset), up, field of view and planes.
+fn camera(
+    raw: &super::schema::RawCamera,
+    v: &Validator<'_>,
+    world_offset: DVec3,
+    moved: &dyn Fn(&str, [f64; 3]) -> Result<DVec3>,
+) -> Result<CameraSettings> {
+    let position = moved("camera.position", raw.position)?;
+    let target = moved("camera.target", raw.target)?;
+    let up = match raw.up {
         Some(u) => v.vec3("camera.up", u)?,
         None => DVec3::Y,
     };
@@ -65,7 +138,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     if view.length() <= 1e-12 * (1.0 + position.length()) {
         return Err(v.invalid(
             "camera.target",
-            format!("{:?}", raw.camera.target),
+            format!("{:?}", raw.target),
             if world_offset == DVec3::ZERO {
                 "a point different from camera.position (the view direction is target - position)"
             } else {
@@ -84,7 +157,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             "a vector not parallel to the view direction (target - position)",
         ));
     }
-    let fov = v.finite("camera.fov_y_deg", raw.camera.fov_y_deg)?;
+    let fov = v.finite("camera.fov_y_deg", raw.fov_y_deg)?;
     // Strictly between 0 and 180, with a margin: at 1e-300 degrees tan(fov/2) underflows and
     // the pixel footprint becomes infinite.
     if !(0.001..=179.999).contains(&fov) {
@@ -94,11 +167,11 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             "degrees strictly between 0 and 180, from 0.001 to 179.999",
         ));
     }
-    let near = v.finite("camera.near", raw.camera.near)?;
+    let near = v.finite("camera.near", raw.near)?;
     if near <= 0.0 {
         return Err(v.invalid("camera.near", near, "a number > 0"));
     }
-    let far = v.finite("camera.far", raw.camera.far)?;
+    let far = v.finite("camera.far", raw.far)?;
     if far > MAX_WORLD {
         return Err(v.invalid("camera.far", far, "a number at most 1e9 world units"));
     }
@@ -121,29 +194,33 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         ));
     }
 
-    // Screen.
-    let width = v.int_range("screen.width", raw.screen.width, 1, 1 << 20)? as u32;
-    let height = v.int_range("screen.height", raw.screen.height, 1, 1 << 20)? as u32;
+    Ok(CameraSettings {
+        position,
+        target,
+        up,
+        fov_y_deg: fov,
+        near,
+        far,
+    })
+}
 
-    // Light.
-    let dir_raw = v.vec3("light.direction", raw.light.direction)?;
+/// `light.direction`: the unit direction light travels, and the direction as written.
+fn light_direction(raw: &super::schema::RawLight, v: &Validator<'_>) -> Result<(DVec3, DVec3)> {
+    let dir_raw = v.vec3("light.direction", raw.direction)?;
     let len = dir_raw.length();
     if len <= 1e-12 || !len.is_finite() {
         return Err(v.invalid(
             "light.direction",
-            format!("{:?}", raw.light.direction),
+            format!("{:?}", raw.direction),
             "a non-zero vector (the direction light travels)",
         ));
     }
-    let light_direction = dir_raw / len;
+    Ok((dir_raw / len, dir_raw))
+}
 
-    // Scene: bounds, geometry, and the bounds defaulting to the geometry's.
-    let (scene, geometry) = scene(&raw.scene, v, base_dir, world_offset, &moved)?;
-
-    // Shadow.
-    let mut s = raw.shadow;
-    let light_update = s.light_update.take();
-    let written = Written {
+/// Which `[shadow]` keys the file writes (a preset's defaults fill the others).
+fn written(s: &super::schema::RawShadow) -> Written {
+    Written {
         max_distance: s.max_distance.is_some(),
         cascades: s.cascades.is_some(),
         resolution: s.resolution.is_some(),
@@ -152,7 +229,18 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         fit: s.fit.is_some(),
         snap: s.snap.is_some(),
         fit_depth_to_scene: s.fit_depth_to_scene.is_some(),
-    };
+    }
+}
+
+/// `[shadow]`: distance, count, λ or fractions, map size, fit, snapping, depth fitting,
+/// precision, and the ground-truth settings ([`truth_settings`]), checked in the order they
+/// are listed in the file's documentation. `far` is the camera's (the default shadow distance).
+fn shadow_settings(
+    s: &super::schema::RawShadow,
+    v: &Validator<'_>,
+    far: f64,
+    has_geometry: bool,
+) -> Result<(ShadowSettings, crate::config::TruthSettings)> {
     let max_distance = match s.max_distance {
         Some(d) => {
             let d = v.finite("shadow.max_distance", d)?;
@@ -188,7 +276,42 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             )
         })?,
     };
-    let s_preset = s.preset;
+    let truth = truth_settings(s, v)?;
+    let shadow = ShadowSettings {
+        params: ShadowParams {
+            max_distance,
+            cascades,
+            lambda,
+            splits,
+            resolution,
+            fit: match &s.fit {
+                Some(f) => v.one_of("shadow.fit", f, &[("sphere", Fit::Sphere), ("aabb", Fit::Aabb)])?,
+                None => Fit::Sphere,
+            },
+            snap: s.snap.unwrap_or(true),
+            fit_depth_to_scene: s.fit_depth_to_scene.unwrap_or(true),
+            fit_depth_to_visible: match s.fit_depth_to_visible {
+                Some(true) if !has_geometry => {
+                    return Err(v.invalid(
+                        "shadow.fit_depth_to_visible",
+                        true,
+                        "false without scene geometry: add scene.ground, [[scene.box]] or scene.gltf \
+                         (the bounds alone show no visible depth)",
+                    ))
+                }
+                f => f.unwrap_or(false),
+            },
+            precision,
+            snap_space,
+        },
+        preset: None,
+    };
+    Ok((shadow, truth))
+}
+
+/// `[shadow]`'s ground-truth settings: the bias keys, the depth format and the PCF kernel
+/// (`enabled` is `analysis.ground_truth`'s, set later).
+fn truth_settings(s: &super::schema::RawShadow, v: &Validator<'_>) -> Result<crate::config::TruthSettings> {
     let bias_key = |key: &str, x: Option<f64>, allowed: &str| -> Result<Option<f64>> {
         match x {
             Some(b) if !(b.is_finite() && (0.0..=MAX_WORLD).contains(&b)) => Err(v.invalid(key, b, allowed)),
@@ -256,140 +379,24 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         }
         truth.pcf = k as u32;
     }
-    let shadow = ShadowSettings {
-        params: ShadowParams {
-            max_distance,
-            cascades,
-            lambda,
-            splits,
-            resolution,
-            fit: match &s.fit {
-                Some(f) => v.one_of("shadow.fit", f, &[("sphere", Fit::Sphere), ("aabb", Fit::Aabb)])?,
-                None => Fit::Sphere,
-            },
-            snap: s.snap.unwrap_or(true),
-            fit_depth_to_scene: s.fit_depth_to_scene.unwrap_or(true),
-            fit_depth_to_visible: match s.fit_depth_to_visible {
-                Some(true) if geometry.is_none() => {
-                    return Err(v.invalid(
-                        "shadow.fit_depth_to_visible",
-                        true,
-                        "false without scene geometry: add scene.ground, [[scene.box]] or scene.gltf \
-                         (the bounds alone show no visible depth)",
-                    ))
-                }
-                f => f.unwrap_or(false),
-            },
-            precision,
-            snap_space,
-        },
-        preset: None,
-    };
-    let camera = CameraSettings {
-        position,
-        target,
-        up,
-        fov_y_deg: fov,
-        near,
-        far,
-    };
+    Ok(truth)
+}
 
-    // Motion.
-    let mut m = raw.motion;
-    let m_light = super::schema::RawMotion {
-        light_path: m.light_path.take(),
-        sun_azimuth_step_deg: m.sun_azimuth_step_deg,
-        sun_elevation_step_deg: m.sun_elevation_step_deg,
-        light_file: m.light_file.take(),
-        ..Default::default()
-    };
+/// `[motion]`'s camera path: the path or paths, their steps and frame count (the light's
+/// motion is read apart, [`super::light_motion::parse`]).
+fn camera_motion(
+    m: super::schema::RawMotion,
+    v: &Validator<'_>,
+    base_dir: Option<&Path>,
+    world_offset: DVec3,
+) -> Result<MotionSettings> {
     let frames = v.int_range("motion.frames", m.frames.unwrap_or(240), 2, 1_000_000)? as usize;
     let step_as_written = v.finite("motion.step", m.step.unwrap_or(0.05))?;
     let file = m.file;
-    let parse_path = |name: &str, step_as_written: f64, key: &str| -> Result<(MotionPath, f64)> {
-        if name != "file" {
-            if let Some(file) = &file {
-                return Err(v.invalid(
-                    "motion.file",
-                    format!("{file:?}"),
-                    &format!(
-                        "motion.file only together with motion.path = \"file\" (motion.path is {name:?}); \
-                         set motion.path = \"file\" or remove motion.file"
-                    ),
-                ));
-            }
-            if step_as_written == 0.0 && name != "still" {
-                return Err(v.invalid(
-                    if key == "motion.paths" {
-                        "motion.steps"
-                    } else {
-                        "motion.step"
-                    },
-                    step_as_written,
-                    "a non-zero step (world units or degrees per frame); a zero step does not move the camera",
-                ));
-            }
-        }
-        Ok(match name {
-            name if MotionPath::generated(name).is_some() => {
-                let path = MotionPath::generated(name).expect("just matched");
-                let step = path.step_from_written(step_as_written);
-                (path, step)
-            }
-            "file" => {
-                let file = file.clone().ok_or_else(|| {
-                    v.invalid(
-                        "motion.file",
-                        "(missing)",
-                        "a CSV file with columns px,py,pz,tx,ty,tz when motion.path = \"file\"",
-                    )
-                })?;
-                let p = PathBuf::from(&file);
-                let p = match base_dir {
-                    Some(dir) if p.is_relative() => dir.join(p),
-                    _ => p,
-                };
-                let poses = super::read_path_file(&p)?
-                    .into_iter()
-                    .map(|(position, target)| (position + world_offset, target + world_offset))
-                    .collect();
-                (MotionPath::File { path: p, poses }, 0.0)
-            }
-            other => {
-                return Err(v.invalid(
-                    key,
-                    format!("{other:?}"),
-                    &format!("one of {}", MotionPath::names_quoted()),
-                ))
-            }
-        })
+    let parse_path = |name: &str, step_as_written: f64, key: &str| {
+        motion_path(v, name, step_as_written, key, file.as_deref(), base_dir, world_offset)
     };
-    let names: Vec<String> = match (m.path, m.paths) {
-        (Some(_), Some(_)) => {
-            return Err(v.invalid(
-                "motion.paths",
-                "(with motion.path)",
-                "either `path = \"NAME\"` or `paths = [\"NAME\", ...]`, not both",
-            ))
-        }
-        (Some(p), None) => vec![p],
-        (None, Some(list)) => {
-            if list.is_empty() || list.len() > 8 {
-                return Err(v.invalid(
-                    "motion.paths",
-                    format!("{} entries", list.len()),
-                    "a list of 1 to 8 path names",
-                ));
-            }
-            for (i, a) in list.iter().enumerate() {
-                if list[..i].contains(a) {
-                    return Err(v.invalid("motion.paths", format!("{a:?} twice"), "each path at most once"));
-                }
-            }
-            list
-        }
-        (None, None) => vec!["strafe".to_string()],
-    };
+    let names = path_names(v, m.path, m.paths)?;
     let steps: Vec<f64> = match m.steps {
         None => vec![step_as_written; names.len()],
         Some(list) if list.len() == names.len() => list
@@ -448,11 +455,125 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         }
     }
 
-    let light = super::light_motion::parse(&m_light, light_update.as_ref(), v, base_dir, light_direction, frames)?;
+    Ok(MotionSettings {
+        path,
+        frames,
+        step,
+        step_as_written,
+        extra,
+        light: Default::default(),
+    })
+}
 
-    let a = raw.analysis;
+/// `motion.path` or `motion.paths`: the names of the camera paths (`strafe` by default).
+fn path_names(v: &Validator<'_>, path: Option<String>, paths: Option<Vec<String>>) -> Result<Vec<String>> {
+    Ok(match (path, paths) {
+        (Some(_), Some(_)) => {
+            return Err(v.invalid(
+                "motion.paths",
+                "(with motion.path)",
+                "either `path = \"NAME\"` or `paths = [\"NAME\", ...]`, not both",
+            ))
+        }
+        (Some(p), None) => vec![p],
+        (None, Some(list)) => {
+            if list.is_empty() || list.len() > 8 {
+                return Err(v.invalid(
+                    "motion.paths",
+                    format!("{} entries", list.len()),
+                    "a list of 1 to 8 path names",
+                ));
+            }
+            for (i, a) in list.iter().enumerate() {
+                if list[..i].contains(a) {
+                    return Err(v.invalid("motion.paths", format!("{a:?} twice"), "each path at most once"));
+                }
+            }
+            list
+        }
+        (None, None) => vec!["strafe".to_string()],
+    })
+}
+
+/// One camera path by name, its step per frame as written and the key it came from: the path
+/// and its step in the path's own unit (a `file` path reads its poses, moved by the world
+/// offset).
+fn motion_path(
+    v: &Validator<'_>,
+    name: &str,
+    step_as_written: f64,
+    key: &str,
+    file: Option<&str>,
+    base_dir: Option<&Path>,
+    world_offset: DVec3,
+) -> Result<(MotionPath, f64)> {
+    if name != "file" {
+        if let Some(file) = &file {
+            return Err(v.invalid(
+                "motion.file",
+                format!("{file:?}"),
+                &format!(
+                    "motion.file only together with motion.path = \"file\" (motion.path is {name:?}); \
+                     set motion.path = \"file\" or remove motion.file"
+                ),
+            ));
+        }
+        if step_as_written == 0.0 && name != "still" {
+            return Err(v.invalid(
+                if key == "motion.paths" {
+                    "motion.steps"
+                } else {
+                    "motion.step"
+                },
+                step_as_written,
+                "a non-zero step (world units or degrees per frame); a zero step does not move the camera",
+            ));
+        }
+    }
+    Ok(match name {
+        name if MotionPath::generated(name).is_some() => {
+            let path = MotionPath::generated(name).expect("just matched");
+            let step = path.step_from_written(step_as_written);
+            (path, step)
+        }
+        "file" => {
+            let file = file.ok_or_else(|| {
+                v.invalid(
+                    "motion.file",
+                    "(missing)",
+                    "a CSV file with columns px,py,pz,tx,ty,tz when motion.path = \"file\"",
+                )
+            })?;
+            let p = PathBuf::from(file);
+            let p = match base_dir {
+                Some(dir) if p.is_relative() => dir.join(p),
+                _ => p,
+            };
+            let poses = super::read_path_file(&p)?
+                .into_iter()
+                .map(|(position, target)| (position + world_offset, target + world_offset))
+                .collect();
+            (MotionPath::File { path: p, poses }, 0.0)
+        }
+        other => {
+            return Err(v.invalid(
+                key,
+                format!("{other:?}"),
+                &format!("one of {}", MotionPath::names_quoted()),
+            ))
+        }
+    })
+}
+
+/// `analysis.ground_truth`, refused without geometry or under a moving light.
+fn ground_truth(
+    a: &super::schema::RawAnalysis,
+    v: &Validator<'_>,
+    has_geometry: bool,
+    light: &csm_core::light_motion::LightMotion,
+) -> Result<Option<bool>> {
     if let Some(on) = a.ground_truth {
-        if on && geometry.is_none() {
+        if on && !has_geometry {
             return Err(v.invalid(
                 "analysis.ground_truth",
                 true,
@@ -466,9 +587,13 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
                 "false while motion.light_path moves the light: the ground-truth pass samples the maps under one still light",
             ));
         }
-        truth.enabled = on;
     }
-    let analysis = AnalysisSettings {
+    Ok(a.ground_truth)
+}
+
+/// `[analysis]`: sample counts and the screen scale.
+fn analysis_settings(a: &super::schema::RawAnalysis, v: &Validator<'_>) -> Result<AnalysisSettings> {
+    Ok(AnalysisSettings {
         density_samples: v.int_range(
             "analysis.density_samples",
             a.density_samples.unwrap_or(512),
@@ -486,45 +611,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             }
             x => x,
         },
-    };
-
-    let sweep = raw
-        .sweep
-        .map(|s| super::sweep_spec::validate_raw(s, v, geometry.is_some()))
-        .transpose()?;
-
-    let config = Config {
-        name: "config".to_string(),
-        path: None,
-        camera,
-        screen: Screen { width, height },
-        light_direction,
-        light_direction_as_written: dir_raw,
-        scene,
-        geometry,
-        world_offset,
-        shadow,
-        motion: MotionSettings {
-            path,
-            frames,
-            step,
-            step_as_written,
-            extra,
-            light,
-        },
-        analysis,
-        sweep,
-        preset_input: PresetInput {
-            preset: s_preset,
-            written,
-            ..PresetInput::default()
-        },
-        truth,
-    };
-    check_camera_path(&config, v)?;
-    // The binary32 range check needs the cascades, which an engine preset may change: it runs
-    // once the preset is applied (`crate::load`).
-    Ok(config)
+    })
 }
 
 /// Every pose of the motion path must be a valid camera (pitching through the up vector, or a
@@ -596,8 +683,9 @@ fn scene(
         let lo = moved("scene.box.min", b.min)?;
         let hi = moved("scene.box.max", b.max)?;
         if lo.cmpgt(hi).any() {
-            return Err(v.invalid(
+            return Err(v.invalid_found(
                 "scene.box.max",
+                &format!("scene.box[{i}].max"),
                 format!("{:?} (box {})", b.max, i + 1),
                 &format!("each component >= that box's min {:?}", b.min),
             ));

@@ -35,7 +35,13 @@ fn table_error(v: &Validator<'_>, table: &str, allowed: String) -> Error {
         key: format!("[{table}]"),
         value: "(engine table)".to_string(),
         allowed,
+        excerpt: header_excerpt(v.text, table),
     })
+}
+
+/// The excerpt under a table's name in its header (or under the key of an inline table).
+fn header_excerpt(text: &str, table: &str) -> String {
+    crate::config::locate(text, table).map_or_else(String::new, |p| crate::config::excerpt(text, p.key))
 }
 
 /// A top-level table that is neither csm-lab's nor an engine's.
@@ -54,6 +60,7 @@ fn unknown_table(v: &Validator<'_>, name: &str) -> Error {
         line,
         column,
         message: format!("unknown field `{name}`, expected one of {}", expected.join(", ")),
+        excerpt: header_excerpt(v.text, name),
     })
 }
 

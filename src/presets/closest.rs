@@ -164,11 +164,11 @@ mod tests {
 
     #[test]
     fn unreal_exponent_fit_recovers_the_exponent_that_made_the_splits() {
-        let k = unreal::UnrealKnobs {
+        let k = engines::unreal::UnrealKnobs {
             cascade_distribution_exponent: 2.2,
             transition_fraction: 0.1,
         };
-        let lay = <unreal::Unreal as Engine>::layout(&k, 4, 150.0, 0.1, 1000.0);
+        let lay = <engines::unreal::Unreal as Engine>::layout(&k, 4, 150.0, 0.1, 1000.0);
         // csm-lab's ends taken as the fitted far ends of Unreal at exponent 2.2.
         let mut ends = vec![0.1];
         ends.extend(lay.fitted[..3].iter().map(|s| s.1));
@@ -179,11 +179,11 @@ mod tests {
             near: 0.1,
             far: 1000.0,
         };
-        let mut fitted = unreal::UnrealKnobs {
+        let mut fitted = engines::unreal::UnrealKnobs {
             cascade_distribution_exponent: 3.0,
             ..k
         };
-        <unreal::Unreal as Engine>::match_ends(&mut fitted, &t);
+        <engines::unreal::Unreal as Engine>::match_ends(&mut fitted, &t);
         assert!((fitted.cascade_distribution_exponent - 2.2).abs() < 1e-7, "{fitted:?}");
     }
 

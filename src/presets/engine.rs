@@ -12,7 +12,10 @@ use csm_core::fitting::Sphere;
 use csm_core::geometry::{Aabb, Lens, LightBasis};
 use csm_core::snapping::{SnapMode, SnapRule};
 
+use super::bias::BiasModel;
+use super::free_splits::{FreeSplitKnob, FreeSplits, Planes, Setting};
 use super::{fit_split_knob, Dims, Fields, Knobs, Layout, Target, Terms, Values};
+use csm_core::free_splits::FractionSpace;
 
 /// Which cascade counts a preset takes.
 #[derive(Debug, Clone, PartialEq)]
@@ -214,6 +217,14 @@ pub trait Engine: Sync + 'static {
     /// The light depth rule in words.
     fn light_depth_rule(k: &Self::Knobs) -> String;
 
+    /// The engine's default shadow bias as the ground truth models it, or why it models none
+    /// (no default: an engine must answer).
+    fn bias() -> BiasModel;
+
+    /// How the engine holds its split positions as free fractions (`sweep --optimize-splits`);
+    /// None (the default) when its splits are not free fractions.
+    const FREE_SPLITS: Option<FreeSplits<Self::Knobs>> = None;
+
     /// How the engine writes a setting in its own configuration language
     /// (`recommendation.<engine>.txt`; [`super::terms`]).
     const TERMS: Terms;
@@ -267,6 +278,19 @@ pub trait DynEngine: Sync {
     fn split_rule(&self, k: &Knobs) -> String;
     fn snap_anchor(&self, k: &Knobs) -> &'static str;
     fn light_depth_rule(&self, k: &Knobs) -> String;
+    fn bias(&self) -> BiasModel;
+    fn has_free_splits(&self) -> bool;
+    /// The knob holding the fractions of `cascades` (at least 2) cascades.
+    fn free_split_knob(&self, cascades: usize) -> Option<FreeSplitKnob>;
+    fn fraction_space(&self, k: &Knobs, p: Planes) -> Option<FractionSpace>;
+    fn configured_fractions(&self, k: &Knobs, cascades: usize, p: Planes) -> Option<Vec<f64>>;
+    /// The knob's values for `fractions` (the fractions themselves when the splits are not free).
+    fn fraction_values(&self, k: &Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Vec<f64>;
+    fn set_fraction_values(&self, k: &mut Knobs, cascades: usize, values: Vec<f64>);
+    fn fractions_setting(&self, k: &Knobs, s: &Setting<'_>) -> Option<String>;
+    /// [`FreeSplits::paste_prefix`] and [`FreeSplits::scalar_when_one`].
+    fn paste_form(&self) -> Option<(&'static str, bool)>;
+    fn fit_fractions_to_count(&self, k: &mut Knobs, cascades: usize);
     fn terms(&self) -> &'static Terms;
     fn terms_values(&self, k: &Knobs, d: &Dims, near: f64, far: f64) -> Values;
     fn read_terms(&self, f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(Knobs, Dims)>;
@@ -379,6 +403,53 @@ impl<E: KnobsOf> DynEngine for E {
 
     fn light_depth_rule(&self, k: &Knobs) -> String {
         E::light_depth_rule(own::<E>(k))
+    }
+
+    fn bias(&self) -> BiasModel {
+        E::bias()
+    }
+
+    fn has_free_splits(&self) -> bool {
+        E::FREE_SPLITS.is_some()
+    }
+
+    fn free_split_knob(&self, cascades: usize) -> Option<FreeSplitKnob> {
+        E::FREE_SPLITS.map(|f| (f.knob)(cascades))
+    }
+
+    fn fraction_space(&self, k: &Knobs, p: Planes) -> Option<FractionSpace> {
+        E::FREE_SPLITS.map(|f| (f.space)(own::<E>(k), p))
+    }
+
+    fn configured_fractions(&self, k: &Knobs, cascades: usize, p: Planes) -> Option<Vec<f64>> {
+        E::FREE_SPLITS.map(|f| (f.configured)(own::<E>(k), cascades, p))
+    }
+
+    fn fraction_values(&self, k: &Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Vec<f64> {
+        match E::FREE_SPLITS {
+            Some(f) => (f.values)(own::<E>(k), cascades, max_distance, fractions),
+            None => fractions.to_vec(),
+        }
+    }
+
+    fn set_fraction_values(&self, k: &mut Knobs, cascades: usize, values: Vec<f64>) {
+        if let (Some(f), Some(k)) = (E::FREE_SPLITS, E::get_mut(k)) {
+            (f.set)(k, cascades, values);
+        }
+    }
+
+    fn fractions_setting(&self, k: &Knobs, s: &Setting<'_>) -> Option<String> {
+        E::FREE_SPLITS.map(|f| (f.setting)(own::<E>(k), s))
+    }
+
+    fn paste_form(&self) -> Option<(&'static str, bool)> {
+        E::FREE_SPLITS.map(|f| (f.paste_prefix, f.scalar_when_one))
+    }
+
+    fn fit_fractions_to_count(&self, k: &mut Knobs, cascades: usize) {
+        if let (Some(f), Some(k)) = (E::FREE_SPLITS, E::get_mut(k)) {
+            (f.fit_count)(k, cascades);
+        }
     }
 
     fn terms(&self) -> &'static Terms {

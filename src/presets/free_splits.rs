@@ -1,5 +1,7 @@
-//! Presets whose splits are free fractions (`sweep --optimize-splits`): which engines, which
-//! knob holds the fractions for a cascade count, what they are fractions of, and setting them.
+//! Presets whose splits are free fractions (`sweep --optimize-splits`): which knob holds the
+//! fractions for a cascade count, what they are fractions of, and setting them. Each engine
+//! whose splits are free says so in its own file ([`super::Engine::FREE_SPLITS`], a [`FreeSplits`]);
+//! the functions here ask the preset's engine.
 //!
 //! Free: Unity and URP (a split knob per count, fractions of the shadow distance), Godot
 //! (`split_1..3`, fractions of [near, max distance]) and Filament (`cascadeSplitPositions`,
@@ -12,21 +14,112 @@ use crate::config::Config;
 use crate::error::Result;
 use csm_core::free_splits::{valid, FractionSpace};
 
-use super::filament::FilamentSplit;
-use super::*;
+use super::{Knobs, PresetName};
 
-/// The engines whose split positions are free fractions.
-pub const FREE_SPLIT_ENGINES: [PresetName; 5] = [
-    PresetName::Unity,
-    PresetName::UnityUrp,
-    PresetName::Godot,
-    PresetName::Filament,
-    PresetName::Bevy,
-];
+/// How an engine holds free split fractions: given by the engine's file as
+/// [`super::Engine::FREE_SPLITS`]; every part must be given.
+pub struct FreeSplits<K> {
+    /// The knob that holds the fractions of `cascades` (at least 2) cascades.
+    pub knob: fn(cascades: usize) -> FreeSplitKnob,
+    /// What the fractions are fractions of, for the camera planes and the shadow distance
+    /// (checked to be a non-empty range with a positive start by the caller).
+    pub space: fn(k: &K, p: Planes) -> FractionSpace,
+    /// The fractions the knob holds now for `cascades` cascades.
+    pub configured: fn(k: &K, cascades: usize, p: Planes) -> Vec<f64>,
+    /// The knob's values for `fractions` of `cascades` cascades ([`as_given`] when it holds the
+    /// fractions themselves).
+    pub values: fn(k: &K, cascades: usize, max_distance: f64, fractions: &[f64]) -> Vec<f64>,
+    /// Stores the knob's values (as [`FreeSplits::values`] gives them).
+    pub set: fn(k: &mut K, cascades: usize, values: Vec<f64>),
+    /// The setting in the engine's own terms, from the knob's values and the fractions.
+    pub setting: fn(k: &K, s: &Setting<'_>) -> String,
+    /// Lines the engine's table needs before the knob in pasted config lines (Filament's
+    /// split mode); usually empty.
+    pub paste_prefix: &'static str,
+    /// Whether a single value is pasted as a number (else always as a list).
+    pub scalar_when_one: bool,
+    /// Drops configured values that do not fit `cascades` cascades (a sweep point with another
+    /// count); [`keep`] when the knob holds one value per count.
+    pub fit_count: fn(k: &mut K, cascades: usize),
+}
+
+/// The camera planes and the shadow distance a fraction space is taken from.
+#[derive(Debug, Clone, Copy)]
+pub struct Planes {
+    pub near: f64,
+    pub far: f64,
+    pub max_distance: f64,
+}
+
+/// What an engine writes its split setting from.
+pub struct Setting<'a> {
+    pub knob: &'a FreeSplitKnob,
+    pub cascades: usize,
+    pub max_distance: f64,
+    /// The knob's values ([`FreeSplits::values`]).
+    pub values: &'a [f64],
+    /// The fractions.
+    pub fractions: &'a [f64],
+}
+
+/// [`FreeSplits::values`] for a knob that holds the fractions themselves.
+pub(crate) fn as_given<K>(_: &K, _: usize, _: f64, fractions: &[f64]) -> Vec<f64> {
+    fractions.to_vec()
+}
+
+/// [`FreeSplits::fit_count`] for a knob that needs no change with the count.
+pub(crate) fn keep<K>(_: &mut K, _: usize) {}
+
+/// [`FreeSplits::values`] of a knob holding three fractions whatever the count (Godot's
+/// splits, Filament's positions): the fractions, followed by the configured entries after them
+/// when those still increase, else by entries spread evenly between the last fraction and 1
+/// (the engine reads only the first ones).
+pub(crate) fn padded_to_three(configured: [f64; 3], cascades: usize, fractions: &[f64]) -> Vec<f64> {
+    let mut out = fractions.to_vec();
+    let tail = &configured[cascades - 1..];
+    let last = fractions.last().copied().unwrap_or(0.0);
+    if tail.first().is_none_or(|&t| t > last) {
+        out.extend_from_slice(tail);
+    } else {
+        let n = tail.len();
+        out.extend((1..=n).map(|i| last + (1.0 - last) * i as f64 / (n + 1) as f64));
+    }
+    out
+}
+
+/// What Unity's and URP's split knobs hold.
+pub(crate) const OF_SHADOW_DISTANCE: &str = "fractions of the shadow distance";
+
+/// [`FreeSplits::space`] of fractions of the shadow distance (Unity, URP): from 0 to the
+/// shadow distance (at most the far plane), the first cascade starting at the near plane.
+pub(crate) fn shadow_distance_space<K>(_: &K, p: Planes) -> FractionSpace {
+    FractionSpace {
+        lo: 0.0,
+        hi: p.far.min(p.max_distance),
+        start: p.near,
+    }
+}
+
+/// [`FreeSplits::setting`] of Unity's and URP's split knobs: a float, a `Vector2` or a
+/// `Vector3` by the number of values.
+pub(crate) fn unity_vector_setting<K>(_: &K, s: &Setting<'_>) -> String {
+    let floats = |v: &[f64]| v.iter().map(|x| format!("{x}f")).collect::<Vec<_>>().join(", ");
+    let term = s.knob.term;
+    match s.values.len() {
+        1 => format!("{term} = {}f", s.values[0]),
+        2 => format!("{term} = new Vector2({})", floats(s.values)),
+        _ => format!("{term} = new Vector3({})", floats(s.values)),
+    }
+}
+
+/// The engines whose split positions are free fractions, in registry order.
+pub(crate) fn free_split_engines() -> Vec<PresetName> {
+    PresetName::ALL.into_iter().filter(|p| has_free_splits(*p)).collect()
+}
 
 /// Whether the engine's splits are free fractions.
 pub fn has_free_splits(name: PresetName) -> bool {
-    FREE_SPLIT_ENGINES.contains(&name)
+    name.engine().has_free_splits()
 }
 
 /// The engine knob that holds the split fractions for one cascade count.
@@ -43,121 +136,31 @@ pub struct FreeSplitKnob {
 /// The knob holding the fractions of `cascades` cascades; None with one cascade (no split) or
 /// an engine whose splits are not free.
 pub fn free_split_knob(knobs: &Knobs, cascades: usize) -> Option<FreeSplitKnob> {
-    let (key, term, of) = match (knobs.name(), cascades) {
-        (_, 0 | 1) => return None,
-        (PresetName::Unity, 2) => (
-            "unity.cascade2_split",
-            "QualitySettings.shadowCascade2Split",
-            "fractions of the shadow distance",
-        ),
-        (PresetName::Unity, _) => (
-            "unity.cascade4_split",
-            "QualitySettings.shadowCascade4Split",
-            "fractions of the shadow distance",
-        ),
-        (PresetName::UnityUrp, 2) => (
-            "unity-urp.cascade2_split",
-            "UniversalRenderPipelineAsset.cascade2Split",
-            "fractions of the shadow distance",
-        ),
-        (PresetName::UnityUrp, 3) => (
-            "unity-urp.cascade3_split",
-            "UniversalRenderPipelineAsset.cascade3Split",
-            "fractions of the shadow distance",
-        ),
-        (PresetName::UnityUrp, _) => (
-            "unity-urp.cascade4_split",
-            "UniversalRenderPipelineAsset.cascade4Split",
-            "fractions of the shadow distance",
-        ),
-        (PresetName::Godot, _) => (
-            "godot.splits",
-            "DirectionalLight3D.directional_shadow_split_1..3",
-            "fractions of [near, max distance]",
-        ),
-        (PresetName::Filament, _) => (
-            "filament.split_positions",
-            "ShadowOptions.cascadeSplitPositions",
-            "fractions of [near, shadowFar]",
-        ),
-        (PresetName::Bevy, _) => (
-            "bevy.bounds",
-            "CascadeShadowConfig.bounds",
-            "far bounds as fractions of the maximum distance",
-        ),
-        _ => return None,
-    };
-    Some(FreeSplitKnob { key, term, of })
+    if cascades < 2 {
+        return None;
+    }
+    knobs.engine().free_split_knob(cascades)
 }
 
 /// What a preset's split fractions are fractions of, for the config's count and distance.
 pub fn preset_fraction_space(config: &Config, knobs: &Knobs) -> Option<FractionSpace> {
-    let (near, far, dist) = (config.camera.near, config.camera.far, config.shadow.max_distance);
-    match knobs.name() {
-        PresetName::Unity | PresetName::UnityUrp => Some(FractionSpace {
-            lo: 0.0,
-            hi: far.min(dist),
-            start: near,
-        }),
-        PresetName::Godot => {
-            let max_d = far.min(dist).max(near + 0.001);
-            let min_d = near.min(max_d);
-            Some(FractionSpace {
-                lo: min_d,
-                hi: max_d,
-                start: min_d,
-            })
-        }
-        PresetName::Filament => Some(FractionSpace {
-            lo: near,
-            hi: dist,
-            start: near,
-        }),
-        PresetName::Bevy => {
-            let min = match knobs {
-                Knobs::Bevy(k) => k.minimum_distance,
-                _ => 0.0,
-            };
-            Some(FractionSpace {
-                lo: 0.0,
-                hi: dist,
-                start: min.max(near),
-            })
-        }
-        _ => None,
-    }
-    .filter(|s| s.start > 0.0 && s.hi > s.start)
+    knobs
+        .engine()
+        .fraction_space(knobs, planes(config))
+        .filter(|s| s.start > 0.0 && s.hi > s.start)
 }
 
-/// The value the knob holds for `fractions` of `cascades` cascades: the fractions themselves
-/// (Bevy: times the maximum distance),
-/// or (Godot's three splits, Filament's three positions, with fewer cascades) the fractions
-/// followed by the configured entries after them when those still increase, else by entries
-/// spread evenly between the last fraction and 1 (the engine reads only the first ones).
-pub fn knob_values(knobs: &Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Vec<f64> {
-    if knobs.name() == PresetName::Bevy {
-        // Bevy's bounds are distances.
-        return fractions.iter().map(|p| p * max_distance).collect();
+fn planes(config: &Config) -> Planes {
+    Planes {
+        near: config.camera.near,
+        far: config.camera.far,
+        max_distance: config.shadow.max_distance,
     }
-    let configured: Option<[f64; 3]> = match knobs {
-        Knobs::Godot(k) => Some(k.splits),
-        Knobs::Filament(k) => Some(k.split_positions),
-        _ => None,
-    };
-    let Some(conf) = configured else {
-        return fractions.to_vec();
-    };
-    let used = cascades - 1;
-    let mut out = fractions.to_vec();
-    let tail = &conf[used..];
-    let last = fractions.last().copied().unwrap_or(0.0);
-    if tail.first().is_none_or(|&t| t > last) {
-        out.extend_from_slice(tail);
-    } else {
-        let n = tail.len();
-        out.extend((1..=n).map(|i| last + (1.0 - last) * i as f64 / (n + 1) as f64));
-    }
-    out
+}
+
+/// The value the knob holds for `fractions` of `cascades` cascades ([`FreeSplits::values`]).
+fn knob_values(knobs: &Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Vec<f64> {
+    knobs.engine().fraction_values(knobs, cascades, max_distance, fractions)
 }
 
 /// Sets a preset's split fractions for its configured count (and, for Filament, its split mode
@@ -180,21 +183,7 @@ pub fn set_fractions(knobs: &mut Knobs, cascades: usize, max_distance: f64, frac
         .into());
     }
     let v = knob_values(knobs, cascades, max_distance, fractions);
-    let arr = |i: usize| v[i];
-    match knobs {
-        Knobs::Unity(k) if cascades == 2 => k.cascade2_split = v[0],
-        Knobs::Unity(k) => k.cascade4_split = [arr(0), arr(1), arr(2)],
-        Knobs::UnityUrp(k) if cascades == 2 => k.cascade2_split = v[0],
-        Knobs::UnityUrp(k) if cascades == 3 => k.cascade3_split = [arr(0), arr(1)],
-        Knobs::UnityUrp(k) => k.cascade4_split = [arr(0), arr(1), arr(2)],
-        Knobs::Godot(k) => k.splits = [arr(0), arr(1), arr(2)],
-        Knobs::Filament(k) => {
-            k.split_mode = FilamentSplit::Positions;
-            k.split_positions = [arr(0), arr(1), arr(2)];
-        }
-        Knobs::Bevy(k) => k.bounds = Some(v),
-        _ => unreachable!("free_split_knob is None for other engines"),
-    }
+    knobs.engine().set_fraction_values(knobs, cascades, v);
     Ok(())
 }
 
@@ -202,44 +191,22 @@ pub fn set_fractions(knobs: &mut Knobs, cascades: usize, max_distance: f64, frac
 /// `[near, shadowFar]`); None when its splits are not free.
 pub fn configured_fractions(config: &Config, knobs: &Knobs, cascades: usize) -> Option<Vec<f64>> {
     free_split_knob(knobs, cascades)?;
-    let used = cascades - 1;
-    Some(match knobs {
-        Knobs::Unity(k) if cascades == 2 => vec![k.cascade2_split],
-        Knobs::Unity(k) => k.cascade4_split.to_vec(),
-        Knobs::UnityUrp(k) if cascades == 2 => vec![k.cascade2_split],
-        Knobs::UnityUrp(k) if cascades == 3 => k.cascade3_split.to_vec(),
-        Knobs::UnityUrp(k) => k.cascade4_split.to_vec(),
-        Knobs::Godot(k) => k.splits[..used].to_vec(),
-        Knobs::Filament(k) => filament::filament_positions(k, cascades, config.camera.near, config.shadow.max_distance),
-        Knobs::Bevy(k) => {
-            let max = config.shadow.max_distance;
-            let fars = match k.bounds.as_ref().filter(|b| b.len() + 1 == cascades) {
-                Some(b) => b.clone(),
-                None => bevy::bevy_far_bounds(cascades, k.first_cascade_far_bound, max)[..used].to_vec(),
-            };
-            fars.iter().map(|d| d / max).collect()
-        }
-        _ => return None,
-    })
+    knobs.engine().configured_fractions(knobs, cascades, planes(config))
 }
 
 /// The lines to paste into the config file (the engine's table) to use `fractions`.
 pub fn paste_lines(knobs: &Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Option<String> {
     let knob = free_split_knob(knobs, cascades)?;
+    let (prefix, scalar_when_one) = knobs.engine().paste_form()?;
     let values = knob_values(knobs, cascades, max_distance, fractions);
     let list = |v: &[f64]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(", ");
     let (table, key) = knob.key.split_once('.').expect("engine.key");
-    let value = if values.len() == 1 && knobs.name() != PresetName::Bevy {
+    let value = if values.len() == 1 && scalar_when_one {
         values[0].to_string()
     } else {
         format!("[{}]", list(&values))
     };
-    let mode = if knobs.name() == PresetName::Filament {
-        "split_mode = \"positions\"\n"
-    } else {
-        ""
-    };
-    Some(format!("[{table}]\n{mode}{key} = {value}"))
+    Some(format!("[{table}]\n{prefix}{key} = {value}"))
 }
 
 /// The setting in the engine's own terms (`QualitySettings.shadowCascade4Split = new
@@ -247,44 +214,19 @@ pub fn paste_lines(knobs: &Knobs, cascades: usize, max_distance: f64, fractions:
 pub fn engine_setting(knobs: &Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Option<String> {
     let knob = free_split_knob(knobs, cascades)?;
     let values = knob_values(knobs, cascades, max_distance, fractions);
-    let floats = |v: &[f64]| v.iter().map(|x| format!("{x}f")).collect::<Vec<_>>().join(", ");
-    Some(match knobs.name() {
-        PresetName::Unity | PresetName::UnityUrp => match values.len() {
-            1 => format!("{} = {}f", knob.term, values[0]),
-            2 => format!("{} = new Vector2({})", knob.term, floats(&values)),
-            _ => format!("{} = new Vector3({})", knob.term, floats(&values)),
-        },
-        PresetName::Godot => values
-            .iter()
-            .take(cascades - 1)
-            .enumerate()
-            .map(|(i, v)| format!("directional_shadow_split_{} = {v}", i + 1))
-            .collect::<Vec<_>>()
-            .join(", "),
-        PresetName::Filament => format!(
-            "ShadowOptions.cascadeSplitPositions = {{ {} }}",
-            fractions.iter().map(|x| format!("{x}f")).collect::<Vec<_>>().join(", ")
-        ),
-        PresetName::Bevy => {
-            let (min, overlap) = match knobs {
-                Knobs::Bevy(k) => (k.minimum_distance, k.overlap_proportion),
-                _ => (0.0, 0.0),
-            };
-            format!(
-                "CascadeShadowConfig {{ bounds: vec![{}, {max_distance}], overlap_proportion: {overlap}, minimum_distance: {min} }}",
-                values.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(", ")
-            )
-        }
-        _ => return None,
-    })
+    let s = Setting {
+        knob: &knob,
+        cascades,
+        max_distance,
+        values: &values,
+        fractions,
+    };
+    knobs.engine().fractions_setting(knobs, &s)
 }
 
-/// Drops explicit far bounds (`bevy.bounds`) that do not hold `cascades − 1` values: a sweep
-/// point with another count uses the engine's own split series.
+/// Drops configured split values that do not fit `cascades` cascades (`bevy.bounds` not
+/// holding `cascades − 1` values): a sweep point with another count uses the engine's own split
+/// series.
 pub fn drop_stale_bounds(knobs: &mut Knobs, cascades: usize) {
-    if let Knobs::Bevy(k) = knobs {
-        if k.bounds.as_ref().is_some_and(|b| b.len() + 1 != cascades) {
-            k.bounds = None;
-        }
-    }
+    knobs.engine().fit_fractions_to_count(knobs, cascades);
 }

@@ -16,6 +16,7 @@ mod apply;
 pub mod bias;
 mod closest;
 mod engine;
+pub mod engines;
 mod free_splits;
 mod report;
 mod rig;
@@ -23,112 +24,31 @@ mod shared;
 mod sweep;
 mod terms;
 
-pub use apply::*;
-pub use closest::*;
-pub use engine::*;
-pub use free_splits::*;
-pub use report::*;
-pub use rig::*;
-pub use shared::*;
-pub use sweep::*;
-pub use terms::*;
+pub use apply::{apply, PresetChoice};
+pub use closest::{complete_fractions, far_ends, fit_1d, fit_split_knob, log_misfit, Target};
+pub use engine::{snap, Counts, DynEngine, Engine, EngineScheme, Fitting, Knob, KnobContext, KnobsOf};
+pub use engines::{Knobs, PresetName, ENGINES};
+pub(crate) use free_splits::free_split_engines;
+pub use free_splits::{
+    configured_fractions, drop_stale_bounds, engine_setting, free_split_knob, has_free_splits, paste_lines,
+    preset_fraction_space, set_fractions, FreeSplitKnob, FreeSplits, Planes, Setting,
+};
+pub use report::{light_depth_description, light_depths, report, snap_description, split_rule, PresetReport};
+pub use rig::{light_basis_rule, rig, rig_for_layout};
+pub(crate) use shared::join;
+pub use shared::{
+    around, centre, check_range, clip_selection, distance_fractions, engine_table, fraction_splits, fractions,
+    half_extent_along, is_generic_note, layout, minimal_sphere_scheme, non_negative, ordered, point_or, positive, unit,
+    Layout,
+};
+pub use sweep::{
+    axes, check_point, preset_axes, set_cascades, set_distance, set_knob, set_lambda, set_resolution, Axes,
+};
+pub use terms::{apply_terms, engine_of, number, read, render, Dims, Field, Fields, Terms, Values};
 
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-
-/// Declares the engine modules and the registry: [`PresetName`], [`Knobs`] and [`ENGINES`] list
-/// them in this order (the order reports use).
-macro_rules! engines {
-    ($($module:ident :: $engine:ident),* $(,)?) => {
-        $(pub mod $module;)*
-
-        /// The implementations csm-lab reproduces.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-        pub enum PresetName {
-            $($engine,)*
-        }
-
-        const COUNT: usize = [$(stringify!($engine)),*].len();
-
-        impl PresetName {
-            pub const ALL: [PresetName; COUNT] = [$(PresetName::$engine),*];
-
-            /// The engine's rules.
-            pub fn engine(self) -> &'static dyn DynEngine {
-                ENGINES[self as usize]
-            }
-        }
-
-        /// Every engine, in [`PresetName`] order.
-        pub static ENGINES: [&dyn DynEngine; COUNT] = [$(&$module::$engine),*];
-
-        /// A preset's engine knobs, resolved (defaults applied, validated).
-        #[derive(Debug, Clone, PartialEq)]
-        pub enum Knobs {
-            $($engine(<$module::$engine as Engine>::Knobs),)*
-        }
-
-        impl Knobs {
-            pub fn name(&self) -> PresetName {
-                match self {
-                    $(Knobs::$engine(_) => PresetName::$engine,)*
-                }
-            }
-        }
-
-        impl Serialize for Knobs {
-            fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-                match self {
-                    $(Knobs::$engine(k) => s.serialize_newtype_variant(
-                        "Knobs",
-                        PresetName::$engine as u32,
-                        <$module::$engine as Engine>::NAME,
-                        k,
-                    ),)*
-                }
-            }
-        }
-
-        $(
-            impl KnobsOf for $module::$engine {
-                fn get(k: &Knobs) -> Option<&Self::Knobs> {
-                    match k {
-                        Knobs::$engine(x) => Some(x),
-                        #[allow(unreachable_patterns)]
-                        _ => None,
-                    }
-                }
-
-                fn get_mut(k: &mut Knobs) -> Option<&mut Self::Knobs> {
-                    match k {
-                        Knobs::$engine(x) => Some(x),
-                        #[allow(unreachable_patterns)]
-                        _ => None,
-                    }
-                }
-
-                fn wrap(k: Self::Knobs) -> Knobs {
-                    Knobs::$engine(k)
-                }
-            }
-        )*
-    };
-}
-
-engines! {
-    dart::Dart,
-    threejs::Threejs,
-    unity_sample::UnitySample,
-    eevee::Eevee,
-    learnopengl::LearnOpenGl,
-    bevy::Bevy,
-    godot::Godot,
-    unreal::Unreal,
-    unity::Unity,
-    unity_urp::UnityUrp,
-    filament::Filament,
-}
 
 // ---------------------------------------------------------------------------------------------
 // Names
@@ -327,7 +247,7 @@ mod tests {
             let lens = Lens::new(rng.range(0.1, 2.0), rng.range(0.3, 3.0));
             let n = rng.range(0.05, 50.0);
             let f = n * rng.range(1.01, 100.0);
-            let u = unreal::unreal_sphere(n, f, &lens);
+            let u = engines::unreal::unreal_sphere(n, f, &lens);
             let m = minimal_sphere(n, f, lens.k2());
             assert!((u.radius - m.radius).abs() <= 1e-9 * m.radius, "{u:?} {m:?}");
             assert!((u.centre_depth - m.centre_depth).abs() <= 1e-9 * f);

@@ -9,7 +9,7 @@ use csm_core::mesh::Mesh;
 use csm_core::truth::{self, Bias, BiasRule, Facing, NormalOffset, Receiver, Sampling};
 use csm_core::visibility::SceneGeometry;
 use csm_lab::analysis::ground_truth::GroundTruth;
-use csm_lab::presets::bias::engine_bias;
+use csm_lab::presets::bias::{engine_bias, BiasModel};
 use csm_lab::presets::PresetName;
 use csm_lab::{analyze, Analysis, AnalysisOptions, Config};
 use glam::{DVec2, DVec3};
@@ -158,6 +158,31 @@ fn unity_sample_clip_space_bias_is_half_of_it_in_normalised_depth() {
         close(b.depth, 0.005 / 2.0 * range, "depth");
         assert_eq!((b.facing, b.normal), (Facing::None, 0.0));
         close(own(PresetName::UnitySample, g, i, b.depth), 0.005, "own");
+    }
+}
+
+/// Every registered engine answers the bias question in its own file: a rule with a named
+/// setting, a unit and a finite positive scale, or a stated reason for modelling none (the trait
+/// has no default, so an engine file without an answer does not compile; this checks the answer
+/// is a real one, for every engine of the registry).
+#[test]
+fn every_engine_gives_a_bias_rule_or_a_reason() {
+    for p in PresetName::ALL {
+        match p.engine().bias() {
+            BiasModel::Rule(b) => {
+                assert!(!b.setting.trim().is_empty() && !b.unit.trim().is_empty(), "{p}: {b:?}");
+                assert!(b.scale.is_finite() && b.scale > 0.0, "{p}: scale {}", b.scale);
+                assert_eq!(engine_bias(p), Some(b), "{p}");
+            }
+            BiasModel::NotModelled(why) => {
+                assert!(why.split_whitespace().count() >= 6, "{p}: reason too short: {why:?}");
+                assert!(
+                    why.contains("[shadow]"),
+                    "{p}: the reason says what applies instead: {why:?}"
+                );
+                assert_eq!(engine_bias(p), None, "{p}");
+            }
+        }
     }
 }
 

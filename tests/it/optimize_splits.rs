@@ -324,7 +324,7 @@ fn bad_input_is_refused_naming_the_flag_key_and_preset() {
                 && stderr.contains("not free"),
             "{stderr}"
         );
-        assert!(stderr.contains("unity, unity-urp, godot, filament, bevy"), "{stderr}");
+        assert!(stderr.contains("bevy, godot, unity, unity-urp, filament"), "{stderr}");
     }
     assert!(!out.exists(), "nothing is written on an error");
     let (code, _, stderr) = cli(&["sweep", c, "--out", o, "--optimize-splits", "--shard", "1/2", "--quiet"]);

@@ -7,10 +7,10 @@ use csm_core::fitting::{corner_average_sphere, minimal_sphere, slice_diameter};
 use csm_core::geometry::{CameraPose, Lens, LightBasis};
 use csm_lab::analysis::{analyze, AnalysisOptions};
 use csm_lab::config::Config;
-use csm_lab::presets::*;
-use csm_lab::presets::{
+use csm_lab::presets::engines::{
     bevy::*, dart::*, eevee::*, filament::*, godot::*, learnopengl::*, threejs::*, unity::*, unreal::*,
 };
+use csm_lab::presets::*;
 use glam::{DQuat, DVec3};
 
 /// A scene without `[shadow]` settings, so every preset runs at its defaults unless `extra`
@@ -1220,6 +1220,48 @@ fn every_enum_valued_key_names_itself_and_its_values() {
     let text = scene("", "[shadow]\nfit = \"ellipse\"");
     let line = line_of(&text, "fit = ");
     assert!(load_err(&text).starts_with(&format!("test.toml:{line}:7: ")));
+}
+
+/// What cargo shows under an error: the gutter, the source line with its number, carets under
+/// `len` characters from 1-based `column`, and the closing gutter (computed here, not by the
+/// renderer).
+fn caret_excerpt(line: usize, source: &str, column: usize, len: usize) -> String {
+    let pad = " ".repeat(line.to_string().len());
+    format!(
+        "\n{pad} |\n{line} | {source}\n{pad} | {}{}\n{pad} |",
+        " ".repeat(column - 1),
+        "^".repeat(len)
+    )
+}
+
+#[test]
+fn a_bad_enum_value_shows_the_source_line_with_a_caret_under_the_value() {
+    let text = scene("", "[shadow]\nfit = \"ellipse\"");
+    let line = line_of(&text, "fit = ");
+    let e = load_err(&text);
+    // The key, the bad value and what is allowed, then the excerpt: nothing else.
+    let first = format!("test.toml:{line}:7: `shadow.fit` = \"ellipse\" is not allowed: one of \"sphere\", \"aabb\"");
+    assert_eq!(e, first + &caret_excerpt(line, "fit = \"ellipse\"", 7, 9), "{e}");
+
+    // A value out of range, located at its key: the caret is under the value.
+    let text = scene("", "[analysis]\nscreen_scale =  1.5");
+    let line = line_of(&text, "screen_scale");
+    let e = load_err(&text);
+    assert!(
+        e.starts_with(&format!("test.toml:{line}:1: `analysis.screen_scale` = 1.5")),
+        "{e}"
+    );
+    assert!(e.ends_with(&caret_excerpt(line, "screen_scale =  1.5", 17, 3)), "{e}");
+
+    // A TOML type error keeps toml's message and gains the excerpt under the value.
+    let text = scene("", "[shadow]\ncascades = \"four\"");
+    let line = line_of(&text, "cascades");
+    let e = load_err(&text);
+    assert!(
+        e.starts_with(&format!("test.toml:{line}:12: `shadow.cascades`: ")),
+        "{e}"
+    );
+    assert!(e.ends_with(&caret_excerpt(line, "cascades = \"four\"", 12, 6)), "{e}");
 }
 
 // ---------------------------------------------------------------------------------------------

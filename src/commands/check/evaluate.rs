@@ -282,6 +282,7 @@ pub fn evaluate(rule: &Rule, a: &Analysis) -> Result<RuleResult> {
                         "a range that overlaps the split range [{z_lo}, {z_hi}] of {} (nothing outside it is shadowed)",
                         a.config.name
                     ),
+                    excerpt: String::new(),
                 }));
             }
             let note = ((elo, ehi) != (lo, hi)).then(|| {

@@ -192,10 +192,11 @@ impl<'a> At<'a> {
 
     fn invalid(&self, span: std::ops::Range<usize>, key: &str, value: impl std::fmt::Display, allowed: &str) -> Error {
         Error::from(ConfigError::Invalid {
-            location: format!("{}: ", self.location(span)),
+            location: format!("{}: ", self.location(span.clone())),
             key: key.to_string(),
             value: value.to_string(),
             allowed: allowed.to_string(),
+            excerpt: crate::config::excerpt(self.text, span),
         })
     }
 
@@ -241,6 +242,7 @@ impl Thresholds {
                 key: "rule".to_string(),
                 value: format!("{} rules", raw.rule.len()),
                 allowed: format!("at most {MAX_RULES} [[rule]] entries"),
+                excerpt: String::new(),
             }
             .into());
         }

@@ -46,7 +46,11 @@ pub const ROUNDING_LOSS: f64 = 1e-3;
 pub fn check_free(config: &Config, source: &str) -> Result<()> {
     if let Some(p) = &config.shadow.preset {
         if !crate::presets::has_free_splits(p.name) {
-            let free = crate::presets::FREE_SPLIT_ENGINES.map(|e| e.as_str()).join(", ");
+            let free = crate::presets::free_split_engines()
+                .iter()
+                .map(|e| e.as_str())
+                .collect::<Vec<_>>()
+                .join(", ");
             return Err(GridError::Unusable {
                 context: format!("{source} with the {} preset", p.name),
                 message: format!(

@@ -3,16 +3,23 @@
 //! light basis fixed in the world: a look-to along the light with the world-origin transform's
 //! x axis (+X) as the up reference, as `computeDirectionalShadowBounds` builds it.
 
+use crate::presets::{
+    complete_fractions, fractions, snap, unit, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext,
+    Layout, Target, Terms, Values,
+};
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
-use csm_core::cascades::{BasisRule, LightDepthRule};
 use crate::error::Result;
+use csm_core::cascades::{BasisRule, LightDepthRule};
 use csm_core::fitting::corner_average_sphere;
 use csm_core::snapping::{SnapMode, SnapRule};
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use crate::presets::free_splits::{keep, padded_to_three, FreeSplitKnob, FreeSplits};
+use csm_core::free_splits::FractionSpace;
+use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Filament;
 
@@ -67,6 +74,57 @@ impl Engine for Filament {
     const NAME: &'static str = "filament";
     const SOURCE: &'static str = "Filament ShadowMap.cpp, ShadowMapManager.cpp, stable mode";
     const POWER_OF_TWO_MAPS: bool = true;
+
+    /// Light camera moved by constantBias (world units); normal bias 0.5 x normalBias x
+    /// texel; polygon offset slope 2 (its constant 0.5 is in depth-buffer steps: left out).
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::World {
+                depth: 0.001,
+                slope: 2.0,
+                normal_texels: 0.5,
+                offset: NormalOffset::Along,
+            },
+            setting: "ShadowOptions.constantBias",
+            unit: "world units",
+            scale: 1.0,
+            one_for_all: true,
+        })
+    }
+
+    /// `cascadeSplitPositions`: fractions of [near, shadowFar]; setting them switches the split
+    /// mode to explicit positions.
+    const FREE_SPLITS: Option<FreeSplits<FilamentKnobs>> = Some(FreeSplits {
+        knob: |_| FreeSplitKnob {
+            key: "filament.split_positions",
+            term: "ShadowOptions.cascadeSplitPositions",
+            of: "fractions of [near, shadowFar]",
+        },
+        space: |_, p| FractionSpace {
+            lo: p.near,
+            hi: p.max_distance,
+            start: p.near,
+        },
+        configured: |k, cascades, p| filament_positions(k, cascades, p.near, p.max_distance),
+        values: |k, cascades, _, fractions| padded_to_three(k.split_positions, cascades, fractions),
+        set: |k, _, v| {
+            k.split_mode = FilamentSplit::Positions;
+            k.split_positions = [v[0], v[1], v[2]];
+        },
+        setting: |_, s| {
+            format!(
+                "ShadowOptions.cascadeSplitPositions = {{ {} }}",
+                s.fractions
+                    .iter()
+                    .map(|x| format!("{x}f"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        },
+        paste_prefix: "split_mode = \"positions\"\n",
+        scalar_when_one: true,
+        fit_count: keep,
+    });
 
     fn knobs(t: &FilamentTable, cx: &KnobContext<'_>) -> Result<FilamentKnobs> {
         let v = cx.v;

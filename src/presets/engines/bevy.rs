@@ -2,17 +2,24 @@
 //! band, windows of the slice diameter rounded up to whole units, floor snapping, and the
 //! light's own look-to basis (x mirrored against csm-lab's).
 
+use crate::presets::{
+    around, check_range, non_negative, positive, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, Knob,
+    KnobContext, Layout, Terms, Values,
+};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use csm_core::cascades::{LightDepthRule, WindowRule};
 use crate::config::Validator;
 use crate::error::Result;
+use csm_core::cascades::{LightDepthRule, WindowRule};
 use csm_core::fitting::slice_diameter;
 use csm_core::geometry::LightBasis;
 use csm_core::snapping::{SnapMode, SnapRule};
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use crate::presets::free_splits::{FreeSplitKnob, FreeSplits};
+use csm_core::free_splits::FractionSpace;
+use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Bevy;
 
@@ -80,6 +87,64 @@ impl Engine for Bevy {
     const SOURCE: &'static str = "Bevy bevy_light/src/cascade.rs @ 4805ca792c3e";
     const POWER_OF_TWO_MAPS: bool = true;
 
+    /// Receiver moved by normal x normal_bias x texel (normal_bias pre-multiplied by sqrt 2)
+    /// and by depth_bias toward the light; defaults 0.02 and 1.8.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::World {
+                depth: 0.02,
+                slope: 0.0,
+                normal_texels: 1.8 * std::f64::consts::SQRT_2,
+                offset: NormalOffset::Along,
+            },
+            setting: "DirectionalLight::shadow_depth_bias",
+            unit: "world units",
+            scale: 1.0,
+            one_for_all: true,
+        })
+    }
+
+    /// `CascadeShadowConfig::bounds`: the far bounds of every cascade but the last, as fractions
+    /// of the maximum distance (the knob holds distances).
+    const FREE_SPLITS: Option<FreeSplits<BevyKnobs>> = Some(FreeSplits {
+        knob: |_| FreeSplitKnob {
+            key: "bevy.bounds",
+            term: "CascadeShadowConfig.bounds",
+            of: "far bounds as fractions of the maximum distance",
+        },
+        space: |k, p| FractionSpace {
+            lo: 0.0,
+            hi: p.max_distance,
+            start: k.minimum_distance.max(p.near),
+        },
+        configured: |k, cascades, p| {
+            let max = p.max_distance;
+            let fars = match k.bounds.as_ref().filter(|b| b.len() + 1 == cascades) {
+                Some(b) => b.clone(),
+                None => bevy_far_bounds(cascades, k.first_cascade_far_bound, max)[..cascades - 1].to_vec(),
+            };
+            fars.iter().map(|d| d / max).collect()
+        },
+        values: |_, _, max_distance, fractions| fractions.iter().map(|p| p * max_distance).collect(),
+        set: |k, _, v| k.bounds = Some(v),
+        setting: |k, s| {
+            format!(
+                "CascadeShadowConfig {{ bounds: vec![{}, {}], overlap_proportion: {}, minimum_distance: {} }}",
+                s.values.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(", "),
+                s.max_distance,
+                k.overlap_proportion,
+                k.minimum_distance
+            )
+        },
+        paste_prefix: "",
+        scalar_when_one: false,
+        fit_count: |k, cascades| {
+            if k.bounds.as_ref().is_some_and(|b| b.len() + 1 != cascades) {
+                k.bounds = None;
+            }
+        },
+    });
+
     fn knobs(t: &BevyTable, cx: &KnobContext<'_>) -> Result<BevyKnobs> {
         let v = cx.v;
         Ok(BevyKnobs {
@@ -103,7 +168,8 @@ impl Engine for Bevy {
                 Some(b) => {
                     let ok = !b.is_empty()
                         && b.len() < 16
-                        && b.iter().all(|x| x.is_finite() && *x > 0.0 && *x <= crate::config::MAX_WORLD)
+                        && b.iter()
+                            .all(|x| x.is_finite() && *x > 0.0 && *x <= crate::config::MAX_WORLD)
                         && b.windows(2).all(|w| w[0] < w[1]);
                     if !ok {
                         return Err(v.invalid(

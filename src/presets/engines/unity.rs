@@ -1,11 +1,18 @@
 //! Unity's built-in render pipeline (vendor documentation; closed source): fractions of the
 //! shadow distance, Stable Fit modelled as csm-lab's minimal sphere with round snapping.
 
+use crate::presets::{
+    check_range, complete_fractions, distance_fractions, fractions, minimal_sphere_scheme, Counts, Dims, Engine,
+    EngineScheme, Fields, Fitting, KnobContext, Layout, Target, Terms, Values,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 
-use super::*;
+use crate::presets::bias::BiasModel;
+use crate::presets::free_splits::{
+    as_given, keep, shadow_distance_space, unity_vector_setting, FreeSplitKnob, FreeSplits, OF_SHADOW_DISTANCE,
+};
 
 pub struct Unity;
 
@@ -29,12 +36,53 @@ impl Engine for Unity {
     const NAME: &'static str = "unity";
     const SOURCE: &'static str = "Unity built-in render pipeline, Stable Fit (vendor documentation)";
 
+    fn bias() -> BiasModel {
+        BiasModel::NotModelled(concat!(
+            "Unity built-in's default bias and its per-cascade scaling are not published; ",
+            "the [shadow] bias keys apply (0 by default)"
+        ))
+    }
+
+    const FREE_SPLITS: Option<FreeSplits<UnityKnobs>> = Some(FreeSplits {
+        knob: |cascades| match cascades {
+            2 => FreeSplitKnob {
+                key: "unity.cascade2_split",
+                term: "QualitySettings.shadowCascade2Split",
+                of: OF_SHADOW_DISTANCE,
+            },
+            _ => FreeSplitKnob {
+                key: "unity.cascade4_split",
+                term: "QualitySettings.shadowCascade4Split",
+                of: OF_SHADOW_DISTANCE,
+            },
+        },
+        space: shadow_distance_space,
+        configured: |k, cascades, _| match cascades {
+            2 => vec![k.cascade2_split],
+            _ => k.cascade4_split.to_vec(),
+        },
+        values: as_given,
+        set: |k, cascades, v| match cascades {
+            2 => k.cascade2_split = v[0],
+            _ => k.cascade4_split = [v[0], v[1], v[2]],
+        },
+        setting: unity_vector_setting,
+        paste_prefix: "",
+        scalar_when_one: true,
+        fit_count: keep,
+    });
+
     fn knobs(t: &UnityTable, cx: &KnobContext<'_>) -> Result<UnityKnobs> {
         let v = cx.v;
         let s2 = t.cascade2_split.unwrap_or(1.0 / 3.0);
         Ok(UnityKnobs {
             cascade2_split: check_range(v, "unity.cascade2_split", s2, 0.0, 1.0, true, true)?,
-            cascade4_split: fractions::<3>(v, "unity.cascade4_split", t.cascade4_split.as_ref(), [0.067, 0.2, 0.467])?,
+            cascade4_split: fractions::<3>(
+                v,
+                "unity.cascade4_split",
+                t.cascade4_split.as_ref(),
+                [0.067, 0.2, 0.467],
+            )?,
         })
     }
 
@@ -106,7 +154,11 @@ sun.shadowCustomResolution = {{shadowCustomResolution}};",
         let cascades = f.count("shadowCascades", "shadow.cascades")?;
         let dims = Dims {
             cascades,
-            resolution: f.tile("shadowCustomResolution", "shadow.resolution", if cascades > 1 { 2 } else { 1 })?,
+            resolution: f.tile(
+                "shadowCustomResolution",
+                "shadow.resolution",
+                if cascades > 1 { 2 } else { 1 },
+            )?,
             max_distance: Some(f.num("shadowDistance", "shadow.max_distance")?),
         };
         Ok((Self::knobs(&table, cx)?, dims))

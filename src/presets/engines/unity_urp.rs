@@ -2,11 +2,19 @@
 //! fractions of the shadow distance, one atlas of 2048 (tiles of 1024 from two cascades on),
 //! modelled like Unity's built-in pipeline for the fit and snap.
 
+use crate::presets::{
+    check_range, complete_fractions, distance_fractions, fractions, minimal_sphere_scheme, Counts, Dims, Engine,
+    EngineScheme, Fields, Fitting, KnobContext, Layout, Target, Terms, Values,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use crate::presets::free_splits::{
+    as_given, keep, shadow_distance_space, unity_vector_setting, FreeSplitKnob, FreeSplits, OF_SHADOW_DISTANCE,
+};
+use csm_core::truth::BiasRule;
 
 pub struct UnityUrp;
 
@@ -31,6 +39,56 @@ impl Engine for UnityUrp {
     type Table = UnityUrpTable;
     const NAME: &'static str = "unity-urp";
     const SOURCE: &'static str = "Unity URP UniversalRenderPipelineAsset.cs, Shadows.hlsl";
+
+    /// Depth and normal bias scale with each cascade's texel size; defaults 1 and 1.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::Texels {
+                depth_texels: 1.0,
+                normal_texels: 1.0,
+            },
+            setting: "Depth Bias",
+            unit: "texels of the cascade",
+            scale: 1.0,
+            one_for_all: true,
+        })
+    }
+
+    const FREE_SPLITS: Option<FreeSplits<UnityUrpKnobs>> = Some(FreeSplits {
+        knob: |cascades| match cascades {
+            2 => FreeSplitKnob {
+                key: "unity-urp.cascade2_split",
+                term: "UniversalRenderPipelineAsset.cascade2Split",
+                of: OF_SHADOW_DISTANCE,
+            },
+            3 => FreeSplitKnob {
+                key: "unity-urp.cascade3_split",
+                term: "UniversalRenderPipelineAsset.cascade3Split",
+                of: OF_SHADOW_DISTANCE,
+            },
+            _ => FreeSplitKnob {
+                key: "unity-urp.cascade4_split",
+                term: "UniversalRenderPipelineAsset.cascade4Split",
+                of: OF_SHADOW_DISTANCE,
+            },
+        },
+        space: shadow_distance_space,
+        configured: |k, cascades, _| match cascades {
+            2 => vec![k.cascade2_split],
+            3 => k.cascade3_split.to_vec(),
+            _ => k.cascade4_split.to_vec(),
+        },
+        values: as_given,
+        set: |k, cascades, v| match cascades {
+            2 => k.cascade2_split = v[0],
+            3 => k.cascade3_split = [v[0], v[1]],
+            _ => k.cascade4_split = [v[0], v[1], v[2]],
+        },
+        setting: unity_vector_setting,
+        paste_prefix: "",
+        scalar_when_one: true,
+        fit_count: keep,
+    });
 
     fn knobs(t: &UnityUrpTable, cx: &KnobContext<'_>) -> Result<UnityUrpKnobs> {
         let v = cx.v;
@@ -126,7 +184,11 @@ urp.cascade4Split = new Vector3({{cascade4Split.x}}f, {{cascade4Split.y}}f, {{ca
         let cascades = f.count("shadowCascadeCount", "shadow.cascades")?;
         let dims = Dims {
             cascades,
-            resolution: f.tile("mainLightShadowmapResolution", "shadow.resolution", if cascades > 1 { 2 } else { 1 })?,
+            resolution: f.tile(
+                "mainLightShadowmapResolution",
+                "shadow.resolution",
+                if cascades > 1 { 2 } else { 1 },
+            )?,
             max_distance: Some(f.num("shadowDistance", "shadow.max_distance")?),
         };
         Ok((Self::knobs(&table, cx)?, dims))

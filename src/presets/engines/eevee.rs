@@ -1,15 +1,20 @@
 //! Blender EEVEE (2017, `eevee_shadow_cascade_setup`): practical split with a fade overlap,
 //! far-cap-centred spheres, round snapping on a grid through the lamp, the lamp's clip range.
 
+use crate::presets::{
+    centre, half_extent_along, non_negative, ordered, point_or, unit, Counts, Dims, Engine, EngineScheme, Fields,
+    Fitting, KnobContext, Layout, Terms, Values,
+};
 use serde::{Deserialize, Serialize};
 
 use glam::DVec3;
 
-use csm_core::cascades::{BasisRule, LightDepthRule};
 use crate::error::Result;
+use csm_core::cascades::{BasisRule, LightDepthRule};
 use csm_core::fitting::far_cap_sphere;
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Eevee;
 
@@ -56,6 +61,22 @@ impl Engine for Eevee {
     type Table = EeveeTable;
     const NAME: &'static str = "eevee";
     const SOURCE: &'static str = "Blender EEVEE (2017) eevee_shadow_cascade_setup";
+
+    /// The 2017 cascade code: 0.05 x the lamp's bias (default 1) in depth normalised over
+    /// the lamp's clip range.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::RangeFraction {
+                fraction: EEVEE_BIAS_FACTOR * EEVEE_LAMP_BIAS,
+                normal_texels: 0.0,
+                offset: NormalOffset::Along,
+            },
+            setting: "Lamp bias (shadow_buffer_bias)",
+            unit: "lamp bias (1 = 0.05 of the lamp's clip range)",
+            scale: 1.0 / EEVEE_BIAS_FACTOR,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &EeveeTable, cx: &KnobContext<'_>) -> Result<EeveeKnobs> {
         let v = cx.v;
@@ -191,3 +212,9 @@ clip_end = {{clip_end}}",
         Ok((Self::knobs(&table, cx)?, dims))
     }
 }
+
+/// EEVEE's factor on the lamp bias (normalised depth per unit of bias).
+const EEVEE_BIAS_FACTOR: f64 = 0.05;
+
+/// Blender's default lamp bias.
+const EEVEE_LAMP_BIAS: f64 = 1.0;

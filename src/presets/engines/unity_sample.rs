@@ -1,14 +1,16 @@
 //! The Unity C# sample (a blog's cascade code): fixed fractions of the far plane, tight boxes
 //! whose centre is discarded (the window sits on the light axis through the world origin).
 
+use crate::presets::{Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Terms, Values};
 use serde::{Deserialize, Serialize};
 
-use csm_core::cascades::{LightDepthRule, WindowRule};
 use crate::config::Fit;
 use crate::error::Result;
+use csm_core::cascades::{LightDepthRule, WindowRule};
 use csm_core::fitting::minimal_sphere;
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct UnitySample;
 
@@ -32,6 +34,22 @@ impl Engine for UnitySample {
     const HAS_DISTANCE: bool = false;
     const FIT: Fit = Fit::Aabb;
     const SNAPS: bool = false;
+
+    /// The sample adds 0.005 to the casters' clip-space z; on OpenGL (z in [-1, 1]) that is
+    /// 0.0025 of the cascade's light depth range away from the light.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::RangeFraction {
+                fraction: UNITY_SAMPLE_CLIP_BIAS / 2.0,
+                normal_texels: 0.0,
+                offset: NormalOffset::Along,
+            },
+            setting: "_gShadowBias",
+            unit: "clip-space z on OpenGL (2 x normalised depth)",
+            scale: 2.0,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &UnitySampleTable, _cx: &KnobContext<'_>) -> Result<UnitySampleKnobs> {
         Ok(UnitySampleKnobs {
@@ -116,3 +134,6 @@ centre_on_slice = {{centre_on_slice}}",
         Ok((Self::knobs(&table, cx)?, dims))
     }
 }
+
+/// The Unity sample's clip-space bias.
+const UNITY_SAMPLE_CLIP_BIAS: f64 = 0.005;

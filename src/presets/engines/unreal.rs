@@ -2,15 +2,20 @@
 //! with a transition band, Unreal's bounding sphere with a 4-texel border, fmod snapping.
 //! Centimetre constants are converted to metres.
 
+use crate::presets::{
+    around, check_range, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, Knob, KnobContext, Layout, Terms,
+    Values,
+};
 use serde::{Deserialize, Serialize};
 
-use csm_core::cascades::LightDepthRule;
 use crate::error::Result;
+use csm_core::cascades::LightDepthRule;
 use csm_core::fitting::Sphere;
 use csm_core::geometry::Lens;
 use csm_core::snapping::{SnapMode, SnapRule};
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::BiasRule;
 
 pub struct Unreal;
 
@@ -65,6 +70,26 @@ impl Engine for Unreal {
     type Table = UnrealTable;
     const NAME: &'static str = "unreal";
     const SOURCE: &'static str = "Unreal Engine CSM: DirectionalLightComponent.cpp, ShadowSetup.cpp";
+
+    /// Per cascade: CSMDepthBias (10) x ShadowBias (0.5) x sphere radius / resolution, and
+    /// that times CSMSlopeScaleDepthBias (3) x ShadowSlopeBias (0.5) x the tangent of the
+    /// receiver's angle to the light, capped at 1. The radius over the resolution is half a
+    /// texel, so 2.5 texels plus 3.75 texels x min(tan, 1).
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::TexelsTangent {
+                depth_texels: UNREAL_CSM_DEPTH_BIAS * UNREAL_SHADOW_BIAS / 2.0,
+                tangent_texels: UNREAL_CSM_DEPTH_BIAS * UNREAL_SHADOW_BIAS / 2.0
+                    * UNREAL_CSM_SLOPE_SCALE
+                    * UNREAL_SHADOW_SLOPE_BIAS,
+                cap: UNREAL_MAX_SLOPE,
+            },
+            setting: "DirectionalLight Shadow Bias (ShadowBias)",
+            unit: "Unreal's Shadow Bias (1 = r.Shadow.CSMDepthBias 10 x half a texel of the cascade)",
+            scale: 2.0 / UNREAL_CSM_DEPTH_BIAS,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &UnrealTable, cx: &KnobContext<'_>) -> Result<UnrealKnobs> {
         let v = cx.v;
@@ -157,7 +182,8 @@ impl Engine for Unreal {
 
     const TERMS: Terms = Terms {
         comment: ";",
-        language: "Unreal Engine: DefaultEngine.ini and the DirectionalLightComponent's properties, distances in centimetres",
+        language:
+            "Unreal Engine: DefaultEngine.ini and the DirectionalLightComponent's properties, distances in centimetres",
         template: "\
 [SystemSettings]
 r.Shadow.MaxCSMResolution={{r.Shadow.MaxCSMResolution}}
@@ -173,7 +199,10 @@ End Object",
     fn terms(k: &UnrealKnobs, d: &Dims, _near: f64, _far: f64) -> Values {
         Values::new()
             .int("r.Shadow.MaxCSMResolution", d.resolution)
-            .num("DynamicShadowDistanceMovableLight", d.max_distance.unwrap_or(200.0) * 100.0)
+            .num(
+                "DynamicShadowDistanceMovableLight",
+                d.max_distance.unwrap_or(200.0) * 100.0,
+            )
             .int("DynamicShadowCascades", d.cascades)
             .num("CascadeDistributionExponent", k.cascade_distribution_exponent)
             .num("CascadeTransitionFraction", k.transition_fraction)
@@ -181,10 +210,9 @@ End Object",
 
     fn from_terms(f: &Fields<'_>, cx: &KnobContext<'_>) -> Result<(UnrealKnobs, Dims)> {
         let table = UnrealTable {
-            cascade_distribution_exponent: Some(f.num(
-                "CascadeDistributionExponent",
-                "unreal.cascade_distribution_exponent",
-            )?),
+            cascade_distribution_exponent: Some(
+                f.num("CascadeDistributionExponent", "unreal.cascade_distribution_exponent")?,
+            ),
             transition_fraction: Some(f.num("CascadeTransitionFraction", "unreal.transition_fraction")?),
         };
         let dims = Dims {
@@ -195,3 +223,18 @@ End Object",
         Ok((Self::knobs(&table, cx)?, dims))
     }
 }
+
+/// Unreal's `r.Shadow.CSMDepthBias` default.
+const UNREAL_CSM_DEPTH_BIAS: f64 = 10.0;
+
+/// Unreal's `r.Shadow.CSMSlopeScaleDepthBias` default.
+const UNREAL_CSM_SLOPE_SCALE: f64 = 3.0;
+
+/// The directional light's `ShadowBias` default.
+const UNREAL_SHADOW_BIAS: f64 = 0.5;
+
+/// The directional light's `ShadowSlopeBias` default.
+const UNREAL_SHADOW_SLOPE_BIAS: f64 = 0.5;
+
+/// Unreal's `r.Shadow.ShadowMaxSlopeScaleDepthBias` default: the tangent's cap.
+const UNREAL_MAX_SLOPE: f64 = 1.0;

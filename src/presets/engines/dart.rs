@@ -1,14 +1,14 @@
 //! Dart: the reference `computeCascades` (API documentation): practical split on
 //! [near, shadow distance] with the last boundary from the formula, corner-average spheres.
 
+use crate::presets::{unit, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Terms, Values};
 use serde::{Deserialize, Serialize};
 
-
-use csm_core::cascades::LightDepthRule;
 use crate::error::Result;
+use csm_core::cascades::LightDepthRule;
 use csm_core::fitting::corner_average_sphere;
 
-use super::*;
+use crate::presets::bias::BiasModel;
 
 pub struct Dart;
 
@@ -42,6 +42,13 @@ impl Engine for Dart {
     type Table = DartTable;
     const NAME: &'static str = "dart";
     const SOURCE: &'static str = "Dart computeCascades (API documentation)";
+
+    fn bias() -> BiasModel {
+        BiasModel::NotModelled(concat!(
+            "the Dart engine's documents state no shadow bias; ",
+            "the [shadow] bias keys apply (0 by default)"
+        ))
+    }
 
     fn knobs(t: &DartTable, cx: &KnobContext<'_>) -> Result<DartKnobs> {
         Ok(DartKnobs {

@@ -2,15 +2,20 @@
 //! at the light-space box centre, floor snapping, fixed light near/far with a margin; with
 //! `fade` (a property set after construction) blend bands between cascades and grown windows.
 
+use crate::presets::{
+    log_misfit, non_negative, ordered, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout,
+    Target, Terms, Values,
+};
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
-use csm_core::cascades::{LightDepthRule, WindowRule};
 use crate::error::Result;
+use csm_core::cascades::{LightDepthRule, WindowRule};
 use csm_core::fitting::slice_diameter;
 use csm_core::snapping::{SnapMode, SnapRule};
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Threejs;
 
@@ -87,6 +92,21 @@ impl Engine for Threejs {
     type Table = ThreejsTable;
     const NAME: &'static str = "threejs";
     const SOURCE: &'static str = "three.js CSM addon, r185 and later";
+
+    /// shadowBias 1e-6 in normalised depth: a fraction of the light depth range.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::RangeFraction {
+                fraction: 1e-6,
+                normal_texels: 0.0,
+                offset: NormalOffset::Along,
+            },
+            setting: "CSM shadowBias",
+            unit: "normalised depth",
+            scale: 1.0,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &ThreejsTable, cx: &KnobContext<'_>) -> Result<ThreejsKnobs> {
         let v = cx.v;

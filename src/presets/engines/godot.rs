@@ -2,14 +2,21 @@
 //! optional blend splits, corner-average spheres with a texel of border, 2-texel round snap,
 //! a pancaked caster range.
 
+use crate::presets::{
+    complete_fractions, fractions, non_negative, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting,
+    KnobContext, Layout, Target, Terms, Values,
+};
 use serde::{Deserialize, Serialize};
 
-use csm_core::cascades::LightDepthRule;
 use crate::error::Result;
+use csm_core::cascades::LightDepthRule;
 use csm_core::fitting::corner_average_sphere;
 use csm_core::snapping::{SnapMode, SnapRule};
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use crate::presets::free_splits::{keep, padded_to_three, FreeSplitKnob, FreeSplits};
+use csm_core::free_splits::FractionSpace;
+use csm_core::truth::{BiasRule, NormalOffset};
 
 pub struct Godot;
 
@@ -35,6 +42,55 @@ impl Engine for Godot {
     type Table = GodotTable;
     const NAME: &'static str = "godot";
     const SOURCE: &'static str = "Godot 4 renderer_scene_cull.cpp, light_3d.cpp";
+
+    /// Depth bias = bias / 100 x the cascade's depth range; normal bias x texel x
+    /// (1 - max(0, N.L)) with its part along the light removed; defaults 0.1 and 2.0.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::RangeFraction {
+                fraction: 0.1 / 100.0,
+                normal_texels: 2.0,
+                offset: NormalOffset::Lateral,
+            },
+            setting: "DirectionalLight3D.shadow_bias",
+            unit: "percent of the cascade's depth range",
+            scale: 100.0,
+            one_for_all: true,
+        })
+    }
+
+    /// `directional_shadow_split_1..3`: fractions of [near, max distance].
+    const FREE_SPLITS: Option<FreeSplits<GodotKnobs>> = Some(FreeSplits {
+        knob: |_| FreeSplitKnob {
+            key: "godot.splits",
+            term: "DirectionalLight3D.directional_shadow_split_1..3",
+            of: "fractions of [near, max distance]",
+        },
+        space: |_, p| {
+            let max_d = p.far.min(p.max_distance).max(p.near + 0.001);
+            let min_d = p.near.min(max_d);
+            FractionSpace {
+                lo: min_d,
+                hi: max_d,
+                start: min_d,
+            }
+        },
+        configured: |k, cascades, _| k.splits[..cascades - 1].to_vec(),
+        values: |k, cascades, _, fractions| padded_to_three(k.splits, cascades, fractions),
+        set: |k, _, v| k.splits = [v[0], v[1], v[2]],
+        setting: |_, s| {
+            s.values
+                .iter()
+                .take(s.cascades - 1)
+                .enumerate()
+                .map(|(i, v)| format!("directional_shadow_split_{} = {v}", i + 1))
+                .collect::<Vec<_>>()
+                .join(", ")
+        },
+        paste_prefix: "",
+        scalar_when_one: true,
+        fit_count: keep,
+    });
 
     fn knobs(t: &GodotTable, cx: &KnobContext<'_>) -> Result<GodotKnobs> {
         let v = cx.v;

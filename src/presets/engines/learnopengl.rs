@@ -1,16 +1,21 @@
 //! A C++/OpenGL tutorial-style implementation (LearnOpenGL's cascade chapter): fixed planes,
 //! an off-by-one cascade selection, padded boxes seen from a light position.
 
+use crate::presets::{
+    centre, non_negative, point_or, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Target,
+    Terms, Values,
+};
 use serde::{Deserialize, Serialize};
 
 use glam::{DVec2, DVec3};
 
-use csm_core::cascades::{BasisRule, LightDepthRule, WindowRule};
 use crate::config::Fit;
 use crate::error::Result;
+use csm_core::cascades::{BasisRule, LightDepthRule, WindowRule};
 use csm_core::fitting::minimal_sphere;
 
-use super::*;
+use crate::presets::bias::{BiasModel, EngineBias};
+use csm_core::truth::BiasRule;
 
 pub struct LearnOpenGl;
 
@@ -39,6 +44,21 @@ impl Engine for LearnOpenGl {
     const HAS_DISTANCE: bool = false;
     const FIT: Fit = Fit::Aabb;
     const SNAPS: bool = false;
+
+    /// The seed's shader: max(0.05 (1 - N.L), 0.005) in depth normalised over each cascade's
+    /// padded light depth range.
+    fn bias() -> BiasModel {
+        BiasModel::Rule(EngineBias {
+            rule: BiasRule::RangeFacing {
+                factor: 0.05,
+                floor: 0.005,
+            },
+            setting: "the 0.005 floor of max(0.05 (1 - N.L), 0.005)",
+            unit: "normalised depth",
+            scale: 1.0,
+            one_for_all: true,
+        })
+    }
 
     fn knobs(t: &LearnOpenGlTable, cx: &KnobContext<'_>) -> Result<LearnOpenGlKnobs> {
         let v = cx.v;
