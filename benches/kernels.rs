@@ -277,6 +277,7 @@ fn ground_truth(c: &mut Criterion) {
         format: Some(DepthFormat::D32F),
         ranges: vec![(-500.0, 500.0); m],
         pcf: 1,
+        filter: truth::PcfFilter::Bilinear,
     };
     let poses = || csm_core::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
     for snapped in [true, false] {

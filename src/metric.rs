@@ -57,6 +57,8 @@ pub enum Value {
     Flag(bool),
     Count(u64),
     Real(f64),
+    /// Not measured (too little data): `n/a` in CSV, `null` in JSON.
+    Missing,
 }
 
 impl Value {
@@ -66,7 +68,13 @@ impl Value {
             Value::Flag(b) => f64::from(u8::from(b)),
             Value::Count(n) => n as f64,
             Value::Real(x) => x,
+            Value::Missing => f64::NAN,
         }
+    }
+
+    /// A real when known, [`Value::Missing`] otherwise.
+    pub fn maybe(x: Option<f64>) -> Value {
+        x.map_or(Value::Missing, Value::Real)
     }
 
     pub fn json(self) -> serde_json::Value {
@@ -74,6 +82,7 @@ impl Value {
             Value::Flag(b) => b.into(),
             Value::Count(n) => n.into(),
             Value::Real(x) => serde_json::json!(x),
+            Value::Missing => serde_json::Value::Null,
         }
     }
 
@@ -83,6 +92,7 @@ impl Value {
             Value::Flag(b) => Ok(b.to_string()),
             Value::Count(n) => Ok(n.to_string()),
             Value::Real(x) => num(what, x),
+            Value::Missing => Ok("n/a".to_string()),
         }
     }
 }
@@ -390,10 +400,21 @@ pub const SUMMARY: &[SummaryDef] = &[
         value: |s| Value::Real(s.truth.map_or(0.0, |t| t.acne_fraction)),
     },
     SummaryDef {
+        name: "edge_error_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "ground truth: share of the receiver points at frame 0 whose answer is wrong because the texels read hold another surface (the blocky shadow edge, either way; only resolution fixes it); only with ground_truth",
+        brief: "points wrong at a shadow edge (another surface's texels)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: true,
+        value: |s| Value::Real(s.truth.map_or(0.0, |t| t.edge_error_fraction)),
+    },
+    SummaryDef {
         name: "leak_fraction",
         unit: "",
         direction: Direction::HigherIsWorse,
-        help: "ground truth: share of the receiver points at frame 0 that are truly shadowed but the sampled map lights (peter-panning, leaks); only with ground_truth",
+        help: "ground truth: share of the receiver points at frame 0 that are truly shadowed but the sampled map lights only because of the bias (peter-panning, leaks); only with ground_truth",
         brief: "truly shadowed points the map lights (leaks)",
         shown: Shown::Fixed,
         in_rows: false,
@@ -421,6 +442,50 @@ pub const SUMMARY: &[SummaryDef] = &[
         in_rows: false,
         screen: true,
         value: |s| Value::Real(s.truth.map_or(0.0, |t| t.flicker_unsnapped)),
+    },
+    SummaryDef {
+        name: "flicker_edge_snapped",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "the part of flicker_snapped at points whose texels hold another surface in either frame (the shadow edge crawling); only with ground_truth",
+        brief: "S5 at shadow edges, snapped",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: true,
+        value: |s| Value::Real(s.truth.map_or(0.0, |t| t.flicker_edge_snapped)),
+    },
+    SummaryDef {
+        name: "flicker_edge_unsnapped",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "the part of flicker_unsnapped at shadow edges (see flicker_edge_snapped); only with ground_truth",
+        brief: "S5 at shadow edges, unsnapped",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: true,
+        value: |s| Value::Real(s.truth.map_or(0.0, |t| t.flicker_edge_unsnapped)),
+    },
+    SummaryDef {
+        name: "flicker_acne_snapped",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "the rest of flicker_snapped: changes where every texel read holds the point's own surface in both frames (acne coming and going); only with ground_truth",
+        brief: "S5 from acne, snapped",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: true,
+        value: |s| Value::Real(s.truth.map_or(0.0, |t| t.flicker_acne_snapped)),
+    },
+    SummaryDef {
+        name: "flicker_acne_unsnapped",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "the rest of flicker_unsnapped (see flicker_acne_snapped); only with ground_truth",
+        brief: "S5 from acne, unsnapped",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: true,
+        value: |s| Value::Real(s.truth.map_or(0.0, |t| t.flicker_acne_unsnapped)),
     },
     SummaryDef {
         name: "screen_receiver_fraction",
@@ -498,6 +563,61 @@ pub const SUMMARY: &[SummaryDef] = &[
         in_rows: true,
         screen: true,
         value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.aliasing_max)),
+    },
+    SummaryDef {
+        name: "visible_aliasing_mean",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "mean of m over the served receiver pixels, each weighted by its direct-light contrast N·L (0 facing away from the light, 1 facing it): the aliasing as visible under shading",
+        brief: "contrast-weighted mean m on screen",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.visible_mean)),
+    },
+    SummaryDef {
+        name: "visible_aliasing_p50",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "weighted median of m (weights N·L, exact nearest rank on the weights)",
+        brief: "contrast-weighted median m",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.visible_p50)),
+    },
+    SummaryDef {
+        name: "visible_aliasing_p95",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "weighted 95th percentile of m (weights N·L, exact nearest rank on the weights): continuous in the light direction; the default sweep objective with scene geometry",
+        brief: "contrast-weighted 95th percentile of m",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.visible_p95)),
+    },
+    SummaryDef {
+        name: "visible_aliasing_p99",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "weighted 99th percentile of m (weights N·L, exact nearest rank on the weights)",
+        brief: "contrast-weighted 99th percentile of m",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.visible_p99)),
+    },
+    SummaryDef {
+        name: "visible_aliasing_max",
+        unit: "texel / pixel",
+        direction: Direction::HigherIsWorse,
+        help: "largest m over the served receiver pixels with weight N·L above 0",
+        brief: "largest m of a lit pixel",
+        shown: Shown::Fixed,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.visible_max)),
     },
     SummaryDef {
         name: "screen_undersampled_fraction",
@@ -676,11 +796,22 @@ fn is_light_motion(name: &str) -> bool {
 }
 
 /// The summary metrics of the ground-truth pass: only in the outputs of analyses that ran it.
-pub const TRUTH_SUMMARY: [&str; 4] = ["acne_fraction", "leak_fraction", "flicker_snapped", "flicker_unsnapped"];
+pub const TRUTH_SUMMARY: [&str; 9] = [
+    "acne_fraction",
+    "edge_error_fraction",
+    "leak_fraction",
+    "flicker_snapped",
+    "flicker_unsnapped",
+    "flicker_edge_snapped",
+    "flicker_edge_unsnapped",
+    "flicker_acne_snapped",
+    "flicker_acne_unsnapped",
+];
 
 /// The per-cascade metrics of the ground-truth pass: only in `cascades.csv` when it ran.
-pub const TRUTH_CASCADE: [&str; 5] = [
+pub const TRUTH_CASCADE: [&str; 6] = [
     "acne_fraction",
+    "edge_error_fraction",
     "leak_fraction",
     "bias_needed",
     "slope_bias_needed",
@@ -976,25 +1107,33 @@ pub const CASCADE: &[CascadeDef] = &[
         name: "acne_fraction",
         unit: "",
         direction: Direction::HigherIsWorse,
-        help: "ground truth: share of this cascade's receiver points at frame 0 that are truly lit but the map shadows",
+        help: "ground truth: share of this cascade's receiver points at frame 0 that are truly lit but the map shadows while every texel read holds their own surface (acne); n/a under 1000 points",
         screen: true,
-        value: |c| Value::Real(c.truth.as_ref().map_or(0.0, |t| t.acne_fraction)),
+        value: |c| Value::maybe(c.truth.as_ref().and_then(|t| t.acne_fraction)),
+    },
+    CascadeDef {
+        name: "edge_error_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "ground truth: share of this cascade's receiver points at frame 0 wrong because the texels read hold another surface (the blocky edge); n/a under 1000 points",
+        screen: true,
+        value: |c| Value::maybe(c.truth.as_ref().and_then(|t| t.edge_error_fraction)),
     },
     CascadeDef {
         name: "leak_fraction",
         unit: "",
         direction: Direction::HigherIsWorse,
-        help: "ground truth: share of this cascade's receiver points at frame 0 that are truly shadowed but the map lights",
+        help: "ground truth: share of this cascade's receiver points at frame 0 that are truly shadowed but lit because of the bias; n/a under 1000 points",
         screen: true,
-        value: |c| Value::Real(c.truth.as_ref().map_or(0.0, |t| t.leak_fraction)),
+        value: |c| Value::maybe(c.truth.as_ref().and_then(|t| t.leak_fraction)),
     },
     CascadeDef {
         name: "bias_needed",
         unit: "world units",
         direction: Direction::HigherIsWorse,
-        help: "ground truth: smallest depth bias (along the light) leaving acne on at most 0.1 % of this cascade's points, for the configured depth format (bias.csv has every format)",
+        help: "ground truth: smallest depth bias (along the light) leaving acne on at most 0.1 % of this cascade's points, plus a margin (0.1 % of it and one step of the configured depth format; bias.csv has every format); n/a under 1000 points",
         screen: true,
-        value: |c| Value::Real(c.truth.as_ref().map_or(0.0, |t| t.chosen_bias)),
+        value: |c| Value::maybe(c.truth.as_ref().and_then(|t| t.chosen_bias)),
     },
     CascadeDef {
         name: "slope_bias_needed",
@@ -1002,7 +1141,7 @@ pub const CASCADE: &[CascadeDef] = &[
         direction: Direction::HigherIsWorse,
         help: "ground truth: smallest slope bias alone (times the depth slope per texel) doing the same, exact depths",
         screen: true,
-        value: |c| Value::Real(c.truth.as_ref().map_or(0.0, |t| t.slope_bias)),
+        value: |c| Value::maybe(c.truth.as_ref().and_then(|t| t.slope_bias)),
     },
     CascadeDef {
         name: "peter_pan",
@@ -1010,7 +1149,7 @@ pub const CASCADE: &[CascadeDef] = &[
         direction: Direction::HigherIsWorse,
         help: "ground truth: largest distance along the receiver from a caster to where its shadow starts, at bias_needed",
         screen: true,
-        value: |c| Value::Real(c.truth.as_ref().map_or(0.0, |t| t.peter_pan)),
+        value: |c| Value::maybe(c.truth.as_ref().and_then(|t| t.peter_pan)),
     },
     CascadeDef {
         name: "screen_pixels",

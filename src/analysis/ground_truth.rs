@@ -3,11 +3,11 @@
 //! the motion path in both snap modes, with the pictures' data (frame-0 states, flip rates and
 //! every k-th frame's states). The math is [`csm_core::truth`].
 
-use crate::config::Config;
-use crate::presets::bias::{engine_bias, EngineBias};
+use crate::config::{BiasMode, Config};
+use crate::presets::bias::{engine_bias, engine_filter, EngineBias};
 use csm_core::cascades::{LightPose, Rig};
 use csm_core::shade::{FlipImage, ShadeImage};
-use csm_core::truth::{self, Bias, CacheStats, CascadeTruth, Flicker, PointZero, Receiver, Sampling};
+use csm_core::truth::{self, Bias, CacheStats, CascadeTruth, Flicker, PcfFilter, PointZero, Receiver, Sampling};
 
 /// At most this many frames of the path are kept as pictures for the animation (every k-th).
 pub const ANIMATION_FRAMES: usize = 24;
@@ -16,9 +16,40 @@ pub const ANIMATION_FRAMES: usize = 24;
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct TruthSummary {
     pub acne_fraction: f64,
+    pub edge_error_fraction: f64,
     pub leak_fraction: f64,
     pub flicker_snapped: f64,
     pub flicker_unsnapped: f64,
+    pub flicker_edge_snapped: f64,
+    pub flicker_edge_unsnapped: f64,
+    pub flicker_acne_snapped: f64,
+    pub flicker_acne_unsnapped: f64,
+}
+
+/// Where the bias the pass sampled with came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BiasSource {
+    /// The `[shadow]` bias keys.
+    Configured,
+    /// The preset engine's default bias rule.
+    Engine,
+    /// csm-lab's recommended depth bias per cascade (the default without keys or an engine
+    /// rule, or `[shadow] bias = "recommended"`).
+    Recommended,
+    /// No bias (`[shadow] bias = "none"` or `analyze --raw-bias`).
+    None,
+}
+
+impl BiasSource {
+    pub fn name(self) -> &'static str {
+        match self {
+            BiasSource::Configured => "configured",
+            BiasSource::Engine => "engine",
+            BiasSource::Recommended => "recommended",
+            BiasSource::None => "none",
+        }
+    }
 }
 
 /// One snap mode's pictures.
@@ -40,12 +71,18 @@ pub struct GroundTruth {
     pub cascades: Vec<CascadeTruth>,
     /// The bias each cascade was sampled with (world units; normal offset in texels).
     pub bias: Vec<Bias>,
+    /// Where that bias came from.
+    pub bias_source: BiasSource,
+    /// The filter of each PCF tap.
+    pub filter: PcfFilter,
+    pcf: u32,
     /// Frame 0's light depth range per cascade (the depth formats' range).
     pub ranges: Vec<(f64, f64)>,
     /// Texel size per cascade at frame 0.
     pub texel: Vec<f64>,
     /// The engine's bias rule, when the preset's bias is modelled and no `[shadow]` bias key
-    /// replaced it.
+    /// replaced it (the recommendation is given in its setting; the pass sampled with it when
+    /// `bias_source` is `engine`).
     pub engine: Option<EngineBias>,
     pub receivers: usize,
     pub snapped: Flicker,
@@ -61,6 +98,11 @@ pub struct GroundTruth {
 }
 
 impl GroundTruth {
+    /// The PCF kernel width the pass sampled with.
+    pub fn pcf(&self) -> u32 {
+        self.pcf
+    }
+
     /// The `(S5 snapped, S5 unsnapped)` pair, for the flicker-versus-shimmer figure.
     pub fn s5(&self) -> (f64, f64) {
         (self.summary.flicker_snapped, self.summary.flicker_unsnapped)
@@ -68,13 +110,14 @@ impl GroundTruth {
 
     /// A cascade's recommended depth bias (configured format) in the engine's own unit, or in
     /// world units without an engine rule.
-    pub fn recommended_own(&self, i: usize, format: truth::DepthFormat) -> f64 {
+    /// None when the cascade has too few receivers.
+    pub fn recommended_own(&self, i: usize, format: truth::DepthFormat) -> Option<f64> {
         let c = &self.cascades[i];
-        let world = c.depth_bias[DepthFormatIndex::of(format)];
-        match &self.engine {
+        let world = c.depth_bias?[DepthFormatIndex::of(format)];
+        Some(match &self.engine {
             Some(e) => e.own_value(world, self.texel[i], self.ranges[i].1 - self.ranges[i].0),
             None => world,
-        }
+        })
     }
 }
 
@@ -106,33 +149,68 @@ pub fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
         .collect();
     let texel: Vec<f64> = windows0.iter().map(|w| w.texel_size()).collect();
     let t = &config.truth;
+    let preset = config.shadow.preset.as_ref().map(|p| p.name);
+    let filter = t
+        .pcf_filter
+        .unwrap_or_else(|| preset.map_or(PcfFilter::Bilinear, engine_filter));
     let engine = if t.bias_written() {
         None
     } else {
-        config.shadow.preset.as_ref().and_then(|p| engine_bias(p.name))
+        preset.and_then(engine_bias)
     };
-    let bias: Vec<Bias> = (0..m)
-        .map(|i| match &engine {
-            Some(e) => e.rule.for_cascade(texel[i], ranges[i].1 - ranges[i].0),
-            None => Bias {
+    let bias_source = match (t.bias_mode, t.bias_written(), &engine) {
+        (Some(BiasMode::None), _, _) => BiasSource::None,
+        (Some(BiasMode::Recommended), _, _) => BiasSource::Recommended,
+        (None, true, _) => BiasSource::Configured,
+        (None, false, Some(_)) => BiasSource::Engine,
+        (None, false, None) => BiasSource::Recommended,
+    };
+    let unbiased = Sampling {
+        bias: vec![Bias::ZERO; m],
+        format: Some(t.depth_format),
+        ranges: ranges.clone(),
+        pcf: t.pcf,
+        filter,
+    };
+    let points: Vec<Receiver> = truth::receivers(scene, &vis);
+    let mut zero_stats = CacheStats::default();
+    let bias: Vec<Bias> = match bias_source {
+        BiasSource::None => unbiased.bias.clone(),
+        BiasSource::Configured => vec![
+            Bias {
                 depth: t.depth_bias.unwrap_or(0.0),
                 slope: t.slope_bias.unwrap_or(0.0),
                 normal: t.normal_bias.unwrap_or(0.0),
                 ..Bias::ZERO
-            },
-        })
-        .collect();
+            };
+            m
+        ],
+        BiasSource::Engine => {
+            let e = engine.expect("an engine rule");
+            (0..m)
+                .map(|i| e.rule.for_cascade(texel[i], ranges[i].1 - ranges[i].0))
+                .collect()
+        }
+        BiasSource::Recommended => {
+            // The bias needed comes from the unbiased lookups; the pass then samples with it.
+            let (zero, stats) = truth::frame_zero(scene, rig, &rig.light, &pose0, snap, &points, &unbiased);
+            zero_stats.add(stats);
+            let needed: Vec<Option<f64>> = truth::cascade_truth(&zero, m, &unbiased)
+                .iter()
+                .map(|c| c.chosen_bias)
+                .collect();
+            recommended_bias(&needed, &texel).into_iter().map(Bias::depth).collect()
+        }
+    };
     let sampling = Sampling {
         bias: bias.clone(),
-        format: Some(t.depth_format),
-        ranges: ranges.clone(),
-        pcf: t.pcf,
+        ..unbiased
     };
-    let points: Vec<Receiver> = truth::receivers(scene, &vis);
-    let (zero, zero_stats) = truth::frame_zero(scene, rig, &rig.light, &pose0, snap, &points, &sampling);
+    let (zero, stats) = truth::frame_zero(scene, rig, &rig.light, &pose0, snap, &points, &sampling);
+    zero_stats.add(stats);
     let truly_lit: Vec<bool> = zero.iter().map(|p| p.truly_lit).collect();
     let cascades = truth::cascade_truth(&zero, m, &sampling);
-    let (acne, leak) = truth::fractions(&zero);
+    let [acne, edge, leak] = truth::error_fractions(&zero).unwrap_or([0.0; 3]);
 
     let frames = csm_core::motion::poses(&setup.camera, &setup.motion).len();
     let every = frames.div_ceil(ANIMATION_FRAMES).max(1);
@@ -175,12 +253,20 @@ pub fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
     Some(GroundTruth {
         summary: TruthSummary {
             acne_fraction: acne,
+            edge_error_fraction: edge,
             leak_fraction: leak,
             flicker_snapped: snapped.s5,
             flicker_unsnapped: unsnapped.s5,
+            flicker_edge_snapped: snapped.s5_edge,
+            flicker_edge_unsnapped: unsnapped.s5_edge,
+            flicker_acne_snapped: snapped.s5_acne,
+            flicker_acne_unsnapped: unsnapped.s5_acne,
         },
         cascades,
         bias,
+        bias_source,
+        filter,
+        pcf: t.pcf,
         ranges,
         texel,
         engine,
@@ -195,6 +281,24 @@ pub fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
     })
 }
 
+/// The depth bias each cascade samples with when csm-lab recommends it: the cascade's own
+/// `bias_needed` (`needed[i]`), or for a cascade with too few receivers to have one, the
+/// largest of the others scaled by the ratio of texel sizes (on a plane the bias needed is
+/// proportional to the texel size); 0 when no cascade has one.
+pub fn recommended_bias(needed: &[Option<f64>], texel: &[f64]) -> Vec<f64> {
+    (0..needed.len())
+        .map(|i| {
+            needed[i].unwrap_or_else(|| {
+                needed
+                    .iter()
+                    .zip(texel)
+                    .filter_map(|(b, t)| b.map(|b| if *t > 0.0 { b * texel[i] / t } else { b }))
+                    .fold(0.0, f64::max)
+            })
+        })
+        .collect()
+}
+
 /// One configuration's proxies and its measured flicker, per snap mode: the points of the
 /// flicker-versus-shimmer figure.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -206,6 +310,10 @@ pub struct FlickerPoint {
     pub s4: Option<f64>,
     /// S5: measured state changes per receiver and frame step.
     pub s5: f64,
+    /// The part of S5 at shadow edges (`flicker_edge_*`).
+    pub s5_edge: f64,
+    /// Where the bias the pass sampled with came from.
+    pub bias_source: BiasSource,
 }
 
 /// The (S3, S4, S5) points of configurations (both snap modes each), each analysed with
@@ -245,12 +353,16 @@ pub fn points_of(a: &crate::analysis::Analysis) -> Vec<FlickerPoint> {
                 s3: s.stats.rms,
                 s4: s.stats.cell_flip_rate,
                 s5: g.summary.flicker_snapped,
+                s5_edge: g.summary.flicker_edge_snapped,
+                bias_source: g.bias_source,
             },
             FlickerPoint {
                 snapped: false,
                 s3: u.stats.rms,
                 s4: u.stats.cell_flip_rate,
                 s5: g.summary.flicker_unsnapped,
+                s5_edge: g.summary.flicker_edge_unsnapped,
+                bias_source: g.bias_source,
             },
         ],
         _ => Vec::new(),

@@ -44,6 +44,10 @@ pub struct AnalyzeRequest {
     /// needed per cascade; bias.csv); as [analysis] ground_truth = true. Needs scene geometry.
     #[arg(long)]
     pub ground_truth: bool,
+    /// With --ground-truth: sample the maps with no bias at all (as [shadow] bias = "none"),
+    /// instead of the configured, engine or recommended bias.
+    #[arg(long)]
+    pub raw_bias: bool,
 }
 
 /// The `analyze` command.
@@ -62,6 +66,16 @@ pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
     if args.ground_truth {
         crate::commands::sweep::flicker::refuse_ground_truth(&config, "--ground-truth")?;
         config.truth.enabled = true;
+    }
+    if args.raw_bias {
+        if config.truth.bias_written() {
+            return Err(Error::flag(
+                "--raw-bias",
+                "",
+                "not with shadow.depth_bias, shadow.slope_bias or shadow.normal_bias set: those keys are the bias",
+            ));
+        }
+        config.truth.bias_mode = Some(crate::config::BiasMode::None);
     }
     let progress = super::progress::Progress::new(args.quiet, frames_walked(&config), "frames");
     let analysis = analyze_with_progress(&config, &AnalysisOptions::full(), &|n| progress.inc(n));

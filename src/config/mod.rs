@@ -462,6 +462,29 @@ pub struct TruthSettings {
     pub depth_format: csm_core::truth::DepthFormat,
     /// PCF kernel width in texels: 1, 3 or 5.
     pub pcf: u32,
+    /// `[shadow] pcf_filter`; None: the preset engine's filter, else bilinear.
+    pub pcf_filter: Option<csm_core::truth::PcfFilter>,
+    /// `[shadow] bias = "none" | "recommended"` (or `analyze --raw-bias`, which is "none");
+    /// None: the bias keys, else the preset's engine bias, else the recommended bias.
+    pub bias_mode: Option<BiasMode>,
+}
+
+/// `[shadow] bias`: which bias the ground-truth pass samples with, when not its keys'.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BiasMode {
+    /// No bias at all (the raw maps).
+    None,
+    /// csm-lab's recommended depth bias, per cascade.
+    Recommended,
+}
+
+impl BiasMode {
+    pub fn name(self) -> &'static str {
+        match self {
+            BiasMode::None => "none",
+            BiasMode::Recommended => "recommended",
+        }
+    }
 }
 
 impl Default for TruthSettings {
@@ -473,6 +496,8 @@ impl Default for TruthSettings {
             normal_bias: None,
             depth_format: csm_core::truth::DepthFormat::D32F,
             pcf: 1,
+            pcf_filter: None,
+            bias_mode: None,
         }
     }
 }
@@ -489,6 +514,12 @@ impl TruthSettings {
             "depth_format": self.depth_format.name(),
             "pcf": self.pcf,
         });
+        if let Some(f) = self.pcf_filter {
+            v["pcf_filter"] = f.name().into();
+        }
+        if let Some(m) = self.bias_mode {
+            v["bias"] = m.name().into();
+        }
         for (k, x) in [
             ("depth_bias", self.depth_bias),
             ("slope_bias", self.slope_bias),

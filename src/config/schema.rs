@@ -157,6 +157,9 @@ pub(crate) struct RawShadow {
     pub(crate) normal_bias: Option<f64>,
     pub(crate) depth_format: Option<Spanned<String>>,
     pub(crate) pcf: Option<i64>,
+    pub(crate) pcf_filter: Option<Spanned<String>>,
+    /// `"none"` (zero bias) or `"recommended"` (csm-lab's per-cascade bias).
+    pub(crate) bias: Option<Spanned<String>>,
 }
 
 /// `[shadow] light_update = { every_frames = K }` or `{ quantize_deg = Q }`.

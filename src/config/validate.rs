@@ -351,6 +351,31 @@ fn truth_settings(s: &super::schema::RawShadow, v: &Validator<'_>) -> Result<cra
             ],
         )?;
     }
+    if let Some(f) = &s.pcf_filter {
+        use csm_core::truth::PcfFilter;
+        truth.pcf_filter = Some(v.one_of(
+            "shadow.pcf_filter",
+            f,
+            &[("bilinear", PcfFilter::Bilinear), ("nearest", PcfFilter::Nearest)],
+        )?);
+    }
+    if let Some(b) = &s.bias {
+        use crate::config::BiasMode;
+        let mode = v.one_of(
+            "shadow.bias",
+            b,
+            &[("none", BiasMode::None), ("recommended", BiasMode::Recommended)],
+        )?;
+        if truth.bias_written() {
+            return Err(v.invalid(
+                "shadow.bias",
+                format!("{:?}", mode.name()),
+                "absent when shadow.depth_bias, shadow.slope_bias or shadow.normal_bias is set \
+                 (those keys are the bias); \"none\" or \"recommended\" without them",
+            ));
+        }
+        truth.bias_mode = Some(mode);
+    }
     if let Some(k) = s.pcf {
         if ![1, 3, 5].contains(&k) {
             return Err(v.invalid("shadow.pcf", k, "1, 3 or 5: the PCF kernel's width in texels"));

@@ -54,9 +54,11 @@ pub mod colours {
     pub const LIT: [u8; 3] = [246, 222, 140];
     /// Shadowed by the map, truly shadowed.
     pub const SHADOWED: [u8; 3] = [72, 84, 112];
-    /// Shadowed by the map, truly lit (self-shadowing).
+    /// Shadowed by the map, truly lit, every texel read holding its own surface (acne).
     pub const ACNE: [u8; 3] = [213, 40, 120];
-    /// Lit by the map, truly shadowed (peter-panning, light leaks).
+    /// Wrong because the texels read hold another surface (the blocky edge, either way).
+    pub const EDGE: [u8; 3] = [240, 130, 20];
+    /// Lit by the map only because of the bias, truly shadowed (peter-panning, light leaks).
     pub const LEAK: [u8; 3] = [0, 190, 220];
     /// The animation's progress bar.
     pub const PROGRESS: [u8; 3] = [213, 94, 0];
@@ -69,6 +71,7 @@ pub fn shade_colour(s: Shade) -> [u8; 3] {
         Shade::Lit => colours::LIT,
         Shade::Shadowed => colours::SHADOWED,
         Shade::Acne => colours::ACNE,
+        Shade::Edge => colours::EDGE,
         Shade::Leak => colours::LEAK,
     }
 }
@@ -340,6 +343,7 @@ pub struct ShadeCounts {
     pub lit: usize,
     pub shadowed: usize,
     pub acne: usize,
+    pub edge: usize,
     pub leak: usize,
 }
 
@@ -352,6 +356,7 @@ impl ShadeCounts {
                 Shade::Lit => c.lit += 1,
                 Shade::Shadowed => c.shadowed += 1,
                 Shade::Acne => c.acne += 1,
+                Shade::Edge => c.edge += 1,
                 Shade::Leak => c.leak += 1,
             }
         }
@@ -360,7 +365,7 @@ impl ShadeCounts {
 
     /// Pixels with a receiver.
     pub fn receivers(&self) -> usize {
-        self.lit + self.shadowed + self.acne + self.leak
+        self.lit + self.shadowed + self.acne + self.edge + self.leak
     }
 }
 
@@ -373,8 +378,9 @@ fn shade_legend<T>(layout: &Layout, panels: &[Panel<'_, T>], counts: &[ShadeCoun
     for (c, label) in [
         (colours::LIT, "lit"),
         (colours::SHADOWED, "shadowed"),
-        (colours::ACNE, "acne: shadowed by the map, truly lit"),
-        (colours::LEAK, "leak: lit by the map, truly shadowed"),
+        (colours::ACNE, "acne (own surface)"),
+        (colours::EDGE, "edge (another surface)"),
+        (colours::LEAK, "leak (the bias)"),
         (colours::EMPTY, "no receiver"),
     ] {
         body.push_str(&swatch(x, 22.0, c, label));
@@ -393,9 +399,11 @@ fn shade_legend<T>(layout: &Layout, panels: &[Panel<'_, T>], counts: &[ShadeCoun
                 percent(c.shadowed, n)
             ),
             format!(
-                "acne {} ({}), leak {} ({})",
+                "acne {} ({}), edge {} ({}), leak {} ({})",
                 c.acne,
                 percent(c.acne, n),
+                c.edge,
+                percent(c.edge, n),
                 c.leak,
                 percent(c.leak, n)
             ),
@@ -611,7 +619,7 @@ const HEADER_BOUND: u64 = 1024;
 /// Palette: 16 greys (white to black) for the text, then the states and the progress bar.
 const GREYS: usize = 16;
 const PAL_STATE: usize = GREYS;
-const PAL_PROGRESS: usize = GREYS + 5;
+const PAL_PROGRESS: usize = GREYS + 6;
 
 fn palette_rgb() -> Vec<[u8; 3]> {
     let mut p: Vec<[u8; 3]> = (0..GREYS)
@@ -620,7 +628,14 @@ fn palette_rgb() -> Vec<[u8; 3]> {
             [v, v, v]
         })
         .collect();
-    for s in [Shade::Empty, Shade::Lit, Shade::Shadowed, Shade::Acne, Shade::Leak] {
+    for s in [
+        Shade::Empty,
+        Shade::Lit,
+        Shade::Shadowed,
+        Shade::Acne,
+        Shade::Edge,
+        Shade::Leak,
+    ] {
         p.push(shade_colour(s));
     }
     p.push(colours::PROGRESS);
@@ -634,7 +649,8 @@ fn state_index(s: Shade) -> u8 {
             Shade::Lit => 1,
             Shade::Shadowed => 2,
             Shade::Acne => 3,
-            Shade::Leak => 4,
+            Shade::Edge => 4,
+            Shade::Leak => 5,
         }) as u8
 }
 
@@ -766,6 +782,7 @@ pub fn write_animation(
         (Shade::Lit, "lit"),
         (Shade::Shadowed, "shadowed"),
         (Shade::Acne, "acne"),
+        (Shade::Edge, "edge"),
         (Shade::Leak, "leak"),
         (Shade::Empty, "no receiver"),
     ] {
@@ -902,7 +919,7 @@ pub struct ShimmerPoint {
 pub const FLICKER_VS_SHIMMER: &str = "flicker_vs_shimmer";
 
 /// The scatter's caption in a report: what to look for.
-pub const FLICKER_VS_SHIMMER_CAPTION: &str = "Flicker S5 against the shimmer proxies S3 and S4, one point per configuration: points close to the fitted line (|r| near 1) mean the proxy predicts the flicker a player sees.";
+pub const FLICKER_VS_SHIMMER_CAPTION: &str = "Flicker S5 against the shimmer proxies S3 and S4, one point per configuration: points close to the fitted line (|r| near 1) mean the proxy predicts the flicker a player sees. The snapped configurations sit at the origin and pull the line; the unsnapped points alone (the report's sentences) say whether the proxy ranks the configurations that flicker.";
 
 /// The ordinary least-squares line `y = a + b x` through points and how well it fits.
 #[derive(Debug, Clone, Copy, PartialEq)]

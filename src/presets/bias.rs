@@ -56,3 +56,14 @@ impl BiasModel {
 pub fn engine_bias(name: PresetName) -> Option<EngineBias> {
     name.engine().bias().rule()
 }
+
+/// The filter of an engine's shadow lookups (docs/presets.md, "Filter"): the two seeds that
+/// compare point-sampled texels read nearest; engines sample with a comparison sampler and
+/// linear filtering (hardware PCF), as csm-lab's own pipeline does.
+pub fn engine_filter(name: PresetName) -> csm_core::truth::PcfFilter {
+    use csm_core::truth::PcfFilter;
+    match name {
+        PresetName::LearnOpenGl | PresetName::UnitySample => PcfFilter::Nearest,
+        _ => PcfFilter::Bilinear,
+    }
+}

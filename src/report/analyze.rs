@@ -201,6 +201,10 @@ pub fn summary_value(a: &Analysis) -> serde_json::Value {
     for (k, x) in metric::summary_json(s) {
         obj.insert(k.into(), x);
     }
+    if let Some(g) = &a.ground_truth {
+        obj.insert("bias_source".into(), g.bias_source.name().into());
+        obj.insert("pcf_filter".into(), g.filter.name().into());
+    }
     if !s.cascades_needed {
         obj.insert(
             "message".into(),

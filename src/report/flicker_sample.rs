@@ -120,14 +120,43 @@ pub fn lines(s: &FlickerSample) -> Vec<String> {
     // unsnapped points alone say whether the proxies rank the configurations that do flicker.
     let free: Vec<ShimmerPoint> = p.iter().filter(|x| !x.snapped).copied().collect();
     let ff = fits(&free);
+    // The edge part of S5 (changes where a texel read holds another surface) of the same rows.
+    let edge: Vec<ShimmerPoint> = s
+        .points()
+        .filter(|x| !x.snapped)
+        .map(|x| ShimmerPoint {
+            s3: x.s3,
+            s4: x.s4.unwrap_or(0.0),
+            s5: x.s5_edge,
+            snapped: false,
+        })
+        .collect();
+    let fe = fits(&edge);
+    let mut sources: Vec<&str> = s.points().map(|x| x.bias_source.name()).collect();
+    sources.sort_unstable();
+    sources.dedup();
+    let recommended = if sources.contains(&"recommended") {
+        " (recommended: that row's own bias_needed per cascade, acne at most 0.1 %)"
+    } else {
+        ""
+    };
     vec![
         format!("{} (flicker.csv).", s.sentence()),
+        format!(
+            "S5 is measured at the bias each row's pass sampled with: bias_source = {}{recommended}.",
+            sources.join(", ")
+        ),
         format!("Against S3, all points: {}.", fit_words("S3", &f.s3)),
         format!("Against S4, all points: {}.", fit_words("S4", &f.s4)),
         format!(
             "Unsnapped points alone: against S3 {}; against S4 {}.",
             fit_words("S3", &ff.s3),
             fit_words("S4", &ff.s4)
+        ),
+        format!(
+            "Unsnapped points alone, the edge part of S5 (flicker_edge_unsnapped): against S3 {}; against S4 {}.",
+            fit_words("S3", &fe.s3),
+            fit_words("S4", &fe.s4)
         ),
         format!(
             "Largest S5: snapped {}, unsnapped {} (share of receivers flipping per frame).",

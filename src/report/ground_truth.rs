@@ -13,15 +13,18 @@ use csm_core::truth::DepthFormat;
 pub struct BiasCsv;
 
 /// The columns of `bias.csv`.
-pub const BIAS_COLUMNS: [&str; 20] = [
+pub const BIAS_COLUMNS: [&str; 23] = [
     "cascade",
     "points",
     "texel_size",
     "light_depth_range",
+    "bias_source",
+    "pcf_filter",
     "depth_bias",
     "slope_bias",
     "normal_bias_texels",
     "acne_fraction",
+    "edge_error_fraction",
     "leak_fraction",
     "bias_needed_exact",
     "step_d16",
@@ -54,26 +57,31 @@ impl Exporter<Analysis> for BiasCsv {
             .map(|(i, c)| {
                 let b = &g.bias[i];
                 let f = |name: &str, v: f64| num(name, v);
+                let o = |name: &str, v: Option<f64>| v.map_or(Ok("n/a".to_string()), |x| num(name, x));
+                let needed = |k: usize| o("bias_needed", c.depth_bias.map(|d| d[k]));
                 Ok(vec![
                     i.to_string(),
                     c.points.to_string(),
                     f("texel_size", g.texel[i])?,
                     f("light_depth_range", g.ranges[i].1 - g.ranges[i].0)?,
+                    g.bias_source.name().to_string(),
+                    g.filter.name().to_string(),
                     f("depth_bias", b.depth)?,
                     f("slope_bias", b.slope)?,
                     f("normal_bias_texels", b.normal)?,
-                    f("acne_fraction", c.acne_fraction)?,
-                    f("leak_fraction", c.leak_fraction)?,
-                    f("bias_needed_exact", c.depth_bias_exact)?,
+                    o("acne_fraction", c.acne_fraction)?,
+                    o("edge_error_fraction", c.edge_error_fraction)?,
+                    o("leak_fraction", c.leak_fraction)?,
+                    o("bias_needed_exact", c.depth_bias_exact)?,
                     f("step_d16", c.step[0])?,
                     f("step_d24", c.step[1])?,
                     f("step_d32f", c.step[2])?,
-                    f("bias_needed_d16", c.depth_bias[0])?,
-                    f("bias_needed_d24", c.depth_bias[1])?,
-                    f("bias_needed_d32f", c.depth_bias[2])?,
-                    f("slope_bias_needed", c.slope_bias)?,
-                    f("peter_pan", c.peter_pan)?,
-                    f("recommended", g.recommended_own(i, format))?,
+                    needed(0)?,
+                    needed(1)?,
+                    needed(2)?,
+                    o("slope_bias_needed", c.slope_bias)?,
+                    o("peter_pan", c.peter_pan)?,
+                    o("recommended", g.recommended_own(i, format))?,
                     unit.to_string(),
                 ])
             })
@@ -96,26 +104,36 @@ pub fn recommendation(a: &Analysis, g: &GroundTruth) -> String {
         g.cache.rays,
         short_number(g.cache.hit_rate())
     );
+    let _ = writeln!(out, "  {}", bias_sentence(g));
     let (setting, unit) = match &g.engine {
         Some(e) => (e.setting, e.unit),
         None => ("shadow.depth_bias", "world units"),
     };
     let _ = writeln!(
         out,
-        "  recommended depth bias ({}, acne <= 0.1 % per cascade): {setting} in {unit}",
+        "  recommended depth bias ({}, acne <= 0.1 % per cascade, margin 0.1 % + one format step): {setting} in {unit}",
         format.name().to_uppercase()
     );
     let mut largest: f64 = 0.0;
+    let o = |x: Option<f64>| x.map_or("n/a".to_string(), short_number);
     for (i, c) in g.cascades.iter().enumerate() {
-        let own = g.recommended_own(i, format);
+        let Some(own) = g.recommended_own(i, format) else {
+            let _ = writeln!(
+                out,
+                "  cascade {i}: too few receivers ({}; at least {} are needed)",
+                c.points,
+                csm_core::truth::MIN_POINTS
+            );
+            continue;
+        };
         largest = largest.max(own);
         let _ = writeln!(
             out,
             "  cascade {i}: {:>10}  (world {}, slope bias alone {}, peter-pan {} world units, {} points)",
             short_number(own),
-            short_number(c.depth_bias[format_index(format)]),
-            short_number(c.slope_bias),
-            short_number(c.peter_pan),
+            o(c.depth_bias.map(|d| d[format_index(format)])),
+            o(c.slope_bias),
+            o(c.peter_pan),
             c.points
         );
     }
@@ -127,6 +145,30 @@ pub fn recommendation(a: &Analysis, g: &GroundTruth) -> String {
         );
     }
     out
+}
+
+/// One sentence on the bias the pass sampled with and where it came from (stdout, reports).
+pub fn bias_sentence(g: &GroundTruth) -> String {
+    use crate::analysis::ground_truth::BiasSource;
+    let what = match g.bias_source {
+        BiasSource::Configured => "the [shadow] bias keys".to_string(),
+        BiasSource::Engine => format!(
+            "the engine's default bias ({})",
+            g.engine.map_or("the preset", |e| e.setting)
+        ),
+        BiasSource::Recommended => {
+            "csm-lab's recommended depth bias per cascade (no bias set; --raw-bias or [shadow] bias = \"none\" samples without)"
+                .to_string()
+        }
+        BiasSource::None => "no bias (--raw-bias or [shadow] bias = \"none\")".to_string(),
+    };
+    format!(
+        "bias_source = {}: sampled with {what}; {} PCF {}x{}",
+        g.bias_source.name(),
+        g.filter.name(),
+        g.pcf(),
+        g.pcf()
+    )
 }
 
 fn format_index(f: DepthFormat) -> usize {

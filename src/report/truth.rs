@@ -42,7 +42,7 @@ pub fn shadow_caption(label: &str) -> String {
 /// The caption of `flicker.png`.
 pub fn flicker_caption(label: &str) -> String {
     format!(
-        "{label}: how often each receiver pixel flipped between lit and shadowed along the path (flicker.png). Bright pixels are shadow edges that crawl; with snapped windows they should stay dark."
+        "{label}: how often each receiver pixel flipped between lit and shadowed along the path (flicker.png). Bright pixels flip often: at a shadow edge that crawls, or where acne comes and goes as the grid slides (summary.json splits S5 into flicker_edge_* and flicker_acne_*); with snapped windows they should stay dark."
     )
 }
 

@@ -193,7 +193,14 @@ fn unity_builtin_and_dart_are_left_unmodelled() {
     let a = run("unity");
     let g = truth_of(&a);
     assert!(g.engine.is_none());
-    assert!(g.bias.iter().all(|b| *b == Bias::ZERO));
+    // Without an engine rule the pass samples with csm-lab's recommended depth bias per cascade.
+    assert_eq!(g.bias_source.name(), "recommended");
+    for (b, c) in g.bias.iter().zip(&g.cascades) {
+        assert_eq!((b.slope, b.normal), (0.0, 0.0));
+        if let Some(chosen) = c.chosen_bias {
+            assert_eq!(b.depth, chosen);
+        }
+    }
 }
 
 /// The ground plane y = 0 as a mesh.
@@ -233,6 +240,7 @@ fn plane_acne(theta: f64, t: f64, bias: Bias) -> f64 {
         format: None,
         ranges: vec![(-200.0, 200.0)],
         pcf: 1,
+        filter: truth::PcfFilter::Nearest,
     };
     let cascades = vec![Some(0); points.len()];
     truth::fractions(&truth::frame_zero_in(&scene, &b, &[(b, w)], &cascades, &points, &s).0).0

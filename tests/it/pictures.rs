@@ -51,7 +51,14 @@ fn centre(i: u32, pw: u32, k: u32, c: u32, r: u32) -> (u32, u32) {
     (i * (pw + GAP) + c * k + k / 2, TITLE_H + r * k + k / 2)
 }
 
-const STATES: [Shade; 5] = [Shade::Empty, Shade::Lit, Shade::Shadowed, Shade::Acne, Shade::Leak];
+const STATES: [Shade; 6] = [
+    Shade::Empty,
+    Shade::Lit,
+    Shade::Shadowed,
+    Shade::Acne,
+    Shade::Edge,
+    Shade::Leak,
+];
 
 fn state_rgb(s: Shade) -> [u8; 3] {
     match s {
@@ -59,6 +66,7 @@ fn state_rgb(s: Shade) -> [u8; 3] {
         Shade::Lit => [246, 222, 140],
         Shade::Shadowed => [72, 84, 112],
         Shade::Acne => [213, 40, 120],
+        Shade::Edge => [240, 130, 20],
         Shade::Leak => [0, 190, 220],
     }
 }
@@ -67,7 +75,7 @@ fn state_rgb(s: Shade) -> [u8; 3] {
 fn synthetic(shift: usize) -> ShadeImage {
     let mut im = ShadeImage::empty(8, 4);
     for (k, p) in im.pixels.iter_mut().enumerate() {
-        *p = STATES[(k * 7 + shift) % 5];
+        *p = STATES[(k * 7 + shift) % 6];
     }
     im
 }
@@ -185,7 +193,7 @@ fn a_narrow_grid_leaves_room_for_the_legend() {
     // 10 × 100: k = min(1280 / 10, 900 / 100) = 9, a 90-pixel panel left-aligned in 960.
     let mut im = ShadeImage::empty(10, 100);
     for (k, p) in im.pixels.iter_mut().enumerate() {
-        *p = STATES[k % 5];
+        *p = STATES[k % 6];
     }
     let img = decode(&shadow_png(&[Panel::snapped(&im)]).unwrap());
     assert_eq!(img.w, 960);
@@ -312,7 +320,7 @@ fn noise(cols: u32, rows: u32, frame: usize, salt: u64) -> ShadeImage {
         x ^= x << 13;
         x ^= x >> 7;
         x ^= x << 17;
-        *p = STATES[(x % 5) as usize];
+        *p = STATES[(x % 6) as usize];
     }
     im
 }

@@ -669,8 +669,8 @@ fn each_preset_snaps_as_its_engine_does_under_strafe_and_yaw() {
         ("unreal", true, true),
         ("unity", true, true),
         ("unity-urp", true, true),
-        // The light basis follows the camera's right axis: fixed under strafe, turning under yaw.
-        ("filament", true, false),
+        // A basis fixed in the world (+X up reference) and 2-texel fmod snapping.
+        ("filament", true, true),
         // No snapping; the window stays on the origin axis (size fixed under strafe only).
         ("unity-sample", true, false),
         // Look-at from a light position: every camera move turns each cascade's basis.
@@ -701,10 +701,12 @@ fn each_preset_snaps_as_its_engine_does_under_strafe_and_yaw() {
     assert!(s > 1e-3);
 }
 
-/// The per-probe evaluation for bases that follow the camera: exactly zero drift and no flips
-/// while the basis stays put (Filament under strafe), drift and flips once it turns (yaw).
+/// The per-probe evaluation for bases that follow the camera (the rule Filament used before
+/// its fixed +X reference): exactly zero drift and no flips while the basis stays put (strafe),
+/// drift and flips once it turns (yaw).
 #[test]
 fn a_camera_oriented_basis_is_evaluated_probe_by_probe() {
+    use csm_core::cascades::BasisRule;
     use csm_core::rig_path::{along_path, probes};
     use csm_core::shimmer::ShimmerOptions;
     let every = ShimmerOptions {
@@ -718,7 +720,8 @@ fn a_camera_oriented_basis_is_evaluated_probe_by_probe() {
             "[shadow]\npreset = \"filament\"\ncascades = 3",
         );
         let c = load(&text);
-        let rig = csm_lab::analysis::rig(&c).unwrap();
+        let mut rig = csm_lab::analysis::rig(&c).unwrap();
+        rig.scheme.basis = BasisRule::CameraRight;
         assert!(!rig.fixed_basis());
         let poses = c.camera_path().unwrap();
         let pr = probes(&rig, &c.camera.pose(), &c.scene, 128);
@@ -735,6 +738,72 @@ fn a_camera_oriented_basis_is_evaluated_probe_by_probe() {
             );
         }
     }
+}
+
+/// Filament's directional shadow basis is a look-to along the light with the world-origin
+/// transform's x axis (+X) as the up reference: y is the part of +X perpendicular to the light
+/// and x = light x y. It does not turn when the camera yaws (the rule with the camera's right
+/// axis as the reference turned it by tens of degrees at 45 degrees of yaw).
+#[test]
+fn the_filament_window_keeps_its_orientation_when_the_camera_yaws() {
+    use csm_core::cascades::{camera_right_basis, BasisRule};
+    let c = load(&scene(
+        "path = \"yaw\"\nframes = 46\nstep = 1.0",
+        "[shadow]\npreset = \"filament\"\ncascades = 4",
+    ));
+    let rig = csm_lab::analysis::rig(&c).unwrap();
+    assert_eq!(rig.scheme.basis, BasisRule::LookToUp(DVec3::X));
+    let d = DVec3::new(-0.4, -1.0, -0.3).normalize();
+    // Independently: +X with its part along the light removed, and light x y.
+    let y = (DVec3::X - d * DVec3::X.dot(d)).normalize();
+    let x = d.cross(y);
+    let poses = c.camera_path().unwrap();
+    assert_eq!(poses.len(), 46);
+    let lp0 = LightPose::new(&rig.light, &poses[0]);
+    let w0: Vec<_> = (0..4).map(|i| rig.window(i, &lp0, true)).collect();
+    for pose in &poses {
+        let lp = LightPose::new(&rig.light, pose);
+        for (i, w0) in w0.iter().enumerate() {
+            let b = rig.basis(i, &lp);
+            assert!((b.x - x).length() < 1e-12 && (b.y - y).length() < 1e-12 && (b.z - d).length() < 1e-12);
+            // Same texel size and grid orientation in every frame (only the centre moves).
+            let w = rig.window(i, &lp, true);
+            assert_eq!(w.texel, w0.texel);
+            assert_eq!(w.resolution, w0.resolution);
+        }
+    }
+    // The camera-right rule at the last pose (45 degrees of yaw) is turned far from it.
+    let last = poses.last().unwrap();
+    let first = camera_right_basis(d, poses[0].right).unwrap();
+    let turned = camera_right_basis(d, last.right).unwrap();
+    let angle = |a: DVec3, b: DVec3| a.dot(b).clamp(-1.0, 1.0).acos().to_degrees();
+    assert!((angle(poses[0].right, last.right) - 45.0).abs() < 1e-6);
+    let yawed = angle(first.y, turned.y);
+    assert!(
+        (30.0..50.0).contains(&yawed),
+        "camera-right basis turned by {yawed} degrees"
+    );
+    // The fixed basis and the camera-right one at 45 degrees of yaw are far apart too.
+    let apart = angle(y, turned.y);
+    assert!(apart > 30.0, "{apart}");
+}
+
+/// Filament's near-vertical fallback: with the light within acos(0.999) of +X the up
+/// reference becomes (up.z, up.x, up.y) = +Y.
+#[test]
+fn filament_basis_swaps_its_up_reference_for_a_light_along_x() {
+    use csm_core::cascades::look_to_basis;
+    for d in [DVec3::X, DVec3::new(1.0, 0.02, -0.01).normalize(), -DVec3::X] {
+        let b = look_to_basis(d, DVec3::X).unwrap();
+        let y = (DVec3::Y - d * DVec3::Y.dot(d)).normalize();
+        assert!((b.y - y).length() < 1e-12, "{d}: {}", b.y);
+        assert!((b.x - d.cross(y)).length() < 1e-12);
+    }
+    // Just outside the cone the +X reference is kept.
+    let d = DVec3::new(1.0, 0.1, 0.0).normalize();
+    assert!(d.dot(DVec3::X) < 0.999);
+    let b = look_to_basis(d, DVec3::X).unwrap();
+    assert!((b.y - (DVec3::X - d * d.x).normalize()).length() < 1e-12);
 }
 
 #[test]

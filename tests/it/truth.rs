@@ -5,7 +5,7 @@ use csm_core::cascades::LightPose;
 use csm_core::fitting::Window;
 use csm_core::geometry::{Aabb, LightBasis};
 use csm_core::mesh::Mesh;
-use csm_core::truth::{self, Bias, BiasRule, DepthFormat, NormalOffset, Receiver, Sampling};
+use csm_core::truth::{self, Bias, BiasRule, DepthFormat, NormalOffset, PcfFilter, Receiver, Sampling};
 use csm_core::visibility::SceneGeometry;
 use csm_lab::analysis::ground_truth::GroundTruth;
 use csm_lab::{analyze, AnalysisOptions, Config};
@@ -110,6 +110,7 @@ fn sampling(bias: Bias) -> Sampling {
         format: Some(DepthFormat::D32F),
         ranges: vec![(-200.0, 200.0)],
         pcf: 1,
+        filter: PcfFilter::Nearest,
     }
 }
 
@@ -205,49 +206,115 @@ fn first_surface(origin: DVec3, dir: DVec3, b: &Aabb) -> f64 {
     best
 }
 
+/// The texel map of the ground and the box seen along the light, by brute force: texel
+/// `(i, j)`'s centre's first surface (texel indices relative to the window's first texel; any
+/// index, inside the window or not).
+struct BruteMap {
+    b: LightBasis,
+    w: Window,
+    bx: Aabb,
+}
+
+impl BruteMap {
+    const START: f64 = -500.0;
+
+    fn depth(&self, i: i64, j: i64) -> f64 {
+        let c = (self.w.origin_texels + DVec2::new(i as f64 + 0.5, j as f64 + 0.5)) * self.w.texel;
+        let origin = self.b.x * c.x + self.b.y * c.y + self.b.z * Self::START;
+        Self::START + first_surface(origin, self.b.z, &self.bx)
+    }
+
+    /// A comparison sampler's answer at `p` with depth bias `bias`: `k x k` taps one texel apart
+    /// around `p`, each the 2x2 bilinear weights of its compare results (bilinear) or its own
+    /// texel's result (nearest), lit when the weighted share is at least 1/2.
+    fn lit(&self, p: DVec3, bias: f64, k: i64, bilinear: bool) -> bool {
+        let s = DVec2::new(self.b.x.dot(p), self.b.y.dot(p)) / self.w.texel - self.w.origin_texels;
+        let z = self.b.z.dot(p);
+        let pass = |i: i64, j: i64| if z <= self.depth(i, j) + bias { 1.0 } else { 0.0 };
+        let h = k / 2;
+        let mut sum = 0.0;
+        for dy in -h..=h {
+            for dx in -h..=h {
+                let t = s + DVec2::new(dx as f64, dy as f64);
+                sum += if bilinear {
+                    let (fx, fy) = ((t.x - 0.5).fract_gl(), (t.y - 0.5).fract_gl());
+                    let (i, j) = ((t.x - 0.5).floor() as i64, (t.y - 0.5).floor() as i64);
+                    (1.0 - fx) * (1.0 - fy) * pass(i, j)
+                        + fx * (1.0 - fy) * pass(i + 1, j)
+                        + (1.0 - fx) * fy * pass(i, j + 1)
+                        + fx * fy * pass(i + 1, j + 1)
+                } else {
+                    pass(t.x.floor() as i64, t.y.floor() as i64)
+                };
+            }
+        }
+        sum / (k * k) as f64 >= 0.5
+    }
+}
+
+trait FractGl {
+    fn fract_gl(self) -> f64;
+}
+
+impl FractGl for f64 {
+    /// `x - floor(x)` (GLSL's fract; Rust's `fract` keeps the sign).
+    fn fract_gl(self) -> f64 {
+        self - self.floor()
+    }
+}
+
+/// csm-lab's lookups equal a brute-force comparison sampler over a brute-force rasterisation of
+/// the whole map (the ground and the box, every texel's first surface by slabs), for nearest and
+/// bilinear filtering at PCF 1 and 3.
 #[test]
 fn a_box_on_the_ground_equals_a_brute_force_rasterisation_of_the_whole_map() {
-    let text = scene_text("strafe", true, "depth_bias = 0.01")
+    for (filter, pcf) in [("nearest", 1), ("bilinear", 1), ("nearest", 3), ("bilinear", 3)] {
+        let text = scene_text(
+            "strafe",
+            true,
+            &format!("depth_bias = 0.01\npcf_filter = \"{filter}\"\npcf = {pcf}\ndepth_format = \"d32f\""),
+        )
         .replace("cascades = 2", "cascades = 1")
         .replace("resolution = 256", "resolution = 64");
-    let (c, a) = ground_truth(&text);
-    let g = truth_of(&a);
-    let rig = a.rig().unwrap();
-    let pose = c.camera.pose();
-    let lp = LightPose::new(&rig.light, &pose);
-    let w = rig.window(0, &lp, true);
-    let b = rig.light;
-    let bx = Aabb::new(DVec3::new(-2.3, 0.0, -8.7), DVec3::new(1.9, 3.1, -4.4));
-    // Every texel of the 64 x 64 map: its centre's first surface along the light.
-    let n = 64usize;
-    let start = -500.0;
-    let mut map = vec![0.0; n * n];
-    for j in 0..n {
-        for i in 0..n {
-            let cxy = (w.origin_texels + DVec2::new(i as f64 + 0.5, j as f64 + 0.5)) * w.texel;
-            let origin = b.x * cxy.x + b.y * cxy.y + b.z * start;
-            map[j * n + i] = start + first_surface(origin, b.z, &bx);
+        let (c, a) = ground_truth(&text);
+        let g = truth_of(&a);
+        assert_eq!(g.filter.name(), filter);
+        let rig = a.rig().unwrap();
+        let pose = c.camera.pose();
+        let lp = LightPose::new(&rig.light, &pose);
+        let brute = BruteMap {
+            b: rig.light,
+            w: rig.window(0, &lp, true),
+            bx: Aabb::new(DVec3::new(-2.3, 0.0, -8.7), DVec3::new(1.9, 3.1, -4.4)),
+        };
+        let (near, far) = g.ranges[0];
+        let mut compared = 0;
+        let (mut lit, mut shadowed) = (0, 0);
+        for (r, z) in g.points.iter().zip(&g.zero) {
+            let Some(map_lit) = z.map_lit else { continue };
+            // d32f stores each depth rounded to binary32 over the light depth range: the same
+            // rounding applied to the brute-force depths would move a comparison by at most
+            // 2^-24 of the range; skip the receivers that close to a decision.
+            let expected = brute.lit(r.p, 0.01, pcf, filter == "bilinear");
+            let margin = 4.0 * (far - near) * (2.0f64).powi(-24);
+            if brute.lit(r.p, 0.01 + margin, pcf, filter == "bilinear")
+                != brute.lit(r.p, 0.01 - margin, pcf, filter == "bilinear")
+            {
+                continue;
+            }
+            assert_eq!(map_lit, expected, "{filter} pcf {pcf}: receiver at {:?}", r.p);
+            compared += 1;
+            if expected {
+                lit += 1;
+            } else {
+                shadowed += 1;
+            }
         }
+        assert!(
+            compared > 1000 && lit > 100 && shadowed > 100,
+            "{filter} pcf {pcf}: {compared} {lit} {shadowed}"
+        );
     }
-    let mut compared = 0;
-    let (mut lit, mut shadowed) = (0, 0);
-    for (r, z) in g.points.iter().zip(&g.zero) {
-        let Some(map_lit) = z.map_lit else { continue };
-        let s = DVec2::new(b.x.dot(r.p), b.y.dot(r.p)) / w.texel - w.origin_texels;
-        let (i, j) = (s.x.floor() as usize, s.y.floor() as usize);
-        let expected = b.z.dot(r.p) <= map[j * n + i] + 0.01;
-        assert_eq!(map_lit, expected, "receiver at {:?}", r.p);
-        compared += 1;
-        if expected {
-            lit += 1;
-        } else {
-            shadowed += 1;
-        }
-    }
-    assert!(
-        compared > 1000 && lit > 100 && shadowed > 100,
-        "{compared} {lit} {shadowed}"
-    );
 }
 
 #[test]
@@ -392,6 +459,7 @@ proptest! {
         b1 in 0.0f64..0.2, db in 0.0f64..0.2, s1 in 0.0f64..1.5, ds in 0.0f64..1.5,
         normal in 0.0f64..2.0, pcf in prop::sample::select(vec![1u32, 3, 5]),
         fmt in prop::sample::select(DepthFormat::ALL.to_vec()),
+        filter in prop::sample::select(PcfFilter::ALL.to_vec()),
     ) {
         let light = DVec3::new(-0.4, -1.0, -0.3).normalize();
         let n = DVec3::new(0.3, 1.0, 0.2).normalize();
@@ -406,6 +474,7 @@ proptest! {
                 format: Some(fmt),
                 ranges: vec![(-30.0, 30.0)],
                 pcf,
+                filter,
             };
             truth::fractions(&truth::frame_zero_in(&scene, &b, &[(b, w)], &cascades, &points, &s).0).0
         };
@@ -529,20 +598,46 @@ fn analyze_ground_truth_writes_bias_csv_and_the_recommendation() {
     assert!(!out.join("shadow.png").exists() && !out.join("shadow.apng").exists());
     let cascades = std::fs::read_to_string(out.join("cascades.csv")).unwrap();
     assert!(!cascades.contains("acne_fraction"));
-    let o = run(&["--ground-truth"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(stdout.contains("recommended depth bias (D32F"), "{stdout}");
-    let bias = std::fs::read_to_string(out.join("bias.csv")).unwrap();
-    assert!(bias.starts_with("cascade,points,texel_size,"), "{bias}");
-    assert_eq!(bias.lines().count(), 3, "header and two cascades");
-    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
-    let s = &summary;
+    let summary_of =
+        || -> serde_json::Value { serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap() };
+    // --raw-bias: today's zero-bias run, acne on about half of the lit surfaces.
+    let raw = run(&["--ground-truth", "--raw-bias"]);
+    assert!(raw.status.success(), "{}", String::from_utf8_lossy(&raw.stderr));
+    assert!(String::from_utf8_lossy(&raw.stdout).contains("bias_source = none"));
+    let s = summary_of();
+    assert_eq!(s["bias_source"], "none");
     assert!(
         s["acne_fraction"].as_f64().unwrap() > 0.3,
         "zero bias: acne on lit surfaces {s}"
     );
+    let o = run(&["--ground-truth"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("recommended depth bias (D32F"), "{stdout}");
+    assert!(stdout.contains("bias_source = recommended"), "{stdout}");
+    let bias = std::fs::read_to_string(out.join("bias.csv")).unwrap();
+    assert!(bias.starts_with("cascade,points,texel_size,"), "{bias}");
+    assert_eq!(bias.lines().count(), 3, "header and two cascades");
+    let s = summary_of();
+    // No bias set: the pass samples with csm-lab's recommended bias and says so.
+    assert_eq!(s["bias_source"], "recommended");
+    assert_eq!(s["pcf_filter"], "bilinear");
+    assert!(s["acne_fraction"].as_f64().unwrap() <= 0.001, "{s}");
+    assert!(s["edge_error_fraction"].as_f64().unwrap() > 0.0, "{s}");
     assert_eq!(s["flicker_snapped"].as_f64(), Some(0.0));
+    let split = s["flicker_edge_unsnapped"].as_f64().unwrap() + s["flicker_acne_unsnapped"].as_f64().unwrap();
+    assert!((split - s["flicker_unsnapped"].as_f64().unwrap()).abs() < 1e-12, "{s}");
+    // --raw-bias with a bias key is refused, naming the flag (exit 2).
+    std::fs::write(
+        &cfg,
+        text.replace("fit = \"sphere\"", "fit = \"sphere\"\ndepth_bias = 0.1"),
+    )
+    .unwrap();
+    let both = run(&["--ground-truth", "--raw-bias"]);
+    assert_eq!(both.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&both.stderr).contains("--raw-bias"));
+    std::fs::write(&cfg, &text).unwrap();
+    run(&["--ground-truth"]);
     let cascades = std::fs::read_to_string(out.join("cascades.csv")).unwrap();
     assert!(cascades
         .lines()
@@ -587,4 +682,215 @@ fn flicker_points_pair_the_proxies_with_s5_per_snap_mode() {
             assert!(p.s3 > 0.0 && p.s5 > 0.0, "{p:?}");
         }
     }
+}
+
+/// Each receiver's `needed` bias is where its lookup turns lit: re-running the lookups with a
+/// depth bias `b` (exact depths) lights exactly the receivers whose `needed` is at most `b`,
+/// for both filters and PCF 1, 3 and 5.
+#[test]
+fn a_receivers_needed_bias_is_where_its_lookup_turns_lit() {
+    let light = DVec3::new(-0.4, -1.0, -0.3).normalize();
+    let n = DVec3::new(0.3, 1.0, 0.2).normalize();
+    let scene = tilted_plane(n);
+    let b = LightBasis::new(light);
+    let w = Window::centred(DVec2::ZERO, DVec2::splat(30.0), 256, None);
+    let points = plane_points(n, 1500);
+    let cascades = vec![Some(0); points.len()];
+    for filter in PcfFilter::ALL {
+        for pcf in [1u32, 3, 5] {
+            let s = |depth: f64| Sampling {
+                bias: vec![Bias::depth(depth)],
+                format: None,
+                ranges: vec![(-30.0, 30.0)],
+                pcf,
+                filter,
+            };
+            let (zero, _) = truth::frame_zero_in(&scene, &b, &[(b, w)], &cascades, &points, &s(0.0));
+            let needed: Vec<f64> = zero
+                .iter()
+                .map(|p| p.needed.expect("a lit plane can only be acne"))
+                .collect();
+            let mut sorted = needed.clone();
+            sorted.sort_by(f64::total_cmp);
+            let (mut lit_checked, mut dark_checked) = (0, 0);
+            for q in [0.1, 0.3, 0.5, 0.7, 0.9, 0.99] {
+                let bias = sorted[(q * sorted.len() as f64) as usize];
+                let (z, _) = truth::frame_zero_in(&scene, &b, &[(b, w)], &cascades, &points, &s(bias));
+                for (p, need) in z.iter().zip(&needed) {
+                    if (need - bias).abs() <= 1e-9 * bias.max(1e-6) {
+                        continue;
+                    }
+                    assert_eq!(
+                        p.map_lit,
+                        Some(*need <= bias),
+                        "{filter:?} pcf {pcf}: needed {need}, bias {bias}"
+                    );
+                    if *need <= bias {
+                        lit_checked += 1;
+                    } else {
+                        dark_checked += 1;
+                    }
+                    // A lit plane: a wrong answer is acne, never an edge or a leak.
+                    assert_ne!(p.error(), Some(truth::ErrorKind::Edge));
+                }
+            }
+            assert!(
+                lit_checked > 1000 && dark_checked > 1000,
+                "{lit_checked} {dark_checked}"
+            );
+        }
+    }
+}
+
+/// A cascade with fewer than MIN_POINTS receivers has no fractions and no bias needed (n/a),
+/// one with MIN_POINTS has them.
+#[test]
+fn too_few_receivers_give_n_a_instead_of_a_number() {
+    let light = DVec3::new(-0.4, -1.0, -0.3).normalize();
+    let n = DVec3::new(0.3, 1.0, 0.2).normalize();
+    let scene = tilted_plane(n);
+    let b = LightBasis::new(light);
+    let w = Window::centred(DVec2::ZERO, DVec2::splat(30.0), 256, None);
+    let s = Sampling {
+        ranges: vec![(-30.0, 30.0)],
+        ..sampling(Bias::ZERO)
+    };
+    for (count, known) in [(truth::MIN_POINTS - 1, false), (truth::MIN_POINTS, true)] {
+        let points = plane_points(n, count);
+        let (zero, _) = truth::frame_zero_in(&scene, &b, &[(b, w)], &vec![Some(0); count], &points, &s);
+        let c = &truth::cascade_truth(&zero, 1, &s)[0];
+        assert_eq!(c.points, count);
+        for x in [
+            c.acne_fraction,
+            c.edge_error_fraction,
+            c.leak_fraction,
+            c.chosen_bias,
+            c.slope_bias,
+        ] {
+            assert_eq!(x.is_some(), known, "{count} points: {c:?}");
+        }
+    }
+}
+
+/// The default scene with no bias set: the pass samples with csm-lab's recommended bias per
+/// cascade and says so; acne stays within 0.1 % in every cascade (also in D16, whose step the
+/// margin must cover, and with one configured bias equal to the largest cascade's), the edge
+/// error is reported apart, S5 splits into its edge and acne parts, and a cascade without
+/// enough receivers is n/a in cascades.csv.
+#[test]
+fn the_recommended_bias_keeps_its_promise_on_the_default_scene() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/default.toml")).unwrap();
+    let mut c = Config::from_toml_str(&text, "default.toml", None).unwrap();
+    c.truth.enabled = true;
+    let a = analyze(&c, &AnalysisOptions::full());
+    let g = truth_of(&a);
+    assert_eq!(g.bias_source.name(), "recommended");
+    assert_eq!(g.filter, PcfFilter::Bilinear);
+    let s = g.summary;
+    assert!(s.acne_fraction <= 0.001, "{s:?}");
+    assert!(s.edge_error_fraction > 0.0, "{s:?}");
+    assert!((s.flicker_edge_unsnapped + s.flicker_acne_unsnapped - s.flicker_unsnapped).abs() < 1e-12);
+    assert_eq!(s.flicker_snapped, 0.0);
+    let mut largest: f64 = 0.0;
+    let mut with_bias = 0;
+    for (i, ct) in g.cascades.iter().enumerate() {
+        // The pass sampled each cascade with its own bias_needed.
+        if let Some(b) = ct.chosen_bias {
+            assert_eq!(g.bias[i].depth, b);
+            largest = largest.max(b);
+            with_bias += 1;
+            // Counted again from the receivers' answers.
+            let mine: Vec<_> = g
+                .zero
+                .iter()
+                .filter(|p| p.cascade == Some(i) && p.map_lit.is_some())
+                .collect();
+            let acne = mine
+                .iter()
+                .filter(|p| p.error() == Some(truth::ErrorKind::Acne))
+                .count();
+            assert!(
+                acne as f64 <= 0.001 * mine.len() as f64,
+                "cascade {i}: {acne} of {}",
+                mine.len()
+            );
+            assert_eq!(ct.acne_fraction, Some(acne as f64 / mine.len() as f64));
+        } else {
+            assert!(ct.points < truth::MIN_POINTS);
+            let fields = csm_lab::metric::cascade_fields(&a.cascades[i]).unwrap();
+            let cols = csm_lab::metric::cascade_columns(true, false, true);
+            let at = |name: &str| fields[cols.iter().position(|c| *c == name).unwrap()].clone();
+            assert_eq!(at("acne_fraction"), "n/a");
+            assert_eq!(at("bias_needed"), "n/a");
+        }
+    }
+    assert!(with_bias >= 3, "{with_bias} cascades with enough receivers");
+    let per_cascade_acne = |c: &Config| -> Vec<Option<f64>> {
+        // Acne is a frame-0 count: two frames of the path suffice.
+        let mut c = c.clone();
+        c.motion.frames = 2;
+        let a = analyze(&c, &AnalysisOptions::full());
+        truth_of(&a).cascades.iter().map(|x| x.acne_fraction).collect()
+    };
+    // One configured depth bias, the largest cascade's: no cascade above 0.1 %.
+    let mut one = c.clone();
+    one.truth.depth_bias = Some(largest);
+    for (i, x) in per_cascade_acne(&one).into_iter().enumerate() {
+        assert!(x.is_none_or(|x| x <= 0.001), "cascade {i}: {x:?}");
+    }
+    // D16: the margin's format step covers the coarse depths.
+    let mut d16 = c.clone();
+    d16.truth.depth_format = DepthFormat::D16;
+    for (i, x) in per_cascade_acne(&d16).into_iter().enumerate() {
+        assert!(x.is_none_or(|x| x <= 0.001), "d16 cascade {i}: {x:?}");
+    }
+}
+
+/// The walk's S5 split equals a brute force that answers every frame from scratch (a new map
+/// cache per frame, no reuse of unchanged keys) and classifies each change itself.
+#[test]
+fn the_s5_split_equals_answering_every_frame_from_scratch() {
+    let (c, a) = ground_truth(&scene_text("yaw", false, "pcf = 3"));
+    let g = truth_of(&a);
+    let rig = a.rig().unwrap();
+    let setup = c.setup();
+    let scene = &setup.geometry.as_ref().unwrap().scene;
+    let s = Sampling {
+        bias: g.bias.clone(),
+        format: Some(c.truth.depth_format),
+        ranges: g.ranges.clone(),
+        pcf: 3,
+        filter: g.filter,
+    };
+    let poses: Vec<_> = c.camera_path().unwrap();
+    let (mut steps, mut edge, mut acne) = (0u64, 0u64, 0u64);
+    type Frame = (Vec<Option<usize>>, Vec<Option<truth::Answer>>);
+    let mut prev: Option<Frame> = None;
+    for pose in &poses {
+        let mut maps = truth::ShadowMaps::new(scene);
+        let now = truth::frame_states(&mut maps, rig, &rig.light, pose, false, &g.points, &s);
+        if let Some((pc, pa)) = &prev {
+            for j in 0..g.points.len() {
+                if let (Some(ci), Some(cj), Some(x), Some(y)) = (pc[j], now.0[j], pa[j], now.1[j]) {
+                    if ci != cj {
+                        continue;
+                    }
+                    steps += 1;
+                    if x.lit != y.lit {
+                        if x.own_only && y.own_only {
+                            acne += 1;
+                        } else {
+                            edge += 1;
+                        }
+                    }
+                }
+            }
+        }
+        prev = Some(now);
+    }
+    assert!(steps > 1000 && edge > 0, "{steps} {edge} {acne}");
+    assert_eq!(g.unsnapped.steps.iter().map(|&x| x as u64).sum::<u64>(), steps);
+    assert_eq!(g.summary.flicker_edge_unsnapped, edge as f64 / steps as f64);
+    assert_eq!(g.summary.flicker_acne_unsnapped, acne as f64 / steps as f64);
+    assert_eq!(g.summary.flicker_unsnapped, (edge + acne) as f64 / steps as f64);
 }

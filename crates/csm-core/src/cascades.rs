@@ -95,6 +95,11 @@ pub enum BasisRule {
     /// the basis turns when the camera yaws. Falls back to `light` when the camera's right
     /// axis is within acos(0.999) of the light direction.
     CameraRight,
+    /// Look-to along the light with a fixed world `up` reference (Filament: the world-origin
+    /// transform's x axis, +X unless an IBL is rotated): `y` is the part of `up`
+    /// perpendicular to the light, `x = light × y`; when `|up · light| > 0.999` the reference
+    /// becomes `(up.z, up.x, up.y)` first. Fixed in the world: it does not turn with the camera.
+    LookToUp(DVec3),
     /// Look-at from a light *position* to the centroid of each slice, up +Y (seed 004): every
     /// cascade has its own direction, and it changes whenever the camera moves.
     LookAtFrom(DVec3),
@@ -315,6 +320,7 @@ impl Rig {
         match &self.scheme.basis {
             BasisRule::Fixed => *light,
             BasisRule::CameraRight => camera_right_basis(light.z, lp.pose.right).unwrap_or(*light),
+            BasisRule::LookToUp(up) => look_to_basis(light.z, *up).unwrap_or(*light),
             BasisRule::LookAtFrom(eye) => {
                 let s = &self.slices[i];
                 // The 8 corners of a symmetric slice average to its axis point at mid-depth.
@@ -600,6 +606,25 @@ pub fn camera_right_basis(z: DVec3, up: DVec3) -> Option<LightBasis> {
     }
     let y = (up - z * up.dot(z)).normalize();
     let x = y.cross(z);
+    Some(LightBasis {
+        x,
+        y,
+        z,
+        vertical_fallback: false,
+    })
+}
+
+/// The light basis of a look-to along `z` (unit, the way light travels) with the fixed
+/// reference `up` (Filament's directional-shadow rule): `y` is `up` with its part along `z`
+/// removed, `x = z × y`; when `|up · z| > 0.999`, `up` is first replaced by
+/// `(up.z, up.x, up.y)` (+X becomes +Y). None when `up` is zero or still parallel to `z`.
+pub fn look_to_basis(z: DVec3, up: DVec3) -> Option<LightBasis> {
+    let mut up = up.try_normalize()?;
+    if up.dot(z).abs() > 0.999 {
+        up = DVec3::new(up.z, up.x, up.y);
+    }
+    let y = (up - z * up.dot(z)).try_normalize()?;
+    let x = z.cross(y);
     Some(LightBasis {
         x,
         y,

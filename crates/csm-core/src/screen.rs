@@ -13,6 +13,15 @@
 //!
 //! **Percentiles** are nearest-rank: with the `n` served values sorted ascending, the
 //! `p`-th percentile is the value of rank `max(1, ceil(p n / 100))`.
+//!
+//! **Visible aliasing** weighs each served pixel by its direct-light contrast `w = N · L`
+//! (0 when the surface faces away from the light, 1 when it faces the light; stored as whole
+//! multiples of `2^-24`, [`crate::visibility::contrast_weight`]), so a surface barely lit counts
+//! barely and the statistics change continuously with the light direction. The weighted mean
+//! is `Σ w m / Σ w`; the weighted nearest-rank `p`-th percentile is, with the values sorted
+//! ascending, the first value at which the running sum of weights reaches
+//! `max(1, ceil(p W / 100))` (`W = Σ w`, in whole steps: exact); the maximum is over pixels of
+//! weight above 0.
 
 use crate::metrics::cascade_at;
 use crate::visibility::Visibility;
@@ -33,6 +42,13 @@ pub struct ScreenStats {
     pub aliasing_max: f64,
     /// Share of served receiver pixels with `m > 1`.
     pub undersampled_fraction: f64,
+    /// The same statistics weighted by each pixel's direct-light contrast `N · L` (see the
+    /// module docs); 0 when no served pixel has weight.
+    pub visible_mean: f64,
+    pub visible_p50: f64,
+    pub visible_p95: f64,
+    pub visible_p99: f64,
+    pub visible_max: f64,
     /// View-depth range of the visible geometry, clipped to the bounds' split range.
     pub visible_z_lo: f64,
     pub visible_z_hi: f64,
@@ -130,6 +146,77 @@ fn values_at_ranks(
         .collect()
 }
 
+/// The whole-step weight each weighted nearest-rank percentile `p` (integer percent) must
+/// reach among values of total weight `total`: `max(1, ceil(p total / 100))`.
+pub fn weight_target(p: u64, total: u64) -> u64 {
+    ((p as u128 * total as u128).div_ceil(100) as u64).max(1)
+}
+
+/// For each wanted weight target (increasing): its bucket and the weight below that bucket.
+fn locate_weight(hist: &[u64], targets: &[u64]) -> Vec<(usize, u64)> {
+    let (mut bucket, mut below) = (0, 0u64);
+    targets
+        .iter()
+        .map(|&t| {
+            while below + hist[bucket] < t {
+                below += hist[bucket];
+                bucket += 1;
+            }
+            (bucket, below)
+        })
+        .collect()
+}
+
+/// Exact weighted nearest-rank values for the weight `targets` (increasing) of the served
+/// values `t g` with weights `w`: as [`values_at_ranks`], one pass gathers the values of the
+/// wanted buckets, and a sort inside each finds the value where the running weight reaches
+/// the target.
+fn weighted_values_at(
+    g: &[(f64, f64)],
+    w: &[u32],
+    runs: &[(usize, usize, f64)],
+    buckets: Buckets,
+    hist: &[u64],
+    targets: &[u64],
+) -> Vec<f64> {
+    let wanted = locate_weight(hist, targets);
+    let mut slot = vec![u8::MAX; Buckets::COUNT];
+    let mut lists: Vec<Vec<(f64, u32)>> = Vec::new();
+    for &(b, _) in &wanted {
+        if slot[b] == u8::MAX {
+            slot[b] = lists.len() as u8;
+            lists.push(Vec::new());
+        }
+    }
+    for &(a, b, t) in runs {
+        for (&(_, gk), &wk) in g[a..b].iter().zip(&w[a..b]) {
+            let m = t * gk;
+            let s = slot[buckets.key(m)];
+            if s != u8::MAX && wk > 0 {
+                lists[s as usize].push((m, wk));
+            }
+        }
+    }
+    for l in &mut lists {
+        l.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+    }
+    wanted
+        .iter()
+        .zip(targets)
+        .map(|(&(b, below), &target)| {
+            let mut run = below;
+            let list = &lists[slot[b] as usize];
+            for &(m, wk) in list {
+                run += wk as u64;
+                if run >= target {
+                    return m;
+                }
+            }
+            list.last().map_or(0.0, |x| x.0)
+        })
+        .collect()
+}
+
 /// The visible depth range clipped to `[lo, hi]`, or None when nothing visible lies in it.
 pub fn visible_range(vis: &Visibility, lo: f64, hi: f64) -> Option<(f64, f64)> {
     let (a, b) = vis.depth_range?;
@@ -172,6 +259,9 @@ pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f
     let g = &vis.receivers;
     let n: usize = counts.iter().sum();
     let (mut sum, mut max, mut under) = (0.0, 0.0f64, 0usize);
+    let (mut wsum, mut wtotal, mut wmax) = (0.0, 0u64, 0.0f64);
+    let weights = &vis.weights;
+    let mut wp = vec![0.0; 3];
     let p = if n == 0 {
         vec![0.0; 3]
     } else {
@@ -183,15 +273,27 @@ pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f
             .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(r.2), h.max(r.2)));
         let buckets = Buckets::new(t_lo * g_lo, t_hi * g_hi);
         let mut hist = vec![0u32; Buckets::COUNT];
+        let mut whist = vec![0u64; Buckets::COUNT];
         for &(a, b, t) in &runs {
-            for &(_, gk) in &g[a..b] {
+            for (&(_, gk), &wk) in g[a..b].iter().zip(&weights[a..b]) {
                 let m = t * gk;
                 sum += m;
                 // A plain comparison (not f64::max, which also handles NaN): m is finite.
                 max = if m > max { m } else { max };
                 under += usize::from(m > 1.0);
-                hist[buckets.key(m)] += 1;
+                let key = buckets.key(m);
+                hist[key] += 1;
+                whist[key] += wk as u64;
+                wtotal += wk as u64;
+                wsum += wk as f64 * m;
+                if wk > 0 && m > wmax {
+                    wmax = m;
+                }
             }
+        }
+        if wtotal > 0 {
+            let targets = [50, 95, 99].map(|p| weight_target(p, wtotal));
+            wp = weighted_values_at(g, weights, &runs, buckets, &whist, &targets);
         }
         let ranks = [50.0, 95.0, 99.0].map(|p| rank_index(p, n));
         values_at_ranks(g, &runs, buckets, &hist, &ranks)
@@ -212,6 +314,11 @@ pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f
         aliasing_p99: p99,
         aliasing_max: max,
         undersampled_fraction: under,
+        visible_mean: if wtotal > 0 { wsum / wtotal as f64 } else { 0.0 },
+        visible_p50: wp[0],
+        visible_p95: wp[1],
+        visible_p99: wp[2],
+        visible_max: wmax,
         visible_z_lo,
         visible_z_hi,
         cascade_pixels: counts
@@ -270,6 +377,66 @@ mod tests {
             let got = values_at_ranks(&g, &runs, buckets, &hist, &ps.map(|p| rank_index(p, n)));
             all.sort_by(f64::total_cmp);
             let want: Vec<f64> = ps.iter().map(|&p| all[rank_index(p, n)]).collect();
+            assert_eq!(got, want, "n = {n}, spread = {spread}");
+        }
+    }
+
+    /// The bucketed weighted percentiles equal a brute force: every (value, weight) pair sorted
+    /// by value, the running weight compared with ceil(p W / 100) in whole steps; zero weights
+    /// (surfaces edge-on to the light) and one heavy pixel included.
+    #[test]
+    fn weighted_percentiles_equal_a_sorted_brute_force() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (n, spread) in [(1, 1.0), (9, 0.0), (50, 1.0), (2000, 2.0), (30000, 30.0)] {
+            let g: Vec<(f64, f64)> = (0..n).map(|k| (k as f64, 0.1 * (spread * next()).exp2())).collect();
+            let w: Vec<u32> = (0..n)
+                .map(|k| match k % 11 {
+                    0 => 0,
+                    5 => crate::visibility::contrast_weight(1.0),
+                    _ => crate::visibility::contrast_weight(next()),
+                })
+                .collect();
+            let cut = n / 2;
+            let runs = vec![(0, cut, 1.3), (cut, n, 0.4)];
+            let mut all: Vec<(f64, u32)> = runs
+                .iter()
+                .flat_map(|&(a, b, t)| (a..b).map(move |k| (t, k)))
+                .map(|(t, k)| (t * g[k].1, w[k]))
+                .collect();
+            let (lo, hi) = all
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(l, h), &(m, _)| (l.min(m), h.max(m)));
+            let buckets = Buckets::new(lo, hi);
+            let mut whist = vec![0u64; Buckets::COUNT];
+            all.iter().for_each(|&(m, x)| whist[buckets.key(m)] += x as u64);
+            let total: u64 = all.iter().map(|x| x.1 as u64).sum();
+            if total == 0 {
+                continue;
+            }
+            let targets = [50, 95, 99].map(|p| weight_target(p, total));
+            let got = weighted_values_at(&g, &w, &runs, buckets, &whist, &targets);
+            all.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let want: Vec<f64> = [50u64, 95, 99]
+                .iter()
+                .map(|&p| {
+                    // Brute force in 128-bit arithmetic: the first value whose running weight
+                    // times 100 reaches p times the total.
+                    let mut run = 0u128;
+                    for &(m, x) in &all {
+                        run += x as u128;
+                        if x > 0 && run * 100 >= p as u128 * total as u128 {
+                            return m;
+                        }
+                    }
+                    unreachable!()
+                })
+                .collect();
             assert_eq!(got, want, "n = {n}, spread = {spread}");
         }
     }

@@ -287,7 +287,34 @@ impl BiasRule {
     }
 }
 
-/// How the maps are sampled: per-cascade bias, depth format and PCF width (1, 3 or 5).
+/// How one PCF tap filters the depth comparisons.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+pub enum PcfFilter {
+    /// The texel under the tap (a comparison sampler with nearest filtering).
+    Nearest,
+    /// The 2x2 texels around the tap, their compare results weighted bilinearly (a comparison
+    /// sampler with linear filtering: `GL_LINEAR` on a depth texture with compare mode,
+    /// `SampleCmp` with a linear comparison filter).
+    Bilinear,
+}
+
+impl PcfFilter {
+    pub const ALL: [PcfFilter; 2] = [PcfFilter::Nearest, PcfFilter::Bilinear];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            PcfFilter::Nearest => "nearest",
+            PcfFilter::Bilinear => "bilinear",
+        }
+    }
+
+    pub fn from_name(s: &str) -> Option<PcfFilter> {
+        Self::ALL.into_iter().find(|f| f.name() == s)
+    }
+}
+
+/// How the maps are sampled: per-cascade bias, depth format, PCF width (1, 3 or 5) and the
+/// filter of each tap.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sampling {
     pub bias: Vec<Bias>,
@@ -296,6 +323,7 @@ pub struct Sampling {
     /// Light depth range of each cascade over which depths are quantised (frame 0's).
     pub ranges: Vec<(f64, f64)>,
     pub pcf: u32,
+    pub filter: PcfFilter,
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -627,6 +655,9 @@ fn trace_texel(scene: &SceneGeometry, grid: &Grid, g: (i64, i64)) -> Stored {
 /// Where a receiver reads a grid.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Placement {
+    /// The (offset) receiver in texel units of the grid: texel `(i, j)` covers
+    /// `[i, i + 1) x [j, j + 1)`, its centre at `(i + 0.5, j + 0.5)`.
+    pub at: DVec2,
     pub texel: (i64, i64),
     /// Light depth of the (offset) receiver.
     pub depth: f64,
@@ -658,6 +689,7 @@ fn place(basis: LightBasis, texel: DVec2, fraction: DVec2, r: &Receiver, bias: &
         MAX_SLOPE_TEXELS * t
     };
     Placement {
+        at: s,
         texel: (s.x.floor() as i64, s.y.floor() as i64),
         depth: basis.z.dot(p),
         slope,
@@ -669,6 +701,39 @@ fn place(basis: LightBasis, texel: DVec2, fraction: DVec2, r: &Receiver, bias: &
 pub fn kernel(g: (i64, i64), k: u32) -> impl Iterator<Item = (i64, i64)> {
     let h = (k / 2) as i64;
     (-h..=h).flat_map(move |dy| (-h..=h).map(move |dx| (g.0 + dx, g.1 + dy)))
+}
+
+/// The texels a lookup at `at` (texel units, see [`Placement::at`]) reads and the weight of
+/// each compare result, in a fixed order; weights sum to 1 and texels of weight 0 are left
+/// out. `k x k` taps one texel apart are centred on `at`, each weighing `1 / k²`:
+/// - nearest: a tap reads the texel it falls in;
+/// - bilinear: a tap at `t` reads the 2x2 texels whose centres surround it, texel
+///   `(i0 + a, j0 + b)` (a, b in {0, 1}) with weight `(a ? fx : 1 - fx) (b ? fy : 1 - fy)`,
+///   where `i0 = floor(t.x - 0.5)` and `fx = t.x - 0.5 - i0` (likewise in y).
+pub fn footprint(at: DVec2, k: u32, filter: PcfFilter) -> impl Iterator<Item = ((i64, i64), f64)> {
+    let h = (k / 2) as i64;
+    let tap = 1.0 / (k * k) as f64;
+    (-h..=h)
+        .flat_map(move |dy| (-h..=h).map(move |dx| at + DVec2::new(dx as f64, dy as f64)))
+        .flat_map(move |t| {
+            let mut out = [((0i64, 0i64), 0.0f64); 4];
+            match filter {
+                PcfFilter::Nearest => out[0] = ((t.x.floor() as i64, t.y.floor() as i64), tap),
+                PcfFilter::Bilinear => {
+                    let b = t - DVec2::splat(0.5);
+                    let i0 = b.floor();
+                    let f = b - i0;
+                    let (i, j) = (i0.x as i64, i0.y as i64);
+                    out = [
+                        ((i, j), (1.0 - f.x) * (1.0 - f.y) * tap),
+                        ((i + 1, j), f.x * (1.0 - f.y) * tap),
+                        ((i, j + 1), (1.0 - f.x) * f.y * tap),
+                        ((i + 1, j + 1), f.x * f.y * tap),
+                    ];
+                }
+            }
+            out.into_iter().filter(|(_, w)| *w > 0.0)
+        })
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -706,23 +771,95 @@ pub fn frame_grids(
         .collect()
 }
 
-/// The map's answer for one receiver in its cascade's grid: lit (true) or shadowed, None when
-/// the texel is outside the window. Reads held texels only.
-fn answer(maps: &ShadowMaps, fg: &FrameGrid, r: &Receiver, s: &Sampling, cascade: usize) -> Option<bool> {
-    let pl = maps.place(fg.id, r, &s.bias[cascade]);
+/// The map's answer for one receiver in one frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Answer {
+    /// Lit: the weighted share of passing compares is at least 1/2 (for the nearest filter,
+    /// at least half of the `k x k` texels pass).
+    pub lit: bool,
+    /// Every texel read holds the receiver's own surface (its plane): a wrong answer is then
+    /// self-shadowing (acne), not an edge the map's resolution misplaces.
+    pub own_only: bool,
+    /// The same texels compared with the receiver's own light depth, without any bias or
+    /// normal offset: what the lookup says when nothing moves the receiver toward the light.
+    pub lit_unbiased: bool,
+}
+
+/// The three errors of a receiver's answer (docs/ground-truth.md, "Three errors").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+pub enum ErrorKind {
+    /// Truly lit, shadowed, and every texel read holds its own surface: a bias fixes it.
+    Acne,
+    /// Wrong because the texels read hold another surface than the one the exact answer sees:
+    /// truly lit but shadowed by a caster's texels, or truly shadowed but lit because the
+    /// texels do not hold the caster (lit even without bias, or every texel read holds the
+    /// receiver's own surface). Only resolution fixes it.
+    Edge,
+    /// Truly shadowed, lit only because of the bias (shadowed without it) while a texel read
+    /// holds another surface (the caster is in the map): peter-panning and light leaks.
+    Leak,
+}
+
+impl Answer {
+    /// Which error this answer makes at a receiver that is truly lit or not; None when right.
+    pub fn error(self, truly_lit: bool) -> Option<ErrorKind> {
+        match (self.lit, truly_lit) {
+            (false, true) if self.own_only => Some(ErrorKind::Acne),
+            (true, false) if !self.lit_unbiased && !self.own_only => Some(ErrorKind::Leak),
+            (false, true) | (true, false) => Some(ErrorKind::Edge),
+            _ => None,
+        }
+    }
+}
+
+/// The map's answer for one receiver in its cascade's grid, None when its texel is outside
+/// the window. Reads held texels only.
+fn answer(maps: &ShadowMaps, fg: &FrameGrid, r: &Receiver, s: &Sampling, cascade: usize) -> Option<Answer> {
+    answer_with(maps, fg, r, s, cascade, &s.bias[cascade])
+}
+
+fn answer_with(
+    maps: &ShadowMaps,
+    fg: &FrameGrid,
+    r: &Receiver,
+    s: &Sampling,
+    cascade: usize,
+    bias: &Bias,
+) -> Option<Answer> {
+    let pl = maps.place(fg.id, r, bias);
     if !inside(fg, pl.texel) {
         return None;
     }
     let (near, far) = s.ranges[cascade];
-    let mut lit = 0u32;
-    for g in kernel(pl.texel, s.pcf) {
-        let stored = maps.stored(fg.id, g).map_or(f64::INFINITY, |x| x.depth);
+    let own_depth = maps.basis(fg.id).z.dot(r.p);
+    let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
+    let mut own_only = true;
+    for (g, w) in footprint(pl.at, s.pcf, s.filter) {
+        let held = maps.stored(fg.id, g);
+        let stored = held.map_or(f64::INFINITY, |x| x.depth);
         let stored = s.format.map_or(stored, |f| f.quantise(stored, near, far));
         if pl.depth <= stored + pl.bias {
-            lit += 1;
+            lit_w += w;
+            lit_n += 1;
         }
+        if own_depth <= stored {
+            unb_w += w;
+            unb_n += 1;
+        }
+        own_only &= held
+            .and_then(|x| x.triangle)
+            .is_some_and(|t| same_plane(maps.scene, t, r));
     }
-    Some(2 * lit >= s.pcf * s.pcf)
+    let pass = |w: f64, n: u32| match s.filter {
+        // Whole counts for the vote: no rounding of 1/k² sums.
+        PcfFilter::Nearest => 2 * n >= s.pcf * s.pcf,
+        PcfFilter::Bilinear => w >= 0.5,
+    };
+    Some(Answer {
+        lit: pass(lit_w, lit_n),
+        own_only,
+        lit_unbiased: pass(unb_w, unb_n),
+    })
 }
 
 /// One receiver's key in a frame: its cascade, grid and texel (its state is a function of it).
@@ -733,6 +870,12 @@ fn key_of(maps: &ShadowMaps, grids: &[FrameGrid], rig: &Rig, pose: &CameraPose, 
     let fg = &grids[i];
     let pl = maps.place(fg.id, r, &s.bias[i]);
     inside(fg, pl.texel).then_some((i, fg.id, pl.texel))
+}
+
+/// The texels receiver `r` reads in grid `fg` of cascade `i` under the sampling's bias.
+fn texels_read(maps: &ShadowMaps, fg: &FrameGrid, r: &Receiver, s: &Sampling, i: usize) -> Vec<(usize, (i64, i64))> {
+    let pl = maps.place(fg.id, r, &s.bias[i]);
+    footprint(pl.at, s.pcf, s.filter).map(|(g, _)| (fg.id, g)).collect()
 }
 
 /// Whether texel `g` of a frame's grid is inside its window.
@@ -751,16 +894,17 @@ pub fn frame_states(
     snapped: bool,
     points: &[Receiver],
     s: &Sampling,
-) -> (Vec<Option<usize>>, Vec<Option<bool>>) {
+) -> (Vec<Option<usize>>, Vec<Option<Answer>>) {
     let grids = frame_grids(maps, rig, light, pose, snapped);
     let keys: Vec<Key> = points
         .par_iter()
         .map(|r| key_of(maps, &grids, rig, pose, r, s))
         .collect();
-    let wanted: Vec<(usize, (i64, i64))> = keys
+    let wanted: Vec<(usize, (i64, i64))> = points
         .iter()
+        .zip(&keys)
+        .filter_map(|(r, k)| k.map(|(i, _, _)| texels_read(maps, &grids[i], r, s, i)))
         .flatten()
-        .flat_map(|&(_, id, g)| kernel(g, s.pcf).map(move |t| (id, t)))
         .collect();
     maps.stats.reads += wanted.len() as u64;
     maps.fetch(wanted);
@@ -783,6 +927,12 @@ pub struct Flicker {
     /// S5: state changes over the receiver steps counted (a step: one receiver read by the
     /// same cascade in two consecutive frames).
     pub s5: f64,
+    /// The part of S5 at receivers whose texels held another surface than their own in
+    /// either frame of the step (the shadow edge crawling), over the same steps.
+    pub s5_edge: f64,
+    /// The rest of S5: changes where every texel read held the receiver's own surface in both
+    /// frames (acne coming and going); `s5 = s5_edge + s5_acne` up to rounding.
+    pub s5_acne: f64,
     /// Per receiver: state changes and steps counted.
     pub flips: Vec<u32>,
     pub steps: Vec<u32>,
@@ -814,15 +964,17 @@ pub fn flicker(
     snapped: bool,
     points: &[Receiver],
     s: &Sampling,
-    on_frame: &mut dyn FnMut(usize, &[Option<bool>]),
+    on_frame: &mut dyn FnMut(usize, &[Option<Answer>]),
 ) -> Flicker {
     let mut maps = ShadowMaps::new(scene);
     let n = points.len();
     let mut keys: Vec<Key> = vec![None; n];
-    let mut states: Vec<Option<bool>> = vec![None; n];
+    let mut states: Vec<Option<Answer>> = vec![None; n];
     let mut flips = vec![0u32; n];
     let mut steps = vec![0u32; n];
-    let (mut total_flips, mut total_steps) = (0u64, 0u64);
+    let (mut total_flips, mut edge_flips, mut total_steps) = (0u64, 0u64, 0u64);
+    // A bilinear tap reads 2x2 texels.
+    let per_tap = if s.filter == PcfFilter::Bilinear { 4 } else { 1 };
     let mut frames = 0;
     for (t, pose) in poses.enumerate() {
         frames += 1;
@@ -831,7 +983,7 @@ pub fn flicker(
             .par_iter()
             .map(|r| key_of(&maps, &grids, rig, &pose, r, s))
             .collect();
-        let k2 = (s.pcf * s.pcf) as u64;
+        let k2 = (s.pcf * s.pcf * per_tap) as u64;
         maps.stats.reads += new_keys.iter().flatten().count() as u64 * k2;
         // Texels to fetch: those of receivers whose key changed.
         let changed: Vec<usize> = (0..n)
@@ -840,12 +992,12 @@ pub fn flicker(
         let wanted: Vec<(usize, (i64, i64))> = changed
             .iter()
             .flat_map(|&j| {
-                let (_, id, g) = new_keys[j].expect("changed keys are Some");
-                kernel(g, s.pcf).map(move |x| (id, x))
+                let (i, _, _) = new_keys[j].expect("changed keys are Some");
+                texels_read(&maps, &grids[i], &points[j], s, i)
             })
             .collect();
         maps.fetch(wanted);
-        let answers: Vec<Option<bool>> = changed
+        let answers: Vec<Option<Answer>> = changed
             .par_iter()
             .map(|&j| {
                 let (i, _, _) = new_keys[j].expect("changed keys are Some");
@@ -867,9 +1019,12 @@ pub fn flicker(
                 if let (true, Some(a), Some(b)) = (same_cascade, states[j], next[j]) {
                     steps[j] += 1;
                     total_steps += 1;
-                    if a != b {
+                    if a.lit != b.lit {
                         flips[j] += 1;
                         total_flips += 1;
+                        if !(a.own_only && b.own_only) {
+                            edge_flips += 1;
+                        }
                     }
                 }
             }
@@ -879,12 +1034,17 @@ pub fn flicker(
         keys = new_keys;
         maps.end_frame();
     }
-    Flicker {
-        s5: if total_steps == 0 {
+    let rate = |f: u64| {
+        if total_steps == 0 {
             0.0
         } else {
-            total_flips as f64 / total_steps as f64
-        },
+            f as f64 / total_steps as f64
+        }
+    };
+    Flicker {
+        s5: rate(total_flips),
+        s5_edge: rate(edge_flips),
+        s5_acne: rate(total_flips - edge_flips),
         flips,
         steps,
         frames,
@@ -901,43 +1061,63 @@ pub fn flicker(
 pub struct PointZero {
     pub cascade: Option<usize>,
     /// The map's answer with the configured sampling (None outside every window).
+    pub answer: Option<Answer>,
+    /// The map's answer with the configured sampling (None outside every window).
     pub map_lit: Option<bool>,
     /// Truly lit (the exact answer).
     pub truly_lit: bool,
     /// Distance along the light to the blocking surface (0 when truly lit).
     pub occluder: f64,
     /// Light depth minus the stored depth of its own texel, exact (no bias, no quantisation,
-    /// point sampling); `f64::MIN` when the texel holds no caster (never acne).
+    /// point sampling); `f64::MIN` when the texel holds no caster.
     pub excess: f64,
     /// Its depth slope per texel (world units).
     pub slope: f64,
-    /// Its texel holds its own surface (the same plane): the excess is self-shadowing that a
-    /// bias removes, not an edge a bias cannot fix.
+    /// Its own texel holds its own surface (the same plane).
     pub own_surface: bool,
+    /// The smallest depth bias (world units, exact depths) that lights it with the configured
+    /// filter and no other bias term, when it can be acne: truly lit and every texel its
+    /// unbiased lookup reads holds its own surface. None otherwise (a bias cannot or need not
+    /// fix it). At least 0.
+    pub needed: Option<f64>,
     /// `sin` of the light's incidence on its surface (peter-panning along the surface).
     pub sin_incidence: f64,
 }
 
-/// Per-cascade ground truth of frame 0.
+/// The error of a receiver's frame-0 answer, None when right or without an answer.
+impl PointZero {
+    pub fn error(&self) -> Option<ErrorKind> {
+        self.answer.and_then(|a| a.error(self.truly_lit))
+    }
+}
+
+/// Per-cascade ground truth of frame 0. Every `Option` is None (`n/a` in the outputs) when
+/// the cascade has fewer than [`MIN_POINTS`] receivers.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CascadeTruth {
     pub points: usize,
-    pub acne_fraction: f64,
-    pub leak_fraction: f64,
+    /// Truly lit receivers the map shadows while every texel read holds their own surface.
+    pub acne_fraction: Option<f64>,
+    /// Receivers wrong because the texels read hold another surface (both directions).
+    pub edge_error_fraction: Option<f64>,
+    /// Truly shadowed receivers the bias lets through.
+    pub leak_fraction: Option<f64>,
     /// Smallest depth bias (world units) leaving acne on at most [`ACNE_ALLOWED`] of the
-    /// cascade's points, exact depths.
-    pub depth_bias_exact: f64,
-    /// The same plus each format's quantisation step (D16, D24, D32F).
-    pub depth_bias: [f64; 3],
+    /// cascade's points, exact depths, no margin.
+    pub depth_bias_exact: Option<f64>,
+    /// The same with the margin: `exact (1 + BIAS_MARGIN_REL)` plus each format's
+    /// quantisation step (D16, D24, D32F).
+    pub depth_bias: Option<[f64; 3]>,
     /// Each format's quantisation step over the cascade's light depth range.
     pub step: [f64; 3],
     /// The configured format's entry of `depth_bias`.
-    pub chosen_bias: f64,
-    /// Smallest slope bias alone (times the depth slope per texel) doing the same, exact depths.
-    pub slope_bias: f64,
-    /// Largest distance along the receiver from a caster to where its shadow starts, at the
-    /// configured format's depth bias.
-    pub peter_pan: f64,
+    pub chosen_bias: Option<f64>,
+    /// Smallest slope bias alone (times the depth slope per texel) doing the same, exact depths,
+    /// with the relative margin.
+    pub slope_bias: Option<f64>,
+    /// Largest distance along the receiver from a caster to where its shadow starts, at
+    /// `chosen_bias`.
+    pub peter_pan: Option<f64>,
 }
 
 /// Smallest `b >= 0` with at most `allowed` of `values` above it.
@@ -967,6 +1147,27 @@ pub fn frame_zero(
     frame_zero_in(scene, light, &windows, &cascades, points, s)
 }
 
+/// The depth bias that lights a receiver whose lookup reads texels with these excesses
+/// (receiver depth minus stored depth) and weights: with the excesses sorted ascending, the
+/// first at which the passing weight reaches the filter's threshold (at least 0).
+fn needed_bias(mut reads: Vec<(f64, f64)>, s: &Sampling) -> f64 {
+    reads.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut w, mut n) = (0.0, 0u32);
+    for (e, x) in &reads {
+        w += x;
+        n += 1;
+        let pass = match s.filter {
+            PcfFilter::Nearest => 2 * n >= s.pcf * s.pcf,
+            PcfFilter::Bilinear => w >= 0.5,
+        };
+        if pass {
+            return e.max(0.0);
+        }
+    }
+    // Rounding left the weights a hair short of 1/2: every texel must pass.
+    reads.last().map_or(0.0, |r| r.0.max(0.0))
+}
+
 /// [`frame_zero`] for given windows (each in its basis) and the cascade reading each receiver.
 pub fn frame_zero_in(
     scene: &SceneGeometry,
@@ -993,8 +1194,8 @@ pub fn frame_zero_in(
         if let (Some(i), Some(z)) = (*c, zero[j]) {
             let id = grids[i].id;
             wanted.push((id, z.texel));
-            let pl = maps.place(id, &points[j], &s.bias[i]);
-            wanted.extend(kernel(pl.texel, s.pcf).map(|g| (id, g)));
+            wanted.extend(footprint(z.at, s.pcf, s.filter).map(|(g, _)| (id, g)));
+            wanted.extend(texels_read(&maps, &grids[i], &points[j], s, i));
         }
     }
     maps.stats.reads += wanted.len() as u64;
@@ -1004,29 +1205,42 @@ pub fn frame_zero_in(
         .enumerate()
         .map(|(j, r)| {
             let occ = occluder(scene, light.z, r, eps);
-            let (cascade, map_lit, excess, own, slope) = match (cascades[j], zero[j]) {
+            let truly_lit = occ.is_none();
+            let (cascade, answer, excess, own, slope, needed) = match (cascades[j], zero[j]) {
                 (Some(i), Some(z)) if inside(&grids[i], z.texel) => {
                     let fg = &grids[i];
                     let stored = maps.stored(fg.id, z.texel).expect("fetched");
                     let own = stored.triangle.is_some_and(|t| same_plane(scene, t, r));
+                    let reads: Vec<(f64, f64, bool)> = footprint(z.at, s.pcf, s.filter)
+                        .map(|(g, w)| {
+                            let st = maps.stored(fg.id, g).expect("fetched");
+                            let own = st.triangle.is_some_and(|t| same_plane(scene, t, r));
+                            (z.depth - st.depth, w, own)
+                        })
+                        .collect();
+                    let can_be_acne = truly_lit && reads.iter().all(|x| x.2);
+                    let needed = can_be_acne.then(|| needed_bias(reads.iter().map(|x| (x.0, x.1)).collect(), s));
                     (
                         Some(i),
                         answer(&maps, fg, r, s, i),
                         z.depth - stored.depth,
                         own,
                         z.slope,
+                        needed,
                     )
                 }
-                _ => (None, None, 0.0, false, 0.0),
+                _ => (None, None, 0.0, false, 0.0, None),
             };
             PointZero {
                 cascade,
-                map_lit,
-                truly_lit: occ.is_none(),
+                answer,
+                map_lit: answer.map(|a| a.lit),
+                truly_lit,
                 occluder: occ.unwrap_or(0.0),
                 excess: if excess.is_finite() { excess } else { f64::MIN },
                 slope,
                 own_surface: own,
+                needed,
                 sin_incidence: (1.0 - r.n.dot(light.z).powi(2)).max(0.0).sqrt(),
             }
         })
@@ -1045,6 +1259,14 @@ fn same_plane(scene: &SceneGeometry, t: usize, r: &Receiver) -> bool {
     n.dot(r.n).abs() > 1.0 - 1e-9 && r.n.dot(a - r.p).abs() <= 1e-9 * scale
 }
 
+/// A cascade's ground truth needs at least this many receivers: below it, its fractions and
+/// the bias it needs are `n/a` (the 0.1 % cut of the bias search then allows no receiver at
+/// all, and a fraction's step is above 0.1 %).
+pub const MIN_POINTS: usize = 1000;
+
+/// The relative margin on top of the bias found (beside one step of the depth format).
+pub const BIAS_MARGIN_REL: f64 = 1e-3;
+
 /// The per-cascade ground truth of frame 0 (the sampling's format picks the peter-panning's
 /// bias).
 pub fn cascade_truth(points: &[PointZero], cascades: usize, s: &Sampling) -> Vec<CascadeTruth> {
@@ -1055,47 +1277,46 @@ pub fn cascade_truth(points: &[PointZero], cascades: usize, s: &Sampling) -> Vec
                 .filter(|p| p.cascade == Some(i) && p.map_lit.is_some())
                 .collect();
             let n = mine.len();
-            let frac = |f: &dyn Fn(&PointZero) -> bool| {
-                if n == 0 {
-                    0.0
-                } else {
-                    mine.iter().filter(|p| f(p)).count() as f64 / n as f64
-                }
-            };
-            let acne = frac(&|p| p.truly_lit && p.map_lit == Some(false));
-            let leak = frac(&|p| !p.truly_lit && p.map_lit == Some(true));
+            let enough = n >= MIN_POINTS;
+            let frac =
+                |k: ErrorKind| enough.then(|| mine.iter().filter(|p| p.error() == Some(k)).count() as f64 / n as f64);
             let allowed = (ACNE_ALLOWED * n as f64).floor() as usize;
-            let own: Vec<&&PointZero> = mine.iter().filter(|p| p.truly_lit && p.own_surface).collect();
-            let mut excess: Vec<f64> = own.iter().map(|p| p.excess).collect();
-            let exact = smallest_bias(&mut excess, allowed);
-            let mut ratio: Vec<f64> = own
+            let mut needed: Vec<f64> = mine.iter().filter_map(|p| p.needed).collect();
+            let exact = enough.then(|| smallest_bias(&mut needed, allowed));
+            let mut ratio: Vec<f64> = mine
                 .iter()
-                .map(|p| {
-                    if p.excess <= 0.0 {
-                        0.0
-                    } else if p.slope > 0.0 {
-                        p.excess / p.slope
-                    } else {
-                        MAX_SLOPE_TEXELS
-                    }
+                .filter_map(|p| {
+                    p.needed.map(|b| {
+                        if b <= 0.0 {
+                            0.0
+                        } else if p.slope > 0.0 {
+                            b / p.slope
+                        } else {
+                            MAX_SLOPE_TEXELS
+                        }
+                    })
                 })
                 .collect();
-            let slope = smallest_bias(&mut ratio, allowed).min(MAX_SLOPE_TEXELS);
+            let slope =
+                enough.then(|| smallest_bias(&mut ratio, allowed).min(MAX_SLOPE_TEXELS) * (1.0 + BIAS_MARGIN_REL));
             let (near, far) = s.ranges.get(i).copied().unwrap_or((0.0, 0.0));
             let step = DepthFormat::ALL.map(|f| f.step(far - near));
-            let depth_bias = step.map(|st| exact + st);
-            let chosen = exact + s.format.map_or(0.0, |f| f.step(far - near));
-            let peter_pan = mine
-                .iter()
-                // Leaks the bias makes: the texel holds another surface in front of the
-                // point (shadowed without bias), and the bias lets the point through.
-                .filter(|p| !p.truly_lit && !p.own_surface && p.excess > 0.0 && p.excess <= chosen)
-                .map(|p| p.occluder * p.sin_incidence)
-                .fold(0.0, f64::max);
+            let with_margin = |st: f64| exact.map(|e| e * (1.0 + BIAS_MARGIN_REL) + st);
+            let depth_bias = exact.map(|_| step.map(|st| with_margin(st).expect("exact is Some")));
+            let chosen = with_margin(s.format.map_or(0.0, |f| f.step(far - near)));
+            let peter_pan = chosen.map(|chosen| {
+                mine.iter()
+                    // Leaks the bias makes: the texel holds another surface in front of the
+                    // point (shadowed without bias), and the bias lets the point through.
+                    .filter(|p| !p.truly_lit && !p.own_surface && p.excess > 0.0 && p.excess <= chosen)
+                    .map(|p| p.occluder * p.sin_incidence)
+                    .fold(0.0, f64::max)
+            });
             CascadeTruth {
                 points: n,
-                acne_fraction: acne,
-                leak_fraction: leak,
+                acne_fraction: frac(ErrorKind::Acne),
+                edge_error_fraction: frac(ErrorKind::Edge),
+                leak_fraction: frac(ErrorKind::Leak),
                 depth_bias_exact: exact,
                 depth_bias,
                 step,
@@ -1107,22 +1328,21 @@ pub fn cascade_truth(points: &[PointZero], cascades: usize, s: &Sampling) -> Vec
         .collect()
 }
 
-/// Acne and leak fractions over every receiver a window covers at frame 0.
-pub fn fractions(points: &[PointZero]) -> (f64, f64) {
+/// The shares of the three errors (acne, edge, leak) over every receiver a window covers at
+/// frame 0; None without any.
+pub fn error_fractions(points: &[PointZero]) -> Option<[f64; 3]> {
     let covered: Vec<&PointZero> = points.iter().filter(|p| p.map_lit.is_some()).collect();
     if covered.is_empty() {
-        return (0.0, 0.0);
+        return None;
     }
     let n = covered.len() as f64;
-    let acne = covered
-        .iter()
-        .filter(|p| p.truly_lit && p.map_lit == Some(false))
-        .count() as f64;
-    let leak = covered
-        .iter()
-        .filter(|p| !p.truly_lit && p.map_lit == Some(true))
-        .count() as f64;
-    (acne / n, leak / n)
+    let share = |k: ErrorKind| covered.iter().filter(|p| p.error() == Some(k)).count() as f64 / n;
+    Some([share(ErrorKind::Acne), share(ErrorKind::Edge), share(ErrorKind::Leak)])
+}
+
+/// Acne and leak fractions over every receiver a window covers at frame 0 (0 without any).
+pub fn fractions(points: &[PointZero]) -> (f64, f64) {
+    error_fractions(points).map_or((0.0, 0.0), |f| (f[0], f[2]))
 }
 
 /// The picture of one frame's answers over the visibility grid.
@@ -1131,12 +1351,17 @@ pub fn shade_image(
     rows: u32,
     points: &[Receiver],
     truly_lit: &[bool],
-    states: &[Option<bool>],
+    states: &[Option<Answer>],
 ) -> ShadeImage {
     let mut image = ShadeImage::empty(cols, rows);
     for ((r, &truth), s) in points.iter().zip(truly_lit).zip(states) {
-        if let Some(m) = s {
-            image.pixels[r.pixel] = Shade::of(*m, truth);
+        if let Some(a) = s {
+            image.pixels[r.pixel] = match a.error(truth) {
+                None => Shade::of(a.lit, truth),
+                Some(ErrorKind::Acne) => Shade::Acne,
+                Some(ErrorKind::Edge) => Shade::Edge,
+                Some(ErrorKind::Leak) => Shade::Leak,
+            };
         }
     }
     image

@@ -113,6 +113,8 @@ pub struct Sample {
     pub lit: bool,
     /// `g`: the per-pixel aliasing is `m = T g` for texel size `T` (pixels per world unit).
     pub factor: f64,
+    /// The direct-light contrast `N · L` of the hit (0 when it faces away from the light).
+    pub contrast: f64,
 }
 
 /// What one sampled pixel's ray hits, whatever the light: the view depth and the unit normal
@@ -165,35 +167,49 @@ impl Hits {
                 let h = h.as_ref()?;
                 let (u, v) = view.pixel_centre((k % cols) as u32, (k / cols) as u32);
                 let d = view.ray(u, v);
+                let nl = h.normal.dot(-view.light.normalize());
                 Some(Sample {
                     depth: h.depth,
                     lit: h.normal.dot(-view.light) > 0.0,
                     factor: geometric_factor(view, &light, h.normal, d, h.depth),
+                    contrast: nl.max(0.0),
                 })
             })
             .collect();
-        // The lit samples in depth order; equal depths then by factor, so the list is the
-        // one sorting every (depth, factor) pair would give.
-        let mut receivers: Vec<(f64, f64)> = self
+        // The lit samples in depth order; equal depths then by factor (then weight), so the
+        // list is the one sorting every (depth, factor, weight) triple would give.
+        let mut lit: Vec<(f64, f64, u32)> = self
             .by_depth
             .iter()
-            .filter_map(|&k| samples[k as usize].filter(|s| s.lit).map(|s| (s.depth, s.factor)))
+            .filter_map(|&k| {
+                samples[k as usize]
+                    .filter(|s| s.lit)
+                    .map(|s| (s.depth, s.factor, contrast_weight(s.contrast)))
+            })
             .collect();
         let mut start = 0;
-        while start < receivers.len() {
-            let d = receivers[start].0;
-            let end = start
-                + receivers[start..]
-                    .iter()
-                    .take_while(|r| r.0.total_cmp(&d).is_eq())
-                    .count();
+        while start < lit.len() {
+            let d = lit[start].0;
+            let end = start + lit[start..].iter().take_while(|r| r.0.total_cmp(&d).is_eq()).count();
             if end - start > 1 {
-                receivers[start..end].sort_unstable_by(|a, b| a.1.total_cmp(&b.1));
+                lit[start..end].sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.2.cmp(&b.2)));
             }
             start = end;
         }
-        Visibility::of_samples(*view, self.cols, self.rows, samples, receivers)
+        let receivers = lit.iter().map(|r| (r.0, r.1)).collect();
+        let weights = lit.iter().map(|r| r.2).collect();
+        Visibility::of_samples(*view, self.cols, self.rows, samples, receivers, weights)
     }
+}
+
+/// The steps of a unit contrast weight: `N · L` is stored as a whole number of `2^-24`, so the
+/// weighted statistics sum whole numbers exactly (in any order).
+pub const CONTRAST_STEPS: f64 = (1u32 << 24) as f64;
+
+/// A receiver's contrast weight: its direct-light contrast `N · L` in [0, 1], rounded to a
+/// whole number of [`CONTRAST_STEPS`].
+pub fn contrast_weight(contrast: f64) -> u32 {
+    (contrast.clamp(0.0, 1.0) * CONTRAST_STEPS).round() as u32
 }
 
 /// The result of one pass.
@@ -206,6 +222,8 @@ pub struct Visibility {
     pub samples: Vec<Option<Sample>>,
     /// `(depth, factor)` of every lit-facing sample, sorted by depth.
     pub receivers: Vec<(f64, f64)>,
+    /// The contrast weight of each receiver (same order): [`contrast_weight`] of its `N · L`.
+    pub weights: Vec<u32>,
     /// Number of samples that hit a surface facing away from the light.
     pub self_shadowed: usize,
     /// View-depth extent of every hit, or None when nothing is hit.
@@ -222,6 +240,7 @@ impl Visibility {
         rows: u32,
         samples: Vec<Option<Sample>>,
         receivers: Vec<(f64, f64)>,
+        weights: Vec<u32>,
     ) -> Visibility {
         let self_shadowed = samples.iter().flatten().filter(|s| !s.lit).count();
         let depth_range = samples.iter().flatten().fold(None, |r: Option<(f64, f64)>, s| {
@@ -236,6 +255,7 @@ impl Visibility {
             rows,
             samples,
             receivers,
+            weights,
             self_shadowed,
             depth_range,
             factor_range,

@@ -213,12 +213,12 @@ mod tests {
         dedup.sort_unstable();
         dedup.dedup();
         assert_eq!(dedup.len(), names.len());
-        // Nine names are both summary and per-cascade metrics (max_aliasing,
+        // Ten names are both summary and per-cascade metrics (max_aliasing,
         // coverage_violations, lookup_error_max, lookup_error_rms, overlap_area_fraction,
-        // light_crawl, light_jump, acne_fraction, leak_fraction).
+        // light_crawl, light_jump, acne_fraction, edge_error_fraction, leak_fraction).
         assert_eq!(
             names.len(),
-            SummaryMetric::all().count() + CascadeMetric::all().count() - 9 + DepthMetric::ALL.len()
+            SummaryMetric::all().count() + CascadeMetric::all().count() - 10 + DepthMetric::ALL.len()
         );
     }
 

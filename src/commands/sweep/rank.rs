@@ -60,15 +60,16 @@ among configurations that fit the memory budget, cover every slice (coverage_vio
 snapped (shimmer_snapped <= 1e-3 texel); means within 1% of the lowest count as equal, and among those the lowest \
 max aliasing wins, then less memory, then fewer cascades";
 
-/// The objective of a sweep: `[sweep] objective` if written, else the 95th percentile of the
-/// per-pixel aliasing on screen when the scene has geometry, else the mean aliasing over depth.
+/// The objective of a sweep: `[sweep] objective` if written, else the contrast-weighted 95th
+/// percentile of the per-pixel aliasing on screen (`visible_aliasing_p95`) when the scene has
+/// geometry, else the mean aliasing over depth.
 pub fn default_objective(config: &Config) -> SummaryMetric {
     // The name was checked against the registry when the file was loaded.
     if let Some(m) = config.sweep.as_ref().and_then(|s| s.objective.as_deref()) {
         return SummaryMetric::named(m);
     }
     SummaryMetric::named(if config.geometry.is_some() {
-        "screen_aliasing_p95"
+        "visible_aliasing_p95"
     } else {
         "mean_aliasing"
     })

@@ -390,6 +390,11 @@ pub fn rows_text<'a>(m: &Manifest, rows: impl IntoIterator<Item = (usize, &'a Ro
                 aliasing_p99,
                 aliasing_max,
                 undersampled_fraction,
+                visible_mean,
+                visible_p50,
+                visible_p95,
+                visible_p99,
+                visible_max,
                 visible_z_lo,
                 visible_z_hi,
                 cascade_pixels,
@@ -405,6 +410,11 @@ pub fn rows_text<'a>(m: &Manifest, rows: impl IntoIterator<Item = (usize, &'a Ro
                     undersampled_fraction,
                     visible_z_lo,
                     visible_z_hi,
+                    visible_mean,
+                    visible_p50,
+                    visible_p95,
+                    visible_p99,
+                    visible_max,
                 ];
                 let all: Vec<String> = fixed.into_iter().chain(cascade_pixels).map(|x| hex(*x)).collect();
                 out.push_str(&all.join(","));
@@ -526,10 +536,10 @@ pub fn parse_rows(file: &std::path::Path, text: &str, m: &Manifest) -> Result<Ve
             "-" => None,
             s => {
                 let x: Vec<f64> = s.split(',').map(float).collect::<Result<_>>()?;
-                if x.len() < 10 {
+                if x.len() < 15 {
                     return Err(bad(
                         n,
-                        format!("the screen field has {} numbers; it has at least 10", x.len()),
+                        format!("the screen field has {} numbers; it has at least 15", x.len()),
                     ));
                 }
                 Some(ScreenStats {
@@ -543,7 +553,12 @@ pub fn parse_rows(file: &std::path::Path, text: &str, m: &Manifest) -> Result<Ve
                     undersampled_fraction: x[7],
                     visible_z_lo: x[8],
                     visible_z_hi: x[9],
-                    cascade_pixels: x[10..].to_vec(),
+                    visible_mean: x[10],
+                    visible_p50: x[11],
+                    visible_p95: x[12],
+                    visible_p99: x[13],
+                    visible_max: x[14],
+                    cascade_pixels: x[15..].to_vec(),
                 })
             }
         };

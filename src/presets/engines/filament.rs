@@ -1,12 +1,13 @@
 //! Filament (`ShadowMap.cpp`, `ShadowMapManager.cpp`) in stable mode: split positions of
 //! [near, shadowFar or far], corner-average spheres on mapSize − 2 texels, fmod snapping in a
-//! light basis that turns with the camera.
+//! light basis fixed in the world: a look-to along the light with the world-origin transform's
+//! x axis (+X) as the up reference, as `computeDirectionalShadowBounds` builds it.
 
 use crate::presets::{
     complete_fractions, fractions, snap, unit, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext,
     Layout, Target, Terms, Values,
 };
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
@@ -203,7 +204,8 @@ impl Engine for Filament {
             window: Fitting::axis(&s),
             // mapSize − 2 usable texels: one texel of border per side.
             sides: f.on(&s, f.resolution as f64 - 2.0),
-            basis: BasisRule::CameraRight,
+            // Up reference: the world-origin transform's x axis (the identity's +X).
+            basis: BasisRule::LookToUp(DVec3::X),
             anchor: DVec2::ZERO,
             depth: LightDepthRule::Scene,
         }
@@ -219,7 +221,7 @@ impl Engine for Filament {
     }
 
     fn snap_anchor(_: &FilamentKnobs) -> &'static str {
-        "world origin, basis turns with the camera"
+        "world origin, basis from +X (fixed in the world)"
     }
 
     fn light_depth_rule(_: &FilamentKnobs) -> String {
