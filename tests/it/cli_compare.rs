@@ -337,16 +337,19 @@ fn compare_names_the_best_valid_preset_by_the_objective_and_lists_the_invalid_ap
         invalid.len()
     );
     let mut ranked = valid.clone();
-    ranked.sort_by(|a, b| f(a, "screen_aliasing_p95").total_cmp(&f(b, "screen_aliasing_p95")));
+    ranked.sort_by(|a, b| f(a, "visible_aliasing_p95").total_cmp(&f(b, "visible_aliasing_p95")));
     let (best, runner) = (&ranked[0][col("preset")], &ranked[1][col("preset")]);
-    let (vb, vr) = (f(ranked[0], "screen_aliasing_p95"), f(ranked[1], "screen_aliasing_p95"));
+    let (vb, vr) = (
+        f(ranked[0], "visible_aliasing_p95"),
+        f(ranked[1], "visible_aliasing_p95"),
+    );
     assert!(vb <= vr);
     let md = std::fs::read_to_string(out_dir.join("compare.md")).unwrap();
     let verdicts: Vec<&str> = md.lines().filter(|l| l.contains("best")).collect();
     assert_eq!(verdicts.len(), 1, "{md}");
     let line = verdicts[0];
     assert!(
-        line.starts_with(&format!("best: {best} (screen_aliasing_p95 "))
+        line.starts_with(&format!("best: {best} (visible_aliasing_p95 "))
             && line.contains(&format!("the runner-up {runner} (")),
         "{line}"
     );

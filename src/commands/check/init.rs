@@ -1,11 +1,16 @@
 //! `check --init`: a thresholds file written from a configuration's current values.
 //!
-//! Every summary metric with a worse direction gets a rule: today's value plus `headroom`
-//! (a fraction of it) for higher-is-worse metrics, minus it for lower-is-worse ones, with a
-//! floor of 1e-9 (real values) or 0 (counts) so a metric that reads 0 today stays at 0.
-//! `shimmer_snapped` and `shimmer_unsnapped` are information (the gate limits `shimmer`, the
-//! configured snap mode's value), and positions (`z_lo`, `z_hi`) are never limited. The
-//! baseline section names the baseline file written beside it.
+//! Every summary metric the analysis measured, with a worse direction, gets a rule that can
+//! fail: today's value plus `headroom` (a fraction of it) for higher-is-worse metrics, minus it
+//! for lower-is-worse ones, with a floor of 1e-9 so a metric that reads 0 today stays at 0.
+//! Counts (memory, coverage violations) are discrete: their rule is today's value exactly. A
+//! fraction already at its worst bound (e.g. `undersampled_fraction` = 1) gets no rule (none
+//! could fail), and a fraction's limit stays inside [0, 1] (halfway to the bound when the
+//! headroom would reach it). Unmeasured metrics (no ground truth, no geometry, a still light)
+//! get no rule: a rule on them is an error of `check`. `shimmer_snapped` and
+//! `shimmer_unsnapped` are information (the gate limits `shimmer`, the configured snap mode's
+//! value), and positions (`z_lo`, `z_hi`) are never limited. The baseline section names the
+//! baseline file written beside it.
 
 use std::fmt::Write as _;
 
@@ -25,17 +30,24 @@ pub fn limit(m: SummaryMetric, value: Value, headroom: f64) -> Option<(&'static 
         return None;
     }
     let room = |v: f64| (headroom * v.abs()).max(FLOOR);
+    let fraction = m.is_fraction();
     match (m.direction(), value) {
         // Nothing measured: nothing to limit.
         (Direction::Neither, _) | (_, Value::Missing) => None,
-        (Direction::HigherIsWorse, Value::Count(n)) => {
-            Some(("max", ((n as f64) * (1.0 + headroom)).floor().max(n as f64).to_string()))
-        }
-        (Direction::LowerIsWorse, Value::Count(n)) => {
-            Some(("min", ((n as f64) * (1.0 - headroom)).ceil().min(n as f64).to_string()))
-        }
+        // Discrete: any change is a change (memory_bytes moves in whole maps).
+        (Direction::HigherIsWorse, Value::Count(n)) => Some(("max", n.to_string())),
+        (Direction::LowerIsWorse, Value::Count(n)) => Some(("min", n.to_string())),
         (Direction::HigherIsWorse, Value::Flag(b)) => Some(("max", u8::from(b).to_string())),
         (Direction::LowerIsWorse, Value::Flag(b)) => Some(("min", u8::from(b).to_string())),
+        // A fraction at its worst bound: no limit could fail.
+        (Direction::HigherIsWorse, Value::Real(v)) if fraction && v >= 1.0 => None,
+        (Direction::LowerIsWorse, Value::Real(v)) if fraction && v <= 0.0 => None,
+        (Direction::HigherIsWorse, Value::Real(v)) if fraction => {
+            Some(("max", format!("{:e}", (v + room(v)).min((v + 1.0) / 2.0))))
+        }
+        (Direction::LowerIsWorse, Value::Real(v)) if fraction => {
+            Some(("min", format!("{:e}", (v - room(v)).max(v / 2.0))))
+        }
         (Direction::HigherIsWorse, Value::Real(v)) => Some(("max", format!("{:e}", v + room(v)))),
         (Direction::LowerIsWorse, Value::Real(v)) => Some(("min", format!("{:e}", v - room(v)))),
     }
@@ -49,7 +61,7 @@ pub fn thresholds_text(a: &Analysis, config: &str, baseline_file: &str, headroom
     let _ = writeln!(t, "#   csm-lab check {config} --init <this file> --headroom {headroom}");
     let _ = writeln!(
         t,
-        "# Each limit is today's value with {pct} % of room (at least 1e-9), so rounding noise passes and a"
+        "# Each limit is today's value with {pct} % of room (at least 1e-9; counts exactly), so rounding noise passes and a"
     );
     let _ = writeln!(t, "# change that makes shadows {pct} % worse fails. Run it in CI with:");
     let _ = writeln!(t, "#   csm-lab check {config} --thresholds <this file>");
@@ -57,13 +69,27 @@ pub fn thresholds_text(a: &Analysis, config: &str, baseline_file: &str, headroom
         t,
         "# Every metric: docs/check.md. Edit freely; `--init` again starts over."
     );
+    let mut unmeasured = Vec::new();
     for m in SummaryMetric::all() {
+        if !m.measured(&a.summary) {
+            if m.direction() != Direction::Neither {
+                unmeasured.push(m.name());
+            }
+            continue;
+        }
         let v = m.typed(&a.summary);
         let Some((bound, lim)) = limit(m, v, headroom) else {
             continue;
         };
         let _ = writeln!(t, "\n# {} (today {})", m.description(), short_number(v.as_f64()));
         let _ = writeln!(t, "[[rule]]\nmetric = \"{}\"\n{bound} = {lim}", m.name());
+    }
+    if !unmeasured.is_empty() {
+        let _ = writeln!(
+            t,
+            "\n# Not measured for this config, so not limited (a rule on them is an error): {}.",
+            unmeasured.join(", ")
+        );
     }
     let _ = writeln!(
         t,
