@@ -317,7 +317,7 @@ pub struct ExtraPathResult {
 
 impl Analysis {
     /// The cascades' measurements, or None when the scene needs no cascade.
-    pub fn measured(&self) -> Option<&Measured> {
+    pub(crate) fn measured(&self) -> Option<&Measured> {
         match &self.outcome {
             Outcome::Cascades(m) => Some(m),
             Outcome::NoCascades => None,
@@ -356,12 +356,12 @@ impl Analysis {
     }
 }
 
-pub fn memory_bytes(cascades: usize, resolution: u32) -> u64 {
+pub(crate) fn memory_bytes(cascades: usize, resolution: u32) -> u64 {
     cascades as u64 * resolution as u64 * resolution as u64 * 4
 }
 
 /// Bytes in MiB.
-pub fn mib(bytes: u64) -> f64 {
+pub(crate) fn mib(bytes: u64) -> f64 {
     bytes as f64 / (1024.0 * 1024.0)
 }
 
@@ -411,7 +411,7 @@ const FULL_SERIES_CHUNK: usize = csm_core::shimmer::MAX_FRAME_ROWS;
 /// chunks of [`FULL_SERIES_CHUNK`] frames that overlap by one frame: memory stays that of one
 /// chunk whatever the path's length, and the rows are those of one walk of the whole path.
 /// Without cascades there are no rows.
-pub fn each_frame_row(
+pub(crate) fn each_frame_row(
     config: &Config,
     opts: &AnalysisOptions,
     emit: &mut dyn FnMut(&'static str, &csm_core::shimmer::FrameShimmer) -> crate::error::Result<()>,
@@ -496,7 +496,7 @@ pub fn analyze(config: &Config, opts: &AnalysisOptions) -> Analysis {
 
 /// How many frames [`analyze_with_progress`] walks: every frame of every motion path, once per
 /// snap mode.
-pub fn frames_walked(config: &Config) -> u64 {
+pub(crate) fn frames_walked(config: &Config) -> u64 {
     // A path file has as many frames as rows; every further path has `motion.frames`.
     let setup = config.setup();
     let first = csm_core::motion::poses(&setup.camera, &setup.motion).len() as u64;
@@ -514,7 +514,11 @@ const PROGRESS_FRAMES: usize = 4096;
 
 /// [`analyze`], reporting the frames walked to `on_frames` as it goes (in batches; they add up
 /// to [`frames_walked`] when the scene needs cascades).
-pub fn analyze_with_progress(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u64) + Sync)) -> Analysis {
+pub(crate) fn analyze_with_progress(
+    config: &Config,
+    opts: &AnalysisOptions,
+    on_frames: &(dyn Fn(u64) + Sync),
+) -> Analysis {
     let rig = rig(config);
     // A preset has its own range (no scene clipping): the view depths that read its cascades.
     let range = match (&config.shadow.preset, &rig) {
@@ -976,7 +980,7 @@ fn path_totals(
 
 /// Per cascade: the area of the light-space bounding rectangle of the lit-facing receiver
 /// points it serves (clipped to its window) over the window's area; 0 when it serves none.
-pub fn texel_utilization(
+pub(crate) fn texel_utilization(
     vis: &Visibility,
     rig: &Rig,
     lp: &LightPose,

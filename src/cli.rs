@@ -9,7 +9,8 @@ use clap::{Args, Parser, Subcommand};
 use crate::app::{analyze, bench, check, compare, merge, stress, sweep};
 use crate::error::Result;
 
-pub use crate::app::{Format, Outcome};
+pub use crate::app::Format;
+pub(crate) use crate::app::Outcome;
 
 #[derive(Debug, Parser)]
 #[command(

@@ -11,9 +11,9 @@ pub const DRIFT_OFFSETS: [f64; 5] = [0.0, 1e3, 1e4, 1e5, 1e6];
 /// Window sides of the drift table (world units, snapping border included), at 2048².
 pub const DRIFT_WINDOWS: [f64; 2] = [20.0, 200.0];
 /// Camera strafe per frame (world units) and path length of the drift table.
-pub const DRIFT_STEP: f64 = 0.0137;
-pub const DRIFT_FRAMES: usize = 120;
-pub const DRIFT_PROBES: usize = 256;
+pub(crate) const DRIFT_STEP: f64 = 0.0137;
+pub(crate) const DRIFT_FRAMES: usize = 120;
+pub(crate) const DRIFT_PROBES: usize = 256;
 const DRIFT_RESOLUTION: u32 = 2048;
 
 /// One row of the drift table: one window size, world offset and arithmetic.
@@ -39,7 +39,7 @@ pub struct DriftRow {
 /// [`DRIFT_STEP`] per frame, one sphere-fit cascade from 0.1 to a far distance chosen so
 /// that its snapped window is `window` units wide at 2048², everything moved by
 /// `[offset, 0, 0]`.
-pub fn drift_scene_toml(window: f64, offset: f64, precision: Precision, space: SnapSpace) -> String {
+pub(crate) fn drift_scene_toml(window: f64, offset: f64, precision: Precision, space: SnapSpace) -> String {
     let lens = csm_core::geometry::Lens::new(60f64.to_radians(), 1920.0 / 1080.0);
     let n = DRIFT_RESOLUTION as f64;
     // Far-cap case of the minimal sphere (c = f, R = k f, which holds for k^2 >= 1), and the
@@ -87,7 +87,7 @@ probes = {DRIFT_PROBES}
 }
 
 /// Measures one drift-table row through the ordinary config and analysis path.
-pub fn drift_row(window: f64, offset: f64, precision: Precision, space: SnapSpace) -> crate::Result<DriftRow> {
+pub(crate) fn drift_row(window: f64, offset: f64, precision: Precision, space: SnapSpace) -> crate::Result<DriftRow> {
     let text = drift_scene_toml(window, offset, precision, space);
     let config = Config::from_toml_str(&text, "drift-table", None)?;
     let a = crate::analysis::analyze(&config, &crate::analysis::AnalysisOptions::summary_only());

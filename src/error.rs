@@ -209,7 +209,7 @@ pub enum ShardError {
 }
 
 impl ShardError {
-    pub fn dir(dir: &Path, message: impl Into<String>) -> Self {
+    pub(crate) fn dir(dir: &Path, message: impl Into<String>) -> Self {
         ShardError::Dir {
             dir: dir.to_path_buf(),
             message: message.into(),
@@ -288,7 +288,7 @@ impl Error {
         .into()
     }
 
-    pub fn write(path: &Path, source: std::io::Error) -> Self {
+    pub(crate) fn write(path: &Path, source: std::io::Error) -> Self {
         IoError::Write {
             path: path.to_path_buf(),
             source,
@@ -296,7 +296,7 @@ impl Error {
         .into()
     }
 
-    pub fn flag(flag: &str, value: &str, message: impl Into<String>) -> Self {
+    pub(crate) fn flag(flag: &str, value: &str, message: impl Into<String>) -> Self {
         GridError::Flag {
             flag: flag.to_string(),
             value: value.to_string(),
@@ -305,7 +305,7 @@ impl Error {
         .into()
     }
 
-    pub fn data_file(path: &Path, line: usize, message: impl Into<String>) -> Self {
+    pub(crate) fn data_file(path: &Path, line: usize, message: impl Into<String>) -> Self {
         IoError::DataFile {
             path: path.to_path_buf(),
             line,
@@ -329,7 +329,7 @@ impl Error {
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 /// Refuse to let a non-finite number reach an output file.
-pub fn ensure_finite(what: &str, value: f64) -> Result<f64> {
+pub(crate) fn ensure_finite(what: &str, value: f64) -> Result<f64> {
     if value.is_finite() {
         Ok(value)
     } else {

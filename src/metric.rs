@@ -23,7 +23,7 @@ pub enum Direction {
 }
 
 impl Direction {
-    pub fn describe(self) -> &'static str {
+    pub(crate) fn describe(self) -> &'static str {
         match self {
             Direction::HigherIsWorse => "higher is worse",
             Direction::LowerIsWorse => "lower is worse",
@@ -42,7 +42,7 @@ impl Direction {
 
     /// How much worse `current` is than `baseline`, in the metric's units (negative when it
     /// improved); None for [`Direction::Neither`].
-    pub fn worsening(self, baseline: f64, current: f64) -> Option<f64> {
+    pub(crate) fn worsening(self, baseline: f64, current: f64) -> Option<f64> {
         match self {
             Direction::HigherIsWorse => Some(current - baseline),
             Direction::LowerIsWorse => Some(baseline - current),
@@ -63,7 +63,7 @@ pub enum Value {
 
 impl Value {
     /// Booleans read 1 (true) or 0 (false), counts their value.
-    pub fn as_f64(self) -> f64 {
+    pub(crate) fn as_f64(self) -> f64 {
         match self {
             Value::Flag(b) => f64::from(u8::from(b)),
             Value::Count(n) => n as f64,
@@ -73,11 +73,11 @@ impl Value {
     }
 
     /// A real when known, [`Value::Missing`] otherwise.
-    pub fn maybe(x: Option<f64>) -> Value {
+    pub(crate) fn maybe(x: Option<f64>) -> Value {
         x.map_or(Value::Missing, Value::Real)
     }
 
-    pub fn json(self) -> serde_json::Value {
+    pub(crate) fn json(self) -> serde_json::Value {
         match self {
             Value::Flag(b) => b.into(),
             Value::Count(n) => n.into(),
@@ -87,7 +87,7 @@ impl Value {
     }
 
     /// The CSV field; a non-finite real is refused (named `what`).
-    pub fn csv(self, what: &str) -> Result<String> {
+    pub(crate) fn csv(self, what: &str) -> Result<String> {
         match self {
             Value::Flag(b) => Ok(b.to_string()),
             Value::Count(n) => Ok(n.to_string()),
@@ -132,7 +132,7 @@ pub struct SummaryDef {
 }
 
 /// Every summary metric, in the order of `summary.json`'s flat keys and of the CSV columns.
-pub const SUMMARY: &[SummaryDef] = &[
+pub(crate) const SUMMARY: &[SummaryDef] = &[
     SummaryDef {
         name: "cascades_needed",
         unit: "",
@@ -693,7 +693,7 @@ macro_rules! handle {
                 self.def().name
             }
 
-            pub fn from_name(name: &str) -> Option<Self> {
+            pub(crate) fn from_name(name: &str) -> Option<Self> {
                 $table.iter().position(|d| d.name == name).map($handle)
             }
 
@@ -724,7 +724,7 @@ handle!(
 
 impl SummaryMetric {
     /// The typed value.
-    pub fn typed(self, s: &Summary) -> Value {
+    pub(crate) fn typed(self, s: &Summary) -> Value {
         (self.def().value)(s)
     }
 
@@ -742,7 +742,7 @@ impl SummaryMetric {
     }
 
     /// How to measure this metric when a summary does not have it (None: always measured).
-    pub fn how_to_measure(self) -> Option<&'static str> {
+    pub(crate) fn how_to_measure(self) -> Option<&'static str> {
         let name = self.name();
         if TRUTH_SUMMARY.contains(&name) {
             Some("it comes from the ground-truth pass: set `[analysis] ground_truth = true` in the config (it needs scene geometry)")
@@ -758,7 +758,7 @@ impl SummaryMetric {
     }
 
     /// A fraction (a share of something, in [0, 1]).
-    pub fn is_fraction(self) -> bool {
+    pub(crate) fn is_fraction(self) -> bool {
         self.def().unit.is_empty() && self.name().ends_with("_fraction")
     }
 }
@@ -796,7 +796,7 @@ fn is_light_motion(name: &str) -> bool {
 }
 
 /// The summary metrics of the ground-truth pass: only in the outputs of analyses that ran it.
-pub const TRUTH_SUMMARY: [&str; 9] = [
+pub(crate) const TRUTH_SUMMARY: [&str; 9] = [
     "acne_fraction",
     "edge_error_fraction",
     "leak_fraction",
@@ -809,7 +809,7 @@ pub const TRUTH_SUMMARY: [&str; 9] = [
 ];
 
 /// The per-cascade metrics of the ground-truth pass: only in `cascades.csv` when it ran.
-pub const TRUTH_CASCADE: [&str; 6] = [
+pub(crate) const TRUTH_CASCADE: [&str; 6] = [
     "acne_fraction",
     "edge_error_fraction",
     "leak_fraction",
@@ -823,15 +823,15 @@ pub const TRUTH_CASCADE: [&str; 6] = [
 const SEAM_CROSSINGS: &str = "seam_crossings";
 
 /// The setting columns every per-configuration table starts with.
-pub const SETTING_COLUMNS: [&str; 4] = ["lambda", "cascades", "resolution", "fit"];
+pub(crate) const SETTING_COLUMNS: [&str; 4] = ["lambda", "cascades", "resolution", "fit"];
 
 /// With scene geometry, rows also say which depths the splits divide (`bounds` or `visible`).
-pub const SPLIT_RANGE_COLUMN: &str = "split_range";
+pub(crate) const SPLIT_RANGE_COLUMN: &str = "split_range";
 
 /// The columns every per-configuration table shares (`sweep.csv`, `compare.csv`): the setting,
 /// then the summary metrics marked `in_rows`. A contract: users' scripts and CI baselines read
 /// them by name. The screen metrics are columns only with scene geometry (`screen`).
-pub fn summary_columns(screen: bool) -> Vec<&'static str> {
+pub(crate) fn summary_columns(screen: bool) -> Vec<&'static str> {
     SETTING_COLUMNS
         .into_iter()
         .chain(screen.then_some(SPLIT_RANGE_COLUMN))
@@ -846,7 +846,7 @@ pub fn summary_columns(screen: bool) -> Vec<&'static str> {
 
 /// The fields of [`summary_columns`] for one configuration (`lambda` may be empty where a
 /// split rule has none).
-pub fn summary_fields(
+pub(crate) fn summary_fields(
     lambda: String,
     cascades: usize,
     resolution: u32,
@@ -866,7 +866,7 @@ pub fn summary_fields(
 
 /// The lines of `analyze`'s stdout summary for the metrics shown with `f32` on or off:
 /// (name, formatted value, brief).
-pub fn summary_lines(s: &Summary, f32_block: bool) -> Vec<(&'static str, String, &'static str)> {
+pub(crate) fn summary_lines(s: &Summary, f32_block: bool) -> Vec<(&'static str, String, &'static str)> {
     SUMMARY
         .iter()
         .filter(|d| shown_for(d, s))
@@ -901,7 +901,7 @@ pub struct CascadeDef {
 }
 
 /// Every per-cascade metric, in the order of `cascades.csv` (after `cascade`).
-pub const CASCADE: &[CascadeDef] = &[
+pub(crate) const CASCADE: &[CascadeDef] = &[
     CascadeDef {
         name: "near",
         unit: "world units",
@@ -1186,12 +1186,12 @@ handle!(
 );
 
 impl CascadeMetric {
-    pub fn value(self, c: &CascadeReport) -> f64 {
+    pub(crate) fn value(self, c: &CascadeReport) -> f64 {
         (self.def().value)(c).as_f64()
     }
 
     /// Whether cascade `c`'s analysis measured this metric (as [`SummaryMetric::measured`]).
-    pub fn measured(self, c: &CascadeReport) -> bool {
+    pub(crate) fn measured(self, c: &CascadeReport) -> bool {
         let d = self.def();
         (!d.screen || c.screen.is_some() || TRUTH_CASCADE.contains(&d.name))
             && (!is_light_motion(d.name) || c.light.is_some())
@@ -1199,7 +1199,7 @@ impl CascadeMetric {
     }
 
     /// How to measure this metric when a cascade does not have it.
-    pub fn how_to_measure(self) -> &'static str {
+    pub(crate) fn how_to_measure(self) -> &'static str {
         if TRUTH_CASCADE.contains(&self.name()) {
             "it comes from the ground-truth pass: set `[analysis] ground_truth = true` in the config (it needs scene geometry)"
         } else if self.def().screen {

@@ -21,7 +21,7 @@ pub trait Exporter<T: ?Sized> {
 /// Writes `bytes` to `path` atomically: a one-file set ([`write_set`]) in the file's directory,
 /// so the temporary is inside a marked staging directory of this run, under the directory's
 /// lock.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -34,12 +34,12 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 }
 
 /// Creates `dir` (and parents) with a message that names it.
-pub fn ensure_dir(dir: &Path) -> Result<()> {
+pub(crate) fn ensure_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))
 }
 
 /// Renders every exporter, then writes all files atomically into `dir`. Returns the paths.
-pub fn export_all<T: ?Sized>(dir: &Path, data: &T, exporters: &[&dyn Exporter<T>]) -> Result<Vec<PathBuf>> {
+pub(crate) fn export_all<T: ?Sized>(dir: &Path, data: &T, exporters: &[&dyn Exporter<T>]) -> Result<Vec<PathBuf>> {
     let rendered = exporters
         .iter()
         .map(|e| Ok((e.file_name(), e.render(data)?)))
@@ -48,10 +48,10 @@ pub fn export_all<T: ?Sized>(dir: &Path, data: &T, exporters: &[&dyn Exporter<T>
 }
 
 /// Rendered files: (file name, bytes).
-pub type RenderedFiles = Vec<(String, Vec<u8>)>;
+pub(crate) type RenderedFiles = Vec<(String, Vec<u8>)>;
 
 /// Writes already-rendered files into `dir` as one set (see [`write_set`]).
-pub fn write_files<N: AsRef<str> + Sync>(dir: &Path, files: &[(N, Vec<u8>)]) -> Result<Vec<PathBuf>> {
+pub(crate) fn write_files<N: AsRef<str> + Sync>(dir: &Path, files: &[(N, Vec<u8>)]) -> Result<Vec<PathBuf>> {
     write_set(dir, files, &[], None)
 }
 
@@ -73,32 +73,32 @@ pub fn write_files_streamed<N: AsRef<str> + Sync>(
 
 /// Name prefix of the staging directories [`write_files`] makes in an output directory:
 /// `.csm-lab-staging-<run id>-XXXXXX`, the run id being 16 random hex digits ([`run_id`]).
-pub const STAGING_PREFIX: &str = ".csm-lab-staging-";
+pub(crate) const STAGING_PREFIX: &str = ".csm-lab-staging-";
 
 /// The file a staging directory holds once every file of its set is written and synced: from
 /// then on the set is moved into place, and an interrupted move is completed by the next run.
-pub const STAGING_COMPLETE: &str = ".complete";
+pub(crate) const STAGING_COMPLETE: &str = ".complete";
 
 /// The marker a staging directory holds from its creation: `csm-lab staging <run id>` on the
 /// first line, then the names of the set's files, one a line. Recovery touches a staging
 /// directory only when its marker names the run id of the directory's own name, and then only
 /// the files the marker lists.
-pub const STAGING_MARKER: &str = ".csm-lab-run";
+pub(crate) const STAGING_MARKER: &str = ".csm-lab-run";
 
 /// The lock file of an output directory, where the directory itself cannot be locked.
-pub const LOCK_FILE: &str = ".csm-lab.lock";
+pub(crate) const LOCK_FILE: &str = ".csm-lab.lock";
 
 static WAIT_FOR_LOCK: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
 
 /// Whether a run waits for another run that is writing the same output directory (the
 /// default) or stops with an error (`--no-wait`).
-pub fn set_wait_for_lock(wait: bool) {
+pub(crate) fn set_wait_for_lock(wait: bool) {
     WAIT_FOR_LOCK.store(wait, std::sync::atomic::Ordering::Relaxed);
 }
 
 /// This process's run id: 16 hex digits from the operating system's random source (the
 /// process id and time if that fails), the same for every set the process writes.
-pub fn run_id() -> &'static str {
+pub(crate) fn run_id() -> &'static str {
     static ID: std::sync::OnceLock<String> = std::sync::OnceLock::new();
     ID.get_or_init(|| {
         let x = getrandom::u64().unwrap_or_else(|_| {
@@ -344,7 +344,7 @@ fn sync_dir(dir: &Path) {
 /// markers are deleted; a staging directory that still holds anything else is left. Returns
 /// (sets completed, staging directories removed). Best effort: what cannot be recovered is
 /// left, and the write goes on. Files of the user are never touched, whatever their names.
-pub fn recover(dir: &Path) -> (usize, usize) {
+pub(crate) fn recover(dir: &Path) -> (usize, usize) {
     let mut completed = 0;
     let mut removed = 0;
     let Ok(entries) = std::fs::read_dir(dir) else {
@@ -394,11 +394,11 @@ pub fn recover(dir: &Path) -> (usize, usize) {
 }
 
 /// A finite number formatted for CSV/JSON: shortest round-trip representation.
-pub fn num(what: &str, v: f64) -> Result<String> {
+pub(crate) fn num(what: &str, v: f64) -> Result<String> {
     Ok(format!("{}", ensure_finite(what, v)?))
 }
 
-pub fn encode_error(format: &'static str, e: impl std::fmt::Display) -> Error {
+pub(crate) fn encode_error(format: &'static str, e: impl std::fmt::Display) -> Error {
     IoError::Encode {
         format,
         message: e.to_string(),
@@ -407,7 +407,7 @@ pub fn encode_error(format: &'static str, e: impl std::fmt::Display) -> Error {
 }
 
 /// CSV bytes from a header and rows of already formatted fields.
-pub fn csv_bytes(header: &[&str], rows: &[Vec<String>]) -> Result<Vec<u8>> {
+pub(crate) fn csv_bytes(header: &[&str], rows: &[Vec<String>]) -> Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let wrap = |e: csv::Error| encode_error("CSV", e);
     w.write_record(header).map_err(wrap)?;
@@ -419,14 +419,14 @@ pub fn csv_bytes(header: &[&str], rows: &[Vec<String>]) -> Result<Vec<u8>> {
 
 /// [`csv_bytes`] from rows formatted one at a time: only one row's fields exist at once, so a
 /// 100,000-row table costs its bytes, not a string per field.
-pub fn csv_bytes_from(header: &[&str], rows: impl Iterator<Item = Result<Vec<String>>>) -> Result<Vec<u8>> {
+pub(crate) fn csv_bytes_from(header: &[&str], rows: impl Iterator<Item = Result<Vec<String>>>) -> Result<Vec<u8>> {
     let mut out = Vec::new();
     csv_write_from(&mut out, header, rows)?;
     Ok(out)
 }
 
 /// [`csv_bytes_from`] written to `out` row by row (a streamed file holds no copy of itself).
-pub fn csv_write_from(
+pub(crate) fn csv_write_from(
     out: &mut dyn Write,
     header: &[&str],
     rows: impl Iterator<Item = Result<Vec<String>>>,
@@ -462,7 +462,7 @@ pub fn check_json_finite(what: &str, v: &serde_json::Value) -> Result<()> {
 }
 
 /// Pretty JSON with a trailing newline, after checking every number is finite.
-pub fn json_bytes(what: &str, v: &serde_json::Value) -> Result<Vec<u8>> {
+pub(crate) fn json_bytes(what: &str, v: &serde_json::Value) -> Result<Vec<u8>> {
     check_json_finite(what, v)?;
     let mut out = serde_json::to_vec_pretty(v).map_err(|e| encode_error("JSON", e))?;
     out.push(b'\n');
@@ -492,7 +492,7 @@ pub fn short_number(v: f64) -> String {
 /// At most four significant digits without trailing zeros ("10", "0.2", "1.967"), scientific
 /// notation for magnitudes outside `[sci_below, 1e6)` ("2.5e-5", "6.711e7"). `v` is finite and
 /// not zero. The one decimal formatter behind [`short_number`] and the figures' tick labels.
-pub fn four_digits(v: f64, sci_below: f64) -> String {
+pub(crate) fn four_digits(v: f64, sci_below: f64) -> String {
     let a = v.abs();
     if !(sci_below..1e6).contains(&a) {
         let s = format!("{v:.3e}");
@@ -515,20 +515,20 @@ pub fn four_digits(v: f64, sci_below: f64) -> String {
 
 /// "1 cascade", "2 cascades", "0 cascades": a count and its noun with the plural right
 /// (`noun` is the singular; the plural adds "s").
-pub fn count(n: impl Into<u64>, noun: &str) -> String {
+pub(crate) fn count(n: impl Into<u64>, noun: &str) -> String {
     let n = n.into();
     format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
 }
 
 /// The relative change from `base` to `value` in percent; None when `base` is 0 (no relative
 /// change exists) or either is not finite.
-pub fn percent_change(base: f64, value: f64) -> Option<f64> {
+pub(crate) fn percent_change(base: f64, value: f64) -> Option<f64> {
     (base != 0.0 && base.is_finite() && value.is_finite()).then(|| 100.0 * (value - base) / base.abs())
 }
 
 /// A percentage from [`percent_change`] as text for people: "+16 %", "-25 %", "+0.4 %", "0 %"
 /// (whole percent from 10 % up, one decimal below).
-pub fn signed_percent(p: f64) -> String {
+pub(crate) fn signed_percent(p: f64) -> String {
     let r = if p.abs() >= 10.0 {
         p.round()
     } else {

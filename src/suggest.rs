@@ -2,17 +2,17 @@
 //! every message that rejects an unknown name (metrics, presets).
 
 /// Levenshtein distance in characters (insert, delete, substitute each cost 1), by `strsim`.
-pub fn edit_distance(a: &str, b: &str) -> usize {
+pub(crate) fn edit_distance(a: &str, b: &str) -> usize {
     strsim::levenshtein(a, b)
 }
 
 /// The candidate nearest to `name` by edit distance (the first one on ties).
-pub fn closest<'a>(name: &str, candidates: &[&'a str]) -> Option<&'a str> {
+pub(crate) fn closest<'a>(name: &str, candidates: &[&'a str]) -> Option<&'a str> {
     candidates.iter().copied().min_by_key(|c| edit_distance(name, c))
 }
 
 /// Words people write for a metric, and the registry name they mean.
-pub const METRIC_SYNONYMS: &[(&str, &str)] = &[
+pub(crate) const METRIC_SYNONYMS: &[(&str, &str)] = &[
     ("shimmer_rms", "shimmer"),
     ("drift", "shimmer"),
     ("shimmer_snap", "shimmer_snapped"),
@@ -32,7 +32,7 @@ pub const METRIC_SYNONYMS: &[(&str, &str)] = &[
 /// The registry name an unknown metric name most likely means: a known synonym, else a name
 /// that contains it (or that it contains) as whole `_`-separated words, else the nearest by
 /// edit distance. Only names in `names` are suggested.
-pub fn metric_suggestion<'a>(name: &str, names: &[&'a str]) -> Option<&'a str> {
+pub(crate) fn metric_suggestion<'a>(name: &str, names: &[&'a str]) -> Option<&'a str> {
     let lower = name.to_ascii_lowercase();
     if let Some(&(_, target)) = METRIC_SYNONYMS.iter().find(|(w, _)| *w == lower) {
         if let Some(n) = names.iter().copied().find(|n| *n == target) {

@@ -10,7 +10,7 @@ use csm_core::shade::{FlipImage, ShadeImage};
 use csm_core::truth::{self, Bias, CacheStats, CascadeTruth, Flicker, PcfFilter, PointZero, Receiver, Sampling};
 
 /// At most this many frames of the path are kept as pictures for the animation (every k-th).
-pub const ANIMATION_FRAMES: usize = 24;
+pub(crate) const ANIMATION_FRAMES: usize = 24;
 
 /// The flat ground-truth metrics of the summary.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -99,7 +99,7 @@ pub struct GroundTruth {
 
 impl GroundTruth {
     /// The PCF kernel width the pass sampled with.
-    pub fn pcf(&self) -> u32 {
+    pub(crate) fn pcf(&self) -> u32 {
         self.pcf
     }
 
@@ -111,7 +111,7 @@ impl GroundTruth {
     /// A cascade's recommended depth bias (configured format) in the engine's own unit, or in
     /// world units without an engine rule.
     /// None when the cascade has too few receivers.
-    pub fn recommended_own(&self, i: usize, format: truth::DepthFormat) -> Option<f64> {
+    pub(crate) fn recommended_own(&self, i: usize, format: truth::DepthFormat) -> Option<f64> {
         let c = &self.cascades[i];
         let world = c.depth_bias?[DepthFormatIndex::of(format)];
         Some(match &self.engine {
@@ -130,7 +130,7 @@ impl DepthFormatIndex {
 }
 
 /// The pass for a config whose scene has geometry and cascades; None otherwise.
-pub fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
+pub(crate) fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
     let setup = config.setup();
     let vis = setup.visibility()?;
     let scene = &setup.geometry.as_ref()?.scene;
@@ -285,7 +285,7 @@ pub fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
 /// `bias_needed` (`needed[i]`), or for a cascade with too few receivers to have one, the
 /// largest of the others scaled by the ratio of texel sizes (on a plane the bias needed is
 /// proportional to the texel size); 0 when no cascade has one.
-pub fn recommended_bias(needed: &[Option<f64>], texel: &[f64]) -> Vec<f64> {
+pub(crate) fn recommended_bias(needed: &[Option<f64>], texel: &[f64]) -> Vec<f64> {
     (0..needed.len())
         .map(|i| {
             needed[i].unwrap_or_else(|| {
@@ -332,7 +332,7 @@ pub fn flicker_points(configs: &[Config]) -> Vec<FlickerPoint> {
 
 /// One configuration analysed as [`flicker_points`] does: cell flips and the ground-truth
 /// pass (when the scene has geometry).
-pub fn analyze_for_flicker(c: &Config) -> crate::analysis::Analysis {
+pub(crate) fn analyze_for_flicker(c: &Config) -> crate::analysis::Analysis {
     let opts = crate::analysis::AnalysisOptions {
         cell_flips: true,
         ground_truth: true,
@@ -345,7 +345,7 @@ pub fn analyze_for_flicker(c: &Config) -> crate::analysis::Analysis {
 
 /// The (S3, S4, S5) points of an analysis from [`analyze_for_flicker`]: snapped, then
 /// unsnapped; none without the pass or cascades.
-pub fn points_of(a: &crate::analysis::Analysis) -> Vec<FlickerPoint> {
+pub(crate) fn points_of(a: &crate::analysis::Analysis) -> Vec<FlickerPoint> {
     match (&a.ground_truth, a.snapped(), a.unsnapped()) {
         (Some(g), Some(s), Some(u)) => vec![
             FlickerPoint {

@@ -51,7 +51,7 @@ pub struct AnalyzeRequest {
 }
 
 /// The `analyze` command.
-pub fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
+pub(crate) fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
     let mut config = match &args.engine_settings {
         Some(file) => load_with_engine_settings(&args.config, args.preset.as_deref(), file)?,
         None => load_with_preset_flag(&args.config, args.preset.as_deref())?,

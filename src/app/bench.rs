@@ -27,7 +27,7 @@ pub struct BenchRequest {
 }
 
 /// The `bench` command.
-pub fn execute(args: &BenchRequest) -> Result<Outcome> {
+pub(crate) fn execute(args: &BenchRequest) -> Result<Outcome> {
     if !(1..=1000).contains(&args.repeats) {
         return Err(Error::flag(
             "--repeats",

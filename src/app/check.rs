@@ -10,7 +10,7 @@ use crate::error::{BaselineError, Error, GridError, IoError, Result};
 use crate::output;
 
 /// Writes the JUnit file atomically, creating its directory.
-pub fn write_junit(path: &Path, report: &CheckReport) -> Result<()> {
+pub(crate) fn write_junit(path: &Path, report: &CheckReport) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         output::ensure_dir(dir)?;
     }
@@ -19,7 +19,7 @@ pub fn write_junit(path: &Path, report: &CheckReport) -> Result<()> {
 
 /// What `check` was asked to do (the command line's values).
 #[derive(Debug, Clone, Copy)]
-pub struct CheckRequest<'a> {
+pub(crate) struct CheckRequest<'a> {
     /// Scene and shadow settings.
     pub config: &'a Path,
     /// Rules and baseline tolerances.
@@ -45,7 +45,7 @@ pub struct CheckRequest<'a> {
 /// JUnit file is replaced by one that reports an unfinished run: whatever ends the run (a
 /// panic, a kill, an out-of-memory abort), the file a CI reads never says pass for it, and it
 /// says pass only once the run wrote its final report.
-pub fn execute(args: &CheckRequest) -> Result<Outcome> {
+pub(crate) fn execute(args: &CheckRequest) -> Result<Outcome> {
     if let Some(p) = args.junit {
         let xml = crate::report::junit::render_error(
             &args.config.display().to_string(),
@@ -177,7 +177,7 @@ fn with_hint(e: Error, hint: &str) -> Error {
 
 /// What `check --init` was asked to do.
 #[derive(Debug, Clone, Copy)]
-pub struct InitRequest<'a> {
+pub(crate) struct InitRequest<'a> {
     pub config: &'a Path,
     /// The thresholds file to write; the baseline goes beside it.
     pub file: &'a Path,
@@ -187,7 +187,7 @@ pub struct InitRequest<'a> {
 
 /// `check CONFIG --init FILE`: a thresholds file from the config's current values, with
 /// `headroom`, and its baseline (`summary.json` content) beside it, named in the file.
-pub fn init(args: &InitRequest) -> Result<Outcome> {
+pub(crate) fn init(args: &InitRequest) -> Result<Outcome> {
     if !(args.headroom.is_finite() && (0.0..=10.0).contains(&args.headroom)) {
         return Err(Error::flag(
             "--headroom",

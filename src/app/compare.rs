@@ -32,7 +32,7 @@ pub struct CompareRequest {
 }
 
 /// The `compare` command.
-pub fn execute(args: &CompareRequest) -> Result<Outcome> {
+pub(crate) fn execute(args: &CompareRequest) -> Result<Outcome> {
     let presets = match &args.presets {
         Some(list) => crate::presets::parse_list("--presets", list)?,
         None => crate::presets::PresetName::ALL.to_vec(),

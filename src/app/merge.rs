@@ -53,7 +53,7 @@ fn read_text(dir: &Path, name: &str) -> Result<String> {
 }
 
 /// Reads one shard directory.
-pub fn read_shard(dir: &Path) -> Result<ShardInput> {
+pub(crate) fn read_shard(dir: &Path) -> Result<ShardInput> {
     if !dir.is_dir() {
         return Err(ShardError::dir(
             dir,
@@ -76,7 +76,7 @@ pub fn read_shard(dir: &Path) -> Result<ShardInput> {
 
 /// Merges as the CLI does, without printing: (result, rendered files but `sweep.csv`, which
 /// [`execute`] streams into the set).
-pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::RenderedFiles)> {
+pub(crate) fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::RenderedFiles)> {
     let shards = args.dirs.iter().map(|d| read_shard(d)).collect::<Result<Vec<_>>>()?;
     let m = shard::check_set(&shards)?.clone();
     // The config is loaded again from where the shards read it, and must still be the same.
@@ -137,7 +137,7 @@ pub fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::Rendered
 }
 
 /// The `merge` command.
-pub fn execute(args: &MergeRequest) -> Result<Outcome> {
+pub(crate) fn execute(args: &MergeRequest) -> Result<Outcome> {
     let (result, files) = merge_files(args)?;
     let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&result.config));
     let written = output::write_files_streamed(&dir, &files, &[&report::sweep::SweepCsvFile(&result)])?;

@@ -4,12 +4,12 @@
 //! structs defined here and dispatches.
 
 pub mod analyze;
-pub mod bench;
-pub mod check;
-pub mod compare;
-pub mod merge;
-pub mod progress;
-pub mod stress;
+pub(crate) mod bench;
+pub(crate) mod check;
+pub(crate) mod compare;
+pub(crate) mod merge;
+pub(crate) mod progress;
+pub(crate) mod stress;
 pub mod sweep;
 
 use std::path::{Path, PathBuf};
@@ -43,7 +43,7 @@ impl Outcome {
 }
 
 /// Loads a config, with `--preset NAME` (when given) overriding `shadow.preset`.
-pub fn load_with_preset_flag(path: &Path, preset: Option<&str>) -> Result<Config> {
+pub(crate) fn load_with_preset_flag(path: &Path, preset: Option<&str>) -> Result<Config> {
     let choice = crate::presets::PresetChoice {
         name: preset.map(|s| crate::presets::parse_flag("--preset", s)).transpose()?,
         ..Default::default()
@@ -81,7 +81,7 @@ pub fn load_with_engine_settings(path: &Path, preset: Option<&str>, settings: &P
 /// The same for `sweep --preset`: a `[shadow]` count or map size the engine does not offer
 /// falls back to the engine's default with a note (the sweep covers the engine's own axes
 /// anyway), so every preset sweeps every scene.
-pub fn load_for_preset_sweep(path: &Path, preset: Option<&str>) -> Result<Config> {
+pub(crate) fn load_for_preset_sweep(path: &Path, preset: Option<&str>) -> Result<Config> {
     let choice = crate::presets::PresetChoice {
         name: preset.map(|s| crate::presets::parse_flag("--preset", s)).transpose()?,
         lenient_overrides: preset.is_some(),
@@ -93,7 +93,7 @@ pub fn load_for_preset_sweep(path: &Path, preset: Option<&str>) -> Result<Config
 /// Prints a command's result: with `--format table` the table, then the "wrote" line, on
 /// stdout; with `--format json` the JSON document on stdout and the "wrote" line on stderr, so
 /// that stdout is exactly one document.
-pub fn print_result(
+pub(crate) fn print_result(
     format: Format,
     table: impl FnOnce() -> String,
     json: impl FnOnce() -> Result<Vec<u8>>,
@@ -116,9 +116,9 @@ pub fn print_result(
 /// Where commands write without `--out`: `out/`, ignored by git, so running a command never
 /// changes the committed samples under `reports/` (those are written on purpose, by
 /// `scripts/regen-samples.sh`).
-pub const DEFAULT_OUT_ROOT: &str = "out";
+pub(crate) const DEFAULT_OUT_ROOT: &str = "out";
 
 /// The default output directory for a config: `out/<name>/`.
-pub fn default_out_dir(config: &Config) -> PathBuf {
+pub(crate) fn default_out_dir(config: &Config) -> PathBuf {
     Path::new(DEFAULT_OUT_ROOT).join(&config.name)
 }

@@ -21,7 +21,7 @@ pub struct Progress {
 
 impl Progress {
     /// A bar counting `len` steps of `what` ("configurations", "frames", ...).
-    pub fn new(quiet: bool, len: u64, what: &str) -> Self {
+    pub(crate) fn new(quiet: bool, len: u64, what: &str) -> Self {
         let enabled = !quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
         let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::hidden());
         bar.set_style(
@@ -43,25 +43,25 @@ impl Progress {
     }
 
     /// `n` more steps done (callable from any thread).
-    pub fn inc(&self, n: u64) {
+    pub(crate) fn inc(&self, n: u64) {
         self.bar.inc(n);
         self.show_if_due();
     }
 
     /// The computation is done; the files are being rendered and written.
-    pub fn writing(&self) {
+    pub(crate) fn writing(&self) {
         self.bar.set_message("writing files,");
         self.bar.enable_steady_tick(Duration::from_millis(100));
         self.show_if_due();
     }
 
     /// Prints a line on stderr without tearing the bar.
-    pub fn note(&self, line: &str) {
+    pub(crate) fn note(&self, line: &str) {
         self.bar.suspend(|| eprintln!("{line}"));
     }
 
     /// Removes the bar (the command's own output follows).
-    pub fn finish(&self) {
+    pub(crate) fn finish(&self) {
         self.bar.finish_and_clear();
     }
 

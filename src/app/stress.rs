@@ -30,7 +30,7 @@ pub struct StressRequest {
 }
 
 /// The `stress` command.
-pub fn execute(args: &StressRequest) -> Result<Outcome> {
+pub(crate) fn execute(args: &StressRequest) -> Result<Outcome> {
     if args.cases > 100_000 {
         return Err(Error::flag(
             "--cases",

@@ -226,7 +226,7 @@ pub struct SweepRequest {
 }
 
 /// The `sweep` command.
-pub fn execute(args: &SweepRequest) -> Result<Outcome> {
+pub(crate) fn execute(args: &SweepRequest) -> Result<Outcome> {
     let (result, files, progress) = sweep_files(args)?;
     let dir = match (&args.out, args.shard.as_deref().map(Shard::parse).transpose()?) {
         (Some(dir), _) => dir.clone(),

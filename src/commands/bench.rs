@@ -32,24 +32,24 @@ use csm_core::shimmer::{wrap, ShimmerOptions};
 use csm_core::walk::PathModel;
 
 /// The relative error the summary table asks each metric to reach.
-pub const TARGET_ERROR: f64 = 1e-3;
+pub(crate) const TARGET_ERROR: f64 = 1e-3;
 
 /// Largest probe count measured: 2^12 per cascade.
-pub const MAX_PROBES_LOG2: u32 = 12;
+pub(crate) const MAX_PROBES_LOG2: u32 = 12;
 
 /// Probes per cascade of the dense S3 reference run (8x the largest count measured).
-pub const DENSE_PROBES: usize = 1 << 15;
+pub(crate) const DENSE_PROBES: usize = 1 << 15;
 
 /// Whole turns of the frame-count reference path.
-pub const REFERENCE_TURNS: usize = 16;
+pub(crate) const REFERENCE_TURNS: usize = 16;
 
 /// Yaw step of the probe (AABB) and frame-count metrics, degrees per frame (the indoor
 /// example's step): a whole turn is 1440 frames.
-pub const YAW_STEP_DEG: f64 = 0.25;
+pub(crate) const YAW_STEP_DEG: f64 = 0.25;
 
 /// One measured point: a metric at one sample count.
 #[derive(Debug, Clone, PartialEq)]
-pub struct BenchRow {
+pub(crate) struct BenchRow {
     pub metric: &'static str,
     pub samples: usize,
     /// Best wall-clock time of one evaluation at this sample count.
@@ -62,7 +62,7 @@ pub struct BenchRow {
 
 impl BenchRow {
     /// One measurement: its error is the relative error of `estimate` against `reference`.
-    pub fn measured(metric: &'static str, samples: usize, seconds: f64, estimate: f64, reference: f64) -> Self {
+    pub(crate) fn measured(metric: &'static str, samples: usize, seconds: f64, estimate: f64, reference: f64) -> Self {
         BenchRow {
             metric,
             samples,
@@ -76,7 +76,7 @@ impl BenchRow {
 
 /// What one metric measures.
 #[derive(Debug, Clone, PartialEq)]
-pub struct MetricInfo {
+pub(crate) struct MetricInfo {
     pub name: &'static str,
     /// The setting that controls the sample count.
     pub knob: &'static str,
@@ -90,14 +90,14 @@ pub struct MetricInfo {
 
 /// Everything `bench` measured.
 #[derive(Debug, Clone, PartialEq)]
-pub struct BenchReport {
+pub(crate) struct BenchReport {
     pub scene: String,
     pub metrics: Vec<MetricInfo>,
     pub rows: Vec<BenchRow>,
 }
 
 /// Relative error, or absolute when the reference is exactly 0.
-pub fn relative_error(estimate: f64, reference: f64) -> f64 {
+pub(crate) fn relative_error(estimate: f64, reference: f64) -> f64 {
     if reference == 0.0 {
         (estimate - reference).abs()
     } else {
@@ -109,7 +109,7 @@ pub fn relative_error(estimate: f64, reference: f64) -> f64 {
 /// first call, calls are batched so one batch lasts at least about a millisecond (the clock's
 /// granularity stays negligible), and the best of `repeats` timings is kept (the run least
 /// disturbed by other work on the machine).
-pub fn best_time<T>(repeats: usize, mut f: impl FnMut() -> T) -> (f64, T) {
+pub(crate) fn best_time<T>(repeats: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     let start = Instant::now();
     let value = f();
     let once = start.elapsed().as_secs_f64();
@@ -133,7 +133,7 @@ pub fn best_time<T>(repeats: usize, mut f: impl FnMut() -> T) -> (f64, T) {
 /// density profile: trapezoid rule in `d` and in `ln d` between consecutive samples (the
 /// profile holds both sides of every split, so no trapezoid straddles a jump), and linear
 /// interpolation of where the aliasing crosses 1.
-pub fn integrate_profile(profile: &[DensitySample], z_lo: f64, z_hi: f64) -> (f64, f64, f64) {
+pub(crate) fn integrate_profile(profile: &[DensitySample], z_lo: f64, z_hi: f64) -> (f64, f64, f64) {
     let (mut mean, mut mean_log, mut under) = (0.0, 0.0, 0.0);
     for pair in profile.windows(2) {
         let (a, b) = (&pair[0], &pair[1]);
@@ -209,7 +209,7 @@ fn frame0_texels(config: &Config, rig: &Rig) -> Vec<f64> {
 /// The power-of-two resolution whose closed-form under-sampled fraction is closest to 1/2,
 /// so the profile has an aliasing-1 crossing to find (at many settings the whole range is
 /// under-sampled and any profile gives the exact fraction 1).
-pub fn crossing_resolution(config: &Config) -> u32 {
+pub(crate) fn crossing_resolution(config: &Config) -> u32 {
     let mut best = (f64::INFINITY, config.shadow.resolution);
     for k in 4..=14 {
         let Ok(c) = config.with_resolution(1 << k) else {
@@ -361,17 +361,11 @@ fn bench_frames(config: &Config, repeats: usize, rows: &mut Vec<BenchRow>) -> Re
     Ok(())
 }
 
-/// Runs every measurement on `config` (its camera, light, scene and shadow settings; the
-/// motion is set per metric as described in the module documentation).
-pub fn run(config: &Config, repeats: usize) -> Result<BenchReport> {
-    run_with_progress(config, repeats, &|| ())
-}
-
 /// How many measurement groups [`run_with_progress`] reports.
-pub const BENCH_STEPS: u64 = 4;
+pub(crate) const BENCH_STEPS: u64 = 4;
 
 /// [`run`], calling `on_step` after each of its [`BENCH_STEPS`] measurement groups.
-pub fn run_with_progress(config: &Config, repeats: usize, on_step: &dyn Fn()) -> Result<BenchReport> {
+pub(crate) fn run_with_progress(config: &Config, repeats: usize, on_step: &dyn Fn()) -> Result<BenchReport> {
     let Some(rig) = crate::analysis::rig(config) else {
         return Err(unusable(format!(
             "{} needs no cascades (the scene is not visible within the shadow distance), so there is nothing to sample; use a scene the camera sees",
@@ -429,7 +423,7 @@ pub fn run_with_progress(config: &Config, repeats: usize, on_step: &dyn Fn()) ->
 }
 
 impl BenchReport {
-    pub fn rows_of<'a>(&'a self, metric: &'a str) -> impl Iterator<Item = &'a BenchRow> + 'a {
+    pub(crate) fn rows_of<'a>(&'a self, metric: &'a str) -> impl Iterator<Item = &'a BenchRow> + 'a {
         self.rows.iter().filter(move |r| r.metric == metric)
     }
 
@@ -439,7 +433,7 @@ impl BenchReport {
 
     /// The smallest sample count whose error is at most `target` and stays so at every larger
     /// count measured (a Monte Carlo estimate can dip below the target by luck).
-    pub fn first_reaching(&self, metric: &str, target: f64) -> Option<&BenchRow> {
+    pub(crate) fn first_reaching(&self, metric: &str, target: f64) -> Option<&BenchRow> {
         let rows = self.rows_named(metric);
         let mut first = None;
         for r in rows.iter().rev() {
@@ -453,13 +447,13 @@ impl BenchReport {
     }
 
     /// The row measured at a sample count, if any.
-    pub fn at(&self, metric: &str, samples: usize) -> Option<&BenchRow> {
+    pub(crate) fn at(&self, metric: &str, samples: usize) -> Option<&BenchRow> {
         self.rows_named(metric).into_iter().find(|r| r.samples == samples)
     }
 }
 
 /// The scene `bench` measures when no `--config` is given.
-pub const DEFAULT_SCENE: &str = include_str!("../../configs/default.toml");
+pub(crate) const DEFAULT_SCENE: &str = include_str!("../../configs/default.toml");
 
 #[cfg(test)]
 mod tests {

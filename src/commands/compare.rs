@@ -63,7 +63,7 @@ impl Verdict {
     }
 
     /// The verdict in one line: the best and by how much it beats the runner-up.
-    pub fn line(&self, analyses: &[Analysis]) -> String {
+    pub(crate) fn line(&self, analyses: &[Analysis]) -> String {
         let name = self.objective.name();
         let value = |i: usize| self.objective.value(&analyses[i].summary);
         match self.ranked.as_slice() {
@@ -97,7 +97,7 @@ impl Verdict {
     }
 
     /// One line per invalid entry: its name and why it is left out.
-    pub fn invalid_lines(&self, analyses: &[Analysis]) -> Vec<String> {
+    pub(crate) fn invalid_lines(&self, analyses: &[Analysis]) -> Vec<String> {
         self.invalid
             .iter()
             .map(|(i, why)| format!("{}: {why}", label(&analyses[*i])))
@@ -107,7 +107,7 @@ impl Verdict {
 
 /// Ranks the valid analyses by the objective of `scene` (lowest first) and sets the invalid
 /// apart ([`invalid_reason`]; an entry whose scene needs no cascades is not valid either).
-pub fn verdict(scene: &Config, analyses: &[Analysis]) -> Verdict {
+pub(crate) fn verdict(scene: &Config, analyses: &[Analysis]) -> Verdict {
     let objective = crate::commands::sweep::rank::default_objective(scene);
     let mut invalid = Vec::new();
     let mut ranked = Vec::new();
@@ -172,7 +172,7 @@ pub fn label(a: &Analysis) -> String {
 
 /// Why a preset's result cannot be used as it stands: slice corners its windows miss (those
 /// points read "lit"), or receivers outside its light depth range (clipped). None when valid.
-pub fn invalid_reason(a: &Analysis) -> Option<String> {
+pub(crate) fn invalid_reason(a: &Analysis) -> Option<String> {
     let mut why = Vec::new();
     let misses = a.summary.coverage_violations;
     if misses > 0 {
@@ -189,7 +189,7 @@ pub fn invalid_reason(a: &Analysis) -> Option<String> {
 }
 
 /// The preset an analysis ran, if any.
-pub fn preset_of(a: &Analysis) -> Option<PresetName> {
+pub(crate) fn preset_of(a: &Analysis) -> Option<PresetName> {
     a.config.shadow.preset.as_ref().map(|p| p.name)
 }
 
@@ -200,7 +200,7 @@ pub fn run(path: &Path, presets: &[PresetName], engine_defaults: bool, own: &[Sp
 }
 
 /// [`run`], calling `on_done` after each analysis (from any thread).
-pub fn run_with_progress(
+pub(crate) fn run_with_progress(
     path: &Path,
     presets: &[PresetName],
     engine_defaults: bool,
@@ -257,7 +257,7 @@ pub fn run_with_progress(
 }
 
 /// Worst coverage miss (texels) and smallest slack over the configured snap mode's path.
-pub fn coverage_extremes(a: &Analysis) -> (f64, f64) {
+pub(crate) fn coverage_extremes(a: &Analysis) -> (f64, f64) {
     a.configured_path().map_or((0.0, 0.0), |p| {
         (
             p.coverage.worst_texels.iter().cloned().fold(0.0, f64::max),
@@ -271,7 +271,7 @@ pub fn coverage_extremes(a: &Analysis) -> (f64, f64) {
 }
 
 /// The fit as the preset names it (csm-lab's own fit without a preset).
-pub fn fit_label(a: &Analysis) -> String {
+pub(crate) fn fit_label(a: &Analysis) -> String {
     a.rig()
         .map_or_else(|| a.config.shadow.fit.to_string(), |r| r.scheme.fit_label.clone())
 }

@@ -5,7 +5,7 @@
 //! prints: [`crate::app`] runs a command and hands its result to [`crate::report`] and
 //! [`crate::figures`].
 
-pub mod bench;
+pub(crate) mod bench;
 pub mod check;
 pub mod compare;
 pub mod stress;

@@ -41,7 +41,7 @@ use csm_core::scene::{Precision, SnapSpace};
 
 /// The largest f64 stabilised drift accepted (texels per frame): rounding residue of an exact
 /// snap, far below anything visible (docs/metrics.md, "Shimmer").
-pub const STABILISED_LIMIT: f64 = 1e-9;
+pub(crate) const STABILISED_LIMIT: f64 = 1e-9;
 
 /// Everything a case writes into its config file.
 #[derive(Debug, Clone, PartialEq)]
@@ -91,7 +91,7 @@ pub struct StressCase {
 }
 
 /// A number as TOML writes it (`nan` and `inf` included, for invalid-by-design cases).
-pub fn toml_f64(x: f64) -> String {
+pub(crate) fn toml_f64(x: f64) -> String {
     if x.is_nan() {
         "nan".into()
     } else if x.is_infinite() {
@@ -112,7 +112,7 @@ const CASE_DENSITY_SAMPLES: usize = 64;
 
 impl StressInputs {
     /// The default outdoor scene, 24 frames of strafing.
-    pub fn baseline() -> Self {
+    pub(crate) fn baseline() -> Self {
         StressInputs {
             position: [0.0, 10.0, 0.0],
             target: [0.0, 0.0, -50.0],
@@ -141,7 +141,7 @@ impl StressInputs {
     }
 
     /// The config file of this case, with the given arithmetic and fit.
-    pub fn toml(&self, precision: Precision, space: SnapSpace, fit: Fit) -> String {
+    pub(crate) fn toml(&self, precision: Precision, space: SnapSpace, fit: Fit) -> String {
         format!(
             "[camera]\nposition = {}\ntarget = {}\nup = {}\nfov_y_deg = {}\nnear = {}\nfar = {}\n\n\
              [screen]\nwidth = {}\nheight = {}\n\n\
@@ -355,7 +355,7 @@ pub fn battery() -> Vec<StressCase> {
 }
 
 /// `n` random valid cases from a seeded generator (deterministic for a seed).
-pub fn random_cases(n: usize, seed: u64) -> Vec<StressCase> {
+pub(crate) fn random_cases(n: usize, seed: u64) -> Vec<StressCase> {
     let mut rng = SplitMix64::new(seed);
     (0..n).map(|k| random_case(&mut rng, k)).collect()
 }
@@ -465,14 +465,14 @@ fn random_case(rng: &mut SplitMix64, k: usize) -> StressCase {
 
 /// The outcome of one invariant on one case.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Check {
+pub(crate) struct Check {
     pub invariant: &'static str,
     /// The worst value seen (its meaning is the invariant's; see the module docs).
     pub worst: f64,
     pub pass: bool,
 }
 
-pub fn check_finite(nonfinite_values: usize) -> Check {
+pub(crate) fn check_finite(nonfinite_values: usize) -> Check {
     Check {
         invariant: "finite",
         worst: nonfinite_values as f64,
@@ -482,7 +482,7 @@ pub fn check_finite(nonfinite_values: usize) -> Check {
 
 /// Strictly increasing split depths; the worst value is the smallest gap (NaN-safe: a
 /// non-finite or non-positive gap fails).
-pub fn check_splits_increasing(splits: &[f64]) -> Check {
+pub(crate) fn check_splits_increasing(splits: &[f64]) -> Check {
     let gap = splits
         .windows(2)
         .map(|w| w[1] - w[0])
@@ -495,7 +495,7 @@ pub fn check_splits_increasing(splits: &[f64]) -> Check {
 }
 
 /// The splits start at `z_lo` and end at `z_hi`, exactly.
-pub fn check_splits_end_at_range(splits: &[f64], z_lo: f64, z_hi: f64) -> Check {
+pub(crate) fn check_splits_end_at_range(splits: &[f64], z_lo: f64, z_hi: f64) -> Check {
     let err = match (splits.first(), splits.last()) {
         (Some(a), Some(b)) => (a - z_lo).abs().max((b - z_hi).abs()),
         _ => f64::INFINITY,
@@ -507,7 +507,7 @@ pub fn check_splits_end_at_range(splits: &[f64], z_lo: f64, z_hi: f64) -> Check 
     }
 }
 
-pub fn check_coverage(violations: u64) -> Check {
+pub(crate) fn check_coverage(violations: u64) -> Check {
     Check {
         invariant: "coverage",
         worst: violations as f64,
@@ -516,7 +516,7 @@ pub fn check_coverage(violations: u64) -> Check {
 }
 
 /// Stabilised (sphere, snapped) drift in f64, largest over the path.
-pub fn check_stabilised_shimmer(max_drift: f64) -> Check {
+pub(crate) fn check_stabilised_shimmer(max_drift: f64) -> Check {
     Check {
         invariant: "stabilised_shimmer_f64",
         worst: max_drift,
@@ -525,7 +525,7 @@ pub fn check_stabilised_shimmer(max_drift: f64) -> Check {
 }
 
 /// The opt-in f32 gate: the largest f32 drift over both snap spaces.
-pub fn check_f32_drift(max_drift: f64, limit: f64) -> Check {
+pub(crate) fn check_f32_drift(max_drift: f64, limit: f64) -> Check {
     Check {
         invariant: "f32_drift_limit",
         worst: max_drift,
@@ -534,7 +534,7 @@ pub fn check_f32_drift(max_drift: f64, limit: f64) -> Check {
 }
 
 /// Whether a config was accepted, for a case that must be.
-pub fn check_accepted(error: Option<&str>) -> Check {
+pub(crate) fn check_accepted(error: Option<&str>) -> Check {
     Check {
         invariant: "config_accepted",
         worst: if error.is_some() { 1.0 } else { 0.0 },
@@ -543,7 +543,7 @@ pub fn check_accepted(error: Option<&str>) -> Check {
 }
 
 /// An invalid-by-design case: rejected, and the message names the key.
-pub fn check_clear_rejection(error: Option<&str>, key: &str) -> Check {
+pub(crate) fn check_clear_rejection(error: Option<&str>, key: &str) -> Check {
     let pass = error.is_some_and(|e| e.contains(key));
     Check {
         invariant: "clear_rejection",
@@ -554,7 +554,7 @@ pub fn check_clear_rejection(error: Option<&str>, key: &str) -> Check {
 
 /// Counts NaN and infinities in what an analysis computes beyond its written summary: the
 /// density profile and the per-frame rows.
-pub fn count_nonfinite(a: &Analysis) -> usize {
+pub(crate) fn count_nonfinite(a: &Analysis) -> usize {
     let bad = |xs: &[f64]| xs.iter().filter(|x| !x.is_finite()).count();
     let mut n = 0;
     for d in &a.density {
@@ -577,7 +577,7 @@ pub fn count_nonfinite(a: &Analysis) -> usize {
 /// What the files of `analyze` would say about an analysis: the non-finite numbers in its
 /// summary document and the files that refuse to render. Supplied by the caller (the report
 /// layer knows the files), so this module computes without depending on it.
-pub type OutputCheck = fn(&Analysis) -> (usize, Vec<String>);
+pub(crate) type OutputCheck = fn(&Analysis) -> (usize, Vec<String>);
 
 // ---------------------------------------------------------------------------------------------
 // Running cases
@@ -585,7 +585,7 @@ pub type OutputCheck = fn(&Analysis) -> (usize, Vec<String>);
 
 /// The binary32 residuals of one snap space.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct F32Residual {
+pub(crate) struct F32Residual {
     /// Largest snapped drift per frame (texels).
     pub drift_max: f64,
     /// S7 largest (texels).
@@ -595,7 +595,7 @@ pub struct F32Residual {
 }
 
 #[derive(Debug, Clone, PartialEq)]
-pub struct CaseResult {
+pub(crate) struct CaseResult {
     pub case: StressCase,
     pub checks: Vec<Check>,
     /// None when the case was rejected.
@@ -607,22 +607,22 @@ pub struct CaseResult {
 }
 
 impl CaseResult {
-    pub fn pass(&self) -> bool {
+    pub(crate) fn pass(&self) -> bool {
         self.checks.iter().all(|c| c.pass)
     }
 
-    pub fn failed(&self) -> Vec<&'static str> {
+    pub(crate) fn failed(&self) -> Vec<&'static str> {
         self.checks.iter().filter(|c| !c.pass).map(|c| c.invariant).collect()
     }
 
-    pub fn check(&self, invariant: &str) -> Option<&Check> {
+    pub(crate) fn check(&self, invariant: &str) -> Option<&Check> {
         self.checks.iter().find(|c| c.invariant == invariant)
     }
 }
 
 /// Options of a stress run.
 #[derive(Debug, Clone, Copy)]
-pub struct StressOptions {
+pub(crate) struct StressOptions {
     /// Fail a case whose f32 drift (either snap space) exceeds this many texels.
     pub max_f32_drift: Option<f64>,
     /// Renders what `analyze` would write and reports what is not finite.
@@ -639,7 +639,7 @@ fn f32_residual(a: &Analysis) -> F32Residual {
 
 /// Runs one case: parse, analyse in f64 (and the sphere fit, if the case uses another), in
 /// f32 world and f32 camera-relative, and check the invariants.
-pub fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
+pub(crate) fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
     let inputs = &case.inputs;
     let mut result = CaseResult {
         case: case.clone(),
@@ -736,13 +736,12 @@ pub fn run_case(case: &StressCase, opts: &StressOptions) -> CaseResult {
     result
 }
 
-/// Runs every case in parallel; results come back in case order.
-pub fn run(cases: &[StressCase], opts: &StressOptions) -> Vec<CaseResult> {
-    run_with_progress(cases, opts, &|| ())
-}
-
 /// [`run`], calling `on_done` after each case (from any thread).
-pub fn run_with_progress(cases: &[StressCase], opts: &StressOptions, on_done: &(dyn Fn() + Sync)) -> Vec<CaseResult> {
+pub(crate) fn run_with_progress(
+    cases: &[StressCase],
+    opts: &StressOptions,
+    on_done: &(dyn Fn() + Sync),
+) -> Vec<CaseResult> {
     cases
         .par_iter()
         .map(|c| {

@@ -35,12 +35,12 @@ impl EngineSetting {
     }
 
     /// `recommendation.<engine>.txt`.
-    pub fn file_name(&self) -> String {
+    pub(crate) fn file_name(&self) -> String {
         file_name(self.preset)
     }
 }
 
 /// `recommendation.<engine>.txt`.
-pub fn file_name(p: PresetName) -> String {
+pub(crate) fn file_name(p: PresetName) -> String {
     format!("recommendation.{p}.txt")
 }

@@ -360,7 +360,7 @@ fn read_accessor(
 }
 
 /// Largest glTF file, and largest buffer file, read (1 GiB each).
-pub const MAX_GLTF_BYTES: u64 = 1 << 30;
+pub(crate) const MAX_GLTF_BYTES: u64 = 1 << 30;
 
 fn read_file(path: &Path) -> Result<Vec<u8>, String> {
     super::read_bytes_bounded(path, MAX_GLTF_BYTES, "a glTF file or buffer").map_err(|e| e.to_string())

@@ -16,7 +16,7 @@ const MAX_ROWS: usize = super::path_file::MAX_PATH_ROWS;
 /// The light's motion of a config. `start` is the configured unit light direction, `frames`
 /// the camera path's frame count (every frame of the light path must exist and keep the sun
 /// above the horizon).
-pub(crate) fn parse(
+pub fn parse(
     m: &RawMotion,
     update: Option<&RawLightUpdate>,
     v: &Validator<'_>,
@@ -168,7 +168,7 @@ fn check_elevations(v: &Validator<'_>, start: DVec3, path: &LightPath, frames: u
 
 /// Reads a light path CSV: a header `x,y,z` and one light direction (the way light travels)
 /// per frame; each must be finite, non-zero and point down (a sun above the horizon).
-pub fn read_light_file(path: &Path) -> Result<Vec<DVec3>> {
+pub(crate) fn read_light_file(path: &Path) -> Result<Vec<DVec3>> {
     let file = crate::config::open_bounded(path, super::path_file::MAX_PATH_FILE_BYTES, "a light path file")?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
@@ -249,7 +249,7 @@ pub fn read_light_file(path: &Path) -> Result<Vec<DVec3>> {
 /// A list of light update rules as a sweep axis takes them: `every:1,2,4,8`,
 /// `quantize:0.1,0.25,0.5`, or both (`every:1,4,quantize:0.5`); a value without a prefix keeps
 /// the kind of the one before. `K` is a whole number in 1..=1000000, `q` degrees in (0, 90].
-pub fn parse_light_update_list(spec: &str) -> std::result::Result<Vec<LightUpdate>, String> {
+pub(crate) fn parse_light_update_list(spec: &str) -> std::result::Result<Vec<LightUpdate>, String> {
     let mut kind: Option<&str> = None;
     let mut out = Vec::new();
     for token in spec.split(',').map(str::trim) {
@@ -289,7 +289,7 @@ pub fn parse_light_update_list(spec: &str) -> std::result::Result<Vec<LightUpdat
 
 /// A light update rule as a sweep names it: `every:K` or `quantize:DEG` (DEG back in degrees,
 /// to 9 decimals).
-pub fn light_update_label(u: LightUpdate) -> String {
+pub(crate) fn light_update_label(u: LightUpdate) -> String {
     match u {
         LightUpdate::EveryFrame => "every:1".to_string(),
         LightUpdate::EveryFrames(k) => format!("every:{k}"),

@@ -13,7 +13,7 @@ use crate::error::{ConfigError, Error, Result};
 use super::MAX_WORLD;
 
 /// Byte offset to 1-based (line, column), counting columns in characters.
-pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
+pub(crate) fn line_column(text: &str, offset: usize) -> (usize, usize) {
     let offset = offset.min(text.len());
     let before = &text[..offset];
     let line = before.matches('\n').count() + 1;
@@ -25,7 +25,7 @@ pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
 /// Turn a `toml` deserialisation error into one with the file's line and column.
 /// A value of the wrong type or length (`position = [0, 10]`) is reported with its key
 /// (`` `camera.position`: invalid length 2, ... ``); errors about a key itself name it already.
-pub fn toml_error(path: &str, text: &str, err: &toml::de::Error) -> Error {
+pub(crate) fn toml_error(path: &str, text: &str, err: &toml::de::Error) -> Error {
     let (line, column) = err.span().map(|span| line_column(text, span.start)).unwrap_or((1, 1));
     let message = err.message().trim();
     let message = match err.span().and_then(|span| key_of_value_at(text, span.start)) {
@@ -44,7 +44,7 @@ pub fn toml_error(path: &str, text: &str, err: &toml::de::Error) -> Error {
 /// The dotted key (`table.key`) whose value starts the line holding byte `offset`, when
 /// `offset` lies in that value (after the `=`): None for a position in a key, a header or a
 /// continuation line of a multi-line array.
-pub fn key_of_value_at(text: &str, offset: usize) -> Option<String> {
+pub(crate) fn key_of_value_at(text: &str, offset: usize) -> Option<String> {
     let offset = offset.min(text.len());
     let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
     let line = text[line_start..].lines().next().unwrap_or("");
@@ -119,12 +119,12 @@ fn locate_in(table: &DeTable<'_>, parts: &[&str]) -> Option<Place> {
 
 /// Finds where `table.key = ...` is written, for error messages about values that parsed
 /// but are out of range. Returns 1-based (line, column) of the key, if found.
-pub fn locate_key(text: &str, dotted: &str) -> Option<(usize, usize)> {
+pub(crate) fn locate_key(text: &str, dotted: &str) -> Option<(usize, usize)> {
     locate(text, dotted).map(|p| line_column(text, p.key.start))
 }
 
 /// 1-based line and column of a `[name]` table header (its opening bracket).
-pub fn locate_table(text: &str, name: &str) -> Option<(usize, usize)> {
+pub(crate) fn locate_table(text: &str, name: &str) -> Option<(usize, usize)> {
     let key = locate(text, name)?.key;
     let bracket = text[..key.start].rfind('[')?;
     let (line, column) = line_column(text, bracket);
@@ -165,7 +165,7 @@ pub struct Validator<'a> {
 
 impl Validator<'_> {
     /// A value not allowed, located at its key, with the value underlined.
-    pub fn invalid(&self, key: &str, value: impl std::fmt::Display, allowed: &str) -> Error {
+    pub(crate) fn invalid(&self, key: &str, value: impl std::fmt::Display, allowed: &str) -> Error {
         self.invalid_found(key, key, value, allowed)
     }
 
@@ -202,7 +202,7 @@ impl Validator<'_> {
         })
     }
 
-    pub fn finite(&self, key: &str, v: f64) -> Result<f64> {
+    pub(crate) fn finite(&self, key: &str, v: f64) -> Result<f64> {
         if v.is_finite() {
             Ok(v)
         } else {
@@ -210,7 +210,7 @@ impl Validator<'_> {
         }
     }
 
-    pub fn vec3(&self, key: &str, v: [f64; 3]) -> Result<DVec3> {
+    pub(crate) fn vec3(&self, key: &str, v: [f64; 3]) -> Result<DVec3> {
         if v.iter().all(|c| c.is_finite()) {
             Ok(DVec3::from_array(v))
         } else {
@@ -219,7 +219,7 @@ impl Validator<'_> {
     }
 
     /// Three finite numbers, none beyond [`MAX_WORLD`] in magnitude.
-    pub fn point(&self, key: &str, v: [f64; 3]) -> Result<DVec3> {
+    pub(crate) fn point(&self, key: &str, v: [f64; 3]) -> Result<DVec3> {
         let p = self.vec3(key, v)?;
         if p.abs().max_element() <= MAX_WORLD {
             Ok(p)
@@ -230,7 +230,7 @@ impl Validator<'_> {
 
     /// The value of an enum-valued key: one of `names`, or an error at the value naming the key
     /// and every allowed name.
-    pub fn one_of<T: Copy>(&self, key: &str, value: &Spanned<String>, names: &[(&str, T)]) -> Result<T> {
+    pub(crate) fn one_of<T: Copy>(&self, key: &str, value: &Spanned<String>, names: &[(&str, T)]) -> Result<T> {
         if let Some((_, t)) = names.iter().find(|(n, _)| *n == value.get_ref().as_str()) {
             return Ok(*t);
         }
@@ -244,11 +244,17 @@ impl Validator<'_> {
     }
 
     /// Like [`Validator::invalid`], located at the value's span in the text.
-    pub fn invalid_at(&self, key: &str, span: Range<usize>, value: impl std::fmt::Display, allowed: &str) -> Error {
+    pub(crate) fn invalid_at(
+        &self,
+        key: &str,
+        span: Range<usize>,
+        value: impl std::fmt::Display,
+        allowed: &str,
+    ) -> Error {
         self.error(key, Some(span.start), Some(span), value, allowed)
     }
 
-    pub fn int_range(&self, key: &str, v: i64, lo: i64, hi: i64) -> Result<i64> {
+    pub(crate) fn int_range(&self, key: &str, v: i64, lo: i64, hi: i64) -> Result<i64> {
         if (lo..=hi).contains(&v) {
             Ok(v)
         } else {

@@ -8,7 +8,7 @@
 
 mod gltf_file;
 mod light_motion;
-pub use light_motion::{light_update_label, parse_light_update_list};
+pub(crate) use light_motion::{light_update_label, parse_light_update_list};
 mod location;
 mod path_file;
 mod schema;
@@ -18,9 +18,10 @@ pub mod sweep_spec;
 mod validate;
 
 pub(crate) use location::{excerpt, locate};
-pub use location::{line_column, locate_key, locate_table, toml_error, Validator};
-pub use schema::SECTIONS;
-pub use validate::{check_camera_path, parse};
+pub(crate) use location::{locate_key, locate_table, toml_error, Validator};
+pub(crate) use schema::SECTIONS;
+pub(crate) use validate::check_camera_path;
+pub use validate::parse;
 
 use std::any::Any;
 use std::path::PathBuf;
@@ -41,15 +42,15 @@ pub use path_file::read_path_file;
 /// (engines re-centre long before), and small enough that every derived quantity (texel
 /// coordinates, squared radii) stays finite. Found necessary by the property tests: a camera
 /// strafing 1e305 units per frame turned the shimmer metrics into NaN.
-pub const MAX_WORLD: f64 = 1e9;
+pub(crate) const MAX_WORLD: f64 = 1e9;
 
 /// A config or thresholds file larger than this is refused before it is read.
-pub const MAX_TEXT_FILE_BYTES: u64 = 4 << 20;
+pub(crate) const MAX_TEXT_FILE_BYTES: u64 = 4 << 20;
 
 /// Opens `path` for reading if it is a regular file of at most `max` bytes (checked before a
 /// byte is read: `/dev/zero` or a 50 MB file fails at once, naming the file and the limit).
 /// Reads through a `take(max + 1)` as well, in case the file grows or is not regular.
-pub fn open_bounded(
+pub(crate) fn open_bounded(
     path: &std::path::Path,
     max: u64,
     what: &'static str,
@@ -86,7 +87,7 @@ fn not_regular(path: &std::path::Path) -> crate::Error {
 
 /// Refuses `path` unless it is a regular file (after following symbolic links), without
 /// opening it.
-pub fn regular_file(path: &std::path::Path) -> crate::Result<()> {
+pub(crate) fn regular_file(path: &std::path::Path) -> crate::Result<()> {
     let meta = std::fs::metadata(path).map_err(|e| crate::Error::read(path, e))?;
     if meta.is_file() {
         Ok(())
@@ -97,7 +98,7 @@ pub fn regular_file(path: &std::path::Path) -> crate::Result<()> {
 
 /// At most the first 200 characters of `text` for an error message, with the full length when
 /// cut: a path file whose first line is 500 MB long is not echoed whole.
-pub fn clip_quote(text: &str) -> String {
+pub(crate) fn clip_quote(text: &str) -> String {
     match text.char_indices().nth(200) {
         Some((at, _)) => format!("{}... ({} characters in all)", &text[..at], text.chars().count()),
         None => text.to_string(),
@@ -105,7 +106,7 @@ pub fn clip_quote(text: &str) -> String {
 }
 
 /// The bytes of a regular file of at most `max` bytes (see [`open_bounded`]).
-pub fn read_bytes_bounded(path: &std::path::Path, max: u64, what: &'static str) -> crate::Result<Vec<u8>> {
+pub(crate) fn read_bytes_bounded(path: &std::path::Path, max: u64, what: &'static str) -> crate::Result<Vec<u8>> {
     use std::io::Read;
     let mut bytes = Vec::new();
     open_bounded(path, max, what)?
@@ -124,7 +125,7 @@ pub fn read_bytes_bounded(path: &std::path::Path, max: u64, what: &'static str) 
 }
 
 /// The whole text of a file of at most `max` bytes (see [`open_bounded`]).
-pub fn read_bounded(path: &std::path::Path, max: u64, what: &'static str) -> crate::Result<String> {
+pub(crate) fn read_bounded(path: &std::path::Path, max: u64, what: &'static str) -> crate::Result<String> {
     use std::io::Read;
     let mut text = String::new();
     open_bounded(path, max, what)?
@@ -208,7 +209,7 @@ impl std::ops::DerefMut for ShadowSettings {
 
 /// A value stored in [`AppliedPreset`]: what the settings need to clone, compare, print and
 /// echo it without knowing its type.
-pub trait PresetValue: Any + std::fmt::Debug + Send + Sync {
+pub(crate) trait PresetValue: Any + std::fmt::Debug + Send + Sync {
     fn clone_value(&self) -> Box<dyn PresetValue>;
     fn eq_value(&self, other: &dyn PresetValue) -> bool;
     /// For `summary.json`'s echo of the inputs.
@@ -223,15 +224,15 @@ pub trait PresetValue: Any + std::fmt::Debug + Send + Sync {
 pub struct AppliedPreset(Box<dyn PresetValue>);
 
 impl AppliedPreset {
-    pub fn new(value: impl PresetValue) -> Self {
+    pub(crate) fn new(value: impl PresetValue) -> Self {
         AppliedPreset(Box::new(value))
     }
 
-    pub fn downcast_ref<T: Any>(&self) -> Option<&T> {
+    pub(crate) fn downcast_ref<T: Any>(&self) -> Option<&T> {
         self.0.as_any().downcast_ref()
     }
 
-    pub fn downcast_mut<T: Any>(&mut self) -> Option<&mut T> {
+    pub(crate) fn downcast_mut<T: Any>(&mut self) -> Option<&mut T> {
         self.0.as_any_mut().downcast_mut()
     }
 }
@@ -283,7 +284,7 @@ pub struct PresetInput {
 
 impl PresetInput {
     /// A validator pointing into the file.
-    pub fn validator(&self) -> Validator<'_> {
+    pub(crate) fn validator(&self) -> Validator<'_> {
         Validator {
             path: &self.label,
             text: &self.text,
@@ -318,7 +319,7 @@ pub struct ExtraPath {
 
 impl MotionSettings {
     /// Every path, first the primary one: (path, step in internal units, step as written).
-    pub fn all_paths(&self) -> Vec<(&MotionPath, f64, f64)> {
+    pub(crate) fn all_paths(&self) -> Vec<(&MotionPath, f64, f64)> {
         std::iter::once((&self.path, self.step, self.step_as_written))
             .chain(self.extra.iter().map(|e| (&e.path, e.step, e.step_as_written)))
             .collect()
@@ -370,11 +371,11 @@ pub struct AnalysisSettings {
 }
 
 /// The visibility pass samples an eighth of the screen's width and height by default.
-pub const DEFAULT_SCREEN_SCALE: f64 = 0.125;
+pub(crate) const DEFAULT_SCREEN_SCALE: f64 = 0.125;
 
 impl AnalysisSettings {
     /// The sampling scale in effect.
-    pub fn screen_scale(&self) -> f64 {
+    pub(crate) fn screen_scale(&self) -> f64 {
         self.screen_scale.unwrap_or(DEFAULT_SCREEN_SCALE)
     }
 }
@@ -402,7 +403,7 @@ pub struct GeometrySettings {
 }
 
 impl GeometrySettings {
-    pub fn echo(&self) -> serde_json::Value {
+    pub(crate) fn echo(&self) -> serde_json::Value {
         let mut v = serde_json::json!({
             "boxes": self.boxes.iter().map(|b| serde_json::json!({"min": b.min, "max": b.max})).collect::<Vec<_>>(),
             "triangles": self.scene.mesh.triangles.len(),
@@ -479,7 +480,7 @@ pub enum BiasMode {
 }
 
 impl BiasMode {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             BiasMode::None => "none",
             BiasMode::Recommended => "recommended",
@@ -504,12 +505,12 @@ impl Default for TruthSettings {
 
 impl TruthSettings {
     /// Whether any bias key was written (then they replace the preset's bias).
-    pub fn bias_written(&self) -> bool {
+    pub(crate) fn bias_written(&self) -> bool {
         self.depth_bias.is_some() || self.slope_bias.is_some() || self.normal_bias.is_some()
     }
 
     /// The echo in `summary.json` (only when the pass runs).
-    pub fn echo(&self) -> serde_json::Value {
+    pub(crate) fn echo(&self) -> serde_json::Value {
         let mut v = serde_json::json!({
             "depth_format": self.depth_format.name(),
             "pcf": self.pcf,
@@ -666,7 +667,7 @@ impl Config {
 
     /// Each further path of `motion.paths` (after the first), with its name, as a motion of
     /// the configured frame count.
-    pub fn extra_motions(&self) -> Vec<(&'static str, csm_core::scene::Motion)> {
+    pub(crate) fn extra_motions(&self) -> Vec<(&'static str, csm_core::scene::Motion)> {
         self.motion
             .extra
             .iter()
@@ -684,7 +685,7 @@ impl Config {
     /// Checks every pose of the motion path and of each further path without keeping them:
     /// the first invalid frame as (path index: 0 for the first path, 1-based in
     /// `motion.paths` after it; frame; why).
-    pub fn check_camera_paths(&self) -> std::result::Result<(), (usize, usize, String)> {
+    pub(crate) fn check_camera_paths(&self) -> std::result::Result<(), (usize, usize, String)> {
         let setup = self.setup();
         let first = std::iter::once(setup.motion.clone());
         for (k, motion) in first

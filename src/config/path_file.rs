@@ -7,10 +7,10 @@ use glam::DVec3;
 use crate::error::{Error, Result};
 
 /// At most this many pose rows (the `motion.frames` limit), counted as the file streams.
-pub const MAX_PATH_ROWS: usize = 1_000_000;
+pub(crate) const MAX_PATH_ROWS: usize = 1_000_000;
 /// A path file larger than this is refused before it is read (a 10⁶-row file of long numbers
 /// is well under it).
-pub const MAX_PATH_FILE_BYTES: u64 = 256 << 20;
+pub(crate) const MAX_PATH_FILE_BYTES: u64 = 256 << 20;
 
 /// Reads a camera path CSV: a header `px,py,pz,tx,ty,tz` and one row per frame
 /// (camera position, then the point it looks at). At least two rows.

@@ -6,7 +6,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 /// csm-lab's own top-level tables.
-pub const SECTIONS: [&str; 8] = [
+pub(crate) const SECTIONS: [&str; 8] = [
     "camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep",
 ];
 
@@ -19,7 +19,7 @@ pub(crate) struct RawFile {
 
 impl RawFile {
     /// Parses the text; TOML syntax and type errors carry the line and column.
-    pub(crate) fn parse(text: &str) -> Result<RawFile, toml::de::Error> {
+    pub fn parse(text: &str) -> Result<RawFile, toml::de::Error> {
         let config: RawConfig = toml::from_str(text)?;
         let table: toml::Table = toml::from_str(text)?;
         let others = table

@@ -60,9 +60,9 @@ pub struct SweepSpec {
     pub ground_truth: bool,
 }
 
-pub const DEFAULT_MAX_CONFIGS: usize = 100_000;
+pub(crate) const DEFAULT_MAX_CONFIGS: usize = 100_000;
 /// Budget used for the recommendation when none is configured.
-pub const DEFAULT_BUDGET_MIB: f64 = 64.0;
+pub(crate) const DEFAULT_BUDGET_MIB: f64 = 64.0;
 
 // ---------------------------------------------------------------------------------------------
 // Decimal-exact ranges
@@ -236,12 +236,12 @@ pub(crate) struct RawSweep {
     ground_truth: Option<bool>,
 }
 
-pub fn fmt_list<T: std::fmt::Display>(v: &[T]) -> String {
+pub(crate) fn fmt_list<T: std::fmt::Display>(v: &[T]) -> String {
     v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(",")
 }
 
 /// Checks an axis' values: not empty, no duplicates, each allowed.
-pub fn check_values<T: PartialOrd + Copy + std::fmt::Display>(
+pub(crate) fn check_values<T: PartialOrd + Copy + std::fmt::Display>(
     values: &[T],
     allowed: &str,
     ok: impl Fn(T) -> bool,
@@ -271,15 +271,15 @@ pub fn check_values<T: PartialOrd + Copy + std::fmt::Display>(
     Ok(())
 }
 
-pub fn lambda_ok(x: f64) -> bool {
+pub(crate) fn lambda_ok(x: f64) -> bool {
     (0.0..=1.0).contains(&x)
 }
 
-pub fn cascades_ok(x: usize) -> bool {
+pub(crate) fn cascades_ok(x: usize) -> bool {
     (1..=16).contains(&x)
 }
 
-pub fn resolution_ok(x: u32) -> bool {
+pub(crate) fn resolution_ok(x: u32) -> bool {
     (16..=16384).contains(&x)
 }
 
@@ -301,17 +301,17 @@ fn raw_numbers(raw: RawAxis, allowed: &str, ok: impl Fn(f64) -> bool) -> std::re
 }
 
 /// A sun azimuth a sweep may use, degrees: a compass bearing in [0, 360).
-pub fn sun_azimuth_ok(x: f64) -> bool {
+pub(crate) fn sun_azimuth_ok(x: f64) -> bool {
     (0.0..360.0).contains(&x)
 }
 
 /// A sun elevation a sweep may use, degrees: above the horizon, at most the zenith.
-pub fn sun_elevation_ok(x: f64) -> bool {
+pub(crate) fn sun_elevation_ok(x: f64) -> bool {
     x > 0.0 && x <= 90.0
 }
 
 /// A shadow distance a sweep may use.
-pub fn distance_ok(x: f64) -> bool {
+pub(crate) fn distance_ok(x: f64) -> bool {
     x.is_finite() && x > 0.0 && x <= 1e9
 }
 

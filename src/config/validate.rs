@@ -619,7 +619,7 @@ fn analysis_settings(a: &super::schema::RawAnalysis, v: &Validator<'_>) -> Resul
 
 /// Every pose of the motion path must be a valid camera (pitching through the up vector, or a
 /// path file row with position == target, is a config error, not a panic later).
-pub fn check_camera_path(config: &Config, v: &Validator<'_>) -> Result<()> {
+pub(crate) fn check_camera_path(config: &Config, v: &Validator<'_>) -> Result<()> {
     // Pose by pose, none kept: a long path costs time, not memory.
     config
         .check_camera_paths()
@@ -644,7 +644,7 @@ pub fn check_camera_path(config: &Config, v: &Validator<'_>) -> Result<()> {
 
 /// Most pixels the visibility pass samples (`round(width·s) × round(height·s)`): 2^25, an 8K
 /// screen (7680 × 4320) at `screen_scale = 1`.
-pub const MAX_SAMPLED_PIXELS: u64 = 1 << 25;
+pub(crate) const MAX_SAMPLED_PIXELS: u64 = 1 << 25;
 
 /// Bytes the visibility pass holds per sampled pixel, about (hit, normal, depth and the
 /// per-cascade lookups: 16384² sampled pixels asked for 10 GiB at once).

@@ -14,7 +14,7 @@ use crate::output::Exporter;
 use csm_core::cascades::{bounds_2d, LightPose};
 
 /// Texels per pixel against view depth, log-log, with split lines and the ideal 1.
-pub struct DensityFigure<'a>(pub &'a Analysis);
+pub(crate) struct DensityFigure<'a>(pub &'a Analysis);
 
 impl DensityFigure<'_> {
     /// Legend entries: the ideal line, the split depths (with two or more cascades), a cascade each.
@@ -78,7 +78,7 @@ impl Figure for DensityFigure<'_> {
 }
 
 /// Per-frame RMS phase drift over all cascades, snapped vs unsnapped.
-pub struct ShimmerFigure<'a>(pub &'a Analysis);
+pub(crate) struct ShimmerFigure<'a>(pub &'a Analysis);
 
 impl Figure for ShimmerFigure<'_> {
     fn size(&self) -> (u32, u32) {
@@ -141,7 +141,7 @@ impl Figure for ShimmerFigure<'_> {
 }
 
 /// Andrew's monotone chain convex hull, counter-clockwise.
-pub fn convex_hull(mut pts: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+pub(crate) fn convex_hull(mut pts: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
     pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
     pts.dedup();
     if pts.len() < 3 {
@@ -168,7 +168,7 @@ pub fn convex_hull(mut pts: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
 }
 
 /// Top-down view from the light: each slice's footprint and its window (frame 0).
-pub struct CascadesFigure<'a>(pub &'a Analysis);
+pub(crate) struct CascadesFigure<'a>(pub &'a Analysis);
 
 impl Figure for CascadesFigure<'_> {
     fn size(&self) -> (u32, u32) {
@@ -245,9 +245,9 @@ impl Figure for CascadesFigure<'_> {
     }
 }
 
-pub struct DensitySvg;
-pub struct ShimmerSvg;
-pub struct CascadesSvg;
+pub(crate) struct DensitySvg;
+pub(crate) struct ShimmerSvg;
+pub(crate) struct CascadesSvg;
 
 impl Exporter<Analysis> for DensitySvg {
     fn file_name(&self) -> &'static str {

@@ -12,7 +12,7 @@ use crate::error::Result;
 use crate::output::Exporter;
 
 /// `bench.svg`: error against time, log-log, one line per metric.
-pub struct BenchSvg;
+pub(crate) struct BenchSvg;
 
 impl Exporter<BenchReport> for BenchSvg {
     fn file_name(&self) -> &'static str {
@@ -25,7 +25,7 @@ impl Exporter<BenchReport> for BenchSvg {
 }
 
 /// The chart behind `bench.svg`.
-pub struct BenchFigure<'a>(pub &'a BenchReport);
+pub(crate) struct BenchFigure<'a>(pub &'a BenchReport);
 
 impl Figure for BenchFigure<'_> {
     fn size(&self) -> (u32, u32) {

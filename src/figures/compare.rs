@@ -15,7 +15,7 @@ use crate::error::Result;
 use crate::output::Exporter;
 
 /// Texels per pixel against view depth, log-log, one line per preset.
-pub struct DensityOverlay<'a>(pub &'a Comparison);
+pub(crate) struct DensityOverlay<'a>(pub &'a Comparison);
 
 impl DensityOverlay<'_> {
     /// Legend entries: the ideal line and one per preset with cascades.
@@ -90,7 +90,7 @@ impl Figure for DensityOverlay<'_> {
 }
 
 /// Horizontal bars: shimmer snapped/unsnapped per preset, and coverage per preset.
-pub struct ShimmerCoverageBars<'a>(pub &'a Comparison);
+pub(crate) struct ShimmerCoverageBars<'a>(pub &'a Comparison);
 
 impl ShimmerCoverageBars<'_> {
     fn names(&self) -> Vec<String> {

@@ -6,11 +6,11 @@
 //! axes and legend helpers. Each command's figures live in their own submodule.
 
 pub mod analyze;
-pub mod bench;
-pub mod compare;
-pub mod screen;
-pub mod sun;
-pub mod sweep;
+pub(crate) mod bench;
+pub(crate) mod compare;
+pub(crate) mod screen;
+pub(crate) mod sun;
+pub(crate) mod sweep;
 pub mod truth;
 
 use std::sync::Once;
@@ -27,13 +27,13 @@ use plotters::prelude::*;
 
 use crate::error::{PlotError, Result};
 
-pub const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 /// The font size of every legend.
-pub const LEGEND_FONT: u32 = 13;
+pub(crate) const LEGEND_FONT: u32 = 13;
 
 /// Registers the embedded font with plotters (once per process).
-pub fn init_fonts() {
+pub(crate) fn init_fonts() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         let _ = plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular());
@@ -51,7 +51,7 @@ impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for DrawE
     }
 }
 
-pub type PlotResult = std::result::Result<(), DrawError>;
+pub(crate) type PlotResult = std::result::Result<(), DrawError>;
 
 /// Something that can be drawn.
 pub trait Figure {
@@ -95,13 +95,13 @@ fn font_db() -> std::sync::Arc<resvg::usvg::fontdb::Database> {
 }
 
 /// Rasterises SVG bytes to an opaque PNG on a white background, `scale` pixels per SVG unit.
-pub fn svg_to_png(svg: &[u8], scale: f32) -> Result<Vec<u8>> {
+pub(crate) fn svg_to_png(svg: &[u8], scale: f32) -> Result<Vec<u8>> {
     let (w, h, rgb) = svg_to_rgb(svg, scale)?;
     encode_png(w, h, &rgb)
 }
 
 /// Rasterises SVG bytes to RGB8 pixels on a white background: (width, height, pixels).
-pub fn svg_to_rgb(svg: &[u8], scale: f32) -> Result<(u32, u32, Vec<u8>)> {
+pub(crate) fn svg_to_rgb(svg: &[u8], scale: f32) -> Result<(u32, u32, Vec<u8>)> {
     use resvg::tiny_skia;
     let opt = resvg::usvg::Options {
         font_family: "DejaVu Sans".to_string(),
@@ -137,7 +137,7 @@ pub fn svg_to_rgb(svg: &[u8], scale: f32) -> Result<(u32, u32, Vec<u8>)> {
 }
 
 /// RGB8 pixels to PNG bytes.
-pub fn encode_png(w: u32, h: u32, rgb: &[u8]) -> Result<Vec<u8>> {
+pub(crate) fn encode_png(w: u32, h: u32, rgb: &[u8]) -> Result<Vec<u8>> {
     let mut out = Vec::new();
     {
         let mut enc = png::Encoder::new(&mut out, w, h);
@@ -153,7 +153,7 @@ pub fn encode_png(w: u32, h: u32, rgb: &[u8]) -> Result<Vec<u8>> {
 
 /// An axis tick label: the shortest decimal that names the tick ("10", "0.2", "2.5e-5"), never
 /// trailing zeros. Ticks come from [`nice_ticks`], so 4 significant digits always suffice.
-pub fn tick(v: f64) -> String {
+pub(crate) fn tick(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
         return "0".to_string();
     }
@@ -164,7 +164,7 @@ pub fn tick(v: f64) -> String {
 /// allows, each with a distinct [`tick`] label. Log axes take 1-2-5 steps per decade (every
 /// decade when the range spans many), falling back to a linear 1-2-5 step on narrow ranges, so
 /// an axis never goes unlabelled.
-pub fn nice_ticks(lo: f64, hi: f64, log: bool) -> Vec<f64> {
+pub(crate) fn nice_ticks(lo: f64, hi: f64, log: bool) -> Vec<f64> {
     if !(lo.is_finite() && hi.is_finite()) || hi <= lo {
         return vec![lo];
     }
@@ -231,28 +231,26 @@ pub use crate::output::short_number as short;
 // ---------------------------------------------------------------------------------------------
 
 /// Every colour a figure uses: named single marks and the categorical lists.
-pub mod palette {
+pub(crate) mod palette {
     use plotters::style::RGBColor;
 
     /// A heatmap cell without a value (no cascades needed).
-    pub const NO_DATA: RGBColor = RGBColor(220, 220, 220);
+    pub(crate) const NO_DATA: RGBColor = RGBColor(220, 220, 220);
     /// The outline of the recommended heatmap cell.
-    pub const MARKED: RGBColor = RGBColor(255, 0, 0);
+    pub(crate) const MARKED: RGBColor = RGBColor(255, 0, 0);
     /// The recommended point of a scatter plot.
-    pub const RECOMMENDED: RGBColor = RGBColor(200, 0, 0);
-    /// Thin lines between groups of bars.
-    pub const SEPARATOR: RGBColor = RGBColor(200, 200, 200);
+    pub(crate) const RECOMMENDED: RGBColor = RGBColor(200, 0, 0);
     /// Scatter points that are not singled out.
-    pub const POINT: RGBColor = RGBColor(170, 170, 170);
+    pub(crate) const POINT: RGBColor = RGBColor(170, 170, 170);
     /// Split depths drawn across a chart.
-    pub const SPLIT: RGBColor = RGBColor(150, 150, 150);
+    pub(crate) const SPLIT: RGBColor = RGBColor(150, 150, 150);
     /// A limit such as the memory budget.
-    pub const LIMIT: RGBColor = RGBColor(120, 120, 120);
+    pub(crate) const LIMIT: RGBColor = RGBColor(120, 120, 120);
     /// Coverage misses.
-    pub const MISS: RGBColor = RGBColor(214, 39, 40);
+    pub(crate) const MISS: RGBColor = RGBColor(214, 39, 40);
 
     /// Series of a chart, in order.
-    pub const SERIES: [RGBColor; 8] = [
+    pub(crate) const SERIES: [RGBColor; 8] = [
         RGBColor(0, 114, 178),
         RGBColor(213, 94, 0),
         RGBColor(0, 158, 115),
@@ -264,7 +262,7 @@ pub mod palette {
     ];
 
     /// Presets of a comparison, in order.
-    pub const PRESETS: [RGBColor; 11] = [
+    pub(crate) const PRESETS: [RGBColor; 11] = [
         RGBColor(31, 119, 180),
         RGBColor(255, 127, 14),
         RGBColor(44, 160, 44),
@@ -280,17 +278,17 @@ pub mod palette {
 }
 
 /// Distinct, colour-blind-friendly-ish colours for series.
-pub fn series_color(i: usize) -> RGBColor {
+pub(crate) fn series_color(i: usize) -> RGBColor {
     palette::SERIES[i % palette::SERIES.len()]
 }
 
 /// One colour per preset (eleven, distinguishable).
-pub fn preset_color(i: usize) -> RGBColor {
+pub(crate) fn preset_color(i: usize) -> RGBColor {
     palette::PRESETS[i % palette::PRESETS.len()]
 }
 
 /// Sequential colour map (viridis-like stops), t in [0, 1].
-pub fn colormap(t: f64) -> RGBColor {
+pub(crate) fn colormap(t: f64) -> RGBColor {
     const STOPS: [(f64, f64, f64); 5] = [
         (68.0, 1.0, 84.0),
         (59.0, 82.0, 139.0),
@@ -308,7 +306,11 @@ pub fn colormap(t: f64) -> RGBColor {
 }
 
 /// A chart that only says why there is nothing to show.
-pub fn draw_message<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str, message: &str) -> PlotResult {
+pub(crate) fn draw_message<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    message: &str,
+) -> PlotResult {
     let (w, h) = root.dim_in_pixel();
     root.draw(&Text::new(
         title.to_string(),
@@ -326,7 +328,7 @@ pub fn draw_message<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &s
 
 /// The house chart frame: a caption, 14-pixel margins, and room for the axis labels (50 pixels
 /// below, `y_labels` pixels left).
-pub fn chart_frame<'a, 'b, DB: DrawingBackend>(
+pub(crate) fn chart_frame<'a, 'b, DB: DrawingBackend>(
     root: &'a DrawingArea<DB, Shift>,
     title: &str,
     caption_size: u32,
@@ -341,30 +343,30 @@ pub fn chart_frame<'a, 'b, DB: DrawingBackend>(
 }
 
 /// Log-axis range that covers `lo..hi` with a margin and never collapses.
-pub fn log_range(lo: f64, hi: f64) -> (f64, f64) {
+pub(crate) fn log_range(lo: f64, hi: f64) -> (f64, f64) {
     let lo = lo.max(1e-300);
     let hi = hi.max(lo * 1.0001);
     (lo / 1.3, hi * 1.3)
 }
 
 /// The chart type of the log-log "texels per pixel against view depth" figures.
-pub type DepthChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogAxis, LogAxis>>;
+pub(crate) type DepthChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogAxis, LogAxis>>;
 
 /// A log axis labelled at [`nice_ticks`].
-pub type LogAxis = WithKeyPoints<LogCoord<f64>>;
+pub(crate) type LogAxis = WithKeyPoints<LogCoord<f64>>;
 
 /// A log axis over `lo..hi` with round, distinct tick labels.
-pub fn log_axis(lo: f64, hi: f64) -> LogAxis {
+pub(crate) fn log_axis(lo: f64, hi: f64) -> LogAxis {
     (lo..hi).log_scale().with_key_points(nice_ticks(lo, hi, true))
 }
 
 /// A log axis over `lo..hi` labelled at `ticks`.
-pub fn log_axis_with(lo: f64, hi: f64, ticks: Vec<f64>) -> LogAxis {
+pub(crate) fn log_axis_with(lo: f64, hi: f64, ticks: Vec<f64>) -> LogAxis {
     (lo..hi).log_scale().with_key_points(ticks)
 }
 
 /// A linear axis over `lo..hi` with round, distinct tick labels.
-pub fn linear_axis(lo: f64, hi: f64) -> TickedAxis {
+pub(crate) fn linear_axis(lo: f64, hi: f64) -> TickedAxis {
     TickedAxis {
         inner: (lo..hi).into(),
         ticks: nice_ticks(lo, hi, false),
@@ -372,7 +374,7 @@ pub fn linear_axis(lo: f64, hi: f64) -> TickedAxis {
 }
 
 /// A linear axis over `lo..hi` labelled at the given ticks (e.g. the centres of categories).
-pub fn ticked_axis(lo: f64, hi: f64, ticks: Vec<f64>) -> TickedAxis {
+pub(crate) fn ticked_axis(lo: f64, hi: f64, ticks: Vec<f64>) -> TickedAxis {
     TickedAxis {
         inner: (lo..hi).into(),
         ticks,
@@ -380,7 +382,7 @@ pub fn ticked_axis(lo: f64, hi: f64, ticks: Vec<f64>) -> TickedAxis {
 }
 
 /// A linear f64 axis with chosen tick positions, labelled by the chart's label formatter.
-pub struct TickedAxis {
+pub(crate) struct TickedAxis {
     inner: RangedCoordf64,
     ticks: Vec<f64>,
 }
@@ -409,7 +411,7 @@ impl Ranged for TickedAxis {
 /// A log-log chart of texels per pixel against view depth over `depth` with its axes, labels and
 /// the dashed "ideal: 1 texel per pixel" line already drawn; the y range covers `texels_per_pixel`
 /// and 1. Shared by `analyze`'s density figure, `sweep`'s λ figure and `compare`'s overlay.
-pub fn texels_per_pixel_chart<'a, DB: DrawingBackend>(
+pub(crate) fn texels_per_pixel_chart<'a, DB: DrawingBackend>(
     root: &'a DrawingArea<DB, Shift>,
     title: &str,
     caption_size: u32,
@@ -442,13 +444,13 @@ pub fn texels_per_pixel_chart<'a, DB: DrawingBackend>(
 
 /// The height of a legend of `lines` entries in `font_size` text, in pixels: what
 /// [`legend_frame`] reserves below a chart and [`draw_legend_below`] fills.
-pub fn legend_height(lines: usize, font_size: u32) -> u32 {
+pub(crate) fn legend_height(lines: usize, font_size: u32) -> u32 {
     lines as u32 * (font_size * 5).div_ceil(4) + 24
 }
 
 /// [`chart_frame`] with a band of [`legend_height`] pixels reserved under the x-axis labels, where
 /// [`draw_legend_below`] puts the legend: outside the plotting area, so it never covers data.
-pub fn legend_frame<'a, 'b, DB: DrawingBackend>(
+pub(crate) fn legend_frame<'a, 'b, DB: DrawingBackend>(
     root: &'a DrawingArea<DB, Shift>,
     title: &str,
     caption_size: u32,
@@ -463,7 +465,7 @@ pub fn legend_frame<'a, 'b, DB: DrawingBackend>(
 
 /// A figure's legend entries (label and swatch), drawn by [`draw_legend_below`] in a band of its
 /// own under the chart, so the legend box never covers data.
-pub struct Legend<DB: DrawingBackend> {
+pub(crate) struct Legend<DB: DrawingBackend> {
     entries: Vec<LegendEntry<DB>>,
 }
 
@@ -480,7 +482,7 @@ impl<DB: DrawingBackend> Default for Legend<DB> {
 
 impl<DB: DrawingBackend> Legend<DB> {
     /// An entry: `label` beside the swatch `f` draws at the given pixel.
-    pub fn add<E, F>(&mut self, label: impl Into<String>, f: F)
+    pub(crate) fn add<E, F>(&mut self, label: impl Into<String>, f: F)
     where
         E: IntoDynElement<'static, DB, BackendCoord>,
         F: Fn(BackendCoord) -> E + 'static,
@@ -488,11 +490,11 @@ impl<DB: DrawingBackend> Legend<DB> {
         self.entries.push((label.into(), Box::new(move |p| f(p).into_dyn())));
     }
 
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.entries.len()
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.entries.is_empty()
     }
 }
@@ -500,7 +502,7 @@ impl<DB: DrawingBackend> Legend<DB> {
 /// Draws `legend` in the house style (white, framed box) in the band of [`legend_height`] pixels
 /// for `reserved_lines` entries that [`legend_frame`] left at the bottom of `root`, left-aligned
 /// with the plotting area.
-pub fn draw_legend_below<DB: DrawingBackend>(
+pub(crate) fn draw_legend_below<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     legend: Legend<DB>,
     reserved_lines: usize,
@@ -523,7 +525,7 @@ pub fn draw_legend_below<DB: DrawingBackend>(
 }
 
 /// Draws the series legend in the house style (white, framed box) at `position`.
-pub fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,
     position: SeriesLabelPosition,
     font_size: u32,

@@ -34,7 +34,7 @@ fn hex(c: [u8; 3]) -> String {
 }
 
 /// Colour of aliasing `m` on the log scale.
-pub fn aliasing_color(m: f64) -> [u8; 3] {
+pub(crate) fn aliasing_color(m: f64) -> [u8; 3] {
     rgb(colormap((m.log2() - LOG2_LO) / (LOG2_HI - LOG2_LO)))
 }
 
@@ -111,7 +111,7 @@ fn swatch(x: f64, c: [u8; 3], label: &str) -> String {
 }
 
 /// `screen_aliasing.png`.
-pub fn aliasing_png(a: &Analysis) -> Result<Vec<u8>> {
+pub(crate) fn aliasing_png(a: &Analysis) -> Result<Vec<u8>> {
     let (cols, rows, px) = pixels(a).expect("written only with geometry");
     let colour: Vec<[u8; 3]> = px
         .iter()
@@ -162,7 +162,7 @@ pub fn aliasing_png(a: &Analysis) -> Result<Vec<u8>> {
 }
 
 /// `screen_cascades.png`.
-pub fn cascades_png(a: &Analysis) -> Result<Vec<u8>> {
+pub(crate) fn cascades_png(a: &Analysis) -> Result<Vec<u8>> {
     let (cols, rows, px) = pixels(a).expect("written only with geometry");
     let dim = |c: [u8; 3]| c.map(|x| (x as f64 * 0.4) as u8);
     let cascade_of = |i: usize| px[i].as_ref().and_then(|p| p.cascade);
@@ -202,8 +202,8 @@ pub fn cascades_png(a: &Analysis) -> Result<Vec<u8>> {
     compose(cols, rows, &colour, &legend_svg(&body))
 }
 
-pub struct ScreenAliasingPng;
-pub struct ScreenCascadesPng;
+pub(crate) struct ScreenAliasingPng;
+pub(crate) struct ScreenCascadesPng;
 
 impl Exporter<Analysis> for ScreenAliasingPng {
     fn file_name(&self) -> &'static str {
@@ -225,7 +225,7 @@ impl Exporter<Analysis> for ScreenCascadesPng {
 
 /// Both images of an analysis with their captions (empty without geometry or on a failure to
 /// draw, which only leaves them out of a page).
-pub fn captioned(a: &Analysis, label: &str) -> Vec<(Vec<u8>, String)> {
+pub(crate) fn captioned(a: &Analysis, label: &str) -> Vec<(Vec<u8>, String)> {
     if a.config.geometry.is_none() {
         return Vec::new();
     }

@@ -9,7 +9,7 @@ use super::{draw_message, tick, Figure, PlotResult, FONT};
 use crate::commands::sweep::SweepResult;
 
 /// The objective over the sun angles of a sun sweep ([`crate::commands::sun_sweep`]).
-pub struct QualityVsSunFigure<'a>(pub &'a SweepResult);
+pub(crate) struct QualityVsSunFigure<'a>(pub &'a SweepResult);
 
 /// Every k-th of `n` labels (about `most` of them), the rest empty.
 fn thinned(labels: Vec<String>, most: usize) -> Vec<(usize, String)> {

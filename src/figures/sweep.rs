@@ -18,7 +18,7 @@ use crate::metric::SummaryMetric;
 
 /// The configuration the figures single out: the recommended one, or when nothing qualifies the
 /// one that comes closest (false), or None when no configuration needs cascades.
-pub fn focus(r: &SweepResult) -> Option<(&Row, bool)> {
+pub(crate) fn focus(r: &SweepResult) -> Option<(&Row, bool)> {
     match r.recommended() {
         Some(x) => Some((x, true)),
         None => r.no_recommendation.closest.map(|i| (&r.rows[i], false)),
@@ -35,7 +35,7 @@ fn focus_word(recommended: bool) -> &'static str {
 }
 
 /// A setting in the sweep's own knobs: an engine preset has no λ or fit to print.
-pub fn setting_words(r: &SweepResult, s: &Setting) -> String {
+pub(crate) fn setting_words(r: &SweepResult, s: &Setting) -> String {
     if r.config.shadow.preset.is_some() {
         let mut out = format!("{} × {}²", s.cascades, s.resolution);
         if let (Some(k), Some(v)) = (crate::presets::axes(&r.config).knob, s.knob) {
@@ -58,12 +58,12 @@ pub fn setting_words(r: &SweepResult, s: &Setting) -> String {
 
 /// The most λ columns a heat-map panel draws; a longer λ axis is binned (each column shows the
 /// lowest value among adjacent λ), which keeps the SVG bounded at any grid size.
-pub const MAX_HEAT_COLUMNS: usize = 48;
+pub(crate) const MAX_HEAT_COLUMNS: usize = 48;
 
 /// Aliasing over λ × cascade count, one panel per metric, resolution and fit (or over resolution ×
 /// cascade count when the grid has one λ, as for engine presets). Each panel has its own colour
 /// scale, so the effect of λ shows within every resolution.
-pub struct HeatmapFigure<'a>(pub &'a SweepResult);
+pub(crate) struct HeatmapFigure<'a>(pub &'a SweepResult);
 
 /// One heat-map panel: labelled columns × rows of cells.
 pub(crate) struct HeatPanel {
@@ -440,14 +440,14 @@ pub(crate) fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>,
 }
 
 /// Texels per pixel against depth for a handful of λ at the recommended count/resolution/fit.
-pub struct LambdaDensityFigure<'a> {
+pub(crate) struct LambdaDensityFigure<'a> {
     pub result: &'a SweepResult,
     pub analyses: Vec<Analysis>,
 }
 
 impl<'a> LambdaDensityFigure<'a> {
     /// Picks λ values near 0, 0.25, 0.5, 0.75, 1 (and the recommended one) from the grid.
-    pub fn new(result: &'a SweepResult) -> Self {
+    pub(crate) fn new(result: &'a SweepResult) -> Self {
         let Some((rec, _)) = focus(result) else {
             return LambdaDensityFigure {
                 result,
@@ -574,7 +574,7 @@ impl Figure for LambdaDensityFigure<'_> {
 
 /// The five-number summary of `v` (min, lower quartile, median, upper quartile, max), or None
 /// when `v` is empty. Quartiles by linear interpolation between order statistics.
-pub fn five_numbers(v: &[f64]) -> Option<[f64; 5]> {
+pub(crate) fn five_numbers(v: &[f64]) -> Option<[f64; 5]> {
     let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
     if s.is_empty() {
         return None;
@@ -595,7 +595,7 @@ pub fn five_numbers(v: &[f64]) -> Option<[f64; 5]> {
 /// Shimmer snapped vs unsnapped as distributions: one box per cascade count over every λ,
 /// resolution and fit of the grid (whiskers: min and max; box: quartiles; bar: median), with the
 /// recommended configuration marked. Bounded at any grid size.
-pub struct ShimmerSweepFigure<'a>(pub &'a SweepResult);
+pub(crate) struct ShimmerSweepFigure<'a>(pub &'a SweepResult);
 
 impl Figure for ShimmerSweepFigure<'_> {
     fn size(&self) -> (u32, u32) {
@@ -698,7 +698,7 @@ impl Figure for ShimmerSweepFigure<'_> {
 }
 
 /// Pareto front of memory against the sweep's objective (mean aliasing without geometry).
-pub struct ParetoFigure<'a>(pub &'a SweepResult);
+pub(crate) struct ParetoFigure<'a>(pub &'a SweepResult);
 
 impl Figure for ParetoFigure<'_> {
     fn size(&self) -> (u32, u32) {

@@ -51,21 +51,21 @@ pub mod colours {
     /// No receiver (sky, a surface facing away from the light).
     pub const EMPTY: [u8; 3] = [236, 236, 236];
     /// Lit by the map, truly lit.
-    pub const LIT: [u8; 3] = [246, 222, 140];
+    pub(crate) const LIT: [u8; 3] = [246, 222, 140];
     /// Shadowed by the map, truly shadowed.
-    pub const SHADOWED: [u8; 3] = [72, 84, 112];
+    pub(crate) const SHADOWED: [u8; 3] = [72, 84, 112];
     /// Shadowed by the map, truly lit, every texel read holding its own surface (acne).
-    pub const ACNE: [u8; 3] = [213, 40, 120];
+    pub(crate) const ACNE: [u8; 3] = [213, 40, 120];
     /// Wrong because the texels read hold another surface (the blocky edge, either way).
-    pub const EDGE: [u8; 3] = [240, 130, 20];
+    pub(crate) const EDGE: [u8; 3] = [240, 130, 20];
     /// Lit by the map only because of the bias, truly shadowed (peter-panning, light leaks).
-    pub const LEAK: [u8; 3] = [0, 190, 220];
+    pub(crate) const LEAK: [u8; 3] = [0, 190, 220];
     /// The animation's progress bar.
     pub const PROGRESS: [u8; 3] = [213, 94, 0];
 }
 
 /// The colour of a state in `shadow.png` and `shadow.apng`.
-pub fn shade_colour(s: Shade) -> [u8; 3] {
+pub(crate) fn shade_colour(s: Shade) -> [u8; 3] {
     match s {
         Shade::Empty => colours::EMPTY,
         Shade::Lit => colours::LIT,
@@ -77,25 +77,25 @@ pub fn shade_colour(s: Shade) -> [u8; 3] {
 }
 
 /// The colour of flip rate `v` on a scale from 0 to `vmax` (viridis-like; 0 is the darkest).
-pub fn flip_colour(v: f64, vmax: f64) -> [u8; 3] {
+pub(crate) fn flip_colour(v: f64, vmax: f64) -> [u8; 3] {
     let t = if vmax > 0.0 { v / vmax } else { 0.0 };
     let c = colormap(t);
     [c.0, c.1, c.2]
 }
 
 /// White space between two panels, in pixels.
-pub const GAP: u32 = 16;
+pub(crate) const GAP: u32 = 16;
 /// The band above the panels that holds their titles.
-pub const TITLE_H: u32 = 30;
+pub(crate) const TITLE_H: u32 = 30;
 /// The widest `shadow.png` and `flicker.png`, in pixels.
-pub const MAX_WIDTH: u32 = 1280;
+pub(crate) const MAX_WIDTH: u32 = 1280;
 /// The narrowest `shadow.png` and `flicker.png` (room for the legend), in pixels; narrower
 /// panels are left-aligned on white.
-pub const MIN_WIDTH: u32 = 960;
+pub(crate) const MIN_WIDTH: u32 = 960;
 /// The narrowest animation (room for its legend), in pixels.
-pub const MIN_ANIMATION_WIDTH: u32 = 480;
+pub(crate) const MIN_ANIMATION_WIDTH: u32 = 480;
 /// The tallest panel of `shadow.png` and `flicker.png`, in pixels.
-pub const MAX_PANEL_HEIGHT: u32 = 900;
+pub(crate) const MAX_PANEL_HEIGHT: u32 = 900;
 
 /// One image of a figure with its title.
 #[derive(Debug, Clone, Copy)]
@@ -122,7 +122,7 @@ impl<'a, T> Panel<'a, T> {
 /// The size of a `cols × rows` grid drawn into at most `max_w × max_h` pixels: enlarged by the
 /// largest whole factor that fits (pixels stay square and equal), or shrunk when the grid is
 /// larger than the box.
-pub fn panel_size(cols: u32, rows: u32, max_w: u32, max_h: u32) -> (u32, u32) {
+pub(crate) fn panel_size(cols: u32, rows: u32, max_w: u32, max_h: u32) -> (u32, u32) {
     let (cols, rows) = (cols.max(1), rows.max(1));
     if cols <= max_w && rows <= max_h {
         let k = (max_w / cols).min(max_h / rows).max(1);
@@ -149,7 +149,7 @@ pub struct Layout {
 }
 
 impl Layout {
-    pub fn new(cols: u32, rows: u32, panels: u32, max_w: u32, max_h: u32) -> Layout {
+    pub(crate) fn new(cols: u32, rows: u32, panels: u32, max_w: u32, max_h: u32) -> Layout {
         let panels = panels.max(1);
         let per = (max_w.saturating_sub(GAP * (panels - 1)) / panels).max(1);
         let (pw, ph) = panel_size(cols, rows, per, max_h);
@@ -164,22 +164,22 @@ impl Layout {
     }
 
     /// The layout with the picture at least `w` pixels wide.
-    pub fn at_least(self, w: u32) -> Layout {
+    pub(crate) fn at_least(self, w: u32) -> Layout {
         Layout { min_width: w, ..self }
     }
 
     /// The width of the picture: all panels with their gaps, or [`Self::min_width`].
-    pub fn width(&self) -> u32 {
+    pub(crate) fn width(&self) -> u32 {
         (self.panels * self.pw + GAP * (self.panels - 1)).max(self.min_width)
     }
 
     /// The left edge of panel `i`.
-    pub fn panel_x(&self, i: u32) -> u32 {
+    pub(crate) fn panel_x(&self, i: u32) -> u32 {
         i * (self.pw + GAP)
     }
 
     /// The grid pixel (row-major index) shown at panel pixel (x, y).
-    pub fn source(&self, x: u32, y: u32) -> usize {
+    pub(crate) fn source(&self, x: u32, y: u32) -> usize {
         let c = (x as u64 * self.cols as u64 / self.pw as u64) as usize;
         let r = (y as u64 * self.rows as u64 / self.ph as u64) as usize;
         r * self.cols as usize + c
@@ -338,7 +338,7 @@ fn check_panels<T>(panels: &[Panel<'_, T>], dims: impl Fn(&T) -> (u32, u32, usiz
 
 /// Pixels of each state in one image.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct ShadeCounts {
+pub(crate) struct ShadeCounts {
     pub empty: usize,
     pub lit: usize,
     pub shadowed: usize,
@@ -348,7 +348,7 @@ pub struct ShadeCounts {
 }
 
 impl ShadeCounts {
-    pub fn of(image: &ShadeImage) -> ShadeCounts {
+    pub(crate) fn of(image: &ShadeImage) -> ShadeCounts {
         let mut c = ShadeCounts::default();
         for s in &image.pixels {
             match s {
@@ -364,7 +364,7 @@ impl ShadeCounts {
     }
 
     /// Pixels with a receiver.
-    pub fn receivers(&self) -> usize {
+    pub(crate) fn receivers(&self) -> usize {
         self.lit + self.shadowed + self.acne + self.edge + self.leak
     }
 }
@@ -437,7 +437,7 @@ pub fn shadow_png(panels: &[Panel<'_, ShadeImage>]) -> Result<Vec<u8>> {
 
 /// What a flip image holds: receivers, how many flipped at all, the mean and largest rate.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct FlipStats {
+pub(crate) struct FlipStats {
     pub receivers: usize,
     pub flipped: usize,
     pub mean: f64,
@@ -445,7 +445,7 @@ pub struct FlipStats {
 }
 
 impl FlipStats {
-    pub fn of(image: &FlipImage) -> FlipStats {
+    pub(crate) fn of(image: &FlipImage) -> FlipStats {
         let mut s = FlipStats::default();
         let mut sum = 0.0;
         for v in image.flips.iter().flatten() {
@@ -585,7 +585,7 @@ pub fn flicker_png(panels: &[Panel<'_, FlipImage>]) -> Result<Vec<u8>> {
 // ---------------------------------------------------------------------------------------------
 
 /// The file name of the animation.
-pub const SHADOW_APNG: &str = "shadow.apng";
+pub(crate) const SHADOW_APNG: &str = "shadow.apng";
 
 /// What bounds the animation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -712,11 +712,11 @@ impl AnimationPlan {
         Ok(plan)
     }
 
-    pub fn width(&self) -> u32 {
+    pub(crate) fn width(&self) -> u32 {
         self.layout.width()
     }
 
-    pub fn height(&self) -> u32 {
+    pub(crate) fn height(&self) -> u32 {
         TITLE_H + PROGRESS_H + self.layout.ph + ANIM_LEGEND_H
     }
 
@@ -727,7 +727,7 @@ impl AnimationPlan {
 
     /// The most bytes one frame can take whatever it shows: the raw indexed rows (one filter
     /// byte each) stored without compression, plus deflate's and the chunks' framing.
-    pub fn frame_bound(&self) -> u64 {
+    pub(crate) fn frame_bound(&self) -> u64 {
         let raw = self.height() as u64 * (self.width() as u64 + 1);
         raw + raw / 1024 + 256
     }
@@ -916,10 +916,10 @@ pub struct ShimmerPoint {
 }
 
 /// The stem of the scatter's files (`.svg`, `.png`).
-pub const FLICKER_VS_SHIMMER: &str = "flicker_vs_shimmer";
+pub(crate) const FLICKER_VS_SHIMMER: &str = "flicker_vs_shimmer";
 
 /// The scatter's caption in a report: what to look for.
-pub const FLICKER_VS_SHIMMER_CAPTION: &str = "Flicker S5 against the shimmer proxies S3 and S4, one point per configuration: points close to the fitted line (|r| near 1) mean the proxy predicts the flicker a player sees. The snapped configurations sit at the origin and pull the line; the unsnapped points alone (the report's sentences) say whether the proxy ranks the configurations that flicker.";
+pub(crate) const FLICKER_VS_SHIMMER_CAPTION: &str = "Flicker S5 against the shimmer proxies S3 and S4, one point per configuration: points close to the fitted line (|r| near 1) mean the proxy predicts the flicker a player sees. The snapped configurations sit at the origin and pull the line; the unsnapped points alone (the report's sentences) say whether the proxy ranks the configurations that flicker.";
 
 /// The ordinary least-squares line `y = a + b x` through points and how well it fits.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -1020,7 +1020,7 @@ impl FlickerVsShimmer<'_> {
     }
 
     /// The fit's text as the figure prints it.
-    pub fn fit_text(proxy: &str, f: &Fit) -> [String; 2] {
+    pub(crate) fn fit_text(proxy: &str, f: &Fit) -> [String; 2] {
         let line = match f.line {
             Some((a, b)) => format!("least squares: S5 = {} + {} · {proxy}", short(a), short(b)),
             None => format!("no line: fewer than two points or {proxy} constant"),

@@ -63,7 +63,7 @@ impl Config {
 
 /// Applies the preset chosen in `choice` (or the file's) to a parsed scene and checks the
 /// result: the one way a preset reaches a config.
-pub fn apply_preset(config: &mut Config, choice: &PresetChoice) -> Result<()> {
+pub(crate) fn apply_preset(config: &mut Config, choice: &PresetChoice) -> Result<()> {
     crate::presets::apply(config, choice)?;
     let input = config.preset_input.clone();
     let v = input.validator();

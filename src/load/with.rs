@@ -23,7 +23,7 @@ impl Config {
 
     /// The config after changes made outside these constructors (an engine's sweep knobs,
     /// which never move the camera), checked again.
-    pub fn rechecked(self) -> Result<Config> {
+    pub(crate) fn rechecked(self) -> Result<Config> {
         self.checked()
     }
 
@@ -123,7 +123,7 @@ impl Config {
     }
 
     /// The config with `shadow.precision` set.
-    pub fn with_precision(&self, precision: Precision) -> Result<Config> {
+    pub(crate) fn with_precision(&self, precision: Precision) -> Result<Config> {
         let mut c = self.clone();
         c.shadow.precision = precision;
         c.checked()
@@ -150,7 +150,7 @@ impl Config {
 
     /// The splits on the bounds' depth range or on the visible depths (`fit_depth_to_visible`),
     /// which needs scene geometry.
-    pub fn with_split_range(&self, range: SplitRange) -> Result<Config> {
+    pub(crate) fn with_split_range(&self, range: SplitRange) -> Result<Config> {
         let mut c = self.clone();
         c.set_split_range(range)?;
         c.checked()
@@ -170,7 +170,7 @@ impl Config {
 
     /// The config with a generated motion path (not a path file): `frames` poses, `step` as a
     /// config file would write it (world units per frame, or degrees for the rotations).
-    pub fn with_motion(&self, path: MotionPath, frames: usize, step_as_written: f64) -> Result<Config> {
+    pub(crate) fn with_motion(&self, path: MotionPath, frames: usize, step_as_written: f64) -> Result<Config> {
         let v = |key: &str, value: &dyn std::fmt::Display, allowed: &str| self.refuse(key, value, allowed);
         if matches!(path, MotionPath::File { .. }) {
             return Err(v(

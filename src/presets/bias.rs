@@ -43,7 +43,7 @@ pub enum BiasModel {
 
 impl BiasModel {
     /// The rule, if one is modelled.
-    pub fn rule(self) -> Option<EngineBias> {
+    pub(crate) fn rule(self) -> Option<EngineBias> {
         match self {
             BiasModel::Rule(b) => Some(b),
             BiasModel::NotModelled(_) => None,
@@ -60,7 +60,7 @@ pub fn engine_bias(name: PresetName) -> Option<EngineBias> {
 /// The filter of an engine's shadow lookups (docs/presets.md, "Filter"): the two seeds that
 /// compare point-sampled texels read nearest; engines sample with a comparison sampler and
 /// linear filtering (hardware PCF), as csm-lab's own pipeline does.
-pub fn engine_filter(name: PresetName) -> csm_core::truth::PcfFilter {
+pub(crate) fn engine_filter(name: PresetName) -> csm_core::truth::PcfFilter {
     use csm_core::truth::PcfFilter;
     match name {
         PresetName::LearnOpenGl | PresetName::UnitySample => PcfFilter::Nearest,

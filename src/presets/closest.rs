@@ -19,7 +19,7 @@ pub struct Target<'a> {
 }
 
 impl Target<'_> {
-    pub fn cascades(&self) -> usize {
+    pub(crate) fn cascades(&self) -> usize {
         self.ends.len() - 1
     }
 
@@ -31,7 +31,7 @@ impl Target<'_> {
 }
 
 /// The far end of each cascade but the last for knobs `k` (the last ends at the distance).
-pub fn far_ends<E: Engine + ?Sized>(k: &E::Knobs, t: &Target<'_>) -> Vec<f64> {
+pub(crate) fn far_ends<E: Engine + ?Sized>(k: &E::Knobs, t: &Target<'_>) -> Vec<f64> {
     let n = t.cascades();
     let lay = E::layout(k, n, t.distance, t.near, t.far);
     lay.fitted.iter().take(n.saturating_sub(1)).map(|s| s.1).collect()
@@ -39,7 +39,7 @@ pub fn far_ends<E: Engine + ?Sized>(k: &E::Knobs, t: &Target<'_>) -> Vec<f64> {
 
 /// Σ (ln e_i − ln d_{i+1})² over the inner far ends: how far the engine's cascades end from
 /// csm-lab's, scale-free. Infinite for knobs the engine refuses at this count and distance.
-pub fn log_misfit<E: Engine + ?Sized>(k: &E::Knobs, t: &Target<'_>) -> f64 {
+pub(crate) fn log_misfit<E: Engine + ?Sized>(k: &E::Knobs, t: &Target<'_>) -> f64 {
     let v = Validator { path: "", text: "" };
     if E::check(k, t.cascades(), t.distance, &v).is_err() {
         return f64::INFINITY;
@@ -59,7 +59,7 @@ pub fn log_misfit<E: Engine + ?Sized>(k: &E::Knobs, t: &Target<'_>) -> f64 {
 /// Minimises `cost` over `(lo, hi)`: 256 points spread evenly (in `ln x` when `log`), then a
 /// golden-section search between the best point's neighbours. Deterministic; ties keep the
 /// smaller x.
-pub fn fit_1d(lo: f64, hi: f64, log: bool, cost: impl Fn(f64) -> f64) -> f64 {
+pub(crate) fn fit_1d(lo: f64, hi: f64, log: bool, cost: impl Fn(f64) -> f64) -> f64 {
     const M: usize = 256;
     let (a, b) = if log { (lo.ln(), hi.ln()) } else { (lo, hi) };
     let x_of = |u: f64| if log { u.exp() } else { u };
@@ -98,7 +98,7 @@ pub fn fit_1d(lo: f64, hi: f64, log: bool, cost: impl Fn(f64) -> f64) -> f64 {
 
 /// The default of [`Engine::match_ends`]: the engine's split knob fitted over its range (in
 /// `ln x`), else λ over [0, 1], minimising [`log_misfit`]. Nothing to fit for one cascade.
-pub fn fit_split_knob<E: Engine + ?Sized>(k: &mut E::Knobs, t: &Target<'_>) {
+pub(crate) fn fit_split_knob<E: Engine + ?Sized>(k: &mut E::Knobs, t: &Target<'_>) {
     if t.cascades() < 2 {
         return;
     }
@@ -135,7 +135,7 @@ pub fn fit_split_knob<E: Engine + ?Sized>(k: &mut E::Knobs, t: &Target<'_>) {
 /// `used` fractions first, then `keep`'s where they still increase inside (0, 1), else the
 /// midpoint between the previous one and 1: a complete, valid fraction table whose first
 /// `used.len()` entries are `used` (the others are not read at this count).
-pub fn complete_fractions<const N: usize>(used: &[f64], keep: [f64; N]) -> [f64; N] {
+pub(crate) fn complete_fractions<const N: usize>(used: &[f64], keep: [f64; N]) -> [f64; N] {
     let mut out = keep;
     for i in 0..N {
         if i < used.len() {

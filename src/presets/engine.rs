@@ -65,24 +65,24 @@ pub struct Fitting<'a> {
 
 impl Fitting<'_> {
     /// One number per fitted slice.
-    pub fn each(&self, f: impl Fn(f64, f64) -> f64) -> Vec<f64> {
+    pub(crate) fn each(&self, f: impl Fn(f64, f64) -> f64) -> Vec<f64> {
         self.fitted.iter().map(|&(a, b)| f(a, b)).collect()
     }
 
     /// One sphere per fitted slice.
-    pub fn spheres(&self, f: impl Fn(f64, f64) -> Sphere) -> Vec<Sphere> {
+    pub(crate) fn spheres(&self, f: impl Fn(f64, f64) -> Sphere) -> Vec<Sphere> {
         self.fitted.iter().map(|&(a, b)| f(a, b)).collect()
     }
 
     /// Windows centred on the view-axis point of each sphere.
-    pub fn axis(spheres: &[Sphere]) -> WindowRule {
+    pub(crate) fn axis(spheres: &[Sphere]) -> WindowRule {
         WindowRule::AxisCentred {
             centre_depth: spheres.iter().map(|s| s.centre_depth).collect(),
         }
     }
 
     /// A sphere of radius r on `usable` of the map's N texels: window side 2r·N/usable.
-    pub fn on(&self, spheres: &[Sphere], usable: f64) -> Vec<f64> {
+    pub(crate) fn on(&self, spheres: &[Sphere], usable: f64) -> Vec<f64> {
         let n = self.resolution as f64;
         spheres.iter().map(|s| 2.0 * s.radius * n / usable).collect()
     }
@@ -103,7 +103,7 @@ pub struct EngineScheme {
 
 impl EngineScheme {
     /// A scheme in the engine's fixed light basis, snapped on the grid through the world origin.
-    pub fn fixed(label: &'static str, window: WindowRule, sides: Vec<f64>, depth: LightDepthRule) -> Self {
+    pub(crate) fn fixed(label: &'static str, window: WindowRule, sides: Vec<f64>, depth: LightDepthRule) -> Self {
         EngineScheme {
             label,
             window,

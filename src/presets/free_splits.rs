@@ -118,7 +118,7 @@ pub(crate) fn free_split_engines() -> Vec<PresetName> {
 }
 
 /// Whether the engine's splits are free fractions.
-pub fn has_free_splits(name: PresetName) -> bool {
+pub(crate) fn has_free_splits(name: PresetName) -> bool {
     name.engine().has_free_splits()
 }
 
@@ -135,7 +135,7 @@ pub struct FreeSplitKnob {
 
 /// The knob holding the fractions of `cascades` cascades; None with one cascade (no split) or
 /// an engine whose splits are not free.
-pub fn free_split_knob(knobs: &Knobs, cascades: usize) -> Option<FreeSplitKnob> {
+pub(crate) fn free_split_knob(knobs: &Knobs, cascades: usize) -> Option<FreeSplitKnob> {
     if cascades < 2 {
         return None;
     }
@@ -143,7 +143,7 @@ pub fn free_split_knob(knobs: &Knobs, cascades: usize) -> Option<FreeSplitKnob> 
 }
 
 /// What a preset's split fractions are fractions of, for the config's count and distance.
-pub fn preset_fraction_space(config: &Config, knobs: &Knobs) -> Option<FractionSpace> {
+pub(crate) fn preset_fraction_space(config: &Config, knobs: &Knobs) -> Option<FractionSpace> {
     knobs
         .engine()
         .fraction_space(knobs, planes(config))
@@ -166,7 +166,7 @@ fn knob_values(knobs: &Knobs, cascades: usize, max_distance: f64, fractions: &[f
 /// Sets a preset's split fractions for its configured count (and, for Filament, its split mode
 /// to explicit positions). Refused when the engine's splits are not free or the fractions are
 /// not `cascades − 1` values strictly increasing inside (0, 1).
-pub fn set_fractions(knobs: &mut Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Result<()> {
+pub(crate) fn set_fractions(knobs: &mut Knobs, cascades: usize, max_distance: f64, fractions: &[f64]) -> Result<()> {
     let name = knobs.name();
     let Some(knob) = free_split_knob(knobs, cascades) else {
         return Err(crate::error::PresetError::NoKnob {
@@ -189,7 +189,7 @@ pub fn set_fractions(knobs: &mut Knobs, cascades: usize, max_distance: f64, frac
 
 /// The fractions the preset uses now for `cascades` cascades (Filament's helpers evaluated on
 /// `[near, shadowFar]`); None when its splits are not free.
-pub fn configured_fractions(config: &Config, knobs: &Knobs, cascades: usize) -> Option<Vec<f64>> {
+pub(crate) fn configured_fractions(config: &Config, knobs: &Knobs, cascades: usize) -> Option<Vec<f64>> {
     free_split_knob(knobs, cascades)?;
     knobs.engine().configured_fractions(knobs, cascades, planes(config))
 }
@@ -227,6 +227,6 @@ pub fn engine_setting(knobs: &Knobs, cascades: usize, max_distance: f64, fractio
 /// Drops configured split values that do not fit `cascades` cascades (`bevy.bounds` not
 /// holding `cascades − 1` values): a sweep point with another count uses the engine's own split
 /// series.
-pub fn drop_stale_bounds(knobs: &mut Knobs, cascades: usize) {
+pub(crate) fn drop_stale_bounds(knobs: &mut Knobs, cascades: usize) {
     knobs.engine().fit_fractions_to_count(knobs, cascades);
 }

@@ -25,26 +25,29 @@ mod sweep;
 mod terms;
 
 pub use apply::{apply, PresetChoice};
-pub use closest::{complete_fractions, far_ends, fit_1d, fit_split_knob, log_misfit, Target};
-pub use engine::{snap, Counts, DynEngine, Engine, EngineScheme, Fitting, Knob, KnobContext, KnobsOf};
-pub use engines::{Knobs, PresetName, ENGINES};
+pub use closest::Target;
+pub(crate) use closest::{complete_fractions, fit_split_knob, log_misfit};
+pub use engine::{snap, Counts, Engine, Fitting, Knob};
+pub(crate) use engine::{DynEngine, EngineScheme, KnobContext, KnobsOf};
+pub use engines::{Knobs, PresetName};
 pub(crate) use free_splits::free_split_engines;
-pub use free_splits::{
-    configured_fractions, drop_stale_bounds, engine_setting, free_split_knob, has_free_splits, paste_lines,
-    preset_fraction_space, set_fractions, FreeSplitKnob, FreeSplits, Planes, Setting,
+pub(crate) use free_splits::{
+    configured_fractions, drop_stale_bounds, free_split_knob, has_free_splits, preset_fraction_space, set_fractions,
 };
-pub use report::{light_depth_description, light_depths, report, snap_description, split_rule, PresetReport};
-pub use rig::{light_basis_rule, rig, rig_for_layout};
+pub use free_splits::{engine_setting, paste_lines, Setting};
+pub(crate) use report::PresetReport;
+pub use report::{report, split_rule};
+pub(crate) use rig::light_basis_rule;
+pub use rig::{rig, rig_for_layout};
 pub(crate) use shared::join;
-pub use shared::{
-    around, centre, check_range, clip_selection, distance_fractions, engine_table, fraction_splits, fractions,
-    half_extent_along, is_generic_note, layout, minimal_sphere_scheme, non_negative, ordered, point_or, positive, unit,
-    Layout,
+pub use shared::{around, centre, clip_selection, fractions, layout, ordered, positive, unit, Layout};
+pub(crate) use shared::{
+    check_range, distance_fractions, half_extent_along, is_generic_note, minimal_sphere_scheme, non_negative, point_or,
 };
-pub use sweep::{
-    axes, check_point, preset_axes, set_cascades, set_distance, set_knob, set_lambda, set_resolution, Axes,
-};
-pub use terms::{apply_terms, engine_of, number, read, render, Dims, Field, Fields, Terms, Values};
+pub(crate) use sweep::set_distance;
+pub use sweep::{axes, check_point, set_cascades, set_knob, set_lambda, set_resolution, Axes};
+pub use terms::{apply_terms, number, read, render, Values};
+pub(crate) use terms::{engine_of, Dims, Fields, Terms};
 
 use serde::Serialize;
 
@@ -65,7 +68,7 @@ impl PresetName {
     }
 
     /// Where the preset's behaviour comes from.
-    pub fn source(self) -> &'static str {
+    pub(crate) fn source(self) -> &'static str {
         self.engine().source()
     }
 }
@@ -83,12 +86,12 @@ impl Serialize for PresetName {
 }
 
 /// Every preset name, comma-separated, for messages.
-pub fn valid_names() -> String {
+pub(crate) fn valid_names() -> String {
     PresetName::ALL.map(|p| p.as_str()).join(", ")
 }
 
 /// The preset name closest to `s`.
-pub fn closest_name(s: &str) -> PresetName {
+pub(crate) fn closest_name(s: &str) -> PresetName {
     let s = s.to_ascii_lowercase();
     PresetName::ALL
         .into_iter()
@@ -97,7 +100,7 @@ pub fn closest_name(s: &str) -> PresetName {
 }
 
 /// "valid presets: ...; did you mean ...?"
-pub fn unknown_name_message(s: &str) -> String {
+pub(crate) fn unknown_name_message(s: &str) -> String {
     format!(
         "valid presets are {}; did you mean \"{}\"?",
         valid_names(),
@@ -111,7 +114,7 @@ pub fn parse_flag(flag: &str, s: &str) -> Result<PresetName> {
 }
 
 /// Parses a comma-separated list of preset names (`--presets bevy,godot`).
-pub fn parse_list(flag: &str, s: &str) -> Result<Vec<PresetName>> {
+pub(crate) fn parse_list(flag: &str, s: &str) -> Result<Vec<PresetName>> {
     let mut out = Vec::new();
     for part in s.split(',').map(str::trim) {
         if part.is_empty() {
@@ -136,7 +139,7 @@ pub fn parse_list(flag: &str, s: &str) -> Result<Vec<PresetName>> {
 
 impl Knobs {
     /// The engine whose knobs these are.
-    pub fn engine(&self) -> &'static dyn DynEngine {
+    pub(crate) fn engine(&self) -> &'static dyn DynEngine {
         self.name().engine()
     }
 
@@ -199,7 +202,7 @@ impl From<Preset> for crate::config::AppliedPreset {
 }
 
 /// The λ of a preset whose split rule is the practical scheme (λ weighting the log split).
-pub fn lambda_value(k: &Knobs) -> Option<f64> {
+pub(crate) fn lambda_value(k: &Knobs) -> Option<f64> {
     k.engine().lambda(k)
 }
 

@@ -2,8 +2,7 @@
 
 use serde::Serialize;
 
-use csm_core::cascades::{LightDepth, LightPose, Rig};
-use csm_core::geometry::Aabb;
+use csm_core::cascades::{LightDepth, Rig};
 use csm_core::snapping::SnapMode;
 
 use super::*;
@@ -14,7 +13,7 @@ pub fn split_rule(k: &Knobs) -> String {
 }
 
 /// The snapping rule in words.
-pub fn snap_description(k: &Knobs) -> String {
+pub(crate) fn snap_description(k: &Knobs) -> String {
     let engine = k.engine();
     if !engine.snaps() {
         return "none".to_string();
@@ -30,7 +29,7 @@ pub fn snap_description(k: &Knobs) -> String {
 }
 
 /// The light depth rule in words.
-pub fn light_depth_description(k: &Knobs) -> String {
+pub(crate) fn light_depth_description(k: &Knobs) -> String {
     k.engine().light_depth_rule(k)
 }
 
@@ -85,11 +84,4 @@ pub fn report(preset: &Preset, rig: Option<&Rig>, depths: Vec<LightDepth>) -> Pr
         light_depth: depths,
         notes: preset.notes.clone(),
     }
-}
-
-/// Light depth of every cascade for one camera frame, with the configured snap mode.
-pub fn light_depths(rig: &Rig, lp: &LightPose, snapped: bool, scene: &Aabb) -> Vec<LightDepth> {
-    (0..rig.cascade_count())
-        .map(|i| rig.light_depth(i, lp, &rig.window(i, lp, snapped), scene))
-        .collect()
 }

@@ -64,7 +64,7 @@ pub fn rig_for_layout(
 
 /// How the engine of `preset` builds its light basis from a light direction (the basis of
 /// every frame under a moving light).
-pub fn light_basis_rule(preset: &Preset) -> fn(DVec3) -> csm_core::geometry::LightBasis {
+pub(crate) fn light_basis_rule(preset: &Preset) -> fn(DVec3) -> csm_core::geometry::LightBasis {
     preset.knobs.engine().light_basis_fn()
 }
 

@@ -38,7 +38,7 @@ pub fn layout(knobs: &super::Knobs, cascades: usize, max_distance: f64, near: f6
 
 /// Boundaries at fractions of a distance measured from the eye, the first cascade starting at
 /// the near plane (Unity, URP).
-pub fn fraction_splits(near: f64, distance: f64, fractions: &[f64]) -> Vec<f64> {
+pub(crate) fn fraction_splits(near: f64, distance: f64, fractions: &[f64]) -> Vec<f64> {
     let mut s = vec![near];
     s.extend(fractions.iter().map(|f| f * distance));
     s.push(distance);
@@ -47,7 +47,7 @@ pub fn fraction_splits(near: f64, distance: f64, fractions: &[f64]) -> Vec<f64> 
 
 /// Unity's and URP's layout: boundaries at fractions of the shadow distance min(far, max),
 /// the fractions chosen by count (none for 1, `two` for 2, `three` for 3, `four` from 4 on).
-pub fn distance_fractions(
+pub(crate) fn distance_fractions(
     cascades: usize,
     near: f64,
     far: f64,
@@ -85,7 +85,7 @@ pub fn clip_selection(selection: &[f64], near: f64, far: f64) -> Option<Vec<f64>
 
 /// Reads the top-level table `name` of a TOML document into `T`, with TOML's line and column
 /// on errors; None when the file has no such table.
-pub fn engine_table<T: DeserializeOwned>(text: &str, label: &str, name: &str) -> Result<Option<T>> {
+pub(crate) fn engine_table<T: DeserializeOwned>(text: &str, label: &str, name: &str) -> Result<Option<T>> {
     struct Pick<'n, T> {
         name: &'n str,
         out: PhantomData<T>,
@@ -123,7 +123,7 @@ pub fn engine_table<T: DeserializeOwned>(text: &str, label: &str, name: &str) ->
 
 /// Notes every preset gets alike (csm-lab's own `[shadow]` settings it ignores); reports that
 /// list several presets say this once instead.
-pub fn is_generic_note(note: &str) -> bool {
+pub(crate) fn is_generic_note(note: &str) -> bool {
     [
         "shadow.lambda ",
         "shadow.fit ",
@@ -139,7 +139,7 @@ pub(crate) fn join(list: &[usize]) -> String {
 }
 
 /// `x` in the interval from `lo` to `hi`, each end open or closed.
-pub fn check_range(
+pub(crate) fn check_range(
     v: &Validator<'_>,
     key: &str,
     x: f64,
@@ -172,12 +172,12 @@ pub fn unit(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
 
 /// A distance >= 0, at most 1e9 world units (the world's bound: beyond it the arithmetic of
 /// the fit can no longer carry the value, e.g. `pad_xy = 1e300`).
-pub fn non_negative(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
+pub(crate) fn non_negative(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
     check_range(v, key, x, 0.0, crate::config::MAX_WORLD, false, false)
 }
 
 /// A signed distance (a clip plane may sit behind the light), within ±1e9 world units.
-pub fn signed_distance(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
+pub(crate) fn signed_distance(v: &Validator<'_>, key: &str, x: f64) -> Result<f64> {
     check_range(
         v,
         key,
@@ -218,7 +218,7 @@ pub fn fractions<const N: usize>(
 }
 
 /// A point, or `default` when not written.
-pub fn point_or(v: &Validator<'_>, key: &str, x: Option<[f64; 3]>, default: DVec3) -> Result<DVec3> {
+pub(crate) fn point_or(v: &Validator<'_>, key: &str, x: Option<[f64; 3]>, default: DVec3) -> Result<DVec3> {
     match x {
         // Bounded like every world position: 1e308 was accepted, then the fit's centre was NaN.
         Some(a) => v.point(key, a),
@@ -239,7 +239,7 @@ pub fn ordered(v: &Validator<'_>, lower_key: &str, lower: f64, upper_key: &str, 
 }
 
 /// Half the extent of a box along a unit direction (its support function about the centre).
-pub fn half_extent_along(scene: &Aabb, dir: DVec3) -> f64 {
+pub(crate) fn half_extent_along(scene: &Aabb, dir: DVec3) -> f64 {
     let h = 0.5 * (scene.max - scene.min);
     h.x * dir.x.abs() + h.y * dir.y.abs() + h.z * dir.z.abs()
 }
@@ -251,7 +251,7 @@ pub fn centre(scene: &Aabb) -> DVec3 {
 
 /// csm-lab's minimal sphere, grown by the snap rule's largest shift, on the world-origin grid,
 /// light depth fitted to the scene: how the closed-source Unity pipelines are modelled.
-pub fn minimal_sphere_scheme(f: &super::Fitting<'_>) -> super::EngineScheme {
+pub(crate) fn minimal_sphere_scheme(f: &super::Fitting<'_>) -> super::EngineScheme {
     let k2 = f.lens.k2();
     let s = f.spheres(|a, b| csm_core::fitting::minimal_sphere(a, b, k2));
     let sides = s

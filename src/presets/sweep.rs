@@ -24,7 +24,7 @@ pub struct Axes {
 }
 
 /// The sweep axes of a preset at the shadow distance `max_distance`.
-pub fn preset_axes(p: &Preset, max_distance: f64) -> Axes {
+pub(crate) fn preset_axes(p: &Preset, max_distance: f64) -> Axes {
     let engine = p.knobs.engine();
     Axes {
         lambda: engine.lambda_key(&p.knobs),
@@ -154,7 +154,7 @@ pub fn set_knob(config: &mut Config, value: f64) -> Result<()> {
 
 /// Sets the shadow distance for a sweep point (`shadow.max_distance`), checking it against
 /// the preset's own rules.
-pub fn set_distance(config: &mut Config, distance: f64) -> Result<()> {
+pub(crate) fn set_distance(config: &mut Config, distance: f64) -> Result<()> {
     if !(distance.is_finite() && distance > 0.0 && distance <= 1e9) {
         return Err(PresetError::OutOfRange {
             axis: "distance",

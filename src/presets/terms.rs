@@ -37,7 +37,7 @@ pub struct Dims {
 
 impl Dims {
     /// The count, map size and (for an engine with one) shadow distance of a loaded config.
-    pub fn of(config: &Config) -> Dims {
+    pub(crate) fn of(config: &Config) -> Dims {
         let s = &config.shadow;
         let has_distance = s.preset.as_ref().is_none_or(|p| p.knobs.engine().has_distance());
         Dims {
@@ -59,32 +59,32 @@ pub fn number(x: f64) -> String {
 pub struct Values(pub Vec<(&'static str, String)>);
 
 impl Values {
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Values::default()
     }
 
-    pub fn num(mut self, field: &'static str, x: f64) -> Self {
+    pub(crate) fn num(mut self, field: &'static str, x: f64) -> Self {
         self.0.push((field, number(x)));
         self
     }
 
-    pub fn int(mut self, field: &'static str, n: impl std::fmt::Display) -> Self {
+    pub(crate) fn int(mut self, field: &'static str, n: impl std::fmt::Display) -> Self {
         self.0.push((field, n.to_string()));
         self
     }
 
-    pub fn bool(mut self, field: &'static str, b: bool) -> Self {
+    pub(crate) fn bool(mut self, field: &'static str, b: bool) -> Self {
         self.0.push((field, b.to_string()));
         self
     }
 
-    pub fn word(mut self, field: &'static str, w: &str) -> Self {
+    pub(crate) fn word(mut self, field: &'static str, w: &str) -> Self {
         self.0.push((field, w.to_string()));
         self
     }
 
     /// Numbers separated by `, ` (a TOML array's or an argument list's inside).
-    pub fn nums(mut self, field: &'static str, xs: &[f64]) -> Self {
+    pub(crate) fn nums(mut self, field: &'static str, xs: &[f64]) -> Self {
         self.0
             .push((field, xs.iter().map(|x| number(*x)).collect::<Vec<_>>().join(", ")));
         self
@@ -164,7 +164,7 @@ fn settings_error(
 const COMMENTS: [&str; 3] = ["//", "#", ";"];
 
 /// The engine an engine settings file is for, from its header line.
-pub fn engine_of(text: &str, label: &str) -> Result<PresetName> {
+pub(crate) fn engine_of(text: &str, label: &str) -> Result<PresetName> {
     let Some((i, first)) = text.lines().enumerate().find(|(_, l)| !l.trim().is_empty()) else {
         return Err(settings_error(
             label,
@@ -202,7 +202,7 @@ pub fn engine_of(text: &str, label: &str) -> Result<PresetName> {
 
 /// One placeholder's text as read, and where.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Field {
+pub(crate) struct Field {
     pub name: &'static str,
     pub raw: String,
     pub line: usize,
@@ -229,18 +229,18 @@ impl Fields<'_> {
     }
 
     /// An error at a field.
-    pub fn error(&self, f: &Field, message: impl Into<String>) -> Error {
+    pub(crate) fn error(&self, f: &Field, message: impl Into<String>) -> Error {
         settings_error(self.label, f.line, f.column, format!("`{}`", f.name), message)
     }
 
     /// A finite number; `key` is the config key it becomes (for range errors).
-    pub fn num(&self, name: &str, key: &str) -> Result<f64> {
+    pub(crate) fn num(&self, name: &str, key: &str) -> Result<f64> {
         let f = self.at(name, key)?;
         parse_number(&f.raw).ok_or_else(|| self.error(f, format!("expected a number, found {:?}", f.raw)))
     }
 
     /// A whole number >= 0.
-    pub fn int(&self, name: &str, key: &str) -> Result<u64> {
+    pub(crate) fn int(&self, name: &str, key: &str) -> Result<u64> {
         let f = self.at(name, key)?;
         f.raw
             .parse::<u64>()
@@ -248,7 +248,7 @@ impl Fields<'_> {
     }
 
     /// `true` or `false`.
-    pub fn bool(&self, name: &str, key: &str) -> Result<bool> {
+    pub(crate) fn bool(&self, name: &str, key: &str) -> Result<bool> {
         let f = self.at(name, key)?;
         match f.raw.as_str() {
             "true" => Ok(true),
@@ -258,7 +258,7 @@ impl Fields<'_> {
     }
 
     /// One of `words`, mapped to its value.
-    pub fn word<T: Copy>(&self, name: &str, key: &str, words: &[(&str, T)]) -> Result<T> {
+    pub(crate) fn word<T: Copy>(&self, name: &str, key: &str, words: &[(&str, T)]) -> Result<T> {
         let f = self.at(name, key)?;
         words.iter().find(|(w, _)| *w == f.raw).map(|(_, t)| *t).ok_or_else(|| {
             let list: Vec<String> = words.iter().map(|(w, _)| format!("{w:?}")).collect();
@@ -267,7 +267,7 @@ impl Fields<'_> {
     }
 
     /// Numbers separated by commas.
-    pub fn nums(&self, name: &str, key: &str) -> Result<Vec<f64>> {
+    pub(crate) fn nums(&self, name: &str, key: &str) -> Result<Vec<f64>> {
         let f = self.at(name, key)?;
         f.raw
             .split(',')
@@ -277,18 +277,18 @@ impl Fields<'_> {
     }
 
     /// A cascade count.
-    pub fn count(&self, name: &str, key: &str) -> Result<usize> {
+    pub(crate) fn count(&self, name: &str, key: &str) -> Result<usize> {
         Ok(usize::try_from(self.int(name, key)?).unwrap_or(usize::MAX))
     }
 
     /// A map size (texels); values beyond u32 are kept out of range for the range check.
-    pub fn size(&self, name: &str, key: &str) -> Result<u32> {
+    pub(crate) fn size(&self, name: &str, key: &str) -> Result<u32> {
         Ok(u32::try_from(self.int(name, key)?).unwrap_or(u32::MAX))
     }
 
     /// A map size that is `per` tiles of the cascade's map across (an atlas of 2 × 2 tiles:
     /// `per` = 2): the size of one tile, or an error when the atlas does not divide.
-    pub fn tile(&self, name: &str, key: &str, per: u32) -> Result<u32> {
+    pub(crate) fn tile(&self, name: &str, key: &str, per: u32) -> Result<u32> {
         let atlas = self.size(name, key)?;
         if atlas % per != 0 {
             let f = &self.fields[self.fields.iter().position(|f| f.name == name).unwrap_or(0)];
@@ -301,7 +301,7 @@ impl Fields<'_> {
     }
 
     /// Three numbers separated by commas.
-    pub fn vec3(&self, name: &str, key: &str) -> Result<[f64; 3]> {
+    pub(crate) fn vec3(&self, name: &str, key: &str) -> Result<[f64; 3]> {
         let v = self.nums(name, key)?;
         <[f64; 3]>::try_from(v.as_slice()).map_err(|_| {
             let f = &self.fields[self.fields.iter().position(|f| f.name == name).unwrap_or(0)];
@@ -311,7 +311,7 @@ impl Fields<'_> {
 
     /// A value the engine's validation refused (a `ConfigError::Invalid` naming a config key
     /// read from a field) re-pointed at that field's line; other errors pass unchanged.
-    pub fn relocate(&self, e: Error) -> Error {
+    pub(crate) fn relocate(&self, e: Error) -> Error {
         let Error::Config(ConfigError::Invalid {
             key, value, allowed, ..
         }) = &e

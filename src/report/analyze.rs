@@ -10,7 +10,7 @@ use crate::metric;
 use crate::output::{csv_bytes, json_bytes, num, short_number, Exporter};
 
 /// The files `analyze` writes, in order: its tables, its summary and its figures.
-pub fn exporters() -> Vec<&'static dyn Exporter<Analysis>> {
+pub(crate) fn exporters() -> Vec<&'static dyn Exporter<Analysis>> {
     vec![
         &CascadesCsv,
         &DensityCsv,
@@ -24,7 +24,7 @@ pub fn exporters() -> Vec<&'static dyn Exporter<Analysis>> {
 
 /// The files `analyze` writes for one analysis: [`exporters`], plus the two camera-view
 /// images when the scene has geometry.
-pub fn exporters_for(a: &Analysis) -> Vec<&'static dyn Exporter<Analysis>> {
+pub(crate) fn exporters_for(a: &Analysis) -> Vec<&'static dyn Exporter<Analysis>> {
     let mut v = exporters();
     if a.config.geometry.is_some() {
         v.push(&figures::screen::ScreenAliasingPng);
@@ -162,7 +162,7 @@ impl Exporter<Analysis> for ShimmerCsv {
 /// `shimmer.csv` with every frame's rows (`analyze --all-frames`), written as the path is
 /// walked ([`crate::analysis::each_frame_row`]): a path of any length in the memory of one
 /// chunk of frames. Without the flag, paths longer than 1,000 frames keep every k-th frame.
-pub struct FullShimmerCsv<'a>(pub &'a crate::config::Config);
+pub(crate) struct FullShimmerCsv<'a>(pub &'a crate::config::Config);
 
 impl crate::output::StreamedFile for FullShimmerCsv<'_> {
     fn file_name(&self) -> &str {
@@ -274,7 +274,7 @@ impl Exporter<Analysis> for SummaryJson {
 }
 
 /// The terminal summary of one analysis.
-pub fn summary_table(a: &Analysis) -> String {
+pub(crate) fn summary_table(a: &Analysis) -> String {
     let mut out = String::new();
     let s = &a.summary;
     let c = &a.config;
@@ -423,7 +423,7 @@ pub fn summary_table(a: &Analysis) -> String {
 /// The non-finite numbers in an analysis's summary document (a non-finite number becomes
 /// `null` there, so nulls count too) and the files of `analyze` that refuse to render (they
 /// refuse non-finite values): what `stress` checks of every case.
-pub fn output_problems(a: &Analysis) -> (usize, Vec<String>) {
+pub(crate) fn output_problems(a: &Analysis) -> (usize, Vec<String>) {
     fn walk(v: &serde_json::Value) -> usize {
         match v {
             serde_json::Value::Null => 1,

@@ -8,7 +8,7 @@ use crate::output::{csv_bytes, num, short_number, Exporter};
 
 /// The terminal table: per metric, the smallest count reaching [`TARGET_ERROR`] and its
 /// time, and the error and time at the current default.
-pub fn table(report: &BenchReport) -> String {
+pub(crate) fn table(report: &BenchReport) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -46,9 +46,9 @@ pub fn table(report: &BenchReport) -> String {
 }
 
 /// `bench.csv`: one row per metric and sample count.
-pub struct BenchCsv;
+pub(crate) struct BenchCsv;
 
-pub const BENCH_COLUMNS: [&str; 6] = ["metric", "samples", "seconds", "error", "estimate", "reference"];
+pub(crate) const BENCH_COLUMNS: [&str; 6] = ["metric", "samples", "seconds", "error", "estimate", "reference"];
 
 impl Exporter<BenchReport> for BenchCsv {
     fn file_name(&self) -> &'static str {

@@ -17,7 +17,7 @@ const WORST_LISTED: usize = 3;
 impl CheckReport {
     /// The terminal table: with `--sweep`, a summary (counts per rule, the worst offenders)
     /// unless `verbose`, which lists every configuration.
-    pub fn table_with(&self, verbose: bool) -> String {
+    pub(crate) fn table_with(&self, verbose: bool) -> String {
         match &self.body {
             Body::Sweep { rows, baseline, gated } if !verbose => self.sweep_summary(rows, baseline.as_ref(), gated),
             _ => self.table(),
@@ -183,7 +183,7 @@ impl CheckReport {
     }
 
     /// The terminal table.
-    pub fn table(&self) -> String {
+    pub(crate) fn table(&self) -> String {
         let mut out = String::new();
         let c = self.counts();
         match &self.body {
@@ -296,7 +296,7 @@ impl CheckReport {
     }
 
     /// The same content as JSON (every number at full precision).
-    pub fn json(&self) -> Value {
+    pub(crate) fn json(&self) -> Value {
         let c = self.counts();
         let mut v = json!({
             "tool": format!("csm-lab {}", env!("CARGO_PKG_VERSION")),
@@ -368,7 +368,7 @@ impl CheckReport {
     }
 }
 
-pub fn plural(n: usize) -> &'static str {
+pub(crate) fn plural(n: usize) -> &'static str {
     if n == 1 {
         ""
     } else {
@@ -377,7 +377,7 @@ pub fn plural(n: usize) -> &'static str {
 }
 
 /// `<= 8`, `>= 0.25`, `in [1, 8]`
-pub fn limit_text(r: &RuleResult) -> String {
+pub(crate) fn limit_text(r: &RuleResult) -> String {
     match (r.rule.min, r.rule.max) {
         (Some(lo), Some(hi)) => format!("in [{}, {}]", short(lo), short(hi)),
         (Some(lo), None) => format!(">= {}", short(lo)),
@@ -387,7 +387,7 @@ pub fn limit_text(r: &RuleResult) -> String {
 }
 
 /// One sentence with the numbers, for failure messages.
-pub fn rule_message(r: &RuleResult) -> String {
+pub(crate) fn rule_message(r: &RuleResult) -> String {
     let metric = r.rule.target.metric_name();
     match (&r.judgement, r.status) {
         (None, _) => format!("{metric}: not applicable: {}", r.note.as_deref().unwrap_or("no data")),

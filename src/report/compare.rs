@@ -16,7 +16,7 @@ use crate::presets::{is_generic_note, lambda_value};
 
 /// `compare.csv`: `preset`, the sweep columns ([`metric::summary_columns`]), then these
 /// extra findings.
-pub const EXTRA_COLUMNS: [&str; 5] = [
+pub(crate) const EXTRA_COLUMNS: [&str; 5] = [
     "snaps",
     "coverage_worst_texels",
     "min_slack_texels",
@@ -25,7 +25,7 @@ pub const EXTRA_COLUMNS: [&str; 5] = [
 ];
 
 /// The header of `compare.csv`.
-pub fn columns(screen: bool) -> Vec<&'static str> {
+pub(crate) fn columns(screen: bool) -> Vec<&'static str> {
     std::iter::once("preset")
         .chain(metric::summary_columns(screen))
         .chain(EXTRA_COLUMNS)
@@ -33,7 +33,7 @@ pub fn columns(screen: bool) -> Vec<&'static str> {
 }
 
 /// One CSV row per preset.
-pub fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
+pub(crate) fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
     c.analyses
         .iter()
         .map(|a| {
@@ -66,7 +66,7 @@ pub fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
         .collect()
 }
 
-pub struct CompareCsv;
+pub(crate) struct CompareCsv;
 
 impl Exporter<Comparison> for CompareCsv {
     fn file_name(&self) -> &'static str {
@@ -243,7 +243,7 @@ fn preset_lines(a: &Analysis) -> Vec<String> {
     out
 }
 
-pub struct CompareHtml;
+pub(crate) struct CompareHtml;
 
 impl Exporter<Comparison> for CompareHtml {
     fn file_name(&self) -> &'static str {
@@ -316,7 +316,7 @@ const RESULTS_NOTE: &str = "Aliasing is measured over the depths that read each 
 const DENSITY_CAPTION: &str = "Texels per pixel against view depth, one line per preset";
 const SHIMMER_CAPTION: &str = "Shimmer snapped and unsnapped, and coverage misses, per preset";
 
-pub struct CompareMd;
+pub(crate) struct CompareMd;
 
 impl Exporter<Comparison> for CompareMd {
     fn file_name(&self) -> &'static str {
@@ -366,7 +366,7 @@ impl Exporter<Comparison> for CompareMd {
 }
 
 /// The exporters `compare` writes, in order.
-pub fn exporters() -> Vec<&'static dyn Exporter<Comparison>> {
+pub(crate) fn exporters() -> Vec<&'static dyn Exporter<Comparison>> {
     vec![
         &CompareCsv,
         &DensitySvg,
@@ -380,7 +380,7 @@ pub fn exporters() -> Vec<&'static dyn Exporter<Comparison>> {
 
 /// The lines `compare` prints about the engine settings files: each engine's file and how
 /// near its cascades end to csm-lab's (the last comment line of the file).
-pub fn settings_lines(settings: &[crate::commands::terms::EngineSetting]) -> String {
+pub(crate) fn settings_lines(settings: &[crate::commands::terms::EngineSetting]) -> String {
     if settings.is_empty() {
         return String::new();
     }
@@ -397,7 +397,7 @@ pub fn settings_lines(settings: &[crate::commands::terms::EngineSetting]) -> Str
 }
 
 /// The terminal summary of a comparison.
-pub fn summary_table(c: &Comparison) -> String {
+pub(crate) fn summary_table(c: &Comparison) -> String {
     let mut out = String::new();
     let presets = c.analyses.len() - c.own.len();
     let _ = writeln!(

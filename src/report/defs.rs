@@ -7,7 +7,7 @@ use crate::metric::SummaryMetric;
 /// The definition of summary metric `name` for a column labelled `label`: (label, text).
 /// A help text that reads "the same …" (a variant of the metric before it) is completed with
 /// the text of the metric it varies.
-pub fn metric(label: &str, name: &str) -> (String, String) {
+pub(crate) fn metric(label: &str, name: &str) -> (String, String) {
     let m = SummaryMetric::named(name);
     let unit = m.def().unit;
     let mut text = m.description().to_string();
@@ -34,18 +34,18 @@ pub fn metric(label: &str, name: &str) -> (String, String) {
 }
 
 /// A definition of a column that is not a registry metric (a setting, a derived column).
-pub fn other(label: &str, text: &str) -> (String, String) {
+pub(crate) fn other(label: &str, text: &str) -> (String, String) {
     (label.to_string(), text.to_string())
 }
 
 /// The memory column, shown in MiB.
-pub fn memory(label: &str) -> (String, String) {
+pub(crate) fn memory(label: &str) -> (String, String) {
     let (l, t) = metric(label, "memory_bytes");
     (l, format!("{t} Shown in MiB (1 MiB = 1,048,576 bytes)."))
 }
 
 /// The settings columns of the sweep tables.
-pub fn settings(lambda: bool, fit: bool) -> Vec<(String, String)> {
+pub(crate) fn settings(lambda: bool, fit: bool) -> Vec<(String, String)> {
     let mut v = vec![
         other("cascades", "number of shadow maps the view depth range is split into"),
         other("resolution", "side of each square shadow map, in texels"),
@@ -66,7 +66,7 @@ pub fn settings(lambda: bool, fit: bool) -> Vec<(String, String)> {
 }
 
 /// The definitions as Markdown: one bullet per column.
-pub fn markdown(defs: &[(String, String)]) -> String {
+pub(crate) fn markdown(defs: &[(String, String)]) -> String {
     let mut m = String::new();
     for (k, v) in defs {
         m.push_str(&format!("- *{k}*: {v}\n"));

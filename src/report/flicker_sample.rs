@@ -12,10 +12,10 @@ use crate::figures::truth::{fit, flicker_vs_shimmer_figure, Fit, ShimmerPoint, F
 use crate::output::{num, short_number};
 
 /// The file of the sampled rows.
-pub const FILE: &str = "flicker.csv";
+pub(crate) const FILE: &str = "flicker.csv";
 
 /// `flicker.csv`'s columns.
-pub const COLUMNS: [&str; 14] = [
+pub(crate) const COLUMNS: [&str; 14] = [
     "row",
     "setting",
     "lambda",
@@ -35,7 +35,7 @@ pub const COLUMNS: [&str; 14] = [
 /// `flicker.csv`: one line per sampled row that has cascades, in row order. `row` is the
 /// 0-based index of the setting in grid order (the line of `sweep.csv` after its header; in a
 /// sun sweep, the setting's judged row at its worst sun, named in `setting`).
-pub fn csv(r: &SweepResult, s: &FlickerSample) -> Result<Vec<u8>> {
+pub(crate) fn csv(r: &SweepResult, s: &FlickerSample) -> Result<Vec<u8>> {
     let rec = r.recommendation.as_ref().map(|x| x.index);
     let rows = s.measured.iter().map(|m| {
         let st = &r.rows[m.index].setting;
@@ -60,7 +60,7 @@ pub fn csv(r: &SweepResult, s: &FlickerSample) -> Result<Vec<u8>> {
 }
 
 /// The figure's points (both snap modes of every measured row).
-pub fn points(s: &FlickerSample) -> Vec<ShimmerPoint> {
+pub(crate) fn points(s: &FlickerSample) -> Vec<ShimmerPoint> {
     s.points()
         .map(|p| ShimmerPoint {
             s3: p.s3,
@@ -72,12 +72,12 @@ pub fn points(s: &FlickerSample) -> Vec<ShimmerPoint> {
 }
 
 /// The fits of S5 on S3 and on S4 over all points, as the figure draws them.
-pub struct Fits {
+pub(crate) struct Fits {
     pub s3: Fit,
     pub s4: Fit,
 }
 
-pub fn fits(points: &[ShimmerPoint]) -> Fits {
+pub(crate) fn fits(points: &[ShimmerPoint]) -> Fits {
     let s5: Vec<f64> = points.iter().map(|p| p.s5).collect();
     let s3: Vec<f64> = points.iter().map(|p| p.s3).collect();
     let s4: Vec<f64> = points.iter().map(|p| p.s4).collect();
@@ -88,7 +88,7 @@ pub fn fits(points: &[ShimmerPoint]) -> Fits {
 }
 
 /// "S5 ≈ a + b·S3, r = ..., ρ = ... (n points)" or why there is no line.
-pub fn fit_words(proxy: &str, f: &Fit) -> String {
+pub(crate) fn fit_words(proxy: &str, f: &Fit) -> String {
     let r = |v: Option<f64>| v.map_or("undefined (a constant)".to_string(), |v| format!("{v:.3}"));
     match f.line {
         Some((a, b)) => format!(
@@ -107,7 +107,7 @@ pub fn fit_words(proxy: &str, f: &Fit) -> String {
 }
 
 /// The sentences of a sample: which rows, the two fits, and the snapped rows' largest S5.
-pub fn lines(s: &FlickerSample) -> Vec<String> {
+pub(crate) fn lines(s: &FlickerSample) -> Vec<String> {
     let p = points(s);
     let f = fits(&p);
     let max = |snapped: bool| {
@@ -167,7 +167,7 @@ pub fn lines(s: &FlickerSample) -> Vec<String> {
 }
 
 /// The figure, when the sweep has a sample.
-pub fn figure(r: &SweepResult) -> Result<Option<(&'static str, &'static str, Vec<u8>)>> {
+pub(crate) fn figure(r: &SweepResult) -> Result<Option<(&'static str, &'static str, Vec<u8>)>> {
     match &r.flicker {
         None => Ok(None),
         Some(s) => {
@@ -178,7 +178,7 @@ pub fn figure(r: &SweepResult) -> Result<Option<(&'static str, &'static str, Vec
 }
 
 /// The report.html section ("Does shimmer predict flicker?"); empty without a sample.
-pub fn html_section(r: &SweepResult) -> String {
+pub(crate) fn html_section(r: &SweepResult) -> String {
     let Some(s) = &r.flicker else {
         return String::new();
     };
@@ -188,7 +188,7 @@ pub fn html_section(r: &SweepResult) -> String {
 }
 
 /// The report.md section; empty without a sample.
-pub fn md_section(r: &SweepResult) -> String {
+pub(crate) fn md_section(r: &SweepResult) -> String {
     let Some(s) = &r.flicker else {
         return String::new();
     };

@@ -10,10 +10,10 @@ use crate::error::Result;
 use crate::output::{csv_bytes, num, short_number, Exporter};
 use csm_core::truth::DepthFormat;
 
-pub struct BiasCsv;
+pub(crate) struct BiasCsv;
 
 /// The columns of `bias.csv`.
-pub const BIAS_COLUMNS: [&str; 23] = [
+pub(crate) const BIAS_COLUMNS: [&str; 23] = [
     "cascade",
     "points",
     "texel_size",
@@ -92,7 +92,7 @@ impl Exporter<Analysis> for BiasCsv {
 
 /// `analyze`'s stdout lines for the pass: receivers, cache, and the recommended depth bias
 /// per cascade (configured depth format), in the engine's setting when it is modelled.
-pub fn recommendation(a: &Analysis, g: &GroundTruth) -> String {
+pub(crate) fn recommendation(a: &Analysis, g: &GroundTruth) -> String {
     let mut out = String::new();
     let format = a.config.truth.depth_format;
     let _ = writeln!(
@@ -148,7 +148,7 @@ pub fn recommendation(a: &Analysis, g: &GroundTruth) -> String {
 }
 
 /// One sentence on the bias the pass sampled with and where it came from (stdout, reports).
-pub fn bias_sentence(g: &GroundTruth) -> String {
+pub(crate) fn bias_sentence(g: &GroundTruth) -> String {
     use crate::analysis::ground_truth::BiasSource;
     let what = match g.bias_source {
         BiasSource::Configured => "the [shadow] bias keys".to_string(),
@@ -176,11 +176,11 @@ fn format_index(f: DepthFormat) -> usize {
 }
 
 /// `shadow.png`: frame 0 as the sampled maps shade it, snapped beside unsnapped.
-pub struct ShadowPng;
+pub(crate) struct ShadowPng;
 /// `flicker.png`: how often each receiver pixel flipped along the path, snapped beside unsnapped.
-pub struct FlickerPng;
+pub(crate) struct FlickerPng;
 /// `shadow.apng`: the path's kept frames (every k-th, as the pass kept them), both snap modes.
-pub struct ShadowApng;
+pub(crate) struct ShadowApng;
 
 fn truth_of(a: &Analysis) -> Result<&GroundTruth> {
     a.ground_truth.as_ref().ok_or_else(|| {
@@ -221,7 +221,7 @@ impl Exporter<Analysis> for ShadowApng {
 }
 
 /// `shadow.png` of a ground-truth pass: frame 0, snapped beside unsnapped.
-pub fn shadow_png_of(g: &GroundTruth) -> Result<Vec<u8>> {
+pub(crate) fn shadow_png_of(g: &GroundTruth) -> Result<Vec<u8>> {
     use crate::figures::truth::{shadow_png, Panel};
     shadow_png(&[
         Panel::snapped(&g.pictures_snapped.frame0),
@@ -230,7 +230,7 @@ pub fn shadow_png_of(g: &GroundTruth) -> Result<Vec<u8>> {
 }
 
 /// `flicker.png` of a ground-truth pass: flip rates, snapped beside unsnapped.
-pub fn flicker_png_of(g: &GroundTruth) -> Result<Vec<u8>> {
+pub(crate) fn flicker_png_of(g: &GroundTruth) -> Result<Vec<u8>> {
     use crate::figures::truth::{flicker_png, Panel};
     flicker_png(&[
         Panel::snapped(&g.pictures_snapped.flips),
@@ -239,7 +239,7 @@ pub fn flicker_png_of(g: &GroundTruth) -> Result<Vec<u8>> {
 }
 
 /// `shadow.apng` of a ground-truth pass: its kept frames, both snap modes.
-pub fn animation_of(g: &GroundTruth) -> Result<Vec<u8>> {
+pub(crate) fn animation_of(g: &GroundTruth) -> Result<Vec<u8>> {
     use crate::figures::truth::{write_animation, AnimationPlan, ANIMATION_CAPS};
     let (s, u) = (&g.pictures_snapped.animation, &g.pictures_unsnapped.animation);
     let frame0 = &g.pictures_snapped.frame0;

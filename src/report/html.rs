@@ -20,7 +20,7 @@ ul.notes{font-size:0.92em}dl.defs{font-size:0.88em;color:#444;margin:0.3em 0 1.2
 /// Escapes text for HTML and XML content and attribute values: markup characters, both
 /// quote kinds, newlines and tabs as character references (attribute values keep them), and
 /// characters XML 1.0 cannot carry replaced by U+FFFD.
-pub fn escape(s: &str) -> String {
+pub(crate) fn escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {
@@ -42,7 +42,7 @@ pub fn escape(s: &str) -> String {
 
 /// An SVG document made fit for inlining in a page: no XML declaration, no namespace URIs
 /// (an HTML parser places `<svg>` in the SVG namespace by itself).
-pub fn inline_svg(svg: &[u8]) -> String {
+pub(crate) fn inline_svg(svg: &[u8]) -> String {
     let text = String::from_utf8_lossy(svg);
     let text = match text.find("<svg") {
         Some(i) => &text[i..],
@@ -54,7 +54,7 @@ pub fn inline_svg(svg: &[u8]) -> String {
 }
 
 /// A figure: the inline SVG and its caption.
-pub fn figure(svg: &[u8], caption: &str) -> String {
+pub(crate) fn figure(svg: &[u8], caption: &str) -> String {
     format!(
         "<figure>{}<figcaption>{}</figcaption></figure>\n",
         inline_svg(svg),
@@ -64,10 +64,10 @@ pub fn figure(svg: &[u8], caption: &str) -> String {
 
 /// The largest SVG inlined in a page; a larger one (a figure of a huge grid) is shown as its
 /// PNG and linked, both files beside the page, so the page stays small.
-pub const INLINE_SVG_LIMIT: usize = 256 * 1024;
+pub(crate) const INLINE_SVG_LIMIT: usize = 256 * 1024;
 
 /// A figure by reference: the PNG `{stem}.png` linked to `{stem}.svg`, both beside the page.
-pub fn figure_linked(stem: &str, caption: &str, svg_bytes: usize) -> String {
+pub(crate) fn figure_linked(stem: &str, caption: &str, svg_bytes: usize) -> String {
     format!(
         "<figure><a href=\"{0}.svg\"><img style=\"max-width: 100%\" src=\"{0}.png\" alt=\"{1}\"/></a><figcaption>{1} (<a href=\"{0}.svg\">{0}.svg</a>, {2} KiB, not inlined)</figcaption></figure>\n",
         escape(stem),
@@ -77,7 +77,7 @@ pub fn figure_linked(stem: &str, caption: &str, svg_bytes: usize) -> String {
 }
 
 /// Inline when small, linked when not ([`INLINE_SVG_LIMIT`]).
-pub fn figure_bounded(stem: &str, svg: &[u8], caption: &str) -> String {
+pub(crate) fn figure_bounded(stem: &str, svg: &[u8], caption: &str) -> String {
     if svg.len() <= INLINE_SVG_LIMIT {
         figure(svg, caption)
     } else {
@@ -86,7 +86,7 @@ pub fn figure_bounded(stem: &str, svg: &[u8], caption: &str) -> String {
 }
 
 /// Definitions of a table's columns, as a definition list under the table: (term, text).
-pub fn definitions<K: AsRef<str>, V: AsRef<str>>(defs: &[(K, V)]) -> String {
+pub(crate) fn definitions<K: AsRef<str>, V: AsRef<str>>(defs: &[(K, V)]) -> String {
     let mut h = String::from("<dl class=\"defs\">\n");
     for (k, v) in defs {
         let _ = writeln!(
@@ -114,7 +114,7 @@ fn code_spans(s: &str) -> String {
 }
 
 /// Raster images side by side (PNG bytes embedded as base64 data URIs), each with its caption.
-pub fn png_figures(images: &[(Vec<u8>, String)]) -> String {
+pub(crate) fn png_figures(images: &[(Vec<u8>, String)]) -> String {
     let mut out = String::from("<div style=\"display: flex; flex-wrap: wrap; gap: 1em\">");
     for (png, caption) in images {
         out.push_str(&format!(
@@ -147,7 +147,12 @@ pub fn base64(bytes: &[u8]) -> String {
 
 /// A table of already formatted cells. Columns listed in `left` are left-aligned (text),
 /// the others right-aligned (numbers); the row at `highlight` is marked as the recommended one.
-pub fn table<S: AsRef<str>>(header: &[&str], rows: &[Vec<S>], left: &[usize], highlight: Option<usize>) -> String {
+pub(crate) fn table<S: AsRef<str>>(
+    header: &[&str],
+    rows: &[Vec<S>],
+    left: &[usize],
+    highlight: Option<usize>,
+) -> String {
     let class = |j: usize| if left.contains(&j) { " class=\"l\"" } else { "" };
     let mut h = String::from("<table>\n<tr>");
     for (j, c) in header.iter().enumerate() {
@@ -166,7 +171,7 @@ pub fn table<S: AsRef<str>>(header: &[&str], rows: &[Vec<S>], left: &[usize], hi
 }
 
 /// A two-column table of labelled facts.
-pub fn facts<K: AsRef<str>, V: AsRef<str>>(pairs: &[(K, V)]) -> String {
+pub(crate) fn facts<K: AsRef<str>, V: AsRef<str>>(pairs: &[(K, V)]) -> String {
     let mut h = String::from("<table>\n");
     for (k, v) in pairs {
         let _ = writeln!(
@@ -181,7 +186,7 @@ pub fn facts<K: AsRef<str>, V: AsRef<str>>(pairs: &[(K, V)]) -> String {
 }
 
 /// A bulleted list of text lines.
-pub fn list<S: AsRef<str>>(lines: &[S], class: Option<&str>) -> String {
+pub(crate) fn list<S: AsRef<str>>(lines: &[S], class: Option<&str>) -> String {
     let mut h = match class {
         Some(c) => format!("<ul class=\"{}\">\n", escape(c)),
         None => String::from("<ul>\n"),

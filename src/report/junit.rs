@@ -240,7 +240,7 @@ pub fn render(report: &CheckReport) -> String {
 
 /// The JUnit document of a `check` that could not run (exit 2): one test case in error, with
 /// the message, so a CI step publishing the file never shows an earlier pass.
-pub fn render_error(config: &str, message: &str) -> String {
+pub(crate) fn render_error(config: &str, message: &str) -> String {
     let mut x = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
     x.push_str(
         "<testsuites name=\"csm-lab check\" tests=\"1\" failures=\"0\" errors=\"1\" skipped=\"0\" time=\"0\">\n",

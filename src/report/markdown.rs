@@ -2,7 +2,7 @@
 
 /// A Markdown table of already formatted cells: columns listed in `left` are left-aligned,
 /// the others right-aligned. A `|` inside a cell is escaped.
-pub fn table<S: AsRef<str>>(header: &[&str], rows: &[Vec<S>], left: &[usize]) -> String {
+pub(crate) fn table<S: AsRef<str>>(header: &[&str], rows: &[Vec<S>], left: &[usize]) -> String {
     let cell = |s: &str| s.replace('|', "\\|");
     let line = |cells: Vec<String>| format!("| {} |\n", cells.join(" | "));
     let mut m = line(header.iter().map(|h| cell(h)).collect());

@@ -4,17 +4,17 @@
 //! encoding and the one atomic writer in [`crate::output`].
 
 pub mod analyze;
-pub mod bench;
-pub mod check;
-pub mod compare;
-pub mod defs;
-pub mod flicker_sample;
-pub mod ground_truth;
+pub(crate) mod bench;
+pub(crate) mod check;
+pub(crate) mod compare;
+pub(crate) mod defs;
+pub(crate) mod flicker_sample;
+pub(crate) mod ground_truth;
 pub mod html;
-pub mod junit;
-pub mod markdown;
-pub mod optimize;
+pub(crate) mod junit;
+pub(crate) mod markdown;
+pub(crate) mod optimize;
 pub mod stress;
-pub mod sweep;
+pub(crate) mod sweep;
 pub mod terms;
 pub mod truth;

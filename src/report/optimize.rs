@@ -11,7 +11,7 @@ use crate::error::Result;
 use crate::output::{csv_bytes, num, percent_change, short_number as n, signed_percent};
 
 /// The file name.
-pub const FILE: &str = "optimized_splits.csv";
+pub(crate) const FILE: &str = "optimized_splits.csv";
 
 /// `a, b, c` with each fraction as printed (shortest round trip: it pastes back exactly).
 fn list(fr: &[f64]) -> String {
@@ -24,7 +24,7 @@ fn max_distance(config: &Config, g: &OptimizedGroup) -> f64 {
 }
 
 /// The lines to paste into the config to use the group's optimum.
-pub fn paste_text(config: &Config, g: &OptimizedGroup) -> String {
+pub(crate) fn paste_text(config: &Config, g: &OptimizedGroup) -> String {
     match &config.shadow.preset {
         Some(p) => {
             crate::presets::paste_lines(&p.knobs, g.setting.cascades, max_distance(config, g), &g.best.fractions)
@@ -40,7 +40,7 @@ pub fn paste_text(config: &Config, g: &OptimizedGroup) -> String {
 }
 
 /// The optimum in the engine's own terms (csm-lab: the `shadow.splits` key).
-pub fn setting_text(config: &Config, g: &OptimizedGroup) -> String {
+pub(crate) fn setting_text(config: &Config, g: &OptimizedGroup) -> String {
     match &config.shadow.preset {
         Some(p) => {
             crate::presets::engine_setting(&p.knobs, g.setting.cascades, max_distance(config, g), &g.best.fractions)
@@ -51,7 +51,7 @@ pub fn setting_text(config: &Config, g: &OptimizedGroup) -> String {
 }
 
 /// What the fractions are fractions of, in words.
-pub fn of_text(config: &Config, g: &OptimizedGroup) -> String {
+pub(crate) fn of_text(config: &Config, g: &OptimizedGroup) -> String {
     match &config.shadow.preset {
         Some(p) => {
             crate::presets::free_split_knob(&p.knobs, g.setting.cascades).map_or_else(String::new, |k| k.of.to_string())
@@ -93,7 +93,7 @@ const HEADER: [&str; 22] = [
 
 /// `optimized_splits.csv`: one row per cascade count × resolution (× fit, split range,
 /// distance) with more than one cascade.
-pub fn csv(r: &SweepResult, o: &Optimized) -> Result<Vec<u8>> {
+pub(crate) fn csv(r: &SweepResult, o: &Optimized) -> Result<Vec<u8>> {
     let rows = o
         .groups
         .iter()
@@ -131,7 +131,7 @@ pub fn csv(r: &SweepResult, o: &Optimized) -> Result<Vec<u8>> {
 }
 
 /// The `optimized_splits` section of `recommendation.json`.
-pub fn json(r: &SweepResult, o: &Optimized) -> serde_json::Value {
+pub(crate) fn json(r: &SweepResult, o: &Optimized) -> serde_json::Value {
     let groups: Vec<serde_json::Value> = o
         .groups
         .iter()
@@ -180,7 +180,7 @@ pub fn json(r: &SweepResult, o: &Optimized) -> serde_json::Value {
 }
 
 /// The group of the recommended row, when it was optimised and the optimum is better.
-pub fn recommended_group<'a>(r: &SweepResult, o: &'a Optimized) -> Option<&'a OptimizedGroup> {
+pub(crate) fn recommended_group<'a>(r: &SweepResult, o: &'a Optimized) -> Option<&'a OptimizedGroup> {
     let rec = r.recommended()?.setting;
     o.groups.iter().find(|g| {
         let s = g.setting;
@@ -195,7 +195,7 @@ pub fn recommended_group<'a>(r: &SweepResult, o: &'a Optimized) -> Option<&'a Op
 
 /// The verdict's sentence on free splits: the recommended count and resolution with the
 /// optimised split fractions, when they win.
-pub fn verdict(r: &SweepResult) -> Option<String> {
+pub(crate) fn verdict(r: &SweepResult) -> Option<String> {
     let o = r.optimized.as_ref()?;
     let g = recommended_group(r, o)?;
     let (a, b) = g.values(r.objective);
@@ -291,7 +291,7 @@ const TABLE_HEAD: [&str; 8] = [
 ];
 
 /// The stdout table.
-pub fn stdout(r: &SweepResult) -> String {
+pub(crate) fn stdout(r: &SweepResult) -> String {
     let Some(o) = &r.optimized else {
         return String::new();
     };
@@ -340,7 +340,7 @@ pub fn stdout(r: &SweepResult) -> String {
 }
 
 /// The report section (HTML).
-pub fn html_section(r: &SweepResult) -> String {
+pub(crate) fn html_section(r: &SweepResult) -> String {
     let Some(o) = &r.optimized else {
         return String::new();
     };
@@ -372,7 +372,7 @@ pub fn html_section(r: &SweepResult) -> String {
 }
 
 /// The report section (Markdown).
-pub fn md_section(r: &SweepResult) -> String {
+pub(crate) fn md_section(r: &SweepResult) -> String {
     let Some(o) = &r.optimized else {
         return String::new();
     };

@@ -136,13 +136,13 @@ fn row(r: &CaseResult) -> Vec<String> {
 }
 
 /// `stress.csv`: one row per case.
-pub fn csv(results: &[CaseResult]) -> Result<Vec<u8>> {
+pub(crate) fn csv(results: &[CaseResult]) -> Result<Vec<u8>> {
     let rows: Vec<Vec<String>> = results.iter().map(row).collect();
     output::csv_bytes(&STRESS_COLUMNS, &rows)
 }
 
 /// The terminal table.
-pub fn table(results: &[CaseResult]) -> String {
+pub(crate) fn table(results: &[CaseResult]) -> String {
     let g = |v: Option<f64>| v.map_or("-".to_string(), output::short_number);
     let mut out = String::new();
     let _ = writeln!(

@@ -18,15 +18,15 @@ use crate::metric;
 use crate::output::{count, json_bytes, num, percent_change, short_number as n, signed_percent};
 
 /// `sweep.csv`: [`metric::summary_columns`], then these.
-pub const SWEEP_EXTRA_COLUMNS: [&str; 4] = ["cascades_needed", "pareto", "recommended", "preset"];
+pub(crate) const SWEEP_EXTRA_COLUMNS: [&str; 4] = ["cascades_needed", "pareto", "recommended", "preset"];
 
 /// `sweep.csv`'s last columns in a sun sweep: the sun's angles and whether the row is its
 /// setting's worst sun angle.
-pub const SUN_COLUMNS: [&str; 3] = ["sun_azimuth_deg", "sun_elevation_deg", "worst_sun"];
+pub(crate) const SUN_COLUMNS: [&str; 3] = ["sun_azimuth_deg", "sun_elevation_deg", "worst_sun"];
 
 /// `sweep.csv` streamed into the output set: each row is encoded as it is written, so a
 /// 100,000-configuration sweep holds no copy of its CSV text.
-pub struct SweepCsvFile<'a>(pub &'a SweepResult);
+pub(crate) struct SweepCsvFile<'a>(pub &'a SweepResult);
 
 impl crate::output::StreamedFile for SweepCsvFile<'_> {
     fn file_name(&self) -> &str {
@@ -166,7 +166,7 @@ fn row_json(row: &Row) -> serde_json::Value {
     v
 }
 
-pub fn recommendation_value(r: &SweepResult) -> serde_json::Value {
+pub(crate) fn recommendation_value(r: &SweepResult) -> serde_json::Value {
     let mut v = serde_json::json!({
         "tool": format!("csm-lab {}", env!("CARGO_PKG_VERSION")),
         "name": r.config.name,
@@ -683,7 +683,7 @@ fn rival_text(r: &SweepResult, x: &Rival) -> String {
 
 /// One sentence per swept axis the recommendation sits at the edge of
 /// ([`SweepResult::range_edges`]).
-pub fn edge_lines(r: &SweepResult) -> Vec<String> {
+pub(crate) fn edge_lines(r: &SweepResult) -> Vec<String> {
     r.range_edges.iter().map(|e| e.text()).collect()
 }
 
@@ -695,7 +695,7 @@ fn rival_lines(r: &SweepResult) -> Vec<String> {
 const TOP: usize = 15;
 
 /// The figures of a sweep as (file stem, title, SVG bytes), rendered once.
-pub fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, &'static str, Vec<u8>)>> {
+pub(crate) fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, &'static str, Vec<u8>)>> {
     // The four figures are independent: drawn concurrently (the first error in this order wins).
     let ((heatmap, density), (shimmer, pareto)) = rayon::join(
         || rayon::join(|| HeatmapFigure(r).to_svg(), || LambdaDensityFigure::new(r).to_svg()),
@@ -885,7 +885,7 @@ fn rest_sentence(r: &SweepResult, front_left: usize) -> String {
 /// rivals lost; its tables show the Pareto front and the top rows, with every metric defined
 /// under them; a figure too large to inline is linked ([`html::figure_bounded`]), so the page
 /// stays small at any grid size.
-pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
+pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
     let mut h = String::new();
     h.push_str("<h2>Verdict</h2>\n");
     let _ = writeln!(h, "<div class=\"rec-box\"><p>{}</p>", html::escape(&why_text(r)));
@@ -987,7 +987,7 @@ pub fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8
 }
 
 /// `report.md`: the same content for pasting into a review document.
-pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
+pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
     let mut m = String::new();
     let _ = writeln!(m, "# Cascaded shadow map sweep: {}\n", r.config.name);
     let _ = writeln!(
@@ -1076,7 +1076,7 @@ pub fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> 
 
 /// Every file of a sweep but `sweep.csv`, rendered in memory: (file name, bytes). The
 /// commands stream `sweep.csv` into the same set ([`SweepCsvFile`]).
-pub fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::output::RenderedFiles> {
+pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::output::RenderedFiles> {
     let mut files = vec![(
         "recommendation.json".to_string(),
         json_bytes("recommendation", &recommendation_value(r))?,
@@ -1151,7 +1151,7 @@ fn axis_cells(r: &SweepResult, x: &Row) -> Vec<(&'static str, String)> {
 /// The short table printed on stdout.
 /// What `sweep --shard K/N` prints: which configurations of the grid it ran (1-based, in
 /// `sweep.csv` order), and that it decides nothing.
-pub fn slice_text(name: &str, shard: crate::commands::sweep::shard::Shard, total: usize) -> String {
+pub(crate) fn slice_text(name: &str, shard: crate::commands::sweep::shard::Shard, total: usize) -> String {
     let rows: Vec<usize> = shard.indices(total).map(|i| i + 1).collect();
     let (first, last) = (rows[0], rows[rows.len() - 1]);
     let which = if shard.n == 1 {
@@ -1188,7 +1188,7 @@ fn ordinal(n: usize) -> String {
     format!("{n}{suffix}")
 }
 
-pub fn stdout_table(r: &SweepResult) -> String {
+pub(crate) fn stdout_table(r: &SweepResult) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -1296,7 +1296,7 @@ pub fn stdout_table(r: &SweepResult) -> String {
 /// What a sun sweep adds to the verdict: the recommended setting's worst sun angle, the
 /// worst-case rule, and (bounds only) which metrics cannot depend on the light. Empty without
 /// sun axes.
-pub fn sun_lines(r: &SweepResult) -> Vec<String> {
+pub(crate) fn sun_lines(r: &SweepResult) -> Vec<String> {
     let (Some(sun), Some(grid)) = (&r.sun, &r.grid.sun) else {
         return Vec::new();
     };

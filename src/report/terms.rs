@@ -11,6 +11,6 @@ pub fn text(s: &EngineSetting) -> String {
 }
 
 /// The file: (name, bytes).
-pub fn file(s: &EngineSetting) -> (String, Vec<u8>) {
+pub(crate) fn file(s: &EngineSetting) -> (String, Vec<u8>) {
     (s.file_name(), text(s).into_bytes())
 }

@@ -13,7 +13,7 @@ use super::html;
 use crate::figures::truth::SHADOW_APNG;
 
 /// The largest animation embedded in a page; a larger one is shown from its file beside the page.
-pub const INLINE_ANIMATION_LIMIT: usize = 2 << 20;
+pub(crate) const INLINE_ANIMATION_LIMIT: usize = 2 << 20;
 
 /// The animation as a page shows it.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,21 +33,21 @@ pub struct TruthPictures {
 }
 
 /// The caption of `shadow.png`.
-pub fn shadow_caption(label: &str) -> String {
+pub(crate) fn shadow_caption(label: &str) -> String {
     format!(
         "{label}: the camera view as the shadow map shades it (shadow.png). Look for acne (magenta) on lit surfaces and leaks (cyan) where shadows should start at their casters; snapped on the left, unsnapped on the right."
     )
 }
 
 /// The caption of `flicker.png`.
-pub fn flicker_caption(label: &str) -> String {
+pub(crate) fn flicker_caption(label: &str) -> String {
     format!(
         "{label}: how often each receiver pixel flipped between lit and shadowed along the path (flicker.png). Bright pixels flip often: at a shadow edge that crawls, or where acne comes and goes as the grid slides (summary.json splits S5 into flicker_edge_* and flicker_acne_*); with snapped windows they should stay dark."
     )
 }
 
 /// The caption of the animation.
-pub fn animation_caption(label: &str) -> String {
+pub(crate) fn animation_caption(label: &str) -> String {
     format!(
         "{label}: the path, every k-th frame ({SHADOW_APNG}). Watch the shadow edges: a crawl or shimmer along them is what players see; the bar under the titles is the position along the path."
     )

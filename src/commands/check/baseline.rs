@@ -25,7 +25,7 @@ pub struct Tolerance {
 
 impl Tolerance {
     /// The largest change that does not count: `max(absolute, relative * |baseline|)`.
-    pub fn allowed(&self, baseline: f64) -> f64 {
+    pub(crate) fn allowed(&self, baseline: f64) -> f64 {
         // Clamped to the largest finite value: a huge tolerance allows everything, it does not
         // overflow into a NaN margin or a non-finite number in the JSON report.
         self.absolute.max(self.relative * baseline.abs()).min(f64::MAX)
@@ -53,7 +53,7 @@ impl Default for Tolerances {
 }
 
 impl Tolerances {
-    pub fn for_metric(&self, m: SummaryMetric) -> Tolerance {
+    pub(crate) fn for_metric(&self, m: SummaryMetric) -> Tolerance {
         self.per_metric.get(&m).copied().unwrap_or(self.default)
     }
 }
@@ -77,7 +77,7 @@ pub enum Verdict {
 }
 
 impl Verdict {
-    pub fn label(self) -> &'static str {
+    pub(crate) fn label(self) -> &'static str {
         match self {
             Verdict::Regressed => "REGRESSED",
             Verdict::Improved => "improved",
@@ -102,19 +102,24 @@ pub struct Comparison {
 
 impl Comparison {
     /// current - baseline, when both exist.
-    pub fn change(&self) -> Option<f64> {
+    pub(crate) fn change(&self) -> Option<f64> {
         Some(self.current? - self.baseline?)
     }
 
     /// (current - baseline) / |baseline|, when both exist and the baseline is not 0.
-    pub fn relative_change(&self) -> Option<f64> {
+    pub(crate) fn relative_change(&self) -> Option<f64> {
         let (b, c) = (self.baseline?, self.current?);
         (b != 0.0).then(|| (c - b) / b.abs())
     }
 }
 
 /// Judges one metric.
-pub fn compare_one(metric: SummaryMetric, baseline: Option<f64>, current: Option<f64>, tol: &Tolerances) -> Comparison {
+pub(crate) fn compare_one(
+    metric: SummaryMetric,
+    baseline: Option<f64>,
+    current: Option<f64>,
+    tol: &Tolerances,
+) -> Comparison {
     let t = tol.for_metric(metric);
     let (verdict, tolerance) = match (baseline, current) {
         (None, _) => (Verdict::NotInBaseline, t.allowed(0.0)),
@@ -142,7 +147,7 @@ pub fn compare_one(metric: SummaryMetric, baseline: Option<f64>, current: Option
 
 /// Compares every summary metric, in registry order. The maps need not hold
 /// every metric: a missing value gives [`Verdict::NotInBaseline`] / [`Verdict::NotInCurrent`].
-pub fn compare(
+pub(crate) fn compare(
     current: &BTreeMap<SummaryMetric, f64>,
     baseline: &BTreeMap<SummaryMetric, f64>,
     tol: &Tolerances,
@@ -157,7 +162,7 @@ pub fn compare(
 /// top-level keys named like the metrics. Booleans read 1/0. Metrics absent from the document
 /// are absent from the map (an older file); a metric with a non-numeric value, or a document
 /// with none of the metrics, is an error.
-pub fn summary_from_json(value: &serde_json::Value, label: &str) -> Result<BTreeMap<SummaryMetric, f64>> {
+pub(crate) fn summary_from_json(value: &serde_json::Value, label: &str) -> Result<BTreeMap<SummaryMetric, f64>> {
     let invalid = |message: String| -> Error {
         BaselineError::Invalid {
             label: label.to_string(),
@@ -202,16 +207,16 @@ pub fn summary_from_json(value: &serde_json::Value, label: &str) -> Result<BTree
 
 /// No summary metric csm-lab writes comes near this; a larger baseline value was edited or
 /// corrupted, and comparing with it would overflow the tolerance arithmetic.
-pub const MAX_BASELINE_VALUE: f64 = 1e100;
+pub(crate) const MAX_BASELINE_VALUE: f64 = 1e100;
 
 /// The `scene_hash` of a `summary.json` document, if it has one (files written before the
 /// hash existed have none).
-pub fn scene_hash_of(value: &serde_json::Value) -> Option<&str> {
+pub(crate) fn scene_hash_of(value: &serde_json::Value) -> Option<&str> {
     value.get("scene_hash").and_then(|h| h.as_str())
 }
 
 /// Reads a `summary.json` baseline, refusing one made from a scene other than `scene_hash`'s.
-pub fn read_summary_json_for(path: &Path, scene_hash: &str) -> Result<BTreeMap<SummaryMetric, f64>> {
+pub(crate) fn read_summary_json_for(path: &Path, scene_hash: &str) -> Result<BTreeMap<SummaryMetric, f64>> {
     let text = crate::config::read_bounded(path, 256 << 20, "a baseline file")?;
     let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
         Error::from(IoError::DataFile {

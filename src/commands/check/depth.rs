@@ -17,7 +17,7 @@ use csm_core::metrics::cascade_at;
 
 /// One extreme: its value, where it is attained (or approached) and which cascade serves it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DepthExtreme {
+pub(crate) struct DepthExtreme {
     pub value: f64,
     pub depth: f64,
     pub cascade: usize,
@@ -25,7 +25,7 @@ pub struct DepthExtreme {
 
 /// The largest and the smallest value of a per-depth metric over a depth range.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DepthExtremes {
+pub(crate) struct DepthExtremes {
     pub max: DepthExtreme,
     pub min: DepthExtreme,
 }
@@ -33,7 +33,7 @@ pub struct DepthExtremes {
 /// Extremes of `metric` over view depths `[lo, hi]`, which must lie inside `[splits[0],
 /// splits[M]]` with `lo <= hi`. `texel[i]` is cascade `i`'s texel size (world units) and `k`
 /// is `H / (2 tanV)` (pixels per unit of image slope), so `a(d) = k texel[i] / d`.
-pub fn extremes(metric: DepthMetric, splits: &[f64], texel: &[f64], k: f64, lo: f64, hi: f64) -> DepthExtremes {
+pub(crate) fn extremes(metric: DepthMetric, splits: &[f64], texel: &[f64], k: f64, lo: f64, hi: f64) -> DepthExtremes {
     let m = texel.len();
     assert_eq!(splits.len(), m + 1, "one texel size per cascade");
     assert!(

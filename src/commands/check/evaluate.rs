@@ -31,7 +31,7 @@ pub enum Status {
 }
 
 impl Status {
-    pub fn label(self) -> &'static str {
+    pub(crate) fn label(self) -> &'static str {
         match self {
             Status::Pass => "PASS",
             Status::Fail => "FAIL",
@@ -57,7 +57,7 @@ pub struct Located {
 }
 
 impl Located {
-    pub fn bare(value: f64) -> Self {
+    pub(crate) fn bare(value: f64) -> Self {
         Located {
             value,
             cascade: None,
@@ -93,7 +93,7 @@ pub struct RuleResult {
 }
 
 impl RuleResult {
-    pub fn not_applicable(rule: &Rule, why: impl Into<String>) -> Self {
+    pub(crate) fn not_applicable(rule: &Rule, why: impl Into<String>) -> Self {
         RuleResult {
             rule: rule.clone(),
             status: Status::NotApplicable,
@@ -105,7 +105,7 @@ impl RuleResult {
     }
 
     /// "summary", "cascade 2", "cascade 3 (worst of 4)", "depth 5..60 at 9.86 (cascade 1)".
-    pub fn place(&self) -> String {
+    pub(crate) fn place(&self) -> String {
         let j = self.judgement.as_ref();
         match (&self.rule.target, j) {
             (_, None) => self.rule.scope_text(),
@@ -159,7 +159,7 @@ pub fn short(v: f64) -> String {
 }
 
 /// Judges a rule's limits given the largest and the smallest value it looks at.
-pub fn judge(rule: &Rule, largest: Located, smallest: Located) -> (Status, Judgement) {
+pub(crate) fn judge(rule: &Rule, largest: Located, smallest: Located) -> (Status, Judgement) {
     let mut checks = Vec::with_capacity(2);
     if let Some(max) = rule.max {
         checks.push(Judgement {
@@ -187,7 +187,7 @@ pub fn judge(rule: &Rule, largest: Located, smallest: Located) -> (Status, Judge
 }
 
 /// Judges a rule that looks at one value.
-pub fn judge_value(rule: &Rule, v: Located) -> RuleResult {
+pub(crate) fn judge_value(rule: &Rule, v: Located) -> RuleResult {
     let (status, j) = judge(rule, v, v);
     RuleResult {
         rule: rule.clone(),
@@ -342,14 +342,14 @@ fn unmeasured(rule: &Rule, m: crate::metric::SummaryMetric, config: &str) -> Err
 }
 
 /// Evaluates every rule, in file order.
-pub fn evaluate_all(rules: &[Rule], a: &Analysis) -> Result<Vec<RuleResult>> {
+pub(crate) fn evaluate_all(rules: &[Rule], a: &Analysis) -> Result<Vec<RuleResult>> {
     rules.iter().map(|r| evaluate(r, a)).collect()
 }
 
 /// Evaluates a rule against bare summary values, looked up by metric name (a sweep row).
 /// Per-cascade and per-depth rules are not applicable; so is a summary rule whose metric the
 /// values lack.
-pub fn evaluate_values(rule: &Rule, values: &std::collections::BTreeMap<&'static str, f64>) -> RuleResult {
+pub(crate) fn evaluate_values(rule: &Rule, values: &std::collections::BTreeMap<&'static str, f64>) -> RuleResult {
     match rule.target {
         Target::Summary(m) => match values.get(m.name()) {
             Some(&v) => judge_value(rule, Located::bare(v)),

@@ -25,7 +25,7 @@ const INFORMATION: &[&str] = &["shimmer_snapped", "shimmer_unsnapped"];
 const FLOOR: f64 = 1e-9;
 
 /// The limit for a metric's current value (None: not limited).
-pub fn limit(m: SummaryMetric, value: Value, headroom: f64) -> Option<(&'static str, String)> {
+pub(crate) fn limit(m: SummaryMetric, value: Value, headroom: f64) -> Option<(&'static str, String)> {
     if INFORMATION.contains(&m.name()) {
         return None;
     }
@@ -54,7 +54,7 @@ pub fn limit(m: SummaryMetric, value: Value, headroom: f64) -> Option<(&'static 
 }
 
 /// The thresholds file's text.
-pub fn thresholds_text(a: &Analysis, config: &str, baseline_file: &str, headroom: f64) -> String {
+pub(crate) fn thresholds_text(a: &Analysis, config: &str, baseline_file: &str, headroom: f64) -> String {
     let pct = short_number(headroom * 100.0);
     let mut t = String::new();
     let _ = writeln!(t, "# Quality gate for {config}, written by");

@@ -17,7 +17,8 @@
 //! describe where something is rather than how good it is: they can still be limited by rules,
 //! and a baseline reports their changes, but never as regressions.
 
-pub use crate::metric::{summary_values, CascadeMetric, Direction, SummaryMetric};
+pub use crate::metric::{summary_values, SummaryMetric};
+pub(crate) use crate::metric::{CascadeMetric, Direction};
 
 /// A function of view depth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -29,16 +30,16 @@ pub enum DepthMetric {
 }
 
 impl DepthMetric {
-    pub const ALL: [DepthMetric; 2] = [DepthMetric::Aliasing, DepthMetric::TexelsPerPixel];
+    pub(crate) const ALL: [DepthMetric; 2] = [DepthMetric::Aliasing, DepthMetric::TexelsPerPixel];
 
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             DepthMetric::Aliasing => "aliasing",
             DepthMetric::TexelsPerPixel => "texels_per_pixel",
         }
     }
 
-    pub fn from_name(name: &str) -> Option<Self> {
+    pub(crate) fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|m| m.name() == name)
     }
 
@@ -58,7 +59,7 @@ impl DepthMetric {
 }
 
 /// Every metric name a rule may use, each once, in catalogue order.
-pub fn all_names() -> Vec<&'static str> {
+pub(crate) fn all_names() -> Vec<&'static str> {
     let mut names: Vec<&'static str> = SummaryMetric::all().map(|m| m.name()).collect();
     for n in CascadeMetric::all().map(|m| m.name()) {
         if !names.contains(&n) {

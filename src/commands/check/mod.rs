@@ -7,9 +7,9 @@
 //! [`crate::report::check`] and [`crate::report::junit`] render. Exit codes: 0 everything passes, 1 a rule failed or a metric regressed, 2 an error.
 
 pub mod baseline;
-pub mod depth;
+pub(crate) mod depth;
 pub mod evaluate;
-pub mod init;
+pub(crate) mod init;
 pub mod metric;
 pub mod report;
 pub mod sweep;
@@ -21,7 +21,7 @@ use crate::analysis::{Analysis, AnalysisOptions};
 use crate::config::Config;
 use crate::error::{Error, Result};
 
-pub use report::{Body, CheckReport};
+pub(crate) use report::{Body, CheckReport};
 pub use thresholds::{Rule, Thresholds};
 
 /// What `check` computes: the summary (independent of the options), and the per-cascade
@@ -36,7 +36,7 @@ pub fn check_options() -> AnalysisOptions {
 }
 
 /// Judges one analysed configuration: every rule, and the baseline summary if given.
-pub fn check_analysis(
+pub(crate) fn check_analysis(
     analysis: &Analysis,
     thresholds: &Thresholds,
     baseline: Option<(&str, &BTreeMap<metric::SummaryMetric, f64>)>,
@@ -59,7 +59,7 @@ pub fn check_analysis(
 }
 
 /// Judges sweep rows: the rules per row, and the baseline rows if given.
-pub fn check_rows(
+pub(crate) fn check_rows(
     config: &Config,
     rows: &[sweep::SweepRow],
     thresholds: &Thresholds,

@@ -7,20 +7,20 @@ use super::sweep::{RowReport, SweepComparison};
 
 /// A single configuration's baseline comparison.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SummaryBaseline {
+pub(crate) struct SummaryBaseline {
     pub file: String,
     pub comparisons: Vec<Comparison>,
 }
 
 /// A sweep table's baseline comparison.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SweepBaseline {
+pub(crate) struct SweepBaseline {
     pub file: String,
     pub comparison: SweepComparison,
 }
 
 #[derive(Debug, Clone, PartialEq)]
-pub enum Body {
+pub(crate) enum Body {
     /// One configuration: every rule, and optionally a summary.json baseline.
     Single {
         results: Vec<RuleResult>,
@@ -37,7 +37,7 @@ pub enum Body {
 
 /// Everything a check found.
 #[derive(Debug, Clone, PartialEq)]
-pub struct CheckReport {
+pub(crate) struct CheckReport {
     /// The config file (or its name).
     pub config: String,
     /// The config's name (file stem).
@@ -81,7 +81,7 @@ fn count_comparisons<'a>(c: &mut Counts, comparisons: impl IntoIterator<Item = &
 
 impl CheckReport {
     /// Rule results summed over every configuration, and baseline verdicts.
-    pub fn counts(&self) -> Counts {
+    pub(crate) fn counts(&self) -> Counts {
         let mut c = Counts::default();
         match &self.body {
             Body::Single { results, baseline } => {
@@ -101,7 +101,7 @@ impl CheckReport {
     }
 
     /// No rule failed and nothing regressed (exit code 0).
-    pub fn passed(&self) -> bool {
+    pub(crate) fn passed(&self) -> bool {
         let c = self.counts();
         c.fail == 0 && c.regressed == 0
     }

@@ -22,7 +22,7 @@ use crate::config::{Config, SplitRange};
 use crate::error::{BaselineError, Error, Result};
 
 /// The columns that identify a configuration in `sweep.csv`.
-pub const KEY_COLUMNS: [&str; 4] = ["lambda", "cascades", "resolution", "fit"];
+pub(crate) const KEY_COLUMNS: [&str; 4] = ["lambda", "cascades", "resolution", "fit"];
 
 /// Which configuration a row measures.
 #[derive(Debug, Clone)]
@@ -48,12 +48,12 @@ pub struct SweepKey {
 }
 
 /// The `sweep.csv` column of a swept shadow distance.
-pub const DISTANCE_COLUMN: &str = "shadow.max_distance";
+pub(crate) const DISTANCE_COLUMN: &str = "shadow.max_distance";
 
 /// The `sweep.csv` columns of a swept sun: azimuth and elevation, degrees.
-pub const SUN_COLUMNS: [&str; 2] = ["sun_azimuth_deg", "sun_elevation_deg"];
+pub(crate) const SUN_COLUMNS: [&str; 2] = ["sun_azimuth_deg", "sun_elevation_deg"];
 /// The `sweep.csv` column of a swept light update rule.
-pub const LIGHT_UPDATE_COLUMN: &str = "shadow.light_update";
+pub(crate) const LIGHT_UPDATE_COLUMN: &str = "shadow.light_update";
 
 impl SweepKey {
     /// The key of a config's own shadow setting.
@@ -166,7 +166,7 @@ pub struct RowReport {
 }
 
 impl RowReport {
-    pub fn count(&self, s: Status) -> usize {
+    pub(crate) fn count(&self, s: Status) -> usize {
         self.results.iter().filter(|r| r.status == s).count()
     }
 
@@ -179,7 +179,7 @@ impl RowReport {
 /// Whether `key` is the configured setting of `config` (as `csm-lab sweep` finds it: the swept
 /// knob and distance, when swept, at their configured values; every sun angle and light update
 /// rule of it).
-pub fn is_configured(config: &Config, key: &SweepKey) -> bool {
+pub(crate) fn is_configured(config: &Config, key: &SweepKey) -> bool {
     let c = &config.shadow;
     let knob = crate::presets::axes(config).knob.map(|k| k.value);
     key.knob.is_none_or(|k| Some(k) == knob)
@@ -193,7 +193,7 @@ pub fn is_configured(config: &Config, key: &SweepKey) -> bool {
 
 /// The rows `check --sweep` gates: what the sweep decides, the recommendation's rows and the
 /// configured setting's rows (every row with `all_rows`), and the sentence that says so.
-pub fn gated_rows(config: &Config, rows: Vec<SweepRow>, all_rows: bool) -> (Vec<SweepRow>, String) {
+pub(crate) fn gated_rows(config: &Config, rows: Vec<SweepRow>, all_rows: bool) -> (Vec<SweepRow>, String) {
     let total = rows.len();
     if all_rows {
         return (
@@ -438,7 +438,7 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
 }
 
 /// Reads a `sweep.csv`.
-pub fn read_sweep_csv(path: &Path) -> Result<Vec<SweepRow>> {
+pub(crate) fn read_sweep_csv(path: &Path) -> Result<Vec<SweepRow>> {
     let text = crate::config::read_bounded(path, 256 << 20, "a sweep CSV")?;
     parse_sweep_csv(&text, path)
 }
@@ -446,7 +446,7 @@ pub fn read_sweep_csv(path: &Path) -> Result<Vec<SweepRow>> {
 /// The rows of a `sweep.csv` written for `config` (`check --sweep --sweep-csv FILE`, e.g. a
 /// merged sharded sweep), read by column name, refused unless its configurations are exactly
 /// the config's grid in grid order, so a table of another config or grid is never judged.
-pub fn sweep_rows_from_csv(config: &Config, path: &Path) -> Result<Vec<SweepRow>> {
+pub(crate) fn sweep_rows_from_csv(config: &Config, path: &Path) -> Result<Vec<SweepRow>> {
     let rows = read_sweep_csv(path)?;
     let grid = crate::commands::sweep::grid::Grid::resolve(config, &crate::config::sweep_spec::SweepAxes::default())?;
     let settings = grid.settings();

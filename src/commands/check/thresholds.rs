@@ -55,7 +55,7 @@ pub enum Target {
 
 impl Target {
     /// "summary", "cascade" or "depth".
-    pub fn kind(&self) -> &'static str {
+    pub(crate) fn kind(&self) -> &'static str {
         match self {
             Target::Summary(_) => "summary",
             Target::Cascade(..) => "cascade",
@@ -91,7 +91,7 @@ pub struct Rule {
 impl Rule {
     /// The scope as written: "summary", "cascade 0", "every cascade", "depth 5..60",
     /// "the split range". Stable across runs (JUnit test names use it).
-    pub fn scope_text(&self) -> String {
+    pub(crate) fn scope_text(&self) -> String {
         match self.target {
             Target::Summary(_) => "summary".to_string(),
             Target::Cascade(_, CascadeSelection::One(i)) => format!("cascade {i}"),
@@ -102,7 +102,7 @@ impl Rule {
     }
 
     /// `min <= metric <= max` as written, e.g. `texel_size <= 0.02`.
-    pub fn limits_text(&self) -> String {
+    pub(crate) fn limits_text(&self) -> String {
         let name = self.target.metric_name();
         match (self.min, self.max) {
             (Some(lo), Some(hi)) => format!("{lo} <= {name} <= {hi}"),

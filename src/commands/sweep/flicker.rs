@@ -14,10 +14,10 @@ use crate::error::{GridError, Result};
 
 /// The most rows a sweep computes S5 for (a ground-truth pass costs about a second of one core
 /// on the default scene; see docs/ground-truth.md, "In a sweep").
-pub const SAMPLE_MAX: usize = 12;
+pub(crate) const SAMPLE_MAX: usize = 12;
 
 /// The golden-ratio step (√5 − 1)/2 of the sample's low-discrepancy sequence.
-pub const GOLDEN_STEP: f64 = 0.618_033_988_749_894_9;
+pub(crate) const GOLDEN_STEP: f64 = 0.618_033_988_749_894_9;
 
 /// The rows (indices into the sweep's rows, ascending) whose S5 a sweep computes: all of them
 /// when there are at most [`SAMPLE_MAX`] (M rows, N = `SAMPLE_MAX`). Else, for k = 0..N in
@@ -80,7 +80,7 @@ pub struct FlickerSample {
 
 impl FlickerSample {
     /// "S5 computed for K of M rows: ..." (the stdout note and the reports' sentence).
-    pub fn sentence(&self) -> String {
+    pub(crate) fn sentence(&self) -> String {
         let k = self.indices.len();
         let rule = if k == self.rows {
             format!("every row (the grid has at most {SAMPLE_MAX})")
@@ -100,14 +100,14 @@ impl FlickerSample {
     }
 
     /// The snapped and unsnapped points, in row order (snapped first per row).
-    pub fn points(&self) -> impl Iterator<Item = &FlickerPoint> {
+    pub(crate) fn points(&self) -> impl Iterator<Item = &FlickerPoint> {
         self.measured.iter().flat_map(|r| [&r.snapped, &r.unsnapped])
     }
 }
 
 /// Refuses `--ground-truth` (or `sweep.ground_truth`, named by `source`) for a config the pass
 /// cannot sample: one without scene geometry, or one whose light moves.
-pub fn refuse_ground_truth(result_config: &Config, source: &str) -> Result<()> {
+pub(crate) fn refuse_ground_truth(result_config: &Config, source: &str) -> Result<()> {
     if result_config.geometry.is_none() {
         return Err(GridError::Unusable {
             context: source.to_string(),
@@ -128,13 +128,13 @@ pub fn refuse_ground_truth(result_config: &Config, source: &str) -> Result<()> {
 }
 
 /// Why the ground-truth pass refuses a moving light.
-pub const MOVING_LIGHT: &str =
+pub(crate) const MOVING_LIGHT: &str =
     "the ground-truth pass samples the maps under one still light, and motion.light_path moves the light";
 
 /// Runs the ground-truth pass on the sampled rows of a finished sweep of `config` (its rows, and
 /// the index of the recommended one), in `threads` threads or rayon's default pool, in index
 /// order whatever the thread count.
-pub fn measure(
+pub(crate) fn measure(
     config: &Config,
     rows: &[Row],
     recommended: Option<usize>,

@@ -96,7 +96,7 @@ where
 
 /// `--knob 1,2,3` or `--knob 1:5:0.5` (values of a preset's split knob; range checked
 /// against the engine in [`Grid::resolve`]), and likewise `--distance 50,100,150`.
-pub fn parse_number_spec(flag: &str, spec: &str, allowed: &str, ok: impl Fn(f64) -> bool) -> Result<Axis<f64>> {
+pub(crate) fn parse_number_spec(flag: &str, spec: &str, allowed: &str, ok: impl Fn(f64) -> bool) -> Result<Axis<f64>> {
     parse_numbers(flag, spec, ("1:5:0.5", "1,2,3"), allowed, ok)
 }
 
@@ -233,7 +233,7 @@ pub struct GridFlags {
 
 impl GridFlags {
     /// The flags' names without dashes, in the order of [`GridFlags::values`].
-    pub const KEYS: [&'static str; 11] = [
+    pub(crate) const KEYS: [&'static str; 11] = [
         "preset",
         "lambda",
         "cascades",
@@ -247,7 +247,7 @@ impl GridFlags {
         "light_update",
     ];
 
-    pub fn values(&self) -> [&Option<String>; 11] {
+    pub(crate) fn values(&self) -> [&Option<String>; 11] {
         [
             &self.preset,
             &self.lambda,
@@ -264,7 +264,7 @@ impl GridFlags {
     }
 
     /// The flags from `get(key)` for each of [`GridFlags::KEYS`].
-    pub fn from_keys(get: impl Fn(&str) -> Option<String>) -> Self {
+    pub(crate) fn from_keys(get: impl Fn(&str) -> Option<String>) -> Self {
         GridFlags {
             preset: get("preset"),
             lambda: get("lambda"),
@@ -303,7 +303,7 @@ impl GridFlags {
 
 /// `--split-range` = `spec` (`ranges` parsed) is refused when it asks for visible splits
 /// without scene geometry.
-pub fn check_split_ranges(config: &Config, ranges: &[SplitRange], spec: &str) -> Result<()> {
+pub(crate) fn check_split_ranges(config: &Config, ranges: &[SplitRange], spec: &str) -> Result<()> {
     if config.geometry.is_none() && ranges.contains(&SplitRange::Visible) {
         return Err(Error::flag(
             "--split-range",
@@ -711,7 +711,7 @@ impl Grid {
     /// All settings in row order: the sun's elevation and azimuth when swept (outermost), then
     /// split range, then fit, then distance, then resolution, then cascades, then the knob,
     /// then the light update, then λ (innermost).
-    pub fn settings(&self) -> Vec<Setting> {
+    pub(crate) fn settings(&self) -> Vec<Setting> {
         let base = self.settings_without_sun();
         match &self.sun {
             None => base,
@@ -724,7 +724,7 @@ impl Grid {
     }
 
     /// [`Grid::settings`] under the configured light only (every setting once).
-    pub fn settings_without_sun(&self) -> Vec<Setting> {
+    pub(crate) fn settings_without_sun(&self) -> Vec<Setting> {
         let opt = |a: &Option<Axis<f64>>| {
             a.as_ref()
                 .map_or(vec![None], |a| a.values.iter().map(|&v| Some(v)).collect())
@@ -767,7 +767,7 @@ impl Grid {
 
     /// The CLI arguments that reproduce this grid for `config` (a preset sweep names only the
     /// axes its engine has).
-    pub fn cli_args(&self, config: &Config) -> String {
+    pub(crate) fn cli_args(&self, config: &Config) -> String {
         let axes = crate::presets::axes(config);
         let mut out = String::new();
         if axes.lambda.is_some() {
@@ -893,7 +893,7 @@ impl Setting {
 
 /// A fit and the depths its splits divide: what figures draw a panel or series for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub struct FitGroup {
+pub(crate) struct FitGroup {
     pub split_range: SplitRange,
     pub fit: Fit,
 }
@@ -909,7 +909,7 @@ impl std::fmt::Display for FitGroup {
 }
 
 impl Setting {
-    pub fn fit_group(&self) -> FitGroup {
+    pub(crate) fn fit_group(&self) -> FitGroup {
         FitGroup {
             split_range: self.split_range,
             fit: self.fit,
@@ -937,7 +937,7 @@ pub struct Sun {
 }
 
 impl Sun {
-    pub fn angles(self) -> SunAngles {
+    pub(crate) fn angles(self) -> SunAngles {
         SunAngles {
             azimuth: self.azimuth_deg.to_radians(),
             elevation: self.elevation_deg.to_radians(),
@@ -961,7 +961,7 @@ impl Sun {
     }
 
     /// The sun of a config's light (azimuth brought into [0, 360)).
-    pub fn of_config(config: &Config) -> Sun {
+    pub(crate) fn of_config(config: &Config) -> Sun {
         let a = SunAngles::of_light_direction(config.light_direction);
         let mut azimuth_deg = a.azimuth.to_degrees();
         if azimuth_deg < 0.0 {
@@ -977,13 +977,13 @@ impl Sun {
     }
 
     /// `azimuth 135°, elevation 40°`.
-    pub fn label(self) -> String {
+    pub(crate) fn label(self) -> String {
         format!("azimuth {}°, elevation {}°", self.azimuth_deg, self.elevation_deg)
     }
 }
 
 /// `--sun-azimuth 0:345:15` or a list, degrees in [0, 360).
-pub fn parse_sun_azimuth_spec(spec: &str) -> Result<Axis<f64>> {
+pub(crate) fn parse_sun_azimuth_spec(spec: &str) -> Result<Axis<f64>> {
     parse_number_spec(
         "--sun-azimuth",
         spec,
@@ -993,7 +993,7 @@ pub fn parse_sun_azimuth_spec(spec: &str) -> Result<Axis<f64>> {
 }
 
 /// `--sun-elevation 5:85:5` or a list, degrees in (0, 90].
-pub fn parse_sun_elevation_spec(spec: &str) -> Result<Axis<f64>> {
+pub(crate) fn parse_sun_elevation_spec(spec: &str) -> Result<Axis<f64>> {
     parse_number_spec(
         "--sun-elevation",
         spec,
@@ -1014,7 +1014,11 @@ pub struct SunGrid {
 
 impl SunGrid {
     /// The sun axes from the flags, else the `[sweep]` table; None when neither sweeps the sun.
-    pub fn resolve(config: &Config, azimuth: Option<Axis<f64>>, elevation: Option<Axis<f64>>) -> Option<SunGrid> {
+    pub(crate) fn resolve(
+        config: &Config,
+        azimuth: Option<Axis<f64>>,
+        elevation: Option<Axis<f64>>,
+    ) -> Option<SunGrid> {
         let spec = config.sweep.as_ref();
         let azimuth = azimuth.or_else(|| spec.and_then(|s| s.axes.sun_azimuth.clone()));
         let elevation = elevation.or_else(|| spec.and_then(|s| s.axes.sun_elevation.clone()));
@@ -1025,20 +1029,20 @@ impl SunGrid {
         })
     }
 
-    pub fn azimuths(&self) -> Vec<f64> {
+    pub(crate) fn azimuths(&self) -> Vec<f64> {
         self.azimuth
             .as_ref()
             .map_or_else(|| vec![self.configured.azimuth_deg], |a| a.values.clone())
     }
 
-    pub fn elevations(&self) -> Vec<f64> {
+    pub(crate) fn elevations(&self) -> Vec<f64> {
         self.elevation
             .as_ref()
             .map_or_else(|| vec![self.configured.elevation_deg], |a| a.values.clone())
     }
 
     /// Every sun position in row order: elevation outer, azimuth inner.
-    pub fn suns(&self) -> Vec<Sun> {
+    pub(crate) fn suns(&self) -> Vec<Sun> {
         let azimuths = self.azimuths();
         self.elevations()
             .into_iter()
@@ -1051,7 +1055,7 @@ impl SunGrid {
             .collect()
     }
 
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.azimuths().len() * self.elevations().len()
     }
 
@@ -1060,7 +1064,7 @@ impl SunGrid {
     }
 
     /// ` --sun-azimuth A --sun-elevation E` for the swept axes.
-    pub fn cli_args(&self) -> String {
+    pub(crate) fn cli_args(&self) -> String {
         let mut out = String::new();
         if let Some(a) = &self.azimuth {
             out.push_str(&format!(" --sun-azimuth {}", a.spec));

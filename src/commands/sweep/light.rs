@@ -6,7 +6,7 @@ use crate::commands::sweep::run::Row;
 use csm_core::light_motion::LightUpdate;
 
 /// A jump under this many texels is no visible jump.
-pub const CALM_JUMP: f64 = 1.0;
+pub(crate) const CALM_JUMP: f64 = 1.0;
 
 /// One update rule of the reference setting: its `light_jump` and `light_crawl`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,7 +44,7 @@ fn step(u: LightUpdate) -> f64 {
 /// The choice of a sweep with a light update axis (None without one), made at row `at` of the
 /// (judged) `rows`: the recommended row when there is one, else the configured setting's, else
 /// the first row.
-pub fn choose(grid: &Grid, rows: &[Row], at: usize) -> Option<UpdateChoice> {
+pub(crate) fn choose(grid: &Grid, rows: &[Row], at: usize) -> Option<UpdateChoice> {
     grid.light_update.as_ref()?;
     let base = rows.get(at)?.setting;
     let same = |s: &Setting| {

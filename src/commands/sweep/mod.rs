@@ -10,13 +10,13 @@
 
 pub mod flicker;
 pub mod grid;
-pub mod light;
+pub(crate) mod light;
 pub mod optimize;
 pub mod rank;
 pub mod run;
-pub mod shard;
-pub mod sun;
-pub mod terms;
+pub(crate) mod shard;
+pub(crate) mod sun;
+pub(crate) mod terms;
 
 use crate::commands::terms::EngineSetting;
 use crate::config::sweep_spec::DEFAULT_BUDGET_MIB;
@@ -155,7 +155,7 @@ impl SweepResult {
     }
 
     /// The result of shard `shard`'s rows: `new`'s, marked as a slice ([`Self::slice`]).
-    pub fn into_slice(mut self, shard: shard::Shard) -> Self {
+    pub(crate) fn into_slice(mut self, shard: shard::Shard) -> Self {
         self.slice = Some(shard);
         self
     }

@@ -32,18 +32,18 @@ use crate::config::sweep_spec::decimal_range;
 
 /// Nelder-Mead iterations per run, per free split (two runs: the second restarts from the
 /// best point of the first with a smaller simplex).
-pub const ITERATIONS_PER_SPLIT: u64 = 60;
+pub(crate) const ITERATIONS_PER_SPLIT: u64 = 60;
 /// The first simplex: each vertex moves one log-depth gap by this much (in log units).
-pub const FIRST_STEP: f64 = 0.5;
+pub(crate) const FIRST_STEP: f64 = 0.5;
 /// A run stops when the objective's standard deviation over the simplex falls below this
 /// fraction of the start's objective.
-pub const RELATIVE_TOLERANCE: f64 = 1e-6;
+pub(crate) const RELATIVE_TOLERANCE: f64 = 1e-6;
 /// Printed fractions may cost at most this fraction of the optimum's objective.
-pub const ROUNDING_LOSS: f64 = 1e-3;
+pub(crate) const ROUNDING_LOSS: f64 = 1e-3;
 
 /// Where the free-split search runs: csm-lab's own pipeline or a preset with free fractions.
 /// Refused (naming the flag or key and the preset) for a preset whose splits are not free.
-pub fn check_free(config: &Config, source: &str) -> Result<()> {
+pub(crate) fn check_free(config: &Config, source: &str) -> Result<()> {
     if let Some(p) = &config.shadow.preset {
         if !crate::presets::has_free_splits(p.name) {
             let free = crate::presets::free_split_engines()
@@ -95,7 +95,7 @@ pub struct OptimizedGroup {
 
 impl OptimizedGroup {
     /// The objective of the start and of the optimum.
-    pub fn values(&self, objective: SummaryMetric) -> (f64, f64) {
+    pub(crate) fn values(&self, objective: SummaryMetric) -> (f64, f64) {
         (
             objective.value(&self.start.summary),
             objective.value(&self.best.summary),
@@ -114,7 +114,7 @@ pub struct Optimized {
 }
 
 /// The point's config with split fractions: `shadow.splits`, or the preset's split knob.
-pub fn with_fractions(point: &Config, fractions: &[f64]) -> Result<Config> {
+pub(crate) fn with_fractions(point: &Config, fractions: &[f64]) -> Result<Config> {
     match &point.shadow.preset {
         None => point.with_splits(fractions),
         Some(_) => {
@@ -213,7 +213,7 @@ fn groups(settings: &[Setting], preset: bool) -> Vec<Vec<usize>> {
 }
 
 /// The λ values a preset's practical starting splits are drawn from.
-pub const PRESET_LAMBDAS: &str = "0:1:0.05";
+pub(crate) const PRESET_LAMBDAS: &str = "0:1:0.05";
 
 /// Optimises the split fractions of every group of `rows` (the sweep's rows, in grid order).
 pub fn optimize(

@@ -55,7 +55,8 @@ fn front_of(rows: &[Row], candidates: impl Iterator<Item = usize>, objective: Su
 pub const STABLE_SHIMMER: f64 = 1e-3;
 
 /// What the recommendation optimises, in words (printed in reports).
-pub const OBJECTIVE: &str = "lowest mean aliasing (the average shadow-texel-to-pixel ratio over the depth range) \
+pub(crate) const OBJECTIVE: &str =
+    "lowest mean aliasing (the average shadow-texel-to-pixel ratio over the depth range) \
 among configurations that fit the memory budget, cover every slice (coverage_violations = 0) and are stable when \
 snapped (shimmer_snapped <= 1e-3 texel); means within 1% of the lowest count as equal, and among those the lowest \
 max aliasing wins, then less memory, then fewer cascades";
@@ -76,7 +77,7 @@ pub fn default_objective(config: &Config) -> SummaryMetric {
 }
 
 /// [`OBJECTIVE`] for the mean aliasing; the same rule in words for any other objective.
-pub fn objective_text(objective: SummaryMetric) -> String {
+pub(crate) fn objective_text(objective: SummaryMetric) -> String {
     if objective.name() == "mean_aliasing" {
         return OBJECTIVE.to_string();
     }
@@ -91,7 +92,7 @@ pub fn objective_text(objective: SummaryMetric) -> String {
 
 /// Mean aliasing within this fraction of the best counts as equal: a 0.2% better mean is not
 /// worth a 20% worse worst case, so near-ties are decided by max aliasing.
-pub const MEAN_TOLERANCE: f64 = 0.01;
+pub(crate) const MEAN_TOLERANCE: f64 = 0.01;
 
 /// The recommended row and why.
 #[derive(Debug, Clone, PartialEq)]
@@ -213,7 +214,7 @@ fn pick(rows: &[Row], candidates: &[usize], objective: SummaryMetric) -> Option<
 
 /// Which way an alternative departs from the recommendation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum AlternativeKind {
+pub(crate) enum AlternativeKind {
     /// Less memory, for a higher objective.
     Cheaper,
     /// A lower objective, for more memory.
@@ -224,7 +225,7 @@ pub enum AlternativeKind {
 
 impl AlternativeKind {
     /// The `kind` of `recommendation.json`'s `alternatives`.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             AlternativeKind::Cheaper => "cheaper",
             AlternativeKind::Sharper => "sharper",
@@ -233,7 +234,7 @@ impl AlternativeKind {
     }
 
     /// The rule that picks it, in words (reports and `recommendation.json`).
-    pub fn rule(self) -> &'static str {
+    pub(crate) fn rule(self) -> &'static str {
         match self {
             AlternativeKind::Cheaper => {
                 "the acceptable Pareto row with the most memory below the recommendation's:                  the lowest objective for less memory"
@@ -250,7 +251,7 @@ impl AlternativeKind {
 
 /// One alternative to the recommendation: the row and why it was picked.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Alternative {
+pub(crate) struct Alternative {
     pub kind: AlternativeKind,
     pub index: usize,
 }
@@ -267,7 +268,7 @@ pub struct Alternative {
 ///   memory when nothing fits the budget), the row with the least `shimmer` (the configured snap
 ///   mode's), when that is below the recommendation's; ties go to the lower objective, then less
 ///   memory, then grid order.
-pub fn alternatives(rows: &[Row], rec: &Recommendation, objective: SummaryMetric) -> Vec<Alternative> {
+pub(crate) fn alternatives(rows: &[Row], rec: &Recommendation, objective: SummaryMetric) -> Vec<Alternative> {
     let r = &rows[rec.index].summary;
     let ok = || (0..rows.len()).filter(|&i| acceptable(&rows[i]));
     let front = front_of(rows, ok(), objective);
@@ -310,7 +311,7 @@ pub fn alternatives(rows: &[Row], rec: &Recommendation, objective: SummaryMetric
 
 /// Which rival a row is: the best row of a group the recommendation beat.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum RivalKind {
+pub(crate) enum RivalKind {
     /// The recommendation with λ = 1 (purely logarithmic splits) instead of its own λ, when λ
     /// is swept and the recommendation has more than one cascade.
     LambdaOne,
@@ -325,7 +326,7 @@ pub enum RivalKind {
 }
 
 impl RivalKind {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             RivalKind::LambdaOne => "best_lambda_1",
             RivalKind::OtherCascades => "best_other_cascade_count",
@@ -338,7 +339,7 @@ impl RivalKind {
 
 /// Why a rival lost to the recommendation: the first test of the recommendation rule it failed.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Loss {
+pub(crate) enum Loss {
     /// Slice corners outside their windows (the count).
     CoverageMisses(u64),
     /// Snapped shimmer above [`STABLE_SHIMMER`] (the value).
@@ -359,14 +360,14 @@ pub enum Loss {
 
 /// A rival and why it lost.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Rival {
+pub(crate) struct Rival {
     pub kind: RivalKind,
     pub index: usize,
     pub loss: Loss,
 }
 
 /// Why row `x` lost to the recommendation `rec`, by the rule of [`recommend_by`].
-pub fn loss(rows: &[Row], rec: &Recommendation, x: usize, objective: SummaryMetric) -> Loss {
+pub(crate) fn loss(rows: &[Row], rec: &Recommendation, x: usize, objective: SummaryMetric) -> Loss {
     let s = &rows[x].summary;
     let r = &rows[rec.index].summary;
     if s.coverage_violations > 0 {
@@ -408,7 +409,7 @@ pub fn loss(rows: &[Row], rec: &Recommendation, x: usize, objective: SummaryMetr
 }
 
 /// Distinct fit groups of the rows, in order (for plots).
-pub fn fits_in(rows: &[Row]) -> Vec<FitGroup> {
+pub(crate) fn fits_in(rows: &[Row]) -> Vec<FitGroup> {
     rows.iter()
         .map(|r| r.setting.fit_group())
         .collect::<BTreeSet<_>>()
@@ -530,7 +531,7 @@ pub struct RangeEdge {
 
 impl RangeEdge {
     /// "largest" or "smallest".
-    pub fn side(&self) -> &'static str {
+    pub(crate) fn side(&self) -> &'static str {
         if self.high {
             "largest"
         } else {
@@ -539,12 +540,12 @@ impl RangeEdge {
     }
 
     /// The flag and values to try (`--knob 20,25,30`).
-    pub fn suggestion(&self) -> String {
+    pub(crate) fn suggestion(&self) -> String {
         format!("{} {}", self.flag, self.next.join(","))
     }
 
     /// One sentence for the reports.
-    pub fn text(&self) -> String {
+    pub(crate) fn text(&self) -> String {
         format!(
             "{} {} is the {} value swept: the best may lie beyond it; try {}",
             self.axis,
@@ -658,7 +659,7 @@ fn list_edge<T: Copy + PartialOrd>(
 /// halving, and more cascades or texels only while the recommendation's memory, scaled by the
 /// count or the texel area, stays within the budget. The fit, split range, sun and light update
 /// axes are choices, not ranges. Empty without a recommendation.
-pub fn range_edges(config: &Config, grid: &Grid, rows: &[Row], rec: Option<&Recommendation>) -> Vec<RangeEdge> {
+pub(crate) fn range_edges(config: &Config, grid: &Grid, rows: &[Row], rec: Option<&Recommendation>) -> Vec<RangeEdge> {
     let Some(rec) = rec else {
         return Vec::new();
     };

@@ -23,7 +23,7 @@ pub fn run(base: &Config, grid: &Grid, threads: Option<usize>, on_done: &(dyn Fn
 }
 
 /// [`run`] over some settings of a grid (a shard's slice), in their order.
-pub fn run_settings(
+pub(crate) fn run_settings(
     base: &Config,
     settings: &[Setting],
     threads: Option<usize>,
@@ -70,7 +70,7 @@ pub fn run_settings(
 
 /// Runs `work` in a pool of `threads` threads (`--threads`), or in rayon's default pool. The
 /// one place a command builds a pool; a failure names the flag.
-pub fn in_pool<T: Send>(threads: Option<usize>, work: impl FnOnce() -> Result<T> + Send) -> Result<T> {
+pub(crate) fn in_pool<T: Send>(threads: Option<usize>, work: impl FnOnce() -> Result<T> + Send) -> Result<T> {
     match threads {
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)

@@ -30,13 +30,13 @@ use csm_core::light_motion::LightUpdate;
 use csm_core::screen::ScreenStats;
 
 /// The shard's description, beside its other files.
-pub const MANIFEST_FILE: &str = "shard.json";
+pub(crate) const MANIFEST_FILE: &str = "shard.json";
 /// The shard's rows, lossless.
-pub const ROWS_FILE: &str = "shard-rows.tsv";
+pub(crate) const ROWS_FILE: &str = "shard-rows.tsv";
 /// First line of [`ROWS_FILE`] (the format's version).
 const ROWS_MAGIC: &str = "# csm-lab shard rows v2";
 /// Most shards a grid may be split into.
-pub const MAX_SHARDS: usize = 100_000;
+pub(crate) const MAX_SHARDS: usize = 100_000;
 
 /// `--shard K/N`: the K-th (1-based) of N slices.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -73,22 +73,22 @@ impl Shard {
     }
 
     /// Whether row `index` of the grid is in this shard.
-    pub fn contains(self, index: usize) -> bool {
+    pub(crate) fn contains(self, index: usize) -> bool {
         index % self.n == self.k - 1
     }
 
     /// The grid indices of this shard, ascending.
-    pub fn indices(self, grid_len: usize) -> impl Iterator<Item = usize> {
+    pub(crate) fn indices(self, grid_len: usize) -> impl Iterator<Item = usize> {
         (self.k - 1..grid_len).step_by(self.n)
     }
 
     /// How many rows of a grid of `grid_len` rows this shard holds.
-    pub fn len_of(self, grid_len: usize) -> usize {
+    pub(crate) fn len_of(self, grid_len: usize) -> usize {
         (grid_len + self.n - self.k) / self.n
     }
 
     /// Refuses more shards than the grid has configurations (a shard would be empty).
-    pub fn check_grid(self, grid_len: usize) -> Result<()> {
+    pub(crate) fn check_grid(self, grid_len: usize) -> Result<()> {
         if self.n > grid_len {
             return Err(Error::flag(
                 "--shard",
@@ -105,7 +105,7 @@ impl Shard {
 
 /// What a shard says about itself ([`MANIFEST_FILE`]).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Manifest {
+pub(crate) struct Manifest {
     /// `csm-lab <version>` that ran the shard.
     pub tool: String,
     pub shard: Shard,
@@ -122,7 +122,7 @@ pub struct Manifest {
 }
 
 /// The csm-lab that is running, as written in manifests and reports.
-pub fn tool() -> String {
+pub(crate) fn tool() -> String {
     format!("csm-lab {}", env!("CARGO_PKG_VERSION"))
 }
 
@@ -146,7 +146,7 @@ struct ManifestFile {
 
 impl Manifest {
     /// The digest of every field of the manifest ([`MANIFEST_FILE`]'s `manifest_digest`).
-    pub fn digest(&self) -> String {
+    pub(crate) fn digest(&self) -> String {
         let mut h = Fnv::default();
         for field in [
             self.tool.as_str(),
@@ -166,7 +166,7 @@ impl Manifest {
         h.hex()
     }
 
-    pub fn to_json(&self) -> serde_json::Value {
+    pub(crate) fn to_json(&self) -> serde_json::Value {
         let file = ManifestFile {
             tool: self.tool.clone(),
             shard: self.shard.k,
@@ -191,7 +191,7 @@ impl Manifest {
     /// Reads a manifest back; `dir` names the shard in errors. A manifest of this csm-lab
     /// version must carry the digest of its own fields (one of another version is left to
     /// [`check_set`], which names the version).
-    pub fn from_json(dir: &std::path::Path, text: &str) -> Result<Manifest> {
+    pub(crate) fn from_json(dir: &std::path::Path, text: &str) -> Result<Manifest> {
         let bad = |m: String| Error::from(ShardError::dir(dir, format!("{MANIFEST_FILE}: {m}")));
         let file: ManifestFile =
             serde_json::from_str(text).map_err(|e| bad(format!("not a csm-lab shard manifest ({e})")))?;
@@ -221,7 +221,7 @@ impl Manifest {
 
 /// FNV-1a (64 bits) over byte strings, each followed by its length so that boundaries count.
 #[derive(Debug, Clone)]
-pub struct Fnv(u64);
+pub(crate) struct Fnv(u64);
 
 impl Default for Fnv {
     fn default() -> Self {
@@ -230,14 +230,14 @@ impl Default for Fnv {
 }
 
 impl Fnv {
-    pub fn eat(&mut self, bytes: &[u8]) {
+    pub(crate) fn eat(&mut self, bytes: &[u8]) {
         for b in bytes.iter().chain(&(bytes.len() as u64).to_le_bytes()) {
             self.0 ^= u64::from(*b);
             self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
         }
     }
 
-    pub fn hex(&self) -> String {
+    pub(crate) fn hex(&self) -> String {
         format!("{:016x}", self.0)
     }
 }
@@ -245,7 +245,7 @@ impl Fnv {
 /// The hash two shards must share to be merged: the csm-lab version, the config file's bytes
 /// (and its glTF's, if any), the loaded config (every value as used, the motion file's poses),
 /// the resolved grid and the command of the unsharded sweep. 16 hex digits.
-pub fn config_hash(
+pub(crate) fn config_hash(
     file_bytes: &[u8],
     gltf_bytes: Option<&[u8]>,
     config: &Config,
@@ -315,7 +315,7 @@ fn hex(x: f64) -> String {
 }
 
 /// [`ROWS_FILE`]'s text for rows `(grid index, row)` of the shard `m` describes.
-pub fn rows_text<'a>(m: &Manifest, rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String {
+pub(crate) fn rows_text<'a>(m: &Manifest, rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String {
     let mut out = format!("{ROWS_MAGIC}\n{ROW_COLUMNS}\n");
     for (index, row) in rows {
         let start = out.len();
@@ -468,7 +468,7 @@ pub fn rows_text<'a>(m: &Manifest, rows: impl IntoIterator<Item = (usize, &'a Ro
 
 /// Reads [`rows_text`] back: (grid index, row) per line, each checked against its digest for
 /// the shard `m` describes. `file` names the file in errors.
-pub fn parse_rows(file: &std::path::Path, text: &str, m: &Manifest) -> Result<Vec<(usize, Row)>> {
+pub(crate) fn parse_rows(file: &std::path::Path, text: &str, m: &Manifest) -> Result<Vec<(usize, Row)>> {
     let mut lines = text.lines().enumerate();
     let bad = |line: usize, m: String| Error::data_file(file, line, m);
     match lines.next() {
@@ -640,7 +640,7 @@ pub fn parse_rows(file: &std::path::Path, text: &str, m: &Manifest) -> Result<Ve
 
 /// One shard as read from its directory.
 #[derive(Debug, Clone)]
-pub struct ShardInput {
+pub(crate) struct ShardInput {
     pub dir: std::path::PathBuf,
     pub manifest: Manifest,
     /// (grid index, row), as stored.
@@ -650,7 +650,7 @@ pub struct ShardInput {
 /// Checks that `shards` are the N slices of one sweep, each once, and returns the manifest they
 /// share. Errors name the problem and the directory: a shard given twice, shards of other
 /// csm-lab versions or of different sweeps, missing shards (by K).
-pub fn check_set(shards: &[ShardInput]) -> Result<&Manifest> {
+pub(crate) fn check_set(shards: &[ShardInput]) -> Result<&Manifest> {
     let first = shards
         .first()
         .ok_or_else(|| ShardError::Set("no shard directories were given".into()))?;
@@ -735,7 +735,7 @@ pub fn check_set(shards: &[ShardInput]) -> Result<&Manifest> {
 
 /// The grid's rows, in grid order, from a complete set of shards ([`check_set`]); every row must
 /// sit in its own shard and carry the setting of its place in `grid`.
-pub fn join(shards: Vec<ShardInput>, grid: &Grid) -> Result<Vec<Row>> {
+pub(crate) fn join(shards: Vec<ShardInput>, grid: &Grid) -> Result<Vec<Row>> {
     let settings = grid.settings();
     let mut slots: Vec<Option<Row>> = vec![None; settings.len()];
     for s in shards {

@@ -39,14 +39,14 @@ pub struct SunRows {
 
 impl SunRows {
     /// The indices in `all` of setting `j`'s rows, one per sun angle, in sun order.
-    pub fn rows_of(&self, j: usize) -> Vec<usize> {
+    pub(crate) fn rows_of(&self, j: usize) -> Vec<usize> {
         (0..self.all.len()).filter(|&i| self.setting_of[i] == j).collect()
     }
 }
 
 /// Reduces the rows of a sun sweep (in grid order) to one judged row per setting, in the order
 /// settings first appear, by the worst-sun rule of this module.
-pub fn judge(all: Vec<Row>, objective: SummaryMetric) -> (Vec<Row>, SunRows) {
+pub(crate) fn judge(all: Vec<Row>, objective: SummaryMetric) -> (Vec<Row>, SunRows) {
     // A setting is its values without the sun (f64s by their exact Debug text).
     let mut ids: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
     let mut members: Vec<Vec<usize>> = Vec::new();
@@ -102,7 +102,8 @@ pub fn judge(all: Vec<Row>, objective: SummaryMetric) -> (Vec<Row>, SunRows) {
 }
 
 /// The worst-sun rule in words (reports, `recommendation.json`).
-pub const SUN_RULE: &str = "the sun is a condition, not a setting: each setting is judged by its worst sun angle \
+pub(crate) const SUN_RULE: &str =
+    "the sun is a condition, not a setting: each setting is judged by its worst sun angle \
 (the metrics of the angle where its objective is highest, with max_aliasing, coverage_violations, shimmer and \
 shimmer_snapped the highest over every angle), so the recommendation, the Pareto front and the alternatives hold \
 at every sun angle swept; sweep.csv has every (sun, setting) row";
@@ -110,7 +111,7 @@ at every sun angle swept; sweep.csv has every (sun, setting) row";
 /// What a bounds-only sun sweep says about the metrics the light cannot change, for stdout,
 /// the report and the docs. None when the sweep has scene geometry (the visibility pass then
 /// depends on the light).
-pub fn bounds_only_note(config: &Config, fits: &[crate::config::Fit]) -> Option<String> {
+pub(crate) fn bounds_only_note(config: &Config, fits: &[crate::config::Fit]) -> Option<String> {
     if config.geometry.is_some() {
         return None;
     }

@@ -46,7 +46,7 @@ pub struct BevyKnobs {
 }
 
 /// Bevy far bounds: `first·(max/first)^(i/(N−1))`, or just `max` for one cascade.
-pub fn bevy_far_bounds(cascades: usize, first: f64, max: f64) -> Vec<f64> {
+pub(crate) fn bevy_far_bounds(cascades: usize, first: f64, max: f64) -> Vec<f64> {
     if cascades == 1 {
         return vec![max];
     }
@@ -56,7 +56,7 @@ pub fn bevy_far_bounds(cascades: usize, first: f64, max: f64) -> Vec<f64> {
 }
 
 /// Bevy's window side: the slice diameter rounded up to a whole world unit.
-pub fn bevy_window_side(near: f64, far: f64, k2: f64) -> f64 {
+pub(crate) fn bevy_window_side(near: f64, far: f64, k2: f64) -> f64 {
     slice_diameter(near, far, k2).ceil()
 }
 

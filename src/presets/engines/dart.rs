@@ -25,7 +25,7 @@ pub struct DartKnobs {
 }
 
 /// Practical split exactly as the reference writes it: the last boundary also from the formula.
-pub fn dart_splits(near: f64, far: f64, cascades: usize, lambda: f64) -> Vec<f64> {
+pub(crate) fn dart_splits(near: f64, far: f64, cascades: usize, lambda: f64) -> Vec<f64> {
     let count = cascades.clamp(1, 4);
     let mut s = vec![near];
     for i in 1..=count {

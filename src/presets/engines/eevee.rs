@@ -42,7 +42,7 @@ pub struct EeveeKnobs {
 }
 
 /// EEVEE 2017 split ends and (fade-overlapped) starts on `[start, end]`.
-pub fn eevee_starts_ends(start: f64, end: f64, cascades: usize, lambda: f64, fade: f64) -> (Vec<f64>, Vec<f64>) {
+pub(crate) fn eevee_starts_ends(start: f64, end: f64, cascades: usize, lambda: f64, fade: f64) -> (Vec<f64>, Vec<f64>) {
     let m = cascades;
     let mut starts = vec![start; m];
     let mut ends = vec![end; m];

@@ -29,7 +29,7 @@ macro_rules! engines {
         }
 
         /// Every engine, in [`PresetName`] order.
-        pub static ENGINES: [&dyn DynEngine; COUNT] = [$(&$module::$engine),*];
+        pub(crate) static ENGINES: [&dyn DynEngine; COUNT] = [$(&$module::$engine),*];
 
         /// A preset's engine knobs, resolved (defaults applied, validated).
         #[derive(Debug, Clone, PartialEq)]
@@ -38,7 +38,7 @@ macro_rules! engines {
         }
 
         impl Knobs {
-            pub fn name(&self) -> PresetName {
+            pub(crate) fn name(&self) -> PresetName {
                 match self {
                     $(Knobs::$engine(_) => PresetName::$engine,)*
                 }

@@ -55,21 +55,21 @@ pub struct ThreejsKnobs {
 /// The fade band around a break `b` (a fraction of `F`, read as linear depth `ld = d/(F − n)`):
 /// `[b − b²/8, b + b²/8]` in linear depth, where the shader reads both neighbouring cascades
 /// (margin `b²/4`, half of it on each side of the break).
-pub fn threejs_fade_band(b: f64) -> (f64, f64) {
+pub(crate) fn threejs_fade_band(b: f64) -> (f64, f64) {
     let half = 0.125 * b * b;
     (b - half, b + half)
 }
 
 /// How much fade grows a cascade's window side: `0.25·(z/(Fmax − n))²·(Fmax − n)` for a
 /// cascade ending at view depth `z`, with `Fmax = max(camera far, maxFar)`.
-pub fn threejs_fade_growth(z_far: f64, near: f64, far: f64, max_far: f64) -> f64 {
+pub(crate) fn threejs_fade_growth(z_far: f64, near: f64, far: f64, max_far: f64) -> f64 {
     let span = far.max(max_far) - near;
     let ld = z_far / span;
     0.25 * ld * ld * span
 }
 
 /// three.js `breaks`: far end of each cascade as a fraction of `far`, the last one 1.
-pub fn threejs_breaks(mode: ThreejsMode, cascades: usize, near: f64, far: f64) -> Vec<f64> {
+pub(crate) fn threejs_breaks(mode: ThreejsMode, cascades: usize, near: f64, far: f64) -> Vec<f64> {
     let m = cascades as f64;
     let uniform = |i: f64| (near + (far - near) * i / m) / far;
     let log = |i: f64| near * (far / near).powf(i / m) / far;

@@ -34,7 +34,7 @@ pub struct UnrealKnobs {
 }
 
 /// Unreal split distances: `near + (Σ_{k<i} e^k / Σ_{k<N} e^k)·(distance − near)`.
-pub fn unreal_splits(cascades: usize, exponent: f64, near: f64, distance: f64) -> Vec<f64> {
+pub(crate) fn unreal_splits(cascades: usize, exponent: f64, near: f64, distance: f64) -> Vec<f64> {
     let total: f64 = (0..cascades).map(|k| exponent.powi(k as i32)).sum();
     let mut acc = 0.0;
     let mut out = vec![near];
@@ -63,7 +63,7 @@ pub fn unreal_sphere(near: f64, far: f64, lens: &Lens) -> Sphere {
 }
 
 /// Unreal's border per side, in texels (modelled as the 4-texel snap step).
-pub const UNREAL_BORDER_TEXELS: f64 = 4.0;
+pub(crate) const UNREAL_BORDER_TEXELS: f64 = 4.0;
 
 impl Engine for Unreal {
     type Knobs = UnrealKnobs;
