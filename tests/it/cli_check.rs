@@ -6,6 +6,7 @@ use crate::common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use crate::common::read_csv;
 use common::{with, BASE};
 use csm_core::metrics::cascade_at;
 use csm_lab::analyze;
@@ -985,13 +986,8 @@ fn check_sweep_gates_the_recommendation_and_the_configured_setting_unless_all_ro
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let mut reader = csv::Reader::from_path(out_dir.join("sweep.csv")).unwrap();
-    let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+    let (header, rows) = read_csv(&out_dir.join("sweep.csv"));
     let col = |n: &str| header.iter().position(|h| h == n).unwrap();
-    let rows: Vec<Vec<String>> = reader
-        .records()
-        .map(|r| r.unwrap().iter().map(String::from).collect())
-        .collect();
     let label = |r: &Vec<String>| {
         let range = if r[col("split_range")] == "visible" {
             " split_range=visible"

@@ -5,6 +5,7 @@ use crate::common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use crate::common::read_csv;
 use common::BASE;
 
 fn bin() -> Command {
@@ -319,13 +320,8 @@ fn compare_names_the_best_valid_preset_by_the_objective_and_lists_the_invalid_ap
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     // From compare.csv alone: valid = no missed slice corner and no clipped receiver; the scene
     // has geometry, so the objective is the on-screen 95th percentile.
-    let mut reader = csv::Reader::from_path(out_dir.join("compare.csv")).unwrap();
-    let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+    let (header, rows) = read_csv(&out_dir.join("compare.csv"));
     let col = |n: &str| header.iter().position(|h| h == n).unwrap();
-    let rows: Vec<Vec<String>> = reader
-        .records()
-        .map(|r| r.unwrap().iter().map(String::from).collect())
-        .collect();
     let f = |r: &Vec<String>, n: &str| r[col(n)].parse::<f64>().unwrap();
     let (valid, invalid): (Vec<&Vec<String>>, Vec<&Vec<String>>) = rows
         .iter()

@@ -1,6 +1,9 @@
 //! Shared helpers for the integration tests.
 #![allow(dead_code)]
 
+use std::collections::BTreeMap;
+use std::path::Path;
+
 use csm_lab::Config;
 
 /// The default outdoor scene as text, so tests can edit one line at a time.
@@ -79,4 +82,30 @@ pub fn with(edits: &[(&str, &str)]) -> String {
 
 pub fn config(text: &str) -> Config {
     Config::from_toml_str(text, "test.toml", None).unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+/// Every regular file directly in `dir`: name → bytes.
+pub fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .filter(|e| e.file_type().unwrap().is_file())
+        .map(|e| {
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// A CSV file as its header and its rows of cells.
+pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_path(path).unwrap();
+    let header = r.headers().unwrap().iter().map(String::from).collect();
+    let rows = r
+        .records()
+        .map(|x| x.unwrap().iter().map(String::from).collect())
+        .collect();
+    (header, rows)
 }

@@ -1,6 +1,7 @@
 //! `sweep --ground-truth` (issue 11 item 5): the sample of rows, S5 beside S3 and S4 in
 //! flicker.csv, the flicker_vs_shimmer figure, and its agreement with `analyze --ground-truth`.
 
+use crate::common::files;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -71,19 +72,6 @@ fn sweep(cfg: &Path, out: &Path, extra: &[&str]) -> Output {
     ];
     a.extend_from_slice(extra);
     csm(&a)
-}
-
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap())
-        .map(|e| {
-            (
-                e.file_name().to_string_lossy().into_owned(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
-        .collect()
 }
 
 /// flicker.csv as (header, rows of cells); the setting label is quoted and holds commas.

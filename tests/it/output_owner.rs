@@ -3,10 +3,10 @@
 //! runs into one directory (in one PID namespace or two) write one after the other: one whole
 //! set in the end, or a clear message for the one that does not wait.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
+use crate::common::files;
 use csm_lab::output::DirLock;
 
 fn bin() -> Command {
@@ -30,21 +30,6 @@ fn sweep_args(out: &Path, lambda: &str) -> Vec<String> {
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// Every regular file directly in `dir`, with its bytes.
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap())
-        .filter(|e| e.file_type().unwrap().is_file())
-        .map(|e| {
-            (
-                e.file_name().to_string_lossy().into_owned(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
-        .collect()
 }
 
 #[test]

@@ -2,6 +2,7 @@
 //! (or, killed while moving its staged set into place, a staged set the next run completes),
 //! never a mix; the next run removes what the killed one left and touches nothing else.
 
+use crate::common::files;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -19,21 +20,6 @@ fn sweep(out: &Path, lambda: &str) -> Command {
     .stdout(Stdio::null())
     .stderr(Stdio::null());
     c
-}
-
-/// Every regular file directly in `dir`, with its bytes.
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap())
-        .filter(|e| e.file_type().unwrap().is_file())
-        .map(|e| {
-            (
-                e.file_name().to_string_lossy().into_owned(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
-        .collect()
 }
 
 /// Names of the hidden entries csm-lab makes while writing (staging directories, temporaries).
