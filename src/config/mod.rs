@@ -168,6 +168,19 @@ impl CameraSettings {
     }
 }
 
+/// One named camera view of the level: `[[view]]`, a glTF camera node, a pose of a recorded
+/// path or a sampled player position. Every view shares `[camera]`'s near and far planes and
+/// the screen; `camera.fov_y_deg` is the view's own when it names one, else `[camera]`'s.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub(crate) struct ViewSettings {
+    /// Unique within the config: the `[[view]]` name, the glTF camera node's name, or a
+    /// generated name (`path_000120`, `sample_007`).
+    pub(crate) name: String,
+    pub(crate) camera: CameraSettings,
+    /// How much each of the view's receiver pixels counts in the pooled statistics (default 1).
+    pub(crate) weight: f64,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Screen {
     pub width: u32,
@@ -447,6 +460,26 @@ pub struct Config {
     pub preset_input: PresetInput,
     /// The ground-truth pass: whether it runs, and how the maps are sampled.
     pub truth: TruthSettings,
+    /// The level's views when the config names any (`[[view]]`, `[views]`); empty means
+    /// `[camera]` is the one view, as before views existed. See [`Config::level_views`].
+    pub(crate) views: Vec<ViewSettings>,
+}
+
+impl Config {
+    /// The views the level is judged on: the configured views, or `[camera]` alone (named
+    /// `camera`, weight 1) when none is configured.
+    #[allow(dead_code)] // the views pipeline (issue 22) is its caller; it lands next
+    pub(crate) fn level_views(&self) -> Vec<ViewSettings> {
+        if self.views.is_empty() {
+            vec![ViewSettings {
+                name: "camera".to_string(),
+                camera: self.camera.clone(),
+                weight: 1.0,
+            }]
+        } else {
+            self.views.clone()
+        }
+    }
 }
 
 /// `[analysis] ground_truth` and the `[shadow]` keys of the sampled maps (docs/ground-truth.md).

@@ -103,6 +103,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             ..PresetInput::default()
         },
         truth,
+        views: Vec::new(),
     };
     check_camera_path(&config, v)?;
     // The binary32 range check needs the cascades, which an engine preset may change: it runs
