@@ -51,7 +51,7 @@ pub enum Command {
 pub struct SweepArgs {
     /// Scene and shadow settings (TOML); its `[sweep]` table gives the grid.
     pub config: PathBuf,
-    /// Output directory [default: out/<config name>/].
+    /// Output directory [default: out/<config name>/sweep/, or sweep-<engine>/ with --preset].
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// λ axis: start:end:step (0:1:0.05) or a list (0,0.5,1).
@@ -105,7 +105,7 @@ pub struct SweepArgs {
     pub format: Format,
     /// Run only the K-th of N disjoint slices of the grid (K from 1 to N; row i goes to shard
     /// i mod N + 1); `csm-lab merge` joins the N shard directories [default --out:
-    /// out/<config name>/shard-K-of-N/].
+    /// out/<config name>/sweep/shard-K-of-N/, in sweep-<engine>/ with --preset].
     #[arg(long, value_name = "K/N", allow_hyphen_values = true)]
     pub shard: Option<String>,
     /// Also find the free split fractions that minimise the objective for each cascade count

@@ -1,7 +1,10 @@
 //! `csm-lab analyze`: one scene and shadow setting, built and measured, written as CSV, JSON
 //! and SVG, with a summary on stdout.
 
-use super::{default_out_dir, load_with_engine_settings, load_with_preset_flag, print_result, Format, Outcome};
+use super::{
+    applied_preset, default_out_dir, load_with_engine_settings, load_with_preset_flag, out_folder, print_result,
+    Format, Outcome,
+};
 use crate::analysis::{analyze_with_progress, frames_walked, AnalysisOptions};
 use crate::error::{ConfigError, Error, Result};
 use crate::output;
@@ -14,7 +17,8 @@ use std::path::PathBuf;
 pub struct AnalyzeRequest {
     /// Scene and shadow settings (TOML).
     pub config: PathBuf,
-    /// Output directory [default: out/<config name>/].
+    /// Output directory [default: out/<config name>/analyze/, analyze-<engine>/ with --preset,
+    /// analyze-<engine>-settings/ with --engine-settings].
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// What to print on stdout.
@@ -80,7 +84,11 @@ pub(crate) fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
     let progress = super::progress::Progress::new(args.quiet, frames_walked(&config), "frames");
     let analysis = analyze_with_progress(&config, &AnalysisOptions::full(), &|n| progress.inc(n));
     progress.writing();
-    let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&config));
+    let dir = args.out.clone().unwrap_or_else(|| {
+        let by_flag = args.preset.is_some() || args.engine_settings.is_some();
+        let preset = applied_preset(&config).filter(|_| by_flag);
+        default_out_dir(&config, &out_folder("analyze", preset, args.engine_settings.is_some()))
+    });
     let written = if args.all_frames {
         // Every output but shimmer.csv is rendered as usual; shimmer.csv is streamed into the
         // same all-or-nothing set.

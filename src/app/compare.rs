@@ -23,7 +23,7 @@ pub struct CompareRequest {
     /// bounds, visible or bounds,visible (visible needs scene geometry).
     #[arg(long, value_name = "SPEC")]
     pub split_range: Option<String>,
-    /// Output directory [default: out/<config name>/].
+    /// Output directory [default: out/<config name>/compare/].
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// No progress bar (it shows only on a terminal, after about a second).
@@ -47,7 +47,7 @@ pub(crate) fn execute(args: &CompareRequest) -> Result<Outcome> {
     let dir = args
         .out
         .clone()
-        .unwrap_or_else(|| default_out_dir(&comparison.analyses[0].config));
+        .unwrap_or_else(|| default_out_dir(&comparison.analyses[0].config, "compare"));
     let scene = crate::config::Config::load_scene(&args.config)?;
     let settings = crate::commands::compare::engine_settings(&comparison, &scene)?;
     let mut files = report::compare::exporters()

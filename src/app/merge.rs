@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use super::sweep::{plan, shard_hash, SweepRequest};
-use super::{default_out_dir, print_result, Format, Outcome};
+use super::{print_result, Format, Outcome};
 use crate::commands::sweep::shard::{self, Manifest, ShardInput};
 use crate::commands::sweep::{flicker, optimize, SweepResult};
 use crate::error::{Error, Result, ShardError};
@@ -19,7 +19,8 @@ pub struct MergeRequest {
     /// The output directories of every `sweep --shard K/N` run of one sweep (any order).
     #[arg(required = true, value_name = "DIR")]
     pub dirs: Vec<PathBuf>,
-    /// Output directory [default: out/<config name>/].
+    /// Output directory [default: out/<config name>/sweep/, or sweep-<engine>/ when the shards
+    /// ran with --preset: where the unsharded sweep writes].
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Skip the SVG/PNG figures, as `sweep --no-plots` does.
@@ -75,8 +76,8 @@ pub(crate) fn read_shard(dir: &Path) -> Result<ShardInput> {
 }
 
 /// Merges as the CLI does, without printing: (result, rendered files but `sweep.csv`, which
-/// [`execute`] streams into the set).
-pub(crate) fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::RenderedFiles)> {
+/// [`execute`] streams into the set, and whether the shards ran with `--preset`).
+pub(crate) fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::RenderedFiles, bool)> {
     let shards = args.dirs.iter().map(|d| read_shard(d)).collect::<Result<Vec<_>>>()?;
     let m = shard::check_set(&shards)?.clone();
     // The config is loaded again from where the shards read it, and must still be the same.
@@ -133,13 +134,16 @@ pub(crate) fn merge_files(args: &MergeRequest) -> Result<(SweepResult, output::R
     }
     // sweep.csv is streamed when the set is written (execute).
     let files = report::sweep::render_all_but_csv(&result, !args.no_plots)?;
-    Ok((result, files))
+    Ok((result, files, m.flags.preset.is_some()))
 }
 
 /// The `merge` command.
 pub(crate) fn execute(args: &MergeRequest) -> Result<Outcome> {
-    let (result, files) = merge_files(args)?;
-    let dir = args.out.clone().unwrap_or_else(|| default_out_dir(&result.config));
+    let (result, files, preset_flag) = merge_files(args)?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| super::sweep::sweep_out_dir(&result.config, preset_flag));
     let written = output::write_files_streamed(&dir, &files, &[&report::sweep::SweepCsvFile(&result)])?;
     if !args.quiet {
         eprintln!(

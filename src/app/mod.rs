@@ -118,7 +118,32 @@ pub(crate) fn print_result(
 /// `scripts/regen-samples.sh`).
 pub(crate) const DEFAULT_OUT_ROOT: &str = "out";
 
-/// The default output directory for a config: `out/<name>/`.
-pub(crate) fn default_out_dir(config: &Config) -> PathBuf {
-    Path::new(DEFAULT_OUT_ROOT).join(&config.name)
+/// The default output directory of one command on a config: `out/<config name>/<folder>/`,
+/// one folder per command and preset flag ([`out_folder`]), so that two commands run one
+/// after the other never overwrite each other's files (`compare`'s
+/// `recommendation.unity.txt` is not `sweep --preset unity`'s).
+pub(crate) fn default_out_dir(config: &Config, folder: &str) -> PathBuf {
+    Path::new(DEFAULT_OUT_ROOT).join(&config.name).join(folder)
+}
+
+/// The folder a command writes under `out/<config name>/`: the command's name, and
+/// `<command>-<engine>` when a flag chose the engine (`sweep --preset unity` writes
+/// `sweep-unity/`; `analyze --engine-settings` of a bevy file writes `analyze-bevy-settings/`).
+/// A preset named in the config file itself adds nothing: the config name already says it.
+pub(crate) fn out_folder(command: &str, flag_preset: Option<crate::presets::PresetName>, settings: bool) -> String {
+    match (flag_preset, settings) {
+        (Some(p), true) => format!("{command}-{}-settings", p.as_str()),
+        (Some(p), false) => format!("{command}-{}", p.as_str()),
+        (None, _) => command.to_string(),
+    }
+}
+
+/// The engine preset applied to a loaded config, if any.
+pub(crate) fn applied_preset(config: &Config) -> Option<crate::presets::PresetName> {
+    config
+        .shadow
+        .preset
+        .as_ref()
+        .and_then(|p| p.downcast_ref::<crate::presets::Preset>())
+        .map(|p| p.name)
 }

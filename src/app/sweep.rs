@@ -230,8 +230,10 @@ pub(crate) fn execute(args: &SweepRequest) -> Result<Outcome> {
     let (result, files, progress) = sweep_files(args)?;
     let dir = match (&args.out, args.shard.as_deref().map(Shard::parse).transpose()?) {
         (Some(dir), _) => dir.clone(),
-        (None, Some(s)) => default_out_dir(&result.config).join(format!("shard-{}-of-{}", s.k, s.n)),
-        (None, None) => default_out_dir(&result.config),
+        (None, Some(s)) => {
+            sweep_out_dir(&result.config, args.grid.preset.is_some()).join(format!("shard-{}-of-{}", s.k, s.n))
+        }
+        (None, None) => sweep_out_dir(&result.config, args.grid.preset.is_some()),
     };
     let written = output::write_files_streamed(&dir, &files, &[&report::sweep::SweepCsvFile(&result)])?;
     progress.finish();
@@ -270,6 +272,13 @@ pub(crate) fn execute(args: &SweepRequest) -> Result<Outcome> {
         }
     }
     Ok(Outcome::Success)
+}
+
+/// Where a sweep (or the merge of its shards) writes without `--out`: `out/<config name>/sweep/`,
+/// or `sweep-<engine>/` for `--preset <engine>`; a shard writes `shard-K-of-N/` inside it.
+pub(crate) fn sweep_out_dir(config: &crate::config::Config, preset_flag: bool) -> std::path::PathBuf {
+    let preset = super::applied_preset(config).filter(|_| preset_flag);
+    default_out_dir(config, &super::out_folder("sweep", preset, false))
 }
 
 /// With a preset, `recommendation.<engine>.txt` closes the table output (`sweep`, `merge`);

@@ -418,7 +418,7 @@ fn the_plain_shell_recipe_in_docs_check_md_runs_verbatim_and_gates_like_check_sw
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(0));
-    assert_eq!(files(&tmp.path().join("out/default")), files(&direct));
+    assert_eq!(files(&tmp.path().join("out/default/sweep")), files(&direct));
     let check = Command::new(env!("CARGO_BIN_EXE_csm-lab"))
         .args([
             "check",

@@ -24,6 +24,7 @@ mod gt_sweep;
 mod light_motion;
 mod memory;
 mod optimize_splits;
+mod output_dirs;
 mod output_owner;
 mod output_sets;
 mod pictures;

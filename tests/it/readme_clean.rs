@@ -78,7 +78,7 @@ fn the_readme_commands_leave_a_fresh_clone_clean() {
             String::from_utf8_lossy(&o.stderr)
         );
     }
-    assert!(d.join("out/default/report.html").is_file());
+    assert!(d.join("out/default/sweep/report.html").is_file());
     assert!(d.join("out/bench/bench.csv").is_file());
     assert!(d.join("out/stress/stress.csv").is_file());
     assert_eq!(git(d, &["status", "--porcelain"]), "", "the commands changed the clone");

@@ -174,7 +174,7 @@ fn every_command_the_readme_shows_runs_and_exits_0() {
         "cp configs/default.toml configs/my_scene.toml",
         "-- sweep configs/my_scene.toml",
         "--preset bevy",
-        "--engine-settings out/my_scene/recommendation.bevy.txt",
+        "--engine-settings out/my_scene/sweep-bevy/recommendation.bevy.txt",
         "check configs/my_scene.toml --init",
         "check configs/my_scene.toml --thresholds",
     ] {
@@ -183,9 +183,10 @@ fn every_command_the_readme_shows_runs_and_exits_0() {
     // The commands wrote where the README says they do.
     let d = dir.path();
     for f in [
-        "out/default/report.html",
-        "out/my_scene/report.html",
-        "out/my_scene/recommendation.bevy.txt",
+        "out/default/sweep/report.html",
+        "out/my_scene/sweep/report.html",
+        "out/my_scene/sweep-bevy/recommendation.bevy.txt",
+        "out/my_scene/analyze-bevy-settings/summary.json",
         "ci/my-scene-gate.toml",
         "ci/my-scene-gate.baseline.json",
     ] {
@@ -216,7 +217,7 @@ fn every_command_the_readme_shows_runs_and_exits_0() {
     // The engine settings file the README shows is the one the command writes.
     let settings = block_after(&all, &text, "<!-- written by the command above");
     assert_eq!(settings.lang, "rust");
-    let written = std::fs::read_to_string(d.join("out/my_scene/recommendation.bevy.txt")).unwrap();
+    let written = std::fs::read_to_string(d.join("out/my_scene/sweep-bevy/recommendation.bevy.txt")).unwrap();
     assert_eq!(
         settings.lines.join("\n"),
         written.trim_end(),
