@@ -763,6 +763,27 @@ impl SummaryMetric {
     }
 }
 
+/// The one "worst case" csm-lab prints, ranks and breaks ties on. With scene geometry it is on
+/// screen: `screen_aliasing_max`, the largest per-pixel aliasing over the served receiver
+/// pixels. Without geometry only the bounds metric `max_aliasing` exists: the aliasing at a
+/// cascade's near edge over the depth range of the bounds, which may lie where nothing is drawn
+/// (at the 0.1 m near plane of a scene whose first visible surface is 13 m away), so it is
+/// named the bounds max aliasing wherever a screen value is also shown.
+pub(crate) fn worst_aliasing(screen: bool) -> SummaryMetric {
+    SummaryMetric::named(if screen { "screen_aliasing_max" } else { "max_aliasing" })
+}
+
+/// The words for the worst case of a run ([`worst_aliasing`]): (prose label,
+/// short column head). On screen it is "worst on screen"; the bounds metric keeps its name,
+/// "max aliasing", and is called the bounds max aliasing wherever a screen value is shown too.
+pub(crate) fn worst_words(worst: SummaryMetric) -> (&'static str, &'static str) {
+    if worst.name() == "max_aliasing" {
+        ("max aliasing", "max")
+    } else {
+        ("worst on screen", "worst")
+    }
+}
+
 /// Every summary metric of a summary (the screen metrics only with geometry), in registry order.
 pub fn summary_values(s: &Summary) -> Vec<(SummaryMetric, f64)> {
     SummaryMetric::all()

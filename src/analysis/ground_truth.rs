@@ -173,6 +173,7 @@ pub(crate) fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
         filter,
     };
     let points: Vec<Receiver> = truth::receivers(scene, &vis);
+    let away = truth::away_pixels(&vis);
     let mut zero_stats = CacheStats::default();
     let bias: Vec<Bias> = match bias_source {
         BiasSource::None => unbiased.bias.clone(),
@@ -229,10 +230,10 @@ pub(crate) fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
             &sampling,
             &mut |k, states| {
                 if k == 0 {
-                    frame0 = truth::shade_image(cols, rows, &points, &truly_lit, states);
+                    frame0 = truth::shade_image(cols, rows, &away, &points, &truly_lit, states);
                 }
                 if k % every == 0 {
-                    animation.push((k, truth::shade_image(cols, rows, &points, &truly_lit, states)));
+                    animation.push((k, truth::shade_image(cols, rows, &away, &points, &truly_lit, states)));
                 }
             },
         );

@@ -20,7 +20,7 @@ impl DensityFigure<'_> {
     /// Legend entries: the ideal line, the split depths (with two or more cascades), a cascade each.
     fn legend_lines(&self) -> usize {
         let m = self.0.cascades.len();
-        1 + usize::from(m > 1) + m
+        super::depth_chart_legend_lines(super::visible_depths(&self.0.summary)) + usize::from(m > 1) + m
     }
 }
 
@@ -48,6 +48,7 @@ impl Figure for DensityFigure<'_> {
             a.density.iter().map(|d| d.texels_per_pixel),
             self.legend_lines(),
             &mut legend,
+            super::visible_depths(&a.summary),
         )?;
         for (i, s) in rig.splits[1..rig.splits.len() - 1].iter().enumerate() {
             let style = palette::SPLIT.stroke_width(1);

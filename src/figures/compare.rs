@@ -20,7 +20,18 @@ pub(crate) struct DensityOverlay<'a>(pub &'a Comparison);
 impl DensityOverlay<'_> {
     /// Legend entries: the ideal line and one per preset with cascades.
     fn legend_lines(&self) -> usize {
-        1 + self.0.analyses.iter().filter(|a| !a.density.is_empty()).count()
+        super::depth_chart_legend_lines(self.visible())
+            + self.0.analyses.iter().filter(|a| !a.density.is_empty()).count()
+    }
+
+    /// The depths of the visible geometry over every entry (the same camera and scene; each
+    /// clips them to its own split range): from the nearest to the farthest.
+    fn visible(&self) -> Option<(f64, f64)> {
+        self.0
+            .analyses
+            .iter()
+            .filter_map(|a| super::visible_depths(&a.summary))
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 }
 
@@ -52,6 +63,7 @@ impl Figure for DensityOverlay<'_> {
                 .flat_map(|a| a.density.iter().map(|d| d.texels_per_pixel)),
             self.legend_lines(),
             &mut legend,
+            self.visible(),
         )?;
         for (i, a) in c.analyses.iter().enumerate() {
             if a.density.is_empty() {
@@ -64,12 +76,15 @@ impl Figure for DensityOverlay<'_> {
             // An invalid preset is drawn dashed and thin, and says why in the legend.
             let invalid = invalid_reason(a);
             let style = color.stroke_width(if invalid.is_some() { 2 } else { 3 });
+            // The worst case: on screen with geometry, else the bounds' max aliasing.
+            let worst = crate::metric::worst_aliasing(a.summary.screen.is_some());
             let label = format!(
-                "{}: {} x {}, max aliasing {}{}",
+                "{}: {} x {}, {} {}{}",
                 label(a),
                 a.rig().map_or(0, |r| r.cascade_count()),
                 a.config.shadow.resolution,
-                short(a.summary.max_aliasing),
+                crate::metric::worst_words(worst).0,
+                short(worst.value(&a.summary)),
                 invalid
                     .as_ref()
                     .map_or(String::new(), |r| format!(" - INVALID: {r} (dashed)"))

@@ -29,6 +29,22 @@ use crate::error::{PlotError, Result};
 
 pub(crate) const FONT: &str = "sans-serif";
 
+/// The width a report page shows a figure at, in pixels: a figure wider than this is scaled
+/// down by the browser, so its text is drawn larger by [`legible_scale`].
+pub(crate) const PAGE_WIDTH: u32 = 1280;
+
+/// How much larger than its nominal size a figure `width` pixels wide draws its text, so that
+/// the text is as legible at [`PAGE_WIDTH`] as a figure of that width's (1 up to that width).
+pub(crate) fn legible_scale(width: u32) -> f64 {
+    (f64::from(width) / f64::from(PAGE_WIDTH)).max(1.0)
+}
+
+/// `size` scaled by `k` ([`legible_scale`]), in whole pixels (rounded up, so the text is never
+/// smaller than its nominal size at the page's width).
+pub(crate) fn scaled(size: u32, k: f64) -> u32 {
+    (f64::from(size) * k).ceil() as u32
+}
+
 /// The font size of every legend.
 pub(crate) const LEGEND_FONT: u32 = 13;
 
@@ -94,6 +110,17 @@ fn font_db() -> std::sync::Arc<resvg::usvg::fontdb::Database> {
     .clone()
 }
 
+/// The size of an SVG document in its own units (pixels): (width, height).
+pub(crate) fn svg_size(svg: &[u8]) -> Result<(f32, f32)> {
+    let opt = resvg::usvg::Options {
+        font_family: "DejaVu Sans".to_string(),
+        fontdb: font_db(),
+        ..Default::default()
+    };
+    let tree = resvg::usvg::Tree::from_data(svg, &opt).map_err(|e| PlotError::Rasterise(e.to_string()))?;
+    Ok((tree.size().width(), tree.size().height()))
+}
+
 /// Rasterises SVG bytes to an opaque PNG on a white background, `scale` pixels per SVG unit.
 pub(crate) fn svg_to_png(svg: &[u8], scale: f32) -> Result<Vec<u8>> {
     let (w, h, rgb) = svg_to_rgb(svg, scale)?;
@@ -138,11 +165,27 @@ pub(crate) fn svg_to_rgb(svg: &[u8], scale: f32) -> Result<(u32, u32, Vec<u8>)> 
 
 /// RGB8 pixels to PNG bytes.
 pub(crate) fn encode_png(w: u32, h: u32, rgb: &[u8]) -> Result<Vec<u8>> {
+    encode_png_as(w, h, rgb, false)
+}
+
+/// A figure's SVG as a PNG `scale` pixels per SVG unit, compressed for inlining into a page:
+/// no row filter and the best deflate level. A chart is flat colour areas and text, which the
+/// default (fast deflate, a left-neighbour filter) stores at about ten times the size.
+pub(crate) fn svg_to_png_compact(svg: &[u8], scale: f32) -> Result<Vec<u8>> {
+    let (w, h, rgb) = svg_to_rgb(svg, scale)?;
+    encode_png_as(w, h, &rgb, true)
+}
+
+fn encode_png_as(w: u32, h: u32, rgb: &[u8], compact: bool) -> Result<Vec<u8>> {
     let mut out = Vec::new();
     {
         let mut enc = png::Encoder::new(&mut out, w, h);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
+        if compact {
+            enc.set_compression(png::Compression::Best);
+            enc.set_filter(png::FilterType::NoFilter);
+        }
         let mut writer = enc.write_header().map_err(|e| PlotError::Png(e.to_string()))?;
         writer
             .write_image_data(rgb)
@@ -248,6 +291,8 @@ pub(crate) mod palette {
     pub(crate) const LIMIT: RGBColor = RGBColor(120, 120, 120);
     /// Coverage misses.
     pub(crate) const MISS: RGBColor = RGBColor(214, 39, 40);
+    /// View depths where nothing visible lies (shaded in the depth charts).
+    pub(crate) const NOT_VISIBLE: RGBColor = RGBColor(160, 160, 160);
 
     /// Series of a chart, in order.
     pub(crate) const SERIES: [RGBColor; 8] = [
@@ -408,9 +453,28 @@ impl Ranged for TickedAxis {
     }
 }
 
+/// The view depths of the visible geometry (`visible_z_lo`, `visible_z_hi` of the screen
+/// metrics), when the scene has geometry and some of it is visible: what the depth charts shade
+/// outside of.
+pub(crate) fn visible_depths(s: &crate::analysis::Summary) -> Option<(f64, f64)> {
+    s.screen
+        .as_ref()
+        .map(|x| (x.visible_z_lo, x.visible_z_hi))
+        .filter(|(lo, hi)| lo.is_finite() && hi.is_finite() && *lo > 0.0 && lo < hi)
+}
+
+/// The legend entries [`texels_per_pixel_chart`] adds: the ideal line, and the shaded depths
+/// without visible geometry when `visible` is known.
+pub(crate) fn depth_chart_legend_lines(visible: Option<(f64, f64)>) -> usize {
+    1 + usize::from(visible.is_some())
+}
+
 /// A log-log chart of texels per pixel against view depth over `depth` with its axes, labels and
 /// the dashed "ideal: 1 texel per pixel" line already drawn; the y range covers `texels_per_pixel`
-/// and 1. Shared by `analyze`'s density figure, `sweep`'s λ figure and `compare`'s overlay.
+/// and 1. With `visible` (the depths of the visible geometry, [`visible_depths`]) the depths
+/// outside it are shaded: no pixel on screen lies there, so the density there is what no one
+/// sees. Shared by `analyze`'s density figure, `sweep`'s λ figure and `compare`'s overlay.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn texels_per_pixel_chart<'a, DB: DrawingBackend>(
     root: &'a DrawingArea<DB, Shift>,
     title: &str,
@@ -419,6 +483,7 @@ pub(crate) fn texels_per_pixel_chart<'a, DB: DrawingBackend>(
     texels_per_pixel: impl Iterator<Item = f64>,
     legend_lines: usize,
     legend: &mut Legend<DB>,
+    visible: Option<(f64, f64)>,
 ) -> Result<(DepthChart<'a, DB>, (f64, f64)), DrawError> {
     let (ymin, ymax) = texels_per_pixel.fold((1.0f64, 1.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
     let (y0, y1) = log_range(ymin, ymax);
@@ -434,6 +499,22 @@ pub(crate) fn texels_per_pixel_chart<'a, DB: DrawingBackend>(
         .axis_desc_style((FONT, 15))
         .label_style((FONT, 13))
         .draw()?;
+    if let Some((lo, hi)) = visible {
+        let shade = palette::NOT_VISIBLE.mix(0.35).filled();
+        for (a, b) in [(x0, lo.min(x1)), (hi.max(x0), x1)] {
+            if b > a {
+                chart.draw_series(std::iter::once(Rectangle::new([(a, y0), (b, y1)], shade)))?;
+            }
+        }
+        legend.add(
+            format!(
+                "shaded: no visible geometry (what the camera sees lies at depths {} to {})",
+                tick(lo),
+                tick(hi)
+            ),
+            move |(x, y)| Rectangle::new([(x, y - 5), (x + 18, y + 5)], shade),
+        );
+    }
     let ideal = BLACK.stroke_width(2);
     chart.draw_series(DashedLineSeries::new(vec![(x0, 1.0), (x1, 1.0)], 8, 5, ideal))?;
     legend.add("ideal: 1 texel per pixel", move |(x, y)| {

@@ -5,7 +5,11 @@
 //! Both are raster images of the sampled grid (`[analysis] screen_scale`), enlarged by a whole
 //! factor to at least 960 pixels wide, with a legend drawn below as SVG and rasterised with the
 //! same fonts as every other figure. Sky is neutral light grey, surfaces facing away from the
-//! light are dimmed to dark grey, lit-facing pixels outside the split range mid grey.
+//! light are dimmed to dark grey, lit-facing pixels outside the split range mid grey. A set-up
+//! that does not serve its receivers (an engine preset whose windows miss slice corners or whose
+//! light depth range clips receivers, [`csm_core::truth::serve_faults`]) has those pixels drawn
+//! in warning colours: red where the cascade's window misses the receiver, magenta where its
+//! depth range clips it.
 
 use std::fmt::Write as _;
 
@@ -16,11 +20,16 @@ use crate::analysis::Analysis;
 use crate::error::Result;
 use crate::output::Exporter;
 use csm_core::metrics::cascade_at;
+use csm_core::truth::ServeFault;
 
 const SKY: [u8; 3] = [236, 236, 236];
 const SELF_SHADOWED: [u8; 3] = [70, 70, 70];
 const UNSERVED: [u8; 3] = [170, 170, 170];
 const SPLIT_LINE: [u8; 3] = [0, 0, 0];
+/// A receiver outside the window of the cascade that reads it (a missed slice corner's area).
+const MISSED: [u8; 3] = [214, 39, 40];
+/// A receiver beyond the light depth range of the cascade that reads it (clipped).
+const CLIPPED: [u8; 3] = [230, 0, 230];
 /// The aliasing scale: log2 m from -3 (m = 1/8) to +6 (m = 64).
 const LOG2_LO: f64 = -3.0;
 const LOG2_HI: f64 = 6.0;
@@ -38,16 +47,23 @@ pub(crate) fn aliasing_color(m: f64) -> [u8; 3] {
     rgb(colormap((m.log2() - LOG2_LO) / (LOG2_HI - LOG2_LO)))
 }
 
-/// What each sampled pixel shows: None (sky), or (lit, served cascade, aliasing m).
+/// What each sampled pixel shows: None (sky), or (lit, served cascade, aliasing m, whether
+/// the cascade fails to serve it).
 struct Pixel {
     lit: bool,
     cascade: Option<usize>,
     m: f64,
+    fault: Option<ServeFault>,
 }
 
 fn pixels(a: &Analysis) -> Option<(u32, u32, Vec<Option<Pixel>>)> {
-    let vis = a.config.setup().visibility()?;
+    let setup = a.config.setup();
+    let vis = setup.visibility()?;
     let rig = a.rig();
+    let faults = rig.map(|r| {
+        let slack = 1e-9 * (setup.bounds.max - setup.bounds.min).length().max(1.0);
+        csm_core::truth::serve_faults(r, &vis, &setup.bounds, a.config.shadow.snap, slack)
+    });
     let served = |d: f64| {
         let r = rig?;
         let m = r.cascade_count();
@@ -56,13 +72,15 @@ fn pixels(a: &Analysis) -> Option<(u32, u32, Vec<Option<Pixel>>)> {
     let px = vis
         .samples
         .iter()
-        .map(|s| {
+        .enumerate()
+        .map(|(k, s)| {
             s.map(|s| {
                 let cascade = served(s.depth);
                 Pixel {
                     lit: s.lit,
                     cascade,
                     m: cascade.map_or(0.0, |i| a.cascades[i].texel_size * s.factor),
+                    fault: faults.as_ref().and_then(|f| f[k]),
                 }
             })
         })
@@ -119,7 +137,7 @@ pub(crate) fn aliasing_png(a: &Analysis) -> Result<Vec<u8>> {
             None => SKY,
             Some(p) if !p.lit => SELF_SHADOWED,
             Some(p) if p.cascade.is_none() => UNSERVED,
-            Some(p) => aliasing_color(p.m),
+            Some(p) => fault_colour(p).unwrap_or_else(|| aliasing_color(p.m)),
         })
         .collect();
     let mut body = String::new();
@@ -136,21 +154,24 @@ pub(crate) fn aliasing_png(a: &Analysis) -> Result<Vec<u8>> {
     }
     for e in LOG2_LO as i32..=LOG2_HI as i32 {
         let x = 10.0 + 360.0 * (e as f64 - LOG2_LO) / (LOG2_HI - LOG2_LO);
-        let label = if e < 0 {
-            format!("1/{}", 1 << -e)
-        } else {
-            format!("{}", 1 << e)
+        // The top of the bar is clipped: larger values take its colour (the max is printed
+        // beside the bar).
+        let label = match e {
+            _ if e == LOG2_HI as i32 => format!("≥ {}", 1 << e),
+            _ if e < 0 => format!("1/{}", 1 << -e),
+            _ => format!("{}", 1 << e),
         };
+        let anchor = "middle";
         let _ = write!(
             body,
-            "<line x1=\"{x}\" y1=\"6\" x2=\"{x}\" y2=\"24\" stroke=\"black\"/><text x=\"{x}\" y=\"36\" text-anchor=\"middle\">{label}</text>"
+            "<line x1=\"{x}\" y1=\"6\" x2=\"{x}\" y2=\"24\" stroke=\"black\"/><text x=\"{x}\" y=\"36\" text-anchor=\"{anchor}\">{label}</text>"
         );
     }
     let st = a.summary.screen.as_ref();
     let _ = write!(
         body,
-        "<text x=\"385\" y=\"20\">per-pixel aliasing m (texel extent in pixels; &gt; 1 is blocky), log scale</text>\
-         <text x=\"385\" y=\"36\">p50 {:.3}, p95 {:.3}, max {:.3}</text>",
+        "<text x=\"394\" y=\"20\">per-pixel aliasing m (texel extent in pixels; &gt; 1 is blocky), log scale</text>\
+         <text x=\"394\" y=\"36\">p50 {:.3}, p95 {:.3}, max {:.3}</text>",
         st.map_or(0.0, |s| s.aliasing_p50),
         st.map_or(0.0, |s| s.aliasing_p95),
         st.map_or(0.0, |s| s.aliasing_max)
@@ -158,7 +179,38 @@ pub(crate) fn aliasing_png(a: &Analysis) -> Result<Vec<u8>> {
     body.push_str(&swatch(10.0, SKY, "sky"));
     body.push_str(&swatch(70.0, SELF_SHADOWED, "facing away from the light"));
     body.push_str(&swatch(290.0, UNSERVED, "outside the split range"));
+    body.push_str(&fault_swatches(&px, 480.0));
     compose(cols, rows, &colour, &legend_svg(&body))
+}
+
+/// The warning colour of a receiver its cascade does not serve, if it is one.
+fn fault_colour(p: &Pixel) -> Option<[u8; 3]> {
+    p.fault.map(|f| match f {
+        ServeFault::Missed => MISSED,
+        ServeFault::Clipped => CLIPPED,
+    })
+}
+
+/// How many receiver pixels each fault marks: (missed, clipped).
+fn fault_counts(px: &[Option<Pixel>]) -> (usize, usize) {
+    let n = |f: ServeFault| px.iter().flatten().filter(|p| p.fault == Some(f)).count();
+    (n(ServeFault::Missed), n(ServeFault::Clipped))
+}
+
+/// The legend's warning swatches from `x` on, for the faults the picture has (none: empty).
+fn fault_swatches(px: &[Option<Pixel>], x: f64) -> String {
+    let (missed, clipped) = fault_counts(px);
+    let mut out = String::new();
+    let mut x = x;
+    if missed > 0 {
+        let label = format!("outside its window: {missed} px");
+        out.push_str(&swatch(x, MISSED, &label));
+        x += 40.0 + 7.5 * label.len() as f64;
+    }
+    if clipped > 0 {
+        out.push_str(&swatch(x, CLIPPED, &format!("clipped by light depth: {clipped} px")));
+    }
+    out
 }
 
 /// `screen_cascades.png`.
@@ -178,6 +230,7 @@ pub(crate) fn cascades_png(a: &Analysis) -> Result<Vec<u8>> {
             match (&px[i], c) {
                 (None, _) => SKY,
                 (Some(_), None) => UNSERVED,
+                (Some(p), Some(_)) if fault_colour(p).is_some() => fault_colour(p).unwrap_or(SKY),
                 (Some(p), Some(k)) if !p.lit => dim(rgb(series_color(k))),
                 (Some(_), Some(k)) => rgb(series_color(k)),
             }
@@ -198,7 +251,12 @@ pub(crate) fn cascades_png(a: &Analysis) -> Result<Vec<u8>> {
     body.push_str(&swatch(10.0, SKY, "sky"));
     body.push_str(&swatch(70.0, SPLIT_LINE, "split lines"));
     body.push_str(&swatch(180.0, UNSERVED, "outside the split range"));
-    body.push_str("<text x=\"390\" y=\"52\">darker: facing away from the light</text>");
+    let (missed, clipped) = fault_counts(&px);
+    if missed + clipped > 0 {
+        body.push_str(&fault_swatches(&px, 390.0));
+    } else {
+        body.push_str("<text x=\"390\" y=\"52\">darker: facing away from the light</text>");
+    }
     compose(cols, rows, &colour, &legend_svg(&body))
 }
 
@@ -229,12 +287,29 @@ pub(crate) fn captioned(a: &Analysis, label: &str) -> Vec<(Vec<u8>, String)> {
     if a.config.geometry.is_none() {
         return Vec::new();
     }
+    // Receivers the set-up does not serve are marked, and the captions say so.
+    let (missed, clipped) = pixels(a).map_or((0, 0), |(_, _, px)| fault_counts(&px));
+    let mut note = String::new();
+    if missed > 0 {
+        note.push_str(&format!(
+            " Red: {missed} receiver pixels outside the window of the cascade that reads them (missed slice corners: the map reads \"lit\" there)."
+        ));
+    }
+    if clipped > 0 {
+        note.push_str(&format!(
+            " Magenta: {clipped} receiver pixels beyond their cascade's light depth range (clipped)."
+        ));
+    }
+    let end = if note.is_empty() { "" } else { "." };
     match (aliasing_png(a), cascades_png(a)) {
         (Ok(m), Ok(c)) => vec![
-            (m, format!("{label}: per-pixel aliasing m on screen (log scale)")),
+            (
+                m,
+                format!("{label}: per-pixel aliasing m on screen (log scale){end}{note}"),
+            ),
             (
                 c,
-                format!("{label}: the cascade serving each pixel, with the split lines"),
+                format!("{label}: the cascade serving each pixel, with the split lines{end}{note}"),
             ),
         ],
         _ => Vec::new(),

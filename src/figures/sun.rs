@@ -145,8 +145,9 @@ impl Figure for QualityVsSunFigure<'_> {
             note_area.draw(&Text::new(l.clone(), (14, 6 + 22 * k as i32), (FONT, 13).into_font()))?;
         }
         let areas = grid_area.split_evenly((1, panels.len()));
+        let k = super::legible_scale(root.dim_in_pixel().0);
         for (area, panel) in areas.iter().zip(&panels) {
-            draw_heat_panel(area, panel)?;
+            draw_heat_panel(area, panel, k)?;
         }
         Ok(())
     }

@@ -83,14 +83,16 @@ pub(crate) struct HeatPanel {
     pub unit: String,
 }
 
-/// The heat-map rows of panels: the objective when it is not mean aliasing, then mean and max.
+/// The heat-map rows of panels: the objective when it is not mean aliasing, then the mean and
+/// the worst case ([`SweepResult::worst`]: on screen with geometry, else the bounds' max).
 fn heat_metrics(r: &SweepResult) -> Vec<SummaryMetric> {
     let mut v = Vec::new();
     if r.objective.name() != "mean_aliasing" {
         v.push(r.objective);
     }
     v.push(SummaryMetric::named("mean_aliasing"));
-    v.push(SummaryMetric::named("max_aliasing"));
+    // The worst case: on screen with geometry, else the bounds' max aliasing.
+    v.push(r.worst);
     v
 }
 
@@ -294,9 +296,11 @@ impl Figure for HeatmapFigure<'_> {
             },
             r.config.name
         );
-        let root = root.titled(&title, (FONT, 22))?;
+        // Drawn wider than a page, the text is drawn larger so that it reads at the page's width.
+        let k = super::legible_scale(root.dim_in_pixel().0);
+        let root = root.titled(&title, (FONT, super::scaled(22, k)))?;
         let (w, _) = root.dim_in_pixel();
-        let (note_area, grid_area) = root.split_vertically(40);
+        let (note_area, grid_area) = root.split_vertically(super::scaled(40, k));
         let rec = match focus(r) {
             Some((x, ok)) => format!("Red ring: {} ({})", focus_word(ok), setting_words(r, &x.setting)),
             None => "No configuration needs cascades: nothing is marked".to_string(),
@@ -305,8 +309,12 @@ impl Figure for HeatmapFigure<'_> {
             "Lower is better; each panel has its own colour scale. {rec}. White line: {} MiB memory budget (cells above or right of it exceed it). Grey: no cascades needed.",
             tick(r.budget_mib)
         );
-        let font = if note.len() as u32 * 7 > w { 11 } else { 13 };
-        note_area.draw(&Text::new(note, (14, 8), (FONT, font).into_font()))?;
+        let font = if note.len() as f64 * 7.0 * k > f64::from(w) {
+            12
+        } else {
+            13
+        };
+        note_area.draw(&Text::new(note, (14, 8), (FONT, super::scaled(font, k)).into_font()))?;
         let panels = self.panels();
         if panels.is_empty() || panels.iter().all(|p| p.cells.is_empty()) {
             return draw_message(&grid_area, "", "No configuration to draw: the sweep has no rows.");
@@ -314,7 +322,7 @@ impl Figure for HeatmapFigure<'_> {
         let (cols, rows) = self.layout();
         let areas = grid_area.split_evenly((rows, cols));
         for (area, panel) in areas.iter().zip(&panels) {
-            draw_heat_panel(area, panel)?;
+            draw_heat_panel(area, panel, k)?;
         }
         Ok(())
     }
@@ -322,10 +330,12 @@ impl Figure for HeatmapFigure<'_> {
 
 /// Draws one heat-map panel with its own log colour bar (titled with the unit), the budget line
 /// and the recommendation ring. Cells overlap their neighbours by a pixel, so no seam shows
-/// when a browser scales the SVG.
-pub(crate) fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &HeatPanel) -> PlotResult {
+/// when a browser scales the SVG. Text and the label areas are `k` times their nominal size
+/// ([`super::legible_scale`] of the whole figure's width).
+pub(crate) fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &HeatPanel, k: f64) -> PlotResult {
+    let s = |v: u32| super::scaled(v, k);
     let (w, _) = area.dim_in_pixel();
-    let (cells_area, bar_area) = area.split_horizontally(w.saturating_sub(100));
+    let (cells_area, bar_area) = area.split_horizontally(w.saturating_sub(s(100)));
     let values: Vec<f64> = p
         .cells
         .iter()
@@ -344,10 +354,10 @@ pub(crate) fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>,
     let t_of = |v: f64| (v.ln() - lo.ln()) / (hi.ln() - lo.ln());
     let (nx, ny) = (p.nx.max(1), p.y_labels.len().max(1));
     let mut chart = ChartBuilder::on(&cells_area)
-        .caption(&p.caption, (FONT, 13))
+        .caption(&p.caption, (FONT, s(13)))
         .margin(6)
-        .x_label_area_size(38)
-        .y_label_area_size(42)
+        .x_label_area_size(s(38))
+        .y_label_area_size(s(42))
         .build_cartesian_2d(
             ticked_axis(0.0, nx as f64, p.x_ticks.iter().map(|t| t.0 as f64 + 0.5).collect()),
             ticked_axis(0.0, ny as f64, (0..ny).map(|j| j as f64 + 0.5).collect()),
@@ -357,8 +367,8 @@ pub(crate) fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>,
         .disable_mesh()
         .x_desc(p.x_desc.as_str())
         .y_desc(p.y_desc.as_str())
-        .axis_desc_style((FONT, 12))
-        .label_style((FONT, 11))
+        .axis_desc_style((FONT, s(12)))
+        .label_style((FONT, s(12)))
         .x_label_formatter(&|v| {
             let c = v.floor() as usize;
             p.x_ticks
@@ -416,17 +426,17 @@ pub(crate) fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>,
     }
     // Tick labels and the title sit right of the bar, clear of the cells and of the bar itself.
     let mut bar = ChartBuilder::on(&bar_area)
-        .caption(&p.unit, (FONT, 11))
+        .caption(&p.unit, (FONT, s(12)))
         .margin_top(8)
-        .margin_bottom(44)
+        .margin_bottom(s(44))
         .margin_left(6)
-        .set_label_area_size(LabelAreaPosition::Right, 44)
+        .set_label_area_size(LabelAreaPosition::Right, s(44))
         .build_cartesian_2d(0.0..1.0, log_axis_with(lo, hi, ticks))?;
     bar.configure_mesh()
         .disable_x_mesh()
         .disable_x_axis()
         .disable_y_mesh()
-        .label_style((FONT, 11))
+        .label_style((FONT, s(12)))
         .y_label_formatter(&|v| tick(*v))
         .draw()?;
     let steps = 40;
@@ -481,7 +491,14 @@ impl<'a> LambdaDensityFigure<'a> {
 
 impl Figure for LambdaDensityFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (960, 540 + legend_height(self.analyses.len() + 1, LEGEND_FONT))
+        let visible = focus(self.result).and_then(|(rec, _)| super::visible_depths(&rec.summary));
+        (
+            960,
+            540 + legend_height(
+                self.analyses.len() + super::depth_chart_legend_lines(visible),
+                LEGEND_FONT,
+            ),
+        )
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
@@ -516,8 +533,9 @@ impl Figure for LambdaDensityFigure<'_> {
             self.analyses
                 .iter()
                 .flat_map(|a| a.density.iter().map(|d| d.texels_per_pixel)),
-            self.analyses.len() + 1,
+            self.analyses.len() + super::depth_chart_legend_lines(super::visible_depths(&rec.summary)),
             &mut legend,
+            super::visible_depths(&rec.summary),
         )?;
         for (k, a) in self.analyses.iter().enumerate() {
             let color = series_color(k);
@@ -537,15 +555,31 @@ impl Figure for LambdaDensityFigure<'_> {
                     .collect();
                 chart.draw_series(LineSeries::new(pts, color.stroke_width(width)))?;
                 if i == 0 {
+                    // The worst case from the sweep's row of this λ (its screen metrics with
+                    // geometry; this figure's own analyses measure depth only).
+                    let same = Setting {
+                        lambda: a.config.shadow.lambda,
+                        ..rec.setting
+                    };
+                    let worst = r
+                        .rows
+                        .iter()
+                        .find(|x| x.setting == same)
+                        .map_or(a.summary.max_aliasing, |x| r.worst.value(&x.summary));
                     let label = format!(
-                        "{}: mean aliasing {}, max {}{}",
+                        "{}: mean aliasing {}, {} {}{}",
                         if preset {
                             "the preset's own splits".to_string()
                         } else {
                             format!("λ = {}", tick(a.config.shadow.lambda))
                         },
                         super::short(a.summary.mean_aliasing),
-                        super::short(a.summary.max_aliasing),
+                        if r.worst.name() == "max_aliasing" {
+                            "max"
+                        } else {
+                            "worst on screen"
+                        },
+                        super::short(worst),
                         if width == 4 {
                             format!(" ({})", focus_word(ok))
                         } else {
@@ -567,7 +601,11 @@ impl Figure for LambdaDensityFigure<'_> {
                 }
             }
         }
-        draw_legend_below(root, legend, self.analyses.len() + 1)?;
+        draw_legend_below(
+            root,
+            legend,
+            self.analyses.len() + super::depth_chart_legend_lines(super::visible_depths(&rec.summary)),
+        )?;
         Ok(())
     }
 }

@@ -48,8 +48,11 @@ use csm_core::shade::{FlipImage, Shade, ShadeImage};
 
 /// The colour of each shadow state, and of the flicker map's marks.
 pub mod colours {
-    /// No receiver (sky, a surface facing away from the light).
+    /// No receiver (sky, a point no cascade serves, a receiver that left the view).
     pub const EMPTY: [u8; 3] = [236, 236, 236];
+    /// A surface turned from the light: in shadow by its own orientation (a shade of its own,
+    /// so a building's shadowed face never reads as a notch of sky).
+    pub(crate) const AWAY: [u8; 3] = [118, 116, 136];
     /// Lit by the map, truly lit.
     pub(crate) const LIT: [u8; 3] = [246, 222, 140];
     /// Shadowed by the map, truly shadowed.
@@ -73,6 +76,7 @@ pub(crate) fn shade_colour(s: Shade) -> [u8; 3] {
         Shade::Acne => colours::ACNE,
         Shade::Edge => colours::EDGE,
         Shade::Leak => colours::LEAK,
+        Shade::Away => colours::AWAY,
     }
 }
 
@@ -93,7 +97,7 @@ pub(crate) const MAX_WIDTH: u32 = 1280;
 /// panels are left-aligned on white.
 pub(crate) const MIN_WIDTH: u32 = 960;
 /// The narrowest animation (room for its legend), in pixels.
-pub(crate) const MIN_ANIMATION_WIDTH: u32 = 480;
+pub(crate) const MIN_ANIMATION_WIDTH: u32 = 520;
 /// The tallest panel of `shadow.png` and `flicker.png`, in pixels.
 pub(crate) const MAX_PANEL_HEIGHT: u32 = 900;
 
@@ -345,6 +349,7 @@ pub(crate) struct ShadeCounts {
     pub acne: usize,
     pub edge: usize,
     pub leak: usize,
+    pub away: usize,
 }
 
 impl ShadeCounts {
@@ -358,6 +363,7 @@ impl ShadeCounts {
                 Shade::Acne => c.acne += 1,
                 Shade::Edge => c.edge += 1,
                 Shade::Leak => c.leak += 1,
+                Shade::Away => c.away += 1,
             }
         }
         c
@@ -381,6 +387,7 @@ fn shade_legend<T>(layout: &Layout, panels: &[Panel<'_, T>], counts: &[ShadeCoun
         (colours::ACNE, "acne (own surface)"),
         (colours::EDGE, "edge (another surface)"),
         (colours::LEAK, "leak (the bias)"),
+        (colours::AWAY, "turned from the light"),
         (colours::EMPTY, "no receiver"),
     ] {
         body.push_str(&swatch(x, 22.0, c, label));
@@ -619,7 +626,7 @@ const HEADER_BOUND: u64 = 1024;
 /// Palette: 16 greys (white to black) for the text, then the states and the progress bar.
 const GREYS: usize = 16;
 const PAL_STATE: usize = GREYS;
-const PAL_PROGRESS: usize = GREYS + 6;
+const PAL_PROGRESS: usize = GREYS + 7;
 
 fn palette_rgb() -> Vec<[u8; 3]> {
     let mut p: Vec<[u8; 3]> = (0..GREYS)
@@ -635,6 +642,7 @@ fn palette_rgb() -> Vec<[u8; 3]> {
         Shade::Acne,
         Shade::Edge,
         Shade::Leak,
+        Shade::Away,
     ] {
         p.push(shade_colour(s));
     }
@@ -651,6 +659,7 @@ fn state_index(s: Shade) -> u8 {
             Shade::Acne => 3,
             Shade::Edge => 4,
             Shade::Leak => 5,
+            Shade::Away => 6,
         }) as u8
 }
 
@@ -784,6 +793,7 @@ pub fn write_animation(
         (Shade::Acne, "acne"),
         (Shade::Edge, "edge"),
         (Shade::Leak, "leak"),
+        (Shade::Away, "away"),
         (Shade::Empty, "no receiver"),
     ] {
         legend_body.push_str(&swatch(x, 19.0, shade_colour(s), label));

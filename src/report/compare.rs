@@ -135,7 +135,7 @@ fn table_definitions(c: &Comparison) -> Vec<(String, String)> {
         defs::other("cascades × map", "cascade count × side of each square shadow map, in texels"),
         defs::other("fit", "how the preset encloses each slice in its window"),
         defs::other("snap", "how the preset keeps its windows on the texel grid"),
-        defs::metric("max aliasing", "max_aliasing"),
+        defs::metric(max_label(c), "max_aliasing"),
         defs::metric("mean aliasing", "mean_aliasing"),
         defs::metric("shimmer snapped", "shimmer_snapped"),
         defs::metric("shimmer unsnapped", "shimmer_unsnapped"),
@@ -150,9 +150,23 @@ fn table_definitions(c: &Comparison) -> Vec<(String, String)> {
         defs::memory("memory (MiB)"),
     ];
     if has_screen(c) {
-        d.push(defs::metric("screen p95", "screen_aliasing_p95"));
+        let o = c.verdict.objective;
+        d.push(defs::metric(o.name(), o.name()));
+        let worst = crate::metric::worst_aliasing(true);
+        d.push(defs::metric(crate::metric::worst_words(worst).0, worst.name()));
     }
     d
+}
+
+/// The label of the `max_aliasing` column: with geometry it is named the bounds metric it is
+/// (the near edge of each cascade over the bounds' depth range, where nothing may be drawn),
+/// beside the worst case on screen.
+fn max_label(c: &Comparison) -> &'static str {
+    if has_screen(c) {
+        "bounds max aliasing"
+    } else {
+        "max aliasing"
+    }
 }
 
 /// Whether the comparison has screen metrics (the scene has geometry).
@@ -167,7 +181,7 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
         "cascades × map",
         "fit",
         "snap",
-        "max aliasing",
+        max_label(c),
         "mean aliasing",
         "shimmer snapped",
         "shimmer unsnapped",
@@ -176,8 +190,10 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
         "memory (MiB)",
     ];
     let screen = has_screen(c);
+    let worst_on_screen = crate::metric::worst_aliasing(true);
     if screen {
-        header.push("screen p95");
+        header.push(c.verdict.objective.name());
+        header.push(crate::metric::worst_words(worst_on_screen).0);
     }
     let rows = c
         .analyses
@@ -212,7 +228,8 @@ fn table(c: &Comparison) -> (Vec<&'static str>, Vec<Vec<String>>) {
                 short(mib(s.memory_bytes)),
             ];
             if screen {
-                row.push(short(s.screen.as_ref().map_or(0.0, |x| x.aliasing_p95)));
+                row.push(short(c.verdict.objective.value(s)));
+                row.push(short(worst_on_screen.value(s)));
             }
             row
         })
@@ -422,10 +439,20 @@ pub(crate) fn summary_table(c: &Comparison) -> String {
     let _ = write!(
         out,
         "{:<w$} {:>11} {:<22} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>10}",
-        "preset", "cascades", "fit", "max alias", "mean", "shim snap", "shim raw", "coverage", "worst", "depth out"
+        "preset",
+        "cascades",
+        "fit",
+        if screen { "bounds max" } else { "max alias" },
+        "mean",
+        "shim snap",
+        "shim raw",
+        "coverage",
+        "worst",
+        "depth out"
     );
+    let worst_on_screen = crate::metric::worst_aliasing(true);
     let _ = if screen {
-        writeln!(out, " {:>10}", "screen p95")
+        writeln!(out, " {:>10} {:>10}", "objective", "scr worst")
     } else {
         writeln!(out)
     };
@@ -455,7 +482,12 @@ pub(crate) fn summary_table(c: &Comparison) -> String {
             short(depth_out),
         );
         if screen {
-            let _ = write!(out, " {:>10}", short(s.screen.as_ref().map_or(0.0, |x| x.aliasing_p95)));
+            let _ = write!(
+                out,
+                " {:>10} {:>10}",
+                short(c.verdict.objective.value(s)),
+                short(worst_on_screen.value(s))
+            );
         }
         let _ = writeln!(
             out,

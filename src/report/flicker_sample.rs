@@ -167,12 +167,12 @@ pub(crate) fn lines(s: &FlickerSample) -> Vec<String> {
 }
 
 /// The figure, when the sweep has a sample.
-pub(crate) fn figure(r: &SweepResult) -> Result<Option<(&'static str, &'static str, Vec<u8>)>> {
+pub(crate) fn figure(r: &SweepResult) -> Result<Option<(&'static str, String, Vec<u8>)>> {
     match &r.flicker {
         None => Ok(None),
         Some(s) => {
             let (stem, _, svg) = flicker_vs_shimmer_figure(&r.config.name, &points(s))?;
-            Ok(Some((stem, FLICKER_VS_SHIMMER_CAPTION, svg)))
+            Ok(Some((stem, FLICKER_VS_SHIMMER_CAPTION.to_string(), svg)))
         }
     }
 }

@@ -2,8 +2,9 @@
 //! `compare`): a page shell with one stylesheet, tables, inline figures, and the escaping that
 //! HTML and XML outputs (JUnit included) share.
 //!
-//! Pages are self-contained (inline CSS and SVG, nothing fetched) and well-formed XML, so they
-//! open offline and parse with an XML reader.
+//! Pages are self-contained (inline CSS, SVG and PNG data URIs; nothing fetched, no figure read
+//! from a file beside the page) and well-formed XML, so they open offline, sent on their own,
+//! and parse with an XML reader.
 
 use std::fmt::Write as _;
 
@@ -62,27 +63,38 @@ pub(crate) fn figure(svg: &[u8], caption: &str) -> String {
     )
 }
 
-/// The largest SVG inlined in a page; a larger one (a figure of a huge grid) is shown as its
-/// PNG and linked, both files beside the page, so the page stays small.
+/// The largest SVG inlined in a page as SVG; a larger one (a figure of a big grid) is inlined
+/// as a PNG of at most [`INLINE_PNG_WIDTH`] pixels, linked to the full files beside the page,
+/// so the page stays small and still shows every figure when sent on its own.
 pub(crate) const INLINE_SVG_LIMIT: usize = 256 * 1024;
 
-/// A figure by reference: the PNG `{stem}.png` linked to `{stem}.svg`, both beside the page.
-pub(crate) fn figure_linked(stem: &str, caption: &str, svg_bytes: usize) -> String {
+/// The widest PNG a page inlines in place of a large SVG, in pixels: the page's column (1280
+/// pixels of text width; the figures are drawn legible at that width).
+pub(crate) const INLINE_PNG_WIDTH: f32 = 1280.0;
+
+/// A figure inlined as a PNG data URI, linked to the full `{stem}.svg` and `{stem}.png` beside
+/// the page.
+pub(crate) fn figure_png(stem: &str, png: &[u8], width: u32, caption: &str, svg_bytes: usize) -> String {
     format!(
-        "<figure><a href=\"{0}.svg\"><img style=\"max-width: 100%\" src=\"{0}.png\" alt=\"{1}\"/></a><figcaption>{1} (<a href=\"{0}.svg\">{0}.svg</a>, {2} KiB, not inlined)</figcaption></figure>\n",
+        "<figure><a href=\"{0}.svg\"><img style=\"max-width: 100%\" src=\"data:image/png;base64,{2}\" alt=\"{1}\"/></a><figcaption>{1} (inlined as a {3}-pixel-wide PNG; the full figure: <a href=\"{0}.svg\">{0}.svg</a>, {4} KiB, and <a href=\"{0}.png\">{0}.png</a>, beside this page)</figcaption></figure>\n",
         escape(stem),
         escape(caption),
+        base64(png),
+        width,
         svg_bytes.div_ceil(1024)
     )
 }
 
-/// Inline when small, linked when not ([`INLINE_SVG_LIMIT`]).
-pub(crate) fn figure_bounded(stem: &str, svg: &[u8], caption: &str) -> String {
+/// Inline as SVG when small, as a PNG of at most [`INLINE_PNG_WIDTH`] pixels when not
+/// ([`INLINE_SVG_LIMIT`]): never a reference to a file the page needs.
+pub(crate) fn figure_bounded(stem: &str, svg: &[u8], caption: &str) -> crate::error::Result<String> {
     if svg.len() <= INLINE_SVG_LIMIT {
-        figure(svg, caption)
-    } else {
-        figure_linked(stem, caption, svg.len())
+        return Ok(figure(svg, caption));
     }
+    let (w, _) = crate::figures::svg_size(svg)?;
+    let scale = (INLINE_PNG_WIDTH / w).min(1.0);
+    let png = crate::figures::svg_to_png_compact(svg, scale)?;
+    Ok(figure_png(stem, &png, (w * scale).ceil() as u32, caption, svg.len()))
 }
 
 /// Definitions of a table's columns, as a definition list under the table: (term, text).

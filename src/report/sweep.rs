@@ -15,6 +15,7 @@ use crate::error::Result;
 use crate::figures::sweep::{HeatmapFigure, LambdaDensityFigure, ParetoFigure, ShimmerSweepFigure};
 use crate::figures::{svg_to_png, Figure};
 use crate::metric;
+use crate::metric::worst_words;
 use crate::output::{count, json_bytes, num, percent_change, short_number as n, signed_percent};
 
 /// `sweep.csv`: [`metric::summary_columns`], then these.
@@ -232,9 +233,11 @@ pub(crate) fn recommendation_value(r: &SweepResult) -> serde_json::Value {
                             r.objective.value(&x.summary),
                         ),
                         (
-                            "max_aliasing_change_percent",
-                            row.summary.max_aliasing,
-                            x.summary.max_aliasing,
+                            // Named after the worst case it compares: `max_aliasing` without
+                            // geometry, `screen_aliasing_max` with it.
+                            worst_change_key(r),
+                            r.worst.value(&row.summary),
+                            r.worst.value(&x.summary),
                         ),
                         ("shimmer_change_percent", row.summary.shimmer, x.summary.shimmer),
                     ] {
@@ -255,7 +258,7 @@ pub(crate) fn recommendation_value(r: &SweepResult) -> serde_json::Value {
                 .map(|x| {
                     serde_json::json!({
                         "kind": x.kind.name(),
-                        "lost_on": loss_name(x.loss),
+                        "lost_on": loss_name(r, x.loss),
                         "why": rival_text(r, x),
                         "configuration": row_json(&r.rows[x.index]),
                     })
@@ -450,11 +453,16 @@ fn why_text(r: &SweepResult) -> String {
         )
     } else {
         format!(
-            "{}: mean aliasing {}, worst {} at a cascade's near edge, {} % of the depth range \
+            "{}: mean aliasing {}, worst {} {}, {} % of the depth range \
              under-sampled, {} MiB. ",
             setting_text(r, rec),
             n(s.mean_aliasing),
-            n(s.max_aliasing),
+            n(r.worst.value(s)),
+            if s.screen.is_some() {
+                "on screen"
+            } else {
+                "at a cascade's near edge"
+            },
             n(100.0 * s.undersampled_fraction),
             n(mib(s.memory_bytes))
         )
@@ -493,7 +501,7 @@ fn why_text(r: &SweepResult) -> String {
                 " To get it, change {} (the configured setting has mean aliasing {}, worst {}, {} MiB).",
                 change.join(", "),
                 n(o.summary.mean_aliasing),
-                n(o.summary.max_aliasing),
+                n(r.worst.value(&o.summary)),
                 n(mib(o.summary.memory_bytes))
             );
         } else {
@@ -529,6 +537,15 @@ fn setting_text(r: &SweepResult, x: &Row) -> String {
     )
 }
 
+/// The key of an alternative's change in the worst case in `recommendation.json`.
+fn worst_change_key(r: &SweepResult) -> &'static str {
+    if r.worst.name() == "max_aliasing" {
+        "max_aliasing_change_percent"
+    } else {
+        "screen_aliasing_max_change_percent"
+    }
+}
+
 /// "name value (+16 %)": a metric of `x` against the recommendation's `base`.
 fn versus(name: &str, base: f64, value: f64) -> String {
     match percent_change(base, value) {
@@ -552,8 +569,8 @@ fn cost_text(r: &SweepResult, rec: &Row, x: &Row) -> String {
         }
     )];
     parts.push(versus(r.objective.name(), r.objective.value(a), r.objective.value(b)));
-    if r.objective.name() != "max_aliasing" {
-        parts.push(versus("max aliasing", a.max_aliasing, b.max_aliasing));
+    if r.objective != r.worst {
+        parts.push(versus(worst_words(r.worst).0, r.worst.value(a), r.worst.value(b)));
     }
     parts.push(versus("shimmer", a.shimmer, b.shimmer));
     parts.join(", ")
@@ -602,15 +619,16 @@ fn alternative_lines(r: &SweepResult) -> Vec<String> {
     .collect()
 }
 
-/// The `lost_on` word of `recommendation.json`'s rivals.
-fn loss_name(l: Loss) -> &'static str {
+/// The `lost_on` word of `recommendation.json`'s rivals (a tie lost on the worst case is named
+/// after that metric: `max_aliasing`, or `screen_aliasing_max` with geometry).
+fn loss_name(r: &SweepResult, l: Loss) -> &'static str {
     match l {
         Loss::CoverageMisses(_) => "coverage",
         Loss::Unstable(_) => "stability",
         Loss::OverBudget => "memory_budget",
         Loss::MoreMemory => "memory",
         Loss::Objective => "objective",
-        Loss::MaxAliasing => "max_aliasing",
+        Loss::MaxAliasing => r.worst.name(),
         Loss::TieMemory => "memory_tie",
         Loss::TieOrder => "order_tie",
     }
@@ -664,13 +682,15 @@ fn rival_text(r: &SweepResult, x: &Rival) -> String {
         ),
         Loss::Objective => format!("lost on {obj}: {} against {}{}", n(vb), n(va), pct(va, vb)),
         Loss::MaxAliasing => format!(
-            "tied on {obj} (within 1 %) and lost on max aliasing: {} against {}{}",
-            n(b.max_aliasing),
-            n(a.max_aliasing),
-            pct(a.max_aliasing, b.max_aliasing)
+            "tied on {obj} (within 1 %) and lost on {}: {} against {}{}",
+            worst_words(r.worst).0,
+            n(r.worst.value(b)),
+            n(r.worst.value(a)),
+            pct(r.worst.value(a), r.worst.value(b))
         ),
         Loss::TieMemory => format!(
-            "tied on {obj} and max aliasing, and needs more memory: {} MiB against {} MiB",
+            "tied on {obj} and {}, and needs more memory: {} MiB against {} MiB",
+            worst_words(r.worst).0,
             n(mib(b.memory_bytes)),
             n(mib(a.memory_bytes))
         ),
@@ -695,29 +715,18 @@ fn rival_lines(r: &SweepResult) -> Vec<String> {
 const TOP: usize = 15;
 
 /// The figures of a sweep as (file stem, title, SVG bytes), rendered once.
-pub(crate) fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, &'static str, Vec<u8>)>> {
+pub(crate) fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, String, Vec<u8>)>> {
     // The four figures are independent: drawn concurrently (the first error in this order wins).
     let ((heatmap, density), (shimmer, pareto)) = rayon::join(
         || rayon::join(|| HeatmapFigure(r).to_svg(), || LambdaDensityFigure::new(r).to_svg()),
         || rayon::join(|| ShimmerSweepFigure(r).to_svg(), || ParetoFigure(r).to_svg()),
     );
+    let captions = figure_captions(r);
     let mut out = vec![
-        (
-            "heatmap",
-            "Max and mean aliasing over λ × cascade count, per resolution",
-            heatmap?,
-        ),
-        (
-            "density_lambda",
-            "Texels per pixel against depth for several λ at the recommended count and resolution",
-            density?,
-        ),
-        (
-            "shimmer_sweep",
-            "Shimmer snapped vs unsnapped for every configuration",
-            shimmer?,
-        ),
-        ("pareto", "Pareto front of memory against mean aliasing", pareto?),
+        ("heatmap", captions[0].clone(), heatmap?),
+        ("density_lambda", captions[1].clone(), density?),
+        ("shimmer_sweep", captions[2].clone(), shimmer?),
+        ("pareto", captions[3].clone(), pareto?),
     ];
     // Only a sun sweep has the sun figure (other sweeps keep their files).
     // Only a sweep with a ground-truth sample has the flicker scatter.
@@ -725,11 +734,52 @@ pub(crate) fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, &'sta
     if r.sun.is_some() {
         out.push((
             "quality_vs_sun",
-            "The objective over sun azimuth × elevation for the recommended setting, its worst sun marked",
+            format!(
+                "{} (the objective) over sun azimuth × elevation for the recommended setting, its worst sun marked",
+                r.objective.name()
+            ),
             crate::figures::sun::QualityVsSunFigure(r).to_svg()?,
         ));
     }
     Ok(out)
+}
+
+/// The captions of the heat map, the λ density, the shimmer and the Pareto figures, from the
+/// metrics the figures draw: the objective the verdict minimises and the worst case it breaks
+/// ties on ([`SweepResult::objective`], [`SweepResult::worst`]), so a caption never names a
+/// metric its figure does not show.
+pub(crate) fn figure_captions(r: &SweepResult) -> [String; 4] {
+    let x = match (r.grid.lambda.values.len() > 1, crate::presets::axes(&r.config).knob) {
+        (true, _) => "λ".to_string(),
+        (false, Some(k)) if r.grid.knob.as_ref().is_some_and(|v| v.values.len() > 1) => k.term.to_string(),
+        _ => "resolution".to_string(),
+    };
+    let metrics: Vec<&str> = {
+        let mut v = Vec::new();
+        if r.objective.name() != "mean_aliasing" {
+            v.push(r.objective.name());
+        }
+        v.push("mean_aliasing");
+        v.push(r.worst.name());
+        v
+    };
+    let worst = if r.worst.name() == "max_aliasing" {
+        "max"
+    } else {
+        "worst on screen"
+    };
+    [
+        format!(
+            "{} over {x} × cascade count, one panel each (the objective: {})",
+            metrics.join(", "),
+            r.objective.name()
+        ),
+        format!(
+            "Texels per pixel against depth for several λ at the recommended count and resolution (legend: mean aliasing and {worst} per λ)"
+        ),
+        "Shimmer snapped vs unsnapped for every configuration".to_string(),
+        format!("Pareto front of memory against {} (the objective)", r.objective.name()),
+    ]
 }
 
 /// The largest number of Pareto rows a report table shows (the rest are in `sweep.csv`).
@@ -782,7 +832,7 @@ fn config_table(r: &SweepResult, idx: &[usize]) -> ConfigTable {
     }
     head.extend([
         "mean aliasing",
-        "max aliasing",
+        worst_words(r.worst).0,
         "shimmer",
         "shimmer snapped",
         "coverage misses",
@@ -808,7 +858,7 @@ fn config_table(r: &SweepResult, idx: &[usize]) -> ConfigTable {
             }
             v.extend([
                 n(s.mean_aliasing),
-                n(s.max_aliasing),
+                n(r.worst.value(s)),
                 n(s.shimmer),
                 n(s.shimmer_snapped),
                 s.coverage_violations.to_string(),
@@ -824,7 +874,7 @@ fn config_table(r: &SweepResult, idx: &[usize]) -> ConfigTable {
     }
     d.extend([
         defs::metric("mean aliasing", "mean_aliasing"),
-        defs::metric("max aliasing", "max_aliasing"),
+        defs::metric(worst_words(r.worst).0, r.worst.name()),
         defs::metric("shimmer", "shimmer"),
         defs::metric("shimmer snapped", "shimmer_snapped"),
         defs::metric("coverage misses", "coverage_violations"),
@@ -883,9 +933,10 @@ fn rest_sentence(r: &SweepResult, front_left: usize) -> String {
 /// `report.html`: one self-contained, well-formed (XHTML-compatible) document in the shared
 /// report look ([`html::page`]). It opens with the verdict, the alternatives and why the main
 /// rivals lost; its tables show the Pareto front and the top rows, with every metric defined
-/// under them; a figure too large to inline is linked ([`html::figure_bounded`]), so the page
-/// stays small at any grid size.
-pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
+/// under them; a figure too large to inline as SVG is inlined as a downscaled PNG linked to its
+/// files ([`html::figure_bounded`]), so the page stays small at any grid size and shows every
+/// figure when sent on its own.
+pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, String, Vec<u8>)]) -> Result<Vec<u8>> {
     let mut h = String::new();
     h.push_str("<h2>Verdict</h2>\n");
     let _ = writeln!(h, "<div class=\"rec-box\"><p>{}</p>", html::escape(&why_text(r)));
@@ -940,7 +991,7 @@ pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) ->
     if !figures.is_empty() {
         h.push_str("<h2>Plots</h2>\n");
         for (stem, caption, svg) in figures {
-            h.push_str(&html::figure_bounded(stem, svg, caption));
+            h.push_str(&html::figure_bounded(stem, svg, caption)?);
         }
     }
     let rec = r.recommendation.as_ref().map(|x| x.index);
@@ -978,16 +1029,16 @@ pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) ->
     h.push_str("<h2>Reproduce</h2>\n");
     let _ = writeln!(h, "<pre>{}</pre>", html::escape(&r.command));
     let name = &r.config.name;
-    html::page(
+    Ok(html::page(
         &format!("csm-lab sweep: {name}"),
         &format!("Cascaded shadow map sweep: {name}"),
         &h,
         "Every row of <code>sweep.csv</code> equals what <code>csm-lab analyze</code> reports for that setting.",
-    )
+    ))
 }
 
 /// `report.md`: the same content for pasting into a review document.
-pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
+pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, String, Vec<u8>)]) -> Vec<u8> {
     let mut m = String::new();
     let _ = writeln!(m, "# Cascaded shadow map sweep: {}\n", r.config.name);
     let _ = writeln!(
@@ -1104,7 +1155,7 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
             super::flicker_sample::csv(r, s)?,
         ));
     }
-    files.push(("report.html".to_string(), report_html(r, &figures)));
+    files.push(("report.html".to_string(), report_html(r, &figures)?));
     files.push(("report.md".to_string(), report_md(r, &figures)));
     if let Some(s) = &r.engine_setting {
         files.push(super::terms::file(s));
@@ -1223,7 +1274,14 @@ pub(crate) fn stdout_table(r: &SweepResult) -> String {
     let _ = write!(
         out,
         "  {:>9} {:>8} {:>6} {:>6} {:>fw$} {:>10} {:>10} {:>10}",
-        "MiB", "cascades", "res", "λ", "fit", "mean", "max", "shimmer"
+        "MiB",
+        "cascades",
+        "res",
+        "λ",
+        "fit",
+        "mean",
+        worst_words(r.worst).1,
+        "shimmer"
     );
     if screen {
         let _ = write!(out, " {:>10}", "objective");
@@ -1257,7 +1315,7 @@ pub(crate) fn stdout_table(r: &SweepResult) -> String {
                 "-".to_string()
             },
             n(s.mean_aliasing),
-            n(s.max_aliasing),
+            n(r.worst.value(s)),
             n(s.shimmer_snapped)
         );
         if screen {

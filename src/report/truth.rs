@@ -35,7 +35,7 @@ pub struct TruthPictures {
 /// The caption of `shadow.png`.
 pub(crate) fn shadow_caption(label: &str) -> String {
     format!(
-        "{label}: the camera view as the shadow map shades it (shadow.png). Look for acne (magenta) on lit surfaces and leaks (cyan) where shadows should start at their casters; snapped on the left, unsnapped on the right."
+        "{label}: the camera view as the shadow map shades it (shadow.png). Look for acne (magenta) on lit surfaces and leaks (cyan) where shadows should start at their casters; faces turned from the light are in shadow by their own orientation (grey-violet, no map is read for them); snapped on the left, unsnapped on the right."
     )
 }
 
@@ -49,7 +49,7 @@ pub(crate) fn flicker_caption(label: &str) -> String {
 /// The caption of the animation.
 pub(crate) fn animation_caption(label: &str) -> String {
     format!(
-        "{label}: the path, every k-th frame ({SHADOW_APNG}). Watch the shadow edges: a crawl or shimmer along them is what players see; the bar under the titles is the position along the path."
+        "{label}: the path, every k-th frame ({SHADOW_APNG}). Watch the shadow edges: a crawl or shimmer along them is what players see; the bar under the titles is the position along the path. The pixels are the receivers of the first frame, followed along the path: as the camera moves, receivers leave the view (or every cascade) and turn to the no-receiver grey, a wedge that grows toward the end of the path; new ground coming into view is not drawn."
     )
 }
 

@@ -51,13 +51,14 @@ fn centre(i: u32, pw: u32, k: u32, c: u32, r: u32) -> (u32, u32) {
     (i * (pw + GAP) + c * k + k / 2, TITLE_H + r * k + k / 2)
 }
 
-const STATES: [Shade; 6] = [
+const STATES: [Shade; 7] = [
     Shade::Empty,
     Shade::Lit,
     Shade::Shadowed,
     Shade::Acne,
     Shade::Edge,
     Shade::Leak,
+    Shade::Away,
 ];
 
 fn state_rgb(s: Shade) -> [u8; 3] {
@@ -68,6 +69,7 @@ fn state_rgb(s: Shade) -> [u8; 3] {
         Shade::Acne => [213, 40, 120],
         Shade::Edge => [240, 130, 20],
         Shade::Leak => [0, 190, 220],
+        Shade::Away => [118, 116, 136],
     }
 }
 
@@ -75,7 +77,7 @@ fn state_rgb(s: Shade) -> [u8; 3] {
 fn synthetic(shift: usize) -> ShadeImage {
     let mut im = ShadeImage::empty(8, 4);
     for (k, p) in im.pixels.iter_mut().enumerate() {
-        *p = STATES[(k * 7 + shift) % 6];
+        *p = STATES[(k * 5 + shift) % 7];
     }
     im
 }
@@ -186,6 +188,43 @@ fn shadow_png_of_the_default_scene_receivers() {
         enc.write_header().unwrap().write_image_data(&d.last).unwrap();
         std::fs::write(format!("{dir}/shadow_apng_last.png"), &last).unwrap();
     }
+}
+
+/// Faces turned from the light are drawn in a shade of their own, not as "no receiver": the
+/// pixels the visibility pass hits facing away from the light, exactly.
+#[test]
+fn faces_turned_from_the_light_are_drawn_as_away_not_as_sky() {
+    let cfg = csm_lab::Config::load(std::path::Path::new("configs/default.toml")).unwrap();
+    let vis = cfg.setup().visibility().expect("the default scene has geometry");
+    let away = csm_core::truth::away_pixels(&vis);
+    // Independently: every hit whose surface faces away from the light.
+    let want: Vec<usize> = (0..vis.samples.len())
+        .filter(|&i| vis.samples[i].is_some_and(|s| !s.lit))
+        .collect();
+    assert_eq!(away, want);
+    assert_eq!(away.len(), vis.self_shadowed);
+    assert!(
+        !away.is_empty(),
+        "the default scene's buildings have faces turned from the sun"
+    );
+    // No answers at all: only the away pixels are drawn, the rest is "no receiver".
+    let image = csm_core::truth::shade_image(vis.cols, vis.rows, &away, &[], &[], &[]);
+    for (i, p) in image.pixels.iter().enumerate() {
+        let expected = if away.binary_search(&i).is_ok() {
+            Shade::Away
+        } else {
+            Shade::Empty
+        };
+        assert_eq!(*p, expected, "pixel {i}");
+    }
+    let img = decode(&shadow_png(&[Panel::snapped(&image)]).unwrap());
+    let k = (1280 / vis.cols).min(900 / vis.rows);
+    let i = away[away.len() / 2];
+    let (c, r) = (i as u32 % vis.cols, i as u32 / vis.cols);
+    let (x, y) = centre(0, vis.cols * k, k, c, r);
+    assert_eq!(img.at(x, y), state_rgb(Shade::Away));
+    assert_ne!(state_rgb(Shade::Away), state_rgb(Shade::Empty));
+    assert_ne!(state_rgb(Shade::Away), state_rgb(Shade::Shadowed));
 }
 
 #[test]

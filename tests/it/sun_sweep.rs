@@ -215,6 +215,12 @@ fn each_setting_is_judged_by_its_worst_sun_and_the_recommendation_by_those_worst
             assert_eq!(objective.value(&judged.summary), max);
             let most = |f: &dyn Fn(&Row) -> f64| mine.iter().map(|r| f(r)).fold(f64::NEG_INFINITY, f64::max);
             assert_eq!(judged.summary.max_aliasing, most(&|r| r.summary.max_aliasing));
+            if let Some(st) = &judged.summary.screen {
+                assert_eq!(
+                    st.aliasing_max,
+                    most(&|r| r.summary.screen.as_ref().unwrap().aliasing_max)
+                );
+            }
             assert_eq!(judged.summary.shimmer_snapped, most(&|r| r.summary.shimmer_snapped));
             assert_eq!(judged.summary.shimmer, most(&|r| r.summary.shimmer));
             assert_eq!(
@@ -226,7 +232,16 @@ fn each_setting_is_judged_by_its_worst_sun_and_the_recommendation_by_those_worst
         // The recommendation and the front are those of the worst cases.
         assert_eq!(
             result.recommendation,
-            rank::recommend_by(&worst_rows, result.budget_mib, objective)
+            rank::recommend_by(
+                &worst_rows,
+                result.budget_mib,
+                objective,
+                csm_lab::metric::SummaryMetric::named(if config.geometry.is_some() {
+                    "screen_aliasing_max"
+                } else {
+                    "max_aliasing"
+                })
+            )
         );
         assert_eq!(result.front, rank::pareto_front_by(&worst_rows, objective));
         // The default objective: the contrast-weighted screen p95 with geometry, mean aliasing

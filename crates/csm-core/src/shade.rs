@@ -2,8 +2,9 @@
 //! fills and the figures draw.
 //!
 //! An image covers the visibility pass's grid (`cols × rows` samples of the screen), row-major,
-//! row 0 at the top of the screen, column 0 at its left. A pixel without a receiver (sky, a
-//! surface facing away from the light) is [`Shade::Empty`].
+//! row 0 at the top of the screen, column 0 at its left. A pixel whose surface faces away from
+//! the light is [`Shade::Away`] (in shadow by its own orientation, whatever the map says); a
+//! pixel without a receiver (sky, a point no cascade serves) is [`Shade::Empty`].
 
 /// What one screen pixel shows, as the shadow map decides it, against the exact answer (a ray
 /// from the surface point toward the light).
@@ -25,6 +26,9 @@ pub enum Shade {
     /// Lit by the map only because of the bias although the point is truly shadowed
     /// (peter-panning, light leaks).
     Leak,
+    /// The surface faces away from the light (`N · L <= 0`): in shadow by its own orientation,
+    /// so no shadow map is read for it and it is never acne or a leak.
+    Away,
 }
 
 impl Shade {

@@ -31,7 +31,7 @@ use rayon::prelude::*;
 
 use crate::cascades::{LightPose, Rig};
 use crate::fitting::Window;
-use crate::geometry::{CameraPose, LightBasis};
+use crate::geometry::{Aabb, CameraPose, LightBasis};
 use crate::metrics::cascade_at;
 use crate::shade::{FlipImage, Shade, ShadeImage};
 use crate::visibility::{SceneGeometry, Visibility};
@@ -753,6 +753,50 @@ pub fn reading_cascade(rig: &Rig, pose: &CameraPose, p: DVec3) -> Option<usize> 
     inside.then(|| cascade_at(&rig.splits, z))
 }
 
+/// Why a receiver pixel is not served as an engine would need at frame 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ServeFault {
+    /// The cascade that reads it has a window that does not contain it (the area of a missed
+    /// slice corner): the map answers "lit" there whatever the casters.
+    Missed,
+    /// The cascade that reads it renders a light depth range that does not reach it (the
+    /// receiver is clipped by the map's near or far plane).
+    Clipped,
+}
+
+/// For every pixel of the visibility grid (row-major), whether its receiver (a hit facing the
+/// light) is read by a cascade whose frame-0 window (`snapped` or not) misses it, or whose
+/// light depth range (by the rig's scheme, [`Rig::light_depth`], over `bounds`) does not
+/// contain its light depth; None for a pixel without a receiver, one no cascade reads, or one
+/// served well. `slack` is the distance (world units) a point may lie past a depth plane
+/// before it counts as clipped (rounding).
+pub fn serve_faults(rig: &Rig, vis: &Visibility, bounds: &Aabb, snapped: bool, slack: f64) -> Vec<Option<ServeFault>> {
+    let pose = vis.view.pose;
+    let lp = LightPose::new(&rig.light, &pose);
+    let cascades: Vec<(LightBasis, Window, (f64, f64))> = (0..rig.cascade_count())
+        .map(|i| {
+            let w = rig.window(i, &lp, snapped);
+            let d = rig.light_depth(i, &lp, &w, bounds);
+            (rig.basis(i, &lp), w, (d.near, d.far))
+        })
+        .collect();
+    vis.samples
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let s = s.filter(|s| s.lit)?;
+            let p = vis.position(k, s.depth);
+            let i = reading_cascade(rig, &pose, p)?;
+            let (basis, w, (near, far)) = &cascades[i];
+            if w.outside_by_texels(basis.to_light_xy(p)) > 0.0 {
+                return Some(ServeFault::Missed);
+            }
+            let z = basis.z.dot(p);
+            (z < near - slack || z > far + slack).then_some(ServeFault::Clipped)
+        })
+        .collect()
+}
+
 /// Every cascade's grid in a frame (`light` is the frame's light: the rig's, until lights move).
 pub fn frame_grids(
     maps: &mut ShadowMaps,
@@ -1345,15 +1389,31 @@ pub fn fractions(points: &[PointZero]) -> (f64, f64) {
     error_fractions(points).map_or((0.0, 0.0), |f| (f[0], f[2]))
 }
 
-/// The picture of one frame's answers over the visibility grid.
+/// The pixels of the visibility grid whose nearest hit faces away from the light, in
+/// grid order: they are drawn as [`Shade::Away`] under every frame's answers.
+pub fn away_pixels(vis: &Visibility) -> Vec<usize> {
+    vis.samples
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.is_some_and(|s| !s.lit))
+        .map(|(i, _)| i)
+        .collect()
+}
+
+/// The picture of one frame's answers over the visibility grid, the pixels `away` (facing away
+/// from the light, [`away_pixels`]) drawn as [`Shade::Away`].
 pub fn shade_image(
     cols: u32,
     rows: u32,
+    away: &[usize],
     points: &[Receiver],
     truly_lit: &[bool],
     states: &[Option<Answer>],
 ) -> ShadeImage {
     let mut image = ShadeImage::empty(cols, rows);
+    for &i in away {
+        image.pixels[i] = Shade::Away;
+    }
     for ((r, &truth), s) in points.iter().zip(truly_lit).zip(states) {
         if let Some(a) = s {
             image.pixels[r.pixel] = match a.error(truth) {

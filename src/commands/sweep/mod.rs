@@ -55,6 +55,10 @@ pub struct SweepResult {
     pub command: String,
     /// The metric the recommendation minimises ([`rank::default_objective`]).
     pub objective: SummaryMetric,
+    /// The worst case the recommendation breaks near-ties on and the reports print as "worst"
+    /// ([`crate::metric::worst_aliasing`]): on screen with geometry, else the bounds'
+    /// `max_aliasing`.
+    pub(crate) worst: SummaryMetric,
     /// The recommendation rule in words ([`rank::objective_text`]).
     pub(crate) objective_text: String,
     /// The row of the configured setting, when the grid has it ([`rank::configured`]).
@@ -97,6 +101,7 @@ impl SweepResult {
             .and_then(|s| s.memory_budget_mib)
             .unwrap_or(DEFAULT_BUDGET_MIB);
         let objective = rank::default_objective(&config);
+        let worst = crate::metric::worst_aliasing(config.geometry.is_some());
         let (rows, sun, sun_note) = match &grid.sun {
             None => (rows, None, None),
             Some(_) => {
@@ -105,15 +110,23 @@ impl SweepResult {
             }
         };
         let front = rank::pareto_front_by(&rows, objective);
-        let recommendation = rank::recommend_by(&rows, budget_mib, objective);
+        let recommendation = rank::recommend_by(&rows, budget_mib, objective, worst);
         let no_recommendation = rank::no_recommendation(&rows, budget_mib, objective);
         let configured = rank::configured(&config, &rows);
-        let ranked = rank::ranked(&rows, recommendation.as_ref(), budget_mib, objective);
+        let ranked = rank::ranked(&rows, recommendation.as_ref(), budget_mib, objective, worst);
         let (alternatives, rivals) = match &recommendation {
             None => (Vec::new(), Vec::new()),
             Some(rec) => (
                 rank::alternatives(&rows, rec, objective),
-                rank::rivals(&rows, rec, &ranked, configured, grid.lambda.values.len() > 1, objective),
+                rank::rivals(
+                    &rows,
+                    rec,
+                    &ranked,
+                    configured,
+                    grid.lambda.values.len() > 1,
+                    objective,
+                    worst,
+                ),
             ),
         };
         let range_edges = rank::range_edges(&config, &grid, &rows, recommendation.as_ref());
@@ -128,7 +141,8 @@ impl SweepResult {
             &no_recommendation,
         )?;
         Ok(SweepResult {
-            objective_text: rank::objective_text(objective),
+            objective_text: rank::objective_text(objective, worst),
+            worst,
             fit_groups: rank::fits_in(&rows),
             objective,
             config,

@@ -76,17 +76,20 @@ pub fn default_objective(config: &Config) -> SummaryMetric {
     })
 }
 
-/// [`OBJECTIVE`] for the mean aliasing; the same rule in words for any other objective.
-pub(crate) fn objective_text(objective: SummaryMetric) -> String {
-    if objective.name() == "mean_aliasing" {
+/// [`OBJECTIVE`] for the mean aliasing without geometry; the same rule in words for any other
+/// objective, naming the worst case that breaks near-ties (`worst`).
+pub(crate) fn objective_text(objective: SummaryMetric, worst: SummaryMetric) -> String {
+    if objective.name() == "mean_aliasing" && worst.name() == "max_aliasing" {
         return OBJECTIVE.to_string();
     }
     format!(
         "lowest {} ({}) among configurations that fit the memory budget, cover every slice \
          (coverage_violations = 0) and are stable when snapped (shimmer_snapped <= 1e-3 texel); values within 1% of \
-         the lowest count as equal, and among those the lowest max aliasing wins, then less memory, then fewer cascades",
+         the lowest count as equal, and among those the lowest {} ({}) wins, then less memory, then fewer cascades",
         objective.name(),
-        objective.description()
+        objective.description(),
+        worst.name(),
+        worst.description()
     )
 }
 
@@ -114,11 +117,22 @@ pub fn acceptable(r: &Row) -> bool {
 /// Picks the recommendation by [`OBJECTIVE`]. None when no row needs cascades or none is
 /// acceptable.
 pub fn recommend(rows: &[Row], budget_mib: f64) -> Option<Recommendation> {
-    recommend_by(rows, budget_mib, SummaryMetric::named("mean_aliasing"))
+    recommend_by(
+        rows,
+        budget_mib,
+        SummaryMetric::named("mean_aliasing"),
+        SummaryMetric::named("max_aliasing"),
+    )
 }
 
-/// [`recommend`] minimising any objective metric.
-pub fn recommend_by(rows: &[Row], budget_mib: f64, objective: SummaryMetric) -> Option<Recommendation> {
+/// [`recommend`] minimising any objective metric, near-ties decided by `worst`, the worst case
+/// ([`crate::metric::worst_aliasing`]: on screen with geometry).
+pub fn recommend_by(
+    rows: &[Row],
+    budget_mib: f64,
+    objective: SummaryMetric,
+    worst: SummaryMetric,
+) -> Option<Recommendation> {
     let budget_bytes = (budget_mib * 1024.0 * 1024.0).floor() as u64;
     let ok: Vec<usize> = (0..rows.len()).filter(|&i| acceptable(&rows[i])).collect();
     let within: Vec<usize> = ok
@@ -126,7 +140,7 @@ pub fn recommend_by(rows: &[Row], budget_mib: f64, objective: SummaryMetric) -> 
         .copied()
         .filter(|&i| rows[i].summary.memory_bytes <= budget_bytes)
         .collect();
-    if let Some(index) = pick(rows, &within, objective) {
+    if let Some(index) = pick(rows, &within, objective, worst) {
         return Some(Recommendation {
             index,
             budget_bytes,
@@ -139,7 +153,7 @@ pub fn recommend_by(rows: &[Row], budget_mib: f64, objective: SummaryMetric) -> 
         .into_iter()
         .filter(|&i| rows[i].summary.memory_bytes == cheapest)
         .collect();
-    pick(rows, &cheap, objective).map(|index| Recommendation {
+    pick(rows, &cheap, objective, worst).map(|index| Recommendation {
         index,
         budget_bytes,
         within_budget: false,
@@ -188,8 +202,9 @@ pub fn no_recommendation(rows: &[Row], budget_mib: f64, objective: SummaryMetric
 }
 
 /// The best of `candidates` by [`OBJECTIVE`]: the shortlist within [`MEAN_TOLERANCE`] of the
-/// lowest mean aliasing, then the lowest max aliasing, less memory, fewer cascades, grid order.
-fn pick(rows: &[Row], candidates: &[usize], objective: SummaryMetric) -> Option<usize> {
+/// lowest objective, then the lowest worst case (`worst`), less memory, fewer cascades, grid
+/// order.
+fn pick(rows: &[Row], candidates: &[usize], objective: SummaryMetric, worst: SummaryMetric) -> Option<usize> {
     let best = candidates
         .iter()
         .map(|&i| objective.value(&rows[i].summary))
@@ -200,8 +215,9 @@ fn pick(rows: &[Row], candidates: &[usize], objective: SummaryMetric) -> Option<
         .filter(|&i| objective.value(&rows[i].summary) <= best * (1.0 + MEAN_TOLERANCE))
         .min_by(|&a, &b| {
             let (x, y) = (&rows[a].summary, &rows[b].summary);
-            x.max_aliasing
-                .total_cmp(&y.max_aliasing)
+            worst
+                .value(x)
+                .total_cmp(&worst.value(y))
                 .then(x.memory_bytes.cmp(&y.memory_bytes))
                 .then(rows[a].setting.cascades.cmp(&rows[b].setting.cascades))
                 .then(a.cmp(&b))
@@ -350,9 +366,9 @@ pub(crate) enum Loss {
     MoreMemory,
     /// A higher objective, beyond the [`MEAN_TOLERANCE`] tie.
     Objective,
-    /// Tied on the objective; a higher max aliasing.
+    /// Tied on the objective; a higher worst case (the sweep's `worst` metric).
     MaxAliasing,
-    /// Tied on the objective and max aliasing; more memory.
+    /// Tied on the objective and the worst case; more memory.
     TieMemory,
     /// Tied on everything above; more cascades or later in grid order.
     TieOrder,
@@ -367,7 +383,13 @@ pub(crate) struct Rival {
 }
 
 /// Why row `x` lost to the recommendation `rec`, by the rule of [`recommend_by`].
-pub(crate) fn loss(rows: &[Row], rec: &Recommendation, x: usize, objective: SummaryMetric) -> Loss {
+pub(crate) fn loss(
+    rows: &[Row],
+    rec: &Recommendation,
+    x: usize,
+    objective: SummaryMetric,
+    worst: SummaryMetric,
+) -> Loss {
     let s = &rows[x].summary;
     let r = &rows[rec.index].summary;
     if s.coverage_violations > 0 {
@@ -399,7 +421,7 @@ pub(crate) fn loss(rows: &[Row], rec: &Recommendation, x: usize, objective: Summ
         .unwrap_or(objective.value(r));
     if objective.value(s) > best * (1.0 + MEAN_TOLERANCE) {
         Loss::Objective
-    } else if s.max_aliasing > r.max_aliasing {
+    } else if worst.value(s) > worst.value(r) {
         Loss::MaxAliasing
     } else if s.memory_bytes > r.memory_bytes {
         Loss::TieMemory
@@ -434,19 +456,20 @@ pub(crate) fn configured(config: &Config, rows: &[Row]) -> Option<usize> {
 }
 
 /// Rows in objective order (acceptable within budget first), for the "top" tables; the
-/// recommendation heads them (near-ties in the objective are decided by max aliasing).
+/// recommendation heads them (near-ties in the objective are decided by the worst case).
 pub(crate) fn ranked(
     rows: &[Row],
     rec: Option<&Recommendation>,
     budget_mib: f64,
     objective: SummaryMetric,
+    worst: SummaryMetric,
 ) -> Vec<usize> {
     let budget = rec.map_or((budget_mib * 1048576.0) as u64, |r| r.budget_bytes);
     let mut idx: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed).collect();
     let key = |i: usize| {
         let s = &rows[i].summary;
         let ok = s.coverage_violations == 0 && s.snapped_drift() <= STABLE_SHIMMER && s.memory_bytes <= budget;
-        (!ok, objective.value(s), s.max_aliasing, s.memory_bytes, i)
+        (!ok, objective.value(s), worst.value(s), s.memory_bytes, i)
     };
     idx.sort_by(|&a, &b| {
         let (ka, kb) = (key(a), key(b));
@@ -474,6 +497,7 @@ pub(crate) fn rivals(
     configured: Option<usize>,
     lambda_swept: bool,
     objective: SummaryMetric,
+    worst: SummaryMetric,
 ) -> Vec<Rival> {
     let r = rows[rec.index].setting;
     let best = |f: &dyn Fn(&Setting) -> bool| ranked.iter().copied().find(|&i| f(&rows[i].setting));
@@ -500,7 +524,7 @@ pub(crate) fn rivals(
             out.push(Rival {
                 kind,
                 index,
-                loss: loss(rows, rec, index, objective),
+                loss: loss(rows, rec, index, objective, worst),
             });
         }
     }
@@ -840,7 +864,7 @@ mod tests {
         for round in 0..400 {
             let rows = random_rows(&mut rng, 5 + round % 40);
             let budget = 1.0 + (rng.unit() * 8.0).floor();
-            let Some(rec) = recommend_by(&rows, budget, objective) else {
+            let Some(rec) = recommend_by(&rows, budget, objective, SummaryMetric::named("max_aliasing")) else {
                 continue;
             };
             let r = &rows[rec.index];
@@ -918,7 +942,7 @@ mod tests {
             // Why every other row lost, by the rule that picked the recommendation.
             for x in (0..rows.len()).filter(|&i| i != rec.index && rows[i].summary.cascades_needed) {
                 let s = &rows[x].summary;
-                match loss(&rows, &rec, x, objective) {
+                match loss(&rows, &rec, x, objective, SummaryMetric::named("max_aliasing")) {
                     Loss::CoverageMisses(n) => assert_eq!(n, s.coverage_violations),
                     Loss::Unstable(v) => assert!(v > STABLE_SHIMMER && s.coverage_violations == 0),
                     Loss::OverBudget => assert!(rec.within_budget && s.memory_bytes > rec.budget_bytes),
@@ -962,6 +986,58 @@ mod tests {
         near[1].summary.max_aliasing = 5.0;
         near[2].summary.max_aliasing = 1.0;
         assert_eq!(recommend(&near, 64.0).unwrap().index, 1);
+    }
+
+    /// With screen metrics the near-tie is decided by the worst case on screen, not by the
+    /// bounds' `max_aliasing` at the near plane: the two orders disagree here on purpose.
+    #[test]
+    fn with_geometry_near_ties_go_to_the_lowest_worst_case_on_screen() {
+        let mib = 1024 * 1024;
+        let objective = SummaryMetric::named("visible_aliasing_p95");
+        let worst = crate::metric::worst_aliasing(true);
+        assert_eq!(worst.name(), "screen_aliasing_max");
+        // (visible p95, screen max, bounds max): rows 0 and 1 tie on the objective (0.5 %).
+        let rows: Vec<Row> = [(4.0, 9.0, 100.0), (4.02, 7.0, 300.0), (4.5, 5.0, 50.0)]
+            .iter()
+            .map(|&(p95, screen_max, bounds_max)| {
+                let mut x = row(mib, 1.0, true);
+                x.summary.max_aliasing = bounds_max;
+                x.summary.screen = Some(screen_stats(p95, screen_max));
+                x
+            })
+            .collect();
+        let rec = recommend_by(&rows, 64.0, objective, worst).unwrap();
+        assert_eq!(
+            rec.index, 1,
+            "screen max 7 beats 9; the bounds max (300 against 100) has no say"
+        );
+        assert_eq!(loss(&rows, &rec, 0, objective, worst), Loss::MaxAliasing);
+        assert_eq!(loss(&rows, &rec, 2, objective, worst), Loss::Objective);
+        assert_eq!(ranked(&rows, Some(&rec), 64.0, objective, worst), [1, 0, 2]);
+        // The bounds rule on the same rows picks the other one of the tie.
+        let bounds = recommend_by(&rows, 64.0, objective, SummaryMetric::named("max_aliasing")).unwrap();
+        assert_eq!(bounds.index, 0);
+    }
+
+    fn screen_stats(p95: f64, max: f64) -> csm_core::screen::ScreenStats {
+        csm_core::screen::ScreenStats {
+            receiver_fraction: 0.5,
+            self_shadowed_fraction: 0.1,
+            aliasing_mean: 1.0,
+            aliasing_p50: 1.0,
+            aliasing_p95: p95,
+            aliasing_p99: p95,
+            aliasing_max: max,
+            undersampled_fraction: 0.5,
+            visible_mean: 1.0,
+            visible_p50: 1.0,
+            visible_p95: p95,
+            visible_p99: p95,
+            visible_max: max,
+            visible_z_lo: 1.0,
+            visible_z_hi: 2.0,
+            cascade_pixels: vec![1.0],
+        }
     }
 
     #[test]

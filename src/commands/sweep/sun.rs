@@ -8,7 +8,8 @@
 //! - its metrics are those of the sun angle where the objective is highest (ties: the first
 //!   angle in grid order), and that angle is the setting's **worst sun**;
 //! - the values the recommendation rule tests or breaks ties with are the worst over every
-//!   angle: the objective (by construction), `max_aliasing`, `coverage_violations`,
+//!   angle: the objective (by construction), `max_aliasing`, `screen_aliasing_max` (the worst
+//!   case with geometry), `coverage_violations`,
 //!   `shimmer_snapped` and `shimmer` (highest of each), so the stability and coverage gates
 //!   must hold at every sun angle.
 //!
@@ -86,6 +87,10 @@ pub(crate) fn judge(all: Vec<Row>, objective: SummaryMetric) -> (Vec<Row>, SunRo
         for &i in pool {
             let x = &all[i].summary;
             s.max_aliasing = s.max_aliasing.max(x.max_aliasing);
+            // The worst case on screen (`screen_aliasing_max`), which breaks ties with geometry.
+            if let (Some(st), Some(xs)) = (s.screen.as_mut(), x.screen.as_ref()) {
+                st.aliasing_max = st.aliasing_max.max(xs.aliasing_max);
+            }
             s.coverage_violations = s.coverage_violations.max(x.coverage_violations);
             s.shimmer_snapped = s.shimmer_snapped.max(x.shimmer_snapped);
             s.shimmer = s.shimmer.max(x.shimmer);
@@ -104,8 +109,8 @@ pub(crate) fn judge(all: Vec<Row>, objective: SummaryMetric) -> (Vec<Row>, SunRo
 /// The worst-sun rule in words (reports, `recommendation.json`).
 pub(crate) const SUN_RULE: &str =
     "the sun is a condition, not a setting: each setting is judged by its worst sun angle \
-(the metrics of the angle where its objective is highest, with max_aliasing, coverage_violations, shimmer and \
-shimmer_snapped the highest over every angle), so the recommendation, the Pareto front and the alternatives hold \
+(the metrics of the angle where its objective is highest, with max_aliasing, screen_aliasing_max, \
+coverage_violations, shimmer and shimmer_snapped the highest over every angle), so the recommendation, the Pareto front and the alternatives hold \
 at every sun angle swept; sweep.csv has every (sun, setting) row";
 
 /// What a bounds-only sun sweep says about the metrics the light cannot change, for stdout,
