@@ -342,10 +342,6 @@ impl Analysis {
         self.measured().map(|m| &m.unsnapped)
     }
 
-    pub fn lookup_error(&self) -> Option<&LookupError> {
-        self.measured().and_then(|m| m.lookup_error.as_ref())
-    }
-
     /// The path result of the configured snap mode.
     pub fn configured_path(&self) -> Option<&PathResult> {
         if self.config.shadow.snap {
