@@ -740,21 +740,8 @@ mod tests {
                 max_aliasing: mean * 2.0,
                 mean_aliasing: mean,
                 mean_log_aliasing: mean,
-                undersampled_fraction: 0.0,
-                shimmer: 0.0,
-                shimmer_snapped: 0.0,
                 shimmer_unsnapped: 0.3,
-                size_jitter: 0.0,
-                coverage_violations: 0,
-                memory_bytes: memory,
-                lookup_error_max: 0.0,
-                lookup_error_rms: 0.0,
-                overlap_area_fraction: 0.0,
-                band_pixel_share: 0.0,
-                seam_crossings: None,
-                screen: None,
-                light: None,
-                truth: None,
+                ..Summary::nothing_needed(memory)
             },
         }
     }
