@@ -52,6 +52,18 @@ pub(crate) fn shard_hash(path: &Path, config: &Config, grid: &Grid, command: &st
 pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::RenderedFiles, super::progress::Progress)> {
     let shard = args.shard.as_deref().map(Shard::parse).transpose()?;
     let (config, grid, command) = plan(args)?;
+    // A level of views: each row holds every view's own screen metrics, which the shard row
+    // format does not carry, so a level is swept whole.
+    if shard.is_some() && !config.views.is_empty() && config.geometry.is_some() {
+        return Err(Error::flag(
+            "--shard",
+            args.shard.as_deref().unwrap_or_default(),
+            format!(
+                "a config with views ({} named) is swept whole: its rows hold each view's own screen metrics, which shard rows do not carry",
+                config.views.len()
+            ),
+        ));
+    }
     // --optimize-splits (or `[sweep] optimize_splits`): refused before any work for a preset
     // whose splits are not free; a shard holds part of each group, so it leaves it to the
     // unsharded sweep.

@@ -17,13 +17,13 @@ use crate::error::Result;
 use crate::output::Exporter;
 use csm_core::metrics::cascade_at;
 
-const SKY: [u8; 3] = [236, 236, 236];
-const SELF_SHADOWED: [u8; 3] = [70, 70, 70];
-const UNSERVED: [u8; 3] = [170, 170, 170];
+pub(crate) const SKY: [u8; 3] = [236, 236, 236];
+pub(crate) const SELF_SHADOWED: [u8; 3] = [70, 70, 70];
+pub(crate) const UNSERVED: [u8; 3] = [170, 170, 170];
 const SPLIT_LINE: [u8; 3] = [0, 0, 0];
 /// The aliasing scale: log2 m from -3 (m = 1/8) to +6 (m = 64).
-const LOG2_LO: f64 = -3.0;
-const LOG2_HI: f64 = 6.0;
+pub(crate) const LOG2_LO: f64 = -3.0;
+pub(crate) const LOG2_HI: f64 = 6.0;
 
 fn rgb(c: RGBColor) -> [u8; 3] {
     [c.0, c.1, c.2]

@@ -278,6 +278,9 @@ pub(crate) fn recommendation_value(r: &SweepResult) -> serde_json::Value {
             v["no_recommendation"] = none;
         }
     }
+    if let Some(views) = super::views::sweep_json(r) {
+        v["views"] = views;
+    }
     if let Some(c) = &r.light_update {
         // A kind none of whose steps stays calm (or that was not swept) has no key: no null.
         let mut u = serde_json::json!({
@@ -885,7 +888,8 @@ fn rest_sentence(r: &SweepResult, front_left: usize) -> String {
 /// rivals lost; its tables show the Pareto front and the top rows, with every metric defined
 /// under them; a figure too large to inline is linked ([`html::figure_bounded`]), so the page
 /// stays small at any grid size.
-pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
+/// A level's contact sheet (`views.png`) is shown in its "Views" section when one was drawn./
+fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)], sheet: Option<&[u8]>) -> Vec<u8> {
     let mut h = String::new();
     h.push_str("<h2>Verdict</h2>\n");
     let _ = writeln!(h, "<div class=\"rec-box\"><p>{}</p>", html::escape(&why_text(r)));
@@ -916,6 +920,20 @@ pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) ->
         h.push_str("<h2>Sun angles</h2>\n");
         h.push_str(&html::list(&sun, None));
     }
+    let views = super::views::sweep_lines(r);
+    if !views.is_empty() {
+        h.push_str("<h2>Views</h2>\n");
+        h.push_str(&html::list(&views, None));
+        h.push_str(
+            "<p>Each view's own screen metrics at the level's choice: <a href=\"views.csv\">views.csv</a>.</p>\n",
+        );
+        if let Some(png) = sheet {
+            h.push_str(&html::png_figures(&[(
+                png.to_vec(),
+                "views.png: every view's per-pixel aliasing at the level's choice, one colour scale; the worst view framed in red".to_string(),
+            )]));
+        }
+    }
     let _ = writeln!(
         h,
         "<h2>Sweep</h2>\n<p>{} (closed-form aliasing, shimmer with and without snapping along the motion path, coverage).</p>",
@@ -934,6 +952,16 @@ pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) ->
             // pass its sample already ran).
             if let Some(g) = r.flicker.as_ref().and_then(|f| f.recommended_truth.as_deref()) {
                 h.push_str(&truth_pictures(g, &label));
+            }
+            // A level: the worst view at the recommended setting.
+            if let Some(c) = &r.level {
+                let view = &cfg.views[c.worst];
+                let wa = crate::analysis::analyze(
+                    &crate::analysis::config_for_view(&cfg, view),
+                    &crate::analysis::AnalysisOptions::summary_only(),
+                );
+                let label = format!("the worst view, {}, at the recommended setting", view.name);
+                h.push_str(&html::png_figures(&crate::figures::screen::captioned(&wa, &label)));
             }
         }
     }
@@ -987,7 +1015,8 @@ pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) ->
 }
 
 /// `report.md`: the same content for pasting into a review document.
-pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
+/// A level's contact sheet (`views.png`) is linked in its "Views" section when one was drawn.
+fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)], sheet: bool) -> Vec<u8> {
     let mut m = String::new();
     let _ = writeln!(m, "# Cascaded shadow map sweep: {}\n", r.config.name);
     let _ = writeln!(
@@ -1032,6 +1061,17 @@ pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> V
             let _ = writeln!(m, "- {l}");
         }
         m.push('\n');
+    }
+    let views = super::views::sweep_lines(r);
+    if !views.is_empty() {
+        m.push_str("## Views\n\n");
+        for l in views {
+            let _ = writeln!(m, "- {l}");
+        }
+        m.push_str("\nEach view's own screen metrics at the level's choice: [views.csv](views.csv).\n\n");
+        if sheet {
+            m.push_str("![Every view's per-pixel aliasing at the level's choice, one colour scale; the worst view framed in red](views.png)\n\n");
+        }
     }
     let _ = writeln!(m, "## Sweep\n\n{}.\n", grid_sentence(r));
     m.push_str("## Scene\n\n| | |\n|---|---|\n");
@@ -1104,8 +1144,22 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
             super::flicker_sample::csv(r, s)?,
         ));
     }
-    files.push(("report.html".to_string(), report_html(r, &figures)));
-    files.push(("report.md".to_string(), report_md(r, &figures)));
+    let mut sheet = None;
+    if let Some(c) = &r.level {
+        let at = &r.rows[c.at].summary;
+        files.push((
+            super::views::FILE.to_string(),
+            super::views::csv(&r.config, at, r.objective, Some((r, c)))?,
+        ));
+        if plots {
+            sheet = super::views::sweep_sheet(r)?;
+        }
+    }
+    if let Some(png) = &sheet {
+        files.push((super::views::SHEET.to_string(), png.clone()));
+    }
+    files.push(("report.html".to_string(), report_html(r, &figures, sheet.as_deref())));
+    files.push(("report.md".to_string(), report_md(r, &figures, sheet.is_some())));
     if let Some(s) = &r.engine_setting {
         files.push(super::terms::file(s));
     }
@@ -1289,6 +1343,13 @@ pub(crate) fn stdout_table(r: &SweepResult) -> String {
     }
     if let Some(c) = &r.light_update {
         let _ = writeln!(out, "{}", c.sentence);
+    }
+    let views = super::views::sweep_lines(r);
+    if let Some((first, rest)) = views.split_first() {
+        let _ = writeln!(out, "views: {first}");
+        for l in rest {
+            let _ = writeln!(out, "  {l}");
+        }
     }
     out
 }

@@ -433,19 +433,23 @@ struct Targets {
 }
 
 impl Targets {
-    fn new(hist: &[u128], whist: &[u128]) -> Targets {
-        let plain_total: u128 = hist.iter().sum();
-        let contrast_total: u128 = whist.iter().sum();
+    /// The targets of histograms `hist` (plain weight) and `whist` (contrast weight), each
+    /// bucket's weight read through `as128` (the level's are 128-bit; a view's own are its
+    /// counts).
+    fn new<A: Copy, B: Copy>(hist: &[A], whist: &[B], a: impl Fn(A) -> u128, b: impl Fn(B) -> u128) -> Targets {
+        let plain_total: u128 = hist.iter().map(|&x| a(x)).sum();
+        let contrast_total: u128 = whist.iter().map(|&x| b(x)).sum();
         let mut at = Vec::with_capacity(6);
-        for (h, total) in [(hist, plain_total), (whist, contrast_total)] {
+        for (k, total) in [plain_total, contrast_total].into_iter().enumerate() {
+            let weight = |bucket: usize| if k == 0 { a(hist[bucket]) } else { b(whist[bucket]) };
             for p in [50u128, 95, 99] {
                 if total == 0 {
                     continue;
                 }
                 let target = (p * total).div_ceil(100).max(1);
                 let (mut bucket, mut below) = (0, 0u128);
-                while below + h[bucket] < target {
-                    below += h[bucket];
+                while below + weight(bucket) < target {
+                    below += weight(bucket);
                     bucket += 1;
                 }
                 at.push((bucket, below, target));
@@ -541,18 +545,10 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
             whist[k] += w as u128 * p.steps as u128;
         }
     }
-    let level = Targets::new(&hist, &whist);
+    let level = Targets::new(&hist, &whist, |x| x, |x| x);
     let own: Vec<Targets> = passes
         .iter()
-        .map(|pass| {
-            let h: Vec<u128> = pass.hist.iter().map(|&x| x as u128).collect();
-            let w: Vec<u128> = pass.whist.iter().map(|&x| x as u128).collect();
-            if pass.n == 0 {
-                Targets::new(&[], &[])
-            } else {
-                Targets::new(&h, &w)
-            }
-        })
+        .map(|pass| Targets::new(&pass.hist, &pass.whist, |x| x as u128, |x| x as u128))
         .collect();
 
     // The second pass: every part's values in the level's wanted buckets or its own.

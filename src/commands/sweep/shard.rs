@@ -345,6 +345,9 @@ pub(crate) fn rows_text<'a>(m: &Manifest, rows: impl IntoIterator<Item = (usize,
             light,
             // Ground truth is not part of a sweep row (only `analyze` runs it).
             truth: _,
+            // A level of views is not sharded (`sweep --shard` refuses one): its rows hold the
+            // pooled screen metrics above and each view's own, which the row format lacks.
+            views: _,
         } = &row.summary;
         let _ = write!(
             out,
@@ -590,6 +593,7 @@ pub(crate) fn parse_rows(file: &std::path::Path, text: &str, m: &Manifest) -> Re
                     },
                 },
                 summary: Summary {
+                    views: Vec::new(),
                     cascades_needed,
                     z_lo: v[0],
                     z_hi: v[1],
