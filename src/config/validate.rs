@@ -960,3 +960,43 @@ fn example_fractions(cascades: usize) -> String {
         .collect();
     format!("[{}]", f.join(", "))
 }
+
+#[cfg(test)]
+mod view_tests {
+    use super::*;
+
+    const SCENE: &str = "[camera]\nposition = [0.0, 10.0, 0.0]\ntarget = [0.0, 0.0, -50.0]\nfov_y_deg = 60.0\nnear = 0.1\nfar = 1000.0\n\
+        [screen]\nwidth = 640\nheight = 360\n[light]\ndirection = [-0.4, -1.0, -0.3]\n\
+        [scene]\nmin = [-200.0, 0.0, -200.0]\nmax = [200.0, 40.0, 200.0]\nworld_offset = [1000.0, 0.0, 0.0]\n";
+
+    /// `[camera]` gives a view what it leaves out (up, field of view, and always near and
+    /// far); the world offset moves a view as it moves the camera; weight defaults to 1.
+    #[test]
+    fn views_take_the_cameras_defaults_and_the_world_offset() {
+        let text = format!(
+            "{SCENE}[[view]]\nname = \"a\"\nposition = [0.0, 5.0, 0.0]\ntarget = [0.0, 0.0, -10.0]\n\
+             [[view]]\nname = \"b\"\nposition = [1.0, 5.0, 0.0]\ntarget = [0.0, 0.0, -10.0]\nup = [1.0, 1.0, 0.0]\nfov_y_deg = 30.0\nweight = 2.5\n"
+        );
+        let c = parse(&text, "t.toml", None).unwrap();
+        let v = c.level_views();
+        assert_eq!(v.len(), 2);
+        assert_eq!((v[0].name.as_str(), v[1].name.as_str()), ("a", "b"));
+        assert_eq!(v[0].camera.position, DVec3::new(1000.0, 5.0, 0.0));
+        assert_eq!(v[0].camera.target, DVec3::new(1000.0, 0.0, -10.0));
+        assert_eq!(
+            (v[0].camera.fov_y_deg, v[0].camera.up, v[0].weight),
+            (60.0, DVec3::Y, 1.0)
+        );
+        assert_eq!(
+            (v[1].camera.fov_y_deg, v[1].camera.up, v[1].weight),
+            (30.0, DVec3::new(1.0, 1.0, 0.0), 2.5)
+        );
+        for x in &v {
+            assert_eq!((x.camera.near, x.camera.far), (0.1, 1000.0));
+        }
+        // Without views, [camera] is the one view.
+        let c = parse(SCENE, "t.toml", None).unwrap();
+        assert!(c.views.is_empty());
+        assert_eq!(c.level_views()[0].camera, c.camera);
+    }
+}

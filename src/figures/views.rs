@@ -33,7 +33,7 @@ pub(crate) fn views_png(config: &Config, worst: Option<usize>) -> Result<Vec<u8>
     let grid_rows = (shown as u32).div_ceil(per_row).max(1);
     let cell_w = tw + 2 * GAP;
     let cell_h = th + CAPTION_H + 2 * GAP;
-    let w = (per_row * cell_w).max(720);
+    let w = (per_row * cell_w).max(960);
     let h = grid_rows * cell_h + LEGEND_H;
     // The text (names, legend) as one SVG, rasterised; the tiles are pasted over it.
     let mut svg = format!(
