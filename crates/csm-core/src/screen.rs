@@ -364,14 +364,9 @@ pub struct Pooled {
     pub views: Vec<ScreenStats>,
 }
 
-/// Served pixels per chunk of a run whose smallest and largest bucket key the first pass keeps:
-/// the second pass skips a chunk that holds no wanted bucket.
-const CHUNK: usize = 64;
-
 /// One part's first pass: its served runs and the histograms of its values and weights.
 struct PartPass {
-    /// `(start, end, texel size, smallest key, largest key)` of each chunk of each run.
-    chunks: Vec<(usize, usize, f64, u16, u16)>,
+    runs: Vec<(usize, usize, f64)>,
     counts: Vec<usize>,
     n: usize,
     hist: Vec<u32>,
@@ -387,7 +382,6 @@ struct PartPass {
 fn first_pass(part: &PoolPart<'_>, runs: Vec<(usize, usize, f64)>, counts: Vec<usize>, buckets: Buckets) -> PartPass {
     let vis = part.vis;
     let n = counts.iter().sum();
-    let mut chunks = Vec::with_capacity(n / CHUNK + runs.len());
     let (mut sum, mut max, mut under) = (0.0, 0.0f64, 0usize);
     let (mut wsum, mut wtotal, mut wmax) = (0.0, 0u64, 0.0f64);
     let mut hist = vec![0u32; if n > 0 { Buckets::COUNT } else { 0 }];
@@ -395,33 +389,24 @@ fn first_pass(part: &PoolPart<'_>, runs: Vec<(usize, usize, f64)>, counts: Vec<u
     let g = &vis.receivers;
     let weights = &vis.weights;
     for &(a, b, t) in &runs {
-        let mut c = a;
-        while c < b {
-            let e = (c + CHUNK).min(b);
-            let (mut lo, mut hi) = (usize::MAX, 0usize);
-            for (&(_, gk), &wk) in g[c..e].iter().zip(&weights[c..e]) {
-                // The same operations in the same order as `stats`: equal sums, bit for bit.
-                let m = t * gk;
-                sum += m;
-                max = if m > max { m } else { max };
-                under += usize::from(m > 1.0);
-                let key = buckets.key(m);
-                lo = lo.min(key);
-                hi = hi.max(key);
-                hist[key] += 1;
-                whist[key] += wk as u64;
-                wtotal += wk as u64;
-                wsum += wk as f64 * m;
-                if wk > 0 && m > wmax {
-                    wmax = m;
-                }
+        for (&(_, gk), &wk) in g[a..b].iter().zip(&weights[a..b]) {
+            // The same operations in the same order as `stats`: equal sums, bit for bit.
+            let m = t * gk;
+            sum += m;
+            max = if m > max { m } else { max };
+            under += usize::from(m > 1.0);
+            let key = buckets.key(m);
+            hist[key] += 1;
+            whist[key] += wk as u64;
+            wtotal += wk as u64;
+            wsum += wk as f64 * m;
+            if wk > 0 && m > wmax {
+                wmax = m;
             }
-            chunks.push((c, e, t, lo as u16, hi as u16));
-            c = e;
         }
     }
     PartPass {
-        chunks,
+        runs,
         counts,
         n,
         hist,
@@ -579,16 +564,7 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
         let mut lists: Vec<Vec<(f64, u32, u64)>> = vec![Vec::new(); targets.mark(&mut slot)];
         let g = &p.vis.receivers;
         let weights = &p.vis.weights;
-        // How many wanted buckets (the level's or the view's own) lie below each key.
-        let mut wanted_below = vec![0u16; Buckets::COUNT + 1];
-        for k in 0..Buckets::COUNT {
-            let wanted = slot[k] != u8::MAX || level_slot[k] != u8::MAX;
-            wanted_below[k + 1] = wanted_below[k] + u16::from(wanted);
-        }
-        for &(a, b, t, klo, khi) in &pass.chunks {
-            if wanted_below[khi as usize + 1] == wanted_below[klo as usize] {
-                continue;
-            }
+        for &(a, b, t) in &pass.runs {
             for (&(_, gk), &wk) in g[a..b].iter().zip(&weights[a..b]) {
                 let m = t * gk;
                 let key = buckets.key(m);
