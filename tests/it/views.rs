@@ -281,7 +281,7 @@ fn write_level(dir: &Path) -> String {
 
 /// `sweep` over a level writes `views.csv` (one row per view, the worst marked, each view's
 /// own choice), `views.png`, the views in `recommendation.json` and on stdout, the same bytes
-/// at one and two threads; `--shard` refuses a level; `analyze` writes `views.csv` and names
+/// at one and two threads and from merged shards; `analyze` writes `views.csv` and names
 /// the worst view in `summary.json`.
 #[test]
 fn the_cli_writes_a_levels_files() {
@@ -339,17 +339,36 @@ fn the_cli_writes_a_levels_files() {
         .unwrap()
         .contains("## Views"));
 
-    let shard = run_cli(&[
-        "sweep",
-        &cfg,
+    // Shards carry each view's metrics: merging two gives the unsharded files, views.csv and
+    // views.png included (`cli_shard` checks every bundled config, configs/level.toml too).
+    let (s1, s2) = (dir.path().join("s1"), dir.path().join("s2"));
+    for (k, out) in [("1/2", &s1), ("2/2", &s2)] {
+        let s = run_cli(&["sweep", &cfg, "--quiet", "--shard", k, "--out", out.to_str().unwrap()]);
+        assert_eq!(s.status.code(), Some(0), "{}", String::from_utf8_lossy(&s.stderr));
+    }
+    let merged = dir.path().join("merged");
+    let m = run_cli(&[
+        "merge",
+        s1.to_str().unwrap(),
+        s2.to_str().unwrap(),
         "--quiet",
-        "--shard",
-        "1/2",
         "--out",
-        dir.path().join("s").to_str().unwrap(),
+        merged.to_str().unwrap(),
     ]);
-    assert_eq!(shard.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&shard.stderr).contains("--shard"));
+    assert_eq!(m.status.code(), Some(0), "{}", String::from_utf8_lossy(&m.stderr));
+    let (whole, parts) = (common::files(&o1), common::files(&merged));
+    for f in [
+        "views.csv",
+        "views.png",
+        "sweep.csv",
+        "recommendation.json",
+        "report.md",
+    ] {
+        assert!(
+            whole[f] == parts[f],
+            "{f} differs between the sweep and its merged shards"
+        );
+    }
 
     let out = dir.path().join("an");
     let an = run_cli(&["analyze", &cfg, "--quiet", "--out", out.to_str().unwrap()]);
