@@ -117,6 +117,23 @@ pub struct Summary {
     /// The ground-truth metrics (acne, leaks, S5), when the pass ran; the registry writes them.
     #[serde(skip)]
     pub truth: Option<ground_truth::TruthSummary>,
+    /// With configured views (`[[view]]`, `[views]`) and scene geometry: each view's own screen
+    /// metrics, in the config's order, while [`Summary::screen`] and
+    /// [`Summary::band_pixel_share`] hold the level's, pooled over the views
+    /// ([`level_screen`]). Empty otherwise (`[camera]` is the one view), and then absent from
+    /// the serde form (a shard's rows carry them only for a level).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub views: Vec<ViewScreen>,
+}
+
+/// One view's own screen metrics in a level of views (`views.csv`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ViewScreen {
+    pub name: String,
+    pub weight: f64,
+    pub screen: ScreenStats,
+    /// Share of the view's lit-facing receiver pixels inside a blend band (every split).
+    pub band_pixel_share: f64,
 }
 
 impl Summary {
@@ -145,6 +162,7 @@ impl Summary {
             screen: None,
             light: None,
             truth: None,
+            views: Vec::new(),
         }
     }
 }
@@ -545,6 +563,186 @@ pub(crate) fn analyze_with_progress(
     opts: &AnalysisOptions,
     on_frames: &(dyn Fn(u64) + Sync),
 ) -> Analysis {
+    let mut a = analyze_camera(config, opts, on_frames);
+    if let Some(level) = level_screen(config) {
+        a.summary.screen = Some(level.screen);
+        a.summary.band_pixel_share = level.band_pixel_share;
+        a.summary.views = level.views;
+    }
+    a
+}
+
+/// The level's screen metrics, pooled over its configured views, and each view's own.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LevelScreen {
+    pub screen: ScreenStats,
+    pub band_pixel_share: f64,
+    pub views: Vec<ViewScreen>,
+}
+
+/// The config as seen from one of its views: `[camera]` replaced by the view's camera.
+pub(crate) fn config_for_view(config: &Config, view: &crate::config::ViewSettings) -> Config {
+    Config {
+        camera: view.camera.clone(),
+        ..config.clone()
+    }
+}
+
+/// What one view's screen statistics read: its pass, and the selection splits, texel sizes
+/// and blend bands of the cascades the setting builds for that view's pose (frame 0).
+struct ScreenInputs {
+    vis: std::sync::Arc<Visibility>,
+    splits: Vec<f64>,
+    texel: Vec<f64>,
+    visible: Option<(f64, f64)>,
+    bands: Vec<(f64, f64)>,
+}
+
+/// A config's screen inputs, computed as [`analyze`] computes them for `[camera]` (the same
+/// rig, windows and visible range); None without scene geometry.
+fn screen_inputs(config: &Config) -> Option<ScreenInputs> {
+    let setup = config.setup();
+    let vis = setup.visibility()?;
+    let visible = {
+        let mut bounds_only = setup.clone();
+        bounds_only.shadow.fit_depth_to_visible = false;
+        depth_range::for_setup(&bounds_only)
+            .bounds()
+            .and_then(|(lo, hi)| screen::visible_range(&vis, lo, hi))
+    };
+    let (splits, texel, bands) = match rig(config) {
+        None => (vec![0.0, 0.0], vec![0.0], Vec::new()),
+        Some(rig) => {
+            let pose0 = config.camera.pose();
+            let lp0 = LightPose::new(&rig.light, &pose0);
+            let texel = (0..rig.cascade_count())
+                .map(|i| rig.window(i, &lp0, config.shadow.snap).texel_size())
+                .collect();
+            let bands = seams::bands(&rig);
+            (rig.splits.clone(), texel, bands)
+        }
+    };
+    Some(ScreenInputs {
+        vis,
+        splits,
+        texel,
+        visible,
+        bands,
+    })
+}
+
+/// The level's screen metrics when the config names views and has scene geometry: every
+/// view's receiver pixels pooled, each carrying its view's weight (`csm_core::screen::pool`),
+/// the cascades built for each view's own pose; the blend-band share pooled the same way,
+/// band by band. None without configured views (`[camera]` is then the one view and
+/// [`analyze`] measures it as always) or without geometry.
+pub fn level_screen(config: &Config) -> Option<LevelScreen> {
+    if config.views.is_empty() {
+        return None;
+    }
+    let geometry = config.geometry.as_ref()?;
+    // One pass per view, shared by every setting of a sweep: none may be evicted.
+    geometry.scene.keep_at_least(2 * config.views.len() + 8);
+    let inputs: Vec<ScreenInputs> = config
+        .views
+        .iter()
+        .map(|v| screen_inputs(&config_for_view(config, v)))
+        .collect::<Option<_>>()?;
+    let parts: Vec<screen::PoolPart<'_>> = inputs
+        .iter()
+        .zip(&config.views)
+        .map(|(x, v)| screen::PoolPart {
+            vis: &x.vis,
+            splits: &x.splits,
+            texel: &x.texel,
+            visible: x.visible,
+            steps: screen::view_weight_steps(v.weight),
+        })
+        .collect();
+    let pooled = screen::pool(&parts);
+    // Band k's receivers of each view, pooled band by band (a view without that band has none).
+    let band_count = |x: &ScreenInputs, k: usize| -> u64 {
+        x.bands.get(k).map_or(0, |&(lo, hi)| {
+            let r = &x.vis.receivers;
+            (r.partition_point(|&(d, _)| d < hi) - r.partition_point(|&(d, _)| d < lo)) as u64
+        })
+    };
+    let bands = inputs.iter().map(|x| x.bands.len()).max().unwrap_or(0);
+    let band_pixel_share = (0..bands)
+        .map(|k| {
+            let counts: Vec<(u64, u64, u64)> = inputs
+                .iter()
+                .zip(&parts)
+                .map(|(x, p)| (band_count(x, k), x.vis.receivers.len() as u64, p.steps))
+                .collect();
+            screen::pooled_share(&counts)
+        })
+        .sum();
+    let views = config
+        .views
+        .iter()
+        .zip(&inputs)
+        .zip(pooled.views)
+        .map(|((v, x), st)| ViewScreen {
+            name: v.name.clone(),
+            weight: v.weight,
+            screen: st,
+            band_pixel_share: seams::band_shares(&x.vis, &x.bands).iter().sum(),
+        })
+        .collect();
+    Some(LevelScreen {
+        screen: pooled.level,
+        band_pixel_share,
+        views,
+    })
+}
+
+/// One sampled pixel of a view's picture: None (nothing hit), or (lit-facing, the aliasing `m`
+/// where a cascade serves it).
+pub(crate) type ViewPixel = Option<(bool, Option<f64>)>;
+
+/// What each sampled pixel of configured view `k` shows at this setting, for pictures: None
+/// (nothing hit), or (lit-facing, the aliasing `m` where a cascade serves it); with the
+/// sampled grid's columns and rows. None without geometry or such a view.
+pub(crate) fn view_pixels(config: &Config, k: usize) -> Option<(u32, u32, Vec<ViewPixel>)> {
+    let x = screen_inputs(&config_for_view(config, config.views.get(k)?))?;
+    let m = x.texel.len();
+    let px = x
+        .vis
+        .samples
+        .iter()
+        .map(|s| {
+            s.map(|s| {
+                let served = s.lit && s.depth >= x.splits[0] && s.depth <= x.splits[m] && x.texel[0] > 0.0;
+                (
+                    s.lit,
+                    served.then(|| x.texel[metrics::cascade_at(&x.splits, s.depth)] * s.factor),
+                )
+            })
+        })
+        .collect();
+    Some((x.vis.cols, x.vis.rows, px))
+}
+
+/// Makes each configured view's pass (or, with `rays_only`, its cast rays: a sun sweep shades
+/// them per angle) before a parallel batch reads them, so no two rows cast one view's rays.
+pub(crate) fn warm_views(config: &Config, rays_only: bool) {
+    let Some(geometry) = config.geometry.as_ref() else {
+        return;
+    };
+    geometry.scene.keep_at_least(2 * config.views.len() + 8);
+    for v in &config.views {
+        let setup = config_for_view(config, v).setup();
+        if rays_only {
+            let _ = setup.visibility_hits();
+        } else {
+            let _ = setup.visibility();
+        }
+    }
+}
+
+/// [`analyze_with_progress`] for `[camera]` alone: every metric of the camera and its path.
+fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u64) + Sync)) -> Analysis {
     let rig = rig(config);
     // A preset has its own range (no scene clipping): the view depths that read its cascades.
     let range = match (&config.shadow.preset, &rig) {
@@ -756,6 +954,7 @@ pub(crate) fn analyze_with_progress(
             std::iter::once((&snapped, &unsnapped)).chain(extra.iter().map(|e| (&e.snapped, &e.unsnapped))),
         ),
         truth: truth.as_ref().map(|t| t.summary),
+        views: Vec::new(),
     };
     let preset = config
         .shadow

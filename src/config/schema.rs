@@ -6,8 +6,8 @@ use serde::Deserialize;
 use toml::Spanned;
 
 /// csm-lab's own top-level tables.
-pub(crate) const SECTIONS: [&str; 8] = [
-    "camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep",
+pub(crate) const SECTIONS: [&str; 9] = [
+    "camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep", "view",
 ];
 
 /// The whole file: csm-lab's tables, and every other top-level key (engine tables or unknown).
@@ -76,6 +76,25 @@ pub(crate) struct RawConfig {
     #[serde(default)]
     pub(crate) analysis: RawAnalysis,
     pub(crate) sweep: Option<super::sweep_spec::RawSweep>,
+    /// `[[view]]`: the level's named views (issue 22); none keeps `[camera]` as the one view.
+    #[serde(default)]
+    pub(crate) view: Vec<RawView>,
+}
+
+/// One `[[view]]`: a named camera pose; `[camera]` gives what it leaves out (up, field of
+/// view, and always the near and far planes).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawView {
+    pub(crate) name: Spanned<String>,
+    #[serde(deserialize_with = "vec3")]
+    pub(crate) position: [f64; 3],
+    #[serde(deserialize_with = "vec3")]
+    pub(crate) target: [f64; 3],
+    #[serde(default, deserialize_with = "opt_vec3")]
+    pub(crate) up: Option<[f64; 3]>,
+    pub(crate) fov_y_deg: Option<f64>,
+    pub(crate) weight: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

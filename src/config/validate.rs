@@ -43,6 +43,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let moved = |key: &str, p: [f64; 3]| moved(v, world_offset, key, p);
 
     let camera = camera(&raw.camera, v, world_offset, &moved)?;
+    let views = views(&raw.view, v, &camera, &moved)?;
     let width = v.int_range("screen.width", raw.screen.width, 1, 1 << 20)? as u32;
     let height = v.int_range("screen.height", raw.screen.height, 1, 1 << 20)? as u32;
     let (light_direction, dir_raw) = light_direction(&raw.light, v)?;
@@ -103,7 +104,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             ..PresetInput::default()
         },
         truth,
-        views: Vec::new(),
+        views,
     };
     check_camera_path(&config, v)?;
     // The binary32 range check needs the cascades, which an engine preset may change: it runs
@@ -206,6 +207,133 @@ fn camera(
         near,
         far,
     })
+}
+
+/// Most views a config may name: each costs one visibility pass and one pass over its pixels
+/// per setting of a sweep.
+pub(crate) const MAX_VIEWS: usize = 10_000;
+
+/// A view's weight: `[1e-6, 1e6]`, so that its whole steps (`csm_core::screen::
+/// view_weight_steps`) are at least one and every pooled sum fits 128 bits.
+pub(crate) const VIEW_WEIGHT_RANGE: (f64, f64) = (1e-6, 1e6);
+
+/// `[[view]]`: each entry's name (unique, 1 to 64 printable characters), position and target
+/// (moved by the world offset, as `[camera]`'s), up and field of view (`[camera]`'s when left
+/// out) and weight (1 when left out). Near and far are always `[camera]`'s.
+fn views(
+    raw: &[super::schema::RawView],
+    v: &Validator<'_>,
+    camera: &CameraSettings,
+    moved: &dyn Fn(&str, [f64; 3]) -> Result<DVec3>,
+) -> Result<Vec<ViewSettings>> {
+    if raw.len() > MAX_VIEWS {
+        return Err(v.invalid(
+            "view",
+            format!("{} entries", raw.len()),
+            &format!("at most {MAX_VIEWS} [[view]] entries"),
+        ));
+    }
+    let mut out: Vec<ViewSettings> = Vec::with_capacity(raw.len());
+    for (i, r) in raw.iter().enumerate() {
+        let key = |k: &str| format!("view[{i}].{k}");
+        let name = r.name.get_ref();
+        let printable = !name.is_empty() && name.chars().count() <= 64 && !name.chars().any(char::is_control);
+        if !printable || name.trim() != name {
+            return Err(v.invalid_at(
+                &key("name"),
+                r.name.span(),
+                format!("{name:?}"),
+                "a name of 1 to 64 printable characters, without leading or trailing spaces",
+            ));
+        }
+        if let Some(j) = out.iter().position(|o| o.name == *name) {
+            return Err(v.invalid_at(
+                &key("name"),
+                r.name.span(),
+                format!("{name:?}"),
+                &format!("a name no other view has (view[{j}] is {name:?} too)"),
+            ));
+        }
+        let position = moved(&key("position"), r.position)?;
+        let target = moved(&key("target"), r.target)?;
+        let dir = target - position;
+        if dir.length() <= 1e-12 * (1.0 + position.length()) {
+            return Err(v.invalid(
+                &key("target"),
+                format!("{:?}", r.target),
+                &format!(
+                    "a point different from {} (the view direction is target - position)",
+                    key("position")
+                ),
+            ));
+        }
+        let up = match r.up {
+            Some(u) => {
+                let up = v.vec3(&key("up"), u)?;
+                if up.length() <= 1e-300 {
+                    return Err(v.invalid(&key("up"), format!("{u:?}"), "a non-zero vector"));
+                }
+                up
+            }
+            None => camera.up,
+        };
+        if dir.normalize().cross(up.normalize()).length() < 1e-9 {
+            let what = if r.up.is_some() {
+                key("up")
+            } else {
+                "camera.up (the view's default up)".to_string()
+            };
+            return Err(v.invalid(
+                &key(if r.up.is_some() { "up" } else { "target" }),
+                format!(
+                    "{:?}",
+                    if r.up.is_some() {
+                        r.up.unwrap_or_default()
+                    } else {
+                        r.target
+                    }
+                ),
+                &format!("a view direction (target - position) not parallel to {what}"),
+            ));
+        }
+        let fov_y_deg = match r.fov_y_deg {
+            Some(f) => {
+                let f = v.finite(&key("fov_y_deg"), f)?;
+                if !(0.001..=179.999).contains(&f) {
+                    return Err(v.invalid(
+                        &key("fov_y_deg"),
+                        f,
+                        "degrees strictly between 0 and 180, from 0.001 to 179.999",
+                    ));
+                }
+                f
+            }
+            None => camera.fov_y_deg,
+        };
+        let weight = match r.weight {
+            Some(w) => {
+                let (lo, hi) = VIEW_WEIGHT_RANGE;
+                if !(lo..=hi).contains(&w) {
+                    return Err(v.invalid(&key("weight"), w, "a number > 0, from 1e-6 to 1e6"));
+                }
+                w
+            }
+            None => 1.0,
+        };
+        out.push(ViewSettings {
+            name: name.clone(),
+            camera: CameraSettings {
+                position,
+                target,
+                up,
+                fov_y_deg,
+                near: camera.near,
+                far: camera.far,
+            },
+            weight,
+        });
+    }
+    Ok(out)
 }
 
 /// `light.direction`: the unit direction light travels, and the direction as written.
@@ -831,4 +959,44 @@ fn example_fractions(cascades: usize) -> String {
         .map(|p| csm_core::free_splits::round_significant(*p, 2).to_string())
         .collect();
     format!("[{}]", f.join(", "))
+}
+
+#[cfg(test)]
+mod view_tests {
+    use super::*;
+
+    const SCENE: &str = "[camera]\nposition = [0.0, 10.0, 0.0]\ntarget = [0.0, 0.0, -50.0]\nfov_y_deg = 60.0\nnear = 0.1\nfar = 1000.0\n\
+        [screen]\nwidth = 640\nheight = 360\n[light]\ndirection = [-0.4, -1.0, -0.3]\n\
+        [scene]\nmin = [-200.0, 0.0, -200.0]\nmax = [200.0, 40.0, 200.0]\nworld_offset = [1000.0, 0.0, 0.0]\n";
+
+    /// `[camera]` gives a view what it leaves out (up, field of view, and always near and
+    /// far); the world offset moves a view as it moves the camera; weight defaults to 1.
+    #[test]
+    fn views_take_the_cameras_defaults_and_the_world_offset() {
+        let text = format!(
+            "{SCENE}[[view]]\nname = \"a\"\nposition = [0.0, 5.0, 0.0]\ntarget = [0.0, 0.0, -10.0]\n\
+             [[view]]\nname = \"b\"\nposition = [1.0, 5.0, 0.0]\ntarget = [0.0, 0.0, -10.0]\nup = [1.0, 1.0, 0.0]\nfov_y_deg = 30.0\nweight = 2.5\n"
+        );
+        let c = parse(&text, "t.toml", None).unwrap();
+        let v = c.level_views();
+        assert_eq!(v.len(), 2);
+        assert_eq!((v[0].name.as_str(), v[1].name.as_str()), ("a", "b"));
+        assert_eq!(v[0].camera.position, DVec3::new(1000.0, 5.0, 0.0));
+        assert_eq!(v[0].camera.target, DVec3::new(1000.0, 0.0, -10.0));
+        assert_eq!(
+            (v[0].camera.fov_y_deg, v[0].camera.up, v[0].weight),
+            (60.0, DVec3::Y, 1.0)
+        );
+        assert_eq!(
+            (v[1].camera.fov_y_deg, v[1].camera.up, v[1].weight),
+            (30.0, DVec3::new(1.0, 1.0, 0.0), 2.5)
+        );
+        for x in &v {
+            assert_eq!((x.camera.near, x.camera.far), (0.1, 1000.0));
+        }
+        // Without views, [camera] is the one view.
+        let c = parse(SCENE, "t.toml", None).unwrap();
+        assert!(c.views.is_empty());
+        assert_eq!(c.level_views()[0].camera, c.camera);
+    }
 }

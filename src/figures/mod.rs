@@ -12,6 +12,7 @@ pub(crate) mod screen;
 pub(crate) mod sun;
 pub(crate) mod sweep;
 pub mod truth;
+pub(crate) mod views;
 
 use std::sync::Once;
 

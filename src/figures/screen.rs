@@ -22,17 +22,17 @@ use crate::output::Exporter;
 use csm_core::metrics::cascade_at;
 use csm_core::truth::ServeFault;
 
-const SKY: [u8; 3] = [236, 236, 236];
-const SELF_SHADOWED: [u8; 3] = [70, 70, 70];
-const UNSERVED: [u8; 3] = [170, 170, 170];
+pub(crate) const SKY: [u8; 3] = [236, 236, 236];
+pub(crate) const SELF_SHADOWED: [u8; 3] = [70, 70, 70];
+pub(crate) const UNSERVED: [u8; 3] = [170, 170, 170];
 const SPLIT_LINE: [u8; 3] = [0, 0, 0];
 /// A receiver outside the window of the cascade that reads it (a missed slice corner's area).
 const MISSED: [u8; 3] = [214, 39, 40];
 /// A receiver beyond the light depth range of the cascade that reads it (clipped).
 const CLIPPED: [u8; 3] = [230, 0, 230];
 /// The aliasing scale: log2 m from -3 (m = 1/8) to +6 (m = 64).
-const LOG2_LO: f64 = -3.0;
-const LOG2_HI: f64 = 6.0;
+pub(crate) const LOG2_LO: f64 = -3.0;
+pub(crate) const LOG2_HI: f64 = 6.0;
 
 fn rgb(c: RGBColor) -> [u8; 3] {
     [c.0, c.1, c.2]

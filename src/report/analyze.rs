@@ -30,6 +30,12 @@ pub(crate) fn exporters_for(a: &Analysis) -> Vec<&'static dyn Exporter<Analysis>
         v.push(&figures::screen::ScreenAliasingPng);
         v.push(&figures::screen::ScreenCascadesPng);
     }
+    if !a.summary.views.is_empty() {
+        v.push(&super::views::ViewsCsv);
+    }
+    if a.summary.views.len() >= 2 {
+        v.push(&super::views::ViewsPng);
+    }
     if a.ground_truth.is_some() {
         v.push(&super::ground_truth::BiasCsv);
         v.push(&super::ground_truth::ShadowPng);
@@ -200,6 +206,10 @@ pub fn summary_value(a: &Analysis) -> serde_json::Value {
     }
     for (k, x) in metric::summary_json(s) {
         obj.insert(k.into(), x);
+    }
+    let objective = crate::commands::sweep::rank::default_objective(&a.config);
+    if let Some(views) = super::views::json(s, objective) {
+        obj.insert("views".into(), views);
     }
     if let Some(g) = &a.ground_truth {
         obj.insert("bias_source".into(), g.bias_source.name().into());
@@ -378,6 +388,10 @@ pub(crate) fn summary_table(a: &Analysis) -> String {
             if screen_line(k) {
                 let _ = writeln!(out, "  {k:<29} {v:>12}  {what}");
             }
+        }
+        let objective = crate::commands::sweep::rank::default_objective(c);
+        if let Some(line) = super::views::worst_line(s, objective) {
+            let _ = writeln!(out, "  {line} (each view's own metrics: views.csv)");
         }
     }
     if let Some(g) = &a.ground_truth {

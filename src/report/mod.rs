@@ -18,3 +18,4 @@ pub mod stress;
 pub(crate) mod sweep;
 pub mod terms;
 pub mod truth;
+pub(crate) mod views;

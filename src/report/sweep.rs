@@ -281,6 +281,9 @@ pub(crate) fn recommendation_value(r: &SweepResult) -> serde_json::Value {
             v["no_recommendation"] = none;
         }
     }
+    if let Some(views) = super::views::sweep_json(r) {
+        v["views"] = views;
+    }
     if let Some(c) = &r.light_update {
         // A kind none of whose steps stays calm (or that was not swept) has no key: no null.
         let mut u = serde_json::json!({
@@ -943,8 +946,13 @@ fn rest_sentence(r: &SweepResult, front_left: usize) -> String {
 /// rivals lost; its tables show the Pareto front and the top rows, with every metric defined
 /// under them; a figure too large to inline as SVG is inlined as a downscaled PNG linked to its
 /// files ([`html::figure_bounded`]), so the page stays small at any grid size and shows every
-/// figure when sent on its own.
-pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, String, Vec<u8>)]) -> Result<Vec<u8>> {
+/// figure when sent on its own. A level's contact sheet (`views.png`) is shown in its "Views"
+/// section when one was drawn.
+pub(crate) fn report_html(
+    r: &SweepResult,
+    figures: &[(&str, String, Vec<u8>)],
+    sheet: Option<&[u8]>,
+) -> Result<Vec<u8>> {
     let mut h = String::new();
     h.push_str("<h2>Verdict</h2>\n");
     let _ = writeln!(h, "<div class=\"rec-box\"><p>{}</p>", html::escape(&why_text(r)));
@@ -975,6 +983,20 @@ pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, String, Vec<u8>)]) 
         h.push_str("<h2>Sun angles</h2>\n");
         h.push_str(&html::list(&sun, None));
     }
+    let views = super::views::sweep_lines(r);
+    if !views.is_empty() {
+        h.push_str("<h2>Views</h2>\n");
+        h.push_str(&html::list(&views, None));
+        h.push_str(
+            "<p>Each view's own screen metrics at the level's choice: <a href=\"views.csv\">views.csv</a>.</p>\n",
+        );
+        if let Some(png) = sheet {
+            h.push_str(&html::png_figures(&[(
+                png.to_vec(),
+                "views.png: every view's per-pixel aliasing at the level's choice, one colour scale; the worst view framed in red".to_string(),
+            )]));
+        }
+    }
     let _ = writeln!(
         h,
         "<h2>Sweep</h2>\n<p>{} (closed-form aliasing, shimmer with and without snapping along the motion path, coverage).</p>",
@@ -993,6 +1015,16 @@ pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, String, Vec<u8>)]) 
             // pass its sample already ran).
             if let Some(g) = r.flicker.as_ref().and_then(|f| f.recommended_truth.as_deref()) {
                 h.push_str(&truth_pictures(g, &label));
+            }
+            // A level: the worst view at the recommended setting.
+            if let Some(c) = &r.level {
+                let view = &cfg.views[c.worst];
+                let wa = crate::analysis::analyze(
+                    &crate::analysis::config_for_view(&cfg, view),
+                    &crate::analysis::AnalysisOptions::summary_only(),
+                );
+                let label = format!("the worst view, {}, at the recommended setting", view.name);
+                h.push_str(&html::png_figures(&crate::figures::screen::captioned(&wa, &label)));
             }
         }
     }
@@ -1054,8 +1086,9 @@ fn md_list(m: &mut String, heading: &str, lines: &[String]) {
     }
 }
 
-/// `report.md`: the same content for pasting into a review document.
-pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, String, Vec<u8>)]) -> Vec<u8> {
+/// `report.md`: the same content for pasting into a review document. A level's contact sheet
+/// (`views.png`) is linked in its "Views" section when one was drawn.
+pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, String, Vec<u8>)], sheet: bool) -> Vec<u8> {
     let mut m = String::new();
     let _ = writeln!(m, "# Cascaded shadow map sweep: {}\n", r.config.name);
     let _ = writeln!(
@@ -1077,6 +1110,14 @@ pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, String, Vec<u8>)]) ->
     m.push_str(&super::flicker_sample::md_section(r));
     let sun = sun_lines(r);
     md_list(&mut m, "Sun angles", &sun);
+    let views = super::views::sweep_lines(r);
+    md_list(&mut m, "Views", &views);
+    if !views.is_empty() {
+        m.push_str("Each view's own screen metrics at the level's choice: [views.csv](views.csv).\n\n");
+        if sheet {
+            m.push_str("![Every view's per-pixel aliasing at the level's choice, one colour scale; the worst view framed in red](views.png)\n\n");
+        }
+    }
     let _ = writeln!(m, "## Sweep\n\n{}.\n", grid_sentence(r));
     m.push_str("## Scene\n\n| | |\n|---|---|\n");
     for (k, v) in scene_facts(&r.config, &r.rows) {
@@ -1148,8 +1189,22 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
             super::flicker_sample::csv(r, s)?,
         ));
     }
-    files.push(("report.html".to_string(), report_html(r, &figures)?));
-    files.push(("report.md".to_string(), report_md(r, &figures)));
+    let mut sheet = None;
+    if let Some(c) = &r.level {
+        let at = &r.rows[c.at].summary;
+        files.push((
+            super::views::FILE.to_string(),
+            super::views::csv(&r.config, at, r.objective, Some((r, c)))?,
+        ));
+        if plots {
+            sheet = super::views::sweep_sheet(r)?;
+        }
+    }
+    if let Some(png) = &sheet {
+        files.push((super::views::SHEET.to_string(), png.clone()));
+    }
+    files.push(("report.html".to_string(), report_html(r, &figures, sheet.as_deref())?));
+    files.push(("report.md".to_string(), report_md(r, &figures, sheet.is_some())));
     if let Some(s) = &r.engine_setting {
         files.push(super::terms::file(s));
     }
@@ -1336,6 +1391,13 @@ pub(crate) fn stdout_table(r: &SweepResult) -> String {
     }
     if let Some(c) = &r.light_update {
         let _ = writeln!(out, "{}", c.sentence);
+    }
+    let views = super::views::sweep_lines(r);
+    if let Some((first, rest)) = views.split_first() {
+        let _ = writeln!(out, "views: {first}");
+        for l in rest {
+            let _ = writeln!(out, "  {l}");
+        }
     }
     out
 }

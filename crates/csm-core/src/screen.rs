@@ -334,6 +334,381 @@ pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f
     }
 }
 
+/// The whole steps of one unit of view weight: a view's weight `w` counts as
+/// `round(w · VIEW_WEIGHT_STEPS)` steps, so the pooled statistics sum whole numbers exactly (in
+/// any order) and a weight of 1 (a power of two) changes no rounding.
+pub const VIEW_WEIGHT_STEPS: f64 = (1u64 << 20) as f64;
+
+/// A view weight in whole steps of [`VIEW_WEIGHT_STEPS`] (at least one step).
+pub fn view_weight_steps(weight: f64) -> u64 {
+    ((weight * VIEW_WEIGHT_STEPS).round() as u64).max(1)
+}
+
+/// One view's part of a level's pooled screen statistics: its pass, the selection splits and
+/// texel sizes of the cascades built for its pose, its visible depth range (as for [`stats`])
+/// and its weight in whole steps ([`view_weight_steps`]).
+#[derive(Clone, Copy)]
+pub struct PoolPart<'a> {
+    pub vis: &'a Visibility,
+    pub splits: &'a [f64],
+    pub texel: &'a [f64],
+    pub visible: Option<(f64, f64)>,
+    pub steps: u64,
+}
+
+/// The level's screen statistics over every view's pixels together, and each view's own.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pooled {
+    pub level: ScreenStats,
+    /// Per part, in order: exactly what [`stats`] gives for that part alone.
+    pub views: Vec<ScreenStats>,
+}
+
+/// One part's first pass: its served runs and the histograms of its values and weights.
+struct PartPass {
+    runs: Vec<(usize, usize, f64)>,
+    counts: Vec<usize>,
+    n: usize,
+    hist: Vec<u32>,
+    whist: Vec<u64>,
+    sum: f64,
+    max: f64,
+    under: usize,
+    wsum: f64,
+    wtotal: u64,
+    wmax: f64,
+}
+
+fn first_pass(part: &PoolPart<'_>, runs: Vec<(usize, usize, f64)>, counts: Vec<usize>, buckets: Buckets) -> PartPass {
+    let vis = part.vis;
+    let n = counts.iter().sum();
+    let (mut sum, mut max, mut under) = (0.0, 0.0f64, 0usize);
+    let (mut wsum, mut wtotal, mut wmax) = (0.0, 0u64, 0.0f64);
+    let mut hist = vec![0u32; if n > 0 { Buckets::COUNT } else { 0 }];
+    let mut whist = vec![0u64; hist.len()];
+    let g = &vis.receivers;
+    let weights = &vis.weights;
+    for &(a, b, t) in &runs {
+        for (&(_, gk), &wk) in g[a..b].iter().zip(&weights[a..b]) {
+            // The same operations in the same order as `stats`: equal sums, bit for bit.
+            let m = t * gk;
+            sum += m;
+            max = if m > max { m } else { max };
+            under += usize::from(m > 1.0);
+            let key = buckets.key(m);
+            hist[key] += 1;
+            whist[key] += wk as u64;
+            wtotal += wk as u64;
+            wsum += wk as f64 * m;
+            if wk > 0 && m > wmax {
+                wmax = m;
+            }
+        }
+    }
+    PartPass {
+        runs,
+        counts,
+        n,
+        hist,
+        whist,
+        sum,
+        max,
+        under,
+        wsum,
+        wtotal,
+        wmax,
+    }
+}
+
+/// The weighted nearest-rank targets of one pool (the level, or one view alone): the pool's
+/// bucket histograms of plain weight (every served pixel carries its view's steps) and of
+/// contrast weight (`N · L` steps times the view's steps), and the six targets (p50, p95, p99
+/// of each) located in them.
+struct Targets {
+    /// (bucket, weight below the bucket, target weight): three plain, three contrast-weighted.
+    at: Vec<(usize, u128, u128)>,
+    plain_total: u128,
+    contrast_total: u128,
+}
+
+impl Targets {
+    /// The targets of histograms `hist` (plain weight) and `whist` (contrast weight), each
+    /// bucket's weight read through `as128` (the level's are 128-bit; a view's own are its
+    /// counts).
+    fn new<A: Copy, B: Copy>(hist: &[A], whist: &[B], a: impl Fn(A) -> u128, b: impl Fn(B) -> u128) -> Targets {
+        let plain_total: u128 = hist.iter().map(|&x| a(x)).sum();
+        let contrast_total: u128 = whist.iter().map(|&x| b(x)).sum();
+        let mut at = Vec::with_capacity(6);
+        for (k, total) in [plain_total, contrast_total].into_iter().enumerate() {
+            let weight = |bucket: usize| if k == 0 { a(hist[bucket]) } else { b(whist[bucket]) };
+            for p in [50u128, 95, 99] {
+                if total == 0 {
+                    continue;
+                }
+                let target = (p * total).div_ceil(100).max(1);
+                let (mut bucket, mut below) = (0, 0u128);
+                while below + weight(bucket) < target {
+                    below += weight(bucket);
+                    bucket += 1;
+                }
+                at.push((bucket, below, target));
+            }
+        }
+        Targets {
+            at,
+            plain_total,
+            contrast_total,
+        }
+    }
+
+    /// Marks the wanted buckets in `slot` (their list index) and returns the number of lists.
+    fn mark(&self, slot: &mut [u8]) -> usize {
+        let mut lists = 0;
+        for &(b, _, _) in &self.at {
+            if slot[b] == u8::MAX {
+                slot[b] = lists as u8;
+                lists += 1;
+            }
+        }
+        lists
+    }
+
+    /// The values at the targets from the gathered lists: `(m, contrast weight, view steps)`
+    /// of every served value in the wanted buckets, sorted by value. Plain percentiles first.
+    fn resolve(&self, slot: &[u8], lists: &[Vec<(f64, u32, u64)>]) -> ([f64; 3], [f64; 3]) {
+        let mut out = [[0.0; 3]; 2];
+        let plain = usize::from(self.plain_total > 0) * 3;
+        for (k, &(b, below, target)) in self.at.iter().enumerate() {
+            let weighted = k >= plain;
+            let list = &lists[slot[b] as usize];
+            let mut run = below;
+            let mut value = 0.0;
+            for &(m, wk, s) in list {
+                let w = if weighted { wk as u128 * s as u128 } else { s as u128 };
+                if w == 0 {
+                    continue;
+                }
+                run += w;
+                value = m;
+                if run >= target {
+                    break;
+                }
+            }
+            out[usize::from(weighted)][k % 3] = value;
+        }
+        (out[0], out[1])
+    }
+}
+
+/// The screen statistics of a level of views: every served receiver pixel of every view,
+/// carrying its view's weight ([`PoolPart::steps`]), pooled into one set of statistics, and
+/// each view's own statistics beside them. With equal weights the level's percentiles are the
+/// nearest-rank percentiles of all views' values together, and its visible percentiles weigh
+/// each pixel by its `N · L` alone; in general a pixel counts its view's steps (times its
+/// contrast steps for the visible statistics), and the weighted nearest-rank percentile is the
+/// first value at which the running weight reaches `max(1, ceil(p W / 100))`. Means are
+/// weighted the same way; fractions are of the views' sampled (or receiver, or served) pixels,
+/// each counted with its view's weight; the maxima are over every served pixel (of contrast
+/// above 0 for `visible_max`); the visible depth range is the union of the views'.
+///
+/// Two passes over each view's receivers, whatever the number of views: one builds every
+/// view's histograms on a bucket key common to all views, the second gathers the values of the
+/// buckets that hold a wanted rank, of the level or of the view itself.
+pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
+    // The bounds of every served value of every part, as in `stats`, for one common key.
+    let mut lo = f64::INFINITY;
+    let mut hi = 0.0f64;
+    let served: Vec<_> = parts.iter().map(|p| served_runs(p.vis, p.splits, p.texel)).collect();
+    for (p, (runs, _)) in parts.iter().zip(&served) {
+        if let (Some((g_lo, g_hi)), false) = (p.vis.factor_range, runs.is_empty()) {
+            let (t_lo, t_hi) = runs
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(r.2), h.max(r.2)));
+            lo = lo.min(t_lo * g_lo);
+            hi = hi.max(t_hi * g_hi);
+        }
+    }
+    let buckets = if lo <= hi {
+        Buckets::new(lo, hi)
+    } else {
+        Buckets::new(1.0, 1.0)
+    };
+    let passes: Vec<PartPass> = parts
+        .iter()
+        .zip(served)
+        .map(|(p, (runs, counts))| first_pass(p, runs, counts, buckets))
+        .collect();
+
+    // The level's histograms and targets, and each part's own.
+    let mut hist = vec![0u128; Buckets::COUNT];
+    let mut whist = vec![0u128; Buckets::COUNT];
+    for (p, pass) in parts.iter().zip(&passes) {
+        for (k, (&h, &w)) in pass.hist.iter().zip(&pass.whist).enumerate() {
+            hist[k] += h as u128 * p.steps as u128;
+            whist[k] += w as u128 * p.steps as u128;
+        }
+    }
+    let level = Targets::new(&hist, &whist, |x| x, |x| x);
+    let own: Vec<Targets> = passes
+        .iter()
+        .map(|pass| Targets::new(&pass.hist, &pass.whist, |x| x as u128, |x| x as u128))
+        .collect();
+
+    // The second pass: every part's values in the level's wanted buckets or its own.
+    let mut level_slot = vec![u8::MAX; Buckets::COUNT];
+    let level_lists = level.mark(&mut level_slot);
+    let mut level_values: Vec<Vec<(f64, u32, u64)>> = vec![Vec::new(); level_lists];
+    let mut own_values: Vec<([f64; 3], [f64; 3])> = Vec::with_capacity(parts.len());
+    for ((p, pass), targets) in parts.iter().zip(&passes).zip(&own) {
+        let mut slot = vec![u8::MAX; Buckets::COUNT];
+        let mut lists: Vec<Vec<(f64, u32, u64)>> = vec![Vec::new(); targets.mark(&mut slot)];
+        let g = &p.vis.receivers;
+        let weights = &p.vis.weights;
+        for &(a, b, t) in &pass.runs {
+            for (&(_, gk), &wk) in g[a..b].iter().zip(&weights[a..b]) {
+                let m = t * gk;
+                let key = buckets.key(m);
+                let (s, l) = (slot[key], level_slot[key]);
+                if s != u8::MAX {
+                    lists[s as usize].push((m, wk, 1));
+                }
+                if l != u8::MAX {
+                    level_values[l as usize].push((m, wk, p.steps));
+                }
+            }
+        }
+        for l in &mut lists {
+            l.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+        }
+        own_values.push(targets.resolve(&slot, &lists));
+    }
+    for l in &mut level_values {
+        l.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+    }
+    let level_p = level.resolve(&level_slot, &level_values);
+
+    let views: Vec<ScreenStats> = parts
+        .iter()
+        .zip(&passes)
+        .zip(&own_values)
+        .map(|((p, pass), &(plain, weighted))| {
+            let receivers = p.vis.receivers.len();
+            let n = pass.n;
+            let (mean, under) = if n == 0 {
+                (0.0, 0.0)
+            } else {
+                (pass.sum / n as f64, pass.under as f64 / n as f64)
+            };
+            let total = p.vis.sample_count().max(1) as f64;
+            let (visible_z_lo, visible_z_hi) = p.visible.unwrap_or((0.0, 0.0));
+            ScreenStats {
+                receiver_fraction: receivers as f64 / total,
+                self_shadowed_fraction: p.vis.self_shadowed as f64 / total,
+                aliasing_mean: mean,
+                aliasing_p50: plain[0],
+                aliasing_p95: plain[1],
+                aliasing_p99: plain[2],
+                aliasing_max: pass.max,
+                undersampled_fraction: under,
+                visible_mean: if pass.wtotal > 0 {
+                    pass.wsum / pass.wtotal as f64
+                } else {
+                    0.0
+                },
+                visible_p50: weighted[0],
+                visible_p95: weighted[1],
+                visible_p99: weighted[2],
+                visible_max: pass.wmax,
+                visible_z_lo,
+                visible_z_hi,
+                cascade_pixels: pass
+                    .counts
+                    .iter()
+                    .map(|&c| {
+                        if receivers == 0 {
+                            0.0
+                        } else {
+                            c as f64 / receivers as f64
+                        }
+                    })
+                    .collect(),
+            }
+        })
+        .collect();
+
+    // The level: every count and sum weighted by its view's steps (whole numbers; the sums of
+    // values are each view's own sum times its steps).
+    let weighted_ratio = |num: &dyn Fn(usize) -> u128, den: &dyn Fn(usize) -> u128| {
+        let (mut a, mut b) = (0u128, 0u128);
+        for (k, p) in parts.iter().enumerate() {
+            a += num(k) * p.steps as u128;
+            b += den(k) * p.steps as u128;
+        }
+        (a as f64, b as f64)
+    };
+    let (recv, samples) = weighted_ratio(&|k| parts[k].vis.receivers.len() as u128, &|k| {
+        parts[k].vis.sample_count().max(1) as u128
+    });
+    let (shadowed, _) = weighted_ratio(&|k| parts[k].vis.self_shadowed as u128, &|_| 0);
+    let (under, served) = weighted_ratio(&|k| passes[k].under as u128, &|k| passes[k].n as u128);
+    let sum: f64 = parts.iter().zip(&passes).map(|(p, x)| p.steps as f64 * x.sum).sum();
+    let wsum: f64 = parts.iter().zip(&passes).map(|(p, x)| p.steps as f64 * x.wsum).sum();
+    let cascades = passes.iter().map(|x| x.counts.len()).max().unwrap_or(0);
+    let cascade_pixels = (0..cascades)
+        .map(|i| {
+            let (c, _) = weighted_ratio(&|k| passes[k].counts.get(i).copied().unwrap_or(0) as u128, &|_| 0);
+            if recv > 0.0 {
+                c / recv
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let visible = parts
+        .iter()
+        .filter_map(|p| p.visible)
+        .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)));
+    let (visible_z_lo, visible_z_hi) = visible.unwrap_or((0.0, 0.0));
+    let level = ScreenStats {
+        receiver_fraction: recv / samples,
+        self_shadowed_fraction: shadowed / samples,
+        aliasing_mean: if served > 0.0 { sum / served } else { 0.0 },
+        aliasing_p50: level_p.0[0],
+        aliasing_p95: level_p.0[1],
+        aliasing_p99: level_p.0[2],
+        aliasing_max: passes.iter().fold(0.0, |a, x| if x.max > a { x.max } else { a }),
+        undersampled_fraction: if served > 0.0 { under / served } else { 0.0 },
+        visible_mean: if level.contrast_total > 0 {
+            wsum / level.contrast_total as f64
+        } else {
+            0.0
+        },
+        visible_p50: level_p.1[0],
+        visible_p95: level_p.1[1],
+        visible_p99: level_p.1[2],
+        visible_max: passes.iter().fold(0.0, |a, x| if x.wmax > a { x.wmax } else { a }),
+        visible_z_lo,
+        visible_z_hi,
+        cascade_pixels,
+    };
+    Pooled { level, views }
+}
+
+/// A share pooled over views: `Σ s_k a_k / Σ s_k b_k` for each view's count `a_k` out of
+/// `b_k` and its weight steps `s_k`; 0 when the weighted denominator is 0.
+pub fn pooled_share(parts: &[(u64, u64, u64)]) -> f64 {
+    let (mut a, mut b) = (0u128, 0u128);
+    for &(num, den, steps) in parts {
+        a += num as u128 * steps as u128;
+        b += den as u128 * steps as u128;
+    }
+    if b == 0 {
+        0.0
+    } else {
+        a as f64 / b as f64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -439,5 +814,189 @@ mod tests {
                 .collect();
             assert_eq!(got, want, "n = {n}, spread = {spread}");
         }
+    }
+
+    /// A synthetic pass: `n` receivers at increasing depths in [1, 200) with factors spread
+    /// over `spread` octaves and contrast weights (some 0), among `n + extra` samples.
+    fn synthetic(seed: u64, n: usize, spread: f64, extra: usize) -> Visibility {
+        use crate::geometry::{CameraPose, Lens};
+        let mut rng = crate::rng::SplitMix64::new(seed);
+        let mut depths: Vec<f64> = (0..n).map(|_| 1.0 + 199.0 * rng.unit()).collect();
+        depths.sort_by(f64::total_cmp);
+        let receivers: Vec<(f64, f64)> = depths
+            .iter()
+            .map(|&d| (d, 0.05 * (spread * rng.unit()).exp2()))
+            .collect();
+        let weights: Vec<u32> = (0..n)
+            .map(|k| {
+                if k % 7 == 0 {
+                    0
+                } else {
+                    crate::visibility::contrast_weight(rng.unit())
+                }
+            })
+            .collect();
+        let factor_range = receivers.iter().fold(None, |r: Option<(f64, f64)>, &(_, g)| {
+            Some(r.map_or((g, g), |(lo, hi)| (lo.min(g), hi.max(g))))
+        });
+        let view = crate::visibility::View {
+            pose: CameraPose::look_at(glam::DVec3::ZERO, glam::DVec3::NEG_Z, glam::DVec3::Y).unwrap(),
+            lens: Lens::new(1.0, 1.5),
+            near: 0.1,
+            far: 500.0,
+            width: 64,
+            height: 48,
+            scale: 1.0,
+            light: glam::DVec3::NEG_Y,
+        };
+        Visibility {
+            view,
+            cols: 1,
+            rows: (n + extra) as u32,
+            samples: vec![None; n + extra],
+            receivers,
+            weights,
+            self_shadowed: extra / 2,
+            depth_range: Some((1.0, 200.0)),
+            factor_range,
+        }
+    }
+
+    /// Brute force over the pooled pixels: every served `(m, N·L steps, view steps)` listed,
+    /// sorted by value, and the weighted nearest-rank values found by a running sum in 128-bit
+    /// whole numbers (plain: each pixel counts its view's steps; visible: contrast × steps).
+    fn brute_percentiles(parts: &[PoolPart<'_>]) -> ([f64; 3], [f64; 3], f64, f64, usize) {
+        let mut all: Vec<(f64, u128, u128)> = Vec::new();
+        for p in parts {
+            for (k, &(d, g)) in p.vis.receivers.iter().enumerate() {
+                let m = p.splits.len() - 1;
+                if d < p.splits[0] || d > p.splits[m] {
+                    continue;
+                }
+                // The cascade by a linear search (independent of `cascade_at`'s).
+                let mut i = 0;
+                while i + 1 < m && d >= p.splits[i + 1] {
+                    i += 1;
+                }
+                let s = p.steps as u128;
+                all.push((p.texel[i] * g, s, p.vis.weights[k] as u128 * s));
+            }
+        }
+        all.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let pick = |which: usize| -> [f64; 3] {
+            let w = |x: &(f64, u128, u128)| if which == 0 { x.1 } else { x.2 };
+            let total: u128 = all.iter().map(w).sum();
+            [50u128, 95, 99].map(|p| {
+                if total == 0 {
+                    return 0.0;
+                }
+                let mut run = 0u128;
+                for x in &all {
+                    run += w(x);
+                    if w(x) > 0 && run * 100 >= p * total {
+                        return x.0;
+                    }
+                }
+                unreachable!()
+            })
+        };
+        let max = all.iter().map(|x| x.0).fold(0.0, f64::max);
+        let vmax = all.iter().filter(|x| x.2 > 0).map(|x| x.0).fold(0.0, f64::max);
+        (pick(0), pick(1), max, vmax, all.len())
+    }
+
+    /// The level's percentiles are those of a brute-force pool of every view's served pixels,
+    /// each view's own statistics are `stats` of that view alone, and the pooled fractions are
+    /// the step-weighted counts; over views of different sizes, spreads, cascade counts and
+    /// weights (1, 2.5, 0.25 and an unserved view).
+    #[test]
+    fn pooled_percentiles_equal_a_brute_force_pool() {
+        let vis: Vec<Visibility> = [
+            (1, 3000, 4.0, 500),
+            (2, 800, 10.0, 0),
+            (3, 1, 1.0, 9),
+            (4, 12000, 2.0, 100),
+        ]
+        .iter()
+        .map(|&(seed, n, spread, extra)| synthetic(seed, n, spread, extra))
+        .collect();
+        let splits: [Vec<f64>; 4] = [
+            vec![0.5, 10.0, 40.0, 150.0],
+            vec![2.0, 30.0, 60.0, 90.0, 120.0, 210.0],
+            vec![0.5, 300.0],
+            vec![5.0, 12.0, 100.0],
+        ];
+        let texels: [Vec<f64>; 4] = [
+            vec![0.05, 0.2, 0.8],
+            vec![0.1, 0.3, 0.4, 0.9, 1.7],
+            vec![2.0],
+            vec![0.07, 0.5],
+        ];
+        for weights in [[1.0, 1.0, 1.0, 1.0], [2.5, 1.0, 0.25, 3.0], [1.0, 0.001, 7.0, 1.0]] {
+            let parts: Vec<PoolPart<'_>> = (0..4)
+                .map(|k| PoolPart {
+                    vis: &vis[k],
+                    splits: &splits[k],
+                    texel: &texels[k],
+                    visible: Some((1.0 + k as f64, 100.0 + k as f64)),
+                    steps: view_weight_steps(weights[k]),
+                })
+                .collect();
+            let pooled = pool(&parts);
+            for (k, p) in parts.iter().enumerate() {
+                assert_eq!(pooled.views[k], stats(p.vis, p.splits, p.texel, p.visible), "view {k}");
+            }
+            let (plain, visible, max, vmax, served) = brute_percentiles(&parts);
+            let l = &pooled.level;
+            assert_eq!([l.aliasing_p50, l.aliasing_p95, l.aliasing_p99], plain, "{weights:?}");
+            assert_eq!([l.visible_p50, l.visible_p95, l.visible_p99], visible, "{weights:?}");
+            assert_eq!((l.aliasing_max, l.visible_max), (max, vmax));
+            assert!(served > 0);
+            // Fractions: step-weighted counts.
+            let steps: Vec<f64> = parts.iter().map(|p| p.steps as f64).collect();
+            let recv: f64 = (0..4).map(|k| steps[k] * vis[k].receivers.len() as f64).sum();
+            let samples: f64 = (0..4).map(|k| steps[k] * vis[k].samples.len() as f64).sum();
+            assert!((l.receiver_fraction - recv / samples).abs() < 1e-15);
+            let w_mean: f64 = (0..4)
+                .map(|k| steps[k] * pooled.views[k].aliasing_mean * served_of(&parts[k]) as f64)
+                .sum::<f64>()
+                / (0..4).map(|k| steps[k] * served_of(&parts[k]) as f64).sum::<f64>();
+            assert!(
+                (l.aliasing_mean - w_mean).abs() <= 1e-12 * w_mean,
+                "{} vs {w_mean}",
+                l.aliasing_mean
+            );
+            assert_eq!((l.visible_z_lo, l.visible_z_hi), (1.0, 103.0));
+            assert_eq!(l.cascade_pixels.len(), 5);
+        }
+    }
+
+    fn served_of(p: &PoolPart<'_>) -> usize {
+        let m = p.splits.len() - 1;
+        p.vis
+            .receivers
+            .iter()
+            .filter(|&&(d, _)| d >= p.splits[0] && d <= p.splits[m])
+            .count()
+    }
+
+    /// A level of one view is that view, and two identical views (any equal weights) are one.
+    #[test]
+    fn one_view_and_two_identical_views_equal_the_single_view_statistics() {
+        let vis = synthetic(9, 5000, 6.0, 300);
+        let (splits, texel) = (vec![1.0, 8.0, 30.0, 90.0, 180.0], vec![0.02, 0.1, 0.4, 1.1]);
+        let alone = stats(&vis, &splits, &texel, Some((1.0, 180.0)));
+        let part = |w: f64| PoolPart {
+            vis: &vis,
+            splits: &splits,
+            texel: &texel,
+            visible: Some((1.0, 180.0)),
+            steps: view_weight_steps(w),
+        };
+        assert_eq!(pool(&[part(1.0)]).level, alone);
+        assert_eq!(pool(&[part(1.0), part(1.0)]).level, alone);
+        assert_eq!(pool(&[part(4.0), part(4.0), part(4.0)]).level, alone);
+        // Weights only matter relative to each other: one view of weight 3 is still itself.
+        assert_eq!(pool(&[part(3.0)]).level.aliasing_p95, alone.aliasing_p95);
     }
 }

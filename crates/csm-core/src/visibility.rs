@@ -342,6 +342,9 @@ pub struct SceneGeometry {
     cache: Mutex<Vec<Arc<Visibility>>>,
     /// Cast rays, one per view without its light.
     hits_cache: Mutex<Vec<Arc<Hits>>>,
+    /// How many passes (and cast rays) the caches keep: [`CACHED_PASSES`], or more once a
+    /// level of many views asks for it ([`SceneGeometry::keep_at_least`]).
+    capacity: std::sync::atomic::AtomicUsize,
 }
 
 /// The view without its light: the key of the light-independent part.
@@ -362,7 +365,18 @@ impl SceneGeometry {
             tracer: OnceLock::new(),
             cache: Mutex::new(Vec::new()),
             hits_cache: Mutex::new(Vec::new()),
+            capacity: std::sync::atomic::AtomicUsize::new(CACHED_PASSES),
         }
+    }
+
+    /// Keeps at least `n` passes (and as many cast rays) from now on: a level of `n` views
+    /// shares one pass per view between every setting of a sweep only if none is evicted.
+    pub fn keep_at_least(&self, n: usize) {
+        self.capacity.fetch_max(n, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    fn capacity(&self) -> usize {
+        self.capacity.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// The rays of a view cast (its light ignored), computed once per camera and screen and
@@ -377,7 +391,7 @@ impl SceneGeometry {
         }
         let h = Arc::new(self.cast_rays(&key));
         let mut cache = self.hits_cache.lock().unwrap_or_else(|e| e.into_inner());
-        if cache.len() >= CACHED_PASSES {
+        if cache.len() >= self.capacity() {
             cache.remove(0);
         }
         cache.push(h.clone());
@@ -393,7 +407,7 @@ impl SceneGeometry {
         let v = Arc::new(self.cast(view));
         let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
         // A few views at most (one per camera pose and light analysed); keep the latest ones.
-        if cache.len() >= CACHED_PASSES {
+        if cache.len() >= self.capacity() {
             cache.remove(0);
         }
         cache.push(v.clone());

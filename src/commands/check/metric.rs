@@ -131,6 +131,7 @@ mod tests {
                 jump_unsnapped: 1.25,
             }),
             truth: None,
+            views: Vec::new(),
         };
         let json = serde_json::to_value(&s).unwrap();
         // The registry writes every key as serde would (same JSON type: bool, integer, float).

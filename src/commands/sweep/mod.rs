@@ -10,6 +10,7 @@
 
 pub mod flicker;
 pub mod grid;
+pub mod level;
 pub(crate) mod light;
 pub mod optimize;
 pub mod rank;
@@ -84,6 +85,9 @@ pub struct SweepResult {
     pub optimized: Option<Optimized>,
     /// S3, S4 and the measured flicker S5 of a sample of the rows (`--ground-truth`).
     pub flicker: Option<FlickerSample>,
+    /// A level of views: each view's own choice, the level's cost to it and the worst view
+    /// ([`level::choose`]); None without configured views or scene geometry.
+    pub level: Option<level::LevelChoice>,
     /// `--shard K/N`: these rows are one slice of the grid, which decides nothing (only `merge`
     /// of every slice does): the shard writes its rows, and no front, recommendation, report
     /// or worst sun is read from it ([`SweepResult::into_slice`]).
@@ -132,6 +136,7 @@ impl SweepResult {
         let range_edges = rank::range_edges(&config, &grid, &rows, recommendation.as_ref());
         let at = recommendation.as_ref().map(|x| x.index).or(configured).unwrap_or(0);
         let light_update = light::choose(&grid, &rows, at);
+        let level = level::choose(&rows, recommendation.as_ref(), configured, budget_mib, objective);
         let engine_setting = terms::for_sweep(
             &config,
             &command,
@@ -164,6 +169,7 @@ impl SweepResult {
             engine_setting,
             optimized: None,
             flicker: None,
+            level,
             slice: None,
         })
     }

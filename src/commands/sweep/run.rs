@@ -41,15 +41,22 @@ pub(crate) fn run_settings(
             })
         })
     };
+    let mut warmed_views = None;
     for s in settings {
         // The visibility pass is made once, before the parallel part, and shared by every row.
         // Under swept sun angles only its rays are: each angle shades them in the parallel
         // part (the rows of one angle are consecutive and share that shading).
-        let setup = point(s)?.setup();
+        let config = point(s)?;
+        let setup = config.setup();
         if s.sun.is_some() {
             let _ = setup.visibility_hits();
         } else {
             let _ = setup.visibility();
+        }
+        // A level's views: one pass per view (per sun angle: its rays), for every row.
+        if !config.views.is_empty() && warmed_views != Some(s.sun) {
+            crate::analysis::warm_views(&config, s.sun.is_some());
+            warmed_views = Some(s.sun);
         }
     }
     let work = || {
