@@ -885,7 +885,7 @@ fn rest_sentence(r: &SweepResult, front_left: usize) -> String {
 /// rivals lost; its tables show the Pareto front and the top rows, with every metric defined
 /// under them; a figure too large to inline is linked ([`html::figure_bounded`]), so the page
 /// stays small at any grid size.
-pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
+pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)], plan: Option<&[u8]>) -> Vec<u8> {
     let mut h = String::new();
     h.push_str("<h2>Verdict</h2>\n");
     let _ = writeln!(h, "<div class=\"rec-box\"><p>{}</p>", html::escape(&why_text(r)));
@@ -923,6 +923,13 @@ pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) ->
     );
     h.push_str("<h2>Scene</h2>\n");
     h.push_str(&html::facts(&scene_facts(&r.config, &r.rows)));
+    // Where the views stand (plan.png), with scene geometry.
+    if let Some(png) = plan {
+        h.push_str(&html::png_figures(&[(
+            png.to_vec(),
+            crate::figures::plan::caption(&r.config, None),
+        )]));
+    }
     // The camera view of the recommended configuration, with scene geometry.
     if let (Some(rec), Some(_)) = (r.recommended(), &r.config.geometry) {
         if let Ok(cfg) = rec.setting.apply(&r.config) {
@@ -1104,7 +1111,23 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
             super::flicker_sample::csv(r, s)?,
         ));
     }
-    files.push(("report.html".to_string(), report_html(r, &figures)));
+    // The plan of the level's views, with scene geometry and plots; the report inlines a copy
+    // at the figure's own size, so the page stays small.
+    let (plan, plan_inline) = if plots {
+        (
+            crate::figures::plan::plan_png(&r.config, None, None, 2.0)?,
+            crate::figures::plan::plan_png(&r.config, None, None, 1.0)?,
+        )
+    } else {
+        (None, None)
+    };
+    if let Some(png) = plan {
+        files.push((crate::figures::plan::FILE.to_string(), png));
+    }
+    files.push((
+        "report.html".to_string(),
+        report_html(r, &figures, plan_inline.as_deref()),
+    ));
     files.push(("report.md".to_string(), report_md(r, &figures)));
     if let Some(s) = &r.engine_setting {
         files.push(super::terms::file(s));
