@@ -181,9 +181,11 @@ fn value_range(v: &[f64]) -> (f64, f64) {
 }
 
 impl Plan<'_> {
-    /// The frustum's drawn depth: the far plane, at most a sixth of the drawn extent.
+    /// The frustum's drawn depth: the far plane, at most a sixth of the drawn extent, shorter
+    /// with many views (divided by √(n / 3) past three views) so they stay apart.
     fn frustum_depth(&self, rect: (f64, f64, f64, f64), far: f64) -> f64 {
-        far.min((rect.1 - rect.0).max(rect.3 - rect.2) / 6.0)
+        let crowd = (self.views.len() as f64 / 3.0).max(1.0).sqrt();
+        far.min((rect.1 - rect.0).max(rect.3 - rect.2) / (6.0 * crowd))
     }
 
     /// The overlay SVG, the pixel rectangle of its plotting area (left, top, right, bottom) and
@@ -504,5 +506,71 @@ mod tests {
         };
         assert!(at(0.5, 2.5) < at(-8.0, -8.0));
         assert!(c.iter().all(|p| p[0] < 255));
+    }
+
+    /// The centre of the pixels of exactly `colour` left of the key, in SVG units (the PNG is
+    /// drawn at scale 1), and their count.
+    fn centroid(png: &[u8], colour: [u8; 3]) -> ((f64, f64), usize) {
+        let mut reader = png::Decoder::new(std::io::Cursor::new(png)).read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        let (mut sx, mut sy, mut n) = (0.0, 0.0, 0);
+        for y in 0..info.height {
+            for x in 0..(SIZE.0 - KEY_W) {
+                let o = ((y * info.width + x) * 3) as usize;
+                if buf[o..o + 3] == colour {
+                    sx += f64::from(x);
+                    sy += f64::from(y);
+                    n += 1;
+                }
+            }
+        }
+        ((sx / n.max(1) as f64, sy / n.max(1) as f64), n)
+    }
+
+    #[test]
+    fn views_take_the_colour_of_their_value_and_the_worst_is_ringed() {
+        let mut m = Mesh::default();
+        m.add_ground(0.0, -50.0, 50.0, -50.0, 50.0);
+        let scene = SceneGeometry::new(m);
+        let camera = |name: &str, x: f64| ViewSettings {
+            name: name.to_string(),
+            camera: crate::config::CameraSettings {
+                position: DVec3::new(x, 2.0, 20.0),
+                target: DVec3::new(x, 0.0, 0.0),
+                up: DVec3::Y,
+                fov_y_deg: 50.0,
+                near: 0.1,
+                far: 100.0,
+            },
+            weight: 1.0,
+        };
+        let views = [camera("low", -30.0), camera("high", 30.0)];
+        let values = [1.0, 3.0];
+        let plan = Plan {
+            title: "test".to_string(),
+            scene: &scene,
+            bounds: scene.mesh.bounds().unwrap(),
+            views: &views,
+            aspect: 16.0 / 9.0,
+            values: Some(("objective", &values)),
+            worst: Some(1),
+            light: DVec3::new(0.3, -1.0, 0.2).normalize(),
+        };
+        let png = plan.png(1.0).unwrap();
+        let rgb = |c: RGBColor| [c.0, c.1, c.2];
+        // The lowest value takes the colour map's start, the highest its end, each at its eye.
+        let ((lx, ly), n_low) = centroid(&png, rgb(colormap(0.0)));
+        let ((hx, hy), n_high) = centroid(&png, rgb(colormap(1.0)));
+        assert!(n_low > 20 && n_high > 20, "{n_low} {n_high}");
+        // 60 world units apart in x, on one row: the high view to the right.
+        assert!(hx - lx > 100.0 && (hy - ly).abs() < 1.0, "({lx}, {ly}) ({hx}, {hy})");
+        // The red ring goes round the worst (high) view.
+        let ((rx, ry), n_ring) = centroid(&png, rgb(palette::MARKED));
+        assert!(n_ring > 20, "{n_ring}");
+        assert!(
+            (rx - hx).abs() < 1.5 && (ry - hy).abs() < 1.5,
+            "ring ({rx}, {ry}) dot ({hx}, {hy})"
+        );
     }
 }
