@@ -1,4 +1,5 @@
-//! glTF scenes: the triangles of a `.gltf` or `.glb` file's default scene, in world space.
+//! glTF scenes: the triangles of a `.gltf` or `.glb` file's default scene, in world space, and
+//! its perspective camera nodes and directional lights (`[views] from_gltf`, `[light] from_gltf`).
 //!
 //! Every node of the default scene (the first scene when none is marked default) is visited
 //! with its transform composed down the hierarchy (glTF's column-major matrices, or
@@ -6,10 +7,55 @@
 //! triangles (indexed or not). Other modes (points, lines, strips, fans) are skipped. Buffers
 //! come from the GLB binary chunk, a file next to the scene, or a base64 `data:` URI. glTF is
 //! right-handed with +Y up, like csm-lab, and its unit is the metre, read as world units.
+//!
+//! A camera node looks down its local −Z axis with +Y up; its world position is the node's
+//! world transform applied to the origin, its view direction and up that transform applied to
+//! −Z and +Y (normalised). A `KHR_lights_punctual` directional light shines along its node's
+//! −Z in world space. Nodes are visited depth first in the scene's order, so "the first light"
+//! is the first met that way.
 
 use std::path::Path;
 
 use glam::{DMat4, DVec3};
+
+/// A perspective camera node of the default scene, in world space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GltfCamera {
+    /// The node's name (None when it has none or an empty one).
+    pub name: Option<String>,
+    /// The node's index in the file.
+    pub node: usize,
+    pub position: DVec3,
+    /// Unit view direction: the node's −Z in world space.
+    pub forward: DVec3,
+    /// The node's +Y in world space (unit).
+    pub up: DVec3,
+    /// Vertical field of view, radians, as the file gives it.
+    pub yfov: f64,
+    /// The camera's aspect ratio (width / height), when the file gives one.
+    pub aspect: Option<f64>,
+}
+
+/// A `KHR_lights_punctual` directional light of the default scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GltfLight {
+    pub name: Option<String>,
+    pub node: usize,
+    /// Unit direction the light travels: its node's −Z in world space.
+    pub direction: DVec3,
+}
+
+/// What csm-lab reads from a glTF file: triangles, camera nodes and directional lights.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GltfScene {
+    pub triangles: Vec<[DVec3; 3]>,
+    /// Perspective camera nodes, in visiting order.
+    pub cameras: Vec<GltfCamera>,
+    /// Camera nodes with an orthographic projection (not read: a player camera is perspective).
+    pub orthographic_cameras: usize,
+    /// Directional lights, in visiting order.
+    pub directional_lights: Vec<GltfLight>,
+}
 
 /// The world-space triangles of the file's default scene, or why they cannot be read (a
 /// sentence for the error message; never a panic).
@@ -19,6 +65,12 @@ use glam::{DMat4, DVec3};
 /// (an absolute path, a `..` component, another scheme) is refused unless `outside_buffers`
 /// (`scene.gltf_outside_buffers = true`).
 pub fn read_gltf(path: &Path, outside_buffers: bool) -> Result<Vec<[DVec3; 3]>, String> {
+    read_gltf_scene(path, outside_buffers).map(|s| s.triangles)
+}
+
+/// The file's default scene: triangles as [`read_gltf`], plus its camera nodes and directional
+/// lights.
+pub fn read_gltf_scene(path: &Path, outside_buffers: bool) -> Result<GltfScene, String> {
     let bytes = read_file(path)?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| format!("not a valid glTF file: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new("."));
@@ -45,18 +97,108 @@ pub fn read_gltf(path: &Path, outside_buffers: bool) -> Result<Vec<[DVec3; 3]>, 
         .default_scene()
         .or_else(|| gltf.scenes().next())
         .ok_or("the file has no scene")?;
-    let mut out = Vec::new();
+    let mut out = GltfScene::default();
+    let json = gltf.document.as_json();
     for node in scene.nodes() {
-        visit(&node, DMat4::IDENTITY, &buffers, &mut out, 0)?;
+        visit(&node, DMat4::IDENTITY, &buffers, json, &mut out, 0)?;
     }
     Ok(out)
+}
+
+/// A node's name, None when absent or empty.
+fn node_name(node: &gltf::Node<'_>) -> Option<String> {
+    node.name().filter(|n| !n.trim().is_empty()).map(str::to_string)
+}
+
+/// The camera or light a node carries, read from the JSON with every index checked (the
+/// crate's accessors unwrap some of them).
+fn node_extras(
+    node: &gltf::Node<'_>,
+    world: DMat4,
+    json: &gltf::json::Root,
+    out: &mut GltfScene,
+) -> Result<(), String> {
+    use gltf::json::validation::Checked;
+    let axis = |v: DVec3, what: &str| -> Result<DVec3, String> {
+        world.transform_vector3(v).try_normalize().ok_or_else(|| {
+            format!(
+                "node {}: its world transform turns the {what} axis into a zero or non-finite vector",
+                node.index()
+            )
+        })
+    };
+    if let Some(camera) = node.camera() {
+        let cam = json.cameras.get(camera.index()).ok_or_else(|| {
+            format!(
+                "node {} names camera {}, which the file does not have",
+                node.index(),
+                camera.index()
+            )
+        })?;
+        match (&cam.type_, &cam.perspective) {
+            (Checked::Valid(gltf::json::camera::Type::Perspective), Some(p)) => {
+                let position = world.transform_point3(DVec3::ZERO);
+                if !position.is_finite() {
+                    return Err(format!("node {}: camera position is not finite", node.index()));
+                }
+                out.cameras.push(GltfCamera {
+                    name: node_name(node),
+                    node: node.index(),
+                    position,
+                    forward: axis(DVec3::NEG_Z, "camera's view (−Z)")?,
+                    up: axis(DVec3::Y, "camera's up (+Y)")?,
+                    yfov: f64::from(p.yfov),
+                    aspect: p.aspect_ratio.map(f64::from),
+                });
+            }
+            (Checked::Valid(gltf::json::camera::Type::Orthographic), _) => out.orthographic_cameras += 1,
+            _ => {
+                return Err(format!(
+                    "camera {} (node {}) is marked perspective but has no perspective projection",
+                    camera.index(),
+                    node.index()
+                ))
+            }
+        }
+    }
+    let light = json
+        .nodes
+        .get(node.index())
+        .and_then(|n| n.extensions.as_ref())
+        .and_then(|e| e.khr_lights_punctual.as_ref())
+        .map(|l| l.light.value());
+    if let Some(index) = light {
+        let lights = json
+            .extensions
+            .as_ref()
+            .and_then(|e| e.khr_lights_punctual.as_ref())
+            .map_or(&[][..], |l| &l.lights[..]);
+        let l = lights.get(index).ok_or_else(|| {
+            format!(
+                "node {} names light {index}, which the file does not have",
+                node.index()
+            )
+        })?;
+        if matches!(
+            l.type_,
+            Checked::Valid(gltf::json::extensions::scene::khr_lights_punctual::Type::Directional)
+        ) {
+            out.directional_lights.push(GltfLight {
+                name: node_name(node),
+                node: node.index(),
+                direction: axis(DVec3::NEG_Z, "light's (−Z)")?,
+            });
+        }
+    }
+    Ok(())
 }
 
 fn visit(
     node: &gltf::Node<'_>,
     parent: DMat4,
     buffers: &[Vec<u8>],
-    out: &mut Vec<[DVec3; 3]>,
+    json: &gltf::json::Root,
+    scene: &mut GltfScene,
     level: usize,
 ) -> Result<(), String> {
     if level > 256 {
@@ -65,6 +207,8 @@ fn visit(
     let local = node.transform().matrix();
     let local = DMat4::from_cols_array_2d(&local.map(|c| c.map(f64::from)));
     let world = parent * local;
+    node_extras(node, world, json, scene)?;
+    let out = &mut scene.triangles;
     if let Some(mesh) = node.mesh() {
         for primitive in mesh.primitives() {
             if primitive.mode() != gltf::mesh::Mode::Triangles {
@@ -111,7 +255,7 @@ fn visit(
         }
     }
     for child in node.children() {
-        visit(&child, world, buffers, out, level + 1)?;
+        visit(&child, world, buffers, json, scene, level + 1)?;
     }
     Ok(())
 }

@@ -12,6 +12,7 @@ pub(crate) use light_motion::{light_update_label, parse_light_update_list};
 mod location;
 mod path_file;
 mod schema;
+mod view_sources;
 /// Exactly three numbers (a fourth is an error) for `[x, y, z]` keys of preset tables too.
 pub(crate) use schema::opt_vec3;
 pub mod sweep_spec;
@@ -36,6 +37,7 @@ pub use csm_core::fitting::Fit;
 pub use csm_core::scene::MotionPath;
 pub use csm_core::scene::{Precision, SnapSpace};
 pub use gltf_file::read_gltf;
+pub(crate) use gltf_file::{read_gltf_scene, GltfScene};
 pub use path_file::read_path_file;
 
 /// Largest world coordinate or distance accepted, in world units: far beyond any real world
@@ -463,6 +465,9 @@ pub struct Config {
     /// The level's views when the config names any (`[[view]]`, `[views]`); empty means
     /// `[camera]` is the one view, as before views existed. See [`Config::level_views`].
     pub(crate) views: Vec<ViewSettings>,
+    /// Warnings about the config that do not stop it (a view that sees no receiver, a glTF
+    /// camera's aspect ratio unlike the screen's): printed on stderr when a file is loaded.
+    pub(crate) warnings: Vec<String>,
 }
 
 impl Config {

@@ -15,6 +15,19 @@ pub(crate) const MAX_PATH_FILE_BYTES: u64 = 256 << 20;
 /// Reads a camera path CSV: a header `px,py,pz,tx,ty,tz` and one row per frame
 /// (camera position, then the point it looks at). At least two rows.
 pub fn read_path_file(path: &Path) -> Result<Vec<(DVec3, DVec3)>> {
+    let rows = read_path_rows(path)?;
+    if rows.len() < 2 {
+        return Err(Error::data_file(
+            path,
+            rows.len() + 1,
+            format!("{} pose rows; a path needs at least 2 frames", rows.len()),
+        ));
+    }
+    Ok(rows)
+}
+
+/// The rows of a camera path CSV as [`read_path_file`] reads them, however many (none too).
+pub(crate) fn read_path_rows(path: &Path) -> Result<Vec<(DVec3, DVec3)>> {
     let rows: Vec<(DVec3, DVec3)> = read_number_rows(
         path,
         "a motion path file",
@@ -23,13 +36,6 @@ pub fn read_path_file(path: &Path) -> Result<Vec<(DVec3, DVec3)>> {
     )?
     .map(|row| row.map(|(v, _)| (DVec3::new(v[0], v[1], v[2]), DVec3::new(v[3], v[4], v[5]))))
     .collect::<Result<_>>()?;
-    if rows.len() < 2 {
-        return Err(Error::data_file(
-            path,
-            rows.len() + 1,
-            format!("{} pose rows; a path needs at least 2 frames", rows.len()),
-        ));
-    }
     Ok(rows)
 }
 

@@ -6,8 +6,8 @@ use serde::Deserialize;
 use toml::Spanned;
 
 /// csm-lab's own top-level tables.
-pub(crate) const SECTIONS: [&str; 9] = [
-    "camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep", "view",
+pub(crate) const SECTIONS: [&str; 10] = [
+    "camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep", "view", "views",
 ];
 
 /// The whole file: csm-lab's tables, and every other top-level key (engine tables or unknown).
@@ -79,6 +79,8 @@ pub(crate) struct RawConfig {
     /// `[[view]]`: the level's named views (issue 22); none keeps `[camera]` as the one view.
     #[serde(default)]
     pub(crate) view: Vec<RawView>,
+    /// `[views]`: views from the glTF's cameras, a recorded path, or sampled player positions.
+    pub(crate) views: Option<RawViews>,
 }
 
 /// One `[[view]]`: a named camera pose; `[camera]` gives what it leaves out (up, field of
@@ -95,6 +97,25 @@ pub(crate) struct RawView {
     pub(crate) up: Option<[f64; 3]>,
     pub(crate) fov_y_deg: Option<f64>,
     pub(crate) weight: Option<f64>,
+}
+
+/// `[views]`: where the level's views come from besides `[[view]]` entries.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawViews {
+    /// Every perspective camera node of `scene.gltf`.
+    pub(crate) from_gltf: Option<bool>,
+    /// A path file (`"file.csv"`, columns px,py,pz,tx,ty,tz) or `true`: the configured motion path.
+    pub(crate) from_path: Option<toml::Value>,
+    /// Every k-th pose of the path (default 1).
+    pub(crate) every: Option<i64>,
+    /// Player positions sampled on walkable surfaces.
+    pub(crate) sample: Option<i64>,
+    pub(crate) seed: Option<i64>,
+    pub(crate) eye_height: Option<f64>,
+    pub(crate) max_slope_deg: Option<f64>,
+    /// `[lo, hi]` degrees, positive looks up.
+    pub(crate) pitch_deg: Option<Vec<f64>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -121,8 +142,10 @@ pub(crate) struct RawScreen {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawLight {
-    #[serde(deserialize_with = "vec3")]
-    pub(crate) direction: [f64; 3],
+    #[serde(default, deserialize_with = "opt_vec3")]
+    pub(crate) direction: Option<[f64; 3]>,
+    /// The first `KHR_lights_punctual` directional light of `scene.gltf` instead of `direction`.
+    pub(crate) from_gltf: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]

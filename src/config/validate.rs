@@ -46,9 +46,10 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
     let views = views(&raw.view, v, &camera, &moved)?;
     let width = v.int_range("screen.width", raw.screen.width, 1, 1 << 20)? as u32;
     let height = v.int_range("screen.height", raw.screen.height, 1, 1 << 20)? as u32;
-    let (light_direction, dir_raw) = light_direction(&raw.light, v)?;
-    // Scene: bounds, geometry, and the bounds defaulting to the geometry's.
-    let (scene, geometry) = scene(&raw.scene, v, base_dir, world_offset, &moved)?;
+    // Scene: bounds, geometry, and the bounds defaulting to the geometry's; the glTF's cameras
+    // and lights for `[views] from_gltf` and `[light] from_gltf`.
+    let (scene, geometry, gltf) = scene(&raw.scene, v, base_dir, world_offset, &moved)?;
+    let (light_direction, dir_raw) = light_direction(&raw.light, v, gltf.as_ref())?;
 
     let mut s = raw.shadow;
     let light_update = s.light_update.take();
@@ -84,7 +85,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         .map(|s| super::sweep_spec::validate_raw(s, v, geometry.is_some()))
         .transpose()?;
 
-    let config = Config {
+    let mut config = Config {
         name: "config".to_string(),
         path: None,
         camera,
@@ -105,8 +106,12 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         },
         truth,
         views,
+        warnings: Vec::new(),
     };
     check_camera_path(&config, v)?;
+    super::view_sources::add_views(&mut config, raw.views.as_ref(), v, base_dir, gltf.as_ref())?;
+    // Every view of the level, however it was named: not inside geometry, seeing a receiver.
+    super::view_sources::check_views(&mut config, v)?;
     // The binary32 range check needs the cascades, which an engine preset may change: it runs
     // once the preset is applied (`crate::load`).
     Ok(config)
@@ -336,14 +341,40 @@ fn views(
     Ok(out)
 }
 
-/// `light.direction`: the unit direction light travels, and the direction as written.
-fn light_direction(raw: &super::schema::RawLight, v: &Validator<'_>) -> Result<(DVec3, DVec3)> {
-    let dir_raw = v.vec3("light.direction", raw.direction)?;
+/// `light.direction`, or `light.from_gltf = true` (the glTF's first directional light): the
+/// unit direction light travels, and the direction as written (as read, from the glTF).
+fn light_direction(
+    raw: &super::schema::RawLight,
+    v: &Validator<'_>,
+    gltf: Option<&super::GltfScene>,
+) -> Result<(DVec3, DVec3)> {
+    let direction = match (raw.direction, raw.from_gltf) {
+        (Some(_), Some(true)) => {
+            return Err(v.invalid(
+                "light.from_gltf",
+                true,
+                "either light.direction or light.from_gltf = true, not both",
+            ))
+        }
+        (None, Some(true)) => {
+            let d = super::view_sources::gltf_light(v, gltf)?;
+            return Ok((d, d));
+        }
+        (Some(d), _) => d,
+        (None, _) => {
+            return Err(v.invalid(
+                "light.direction",
+                "(missing)",
+                "the direction light travels, e.g. [0.3, -1.0, 0.2], or light.from_gltf = true",
+            ))
+        }
+    };
+    let dir_raw = v.vec3("light.direction", direction)?;
     let len = dir_raw.length();
     if len <= 1e-12 || !len.is_finite() {
         return Err(v.invalid(
             "light.direction",
-            format!("{:?}", raw.direction),
+            format!("{direction:?}"),
             "a non-zero vector (the direction light travels)",
         ));
     }
@@ -812,7 +843,7 @@ fn scene(
     base_dir: Option<&Path>,
     world_offset: DVec3,
     moved: &dyn Fn(&str, [f64; 3]) -> Result<DVec3>,
-) -> Result<(Aabb, Option<GeometrySettings>)> {
+) -> Result<(Aabb, Option<GeometrySettings>, Option<super::GltfScene>)> {
     let written = match (raw.min, raw.max) {
         (Some(lo), Some(hi)) => {
             let smin = moved("scene.min", lo)?;
@@ -839,9 +870,10 @@ fn scene(
                 "scene.min and scene.max, or scene geometry (scene.ground, [[scene.box]], scene.gltf)",
             )
         })?;
-        return Ok((bounds, None));
+        return Ok((bounds, None, None));
     }
     let mut mesh = csm_core::mesh::Mesh::default();
+    let mut gltf_scene = None;
     let mut boxes = Vec::new();
     for (i, b) in raw.boxes.iter().flatten().enumerate() {
         let lo = moved("scene.box.min", b.min)?;
@@ -866,8 +898,10 @@ fn scene(
                 _ => p,
             };
             let allowed = |why: &str| format!("a readable glTF 2.0 file (.gltf or .glb) with triangles: {why}");
-            let tris = super::read_gltf(&p, raw.gltf_outside_buffers)
+            let mut read = super::read_gltf_scene(&p, raw.gltf_outside_buffers)
                 .map_err(|why| v.invalid("scene.gltf", format!("{name:?}"), &allowed(&why)))?;
+            let tris = std::mem::take(&mut read.triangles);
+            gltf_scene = Some(read);
             if tris.is_empty() {
                 return Err(v.invalid(
                     "scene.gltf",
@@ -922,7 +956,7 @@ fn scene(
         gltf,
         scene: Arc::new(csm_core::visibility::SceneGeometry::new(mesh)),
     };
-    Ok((bounds, Some(geometry)))
+    Ok((bounds, Some(geometry), gltf_scene))
 }
 
 /// `shadow.splits`: `cascades − 1` fractions of the split range, strictly increasing inside

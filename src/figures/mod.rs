@@ -8,6 +8,7 @@
 pub mod analyze;
 pub(crate) mod bench;
 pub(crate) mod compare;
+pub(crate) mod plan;
 pub(crate) mod screen;
 pub(crate) mod sun;
 pub(crate) mod sweep;

@@ -30,6 +30,9 @@ impl Config {
             .filter(|s| !s.trim_matches('.').is_empty())
             .unwrap_or_else(|| "config".to_string());
         let mut config = crate::config::parse(&text, &path.display().to_string(), path.parent())?;
+        for w in &config.warnings {
+            eprintln!("warning: {}: {w}", path.display());
+        }
         config.name = name;
         config.path = Some(path.to_path_buf());
         Ok(config)

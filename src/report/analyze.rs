@@ -29,6 +29,7 @@ pub(crate) fn exporters_for(a: &Analysis) -> Vec<&'static dyn Exporter<Analysis>
     if a.config.geometry.is_some() {
         v.push(&figures::screen::ScreenAliasingPng);
         v.push(&figures::screen::ScreenCascadesPng);
+        v.push(&figures::plan::PlanPng);
     }
     if !a.summary.views.is_empty() {
         v.push(&super::views::ViewsCsv);

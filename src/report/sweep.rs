@@ -952,6 +952,7 @@ pub(crate) fn report_html(
     r: &SweepResult,
     figures: &[(&str, String, Vec<u8>)],
     sheet: Option<&[u8]>,
+    plan: Option<&[u8]>,
 ) -> Result<Vec<u8>> {
     let mut h = String::new();
     h.push_str("<h2>Verdict</h2>\n");
@@ -1004,6 +1005,13 @@ pub(crate) fn report_html(
     );
     h.push_str("<h2>Scene</h2>\n");
     h.push_str(&html::facts(&scene_facts(&r.config, &r.rows)));
+    // Where the views stand (plan.png), with scene geometry.
+    if let Some(png) = plan {
+        h.push_str(&html::png_figures(&[(
+            png.to_vec(),
+            crate::figures::plan::caption(&r.config, None),
+        )]));
+    }
     // The camera view of the recommended configuration, with scene geometry.
     if let (Some(rec), Some(_)) = (r.recommended(), &r.config.geometry) {
         if let Ok(cfg) = rec.setting.apply(&r.config) {
@@ -1203,7 +1211,30 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
     if let Some(png) = &sheet {
         files.push((super::views::SHEET.to_string(), png.clone()));
     }
-    files.push(("report.html".to_string(), report_html(r, &figures, sheet.as_deref())?));
+    // The plan of the level's views, with scene geometry and plots, each view coloured by its
+    // objective at the level's choice and the worst ringed; the report inlines a copy at the
+    // figure's own size, so the page stays small.
+    let per_view: Option<Vec<f64>> = r
+        .level
+        .as_ref()
+        .map(|c| c.views.iter().map(|v| v.objective_at_level).collect());
+    let values = per_view.as_deref().map(|v| (r.objective.name(), v));
+    let worst = r.level.as_ref().map(|c| c.worst);
+    let (plan, plan_inline) = if plots {
+        (
+            crate::figures::plan::plan_png(&r.config, values, worst, 2.0)?,
+            crate::figures::plan::plan_png(&r.config, values, worst, 1.0)?,
+        )
+    } else {
+        (None, None)
+    };
+    if let Some(png) = plan {
+        files.push((crate::figures::plan::FILE.to_string(), png));
+    }
+    files.push((
+        "report.html".to_string(),
+        report_html(r, &figures, sheet.as_deref(), plan_inline.as_deref())?,
+    ));
     files.push(("report.md".to_string(), report_md(r, &figures, sheet.is_some())));
     if let Some(s) = &r.engine_setting {
         files.push(super::terms::file(s));

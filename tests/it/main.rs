@@ -48,4 +48,5 @@ mod shimmer_fast_paths;
 mod sun_sweep;
 mod threejs_fade;
 mod truth;
+mod view_sources;
 mod views;

@@ -33,5 +33,6 @@ pub mod snapping;
 pub mod splits;
 pub mod sun;
 pub mod truth;
+pub mod viewpoints;
 pub mod visibility;
 pub mod walk;
