@@ -6,8 +6,11 @@
 use crate::config::{BiasMode, Config};
 use crate::presets::bias::{engine_bias, engine_filter, EngineBias};
 use csm_core::cascades::{LightPose, Rig};
+use csm_core::scene::Precision;
 use csm_core::shade::{FlipImage, ShadeImage};
-use csm_core::truth::{self, Bias, CacheStats, CascadeTruth, Flicker, PcfFilter, PointZero, Receiver, Sampling};
+use csm_core::truth::{
+    self, Bias, Binary32, CacheStats, CascadeTruth, Flicker, PcfFilter, PointZero, Receiver, Sampling,
+};
 
 /// At most this many frames of the path are kept as pictures for the animation (every k-th).
 pub(crate) const ANIMATION_FRAMES: usize = 24;
@@ -171,6 +174,8 @@ pub(crate) fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
         ranges: ranges.clone(),
         pcf: t.pcf,
         filter,
+        binary32: (config.shadow.precision == Precision::F32)
+            .then(|| Binary32::new(rig, config.shadow.snap_space, config.scene)),
     };
     let points: Vec<Receiver> = truth::receivers(scene, &vis);
     let mut zero_stats = CacheStats::default();

@@ -45,3 +45,4 @@ mod shimmer_fast_paths;
 mod sun_sweep;
 mod threejs_fade;
 mod truth;
+mod truth_binary32;
