@@ -32,6 +32,18 @@ impl Config {
         let mut config = crate::config::parse(&text, &path.display().to_string(), path.parent())?;
         config.name = name;
         config.path = Some(path.to_path_buf());
+        if let Some(g) = &config.geometry {
+            let d = g.scene.bvh_dropped();
+            if d.duplicates + d.degenerate > 0 {
+                eprintln!(
+                    "warning: {}: the scene's BVH leaves out {} duplicate triangle(s) (the same three vertices as an \
+                     earlier one) and {} of zero area in binary32; rays cannot tell them apart, so no result changes",
+                    path.display(),
+                    d.duplicates,
+                    d.degenerate
+                );
+            }
+        }
         Ok(config)
     }
 

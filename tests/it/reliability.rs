@@ -165,3 +165,98 @@ fn a_path_file_with_a_huge_first_line_is_quoted_to_200_characters() {
     let e = csm_lab::config::read_path_file(&p).unwrap_err().to_string();
     assert!(e.len() < 600 && e.contains("401 characters in all"), "{e}");
 }
+
+/// 10^5 copies of one triangle overflowed the BVH builder's stack after minutes (a tree as
+/// deep as the copies); identical boxes made every ray visit every copy. The BVH keeps each
+/// distinct binary32 triangle once and leaves out those of zero area once rounded: the hits
+/// are those of the mesh without copies, reported by the first copy's index.
+#[test]
+fn coincident_triangles_build_a_bvh_of_one_and_hit_as_one() {
+    use csm_core::geometry::Aabb;
+    use csm_core::mesh::Mesh;
+    use csm_core::visibility::SceneGeometry;
+    use glam::DVec3;
+    let tri = [
+        DVec3::new(-1.0, 0.0, -1.0),
+        DVec3::new(1.0, 0.0, -1.0),
+        DVec3::new(0.0, 0.0, 1.0),
+    ];
+    let mut m = Mesh::default();
+    for k in 0..100_000 {
+        // The same triangle, its vertices in turn rotated (the same triangle to a ray).
+        let r = k % 3;
+        m.push([tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]]);
+    }
+    // A sliver whose binary32 vertices are collinear (its f64 area is not zero): the third
+    // vertex is 0.1 off the line, and binary32 steps are 0.5 at 5e6.
+    m.push([
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(1e7, 1e7, 0.0),
+        DVec3::new(5e6, 5e6 + 0.1, 0.0),
+    ]);
+    assert_eq!(m.triangles.len(), 100_001);
+    let scene = SceneGeometry::new(m);
+    let d = scene.bvh_dropped();
+    assert_eq!((d.duplicates, d.degenerate), (99_999, 1));
+    // A ray down through the triangle hits it at the first copy, 2 units below the origin.
+    let hit = scene
+        .first_hit(DVec3::new(0.1, 2.0, 0.0), DVec3::NEG_Y, 0.0, 10.0)
+        .unwrap();
+    assert_eq!((hit.triangle, hit.t), (0, 2.0));
+    // Beside it: nothing.
+    assert!(scene
+        .first_hit(DVec3::new(3.0, 2.0, 0.0), DVec3::NEG_Y, 0.0, 10.0)
+        .is_none());
+
+    // 10^4 identical boxes hit as one box: every ray of a grid gives the single box's
+    // distance, at a triangle of the first copy (index below 12).
+    let b = Aabb {
+        min: DVec3::new(-1.0, 0.0, -2.0),
+        max: DVec3::new(1.5, 3.0, 2.0),
+    };
+    let (mut many, mut one) = (Mesh::default(), Mesh::default());
+    one.add_box(&b);
+    for _ in 0..10_000 {
+        many.add_box(&b);
+    }
+    let (many, one) = (SceneGeometry::new(many), SceneGeometry::new(one));
+    assert_eq!(many.bvh_dropped().duplicates, 9_999 * 12);
+    let mut hits = 0;
+    for i in 0..20 {
+        for j in 0..20 {
+            let o = DVec3::new(-3.0 + 0.3 * i as f64, 1.0 + 0.05 * j as f64, -6.0);
+            let dir = DVec3::new(0.1, -0.02, 1.0).normalize();
+            let (a, e) = (many.first_hit(o, dir, 0.0, 50.0), one.first_hit(o, dir, 0.0, 50.0));
+            assert_eq!(
+                a.map(|h| (h.t, h.triangle)),
+                e.map(|h| (h.t, h.triangle)),
+                "ray {i} {j}"
+            );
+            hits += a.is_some() as usize;
+        }
+    }
+    assert!(hits > 100 && hits < 400, "{hits}");
+}
+
+/// A config of identical boxes runs and says on stderr what the BVH left out.
+#[test]
+fn identical_boxes_in_a_config_are_reported_as_left_out_of_the_bvh() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = String::new();
+    for _ in 0..500 {
+        boxes.push_str("\n[[scene.box]]\nmin = [-5.0, 0.0, -40.0]\nmax = [5.0, 8.0, -30.0]\n");
+    }
+    let text = format!("{}{boxes}", with(&[("scene.ground", "ground = 0.0")]));
+    let cfg = write(dir.path(), "boxes.toml", &text);
+    let out = bin()
+        .args(["analyze", &cfg, "--quiet", "--out"])
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let e = stderr(&out);
+    assert!(
+        e.contains("leaves out 5988 duplicate triangle(s)") && e.contains("and 0 of zero area"),
+        "{e}"
+    );
+}
