@@ -503,6 +503,18 @@ pub(crate) fn frames_walked(config: &Config) -> u64 {
     2 * (first + config.motion.extra.len() as u64 * config.motion.frames as u64)
 }
 
+/// [`frames_walked`] plus the ground-truth pass's frames (both snap modes of the first path)
+/// when it runs: the progress bar's length for [`analyze_with_progress`] with `opts`.
+pub(crate) fn frames_walked_with(config: &Config, opts: &AnalysisOptions) -> u64 {
+    let truth = if config.truth.enabled && opts.ground_truth && config.geometry.is_some() {
+        let setup = config.setup();
+        2 * csm_core::motion::poses(&setup.camera, &setup.motion).len() as u64
+    } else {
+        0
+    };
+    frames_walked(config) + truth
+}
+
 /// Probes per cascade that `seam_crossings` follows without scene geometry.
 const SEAM_PROBES: usize = 64;
 
@@ -649,7 +661,7 @@ pub(crate) fn analyze_with_progress(
             .collect::<Vec<_>>()
     });
     let truth = if config.truth.enabled && opts.ground_truth {
-        ground_truth::run(config, &rig)
+        ground_truth::run(config, &rig, on_frames)
     } else {
         None
     };

@@ -260,3 +260,89 @@ fn identical_boxes_in_a_config_are_reported_as_left_out_of_the_bvh() {
         "{e}"
     );
 }
+
+/// The ground-truth pass is refused before any work when its estimated texel reads exceed the
+/// limit, with the estimate and the keys that lower it: at `screen_scale = 1` on the default
+/// scene it ran past a minute at 979 MB, and a 10^5-frame path ran on with no end in sight.
+#[test]
+fn a_ground_truth_pass_beyond_its_limit_is_refused_up_front_with_the_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, edits: &[(&str, &str)], flag: bool| {
+        let mut e = vec![("scene.ground", "ground = 0.0")];
+        e.extend_from_slice(edits);
+        let cfg = write(dir.path(), name, &with(&e));
+        let mut cmd = bin();
+        cmd.args(["analyze", &cfg, "--quiet", "--out"])
+            .arg(dir.path().join(format!("out-{name}")));
+        if flag {
+            cmd.arg("--ground-truth");
+        }
+        cmd.output().unwrap()
+    };
+    // 1920 x 1080 sampled pixels x (240 + 2) frames x 2 modes x 4 texels (bilinear 1x1).
+    let o = run(
+        "full.toml",
+        &[
+            ("analysis.screen_scale", "screen_scale = 1.0"),
+            ("motion.frames", "frames = 240"),
+        ],
+        true,
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("--ground-truth")
+            && e.contains(&format!("about {} texels", 2_073_600u64 * 242 * 2 * 4))
+            && e.contains("2073600 sampled pixels x (240 frames + 2) x 2 snap modes x 4 texels per lookup")
+            && e.contains("analysis.screen_scale (at most 0.5171 fits), motion.frames or shadow.pcf"),
+        "{e}"
+    );
+    assert!(
+        !dir.path().join("out-full.toml").exists(),
+        "no output before the refusal"
+    );
+    // A long path, asked for by the config key: 240 x 135 pixels x (100000 + 2) frames.
+    let o = run(
+        "long.toml",
+        &[
+            ("motion.frames", "frames = 100000"),
+            ("analysis.ground_truth", "ground_truth = true"),
+        ],
+        false,
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("analysis.ground_truth") && e.contains(&format!("about {} texels", 32_400u64 * 100_002 * 8)),
+        "{e}"
+    );
+    // Within the limit (the same path at 60 frames) the pass runs.
+    let o = run("fits.toml", &[], true);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// The estimate bounds the texel reads the pass makes (each receiver is a sampled pixel,
+/// looked up at most once per frame and snap mode), and is not far above them.
+#[test]
+fn the_ground_truth_cost_estimate_bounds_the_reads_made() {
+    use csm_lab::analysis::ground_truth::cost;
+    use csm_lab::config::Config;
+    for (pcf, filter) in [(1, "bilinear"), (3, "nearest"), (3, "bilinear")] {
+        let text = with(&[
+            ("scene.ground", "ground = 0.0"),
+            ("shadow.pcf", &format!("pcf = {pcf}")),
+            ("shadow.pcf_filter", &format!("pcf_filter = \"{filter}\"")),
+            ("motion.frames", "frames = 12"),
+            ("analysis.screen_scale", "screen_scale = 0.05"),
+            ("analysis.ground_truth", "ground_truth = true"),
+        ]);
+        let c = Config::from_toml_str(&text, "t.toml", None).unwrap();
+        let est = cost(&c);
+        assert_eq!(est.pixels, 96 * 54);
+        assert_eq!(est.frames, 12);
+        assert_eq!(est.per_lookup, pcf * pcf * if filter == "bilinear" { 4 } else { 1 });
+        let a = csm_lab::analyze(&c, &csm_lab::AnalysisOptions::full());
+        let reads = a.ground_truth.as_ref().unwrap().cache.reads;
+        assert!(reads <= est.reads && reads * 4 >= est.reads, "{reads} of {est:?}");
+    }
+}
