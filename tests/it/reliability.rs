@@ -346,3 +346,103 @@ fn the_ground_truth_cost_estimate_bounds_the_reads_made() {
         assert!(reads <= est.reads && reads * 4 >= est.reads, "{reads} of {est:?}");
     }
 }
+
+/// `sweep configs/indoor.toml --fit aabb`: no configuration can qualify (a tight box under a
+/// turning camera changes size every frame), and the first frames of the path prove it; the
+/// sweep says so before running (it took 14 to 60 s to reach the same verdict).
+#[test]
+fn a_sweep_where_nothing_can_qualify_fails_before_running() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = bin()
+        .args([
+            "sweep",
+            "configs/indoor.toml",
+            "--fit",
+            "aabb",
+            "--no-plots",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains(
+            "Nothing qualifies: of 672 configurations, 0 miss slice corners (coverage_violations > 0) and 672 shimmer \
+             when snapped (shimmer_snapped > 0.001 texel), which the first 8 of the path's 180 frames already show"
+        ),
+        "{e}"
+    );
+    assert!(!out.join("sweep.csv").exists());
+    // A grid where a row qualifies runs as before.
+    let o = bin()
+        .args([
+            "sweep",
+            "configs/indoor.toml",
+            "--cascades",
+            "2",
+            "--resolution",
+            "512",
+            "--no-plots",
+            "--quiet",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("sweep.csv").exists());
+}
+
+/// The bound the check rests on, against full analyses: the first 8 frames' squared drifts
+/// over `(F − 1) m` never exceed the whole path's snapped S3², and each row the bound refuses
+/// really shimmers; a first-frames coverage violation stays in the whole path.
+#[test]
+fn the_first_frames_bound_snapped_shimmer_and_coverage_from_below() {
+    use csm_lab::{analyze, AnalysisOptions, Config};
+    let base = std::fs::read_to_string("configs/indoor.toml").unwrap();
+    let mut refused = 0;
+    for (fit, snap, cascades, resolution, path) in [
+        ("aabb", true, 2, 512, "yaw"),
+        ("aabb", true, 4, 2048, "strafe"),
+        ("aabb", true, 3, 1024, "orbit"),
+        ("sphere", true, 3, 1024, "yaw"),
+        ("sphere", false, 2, 512, "dolly"),
+    ] {
+        let text = base
+            .replace("fit = \"sphere\"", &format!("fit = \"{fit}\""))
+            .replace("snap = true", &format!("snap = {snap}"))
+            .replace("cascades = 3", &format!("cascades = {cascades}"))
+            .replace("resolution = 1024", &format!("resolution = {resolution}"))
+            .replace("path = \"yaw\"", &format!("path = \"{path}\""));
+        let full = Config::from_toml_str(&text, "indoor.toml", None).unwrap();
+        let frames = full.motion.frames;
+        let prefix = Config::from_toml_str(&text.replace("frames = 180", "frames = 8"), "indoor.toml", None).unwrap();
+        let opts = AnalysisOptions {
+            frame_rows: true,
+            ..AnalysisOptions::summary_only()
+        };
+        let (a, p) = (analyze(&full, &opts), analyze(&prefix, &opts));
+        let sum: f64 = p
+            .snapped()
+            .unwrap()
+            .frames
+            .iter()
+            .map(|f| f.phase_drift_rms.powi(2))
+            .sum();
+        let bound = (sum / ((frames - 1) * cascades) as f64).sqrt();
+        let s3 = a.summary.shimmer_snapped;
+        assert!(bound <= s3 * (1.0 + 1e-12), "{fit} {path}: bound {bound} above S3 {s3}");
+        if bound > 1e-3 {
+            refused += 1;
+            assert!(s3 > 1e-3);
+        }
+        if p.summary.coverage_violations > 0 {
+            assert!(a.summary.coverage_violations >= p.summary.coverage_violations);
+        }
+    }
+    assert!(refused >= 2, "{refused}");
+}
