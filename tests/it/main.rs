@@ -31,6 +31,7 @@ mod precision;
 mod preset_sweeps;
 mod presets;
 mod prop_analysis;
+mod prop_extremes;
 mod prop_presets;
 mod prop_specs;
 mod prop_toml;
