@@ -66,7 +66,7 @@ impl AnalysisOptions {
 }
 
 /// The flat summary: the metric names users' scripts and CI thresholds read.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Summary {
     /// False when the scene is not visible within the shadow distance; then every metric below
     /// is 0 and no cascade is built.
@@ -99,8 +99,8 @@ pub struct Summary {
     pub overlap_area_fraction: f64,
     /// Share of the lit-facing receiver pixels inside a blend band (every split; 0 without
     /// geometry, where it is not reported). A screen metric (`screen_band_pixel_share`): the
-    /// registry writes it with the other screen metrics, serde leaves it out.
-    #[serde(skip)]
+    /// registry writes it with the other screen metrics, and only with geometry.
+    #[serde(rename = "screen_band_pixel_share")]
     pub band_pixel_share: f64,
     /// Fraction of world-fixed receiver points that change cascade per frame, the worst over
     /// the motion paths; None when not computed ([`AnalysisOptions::seams`]).
@@ -119,9 +119,39 @@ pub struct Summary {
     pub truth: Option<ground_truth::TruthSummary>,
 }
 
+impl Summary {
+    /// The summary of a scene that needs no cascades: every metric 0 (nothing to measure: no
+    /// map, no texel, no drift), `memory_bytes` as given, and nothing optional measured.
+    pub(crate) fn nothing_needed(memory_bytes: u64) -> Summary {
+        Summary {
+            cascades_needed: false,
+            z_lo: 0.0,
+            z_hi: 0.0,
+            max_aliasing: 0.0,
+            mean_aliasing: 0.0,
+            mean_log_aliasing: 0.0,
+            undersampled_fraction: 0.0,
+            shimmer: 0.0,
+            shimmer_snapped: 0.0,
+            shimmer_unsnapped: 0.0,
+            size_jitter: 0.0,
+            coverage_violations: 0,
+            memory_bytes,
+            lookup_error_max: 0.0,
+            lookup_error_rms: 0.0,
+            overlap_area_fraction: 0.0,
+            band_pixel_share: 0.0,
+            seam_crossings: None,
+            screen: None,
+            light: None,
+            truth: None,
+        }
+    }
+}
+
 /// Crawl and jumps of a moving light, the worst over the motion paths (texels; see
 /// `docs/metrics.md`).
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct LightSummary {
     /// RMS S3 over the frame pairs between updates, with the configured snapping.
     #[serde(rename = "light_crawl")]
@@ -340,10 +370,6 @@ impl Analysis {
     /// The path without snapping.
     pub fn unsnapped(&self) -> Option<&PathResult> {
         self.measured().map(|m| &m.unsnapped)
-    }
-
-    pub fn lookup_error(&self) -> Option<&LookupError> {
-        self.measured().and_then(|m| m.lookup_error.as_ref())
     }
 
     /// The path result of the configured snap mode.
@@ -784,29 +810,12 @@ fn no_cascades(
         density: Vec::new(),
         outcome: Outcome::NoCascades,
         summary: Summary {
-            cascades_needed: false,
-            z_lo: 0.0,
-            z_hi: 0.0,
-            max_aliasing: 0.0,
-            mean_aliasing: 0.0,
-            mean_log_aliasing: 0.0,
-            undersampled_fraction: 0.0,
-            shimmer: 0.0,
-            shimmer_snapped: 0.0,
-            shimmer_unsnapped: 0.0,
-            size_jitter: 0.0,
-            coverage_violations: 0,
-            memory_bytes: memory,
-            lookup_error_max: 0.0,
-            lookup_error_rms: 0.0,
-            overlap_area_fraction: 0.0,
-            band_pixel_share: 0.0,
             seam_crossings: opts.seams.then_some(0.0),
             screen: visibility
                 .as_ref()
                 .map(|vis| screen::stats(vis, &[0.0, 0.0], &[0.0], visible)),
             light: config.motion.light.moves().then(LightSummary::default),
-            truth: None,
+            ..Summary::nothing_needed(memory)
         },
         ground_truth: None,
         preset: config

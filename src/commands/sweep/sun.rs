@@ -151,27 +151,17 @@ mod tests {
                 light_update: None,
             },
             summary: Summary {
-                light: None,
-                truth: None,
                 cascades_needed: true,
                 z_lo: 1.0,
                 z_hi: 2.0,
                 max_aliasing: 10.0 - mean,
                 mean_aliasing: mean,
                 mean_log_aliasing: mean,
-                undersampled_fraction: 0.0,
                 shimmer,
                 shimmer_snapped: shimmer,
                 shimmer_unsnapped: 0.3,
-                size_jitter: 0.0,
                 coverage_violations: misses,
-                memory_bytes: cascades as u64 * 4 * 1024 * 1024,
-                lookup_error_max: 0.0,
-                lookup_error_rms: 0.0,
-                overlap_area_fraction: 0.0,
-                band_pixel_share: 0.0,
-                seam_crossings: None,
-                screen: None,
+                ..Summary::nothing_needed(cascades as u64 * 4 * 1024 * 1024)
             },
         }
     }
