@@ -33,13 +33,22 @@ pub(crate) struct Infeasible {
 }
 
 impl Infeasible {
-    /// The sweep's "Nothing qualifies" sentence, as far as the first frames tell it.
+    /// The sweep's "Nothing qualifies" sentence, as far as the first frames tell it, for a
+    /// sweep that stops there.
     pub(crate) fn message(&self) -> String {
+        format!(
+            "{}; the sweep was not run. Widen the grid (another fit, e.g. --fit sphere, or snapping that keeps the \
+             window size) or the motion",
+            self.sentence()
+        )
+    }
+
+    /// The sentence alone.
+    pub(crate) fn sentence(&self) -> String {
         format!(
             "Nothing qualifies: of {} configurations, {} miss slice corners (coverage_violations > 0) and {} shimmer \
              when snapped (shimmer_snapped > {STABLE_SHIMMER} texel){}, which the first {} of the path's {} frames \
-             already show; the sweep was not run. Widen the grid (another fit, e.g. --fit sphere, or snapping that \
-             keeps the window size) or the motion",
+             already show",
             self.rows,
             self.coverage_misses,
             self.unstable,
