@@ -97,8 +97,10 @@ pub(crate) fn infeasible(base: &Config, settings: &[Setting]) -> Result<Option<I
         let frames = c.motion.frames;
         out.frames = out.frames.max(frames);
         // The walk does not read the geometry (probes come from the scene bounds): leave out
-        // the visibility pass.
-        c.geometry = None;
+        // the visibility pass, unless the depth range is fitted to what is visible.
+        if !c.shadow.fit_depth_to_visible {
+            c.geometry = None;
+        }
         c.motion.frames = PREFIX_FRAMES;
         let a = analyze(&c, &opts);
         if !a.summary.cascades_needed {
