@@ -391,6 +391,49 @@ pub(crate) fn mib(bytes: u64) -> f64 {
     bytes as f64 / (1024.0 * 1024.0)
 }
 
+/// Why a config's cascade windows cannot be built in f64 along its camera paths, or None: a
+/// slice thinner than f64 resolves at its coordinates (a near plane of 1e-9 a billion units
+/// from the origin) collapses a box-shaped window to zero size, and every texel coordinate
+/// after it is not a number. Checks every frame of every path (`all_frames`) or frame 0 of
+/// each, both snap modes. The message completes "... is not allowed: ".
+pub(crate) fn f64_window_problem(config: &Config, all_frames: bool) -> Option<String> {
+    let rig = rig(config)?;
+    let setup = config.setup();
+    let mut motions = vec![setup.motion.clone()];
+    motions.extend(config.extra_motions().into_iter().map(|(_, m)| m));
+    for motion in &motions {
+        let frames = if all_frames { usize::MAX } else { 1 };
+        for (t, pose) in csm_core::motion::poses(&setup.camera, motion)
+            .map_while(|p| p.ok())
+            .take(frames)
+            .enumerate()
+        {
+            let lp = LightPose::new(&rig.light, &pose);
+            for i in 0..rig.cascade_count() {
+                for snapped in [true, false] {
+                    let w = rig.window(i, &lp, snapped);
+                    let ok = w.texel.is_finite() && w.texel.min_element() > 0.0 && w.origin_texels.is_finite();
+                    if !ok {
+                        let s = &rig.slices[i];
+                        let at = pose.position.abs().max_element() + s.far;
+                        return Some(format!(
+                            "a near plane and splits whose slices f64 can tell apart at the camera's coordinates: in \
+                             frame {t} cascade {i}'s window collapses (its slice spans view depths {:e} .. {:e}, and f64 \
+                             steps by {:e} at coordinates of {:e}); raise camera.near, lower shadow.lambda or \
+                             shadow.cascades, or move the scene toward the origin",
+                            s.near,
+                            s.far,
+                            f64::EPSILON * at,
+                            at
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    None
+}
+
 /// The rig of a config: its engine preset's, or csm-lab's own pipeline built from the
 /// config's domain values. None when the scene needs no cascades.
 pub fn rig(config: &Config) -> Option<Rig> {

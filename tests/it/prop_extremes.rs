@@ -299,3 +299,65 @@ fn the_reported_extreme_camera_and_most_generated_cases_are_analysed() {
     }
     assert!(valid > 30, "{valid} of 100 valid");
 }
+
+/// What the property found: a camera 5e8 from the origin with near 1e-9 and 4 logarithmic
+/// cascades (λ = 1) up to 1e-6: the slices are thinner than f64 resolves at those coordinates,
+/// so the AABB windows collapsed to zero size and analyze ended in "internal error: centre_x is
+/// not finite (NaN)" (a sweep with that point in "pareto_front.shimmer is not finite"). Now
+/// validation refuses it naming camera.near, and a sweep over it names the point.
+#[test]
+fn slices_thinner_than_f64_resolves_are_refused_naming_the_key() {
+    let case = Case {
+        camera: [5e8, 0.0, 5e8],
+        view: [0.0, -0.05, 0.5721360855125875],
+        near: 1e-9,
+        far: 1.0000000000000002e-6,
+        scene_at: [0.0, 0.0, -50.0],
+        half: [1.0, 1.0, 68.8],
+        cascades: 4,
+        resolution: 16,
+        fit: "aabb",
+        snap: false,
+        precision: "f64",
+        path: "strafe",
+        step: 1.0,
+        max_distance: 1.0,
+    };
+    let text = case.toml().replace("lambda = 0.75", "lambda = 1.0");
+    let e = Config::from_toml_str(&text, "case.toml", None).unwrap_err().to_string();
+    assert!(
+        e.contains("`camera.near` = 0.000000001 is not allowed")
+            && e.contains("cascade 0's window collapses")
+            && e.contains("raise camera.near"),
+        "{e}"
+    );
+    // With uniform splits (λ = 0) the file loads and is analysed and swept; a sweep's λ = 1
+    // point is refused by name.
+    let text = case.toml().replace("lambda = 0.75", "lambda = 0.0");
+    assert!(Config::from_toml_str(&text, "case.toml", None).is_ok());
+    assert_eq!(check(&text), Ok(true));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("case.toml");
+    std::fs::write(&path, &text).unwrap();
+    let req = SweepRequest {
+        config: path,
+        out: None,
+        grid: GridFlags {
+            cascades: Some("4".to_string()),
+            lambda: Some("1".to_string()),
+            ..Default::default()
+        },
+        threads: Some(1),
+        quiet: true,
+        no_plots: true,
+        format: csm_lab::app::Format::Table,
+        shard: None,
+        optimize_splits: false,
+        ground_truth: false,
+    };
+    let e = sweep_files(&req).err().expect("refused").to_string();
+    assert!(
+        e.contains("sweep point") && e.contains("camera.near") && !e.contains("internal error"),
+        "{e}"
+    );
+}

@@ -13,7 +13,7 @@ use crate::analysis::{analyze, AnalysisOptions};
 use crate::commands::sweep::grid::Setting;
 use crate::commands::sweep::rank::STABLE_SHIMMER;
 use crate::config::{Config, MotionPath};
-use crate::error::Result;
+use crate::error::{Error, GridError, Result};
 
 /// Frames of the path the check walks per row.
 pub(crate) const PREFIX_FRAMES: usize = 8;
@@ -90,7 +90,13 @@ pub(crate) fn infeasible(base: &Config, settings: &[Setting]) -> Result<Option<I
         frames: base.motion.frames,
     };
     for s in settings {
-        let mut c = s.apply(base)?;
+        // A point the config cannot hold is refused as the sweep refuses it.
+        let mut c = s.apply(base).map_err(|e| {
+            Error::from(GridError::Point {
+                point: s.label(),
+                source: Box::new(e),
+            })
+        })?;
         if !applies(&c) {
             return Ok(None);
         }
