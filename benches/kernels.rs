@@ -278,6 +278,7 @@ fn ground_truth(c: &mut Criterion) {
         ranges: vec![(-500.0, 500.0); m],
         pcf: 1,
         filter: truth::PcfFilter::Bilinear,
+        binary32: None,
     };
     let poses = || csm_core::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
     for snapped in [true, false] {

@@ -409,6 +409,49 @@ pub(crate) fn mib(bytes: u64) -> f64 {
     bytes as f64 / (1024.0 * 1024.0)
 }
 
+/// Why a config's cascade windows cannot be built in f64 along its camera paths, or None: a
+/// slice thinner than f64 resolves at its coordinates (a near plane of 1e-9 a billion units
+/// from the origin) collapses a box-shaped window to zero size, and every texel coordinate
+/// after it is not a number. Checks every frame of every path (`all_frames`) or frame 0 of
+/// each, both snap modes. The message completes "... is not allowed: ".
+pub(crate) fn f64_window_problem(config: &Config, all_frames: bool) -> Option<String> {
+    let rig = rig(config)?;
+    let setup = config.setup();
+    let mut motions = vec![setup.motion.clone()];
+    motions.extend(config.extra_motions().into_iter().map(|(_, m)| m));
+    for motion in &motions {
+        let frames = if all_frames { usize::MAX } else { 1 };
+        for (t, pose) in csm_core::motion::poses(&setup.camera, motion)
+            .map_while(|p| p.ok())
+            .take(frames)
+            .enumerate()
+        {
+            let lp = LightPose::new(&rig.light, &pose);
+            for i in 0..rig.cascade_count() {
+                for snapped in [true, false] {
+                    let w = rig.window(i, &lp, snapped);
+                    let ok = w.texel.is_finite() && w.texel.min_element() > 0.0 && w.origin_texels.is_finite();
+                    if !ok {
+                        let s = &rig.slices[i];
+                        let at = pose.position.abs().max_element() + s.far;
+                        return Some(format!(
+                            "a near plane and splits whose slices f64 can tell apart at the camera's coordinates: in \
+                             frame {t} cascade {i}'s window collapses (its slice spans view depths {:e} .. {:e}, and f64 \
+                             steps by {:e} at coordinates of {:e}); raise camera.near, lower shadow.lambda or \
+                             shadow.cascades, or move the scene toward the origin",
+                            s.near,
+                            s.far,
+                            f64::EPSILON * at,
+                            at
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    None
+}
+
 /// The rig of a config: its engine preset's, or csm-lab's own pipeline built from the
 /// config's domain values. None when the scene needs no cascades.
 pub fn rig(config: &Config) -> Option<Rig> {
@@ -545,6 +588,18 @@ pub(crate) fn frames_walked(config: &Config) -> u64 {
     let setup = config.setup();
     let first = csm_core::motion::poses(&setup.camera, &setup.motion).len() as u64;
     2 * (first + config.motion.extra.len() as u64 * config.motion.frames as u64)
+}
+
+/// [`frames_walked`] plus the ground-truth pass's frames (both snap modes of the first path)
+/// when it runs: the progress bar's length for [`analyze_with_progress`] with `opts`.
+pub(crate) fn frames_walked_with(config: &Config, opts: &AnalysisOptions) -> u64 {
+    let truth = if config.truth.enabled && opts.ground_truth && config.geometry.is_some() {
+        let setup = config.setup();
+        2 * csm_core::motion::poses(&setup.camera, &setup.motion).len() as u64
+    } else {
+        0
+    };
+    frames_walked(config) + truth
 }
 
 /// Probes per cascade that `seam_crossings` follows without scene geometry.
@@ -873,7 +928,7 @@ fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u
             .collect::<Vec<_>>()
     });
     let truth = if config.truth.enabled && opts.ground_truth {
-        ground_truth::run(config, &rig)
+        ground_truth::run(config, &rig, on_frames)
     } else {
         None
     };

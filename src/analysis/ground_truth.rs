@@ -6,8 +6,11 @@
 use crate::config::{BiasMode, Config};
 use crate::presets::bias::{engine_bias, engine_filter, EngineBias};
 use csm_core::cascades::{LightPose, Rig};
+use csm_core::scene::Precision;
 use csm_core::shade::{FlipImage, ShadeImage};
-use csm_core::truth::{self, Bias, CacheStats, CascadeTruth, Flicker, PcfFilter, PointZero, Receiver, Sampling};
+use csm_core::truth::{
+    self, Bias, Binary32, CacheStats, CascadeTruth, Flicker, PcfFilter, PointZero, Receiver, Sampling,
+};
 
 /// At most this many frames of the path are kept as pictures for the animation (every k-th).
 pub(crate) const ANIMATION_FRAMES: usize = 24;
@@ -124,8 +127,88 @@ impl DepthFormatIndex {
     }
 }
 
-/// The pass for a config whose scene has geometry and cascades; None otherwise.
-pub(crate) fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
+/// Most texel reads the pass may be asked for, estimated before any work ([`cost`]): 2^30,
+/// about 17 times the default scene's estimate (62 million; it runs in about 20 s of CPU).
+pub const MAX_TEXEL_READS: u64 = 1 << 30;
+
+/// The pass's size, estimated before any work from the settings alone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Cost {
+    /// Sampled pixels of the visibility pass: at most this many receivers.
+    pub pixels: u64,
+    /// Frames of the first motion path.
+    pub frames: u64,
+    /// Texels one lookup reads: `pcf²`, four times that with the bilinear filter.
+    pub per_lookup: u64,
+    /// `pixels × (frames + 2) × 2 × per_lookup` (every receiver looked up in every frame of both
+    /// snap modes, plus frame 0's two passes), saturating: an upper bound of the texel reads.
+    pub reads: u64,
+}
+
+/// The filter the pass samples with: `[shadow] pcf_filter`, else the preset engine's, else
+/// bilinear.
+fn filter_of(config: &Config) -> PcfFilter {
+    let preset = config.shadow.preset.as_ref().map(|p| p.name);
+    config
+        .truth
+        .pcf_filter
+        .unwrap_or_else(|| preset.map_or(PcfFilter::Bilinear, engine_filter))
+}
+
+/// [`Cost`] of a config's pass.
+pub fn cost(config: &Config) -> Cost {
+    let scale = config.analysis.screen_scale();
+    let n = |x: u32| ((f64::from(x) * scale).round() as u64).clamp(1, u64::from(x.max(1)));
+    let pixels = n(config.screen.width).saturating_mul(n(config.screen.height));
+    let setup = config.setup();
+    let frames = csm_core::motion::poses(&setup.camera, &setup.motion).len() as u64;
+    let taps = u64::from(config.truth.pcf).pow(2);
+    let per_lookup = if filter_of(config) == PcfFilter::Bilinear {
+        4 * taps
+    } else {
+        taps
+    };
+    let reads = pixels
+        .saturating_mul(frames.saturating_add(2))
+        .saturating_mul(2)
+        .saturating_mul(per_lookup);
+    Cost {
+        pixels,
+        frames,
+        per_lookup,
+        reads,
+    }
+}
+
+/// Refuses, before any work, a pass whose estimated texel reads exceed [`MAX_TEXEL_READS`],
+/// naming `source` (the key or flag that asked for the pass), the estimate and the keys that
+/// lower it.
+pub(crate) fn cost_fits(config: &Config, source: &str) -> crate::error::Result<()> {
+    let c = cost(config);
+    if c.reads <= MAX_TEXEL_READS {
+        return Ok(());
+    }
+    // The scale at which the estimate fits (reads grow with the scale squared).
+    let fits = config.analysis.screen_scale() * (MAX_TEXEL_READS as f64 / c.reads as f64).sqrt();
+    Err(crate::error::GridError::Unusable {
+        context: source.to_string(),
+        message: format!(
+            "the ground-truth pass would read about {} texels ({} sampled pixels x ({} frames + 2) x 2 snap modes x {} \
+             texels per lookup), more than its limit of {MAX_TEXEL_READS}; lower analysis.screen_scale (at most {} \
+             fits), motion.frames or shadow.pcf, or use pcf_filter = \"nearest\"",
+            c.reads,
+            c.pixels,
+            c.frames,
+            c.per_lookup,
+            (fits * 1e4).floor() / 1e4,
+        ),
+    }
+    .into())
+}
+
+/// The pass for a config whose scene has geometry and cascades; None otherwise. `on_frames`
+/// hears of every frame walked (both snap modes: `2 × frames` in all).
+pub(crate) fn run(config: &Config, rig: &Rig, on_frames: &(dyn Fn(u64) + Sync)) -> Option<GroundTruth> {
     let setup = config.setup();
     let vis = setup.visibility()?;
     let scene = &setup.geometry.as_ref()?.scene;
@@ -145,9 +228,7 @@ pub(crate) fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
     let texel: Vec<f64> = windows0.iter().map(|w| w.texel_size()).collect();
     let t = &config.truth;
     let preset = config.shadow.preset.as_ref().map(|p| p.name);
-    let filter = t
-        .pcf_filter
-        .unwrap_or_else(|| preset.map_or(PcfFilter::Bilinear, engine_filter));
+    let filter = filter_of(config);
     let engine = if t.bias_written() {
         None
     } else {
@@ -166,6 +247,8 @@ pub(crate) fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
         ranges: ranges.clone(),
         pcf: t.pcf,
         filter,
+        binary32: (config.shadow.precision == Precision::F32)
+            .then(|| Binary32::new(rig, config.shadow.snap_space, config.scene)),
     };
     let points: Vec<Receiver> = truth::receivers(scene, &vis);
     let away = truth::away_pixels(&vis);
@@ -224,6 +307,7 @@ pub(crate) fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
             &points,
             &sampling,
             &mut |k, states| {
+                on_frames(1);
                 if k == 0 {
                     frame0 = truth::shade_image(cols, rows, &away, &points, &truly_lit, states);
                 }
@@ -362,5 +446,57 @@ pub(crate) fn points_of(a: &crate::analysis::Analysis) -> Vec<FlickerPoint> {
             },
         ],
         _ => Vec::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::{analyze_with_progress, frames_walked_with, AnalysisOptions};
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// The progress bar's length counts the pass's frames, and the pass reports every one: the
+    /// bar ends full.
+    #[test]
+    fn the_pass_reports_every_frame_it_walks_to_the_progress_bar() {
+        let text = r#"
+[camera]
+position = [0.0, 6.0, 12.0]
+target = [0.0, 0.0, -6.0]
+fov_y_deg = 60.0
+near = 0.1
+far = 200.0
+[screen]
+width = 160
+height = 90
+[light]
+direction = [-0.4, -1.0, -0.3]
+[scene]
+min = [-60.0, 0.0, -60.0]
+max = [60.0, 10.0, 60.0]
+ground = 0.0
+[[scene.box]]
+min = [-2.3, 0.0, -8.7]
+max = [1.9, 3.1, -4.4]
+[shadow]
+max_distance = 60.0
+cascades = 2
+resolution = 256
+[motion]
+path = "strafe"
+frames = 17
+[analysis]
+ground_truth = true
+"#;
+        let c = Config::from_toml_str(text, "t.toml", None).unwrap();
+        let opts = AnalysisOptions::full();
+        let without = crate::analysis::frames_walked(&c);
+        assert_eq!(frames_walked_with(&c, &opts), without + 2 * 17);
+        let seen = AtomicU64::new(0);
+        let a = analyze_with_progress(&c, &opts, &|n| {
+            seen.fetch_add(n, Ordering::Relaxed);
+        });
+        assert!(a.ground_truth.is_some());
+        assert_eq!(seen.load(Ordering::Relaxed), frames_walked_with(&c, &opts));
     }
 }

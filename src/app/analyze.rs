@@ -5,7 +5,7 @@ use super::{
     applied_preset, default_out_dir, load_with_engine_settings, load_with_preset_flag, out_folder, print_result,
     Format, Outcome,
 };
-use crate::analysis::{analyze_with_progress, frames_walked, AnalysisOptions};
+use crate::analysis::{analyze_with_progress, frames_walked_with, AnalysisOptions};
 use crate::error::{ConfigError, Error, Result};
 use crate::output;
 use crate::report;
@@ -81,7 +81,19 @@ pub(crate) fn execute(args: &AnalyzeRequest) -> Result<Outcome> {
         }
         config.truth.bias_mode = Some(crate::config::BiasMode::None);
     }
-    let progress = super::progress::Progress::new(args.quiet, frames_walked(&config), "frames");
+    if config.truth.enabled {
+        let source = if args.ground_truth {
+            "--ground-truth"
+        } else {
+            "analysis.ground_truth"
+        };
+        crate::analysis::ground_truth::cost_fits(&config, source)?;
+    }
+    let progress = super::progress::Progress::new(
+        args.quiet,
+        frames_walked_with(&config, &AnalysisOptions::full()),
+        "frames",
+    );
     let analysis = analyze_with_progress(&config, &AnalysisOptions::full(), &|n| progress.inc(n));
     progress.writing();
     let dir = args.out.clone().unwrap_or_else(|| {

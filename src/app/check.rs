@@ -71,6 +71,9 @@ pub(crate) fn execute(args: &CheckRequest) -> Result<Outcome> {
 
 fn run(args: &CheckRequest) -> Result<Outcome> {
     let config = Config::load(args.config)?;
+    if config.truth.enabled {
+        crate::analysis::ground_truth::cost_fits(&config, "analysis.ground_truth")?;
+    }
     let thresholds = Thresholds::load(args.thresholds)?;
     // `--baseline` or the thresholds file's `[baseline] file`.
     let baseline_path = args
@@ -196,6 +199,9 @@ pub(crate) fn init(args: &InitRequest) -> Result<Outcome> {
         ));
     }
     let config = Config::load(args.config)?;
+    if config.truth.enabled {
+        crate::analysis::ground_truth::cost_fits(&config, "analysis.ground_truth")?;
+    }
     // Everything `analyze` computes: the baseline is its summary.json.
     let analysis = analyze(&config, &crate::analysis::AnalysisOptions::full());
     let stem = args

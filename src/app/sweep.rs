@@ -110,6 +110,27 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
         indices = s.indices(settings.len()).collect();
         settings = indices.iter().map(|&i| settings[i]).collect();
     }
+    // When the first frames of the path prove that no row can qualify, say so before the sweep
+    // (the whole grid, unsharded, with no split search that could leave the grid). csm-lab's own
+    // pipeline stops there; a preset sweep runs on, since the engine settings file of its
+    // closest row (marked NOT RECOMMENDED) is what it is run for.
+    if shard.is_none() && !optimize {
+        if let Some(f) = crate::commands::sweep::feasible::infeasible(&config, &settings)? {
+            if config.shadow.preset.is_none() {
+                return Err(crate::error::GridError::Unusable {
+                    context: args.config.display().to_string(),
+                    message: f.message(),
+                }
+                .into());
+            }
+            if !args.quiet {
+                eprintln!(
+                    "note: {}; the sweep runs on for the closest engine setting",
+                    f.sentence()
+                );
+            }
+        }
+    }
     let progress = super::progress::Progress::new(args.quiet, settings.len() as u64, "configurations");
     let start = std::time::Instant::now();
     let rows = run_settings(&config, &settings, args.threads.map(usize::from), &|| progress.inc(1))?;

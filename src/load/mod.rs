@@ -35,6 +35,18 @@ impl Config {
         }
         config.name = name;
         config.path = Some(path.to_path_buf());
+        if let Some(g) = &config.geometry {
+            let d = g.scene.bvh_dropped();
+            if d.duplicates + d.degenerate > 0 {
+                eprintln!(
+                    "warning: {}: the scene's BVH leaves out {} duplicate triangle(s) (the same three vertices as an \
+                     earlier one) and {} of zero area in binary32; rays cannot tell them apart, so no result changes",
+                    path.display(),
+                    d.duplicates,
+                    d.degenerate
+                );
+            }
+        }
         Ok(config)
     }
 
@@ -71,7 +83,20 @@ pub(crate) fn apply_preset(config: &mut Config, choice: &PresetChoice) -> Result
     let input = config.preset_input.clone();
     let v = input.validator();
     sweep_objective(config, &v)?;
+    f64_windows(config, &v, true)?;
     binary32_range(config, &v)
+}
+
+/// Every cascade window along the camera paths can be built in f64 (see
+/// [`crate::analysis::f64_window_problem`]); the key named is `camera.near`. `all_frames`:
+/// every frame (a loaded config, a new path), or frame 0 only (a sweep point that kept the
+/// path: a path moves the camera by far less than its coordinates, so the f64 step at them
+/// hardly changes, and walking every point's path again would cost a sweep a path per point).
+pub(super) fn f64_windows(config: &Config, v: &Validator<'_>, all_frames: bool) -> Result<()> {
+    match crate::analysis::f64_window_problem(config, all_frames) {
+        Some(why) => Err(v.invalid("camera.near", config.camera.near, &why)),
+        None => Ok(()),
+    }
 }
 
 /// `[sweep] objective` names a summary metric of the registry that is worse when higher, and
@@ -130,5 +155,6 @@ fn binary32_range(config: &Config, v: &Validator<'_>) -> Result<()> {
 /// changes a loaded config: a valid camera in every frame, and the binary32 range.
 fn cross_checks(config: &Config, v: &Validator<'_>) -> Result<()> {
     crate::config::check_camera_path(config, v)?;
+    f64_windows(config, v, true)?;
     binary32_range(config, v)
 }

@@ -3,7 +3,7 @@
 //! frame, binary32 range), and returns a new config or the error naming the key. Sweeps and
 //! `bench` build their variants through these, so no unchecked setting reaches the core.
 
-use super::{binary32_range, cross_checks};
+use super::{binary32_range, cross_checks, f64_windows};
 use crate::config::{Config, Fit, MotionPath, Precision, SplitRange, Validator, MAX_WORLD};
 use crate::error::Result;
 
@@ -32,7 +32,9 @@ impl Config {
     /// checking it again cost a sweep one path of poses per point).
     fn checked(self) -> Result<Config> {
         let label = self.label();
-        binary32_range(&self, &Validator { path: &label, text: "" })?;
+        let v = Validator { path: &label, text: "" };
+        f64_windows(&self, &v, false)?;
+        binary32_range(&self, &v)?;
         Ok(self)
     }
 

@@ -241,6 +241,7 @@ fn plane_acne(theta: f64, t: f64, bias: Bias) -> f64 {
         ranges: vec![(-200.0, 200.0)],
         pcf: 1,
         filter: truth::PcfFilter::Nearest,
+        binary32: None,
     };
     let cascades = vec![Some(0); points.len()];
     truth::fractions(&truth::frame_zero_in(&scene, &b, &[(b, w)], &cascades, &points, &s).0).0

@@ -165,3 +165,284 @@ fn a_path_file_with_a_huge_first_line_is_quoted_to_200_characters() {
     let e = csm_lab::config::read_path_file(&p).unwrap_err().to_string();
     assert!(e.len() < 600 && e.contains("401 characters in all"), "{e}");
 }
+
+/// 10^5 copies of one triangle overflowed the BVH builder's stack after minutes (a tree as
+/// deep as the copies); identical boxes made every ray visit every copy. The BVH keeps each
+/// distinct binary32 triangle once and leaves out those of zero area once rounded: the hits
+/// are those of the mesh without copies, reported by the first copy's index.
+#[test]
+fn coincident_triangles_build_a_bvh_of_one_and_hit_as_one() {
+    use csm_core::geometry::Aabb;
+    use csm_core::mesh::Mesh;
+    use csm_core::visibility::SceneGeometry;
+    use glam::DVec3;
+    let tri = [
+        DVec3::new(-1.0, 0.0, -1.0),
+        DVec3::new(1.0, 0.0, -1.0),
+        DVec3::new(0.0, 0.0, 1.0),
+    ];
+    let mut m = Mesh::default();
+    for k in 0..100_000 {
+        // The same triangle, its vertices in turn rotated (the same triangle to a ray).
+        let r = k % 3;
+        m.push([tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]]);
+    }
+    // A sliver whose binary32 vertices are collinear (its f64 area is not zero): the third
+    // vertex is 0.1 off the line, and binary32 steps are 0.5 at 5e6.
+    m.push([
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(1e7, 1e7, 0.0),
+        DVec3::new(5e6, 5e6 + 0.1, 0.0),
+    ]);
+    assert_eq!(m.triangles.len(), 100_001);
+    let scene = SceneGeometry::new(m);
+    let d = scene.bvh_dropped();
+    assert_eq!((d.duplicates, d.degenerate), (99_999, 1));
+    // A ray down through the triangle hits it at the first copy, 2 units below the origin.
+    let hit = scene
+        .first_hit(DVec3::new(0.1, 2.0, 0.0), DVec3::NEG_Y, 0.0, 10.0)
+        .unwrap();
+    assert_eq!((hit.triangle, hit.t), (0, 2.0));
+    // Beside it: nothing.
+    assert!(scene
+        .first_hit(DVec3::new(3.0, 2.0, 0.0), DVec3::NEG_Y, 0.0, 10.0)
+        .is_none());
+
+    // 10^4 identical boxes hit as one box: every ray of a grid gives the single box's
+    // distance, at a triangle of the first copy (index below 12).
+    let b = Aabb {
+        min: DVec3::new(-1.0, 0.0, -2.0),
+        max: DVec3::new(1.5, 3.0, 2.0),
+    };
+    let (mut many, mut one) = (Mesh::default(), Mesh::default());
+    one.add_box(&b);
+    for _ in 0..10_000 {
+        many.add_box(&b);
+    }
+    let (many, one) = (SceneGeometry::new(many), SceneGeometry::new(one));
+    assert_eq!(many.bvh_dropped().duplicates, 9_999 * 12);
+    let mut hits = 0;
+    for i in 0..20 {
+        for j in 0..20 {
+            let o = DVec3::new(-3.0 + 0.3 * i as f64, 1.0 + 0.05 * j as f64, -6.0);
+            let dir = DVec3::new(0.1, -0.02, 1.0).normalize();
+            let (a, e) = (many.first_hit(o, dir, 0.0, 50.0), one.first_hit(o, dir, 0.0, 50.0));
+            assert_eq!(
+                a.map(|h| (h.t, h.triangle)),
+                e.map(|h| (h.t, h.triangle)),
+                "ray {i} {j}"
+            );
+            hits += a.is_some() as usize;
+        }
+    }
+    assert!(hits > 100 && hits < 400, "{hits}");
+}
+
+/// A config of identical boxes runs and says on stderr what the BVH left out.
+#[test]
+fn identical_boxes_in_a_config_are_reported_as_left_out_of_the_bvh() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut boxes = String::new();
+    for _ in 0..500 {
+        boxes.push_str("\n[[scene.box]]\nmin = [-5.0, 0.0, -40.0]\nmax = [5.0, 8.0, -30.0]\n");
+    }
+    let text = format!("{}{boxes}", with(&[("scene.ground", "ground = 0.0")]));
+    let cfg = write(dir.path(), "boxes.toml", &text);
+    let out = bin()
+        .args(["analyze", &cfg, "--quiet", "--out"])
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let e = stderr(&out);
+    assert!(
+        e.contains("leaves out 5988 duplicate triangle(s)") && e.contains("and 0 of zero area"),
+        "{e}"
+    );
+}
+
+/// The ground-truth pass is refused before any work when its estimated texel reads exceed the
+/// limit, with the estimate and the keys that lower it: at `screen_scale = 1` on the default
+/// scene it ran past a minute at 979 MB, and a 10^5-frame path ran on with no end in sight.
+#[test]
+fn a_ground_truth_pass_beyond_its_limit_is_refused_up_front_with_the_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, edits: &[(&str, &str)], flag: bool| {
+        let mut e = vec![("scene.ground", "ground = 0.0")];
+        e.extend_from_slice(edits);
+        let cfg = write(dir.path(), name, &with(&e));
+        let mut cmd = bin();
+        cmd.args(["analyze", &cfg, "--quiet", "--out"])
+            .arg(dir.path().join(format!("out-{name}")));
+        if flag {
+            cmd.arg("--ground-truth");
+        }
+        cmd.output().unwrap()
+    };
+    // 1920 x 1080 sampled pixels x (240 + 2) frames x 2 modes x 4 texels (bilinear 1x1).
+    let o = run(
+        "full.toml",
+        &[
+            ("analysis.screen_scale", "screen_scale = 1.0"),
+            ("motion.frames", "frames = 240"),
+        ],
+        true,
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("--ground-truth")
+            && e.contains(&format!("about {} texels", 2_073_600u64 * 242 * 2 * 4))
+            && e.contains("2073600 sampled pixels x (240 frames + 2) x 2 snap modes x 4 texels per lookup")
+            && e.contains("analysis.screen_scale (at most 0.5171 fits), motion.frames or shadow.pcf"),
+        "{e}"
+    );
+    assert!(
+        !dir.path().join("out-full.toml").exists(),
+        "no output before the refusal"
+    );
+    // A long path, asked for by the config key: 240 x 135 pixels x (100000 + 2) frames.
+    let o = run(
+        "long.toml",
+        &[
+            ("motion.frames", "frames = 100000"),
+            ("analysis.ground_truth", "ground_truth = true"),
+        ],
+        false,
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("analysis.ground_truth") && e.contains(&format!("about {} texels", 32_400u64 * 100_002 * 8)),
+        "{e}"
+    );
+    // Within the limit (the same path at 60 frames) the pass runs.
+    let o = run("fits.toml", &[], true);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// The estimate bounds the texel reads the pass makes (each receiver is a sampled pixel,
+/// looked up at most once per frame and snap mode), and is not far above them.
+#[test]
+fn the_ground_truth_cost_estimate_bounds_the_reads_made() {
+    use csm_lab::analysis::ground_truth::cost;
+    use csm_lab::config::Config;
+    for (pcf, filter) in [(1, "bilinear"), (3, "nearest"), (3, "bilinear")] {
+        let text = with(&[
+            ("scene.ground", "ground = 0.0"),
+            ("shadow.pcf", &format!("pcf = {pcf}")),
+            ("shadow.pcf_filter", &format!("pcf_filter = \"{filter}\"")),
+            ("motion.frames", "frames = 12"),
+            ("analysis.screen_scale", "screen_scale = 0.05"),
+            ("analysis.ground_truth", "ground_truth = true"),
+        ]);
+        let c = Config::from_toml_str(&text, "t.toml", None).unwrap();
+        let est = cost(&c);
+        assert_eq!(est.pixels, 96 * 54);
+        assert_eq!(est.frames, 12);
+        assert_eq!(est.per_lookup, pcf * pcf * if filter == "bilinear" { 4 } else { 1 });
+        let a = csm_lab::analyze(&c, &csm_lab::AnalysisOptions::full());
+        let reads = a.ground_truth.as_ref().unwrap().cache.reads;
+        assert!(reads <= est.reads && reads * 4 >= est.reads, "{reads} of {est:?}");
+    }
+}
+
+/// `sweep configs/indoor.toml --fit aabb`: no configuration can qualify (a tight box under a
+/// turning camera changes size every frame), and the first frames of the path prove it; the
+/// sweep says so before running (it took 14 to 60 s to reach the same verdict).
+#[test]
+fn a_sweep_where_nothing_can_qualify_fails_before_running() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = bin()
+        .args([
+            "sweep",
+            "configs/indoor.toml",
+            "--fit",
+            "aabb",
+            "--no-plots",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains(
+            "Nothing qualifies: of 672 configurations, 0 miss slice corners (coverage_violations > 0) and 672 shimmer \
+             when snapped (shimmer_snapped > 0.001 texel), which the first 8 of the path's 180 frames already show"
+        ),
+        "{e}"
+    );
+    assert!(!out.join("sweep.csv").exists());
+    // A grid where a row qualifies runs as before.
+    let o = bin()
+        .args([
+            "sweep",
+            "configs/indoor.toml",
+            "--cascades",
+            "2",
+            "--resolution",
+            "512",
+            "--no-plots",
+            "--quiet",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("sweep.csv").exists());
+}
+
+/// The bound the check rests on, against full analyses: the first 8 frames' squared drifts
+/// over `(F − 1) m` never exceed the whole path's snapped S3², and each row the bound refuses
+/// really shimmers; a first-frames coverage violation stays in the whole path.
+#[test]
+fn the_first_frames_bound_snapped_shimmer_and_coverage_from_below() {
+    use csm_lab::{analyze, AnalysisOptions, Config};
+    let base = std::fs::read_to_string("configs/indoor.toml").unwrap();
+    let mut refused = 0;
+    for (fit, snap, cascades, resolution, path) in [
+        ("aabb", true, 2, 512, "yaw"),
+        ("aabb", true, 4, 2048, "strafe"),
+        ("aabb", true, 3, 1024, "orbit"),
+        ("sphere", true, 3, 1024, "yaw"),
+        ("sphere", false, 2, 512, "dolly"),
+    ] {
+        let text = base
+            .replace("fit = \"sphere\"", &format!("fit = \"{fit}\""))
+            .replace("snap = true", &format!("snap = {snap}"))
+            .replace("cascades = 3", &format!("cascades = {cascades}"))
+            .replace("resolution = 1024", &format!("resolution = {resolution}"))
+            .replace("path = \"yaw\"", &format!("path = \"{path}\""));
+        let full = Config::from_toml_str(&text, "indoor.toml", None).unwrap();
+        let frames = full.motion.frames;
+        let prefix = Config::from_toml_str(&text.replace("frames = 180", "frames = 8"), "indoor.toml", None).unwrap();
+        let opts = AnalysisOptions {
+            frame_rows: true,
+            ..AnalysisOptions::summary_only()
+        };
+        let (a, p) = (analyze(&full, &opts), analyze(&prefix, &opts));
+        let sum: f64 = p
+            .snapped()
+            .unwrap()
+            .frames
+            .iter()
+            .map(|f| f.phase_drift_rms.powi(2))
+            .sum();
+        let bound = (sum / ((frames - 1) * cascades) as f64).sqrt();
+        let s3 = a.summary.shimmer_snapped;
+        assert!(bound <= s3 * (1.0 + 1e-12), "{fit} {path}: bound {bound} above S3 {s3}");
+        if bound > 1e-3 {
+            refused += 1;
+            assert!(s3 > 1e-3);
+        }
+        if p.summary.coverage_violations > 0 {
+            assert!(a.summary.coverage_violations >= p.summary.coverage_violations);
+        }
+    }
+    assert!(refused >= 2, "{refused}");
+}

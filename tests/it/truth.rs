@@ -111,6 +111,7 @@ fn sampling(bias: Bias) -> Sampling {
         ranges: vec![(-200.0, 200.0)],
         pcf: 1,
         filter: PcfFilter::Nearest,
+        binary32: None,
     }
 }
 
@@ -475,6 +476,7 @@ proptest! {
                 ranges: vec![(-30.0, 30.0)],
                 pcf,
                 filter,
+                binary32: None,
             };
             truth::fractions(&truth::frame_zero_in(&scene, &b, &[(b, w)], &cascades, &points, &s).0).0
         };
@@ -704,6 +706,7 @@ fn a_receivers_needed_bias_is_where_its_lookup_turns_lit() {
                 ranges: vec![(-30.0, 30.0)],
                 pcf,
                 filter,
+                binary32: None,
             };
             let (zero, _) = truth::frame_zero_in(&scene, &b, &[(b, w)], &cascades, &points, &s(0.0));
             let needed: Vec<f64> = zero
@@ -861,6 +864,7 @@ fn the_s5_split_equals_answering_every_frame_from_scratch() {
         ranges: g.ranges.clone(),
         pcf: 3,
         filter: g.filter,
+        binary32: None,
     };
     let poses: Vec<_> = c.camera_path().unwrap();
     let (mut steps, mut edge, mut acne) = (0u64, 0u64, 0u64);

@@ -329,7 +329,7 @@ impl<R: Real> EnginePipeline<R> {
     }
 
     /// [`EnginePipeline::window`] with the cascade's rows given.
-    fn window_with(
+    pub(crate) fn window_with(
         &self,
         i: usize,
         rows: &[[R; 3]; 2],

@@ -29,10 +29,14 @@ use std::hash::{BuildHasherDefault, Hasher};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
+use std::sync::Arc;
+
 use crate::cascades::{LightPose, Rig};
 use crate::fitting::Window;
 use crate::geometry::{Aabb, CameraPose, LightBasis};
 use crate::metrics::cascade_at;
+use crate::precision::{frame_anchors, EnginePipeline};
+use crate::scene::SnapSpace;
 use crate::shade::{FlipImage, Shade, ShadeImage};
 use crate::visibility::{SceneGeometry, Visibility};
 
@@ -313,17 +317,104 @@ impl PcfFilter {
     }
 }
 
-/// How the maps are sampled: per-cascade bias, depth format, PCF width (1, 3 or 5) and the
-/// filter of each tap.
-#[derive(Debug, Clone, PartialEq)]
+/// How the maps are sampled: per-cascade bias, depth format, PCF width (1, 3 or 5), the
+/// filter of each tap, and the arithmetic of the light matrix and the depths.
+#[derive(Debug, Clone)]
 pub struct Sampling {
     pub bias: Vec<Bias>,
     /// None: exact f64 depths (no quantisation).
     pub format: Option<DepthFormat>,
-    /// Light depth range of each cascade over which depths are quantised (frame 0's).
+    /// Light depth range of each cascade over which depths are quantised (frame 0's; the
+    /// binary32 pipeline uses each frame's own range instead).
     pub ranges: Vec<(f64, f64)>,
     pub pcf: u32,
     pub filter: PcfFilter,
+    /// None: the light matrix, lookups and depths in f64, windows exact (csm-lab's
+    /// reference). Some: an engine's binary32 pipeline, rebuilt every frame (see
+    /// [`Binary32`]).
+    pub binary32: Option<Binary32>,
+}
+
+/// The binary32 (`f32`) pipeline of an engine, for the ground truth: every frame, each
+/// cascade's light matrix and window are rebuilt in f32 the way [`EnginePipeline`] builds
+/// them (rows stored in f32, window centre, snapping and origin in f32, in the rig's snap
+/// space), the depth row and offset normalise light depth over that frame's light depth
+/// range (fitted to `bounds` by the rig's rule) and are stored in f32, and every texel's
+/// stored depth and every receiver's lookup and depth are computed in f32 through that
+/// matrix. A snapped window then lands a fraction of an ulp off its grid, differently every
+/// frame, and stored depths move by a few ulps: what a GPU's snapped map does.
+#[derive(Debug, Clone)]
+pub struct Binary32 {
+    engine: Arc<EnginePipeline<f32>>,
+    space: SnapSpace,
+    bounds: Aabb,
+}
+
+impl Binary32 {
+    /// The pipeline of `rig` in snap space `space`; `bounds` are the scene bounds the light
+    /// depth range is fitted to (as in the f64 pass's ranges).
+    pub fn new(rig: &Rig, space: SnapSpace, bounds: Aabb) -> Self {
+        Binary32 {
+            engine: Arc::new(EnginePipeline::new(rig)),
+            space,
+            bounds,
+        }
+    }
+}
+
+/// One cascade's light matrix in one frame of the binary32 pipeline, as the engine stores it
+/// (every entry an f32), relative to the frame's anchor (the world origin, or the camera
+/// moved onto the snap grid with `snap_space = "camera_relative"`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameMatrix {
+    anchor: DVec3,
+    /// Light x and y rows.
+    rows: [[f32; 3]; 2],
+    /// The window's minimum corner (light-space x/y relative to the anchor) and texel size.
+    origin: [f32; 2],
+    texel: [f32; 2],
+    /// Normalised depth `x = depth_row . X + depth_offset` (light z over the range).
+    depth_row: [f32; 3],
+    depth_offset: f32,
+    /// `1 / (far - near)`, for the bias in normalised units.
+    inv_range: f32,
+}
+
+impl FrameMatrix {
+    fn point(&self, x: DVec3) -> [f32; 3] {
+        let r = x - self.anchor;
+        [r.x as f32, r.y as f32, r.z as f32]
+    }
+
+    /// The normalised depth of a world point, in f32 (the point stored in f32 first).
+    fn depth(&self, x: DVec3) -> f32 {
+        let p = self.point(x);
+        let d = &self.depth_row;
+        d[0] * p[0] + d[1] * p[1] + d[2] * p[2] + self.depth_offset
+    }
+
+    /// The shader's texel coordinates `(M x - o) / T` of a world point, in f32.
+    fn lookup(&self, x: DVec3) -> [f32; 2] {
+        let p = self.point(x);
+        std::array::from_fn(|a| {
+            let r = &self.rows[a];
+            (r[0] * p[0] + r[1] * p[1] + r[2] * p[2] - self.origin[a]) / self.texel[a]
+        })
+    }
+}
+
+/// A normalised depth stored in `format` (None: as computed), in f32: clamped to [0, 1], then
+/// rounded to the unorm formats' steps. No caster stays infinite.
+fn store32(x: f32, format: Option<DepthFormat>) -> f32 {
+    if !x.is_finite() {
+        return x;
+    }
+    let x = x.clamp(0.0, 1.0);
+    match format {
+        None | Some(DepthFormat::D32F) => x,
+        Some(DepthFormat::D16) => ((x as f64 * 65_535.0).round() / 65_535.0) as f32,
+        Some(DepthFormat::D24) => ((x as f64 * 16_777_215.0).round() / 16_777_215.0) as f32,
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -497,6 +588,8 @@ pub struct FrameGrid {
     /// The window's first texel (whole-texel index of its minimum corner).
     pub first: (i64, i64),
     pub resolution: u32,
+    /// The frame's binary32 light matrix (None: the f64 pipeline).
+    pub matrix: Option<FrameMatrix>,
 }
 
 impl<'a> ShadowMaps<'a> {
@@ -551,6 +644,7 @@ impl<'a> ShadowMaps<'a> {
             id,
             first: (whole.x as i64, whole.y as i64),
             resolution: w.resolution,
+            matrix: None,
         }
     }
 
@@ -633,6 +727,25 @@ impl<'a> ShadowMaps<'a> {
         let grid = self.grids[id].as_ref().expect("a grid of this frame");
         place(grid.basis, grid.texel, grid.fraction, r, bias)
     }
+
+    /// Where receiver `r` reads a frame's grid: [`ShadowMaps::place`] in f64, or with the
+    /// frame's binary32 matrix the shader's f32 lookup and depth (see [`place32`]).
+    pub fn place_in(&self, fg: &FrameGrid, r: &Receiver, bias: &Bias) -> Placement {
+        match &fg.matrix {
+            None => self.place(fg.id, r, bias),
+            Some(m) => {
+                let grid = self.grids[fg.id].as_ref().expect("a grid of this frame");
+                place32(grid.basis, grid.texel, m, fg.first, r, bias)
+            }
+        }
+    }
+
+    /// The world point a held texel's depth stands for: the hit of its ray.
+    fn hit_point(&self, id: usize, g: (i64, i64), depth: f64) -> DVec3 {
+        let grid = self.grids[id].as_ref().expect("a grid of this frame");
+        let c = grid.centre(g);
+        grid.basis.x * c.x + grid.basis.y * c.y + grid.basis.z * depth
+    }
 }
 
 /// The ray of texel `g`: from its centre, before every triangle, along the light.
@@ -670,30 +783,67 @@ pub struct Placement {
 /// Largest depth slope per texel kept (a surface edge-on to the light).
 const MAX_SLOPE_TEXELS: f64 = 1e6;
 
-fn place(basis: LightBasis, texel: DVec2, fraction: DVec2, r: &Receiver, bias: &Bias) -> Placement {
+/// The receiver moved by its normal offset.
+fn offset_point(basis: LightBasis, texel: DVec2, r: &Receiver, bias: &Bias) -> DVec3 {
     let t = texel.x.max(texel.y);
     let mut v = r.n * (bias.normal * t);
     if bias.offset == NormalOffset::Lateral {
         v *= 1.0 - r.n.dot(-basis.z).max(0.0);
         v -= basis.z * v.dot(basis.z);
     }
-    let p = r.p + v;
-    let q = DVec2::new(basis.x.dot(p), basis.y.dot(p));
-    let s = q / texel - fraction;
+    r.p + v
+}
+
+/// The receiver's depth slope per texel (world units), see [`Placement::slope`].
+fn depth_slope(basis: LightBasis, texel: DVec2, r: &Receiver) -> f64 {
+    let t = texel.x.max(texel.y);
     let nz = r.n.dot(basis.z);
-    let slope = if nz.abs() > 0.0 {
+    if nz.abs() > 0.0 {
         ((r.n.dot(basis.x) / nz).abs() * texel.x)
             .max((r.n.dot(basis.y) / nz).abs() * texel.y)
             .min(MAX_SLOPE_TEXELS * t)
     } else {
         MAX_SLOPE_TEXELS * t
-    };
+    }
+}
+
+fn place(basis: LightBasis, texel: DVec2, fraction: DVec2, r: &Receiver, bias: &Bias) -> Placement {
+    let p = offset_point(basis, texel, r, bias);
+    let q = DVec2::new(basis.x.dot(p), basis.y.dot(p));
+    let s = q / texel - fraction;
+    let slope = depth_slope(basis, texel, r);
     Placement {
         at: s,
         texel: (s.x.floor() as i64, s.y.floor() as i64),
         depth: basis.z.dot(p),
         slope,
         bias: bias.facing.apply(bias.depth + bias.slope * slope, r.n.dot(-basis.z)),
+    }
+}
+
+/// [`place`] through a frame's binary32 matrix: the offset point (f64) is stored in f32
+/// relative to the anchor, its texel coordinates `(M p - o) / T` and its normalised depth are
+/// computed in f32, and the bias (world units, as in f64) is converted to normalised depth in
+/// f32. `at` is `first + s` (exact), so its floor is the texel the shader reads. `depth` and
+/// `bias` hold f32 values (normalised depth), exactly.
+fn place32(
+    basis: LightBasis,
+    texel: DVec2,
+    m: &FrameMatrix,
+    first: (i64, i64),
+    r: &Receiver,
+    bias: &Bias,
+) -> Placement {
+    let p = offset_point(basis, texel, r, bias);
+    let s = m.lookup(p);
+    let slope = depth_slope(basis, texel, r);
+    let world = bias.facing.apply(bias.depth + bias.slope * slope, r.n.dot(-basis.z));
+    Placement {
+        at: DVec2::new(first.0 as f64 + s[0] as f64, first.1 as f64 + s[1] as f64),
+        texel: (first.0 + s[0].floor() as i64, first.1 + s[1].floor() as i64),
+        depth: m.depth(p) as f64,
+        slope,
+        bias: ((world as f32) * m.inv_range) as f64,
     }
 }
 
@@ -798,19 +948,59 @@ pub fn serve_faults(rig: &Rig, vis: &Visibility, bounds: &Aabb, snapped: bool, s
 }
 
 /// Every cascade's grid in a frame (`light` is the frame's light: the rig's, until lights move).
+/// With the sampling's binary32 pipeline, each window and light matrix is the one the f32
+/// pipeline builds in this frame.
 pub fn frame_grids(
     maps: &mut ShadowMaps,
     rig: &Rig,
     light: &LightBasis,
     pose: &CameraPose,
     snapped: bool,
+    s: &Sampling,
 ) -> Vec<FrameGrid> {
     let lp = LightPose::new(light, pose);
+    let Some(b32) = &s.binary32 else {
+        return (0..rig.cascade_count())
+            .map(|i| {
+                let w = rig.window(i, &lp, snapped);
+                let basis = rig.basis(i, &lp);
+                maps.grid(i, &basis, &w)
+            })
+            .collect();
+    };
+    let anchors = frame_anchors(rig, pose, b32.space);
     (0..rig.cascade_count())
         .map(|i| {
-            let w = rig.window(i, &lp, snapped);
-            let basis = rig.basis(i, &lp);
-            maps.grid(i, &basis, &w)
+            let (basis, lpi) = rig.cascade_pose_with(i, &lp, light);
+            let f32s = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
+            let rows = [f32s(basis.x), f32s(basis.y)];
+            let anchor = anchors[i];
+            let w = b32.engine.window_with(i, &rows, &lpi.pose, anchor, snapped);
+            // The frame's light depth range, fitted as the f64 pass fits it (to the window the
+            // engine means to build), then stored in the f32 matrix relative to the anchor.
+            let exact = rig.window(i, &lp, snapped);
+            let d = rig.light_depth(i, &lp, &exact, &b32.bounds);
+            let range = d.far - d.near;
+            let inv = if range > 0.0 { 1.0 / range } else { 0.0 };
+            let near_rel = d.near - basis.z.dot(anchor);
+            let texel = DVec2::new(w.texel[0] as f64, w.texel[1] as f64);
+            let origin = DVec2::new(w.origin[0] as f64, w.origin[1] as f64) + basis.to_light_xy(anchor);
+            let window = Window {
+                texel,
+                origin_texels: origin / texel,
+                resolution: exact.resolution,
+            };
+            let mut fg = maps.grid(i, &basis, &window);
+            fg.matrix = Some(FrameMatrix {
+                anchor,
+                rows,
+                origin: w.origin,
+                texel: w.texel,
+                depth_row: f32s(basis.z * inv),
+                depth_offset: (-near_rel * inv) as f32,
+                inv_range: inv as f32,
+            });
+            fg
         })
         .collect()
 }
@@ -870,7 +1060,7 @@ fn answer_with(
     cascade: usize,
     bias: &Bias,
 ) -> Option<Answer> {
-    let pl = maps.place(fg.id, r, bias);
+    let pl = maps.place_in(fg, r, bias);
     if !inside(fg, pl.texel) {
         return None;
     }
@@ -881,12 +1071,28 @@ fn answer_with(
     for (g, w) in footprint(pl.at, s.pcf, s.filter) {
         let held = maps.stored(fg.id, g);
         let stored = held.map_or(f64::INFINITY, |x| x.depth);
-        let stored = s.format.map_or(stored, |f| f.quantise(stored, near, far));
-        if pl.depth <= stored + pl.bias {
+        let (lit, lit_unbiased) = match &fg.matrix {
+            None => {
+                let stored = s.format.map_or(stored, |f| f.quantise(stored, near, far));
+                (pl.depth <= stored + pl.bias, own_depth <= stored)
+            }
+            Some(m) => {
+                // Binary32: the texel's depth written through the frame's f32 matrix, the
+                // receiver's f32 depth compared with it plus the f32 bias.
+                let stored = if stored.is_finite() {
+                    store32(m.depth(maps.hit_point(fg.id, g, stored)), s.format)
+                } else {
+                    f32::INFINITY
+                };
+                let depth = pl.depth as f32;
+                (depth <= stored + pl.bias as f32, m.depth(r.p) <= stored)
+            }
+        };
+        if lit {
             lit_w += w;
             lit_n += 1;
         }
-        if own_depth <= stored {
+        if lit_unbiased {
             unb_w += w;
             unb_n += 1;
         }
@@ -912,13 +1118,13 @@ type Key = Option<(usize, usize, (i64, i64))>;
 fn key_of(maps: &ShadowMaps, grids: &[FrameGrid], rig: &Rig, pose: &CameraPose, r: &Receiver, s: &Sampling) -> Key {
     let i = reading_cascade(rig, pose, r.p)?;
     let fg = &grids[i];
-    let pl = maps.place(fg.id, r, &s.bias[i]);
+    let pl = maps.place_in(fg, r, &s.bias[i]);
     inside(fg, pl.texel).then_some((i, fg.id, pl.texel))
 }
 
 /// The texels receiver `r` reads in grid `fg` of cascade `i` under the sampling's bias.
 fn texels_read(maps: &ShadowMaps, fg: &FrameGrid, r: &Receiver, s: &Sampling, i: usize) -> Vec<(usize, (i64, i64))> {
-    let pl = maps.place(fg.id, r, &s.bias[i]);
+    let pl = maps.place_in(fg, r, &s.bias[i]);
     footprint(pl.at, s.pcf, s.filter).map(|(g, _)| (fg.id, g)).collect()
 }
 
@@ -939,7 +1145,7 @@ pub fn frame_states(
     points: &[Receiver],
     s: &Sampling,
 ) -> (Vec<Option<usize>>, Vec<Option<Answer>>) {
-    let grids = frame_grids(maps, rig, light, pose, snapped);
+    let grids = frame_grids(maps, rig, light, pose, snapped, s);
     let keys: Vec<Key> = points
         .par_iter()
         .map(|r| key_of(maps, &grids, rig, pose, r, s))
@@ -1019,19 +1225,21 @@ pub fn flicker(
     let (mut total_flips, mut edge_flips, mut total_steps) = (0u64, 0u64, 0u64);
     // A bilinear tap reads 2x2 texels.
     let per_tap = if s.filter == PcfFilter::Bilinear { 4 } else { 1 };
+    let rebuilt = s.binary32.is_some();
     let mut frames = 0;
     for (t, pose) in poses.enumerate() {
         frames += 1;
-        let grids = frame_grids(&mut maps, rig, light, &pose, snapped);
+        let grids = frame_grids(&mut maps, rig, light, &pose, snapped, s);
         let new_keys: Vec<Key> = points
             .par_iter()
             .map(|r| key_of(&maps, &grids, rig, &pose, r, s))
             .collect();
         let k2 = (s.pcf * s.pcf * per_tap) as u64;
         maps.stats.reads += new_keys.iter().flatten().count() as u64 * k2;
-        // Texels to fetch: those of receivers whose key changed.
+        // Texels to fetch: those of receivers whose key changed (every receiver with the
+        // binary32 pipeline: its matrix, hence every depth, is rebuilt each frame).
         let changed: Vec<usize> = (0..n)
-            .filter(|&j| new_keys[j].is_some() && new_keys[j] != keys[j])
+            .filter(|&j| new_keys[j].is_some() && (rebuilt || new_keys[j] != keys[j]))
             .collect();
         let wanted: Vec<(usize, (i64, i64))> = changed
             .iter()
@@ -1183,12 +1391,10 @@ pub fn frame_zero(
     points: &[Receiver],
     s: &Sampling,
 ) -> (Vec<PointZero>, CacheStats) {
-    let lp = LightPose::new(light, pose);
-    let windows: Vec<(LightBasis, Window)> = (0..rig.cascade_count())
-        .map(|i| (rig.basis(i, &lp), rig.window(i, &lp, snapped)))
-        .collect();
     let cascades: Vec<Option<usize>> = points.par_iter().map(|r| reading_cascade(rig, pose, r.p)).collect();
-    frame_zero_in(scene, light, &windows, &cascades, points, s)
+    let mut maps = ShadowMaps::new(scene);
+    let grids = frame_grids(&mut maps, rig, light, pose, snapped, s);
+    frame_zero_on(maps, light, &grids, &cascades, points, s)
 }
 
 /// The depth bias that lights a receiver whose lookup reads texels with these excesses
@@ -1227,6 +1433,20 @@ pub fn frame_zero_in(
         .enumerate()
         .map(|(i, (b, w))| maps.grid(i, b, w))
         .collect();
+    frame_zero_on(maps, light, &grids, cascades, points, s)
+}
+
+/// [`frame_zero_in`] on a frame's grids. The bias search (`excess`, `needed`) reads exact
+/// f64 depths in every pipeline; the answers use the grids' own arithmetic.
+fn frame_zero_on(
+    mut maps: ShadowMaps,
+    light: &LightBasis,
+    grids: &[FrameGrid],
+    cascades: &[Option<usize>],
+    points: &[Receiver],
+    s: &Sampling,
+) -> (Vec<PointZero>, CacheStats) {
+    let scene = maps.scene;
     let eps = epsilon(scene);
     let zero: Vec<Option<Placement>> = points
         .par_iter()

@@ -297,10 +297,63 @@ pub fn sigma_min_2x2(a: f64, b: f64, c: f64, d: f64) -> f64 {
     (det / smax).max(smax / MAX_ANISOTROPY)
 }
 
-/// The BVH over a mesh's triangles (binary32, as the crate builds it).
+/// The BVH over a mesh's triangles (binary32, as the crate builds it), each distinct
+/// binary32 triangle once.
 struct Tracer {
-    bvh: CwBvh,
+    /// None when no triangle is left (every one degenerate in binary32).
+    bvh: Option<CwBvh>,
     tris: Vec<Triangle>,
+    /// The mesh index of each BVH triangle (its first occurrence).
+    mesh_index: Vec<u32>,
+    dropped: BvhDropped,
+}
+
+/// What [`bvh_input`] left out of a mesh's BVH.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BvhDropped {
+    /// Copies of an earlier triangle (the same three binary32 vertices, in any order).
+    pub duplicates: usize,
+    /// Triangles whose three binary32 vertices are collinear (zero area once rounded).
+    pub degenerate: usize,
+}
+
+/// The triangles the BVH is built over: the mesh's triangles in binary32, each distinct one
+/// once, without those of zero area. A ray cannot tell a copy from its original, and a
+/// zero-area triangle can neither receive nor cast, so hits are unchanged; but a builder
+/// given many coincident primitives makes a tree as deep as their count (10^5 copies of one
+/// triangle overflowed the stack, and traversal turns linear). Returns the triangles, each
+/// one's mesh index, and what was dropped.
+pub fn bvh_input(mesh: &Mesh) -> (Vec<Triangle>, Vec<u32>, BvhDropped) {
+    let mut seen: std::collections::HashSet<[u32; 9]> = std::collections::HashSet::with_capacity(mesh.triangles.len());
+    let mut dropped = BvhDropped::default();
+    let mut tris = Vec::with_capacity(mesh.triangles.len());
+    let mut index = Vec::with_capacity(mesh.triangles.len());
+    for (k, t) in mesh.triangles.iter().enumerate() {
+        let tri = Triangle {
+            v0: v3(t[0]),
+            v1: v3(t[1]),
+            v2: v3(t[2]),
+        };
+        // The area of the rounded triangle, in f64 (exact enough to tell zero).
+        let f = |v: glam_bvh::Vec3A| DVec3::new(v.x as f64, v.y as f64, v.z as f64);
+        if (f(tri.v1) - f(tri.v0)).cross(f(tri.v2) - f(tri.v0)) == DVec3::ZERO {
+            dropped.degenerate += 1;
+            continue;
+        }
+        let bits = |v: glam_bvh::Vec3A| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        let mut vs = [bits(tri.v0), bits(tri.v1), bits(tri.v2)];
+        vs.sort_unstable();
+        let key = [
+            vs[0][0], vs[0][1], vs[0][2], vs[1][0], vs[1][1], vs[1][2], vs[2][0], vs[2][1], vs[2][2],
+        ];
+        if !seen.insert(key) {
+            dropped.duplicates += 1;
+            continue;
+        }
+        tris.push(tri);
+        index.push(k as u32);
+    }
+    (tris, index, dropped)
 }
 
 fn v3(p: DVec3) -> glam_bvh::Vec3A {
@@ -309,28 +362,27 @@ fn v3(p: DVec3) -> glam_bvh::Vec3A {
 
 impl Tracer {
     fn new(mesh: &Mesh) -> Tracer {
-        let tris: Vec<Triangle> = mesh
-            .triangles
-            .iter()
-            .map(|t| Triangle {
-                v0: v3(t[0]),
-                v1: v3(t[1]),
-                v2: v3(t[2]),
-            })
-            .collect();
-        let bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Default::default());
-        Tracer { bvh, tris }
+        let (tris, mesh_index, dropped) = bvh_input(mesh);
+        let bvh = (!tris.is_empty())
+            .then(|| build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Default::default()));
+        Tracer {
+            bvh,
+            tris,
+            mesh_index,
+            dropped,
+        }
     }
 
-    /// Index of the nearest triangle along the ray within `[tmin, tmax]` (ray units), if any.
+    /// Mesh index of the nearest triangle along the ray within `[tmin, tmax]` (ray units), if
+    /// any.
     fn nearest(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Option<usize> {
+        let bvh = self.bvh.as_ref()?;
         let ray = Ray::new(v3(origin), v3(dir), tmin as f32, tmax as f32);
         let mut hit = RayHit::none();
         let tris = &self.tris;
-        let indices = &self.bvh.primitive_indices;
-        self.bvh
-            .ray_traverse(ray, &mut hit, |r, id| tris[indices[id] as usize].intersect(r))
-            .then(|| indices[hit.primitive_id as usize] as usize)
+        let indices = &bvh.primitive_indices;
+        bvh.ray_traverse(ray, &mut hit, |r, id| tris[indices[id] as usize].intersect(r))
+            .then(|| self.mesh_index[indices[hit.primitive_id as usize] as usize] as usize)
     }
 }
 
@@ -367,6 +419,12 @@ impl SceneGeometry {
             hits_cache: Mutex::new(Vec::new()),
             capacity: std::sync::atomic::AtomicUsize::new(CACHED_PASSES),
         }
+    }
+
+    /// What the BVH left out of the mesh (duplicate and binary32-degenerate triangles; see
+    /// [`bvh_input`]). Builds the BVH if it is not built yet.
+    pub fn bvh_dropped(&self) -> BvhDropped {
+        self.tracer.get_or_init(|| Tracer::new(&self.mesh)).dropped
     }
 
     /// Keeps at least `n` passes (and as many cast rays) from now on: a level of `n` views

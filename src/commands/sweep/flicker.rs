@@ -124,7 +124,7 @@ pub(crate) fn refuse_ground_truth(result_config: &Config, source: &str) -> Resul
         }
         .into());
     }
-    Ok(())
+    crate::analysis::ground_truth::cost_fits(result_config, source)
 }
 
 /// Why the ground-truth pass refuses a moving light.

@@ -8,6 +8,7 @@
 //! those three and never each other's parent; this file holds [`SweepResult`], every decision
 //! of a sweep computed once, and is the only one that uses the children.
 
+pub(crate) mod feasible;
 pub mod flicker;
 pub mod grid;
 pub mod level;
