@@ -214,12 +214,14 @@ pub(crate) fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
 
     let frames = csm_core::motion::poses(&setup.camera, &setup.motion).len();
     let every = frames.div_ceil(ANIMATION_FRAMES).max(1);
+    // Cached cascades hold their maps between updates (empty: every frame).
+    let every_cascade = crate::analysis::cadence(config, rig);
     let (cols, rows) = (vis.cols, vis.rows);
     let walk = |snapped: bool| {
         let poses = csm_core::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
         let mut frame0 = ShadeImage::empty(cols, rows);
         let mut animation = Vec::new();
-        let f = truth::flicker(
+        let f = truth::flicker_cached(
             scene,
             rig,
             &rig.light,
@@ -227,6 +229,10 @@ pub(crate) fn run(config: &Config, rig: &Rig) -> Option<GroundTruth> {
             snapped,
             &points,
             &sampling,
+            csm_core::walk::Cadence {
+                every: &every_cascade,
+                first_frame: 0,
+            },
             &mut |k, states| {
                 if k == 0 {
                     frame0 = truth::shade_image(cols, rows, &points, &truly_lit, states);

@@ -765,6 +765,7 @@ mod tests {
                 screen: None,
                 light: None,
                 truth: None,
+                cache: None,
             },
         }
     }

@@ -345,6 +345,9 @@ pub(crate) fn rows_text<'a>(m: &Manifest, rows: impl IntoIterator<Item = (usize,
             light,
             // Ground truth is not part of a sweep row (only `analyze` runs it).
             truth: _,
+            // Cached-cascade figures are not sweep columns (not `in_rows`); a shard carries
+            // none.
+            cache: _,
         } = &row.summary;
         let _ = write!(
             out,
@@ -612,6 +615,7 @@ pub(crate) fn parse_rows(file: &std::path::Path, text: &str, m: &Manifest) -> Re
                         s => Some(float(s)?),
                     },
                     screen,
+                    cache: None,
                     light: match f[29] {
                         "-" => None,
                         s => {
