@@ -511,11 +511,12 @@ pub(crate) fn each_frame_row(
                         rig_path::along_path_cached(&rig, poses, &probes, cadence, snapped, sopts)
                             .frames
                             .into_iter()
+                            // Frames counted from `start`, as the other walks give them.
+                            .filter(|r| from + r.frame > start)
                             .map(|mut r| {
-                                r.frame += from - start;
+                                r.frame = from + r.frame - start;
                                 r
                             })
-                            .filter(|r| r.frame > 0)
                             .collect()
                     }
                     Precision::F64 => {

@@ -520,3 +520,61 @@ fn bad_cadences_are_errors_that_name_the_key_the_value_and_what_is_allowed() {
     ]));
     assert!(sun.contains("when the light moves"), "{sun}");
 }
+
+/// `analyze --all-frames` walks a long path in overlapping chunks; with cached cascades each
+/// chunk starts early enough that every cascade holds the window of its last render, so its
+/// rows equal, frame for frame, those one walk of the whole path keeps, and between a
+/// cascade's renders its rows drift by 0.
+#[test]
+fn every_frame_rows_of_a_long_path_agree_with_one_walk_of_it() {
+    use std::process::Command;
+    let dir = tempfile::tempdir().unwrap();
+    let every = [1usize, 3, 7, 250];
+    let cfg = dir.path().join("long.toml");
+    let text = with(&[
+        ("motion.path", "path = \"yaw\""),
+        ("motion.frames", "frames = 2500"),
+        ("shadow.update_every", "update_every = [1, 3, 7, 250]"),
+        ("shadow.fit", "fit = \"aabb\""),
+    ]);
+    std::fs::write(&cfg, text).unwrap();
+    let run = |all: bool| {
+        let out = dir.path().join(format!("o{all}"));
+        let mut c = Command::new(env!("CARGO_BIN_EXE_csm-lab"));
+        c.args([
+            "analyze",
+            "--quiet",
+            cfg.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        if all {
+            c.arg("--all-frames");
+        }
+        let o = c.output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        common::read_csv(&out.join("shimmer.csv")).1
+    };
+    let kept = run(false);
+    let all = run(true);
+    assert_eq!(all.len(), 2_499 * 4 * 2, "every frame pair, cascade and snap mode");
+    let by_key: std::collections::BTreeMap<_, _> = all
+        .iter()
+        .map(|r| ((r[0].clone(), r[1].clone(), r[2].clone()), r.clone()))
+        .collect();
+    assert!(kept.len() < all.len() / 2);
+    for r in &kept {
+        assert_eq!(&by_key[&(r[0].clone(), r[1].clone(), r[2].clone())], r);
+    }
+    let mut moved = 0;
+    for r in &all {
+        let (t, i): (usize, usize) = (r[0].parse().unwrap(), r[1].parse().unwrap());
+        let drift: f64 = r[5].parse().unwrap();
+        if t % every[i] != 0 {
+            assert_eq!((r[3].as_str(), drift), ("0", 0.0), "{r:?}");
+        } else if drift > 0.0 {
+            moved += 1;
+        }
+    }
+    assert!(moved > 0, "the renders drift");
+}
