@@ -135,7 +135,7 @@ fn cross_checks(config: &Config, v: &Validator<'_>) -> Result<()> {
 /// `[shadow] update_every` once the cascades are known: one value, or one per cascade; and a
 /// pipeline whose held windows stay valid (binary64, a still light, a light basis that does
 /// not follow the camera: a held map keeps the light basis it was rendered with).
-fn update_every(config: &Config, v: &Validator<'_>) -> Result<()> {
+pub(crate) fn update_every(config: &Config, v: &Validator<'_>) -> Result<()> {
     let Some(every) = &config.shadow.update_every else {
         return Ok(());
     };

@@ -578,3 +578,28 @@ fn every_frame_rows_of_a_long_path_agree_with_one_walk_of_it() {
     }
     assert!(moved > 0, "the renders drift");
 }
+
+/// A sweep point with another cascade count than a per-cascade `update_every` is an error
+/// naming the key, never a row silently rendered every frame; one value fits every count.
+#[test]
+fn a_per_cascade_cadence_refuses_a_sweep_point_of_another_count() {
+    use csm_lab::config::{Fit, SplitRange};
+    let c = config(&with(&[("shadow.update_every", "update_every = [1, 1, 2, 4]")]));
+    let e = c
+        .with_sweep_point(0.5, 3, 1024, Fit::Sphere, SplitRange::Bounds)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("shadow.update_every") && e.contains("(3 here)"), "{e}");
+    assert!(c
+        .with_sweep_point(0.5, 4, 1024, Fit::Sphere, SplitRange::Bounds)
+        .is_ok());
+    let one = config(&with(&[("shadow.update_every", "update_every = 3")]));
+    for n in [1, 3, 8] {
+        let p = one
+            .with_sweep_point(0.5, n, 1024, Fit::Sphere, SplitRange::Bounds)
+            .unwrap();
+        let a = analyze(&p, &AnalysisOptions::summary_only());
+        let r = a.summary.cache.unwrap().renders_per_frame;
+        assert!((r - n as f64 / 3.0).abs() < 1e-12, "{n}: {r}");
+    }
+}
