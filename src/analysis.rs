@@ -11,8 +11,9 @@ use csm_core::rig_path;
 use csm_core::scene::Precision;
 use csm_core::screen::{self, ScreenStats};
 use csm_core::seams;
-use csm_core::shimmer::{PathResult, ShimmerOptions};
+use csm_core::shimmer::{PathResult, ShimmerOptions, StaleStats};
 use csm_core::visibility::Visibility;
+use csm_core::walk::Cadence;
 use glam::DVec2;
 
 pub mod ground_truth;
@@ -124,6 +125,10 @@ pub struct Summary {
     /// the serde form (a shard's rows carry them only for a level).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub views: Vec<ViewScreen>,
+    /// Cached cascades (`[shadow] update_every`), when some cascade is held between updates;
+    /// None otherwise, and then absent from every output.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub cache: Option<CacheSummary>,
 }
 
 /// One view's own screen metrics in a level of views (`views.csv`).
@@ -134,6 +139,49 @@ pub struct ViewScreen {
     pub screen: ScreenStats,
     /// Share of the view's lit-facing receiver pixels inside a blend band (every split).
     pub band_pixel_share: f64,
+}
+
+/// What cached cascades cost and save, over the motion paths with the configured snapping
+/// (see [`csm_core::shimmer::StaleStats`] and `docs/cost.md`, "Cached cascades").
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct CacheSummary {
+    /// Cascade renders per frame on average: the sum over cascades of 1 / update_every
+    /// (the cascade count without caching).
+    pub renders_per_frame: f64,
+    /// Stale frames whose slice the held window does not cover, summed over cascades and paths.
+    pub stale_coverage_violations: u64,
+    /// The worst cascade's share of frames with such a hole.
+    pub stale_coverage_fraction: f64,
+    /// The largest growth, in texels per side of its own window, a cascade's held window needs
+    /// to cover every stale frame.
+    pub stale_margin: f64,
+    /// The same in world units, the largest over the cascades.
+    pub stale_margin_world: f64,
+    /// The worst cascade's RMS S3 over its update pairs (texels).
+    pub update_drift: f64,
+    /// S5 over the receiver steps at the frames their cascade was rendered again (ground truth
+    /// only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub update_flicker: Option<f64>,
+}
+
+/// One cascade's cached-cascade figures (see [`CacheSummary`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct CascadeCache {
+    pub update_every: u64,
+    /// 1 / update_every: the share of frames that render this cascade.
+    pub update_rate: f64,
+    pub stale_coverage_violations: u64,
+    /// Over the frames walked.
+    pub stale_coverage_fraction: f64,
+    /// Texels of this cascade's window, per side.
+    pub stale_margin: f64,
+    pub stale_margin_world: f64,
+    /// RMS S3 over this cascade's update pairs (texels).
+    pub update_drift: f64,
+    /// S5 over the receiver steps this cascade served at its updates (ground truth only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub update_flicker: Option<f64>,
 }
 
 impl Summary {
@@ -163,6 +211,7 @@ impl Summary {
             light: None,
             truth: None,
             views: Vec::new(),
+            cache: None,
         }
     }
 }
@@ -271,6 +320,10 @@ pub struct CascadeReport {
     /// This cascade's ground truth at frame 0, when the pass ran; the registry writes it.
     #[serde(skip)]
     pub truth: Option<csm_core::truth::CascadeTruth>,
+    /// Cached cascades: this cascade's figures, when some cascade is held; None otherwise, and
+    /// then absent from every output.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub cache: Option<CascadeCache>,
 }
 
 /// One cascade's crawl (configured snapping) and jump (windows without snapping) under a
@@ -521,18 +574,39 @@ pub(crate) fn each_frame_row(
         Vec::new()
     };
     let setup = config.setup();
+    let every = cadence(config, &rig);
     let paths = std::iter::once((config.motion.path.name(), setup.motion.clone())).chain(config.extra_motions());
     for (name, motion) in paths {
         let frames = csm_core::motion::poses(&setup.camera, &motion).len();
         for snapped in [true, false] {
             let mut start = 0;
             while start + 1 < frames {
-                let take = FULL_SERIES_CHUNK.min(frames - start);
+                // Cached cascades: the walk starts at the earliest of the cascades' last
+                // updates at or before `start`, so every cascade holds at `start` the window it
+                // holds in one walk of the whole path; the rows up to `start` are dropped.
+                let from = every.iter().map(|&k| start / k * k).min().unwrap_or(start);
+                let take = (FULL_SERIES_CHUNK - (start - from)).min(frames - start);
                 let poses = csm_core::motion::poses(&setup.camera, &motion)
-                    .skip(start)
-                    .take(take)
+                    .skip(from)
+                    .take(take + (start - from))
                     .map(|p| p.expect("validated when the config was loaded"));
                 let rows = match config.shadow.precision {
+                    Precision::F64 if !every.is_empty() => {
+                        let cadence = Cadence {
+                            every: &every,
+                            first_frame: from,
+                        };
+                        rig_path::along_path_cached(&rig, poses, &probes, cadence, snapped, sopts)
+                            .frames
+                            .into_iter()
+                            // Frames counted from `start`, as the other walks give them.
+                            .filter(|r| from + r.frame > start)
+                            .map(|mut r| {
+                                r.frame = from + r.frame - start;
+                                r
+                            })
+                            .collect()
+                    }
                     Precision::F64 => {
                         let light = light_track(config, start);
                         rig_path::along_path_lit(&rig, poses, &probes, light, snapped, sopts).frames
@@ -553,6 +627,18 @@ pub(crate) fn each_frame_row(
         }
     }
     Ok(())
+}
+
+/// Each cascade's `[shadow] update_every` for this rig, or empty when every cascade is
+/// rendered every frame (the key absent, or all ones).
+pub(crate) fn cadence(config: &Config, rig: &Rig) -> Vec<usize> {
+    config
+        .shadow
+        .update_every
+        .as_ref()
+        .and_then(|u| u.per_cascade(rig.cascade_count()))
+        .filter(|v| v.iter().any(|&k| k > 1))
+        .unwrap_or_default()
 }
 
 /// Paths of up to this many frames are generated once per analysis and held (a pose is a
@@ -860,10 +946,12 @@ fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u
     // two snap modes walk on their own threads: each mode's totals are the same, bit for bit,
     // as in one walk of both (`along_path_both`).
     let setup = config.setup();
+    let every = cadence(config, &rig);
     let walker = Walker {
         config,
         setup: &setup,
         rig: &rig,
+        cadence: &every,
         probes: &probes,
         seam_points: &seam_points,
         sopts,
@@ -899,6 +987,7 @@ fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u
         worst_snapped,
         worst_unsnapped,
         jitter,
+        stale,
     } = path_totals(config.shadow.snap, &snapped, &unsnapped, lookup_error, &extra);
     let screen_stats = visibility
         .as_ref()
@@ -932,6 +1021,12 @@ fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u
     } else {
         None
     };
+    let cache = cache_figures(
+        stale.as_ref(),
+        truth
+            .as_ref()
+            .map(|t| if config.shadow.snap { &t.snapped } else { &t.unsnapped }),
+    );
     let cascades = windows0
         .iter()
         .enumerate()
@@ -976,6 +1071,7 @@ fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u
                     std::iter::once((&snapped, &unsnapped)).chain(extra.iter().map(|e| (&e.snapped, &e.unsnapped))),
                 ),
                 truth: truth.as_ref().map(|t| t.cascades[i].clone()),
+                cache: cache.as_ref().map(|c| c.1[i]),
             }
         })
         .collect();
@@ -1010,6 +1106,7 @@ fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u
         ),
         truth: truth.as_ref().map(|t| t.summary),
         views: Vec::new(),
+        cache: cache.map(|c| c.0),
     };
     let preset = config
         .shadow
@@ -1108,6 +1205,8 @@ struct Walker<'a> {
     config: &'a Config,
     setup: &'a csm_core::scene::Setup,
     rig: &'a Rig,
+    /// Each cascade's update cadence (empty: every frame).
+    cadence: &'a [usize],
     probes: &'a [Vec<glam::DVec3>],
     seam_points: &'a [glam::DVec3],
     sopts: ShimmerOptions,
@@ -1155,6 +1254,21 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
     // modes walk on two threads. Either way the totals are the same, bit for bit.
     let batch = rayon::current_thread_index().is_some();
     let walked = match w.config.shadow.precision {
+        Precision::F64 if !w.cadence.is_empty() => {
+            // Cached cascades (refused at load with a moving light or a basis that follows
+            // the camera).
+            let cadence = Cadence {
+                every: w.cadence,
+                first_frame: 0,
+            };
+            let one = |snapped| rig_path::along_path_cached(w.rig, poses(), w.probes, cadence, snapped, w.sopts);
+            let (s, u) = if batch {
+                rig_path::along_path_both_cached(w.rig, poses(), w.probes, cadence, w.sopts)
+            } else {
+                rayon::join(|| one(true), || one(false))
+            };
+            (s, u, None)
+        }
         Precision::F64 => {
             let light = light_track(w.config, 0);
             let one = |snapped| rig_path::along_path_lit(w.rig, poses(), w.probes, light, snapped, w.sopts);
@@ -1197,6 +1311,8 @@ struct PathTotals {
     worst_snapped: f64,
     worst_unsnapped: f64,
     jitter: f64,
+    /// Cached cascades, configured snapping, over every path.
+    stale: Option<StaleStats>,
 }
 
 /// Coverage and S7 over every path: violations add up, the worst and the slack take the
@@ -1209,6 +1325,7 @@ fn path_totals(
     extra: &[ExtraPathResult],
 ) -> PathTotals {
     let mut coverage = if snap { snapped } else { unsnapped }.coverage.clone();
+    let mut stale = if snap { snapped } else { unsnapped }.stale.clone();
     let mut lookup_error = lookup_error;
     let (mut worst_snapped, mut worst_unsnapped, mut jitter) = (
         snapped.stats.rms,
@@ -1218,6 +1335,9 @@ fn path_totals(
     for e in extra {
         let c = if snap { &e.snapped } else { &e.unsnapped };
         coverage.merge(&c.coverage);
+        if let (Some(s), Some(x)) = (stale.as_mut(), c.stale.as_ref()) {
+            s.merge(x);
+        }
         worst_snapped = worst_snapped.max(e.snapped.stats.rms);
         worst_unsnapped = worst_unsnapped.max(e.unsnapped.stats.rms);
         jitter = jitter
@@ -1238,7 +1358,48 @@ fn path_totals(
         worst_snapped,
         worst_unsnapped,
         jitter,
+        stale,
     }
+}
+
+/// The cached-cascade figures of an analysis from the walks' [`StaleStats`] and, when the
+/// ground-truth pass ran, its flicker in the configured snap mode: per cascade and in all.
+fn cache_figures(
+    stale: Option<&StaleStats>,
+    flicker: Option<&csm_core::truth::Flicker>,
+) -> Option<(CacheSummary, Vec<CascadeCache>)> {
+    let s = stale?;
+    let m = s.every.len();
+    let frames = s.frames.max(1) as f64;
+    let cascades: Vec<CascadeCache> = (0..m)
+        .map(|i| CascadeCache {
+            update_every: s.every[i] as u64,
+            update_rate: 1.0 / s.every[i] as f64,
+            stale_coverage_violations: s.violations[i],
+            stale_coverage_fraction: s.violations[i] as f64 / frames,
+            stale_margin: s.margin_texels[i],
+            stale_margin_world: s.margin_world[i],
+            update_drift: s.update_drift_rms[i],
+            update_flicker: flicker.and_then(|f| {
+                let n = f.update_steps.get(i).copied().unwrap_or(0);
+                (n > 0).then(|| f.update_flips[i] as f64 / n as f64)
+            }),
+        })
+        .collect();
+    let worst = |f: fn(&CascadeCache) -> f64| cascades.iter().map(f).fold(0.0, f64::max);
+    let summary = CacheSummary {
+        renders_per_frame: cascades.iter().map(|c| c.update_rate).sum(),
+        stale_coverage_violations: s.violations.iter().sum(),
+        stale_coverage_fraction: worst(|c| c.stale_coverage_fraction),
+        stale_margin: worst(|c| c.stale_margin),
+        stale_margin_world: worst(|c| c.stale_margin_world),
+        update_drift: worst(|c| c.update_drift),
+        update_flicker: flicker.and_then(|f| {
+            let n: u64 = f.update_steps.iter().sum();
+            (n > 0).then(|| f.update_flips.iter().sum::<u64>() as f64 / n as f64)
+        }),
+    };
+    Some((summary, cascades))
 }
 
 /// Per cascade: the area of the light-space bounding rectangle of the lit-facing receiver

@@ -390,6 +390,83 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         value: |s| Value::Real(s.light.map_or(0.0, |l| l.jump_unsnapped)),
     },
     SummaryDef {
+        name: "renders_per_frame",
+        unit: "cascades",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades: cascade renders per frame on average, the sum over cascades of 1 / update_every (the cascade count without caching); only with [shadow] update_every",
+        brief: "cached: cascade renders per frame (sum of 1/update_every)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.renders_per_frame)),
+    },
+    SummaryDef {
+        name: "stale_coverage_violations",
+        unit: "count",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades: frames in which a cascade kept an earlier window that does not hold the current slice (a coverage hole), summed over cascades and motion paths, configured snapping; only with [shadow] update_every",
+        brief: "cached: stale frames whose window misses the slice",
+        shown: Shown::Never,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Count(s.cache.map_or(0, |c| c.stale_coverage_violations)),
+    },
+    SummaryDef {
+        name: "stale_coverage_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades: the worst cascade's share of the frames walked with such a hole; only with [shadow] update_every",
+        brief: "cached: worst cascade's share of frames with a hole",
+        shown: Shown::Never,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.stale_coverage_fraction)),
+    },
+    SummaryDef {
+        name: "stale_margin",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades: the largest growth of a held window, in its own texels on every side, that covers the slice in every stale frame (0 when none has a hole); only with [shadow] update_every",
+        brief: "cached: window growth that closes every hole (texels)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.stale_margin)),
+    },
+    SummaryDef {
+        name: "stale_margin_world",
+        unit: "world units",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades: stale_margin in world units (each cascade's growth times its texel size), the largest over the cascades; only with [shadow] update_every",
+        brief: "cached: the same in world units",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.stale_margin_world)),
+    },
+    SummaryDef {
+        name: "update_drift",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades: the worst cascade's RMS sub-texel drift (S3) over the frame pairs at which it is rendered again, configured snapping, worst over the motion paths (a held window does not drift between updates); only with [shadow] update_every",
+        brief: "cached: RMS drift at a cascade's updates (texels)",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: false,
+        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.update_drift)),
+    },
+    SummaryDef {
+        name: "update_flicker",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades, ground truth: S5 over the receiver steps at the frames their cascade is rendered again, configured snapping; only with [shadow] update_every and ground_truth",
+        brief: "cached: S5 at cascade updates",
+        shown: Shown::Fixed,
+        in_rows: false,
+        screen: true,
+        value: |s| Value::maybe(s.cache.and_then(|c| c.update_flicker)),
+    },
+    SummaryDef {
         name: "acne_fraction",
         unit: "",
         direction: Direction::HigherIsWorse,
@@ -751,6 +828,8 @@ impl SummaryMetric {
             Some("it is a screen metric: give the config scene geometry (scene.ground, [[scene.box]] or scene.gltf)")
         } else if is_light_motion(name) {
             Some("it is measured only under a moving light: give the config a light motion ([motion.light])")
+        } else if CACHE_METRICS.contains(&name) {
+            Some("it is measured only with cached cascades: set `[shadow] update_every` (a value above 1; update_flicker also needs ground_truth)")
         } else if name == SEAM_CROSSINGS {
             Some("it is measured by `analyze` and `check`, not in sweep rows")
         } else {
@@ -808,7 +887,26 @@ fn shown_for(d: &SummaryDef, s: &Summary) -> bool {
         && (d.name != SEAM_CROSSINGS || s.seam_crossings.is_some())
         && (!is_light_motion(d.name) || s.light.is_some())
         && (!TRUTH_SUMMARY.contains(&d.name) || s.truth.is_some())
+        && (!CACHE_METRICS.contains(&d.name) || s.cache.is_some())
+        && (d.name != UPDATE_FLICKER || s.truth.is_some())
 }
+
+/// The cached-cascade metrics (summary and per cascade): only with `[shadow] update_every`
+/// holding some cascade, absent from every output otherwise.
+pub(crate) const CACHE_METRICS: [&str; 9] = [
+    "renders_per_frame",
+    "update_every",
+    "update_rate",
+    "stale_coverage_violations",
+    "stale_coverage_fraction",
+    "stale_margin",
+    "stale_margin_world",
+    "update_drift",
+    UPDATE_FLICKER,
+];
+
+/// The cached-cascade metric that also needs the ground-truth pass.
+const UPDATE_FLICKER: &str = "update_flicker";
 
 /// The moving-light metrics (`light_crawl*`, `light_jump*`, in the summary and per cascade):
 /// only when the light moves ([`Summary::light`]), absent from every output under a still
@@ -1126,6 +1224,70 @@ pub(crate) const CASCADE: &[CascadeDef] = &[
         value: |c| Value::Real(c.light.map_or(0.0, |l| l.jump)),
     },
     CascadeDef {
+        name: "update_every",
+        unit: "frames",
+        direction: Direction::Neither,
+        help: "cached cascades: frames between two renders of this cascade; only with [shadow] update_every",
+        screen: false,
+        value: |c| Value::Count(c.cache.map_or(1, |x| x.update_every)),
+    },
+    CascadeDef {
+        name: "update_rate",
+        unit: "",
+        direction: Direction::Neither,
+        help: "cached cascades: 1 / update_every, the share of frames that render this cascade (what its render costs per frame, relative to every frame); only with [shadow] update_every",
+        screen: false,
+        value: |c| Value::Real(c.cache.map_or(1.0, |x| x.update_rate)),
+    },
+    CascadeDef {
+        name: "stale_coverage_violations",
+        unit: "count",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades: frames in which this cascade kept an earlier window that does not hold the current slice, over the motion paths; only with [shadow] update_every",
+        screen: false,
+        value: |c| Value::Count(c.cache.map_or(0, |x| x.stale_coverage_violations)),
+    },
+    CascadeDef {
+        name: "stale_coverage_fraction",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades: stale_coverage_violations over the frames walked; only with [shadow] update_every",
+        screen: false,
+        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.stale_coverage_fraction)),
+    },
+    CascadeDef {
+        name: "stale_margin",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades: the smallest growth of this cascade's held window, in its texels on every side, that covers the slice in every stale frame; only with [shadow] update_every",
+        screen: false,
+        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.stale_margin)),
+    },
+    CascadeDef {
+        name: "stale_margin_world",
+        unit: "world units",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades: stale_margin in world units; only with [shadow] update_every",
+        screen: false,
+        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.stale_margin_world)),
+    },
+    CascadeDef {
+        name: "update_drift",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades: RMS sub-texel drift (S3) of this cascade over the frame pairs at which it is rendered again, configured snapping; only with [shadow] update_every",
+        screen: false,
+        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.update_drift)),
+    },
+    CascadeDef {
+        name: "update_flicker",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "cached cascades, ground truth: S5 over the receiver steps this cascade serves at its renders; n/a when it serves none; only with [shadow] update_every and ground_truth",
+        screen: true,
+        value: |c| Value::maybe(c.cache.and_then(|x| x.update_flicker)),
+    },
+    CascadeDef {
         name: "acne_fraction",
         unit: "",
         direction: Direction::HigherIsWorse,
@@ -1218,6 +1380,8 @@ impl CascadeMetric {
         (!d.screen || c.screen.is_some() || TRUTH_CASCADE.contains(&d.name))
             && (!is_light_motion(d.name) || c.light.is_some())
             && (!TRUTH_CASCADE.contains(&d.name) || c.truth.is_some())
+            && (!CACHE_METRICS.contains(&d.name) || c.cache.is_some())
+            && (d.name != UPDATE_FLICKER || c.truth.is_some())
     }
 
     /// How to measure this metric when a cascade does not have it.
@@ -1228,6 +1392,8 @@ impl CascadeMetric {
             "it is a screen metric: give the config scene geometry (scene.ground, [[scene.box]] or scene.gltf)"
         } else if is_light_motion(self.name()) {
             "it is measured only under a moving light: give the config a light motion ([motion.light])"
+        } else if CACHE_METRICS.contains(&self.name()) {
+            "it is measured only with cached cascades: set `[shadow] update_every` (a value above 1; the flicker also needs ground_truth)"
         } else {
             "it is not measured for this config"
         }
@@ -1236,8 +1402,8 @@ impl CascadeMetric {
 
 /// The columns of `cascades.csv` (the screen columns only with scene geometry, the
 /// moving-light columns only when the light moves, the ground-truth columns only when that pass
-/// ran).
-pub fn cascade_columns(screen: bool, light: bool, truth: bool) -> Vec<&'static str> {
+/// ran, the cached-cascade columns only with cached cascades).
+pub fn cascade_columns(screen: bool, light: bool, truth: bool, cache: bool) -> Vec<&'static str> {
     std::iter::once("cascade")
         .chain(
             CASCADE
@@ -1246,6 +1412,8 @@ pub fn cascade_columns(screen: bool, light: bool, truth: bool) -> Vec<&'static s
                     (screen || !d.screen)
                         && (light || !is_light_motion(d.name))
                         && (truth || !TRUTH_CASCADE.contains(&d.name))
+                        && (cache || !CACHE_METRICS.contains(&d.name))
+                        && (truth || d.name != UPDATE_FLICKER)
                 })
                 .map(|d| d.name),
         )
@@ -1259,6 +1427,8 @@ pub fn cascade_fields(c: &CascadeReport) -> Result<Vec<String>> {
         (!d.screen || c.screen.is_some())
             && (!is_light_motion(d.name) || c.light.is_some())
             && (c.truth.is_some() || !TRUTH_CASCADE.contains(&d.name))
+            && (c.cache.is_some() || !CACHE_METRICS.contains(&d.name))
+            && (c.truth.is_some() || d.name != UPDATE_FLICKER)
     }) {
         fields.push((d.value)(c).csv(d.name)?);
     }

@@ -293,12 +293,14 @@ pub(crate) fn run(config: &Config, rig: &Rig, on_frames: &(dyn Fn(u64) + Sync)) 
 
     let frames = csm_core::motion::poses(&setup.camera, &setup.motion).len();
     let every = frames.div_ceil(ANIMATION_FRAMES).max(1);
+    // Cached cascades hold their maps between updates (empty: every frame).
+    let every_cascade = crate::analysis::cadence(config, rig);
     let (cols, rows) = (vis.cols, vis.rows);
     let walk = |snapped: bool| {
         let poses = csm_core::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
         let mut frame0 = ShadeImage::empty(cols, rows);
         let mut animation = Vec::new();
-        let f = truth::flicker(
+        let f = truth::flicker_cached(
             scene,
             rig,
             &rig.light,
@@ -306,6 +308,10 @@ pub(crate) fn run(config: &Config, rig: &Rig, on_frames: &(dyn Fn(u64) + Sync)) 
             snapped,
             &points,
             &sampling,
+            csm_core::walk::Cadence {
+                every: &every_cascade,
+                first_frame: 0,
+            },
             &mut |k, states| {
                 on_frames(1);
                 if k == 0 {

@@ -207,6 +207,49 @@ pub struct ShadowSettings {
     /// whether it snaps, `fit` the family of its fit, and `fit_depth_to_scene` is false.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub preset: Option<AppliedPreset>,
+    /// `[shadow] update_every`: cached cascades, when some cascade is rendered less often than
+    /// every frame (None when the key is absent or every value is 1: today's pipeline).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub update_every: Option<UpdateEvery>,
+}
+
+/// `[shadow] update_every`: the frames between two renders of a cascade, one value for every
+/// cascade or one per cascade (nearest first). Held as written: the cascade count may change
+/// after it is read (an engine preset, a sweep's cascade axis).
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[serde(untagged)]
+pub enum UpdateEvery {
+    All(u32),
+    PerCascade(Vec<u32>),
+}
+
+impl UpdateEvery {
+    /// The written value, or None when it renders every cascade every frame.
+    pub(crate) fn caching(self) -> Option<UpdateEvery> {
+        let caches = match &self {
+            UpdateEvery::All(k) => *k > 1,
+            UpdateEvery::PerCascade(v) => v.iter().any(|&k| k > 1),
+        };
+        caches.then_some(self)
+    }
+
+    /// Each of `m` cascades' cadence (None when a per-cascade list has another length).
+    pub fn per_cascade(&self, m: usize) -> Option<Vec<usize>> {
+        match self {
+            UpdateEvery::All(k) => Some(vec![*k as usize; m]),
+            UpdateEvery::PerCascade(v) => (v.len() == m).then(|| v.iter().map(|&k| k as usize).collect()),
+        }
+    }
+
+    /// As written in TOML (`4`, `[1, 1, 2, 4]`).
+    pub fn label(&self) -> String {
+        match self {
+            UpdateEvery::All(k) => k.to_string(),
+            UpdateEvery::PerCascade(v) => {
+                format!("[{}]", v.iter().map(|k| k.to_string()).collect::<Vec<_>>().join(", "))
+            }
+        }
+    }
 }
 
 impl std::ops::Deref for ShadowSettings {

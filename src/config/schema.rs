@@ -202,6 +202,8 @@ pub(crate) struct RawShadow {
     pub(crate) pcf_filter: Option<Spanned<String>>,
     /// `"none"` (zero bias) or `"recommended"` (csm-lab's per-cascade bias).
     pub(crate) bias: Option<Spanned<String>>,
+    /// Frames between two renders of a cascade: an integer, or one per cascade.
+    pub(crate) update_every: Option<toml::Value>,
 }
 
 /// `[shadow] light_update = { every_frames = K }` or `{ quantize_deg = Q }`.

@@ -440,6 +440,7 @@ fn shadow_settings(
         })?,
     };
     let truth = truth_settings(s, v)?;
+    let update_every = s.update_every.as_ref().map(|x| update_every(v, x)).transpose()?;
     let shadow = ShadowSettings {
         params: ShadowParams {
             max_distance,
@@ -468,6 +469,7 @@ fn shadow_settings(
             snap_space,
         },
         preset: None,
+        update_every: update_every.and_then(UpdateEvery::caching),
     };
     Ok((shadow, truth))
 }
@@ -978,6 +980,31 @@ fn split_fractions(v: &Validator<'_>, x: &[f64], cascades: usize) -> Result<csm_
         ));
     }
     csm_core::free_splits::SplitFractions::new(x).ok_or_else(|| v.invalid("shadow.splits", &shown, &allowed))
+}
+
+/// The largest `shadow.update_every`: frames between two renders of a cascade.
+pub(crate) const MAX_UPDATE_EVERY: i64 = 256;
+
+/// `shadow.update_every`: an integer in 1..=256, or an array of them (one per cascade; the
+/// count is checked once the cascades are known, `crate::load`).
+fn update_every(v: &Validator<'_>, x: &toml::Value) -> Result<UpdateEvery> {
+    let allowed = format!(
+        "an integer in 1..={MAX_UPDATE_EVERY} (frames between two renders of every cascade) or an array of them, \
+         one per cascade, nearest first, e.g. [1, 1, 2, 4]"
+    );
+    let one = |k: &toml::Value| match k.as_integer() {
+        Some(k) if (1..=MAX_UPDATE_EVERY).contains(&k) => Some(k as u32),
+        _ => None,
+    };
+    let bad = || v.invalid("shadow.update_every", x, &allowed);
+    match x {
+        toml::Value::Array(a) if !a.is_empty() => a
+            .iter()
+            .map(|k| one(k).ok_or_else(bad))
+            .collect::<Result<Vec<u32>>>()
+            .map(UpdateEvery::PerCascade),
+        k => one(k).map(UpdateEvery::All).ok_or_else(bad),
+    }
 }
 
 /// An example of `cascades − 1` valid split fractions (the logarithmic split of 0.1 to 100).

@@ -84,7 +84,8 @@ pub(crate) fn apply_preset(config: &mut Config, choice: &PresetChoice) -> Result
     let v = input.validator();
     sweep_objective(config, &v)?;
     f64_windows(config, &v, true)?;
-    binary32_range(config, &v)
+    binary32_range(config, &v)?;
+    update_every(config, &v)
 }
 
 /// Every cascade window along the camera paths can be built in f64 (see
@@ -156,5 +157,51 @@ fn binary32_range(config: &Config, v: &Validator<'_>) -> Result<()> {
 fn cross_checks(config: &Config, v: &Validator<'_>) -> Result<()> {
     crate::config::check_camera_path(config, v)?;
     f64_windows(config, v, true)?;
-    binary32_range(config, v)
+    binary32_range(config, v)?;
+    update_every(config, v)
+}
+
+/// `[shadow] update_every` once the cascades are known: one value, or one per cascade; and a
+/// pipeline whose held windows stay valid (binary64, a still light, a light basis that does
+/// not follow the camera: a held map keeps the light basis it was rendered with).
+pub(crate) fn update_every(config: &Config, v: &Validator<'_>) -> Result<()> {
+    let Some(every) = &config.shadow.update_every else {
+        return Ok(());
+    };
+    let key = "shadow.update_every";
+    let m = config.shadow.cascades;
+    if every.per_cascade(m).is_none() {
+        return Err(v.invalid(
+            key,
+            every.label(),
+            &format!("a single integer, or one integer per cascade ({m} here), nearest first"),
+        ));
+    }
+    if config.shadow.precision == Precision::F32 {
+        return Err(v.invalid(
+            key,
+            every.label(),
+            "1 (every frame) with precision = \"f32\": cached cascades are measured with the f64 pipeline only",
+        ));
+    }
+    if config.motion.light.moves() {
+        return Err(v.invalid(
+            key,
+            every.label(),
+            &format!(
+                "1 (every frame) when the light moves (motion.light_path = {:?}): a held map keeps the light \
+                 direction it was rendered with, which is not modelled",
+                config.motion.light.path.name()
+            ),
+        ));
+    }
+    if crate::analysis::rig(config).is_some_and(|r| !r.fixed_basis()) {
+        return Err(v.invalid(
+            key,
+            every.label(),
+            "1 (every frame) for a pipeline whose light basis follows the camera (this preset's): a held map \
+             keeps the basis it was rendered with, which is not modelled",
+        ));
+    }
+    Ok(())
 }

@@ -3,7 +3,7 @@
 //! frame, binary32 range), and returns a new config or the error naming the key. Sweeps and
 //! `bench` build their variants through these, so no unchecked setting reaches the core.
 
-use super::{binary32_range, cross_checks, f64_windows};
+use super::{binary32_range, cross_checks, f64_windows, update_every};
 use crate::config::{Config, Fit, MotionPath, Precision, SplitRange, Validator, MAX_WORLD};
 use crate::error::Result;
 
@@ -28,13 +28,16 @@ impl Config {
     }
 
     /// The checks that involve several settings, for a change that kept the camera path:
-    /// only the binary32 range can be affected (a loaded config's path is already valid, and
+    /// only the binary32 range and the cached cascades' count can be affected (a loaded config's path is already valid, and
     /// checking it again cost a sweep one path of poses per point).
     fn checked(self) -> Result<Config> {
         let label = self.label();
         let v = Validator { path: &label, text: "" };
         f64_windows(&self, &v, false)?;
         binary32_range(&self, &v)?;
+        // A per-cascade `update_every` fits one cascade count: a sweep row of another count is
+        // an error, never a row silently rendered every frame.
+        update_every(&self, &v)?;
         Ok(self)
     }
 

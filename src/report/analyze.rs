@@ -67,6 +67,7 @@ impl Exporter<Analysis> for CascadesCsv {
                 a.config.geometry.is_some(),
                 a.config.motion.light.moves(),
                 a.ground_truth.is_some(),
+                a.summary.cache.is_some(),
             ),
             &rows,
         )
@@ -284,6 +285,48 @@ impl Exporter<Analysis> for SummaryJson {
     }
 }
 
+/// `analyze`'s per-cascade table of cached cascades: what each cascade's cadence saves (its
+/// share of frames rendered) and costs (stale frames with a coverage hole, the growth that
+/// closes them, the drift at its updates).
+fn cache_table(a: &Analysis, every: &crate::config::UpdateEvery) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "cached cascades (update_every {}, {} snapping, over the motion paths):",
+        every.label(),
+        if a.config.shadow.snap { "with" } else { "without" }
+    );
+    let _ = writeln!(
+        out,
+        "{:>7} {:>7} {:>9} {:>11} {:>9} {:>14} {:>13} {:>12}",
+        "cascade", "every", "renders", "stale holes", "share", "margin texels", "margin world", "update drift"
+    );
+    for r in &a.cascades {
+        let Some(x) = &r.cache else { continue };
+        let _ = writeln!(
+            out,
+            "{:>7} {:>7} {:>9} {:>11} {:>9} {:>14} {:>13} {:>12}",
+            r.cascade,
+            x.update_every,
+            short_number(x.update_rate),
+            x.stale_coverage_violations,
+            short_number(x.stale_coverage_fraction),
+            short_number(x.stale_margin),
+            short_number(x.stale_margin_world),
+            short_number(x.update_drift)
+        );
+    }
+    if let Some(s) = &a.summary.cache {
+        let _ = writeln!(
+            out,
+            "  stale_coverage_violations {} (frames x cascades with a hole); worst cascade's share {}",
+            s.stale_coverage_violations,
+            short_number(s.stale_coverage_fraction)
+        );
+    }
+    out
+}
+
 /// The terminal summary of one analysis.
 pub(crate) fn summary_table(a: &Analysis) -> String {
     let mut out = String::new();
@@ -375,6 +418,9 @@ pub(crate) fn summary_table(a: &Analysis) -> String {
             short_number(r.min_aliasing),
             r.coverage_violations
         );
+    }
+    if let Some(every) = a.summary.cache.and(c.shadow.update_every.as_ref()) {
+        out.push_str(&cache_table(a, every));
     }
     let f32_block = c.shadow.precision == csm_core::scene::Precision::F32;
     let screen_line = |k: &str| metric::SummaryMetric::named(k).def().screen;

@@ -3,6 +3,7 @@
 mod architecture;
 mod bad_gltf;
 mod bad_inputs;
+mod cached;
 mod check_sweep;
 mod cli_accuracy;
 mod cli_analyze;

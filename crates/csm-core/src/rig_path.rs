@@ -14,7 +14,7 @@ use crate::geometry::{Aabb, CameraPose, LightBasis};
 use crate::light_motion::LightTrack;
 use crate::rng::halton;
 use crate::shimmer::{floor_exact, PathResult, ShimmerOptions};
-use crate::walk::{closed_form_drift, walk, Landing, PathModel, PathTotals};
+use crate::walk::{closed_form_drift, walk, walk_cached, Cadence, Landing, PathModel, PathTotals};
 
 /// World-fixed probe points for each cascade, placed in the configured camera's slice and,
 /// where possible, inside the scene bounds: receivers that exist. Deterministic (Halton).
@@ -95,6 +95,41 @@ pub fn along_path_lit<P: Borrow<CameraPose>>(
 ) -> PathResult {
     let [r] = walk(&mut model(rig, probes, light), poses, [snapped], opts);
     r.finish(opts)
+}
+
+/// [`along_path`] with cached cascades (see [`Cadence`]; [`Cadence::EVERY_FRAME`] is
+/// [`along_path`], bit for bit). The held windows keep the rig's light basis, so the rig's
+/// basis must not follow the camera ([`Rig::fixed_basis`]) and the light must stand still.
+pub fn along_path_cached<P: Borrow<CameraPose>, I>(
+    rig: &Rig,
+    poses: I,
+    probes: &[Vec<DVec3>],
+    cadence: Cadence<'_>,
+    snapped: bool,
+    opts: ShimmerOptions,
+) -> PathResult
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
+    let [r] = walk_cached(&mut RigPath::new(rig, probes), poses, [snapped], opts, cadence);
+    r.finish(opts)
+}
+
+/// [`along_path_both`] with cached cascades (see [`along_path_cached`]).
+pub fn along_path_both_cached<P: Borrow<CameraPose>, I>(
+    rig: &Rig,
+    poses: I,
+    probes: &[Vec<DVec3>],
+    cadence: Cadence<'_>,
+    opts: ShimmerOptions,
+) -> (PathResult, PathResult)
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
+    let [s, u] = walk_cached(&mut RigPath::new(rig, probes), poses, [true, false], opts, cadence);
+    (s.finish(opts), u.finish(opts))
 }
 
 fn model<'a>(rig: &'a Rig, probes: &'a [Vec<DVec3>], light: Option<LightTrack<'a>>) -> RigPath<'a> {

@@ -148,6 +148,54 @@ pub struct PathResult {
     pub frames: Vec<FrameShimmer>,
     /// Crawl and jumps, when the light moves (None under a still light).
     pub light: Option<LightStats>,
+    /// Cached cascades, when the walk held some cascade between updates
+    /// ([`crate::walk::Cadence`]); None otherwise.
+    pub stale: Option<StaleStats>,
+}
+
+/// What cached cascades cost along a path, for one snap mode, per cascade. A cascade with
+/// cadence `k` is rendered at every `k`-th frame and keeps its window in between; a frame in
+/// which it keeps an earlier window is *stale*.
+///
+/// * **Stale coverage violations**: stale frames in which some corner of the current slice
+///   lies outside the held window (the same corner test and tolerance as [`Coverage`]).
+/// * **Stale margin**: the smallest growth of the held window, in its texels on every side,
+///   that would have covered the slice in every stale frame: the largest distance a corner got
+///   outside, over the violated stale frames (0 without one). `margin_world` is that growth
+///   in world units (times the held window's larger texel side).
+/// * **Update drift**: S3 over the frame pairs at which the cascade was rendered again (a held
+///   window does not move, so the pairs between updates drift by 0): RMS and largest.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+pub struct StaleStats {
+    /// The cadence of each cascade (1: every frame).
+    pub every: Vec<usize>,
+    /// Frames walked.
+    pub frames: usize,
+    pub stale_frames: Vec<u64>,
+    pub violations: Vec<u64>,
+    pub margin_texels: Vec<f64>,
+    pub margin_world: Vec<f64>,
+    pub update_drift_rms: Vec<f64>,
+    pub update_drift_max: Vec<f64>,
+    /// Frame pairs at an update of the cascade.
+    pub update_pairs: Vec<u64>,
+}
+
+impl StaleStats {
+    /// Adds another path's stale statistics of the same cascades: frames and violations add
+    /// up, the margins and the update drift take the worst path's.
+    pub fn merge(&mut self, other: &StaleStats) {
+        self.frames += other.frames;
+        for i in 0..self.violations.len() {
+            self.stale_frames[i] += other.stale_frames[i];
+            self.violations[i] += other.violations[i];
+            self.margin_texels[i] = self.margin_texels[i].max(other.margin_texels[i]);
+            self.margin_world[i] = self.margin_world[i].max(other.margin_world[i]);
+            self.update_drift_rms[i] = self.update_drift_rms[i].max(other.update_drift_rms[i]);
+            self.update_drift_max[i] = self.update_drift_max[i].max(other.update_drift_max[i]);
+            self.update_pairs[i] += other.update_pairs[i];
+        }
+    }
 }
 
 /// Crawl and jumps of a moving light along the path, for one snap mode (texels; see

@@ -1188,6 +1188,10 @@ pub struct Flicker {
     pub steps: Vec<u32>,
     pub frames: usize,
     pub stats: CacheStats,
+    /// Per cascade, the state changes and the receiver steps counted at the frames in which
+    /// that cascade was rendered again (every frame without cached cascades).
+    pub update_flips: Vec<u64>,
+    pub update_steps: Vec<u64>,
 }
 
 impl Flicker {
@@ -1216,6 +1220,40 @@ pub fn flicker(
     s: &Sampling,
     on_frame: &mut dyn FnMut(usize, &[Option<Answer>]),
 ) -> Flicker {
+    flicker_cached(
+        scene,
+        rig,
+        light,
+        poses,
+        snapped,
+        points,
+        s,
+        crate::walk::Cadence::EVERY_FRAME,
+        on_frame,
+    )
+}
+
+/// [`flicker`] with cached cascades: a cascade not rendered again in a frame (see
+/// [`crate::walk::Cadence`]) keeps the window, and so the map, of its last update; a receiver
+/// it serves then keeps its texel and its state, and one that the held window no longer holds
+/// has no answer (its step is not counted). With [`crate::walk::Cadence::EVERY_FRAME`] this is
+/// [`flicker`].
+#[allow(clippy::too_many_arguments)]
+pub fn flicker_cached(
+    scene: &SceneGeometry,
+    rig: &Rig,
+    light: &LightBasis,
+    poses: impl Iterator<Item = CameraPose>,
+    snapped: bool,
+    points: &[Receiver],
+    s: &Sampling,
+    cadence: crate::walk::Cadence<'_>,
+    on_frame: &mut dyn FnMut(usize, &[Option<Answer>]),
+) -> Flicker {
+    let m = rig.cascade_count();
+    let mut held: Vec<Option<(LightBasis, Window)>> = vec![None; m];
+    let mut update_flips = vec![0u64; m];
+    let mut update_steps = vec![0u64; m];
     let mut maps = ShadowMaps::new(scene);
     let n = points.len();
     let mut keys: Vec<Key> = vec![None; n];
@@ -1229,7 +1267,21 @@ pub fn flicker(
     let mut frames = 0;
     for (t, pose) in poses.enumerate() {
         frames += 1;
-        let grids = frame_grids(&mut maps, rig, light, &pose, snapped, s);
+        let grids = if cadence.caches() {
+            let lp = LightPose::new(light, &pose);
+            (0..m)
+                .map(|i| {
+                    let (basis, w) = match held[i] {
+                        Some(h) if !cadence.updates(i, t) => h,
+                        _ => (rig.basis(i, &lp), rig.window(i, &lp, snapped)),
+                    };
+                    held[i] = Some((basis, w));
+                    maps.grid(i, &basis, &w)
+                })
+                .collect()
+        } else {
+            frame_grids(&mut maps, rig, light, &pose, snapped, s)
+        };
         let new_keys: Vec<Key> = points
             .par_iter()
             .map(|r| key_of(&maps, &grids, rig, &pose, r, s))
@@ -1271,7 +1323,11 @@ pub fn flicker(
                 if let (true, Some(a), Some(b)) = (same_cascade, states[j], next[j]) {
                     steps[j] += 1;
                     total_steps += 1;
+                    let i = new_keys[j].map_or(0, |k| k.0);
+                    let update = cadence.updates(i, t);
+                    update_steps[i] += u64::from(update);
                     if a.lit != b.lit {
+                        update_flips[i] += u64::from(update);
                         flips[j] += 1;
                         total_flips += 1;
                         if !(a.own_only && b.own_only) {
@@ -1301,6 +1357,8 @@ pub fn flicker(
         steps,
         frames,
         stats: maps.stats,
+        update_flips,
+        update_steps,
     }
 }
 

@@ -14,7 +14,40 @@ use std::borrow::Borrow;
 use glam::DVec2;
 
 use crate::geometry::CameraPose;
-use crate::shimmer::{wrap, Coverage, FrameShimmer, LightStats, PathResult, ShimmerOptions, ShimmerStats};
+use crate::shimmer::{wrap, Coverage, FrameShimmer, LightStats, PathResult, ShimmerOptions, ShimmerStats, StaleStats};
+
+/// Cached cascades: how often each cascade is rendered again. Cascade `i` is updated at the
+/// frames `t` of the path (counted from the path's first frame, `first_frame + t` for a walk
+/// of a part of it) with `t % every[i] == 0`, and between two updates it keeps the window (and
+/// the map) of its last update. A cascade without an entry, or with 1, is updated every frame;
+/// an empty `every` is the uncached walk. The first frame a walk sees is always rendered.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Cadence<'a> {
+    pub every: &'a [usize],
+    /// The path index of the walk's first pose.
+    pub first_frame: usize,
+}
+
+impl Cadence<'_> {
+    /// Every cascade every frame: today's walk.
+    pub const EVERY_FRAME: Cadence<'static> = Cadence {
+        every: &[],
+        first_frame: 0,
+    };
+
+    /// Whether cascade `i` is rendered again in frame `t` of the walk.
+    #[inline]
+    pub fn updates(&self, i: usize, t: usize) -> bool {
+        self.every
+            .get(i)
+            .is_none_or(|&k| k <= 1 || (self.first_frame + t) % k == 0)
+    }
+
+    /// True when some cascade is held between frames.
+    pub fn caches(&self) -> bool {
+        self.every.iter().any(|&k| k > 1)
+    }
+}
 
 /// Where one probe lands in one window: its texel coordinates `s` (0 at the window's minimum
 /// edge, N at the maximum) and the centre of the texel it samples, in the model's light-space
@@ -102,6 +135,72 @@ pub struct PathTotals {
     /// A moving light: S3 over the frame pairs between updates (mean squares summed, pairs,
     /// largest square), and the largest squared probe move at an update and the update pairs.
     light: Option<LightTotals>,
+    /// Cached cascades (a [`Cadence`] that holds some cascade): the stale frames' coverage and
+    /// the drift at updates.
+    stale: Option<StaleTotals>,
+}
+
+/// What holding cascades between updates costs, accumulated along the path per cascade (see
+/// [`StaleStats`]).
+#[derive(Debug, Clone, Default)]
+struct StaleTotals {
+    every: Vec<usize>,
+    frames: usize,
+    stale_frames: Vec<u64>,
+    violations: Vec<u64>,
+    margin_texels: Vec<f64>,
+    margin_world: Vec<f64>,
+    update_sum_ms: Vec<f64>,
+    update_pairs: Vec<u64>,
+    update_max_sq: Vec<f64>,
+}
+
+impl StaleTotals {
+    fn new(every: &[usize], m: usize) -> Self {
+        StaleTotals {
+            every: (0..m).map(|i| every.get(i).copied().unwrap_or(1).max(1)).collect(),
+            frames: 0,
+            stale_frames: vec![0; m],
+            violations: vec![0; m],
+            margin_texels: vec![0.0; m],
+            margin_world: vec![0.0; m],
+            update_sum_ms: vec![0.0; m],
+            update_pairs: vec![0; m],
+            update_max_sq: vec![0.0; m],
+        }
+    }
+
+    /// One stale frame of cascade `i`: the held window (texel size `texel`) covered the
+    /// current slice as `c` says.
+    fn stale_frame(&mut self, i: usize, c: &FrameCoverage, texel: DVec2) {
+        self.stale_frames[i] += 1;
+        if c.violations > 0 {
+            self.violations[i] += 1;
+            // The window grown by this many texels on every side holds every corner.
+            let deficit = (-c.min_slack_texels).max(0.0);
+            self.margin_texels[i] = self.margin_texels[i].max(deficit);
+            self.margin_world[i] = self.margin_world[i].max(deficit * texel.max_element());
+        }
+    }
+
+    fn finish(self) -> StaleStats {
+        StaleStats {
+            every: self.every,
+            frames: self.frames,
+            stale_frames: self.stale_frames,
+            violations: self.violations,
+            margin_texels: self.margin_texels,
+            margin_world: self.margin_world,
+            update_drift_rms: self
+                .update_sum_ms
+                .iter()
+                .zip(&self.update_pairs)
+                .map(|(&s, &n)| if n > 0 { (s / n as f64).sqrt() } else { 0.0 })
+                .collect(),
+            update_drift_max: self.update_max_sq.iter().map(|x| x.sqrt()).collect(),
+            update_pairs: self.update_pairs,
+        }
+    }
 }
 
 /// Crawl and jumps of a moving light, accumulated along the path (see [`PathTotals`]), in
@@ -173,6 +272,7 @@ impl PathTotals {
             lookup_max: vec![0.0; m],
             lookup_count: vec![0; m],
             light: None,
+            stale: None,
         }
     }
 
@@ -203,6 +303,24 @@ impl PathTotals {
         self.coverage.violations[i] = c.violations;
         self.coverage.worst_texels[i] = c.worst_texels;
         self.coverage.min_slack_texels[i] = c.min_slack_texels;
+    }
+
+    /// [`PathModel::cover`] of one frame of cascade `i`, added to the totals as usual and
+    /// returned on its own (the same totals, bit for bit, as the direct call).
+    fn cover_frame<M: PathModel>(&mut self, model: &M, i: usize, shared: &mut M::Shared, w: &M::Win) -> FrameCoverage {
+        let before = self.frame_coverage(i);
+        self.set_coverage(i, FrameCoverage::default());
+        model.cover(i, shared, w, self);
+        let frame = self.frame_coverage(i);
+        self.set_coverage(
+            i,
+            FrameCoverage {
+                violations: before.violations + frame.violations,
+                worst_texels: before.worst_texels.max(frame.worst_texels),
+                min_slack_texels: before.min_slack_texels.min(frame.min_slack_texels),
+            },
+        );
+        frame
     }
 
     /// A smallest margin found without the per-corner test (see the f64 fixed-basis model).
@@ -298,6 +416,7 @@ impl PathTotals {
             coverage: self.coverage,
             frames: self.frames,
             light,
+            stale: self.stale.map(StaleTotals::finish),
         }
     }
 }
@@ -451,7 +570,28 @@ where
     I: IntoIterator<Item = P>,
     I::IntoIter: ExactSizeIterator,
 {
+    walk_cached(model, poses, modes, opts, Cadence::EVERY_FRAME)
+}
+
+/// [`walk`] with cached cascades: a cascade not updated in a frame (see [`Cadence`]) keeps its
+/// previous window, so its frame pair measures no drift, no size change and no flip, and its
+/// coverage is that of the held window over the current slice. When the cadence holds some
+/// cascade, each mode's totals also gather [`StaleStats`]: per cascade the stale frames whose
+/// slice the held window does not cover, the growth that would cover them, and the drift
+/// over the update pairs. [`Cadence::EVERY_FRAME`] is [`walk`], bit for bit.
+pub fn walk_cached<M: PathModel, P: Borrow<CameraPose>, I, const K: usize>(
+    model: &mut M,
+    poses: I,
+    modes: [bool; K],
+    opts: ShimmerOptions,
+    cadence: Cadence<'_>,
+) -> [PathTotals; K]
+where
+    I: IntoIterator<Item = P>,
+    I::IntoIter: ExactSizeIterator,
+{
     let poses = poses.into_iter();
+    let caches = cadence.caches();
     let m = model.cascade_count();
     let probes = model.probes_needed(opts);
     let stride = crate::shimmer::frame_row_stride(poses.len());
@@ -464,6 +604,7 @@ where
                 cascade_jump_max_sq: vec![0.0; m],
                 ..LightTotals::default()
             }),
+            stale: caches.then(|| StaleTotals::new(cadence.every, m)),
             ..PathTotals::new(snapped, m)
         },
         prev: (0..m).map(|_| None).collect(),
@@ -473,8 +614,26 @@ where
     });
     each_cascade_frame(model, poses, |model, t, i, shared| {
         for st in &mut states {
-            let w = model.window(i, shared, st.totals.snapped);
-            model.cover(i, shared, &w, &mut st.totals);
+            // A cascade not updated this frame keeps the window of its last update.
+            let held = match &st.prev[i] {
+                Some(p) if !cadence.updates(i, t) => Some(p.clone()),
+                _ => None,
+            };
+            let stale = held.is_some();
+            let w = held.unwrap_or_else(|| model.window(i, shared, st.totals.snapped));
+            if stale {
+                let c = st.totals.cover_frame(model, i, shared, &w);
+                if let Some(s) = st.totals.stale.as_mut() {
+                    s.stale_frame(i, &c, M::texel(&w));
+                }
+            } else {
+                model.cover(i, shared, &w, &mut st.totals);
+            }
+            if i == 0 {
+                if let Some(s) = st.totals.stale.as_mut() {
+                    s.frames += 1;
+                }
+            }
             let same = probes && st.prev[i].as_ref().is_some_and(|p| model.same_landings(p, &w));
             let landings = &mut st.current;
             landings.clear();
@@ -549,6 +708,11 @@ where
                     }
                 }
                 if let Some(d) = drift {
+                    if let (false, Some(s)) = (stale, st.totals.stale.as_mut()) {
+                        s.update_sum_ms[i] += d.0;
+                        s.update_pairs[i] += 1;
+                        s.update_max_sq[i] = s.update_max_sq[i].max(d.1);
+                    }
                     st.totals.pair(t, i, size_change, d, opts.frame_rows && t % stride == 0);
                 }
             }

@@ -132,6 +132,15 @@ mod tests {
             }),
             truth: None,
             views: Vec::new(),
+            cache: Some(crate::analysis::CacheSummary {
+                renders_per_frame: 2.75,
+                stale_coverage_violations: 13,
+                stale_coverage_fraction: 0.0625,
+                stale_margin: 14.5,
+                stale_margin_world: 15.5,
+                update_drift: 0.4375,
+                update_flicker: None,
+            }),
         };
         let json = serde_json::to_value(&s).unwrap();
         // The registry writes every key as serde would (same JSON type: bool, integer, float).
@@ -196,6 +205,16 @@ mod tests {
                 jump: 1.75,
             }),
             truth: None,
+            cache: Some(crate::analysis::CascadeCache {
+                update_every: 4,
+                update_rate: 0.25,
+                stale_coverage_violations: 19,
+                stale_coverage_fraction: 0.0078125,
+                stale_margin: 20.5,
+                stale_margin_world: 21.5,
+                update_drift: 0.3125,
+                update_flicker: None,
+            }),
         };
         let json = serde_json::to_value(&c).unwrap();
         let obj = json.as_object().unwrap();
@@ -222,12 +241,14 @@ mod tests {
         dedup.sort_unstable();
         dedup.dedup();
         assert_eq!(dedup.len(), names.len());
-        // Ten names are both summary and per-cascade metrics (max_aliasing,
+        // Sixteen names are both summary and per-cascade metrics (max_aliasing,
         // coverage_violations, lookup_error_max, lookup_error_rms, overlap_area_fraction,
-        // light_crawl, light_jump, acne_fraction, edge_error_fraction, leak_fraction).
+        // light_crawl, light_jump, acne_fraction, edge_error_fraction, leak_fraction, and the
+        // cached cascades' stale_coverage_violations, stale_coverage_fraction, stale_margin,
+        // stale_margin_world, update_drift, update_flicker).
         assert_eq!(
             names.len(),
-            SummaryMetric::all().count() + CascadeMetric::all().count() - 10 + DepthMetric::ALL.len()
+            SummaryMetric::all().count() + CascadeMetric::all().count() - 16 + DepthMetric::ALL.len()
         );
     }
 
