@@ -15,6 +15,7 @@ use csm_core::shimmer::{PathResult, ShimmerOptions};
 use csm_core::visibility::Visibility;
 use glam::DVec2;
 
+pub mod cost;
 pub mod ground_truth;
 
 /// Which optional parts to compute. The summary metrics are always computed and never depend
@@ -117,6 +118,9 @@ pub struct Summary {
     /// The ground-truth metrics (acne, leaks, S5), when the pass ran; the registry writes them.
     #[serde(skip)]
     pub truth: Option<ground_truth::TruthSummary>,
+    /// What the setting costs to render (frame 0; docs/cost.md); the registry writes it.
+    #[serde(skip)]
+    pub cost: cost::CostSummary,
 }
 
 /// Crawl and jumps of a moving light, the worst over the motion paths (texels; see
@@ -223,6 +227,9 @@ pub struct CascadeReport {
     /// This cascade's ground truth at frame 0, when the pass ran; the registry writes it.
     #[serde(skip)]
     pub truth: Option<csm_core::truth::CascadeTruth>,
+    /// What this cascade costs to render (frame 0); the registry writes it.
+    #[serde(skip)]
+    pub cost: cost::CascadeCost,
 }
 
 /// One cascade's crawl (configured snapping) and jump (windows without snapping) under a
@@ -653,6 +660,7 @@ pub(crate) fn analyze_with_progress(
     } else {
         None
     };
+    let (cascade_costs, cost_summary) = cost::measure(config, &rig, &lp0, &windows0, visibility.as_deref());
     let cascades = windows0
         .iter()
         .enumerate()
@@ -697,6 +705,7 @@ pub(crate) fn analyze_with_progress(
                     std::iter::once((&snapped, &unsnapped)).chain(extra.iter().map(|e| (&e.snapped, &e.unsnapped))),
                 ),
                 truth: truth.as_ref().map(|t| t.cascades[i].clone()),
+                cost: cascade_costs[i],
             }
         })
         .collect();
@@ -730,6 +739,7 @@ pub(crate) fn analyze_with_progress(
             std::iter::once((&snapped, &unsnapped)).chain(extra.iter().map(|e| (&e.snapped, &e.unsnapped))),
         ),
         truth: truth.as_ref().map(|t| t.summary),
+        cost: cost_summary,
     };
     let preset = config
         .shadow
@@ -795,6 +805,7 @@ fn no_cascades(
                 .map(|vis| screen::stats(vis, &[0.0, 0.0], &[0.0], visible)),
             light: config.motion.light.moves().then(LightSummary::default),
             truth: None,
+            cost: cost::nothing(config),
         },
         ground_truth: None,
         preset: config

@@ -19,6 +19,16 @@ use glam::{DMat4, DVec3};
 /// (an absolute path, a `..` component, another scheme) is refused unless `outside_buffers`
 /// (`scene.gltf_outside_buffers = true`).
 pub fn read_gltf(path: &Path, outside_buffers: bool) -> Result<Vec<[DVec3; 3]>, String> {
+    Ok(read_gltf_primitives(path, outside_buffers)?
+        .into_iter()
+        .flatten()
+        .collect())
+}
+
+/// [`read_gltf`], grouped by draw call: one entry per mesh primitive in `TRIANGLES` mode under
+/// each node that instances it, in the order of the node walk (a primitive whose triangles are
+/// all non-finite is an empty entry).
+pub fn read_gltf_primitives(path: &Path, outside_buffers: bool) -> Result<Vec<Vec<[DVec3; 3]>>, String> {
     let bytes = read_file(path)?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| format!("not a valid glTF file: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new("."));
@@ -56,7 +66,7 @@ fn visit(
     node: &gltf::Node<'_>,
     parent: DMat4,
     buffers: &[Vec<u8>],
-    out: &mut Vec<[DVec3; 3]>,
+    out: &mut Vec<Vec<[DVec3; 3]>>,
     level: usize,
 ) -> Result<(), String> {
     if level > 256 {
@@ -93,6 +103,7 @@ fn visit(
                 }
                 None => (0..positions.len() as u32).collect(),
             };
+            let mut tris = Vec::with_capacity(indices.len() / 3);
             for t in indices.chunks_exact(3) {
                 let get = |i: u32| {
                     positions.get(i as usize).copied().ok_or_else(|| {
@@ -105,9 +116,10 @@ fn visit(
                 };
                 let tri = [get(t[0])?, get(t[1])?, get(t[2])?];
                 if tri.iter().all(|p| p.is_finite()) {
-                    out.push(tri);
+                    tris.push(tri);
                 }
             }
+            out.push(tris);
         }
     }
     for child in node.children() {

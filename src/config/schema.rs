@@ -76,6 +76,8 @@ pub(crate) struct RawConfig {
     #[serde(default)]
     pub(crate) analysis: RawAnalysis,
     pub(crate) sweep: Option<super::sweep_spec::RawSweep>,
+    #[serde(default)]
+    pub(crate) cost: RawCost,
 }
 
 #[derive(Debug, Deserialize)]
@@ -186,6 +188,17 @@ pub(crate) struct RawMotion {
     pub(crate) sun_azimuth_step_deg: Option<f64>,
     pub(crate) sun_elevation_step_deg: Option<f64>,
     pub(crate) light_file: Option<String>,
+}
+
+/// `[cost]`: receiver-aware culling and the calibration of the cost model (docs/cost.md).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawCost {
+    pub(crate) cull: Option<String>,
+    pub(crate) ns_per_draw: Option<f64>,
+    pub(crate) ns_per_triangle: Option<f64>,
+    pub(crate) ns_per_fragment: Option<f64>,
+    pub(crate) ns_per_texel_cleared: Option<f64>,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -342,6 +342,8 @@ pub struct SceneGeometry {
     cache: Mutex<Vec<Arc<Visibility>>>,
     /// Cast rays, one per view without its light.
     hits_cache: Mutex<Vec<Arc<Hits>>>,
+    /// The scene in a light basis (cost counts), one per basis.
+    light_cache: Mutex<Vec<Arc<crate::cost::LightScene>>>,
 }
 
 /// The view without its light: the key of the light-independent part.
@@ -362,7 +364,29 @@ impl SceneGeometry {
             tracer: OnceLock::new(),
             cache: Mutex::new(Vec::new()),
             hits_cache: Mutex::new(Vec::new()),
+            light_cache: Mutex::new(Vec::new()),
         }
+    }
+
+    /// The scene's triangles and objects in light basis `basis` (cost counts), made once per
+    /// basis and shared by every window in it (the latest [`CACHED_PASSES`] bases are kept).
+    pub fn light_scene(&self, basis: &LightBasis) -> Arc<crate::cost::LightScene> {
+        {
+            let cache = self.light_cache.lock().unwrap_or_else(|e| e.into_inner());
+            if let Some(l) = cache.iter().find(|l| l.basis == *basis) {
+                return l.clone();
+            }
+        }
+        let l = Arc::new(crate::cost::LightScene::new(&self.mesh, basis));
+        let mut cache = self.light_cache.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(found) = cache.iter().find(|x| x.basis == *basis) {
+            return found.clone();
+        }
+        if cache.len() >= CACHED_PASSES {
+            cache.remove(0);
+        }
+        cache.push(l.clone());
+        l
     }
 
     /// The rays of a view cast (its light ignored), computed once per camera and screen and
@@ -526,7 +550,13 @@ mod tests {
             scale: 0.5,
             light: light.normalize(),
         };
-        (Mesh { triangles }, view)
+        (
+            Mesh {
+                triangles,
+                ..Mesh::default()
+            },
+            view,
+        )
     }
 
     #[test]

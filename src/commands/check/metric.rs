@@ -131,6 +131,7 @@ mod tests {
                 jump_unsnapped: 1.25,
             }),
             truth: None,
+            cost: Default::default(),
         };
         let json = serde_json::to_value(&s).unwrap();
         // The registry writes every key as serde would (same JSON type: bool, integer, float).
@@ -188,6 +189,7 @@ mod tests {
                 jump: 1.75,
             }),
             truth: None,
+            cost: Default::default(),
         };
         let json = serde_json::to_value(&c).unwrap();
         let obj = json.as_object().unwrap();

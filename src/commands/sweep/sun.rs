@@ -153,6 +153,7 @@ mod tests {
             summary: Summary {
                 light: None,
                 truth: None,
+                cost: Default::default(),
                 cascades_needed: true,
                 z_lo: 1.0,
                 z_hi: 2.0,
