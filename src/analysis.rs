@@ -67,7 +67,7 @@ impl AnalysisOptions {
 }
 
 /// The flat summary: the metric names users' scripts and CI thresholds read.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Summary {
     /// False when the scene is not visible within the shadow distance; then every metric below
     /// is 0 and no cascade is built.
@@ -100,8 +100,8 @@ pub struct Summary {
     pub overlap_area_fraction: f64,
     /// Share of the lit-facing receiver pixels inside a blend band (every split; 0 without
     /// geometry, where it is not reported). A screen metric (`screen_band_pixel_share`): the
-    /// registry writes it with the other screen metrics, serde leaves it out.
-    #[serde(skip)]
+    /// registry writes it with the other screen metrics, and only with geometry.
+    #[serde(rename = "screen_band_pixel_share")]
     pub band_pixel_share: f64,
     /// Fraction of world-fixed receiver points that change cascade per frame, the worst over
     /// the motion paths; None when not computed ([`AnalysisOptions::seams`]).
@@ -118,14 +118,15 @@ pub struct Summary {
     /// The ground-truth metrics (acne, leaks, S5), when the pass ran; the registry writes them.
     #[serde(skip)]
     pub truth: Option<ground_truth::TruthSummary>,
-    /// What the setting costs to render (frame 0; docs/cost.md); the registry writes it.
-    #[serde(skip)]
+    /// What the setting costs to render (frame 0; docs/cost.md), flat under the registry's
+    /// names.
+    #[serde(flatten)]
     pub cost: cost::CostSummary,
 }
 
 /// Crawl and jumps of a moving light, the worst over the motion paths (texels; see
 /// `docs/metrics.md`).
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct LightSummary {
     /// RMS S3 over the frame pairs between updates, with the configured snapping.
     #[serde(rename = "light_crawl")]
@@ -227,8 +228,8 @@ pub struct CascadeReport {
     /// This cascade's ground truth at frame 0, when the pass ran; the registry writes it.
     #[serde(skip)]
     pub truth: Option<csm_core::truth::CascadeTruth>,
-    /// What this cascade costs to render (frame 0); the registry writes it.
-    #[serde(skip)]
+    /// What this cascade costs to render (frame 0), flat under the registry's names.
+    #[serde(flatten)]
     pub cost: cost::CascadeCost,
 }
 

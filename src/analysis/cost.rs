@@ -22,39 +22,56 @@ pub(crate) const DEFAULT_MODEL: CostModel = CostModel {
 /// Bytes per texel of a depth map (32-bit depth, as `memory_bytes`).
 pub(crate) const BYTES_PER_TEXEL: u64 = 4;
 
-/// One cascade's cost.
+/// One cascade's cost. Serde writes it flat, under the registry's names (the per-cascade
+/// objects of `summary.json`).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct CascadeCost {
     /// The counts; None without scene geometry (nothing to count).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub counts: Option<CostCounts>,
     pub texels_cleared: u64,
     pub bytes_written: u64,
-    /// The model's value with the default weights (relative units); None without geometry.
-    pub model: Option<f64>,
     /// This cascade's share of the configured setting's cost (the cascades' shares add up to
     /// the setting's `cost_index`); None without geometry.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub cost_index: Option<f64>,
     /// Milliseconds from the calibrated coefficients (`[cost] ns_per_*`); None uncalibrated.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub shadow_ms: Option<f64>,
 }
 
+impl CascadeCost {
+    /// The model's value with the default weights (relative units); None without geometry.
+    pub(crate) fn model(&self) -> Option<f64> {
+        self.counts.map(|c| model_of(&DEFAULT_MODEL, &c, self.texels_cleared))
+    }
+}
+
 /// The totals of a setting (the default: nothing measured, for hand-made summaries in tests).
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+/// Serde writes it flat under the registry's names (a shard's rows carry it so).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct CostSummary {
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
     pub counts: Option<CostCounts>,
     pub texels_cleared: u64,
     pub bytes_written: u64,
-    /// The model's value with the default weights (relative units; not an output).
-    pub model: Option<f64>,
     /// The model's value over the configured setting's: 1 for the configured setting itself.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cost_index: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shadow_ms: Option<f64>,
 }
 
 impl CostSummary {
+    /// The model's value with the default weights (relative units; not an output); None
+    /// without geometry.
+    pub(crate) fn model(&self) -> Option<f64> {
+        self.counts.map(|c| model_of(&DEFAULT_MODEL, &c, self.texels_cleared))
+    }
+
     /// Sets `cost_index` against a reference setting's model value (the configured setting's).
     pub(crate) fn normalise(&mut self, reference: Option<f64>) {
-        self.cost_index = match (self.model, reference) {
+        self.cost_index = match (self.model(), reference) {
             (Some(m), Some(r)) if r > 0.0 => Some(m / r),
             _ => None,
         };
@@ -173,7 +190,6 @@ pub(crate) fn measure(
                 counts,
                 texels_cleared: cleared,
                 bytes_written: cleared * BYTES_PER_TEXEL,
-                model: counts.map(|c| model_of(&DEFAULT_MODEL, &c, cleared)),
                 cost_index: None,
                 shadow_ms: calibration.and_then(|m| counts.map(|c| model_of(&m, &c, cleared) * 1e-6)),
             }
@@ -189,15 +205,15 @@ pub(crate) fn measure(
         }),
         texels_cleared: cascades.iter().map(|c| c.texels_cleared).sum(),
         bytes_written: cascades.iter().map(|c| c.bytes_written).sum(),
-        model: geometry.map(|_| cascades.iter().filter_map(|c| c.model).sum()),
         cost_index: None,
         shadow_ms: calibration
             .and(geometry)
             .map(|_| cascades.iter().filter_map(|c| c.shadow_ms).sum()),
     };
-    total.normalise(total.model);
+    let reference = total.model();
+    total.normalise(reference);
     for c in cascades.iter_mut() {
-        c.cost_index = match (c.model, total.model) {
+        c.cost_index = match (c.model(), reference) {
             (Some(m), Some(t)) if t > 0.0 => Some(m / t),
             _ => None,
         };
@@ -212,7 +228,6 @@ pub(crate) fn nothing(config: &Config) -> CostSummary {
         counts: geometry.then(CostCounts::default),
         texels_cleared: 0,
         bytes_written: 0,
-        model: geometry.then_some(0.0),
         cost_index: None,
         shadow_ms: config.cost.calibration.and(geometry.then_some(0.0)),
     }
@@ -228,5 +243,5 @@ pub(crate) fn configured_model(config: &Config) -> Option<f64> {
         .map(|i| rig.window(i, &lp0, config.shadow.snap))
         .collect();
     let vis = config.setup().visibility();
-    measure(config, &rig, &lp0, &windows0, vis.as_deref()).1.model
+    measure(config, &rig, &lp0, &windows0, vis.as_deref()).1.model()
 }

@@ -7,7 +7,7 @@ use toml::Spanned;
 
 /// csm-lab's own top-level tables.
 pub(crate) const SECTIONS: [&str; 8] = [
-    "camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep",
+    "camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep", "cost",
 ];
 
 /// The whole file: csm-lab's tables, and every other top-level key (engine tables or unknown).

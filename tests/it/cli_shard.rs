@@ -152,7 +152,7 @@ fn a_shard_holds_every_nth_row_of_the_grid_with_the_unsharded_values() {
     // Its rows and manifest, nothing that decides.
     let mut names: Vec<String> = files(&shard).into_keys().collect();
     names.sort();
-    assert_eq!(names, ["shard-rows.tsv", "shard.json", "sweep.csv"]);
+    assert_eq!(names, ["shard-rows.jsonl", "shard.json", "sweep.csv"]);
     let part = read_csv(&shard.join("sweep.csv"));
     // Rows 1, 6 and 11 (0-based) of the grid: the setting and every metric as unsharded; the
     // pareto and recommended columns (last but one and two) are empty: a slice decides nothing.
@@ -268,7 +268,7 @@ fn merging_a_shard_given_twice_names_the_shard_and_both_directories() {
     let d = three_shards(&cfg, tmp.path());
     let copy = tmp.path().join("copy-of-1");
     std::fs::create_dir(&copy).unwrap();
-    for f in ["shard.json", "shard-rows.tsv"] {
+    for f in ["shard.json", "shard-rows.jsonl"] {
         std::fs::copy(d[0].join(f), copy.join(f)).unwrap();
     }
     let err = fails_with_2(merge(
@@ -673,16 +673,15 @@ fn edited_rows_pasted_hashes_and_device_links_are_refused_naming_the_shard() {
     let tmp = tempfile::tempdir().unwrap();
     let cfg = small_config(tmp.path(), "small.toml", 1000.0);
     let d = three_shards(&cfg, tmp.path());
-    let rows = d[1].join("shard-rows.tsv");
+    let rows = d[1].join("shard-rows.jsonl");
     let text = std::fs::read_to_string(&rows).unwrap();
-    // Edit one hex digit of a metric on line 4 (the second row).
+    // Edit one metric of the row on line 4 (the third row): its memory figure, doubled.
     let lines: Vec<&str> = text.lines().collect();
-    let mut fields: Vec<String> = lines[3].split('\t').map(str::to_string).collect();
-    let f = &mut fields[9];
-    let last = f.pop().unwrap();
-    f.push(if last == '0' { '1' } else { '0' });
+    let mut row: serde_json::Value = serde_json::from_str(lines[3]).unwrap();
+    let memory = row["row"]["summary"]["memory_bytes"].as_u64().unwrap();
+    row["row"]["summary"]["memory_bytes"] = (memory * 2).into();
     let mut edited: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
-    edited[3] = fields.join("\t");
+    edited[3] = row.to_string();
     std::fs::write(&rows, edited.join("\n") + "\n").unwrap();
     let err = fails_with_2(merge(&d, &tmp.path().join("m")));
     assert!(
@@ -728,7 +727,7 @@ fn edited_rows_pasted_hashes_and_device_links_are_refused_naming_the_shard() {
         let zero = tmp.path().join("zero-shard");
         std::fs::create_dir(&zero).unwrap();
         std::fs::copy(d[0].join("shard.json"), zero.join("shard.json")).unwrap();
-        std::os::unix::fs::symlink("/dev/zero", zero.join("shard-rows.tsv")).unwrap();
+        std::os::unix::fs::symlink("/dev/zero", zero.join("shard-rows.jsonl")).unwrap();
         let err = fails_with_2(merge(
             &[zero.clone(), d[1].clone(), d[2].clone()],
             &tmp.path().join("m4"),

@@ -196,7 +196,7 @@ pub fn projected_area(t: &[DVec3; 3]) -> f64 {
 }
 
 /// One cascade's cost counts in one frame.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CostCounts {
     pub caster_objects: u64,
     pub caster_triangles: u64,

@@ -41,7 +41,7 @@ impl LightPath {
 }
 
 /// How often an engine re-aims its shadow maps at the light.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum LightUpdate {
     /// The used direction is the true one in every frame.
     EveryFrame,

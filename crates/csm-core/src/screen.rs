@@ -29,7 +29,7 @@ use crate::visibility::Visibility;
 /// The screen metrics of one configuration. Fractions are of sampled pixels (receivers,
 /// self-shadowed) or of served receiver pixels (undersampled). Every value is finite; all
 /// statistics of `m` are 0 when no receiver pixel is served.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ScreenStats {
     /// Share of sampled pixels whose nearest hit is a lit-facing receiver.
     pub receiver_fraction: f64,

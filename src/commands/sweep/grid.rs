@@ -800,7 +800,7 @@ impl Grid {
 }
 
 /// One point of the grid.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Setting {
     pub lambda: f64,
     pub cascades: usize,
@@ -928,7 +928,7 @@ fn axis_error(source_key: &str, spec: &str, e: Error) -> Error {
 }
 
 /// A sun position of a sweep, in degrees as written on the command line or in the file.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sun {
     /// Compass bearing from north (−Z) toward east (+X), degrees in [0, 360).
     pub azimuth_deg: f64,

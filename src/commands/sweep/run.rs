@@ -10,7 +10,7 @@ use crate::config::Config;
 use crate::error::{Error, GridError, Result};
 
 /// One row of `sweep.csv`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Row {
     pub setting: Setting,
     pub summary: Summary,

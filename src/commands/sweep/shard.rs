@@ -5,8 +5,9 @@
 //! belongs to shard `i mod N + 1`, so every shard gets a share of every axis (cheap and costly
 //! settings alike) and the N slices together are the grid, each row exactly once.
 //!
-//! A shard keeps its rows in [`ROWS_FILE`] in a lossless text form (every `f64` as the 16 hex
-//! digits of its bit pattern) and describes itself in [`MANIFEST_FILE`]: the csm-lab version,
+//! A shard keeps its rows in [`ROWS_FILE`] in a lossless text form (JSON lines: a header with
+//! the format's version, then one object per row as serde writes [`Row`], each `f64` exact)
+//! and describes itself in [`MANIFEST_FILE`]: the csm-lab version,
 //! K and N, the grid size, the command of the unsharded sweep and a hash of everything that
 //! decides the rows. Merging rebuilds the exact rows, so the merged files are byte for byte
 //! those of the unsharded sweep. Nothing here reads or writes a file: [`crate::app`] does.
@@ -18,23 +19,18 @@
 //! so are its rows, whose digests were made with the hash the shard really ran. The digests
 //! (64-bit FNV-1a) catch edits and mix-ups, not forgery: they are not signatures.
 
-use std::fmt::Write as _;
-
-use crate::analysis::{LightSummary, Summary};
-use crate::commands::sweep::grid::{Grid, GridFlags, Setting, Sun};
+use crate::commands::sweep::grid::{Grid, GridFlags};
 use crate::commands::sweep::run::Row;
 use crate::config::Config;
-use crate::config::{Fit, SplitRange};
 use crate::error::{Error, Result, ShardError};
-use csm_core::light_motion::LightUpdate;
-use csm_core::screen::ScreenStats;
 
 /// The shard's description, beside its other files.
 pub(crate) const MANIFEST_FILE: &str = "shard.json";
 /// The shard's rows, lossless.
-pub(crate) const ROWS_FILE: &str = "shard-rows.tsv";
-/// First line of [`ROWS_FILE`] (the format's version).
-const ROWS_MAGIC: &str = "# csm-lab shard rows v2";
+pub(crate) const ROWS_FILE: &str = "shard-rows.jsonl";
+/// The format named by the first line of [`ROWS_FILE`], and its version.
+const ROWS_FORMAT: &str = "csm-lab shard rows";
+const ROWS_VERSION: u32 = 4;
 /// Most shards a grid may be split into.
 pub(crate) const MAX_SHARDS: usize = 100_000;
 
@@ -291,15 +287,6 @@ pub(crate) fn config_hash(
 // Rows, lossless
 // ---------------------------------------------------------------------------------------------
 
-const ROW_COLUMNS: &str =
-    "index\tlambda\tcascades\tresolution\tfit\tsplit_range\tcascades_needed\tz_lo\tz_hi\tmax_aliasing\t\
-mean_aliasing\tmean_log_aliasing\tundersampled_fraction\tshimmer\tshimmer_snapped\tshimmer_unsnapped\tsize_jitter\t\
-coverage_violations\tmemory_bytes\tlookup_error_max\tlookup_error_rms\toverlap_area_fraction\tband_pixel_share\t\
-seam_crossings\tscreen\tknob\tdistance\tsun_azimuth\tsun_elevation\tlight\tlight_update\tdigest";
-
-/// Fields of a row of [`ROWS_FILE`] (the columns of [`ROW_COLUMNS`]).
-const ROW_FIELDS: usize = 32;
-
 /// The digest that ends a row: its text before the digest, keyed by the shard's
 /// `config_hash` and K/N (a row of another shard or run does not match).
 fn row_digest(m: &Manifest, text: &str) -> String {
@@ -310,159 +297,48 @@ fn row_digest(m: &Manifest, text: &str) -> String {
     h.hex()
 }
 
-fn hex(x: f64) -> String {
-    format!("{:016x}", x.to_bits())
+/// One line of [`ROWS_FILE`]: the row's grid index, the row as serde writes it, and its
+/// digest. `serde_json` (with `float_roundtrip`) writes every `f64` in its shortest exact form
+/// and reads it back bit for bit, so the merged rows equal the unsharded ones; a new field of
+/// [`Row`] is carried without touching this file. Ground truth is not part of a sweep row (only
+/// `analyze` runs it): serde skips it.
+#[derive(serde::Deserialize)]
+struct StoredRow {
+    index: usize,
+    row: Row,
+    digest: String,
 }
 
-/// [`ROWS_FILE`]'s text for rows `(grid index, row)` of the shard `m` describes.
+/// What a row's digest is made of (its index and row, as serde writes them).
+#[derive(serde::Serialize)]
+struct Digested<'a> {
+    index: usize,
+    row: &'a Row,
+}
+
+impl Digested<'_> {
+    fn digest(&self, m: &Manifest) -> String {
+        row_digest(
+            m,
+            &serde_json::to_string(self).expect("a row holds finite plain values"),
+        )
+    }
+}
+
+/// The first line of [`ROWS_FILE`]: the format and its version.
+fn rows_header() -> String {
+    serde_json::json!({"format": ROWS_FORMAT, "version": ROWS_VERSION}).to_string()
+}
+
+/// [`ROWS_FILE`]'s text for rows `(grid index, row)` of the shard `m` describes: JSON lines, a
+/// header and then one object per row.
 pub(crate) fn rows_text<'a>(m: &Manifest, rows: impl IntoIterator<Item = (usize, &'a Row)>) -> String {
-    let mut out = format!("{ROWS_MAGIC}\n{ROW_COLUMNS}\n");
+    let mut out = rows_header();
+    out.push('\n');
     for (index, row) in rows {
-        let start = out.len();
-        let st = &row.setting;
-        // Destructured without `..`: a new field of Summary fails to compile here until it is
-        // carried, so merging never silently drops a value.
-        let Summary {
-            cascades_needed,
-            z_lo,
-            z_hi,
-            max_aliasing,
-            mean_aliasing,
-            mean_log_aliasing,
-            undersampled_fraction,
-            shimmer,
-            shimmer_snapped,
-            shimmer_unsnapped,
-            size_jitter,
-            coverage_violations,
-            memory_bytes,
-            lookup_error_max,
-            lookup_error_rms,
-            overlap_area_fraction,
-            band_pixel_share,
-            seam_crossings,
-            screen,
-            light,
-            // Ground truth is not part of a sweep row (only `analyze` runs it).
-            truth: _,
-            // FIXME(cost): carried once the row format is serde (merge main first).
-            cost: _,
-        } = &row.summary;
-        let _ = write!(
-            out,
-            "{index}\t{}\t{}\t{}\t{}\t{}\t{}",
-            hex(st.lambda),
-            st.cascades,
-            st.resolution,
-            st.fit.name(),
-            st.split_range.name(),
-            u8::from(*cascades_needed)
-        );
-        for x in [
-            z_lo,
-            z_hi,
-            max_aliasing,
-            mean_aliasing,
-            mean_log_aliasing,
-            undersampled_fraction,
-            shimmer,
-            shimmer_snapped,
-            shimmer_unsnapped,
-            size_jitter,
-        ] {
-            let _ = write!(out, "\t{}", hex(*x));
-        }
-        let _ = write!(
-            out,
-            "\t{coverage_violations}\t{memory_bytes}\t{}\t{}\t{}\t{}\t{}\t",
-            hex(*lookup_error_max),
-            hex(*lookup_error_rms),
-            hex(*overlap_area_fraction),
-            hex(*band_pixel_share),
-            seam_crossings.map_or_else(|| "-".to_string(), hex)
-        );
-        match screen {
-            None => out.push('-'),
-            Some(ScreenStats {
-                receiver_fraction,
-                self_shadowed_fraction,
-                aliasing_mean,
-                aliasing_p50,
-                aliasing_p95,
-                aliasing_p99,
-                aliasing_max,
-                undersampled_fraction,
-                visible_mean,
-                visible_p50,
-                visible_p95,
-                visible_p99,
-                visible_max,
-                visible_z_lo,
-                visible_z_hi,
-                cascade_pixels,
-            }) => {
-                let fixed = [
-                    receiver_fraction,
-                    self_shadowed_fraction,
-                    aliasing_mean,
-                    aliasing_p50,
-                    aliasing_p95,
-                    aliasing_p99,
-                    aliasing_max,
-                    undersampled_fraction,
-                    visible_z_lo,
-                    visible_z_hi,
-                    visible_mean,
-                    visible_p50,
-                    visible_p95,
-                    visible_p99,
-                    visible_max,
-                ];
-                let all: Vec<String> = fixed.into_iter().chain(cascade_pixels).map(|x| hex(*x)).collect();
-                out.push_str(&all.join(","));
-            }
-        }
-        for x in [
-            st.knob,
-            st.distance,
-            st.sun.map(|s| s.azimuth_deg),
-            st.sun.map(|s| s.elevation_deg),
-        ] {
-            let _ = write!(out, "\t{}", x.map_or_else(|| "-".to_string(), hex));
-        }
-        out.push('\t');
-        match light {
-            None => out.push('-'),
-            Some(LightSummary {
-                crawl,
-                crawl_snapped,
-                crawl_unsnapped,
-                jump,
-                jump_snapped,
-                jump_unsnapped,
-            }) => {
-                let all = [
-                    crawl,
-                    crawl_snapped,
-                    crawl_unsnapped,
-                    jump,
-                    jump_snapped,
-                    jump_unsnapped,
-                ]
-                .map(|x| hex(*x));
-                out.push_str(&all.join(","));
-            }
-        }
-        out.push('\t');
-        out.push_str(&match st.light_update {
-            None => "-".to_string(),
-            Some(LightUpdate::EveryFrame) => "every:1".to_string(),
-            Some(LightUpdate::EveryFrames(k)) => format!("every:{k}"),
-            Some(LightUpdate::Quantize(q)) => format!("quantize:{}", hex(q)),
-        });
-        let digest = row_digest(m, &out[start..]);
-        out.push('\t');
-        out.push_str(&digest);
+        let digest = Digested { index, row }.digest(m);
+        let line = serde_json::json!({"index": index, "row": row, "digest": digest});
+        out.push_str(&line.to_string());
         out.push('\n');
     }
     out
@@ -473,170 +349,39 @@ pub(crate) fn rows_text<'a>(m: &Manifest, rows: impl IntoIterator<Item = (usize,
 pub(crate) fn parse_rows(file: &std::path::Path, text: &str, m: &Manifest) -> Result<Vec<(usize, Row)>> {
     let mut lines = text.lines().enumerate();
     let bad = |line: usize, m: String| Error::data_file(file, line, m);
+    let header = rows_header();
     match lines.next() {
-        Some((_, ROWS_MAGIC)) => {}
+        Some((_, first)) if first == header => {}
         _ => {
             return Err(bad(
                 1,
-                format!("not a csm-lab shard rows file (the first line is not {ROWS_MAGIC:?})"),
+                format!("not a shard rows file of this csm-lab (the first line is not {header})"),
             ))
         }
-    }
-    match lines.next() {
-        Some((_, l)) if l == ROW_COLUMNS => {}
-        _ => return Err(bad(2, "the column line is not that of this csm-lab".into())),
     }
     let mut rows = Vec::new();
     for (i, line) in lines {
         let n = i + 1;
-        let f: Vec<&str> = line.split('\t').collect();
-        if f.len() != ROW_FIELDS {
-            return Err(bad(n, format!("{} fields; a row has {ROW_FIELDS}", f.len())));
+        let stored: StoredRow =
+            serde_json::from_str(line).map_err(|e| bad(n, format!("not a row of this csm-lab: {e}")))?;
+        // The digest is of the values read, written again: an edited value changes it, while
+        // whitespace or key order, which change no value, do not.
+        let expected = Digested {
+            index: stored.index,
+            row: &stored.row,
         }
-        let (body, digest) = line.rsplit_once('\t').unwrap_or_default();
-        if row_digest(m, body) != digest {
+        .digest(m);
+        if expected != stored.digest {
             return Err(bad(
                 n,
                 format!(
-                    "the row does not match its digest {digest:?}: it was edited after shard {} of {} ran, or the \
+                    "the row does not match its digest {:?}: it was edited after shard {} of {} ran, or the \
                      shard's {MANIFEST_FILE} is not the one it ran with; run the shard again",
-                    m.shard.k, m.shard.n
+                    stored.digest, m.shard.k, m.shard.n
                 ),
             ));
         }
-        let float = |s: &str| {
-            u64::from_str_radix(s, 16)
-                .ok()
-                .filter(|_| s.len() == 16)
-                .map(f64::from_bits)
-                .ok_or_else(|| bad(n, format!("{s:?} is not 16 hex digits")))
-        };
-        let optional_float = |s: &str| if s == "-" { Ok(None) } else { float(s).map(Some) };
-        let whole = |s: &str| {
-            s.parse::<u64>()
-                .map_err(|_| bad(n, format!("{s:?} is not a whole number")))
-        };
-        let small =
-            |s: &str| whole(s).and_then(|x| usize::try_from(x).map_err(|_| bad(n, format!("{s:?} is too large"))));
-        let fit = match f[4] {
-            "sphere" => Fit::Sphere,
-            "aabb" => Fit::Aabb,
-            other => return Err(bad(n, format!("{other:?} is not a fit"))),
-        };
-        let split_range = match f[5] {
-            "bounds" => SplitRange::Bounds,
-            "visible" => SplitRange::Visible,
-            other => return Err(bad(n, format!("{other:?} is not a split range"))),
-        };
-        let cascades_needed = match f[6] {
-            "0" => false,
-            "1" => true,
-            other => return Err(bad(n, format!("{other:?} is not 0 or 1"))),
-        };
-        let v: Vec<f64> = f[7..17].iter().map(|s| float(s)).collect::<Result<_>>()?;
-        let screen = match f[24] {
-            "-" => None,
-            s => {
-                let x: Vec<f64> = s.split(',').map(float).collect::<Result<_>>()?;
-                if x.len() < 15 {
-                    return Err(bad(
-                        n,
-                        format!("the screen field has {} numbers; it has at least 15", x.len()),
-                    ));
-                }
-                Some(ScreenStats {
-                    receiver_fraction: x[0],
-                    self_shadowed_fraction: x[1],
-                    aliasing_mean: x[2],
-                    aliasing_p50: x[3],
-                    aliasing_p95: x[4],
-                    aliasing_p99: x[5],
-                    aliasing_max: x[6],
-                    undersampled_fraction: x[7],
-                    visible_z_lo: x[8],
-                    visible_z_hi: x[9],
-                    visible_mean: x[10],
-                    visible_p50: x[11],
-                    visible_p95: x[12],
-                    visible_p99: x[13],
-                    visible_max: x[14],
-                    cascade_pixels: x[15..].to_vec(),
-                })
-            }
-        };
-        let resolution = u32::try_from(whole(f[3])?).map_err(|_| bad(n, format!("{:?} is too large", f[3])))?;
-        rows.push((
-            small(f[0])?,
-            Row {
-                setting: Setting {
-                    lambda: float(f[1])?,
-                    cascades: small(f[2])?,
-                    resolution,
-                    fit,
-                    split_range,
-                    knob: optional_float(f[25])?,
-                    distance: optional_float(f[26])?,
-                    sun: match (optional_float(f[27])?, optional_float(f[28])?) {
-                        (None, None) => None,
-                        (Some(azimuth_deg), Some(elevation_deg)) => Some(Sun {
-                            azimuth_deg,
-                            elevation_deg,
-                        }),
-                        _ => return Err(bad(n, "a sun azimuth without an elevation, or the reverse".into())),
-                    },
-                    light_update: match f[30].split_once(':') {
-                        None if f[30] == "-" => None,
-                        Some(("every", k)) => Some(LightUpdate::EveryFrames(small(k)?.max(1))),
-                        Some(("quantize", q)) => Some(LightUpdate::Quantize(float(q)?)),
-                        _ => return Err(bad(n, format!("{:?} is not a light update rule", f[30]))),
-                    },
-                },
-                summary: Summary {
-                    cascades_needed,
-                    z_lo: v[0],
-                    z_hi: v[1],
-                    max_aliasing: v[2],
-                    mean_aliasing: v[3],
-                    mean_log_aliasing: v[4],
-                    undersampled_fraction: v[5],
-                    shimmer: v[6],
-                    shimmer_snapped: v[7],
-                    shimmer_unsnapped: v[8],
-                    size_jitter: v[9],
-                    coverage_violations: whole(f[17])?,
-                    memory_bytes: whole(f[18])?,
-                    lookup_error_max: float(f[19])?,
-                    lookup_error_rms: float(f[20])?,
-                    overlap_area_fraction: float(f[21])?,
-                    band_pixel_share: float(f[22])?,
-                    seam_crossings: match f[23] {
-                        "-" => None,
-                        s => Some(float(s)?),
-                    },
-                    screen,
-                    light: match f[29] {
-                        "-" => None,
-                        s => {
-                            let x: Vec<f64> = s.split(',').map(float).collect::<Result<_>>()?;
-                            let [crawl, crawl_snapped, crawl_unsnapped, jump, jump_snapped, jump_unsnapped] = x[..]
-                            else {
-                                return Err(bad(n, format!("the light field has {} numbers; it has 6", x.len())));
-                            };
-                            Some(LightSummary {
-                                crawl,
-                                crawl_snapped,
-                                crawl_unsnapped,
-                                jump,
-                                jump_snapped,
-                                jump_unsnapped,
-                            })
-                        }
-                    },
-                    truth: None,
-                    cost: Default::default(),
-                },
-            },
-        ));
+        rows.push((stored.index, stored.row));
     }
     Ok(rows)
 }
