@@ -875,11 +875,22 @@ fn shown_for(d: &SummaryDef, s: &Summary) -> bool {
         && (!is_light_motion(d.name) || s.light.is_some())
         && (!TRUTH_SUMMARY.contains(&d.name) || s.truth.is_some())
         && (d.name != SHADOW_MS || s.cost.shadow_ms.is_some())
+        && (d.name != COST_INDEX || s.cost.cost_index.is_some())
+}
+
+/// Whether a metric is a column of a per-configuration row: as [`shown_for`], but
+/// `cost_index` is a column whenever the counts are (n/a where it has no reference: a
+/// configured setting that needs no cascade).
+fn in_row_for(d: &SummaryDef, s: &Summary) -> bool {
+    d.in_rows && (shown_for(d, s) || (d.name == COST_INDEX && s.screen.is_some()))
 }
 
 /// The one cost metric in milliseconds: only with a calibrated model (`[cost] ns_per_*`),
 /// never from the default weights.
 const SHADOW_MS: &str = "shadow_ms";
+
+/// The cost relative to the configured setting: absent when there is nothing to relate it to.
+const COST_INDEX: &str = "cost_index";
 
 /// The moving-light metrics (`light_crawl*`, `light_jump*`, in the summary and per cascade):
 /// only when the light moves ([`Summary::light`]), absent from every output under a still
@@ -951,7 +962,7 @@ pub(crate) fn summary_fields(
     if s.screen.is_some() {
         fields.push(split_range.name().to_string());
     }
-    for d in SUMMARY.iter().filter(|d| d.in_rows && shown_for(d, s)) {
+    for d in SUMMARY.iter().filter(|d| in_row_for(d, s)) {
         fields.push((d.value)(s).csv(d.name)?);
     }
     Ok(fields)

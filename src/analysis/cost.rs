@@ -183,7 +183,7 @@ pub(crate) fn measure(
                 let kept = vis.and_then(|vis| kept_objects(config, rig, i, &v, scene, vis));
                 match kept {
                     Some(kept) => light.counts(&scene.mesh, &v, |k| kept[k]),
-                    None => light.counts(&scene.mesh, &v, |_| true),
+                    None => light.counts_all(&scene.mesh, &v),
                 }
             });
             CascadeCost {

@@ -6,7 +6,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 /// csm-lab's own top-level tables.
-pub(crate) const SECTIONS: [&str; 8] = [
+pub(crate) const SECTIONS: [&str; 9] = [
     "camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep", "cost",
 ];
 

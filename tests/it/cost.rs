@@ -551,3 +551,135 @@ fn culling_by_receivers_never_changes_the_ground_truth_states() {
         assert!(compared > 1000, "{name}: {compared} receivers compared");
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Sweeps: columns, cost_index against the configured setting, the cost budget
+// ---------------------------------------------------------------------------------------------
+
+fn sweep_default(dir: &std::path::Path, sweep_table: &str) -> serde_json::Value {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/default.toml")).unwrap();
+    let text = text.split("[sweep]").next().unwrap().to_string() + sweep_table;
+    let cfg = dir.join("d.toml");
+    std::fs::write(&cfg, text).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+        .args([
+            "sweep",
+            cfg.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&std::fs::read(dir.join("recommendation.json")).unwrap()).unwrap()
+}
+
+/// `sweep.csv` carries the counts and `cost_index` (1 for the configured setting's row, each
+/// row's model over the configured one's); a cost budget keeps the recommendation within it
+/// and says what it cost in quality; the cost figure is written.
+#[test]
+fn a_sweep_carries_the_counts_and_recommends_within_a_cost_budget() {
+    let grid =
+        "[sweep]\nlambda = [0.5, 0.75]\ncascades = [1, 2, 3, 4]\nresolution = [1024, 2048]\nmemory_budget_mib = 64\n";
+    let free_tmp = tempfile::tempdir().unwrap();
+    let free_dir = free_tmp.path();
+    let free = sweep_default(free_dir, grid);
+    let (header, rows) = crate::common::read_csv(&free_dir.join("sweep.csv"));
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("{name} in {header:?}"))
+    };
+    let at = |r: &Vec<String>, name: &str| r[col(name)].clone();
+    let configured = rows
+        .iter()
+        .find(|r| at(r, "lambda") == "0.75" && at(r, "cascades") == "4" && at(r, "resolution") == "2048")
+        .unwrap();
+    assert_eq!(at(configured, "cost_index"), "1");
+    // Each row's cost_index is its own analysis's model over the configured setting's.
+    let text = std::fs::read_to_string(free_dir.join("d.toml")).unwrap();
+    let base = Config::from_toml_str(&text, "d.toml", None).unwrap();
+    let model = |c: &Config| {
+        let a = analyze(c, &AnalysisOptions::summary_only());
+        let t = a.summary.cost.counts.unwrap();
+        2000.0 * t.caster_objects as f64
+            + 0.5 * t.caster_triangles as f64
+            + 0.01 * t.raster_fragments
+            + 0.002 * a.summary.cost.texels_cleared as f64
+    };
+    let reference = model(&base);
+    for r in &rows {
+        let c = base
+            .with_lambda(at(r, "lambda").parse().unwrap())
+            .unwrap()
+            .with_cascades(at(r, "cascades").parse().unwrap())
+            .unwrap()
+            .with_resolution(at(r, "resolution").parse().unwrap())
+            .unwrap();
+        let got: f64 = at(r, "cost_index").parse().unwrap();
+        assert!((got - model(&c) / reference).abs() < 1e-12, "{r:?}");
+        let cleared: u64 = at(r, "texels_cleared").parse().unwrap();
+        let (n, res): (u64, u64) = (at(r, "cascades").parse().unwrap(), at(r, "resolution").parse().unwrap());
+        assert_eq!(cleared, n * res * res);
+        assert!(at(r, "caster_objects").parse::<u64>().unwrap() >= n);
+    }
+    assert!(free_dir.join("cost_pareto.png").exists());
+    let unconstrained = free["recommended"]["cost_index"].as_f64().unwrap();
+    // A budget below the free recommendation's cost forces a cheaper one.
+    let budget = 0.9 * unconstrained;
+    let dir = tempfile::tempdir().unwrap();
+    let v = sweep_default(dir.path(), &format!("{grid}cost_budget = {budget}\n"));
+    let rec = v["recommended"]["cost_index"].as_f64().unwrap();
+    assert!(rec <= budget, "{rec} over {budget}");
+    assert_eq!(v["cost_budget"].as_f64(), Some(budget));
+    assert_eq!(v["within_cost_budget"], true);
+    assert_eq!(v["without_cost_budget"]["configuration"], free["recommended"]);
+    let effect = v["cost_budget_effect"].as_str().unwrap();
+    assert!(effect.contains("cost quality"), "{effect}");
+    let obj = v["objective_metric"].as_str().unwrap();
+    assert!(v["recommended"][obj].as_f64().unwrap() >= free["recommended"][obj].as_f64().unwrap());
+    // The rows over the budget that beat it on the objective lost on the budget.
+    let kinds: Vec<&str> = v["alternatives"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["kind"].as_str().unwrap())
+        .collect();
+    assert!(!kinds.is_empty());
+    // The cheaper-to-render alternative of the free sweep costs less and is on the cost front.
+    if let Some(a) = free["alternatives"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["kind"] == "cheaper_to_render")
+    {
+        assert!(a["configuration"]["cost_index"].as_f64().unwrap() < unconstrained);
+        assert!(free["cost_pareto_front"]
+            .as_array()
+            .unwrap()
+            .contains(&a["configuration"]));
+    }
+}
+
+/// A cost budget without geometry, and milliseconds without calibration, are config errors.
+#[test]
+fn cost_budgets_need_geometry_and_milliseconds_need_calibration() {
+    let e = Config::from_toml_str(
+        &format!(
+            "{}\n[sweep]\ncascades = [1, 2]\ncost_budget = 0.5\n",
+            crate::common::BASE
+        ),
+        "t.toml",
+        None,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("sweep.cost_budget") && e.contains("scene geometry"), "{e}");
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/default.toml")).unwrap();
+    let text =
+        text.split("[sweep]").next().unwrap().to_string() + "[sweep]\ncascades = [1, 2]\nshadow_ms_budget = 1.0\n";
+    let e = Config::from_toml_str(&text, "t.toml", None).unwrap_err().to_string();
+    assert!(e.contains("sweep.shadow_ms_budget") && e.contains("calibrated"), "{e}");
+}

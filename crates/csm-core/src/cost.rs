@@ -118,41 +118,67 @@ pub fn aabb_meets_volume(b: &Aabb, v: &CasterVolume) -> bool {
     true
 }
 
-/// Clips a convex polygon (light coordinates) to the half-space `sign * p[axis] <= sign * bound`
-/// (Sutherland-Hodgman, one plane).
-fn clip_plane<const N: usize>(poly: &[[f64; N]], axis: usize, bound: f64, keep_below: bool, out: &mut Vec<[f64; N]>) {
-    out.clear();
-    let inside = |p: &[f64; N]| if keep_below { p[axis] <= bound } else { p[axis] >= bound };
-    let n = poly.len();
-    for i in 0..n {
-        let a = &poly[i];
-        let b = &poly[(i + 1) % n];
-        let (ia, ib) = (inside(a), inside(b));
-        if ia {
-            out.push(*a);
-        }
-        if ia != ib {
-            let t = (bound - a[axis]) / (b[axis] - a[axis]);
-            let mut p = [0.0; N];
-            for k in 0..N {
-                p[k] = a[k] + t * (b[k] - a[k]);
+/// Most vertices a clipped triangle has: 3, plus one per clipping plane.
+const MAX_VERTICES: usize = 9;
+
+/// A convex polygon on the stack (no allocation per clip).
+#[derive(Clone, Copy)]
+struct Poly<const N: usize> {
+    v: [[f64; N]; MAX_VERTICES],
+    n: usize,
+}
+
+impl<const N: usize> Poly<N> {
+    fn of(points: [[f64; N]; 3]) -> Self {
+        let mut v = [[0.0; N]; MAX_VERTICES];
+        v[..3].copy_from_slice(&points);
+        Poly { v, n: 3 }
+    }
+
+    /// Clipped to the half-space `p[axis] <= bound` (`keep_below`) or `p[axis] >= bound`
+    /// (Sutherland-Hodgman, one plane).
+    fn clip(&self, axis: usize, bound: f64, keep_below: bool) -> Self {
+        let mut out = Poly {
+            v: [[0.0; N]; MAX_VERTICES],
+            n: 0,
+        };
+        let inside = |p: &[f64; N]| if keep_below { p[axis] <= bound } else { p[axis] >= bound };
+        for i in 0..self.n {
+            let a = &self.v[i];
+            let b = &self.v[(i + 1) % self.n];
+            let (ia, ib) = (inside(a), inside(b));
+            if ia && out.n < MAX_VERTICES {
+                out.v[out.n] = *a;
+                out.n += 1;
             }
-            p[axis] = bound;
-            out.push(p);
+            if ia != ib && out.n < MAX_VERTICES {
+                let t = (bound - a[axis]) / (b[axis] - a[axis]);
+                let mut p: [f64; N] = std::array::from_fn(|k| a[k] + t * (b[k] - a[k]));
+                p[axis] = bound;
+                out.v[out.n] = p;
+                out.n += 1;
+            }
         }
+        out
     }
 }
 
-/// Whether a triangle (light coordinates) intersects the closed box `[lo, hi]`: its clip by
-/// the box's six planes is not empty.
+/// Whether a triangle (light coordinates) intersects the closed box `[lo, hi]`: a vertex
+/// inside decides yes, bounds apart decide no, and otherwise its clip by the box's six planes
+/// is not empty.
 pub fn triangle_meets_box(t: &[DVec3; 3], lo: DVec3, hi: DVec3) -> bool {
-    let mut poly: Vec<[f64; 3]> = t.iter().map(|p| p.to_array()).collect();
-    let mut next = Vec::with_capacity(9);
+    if t.iter().any(|p| p.cmpge(lo).all() && p.cmple(hi).all()) {
+        return true;
+    }
+    let (tlo, thi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
+    if tlo.cmpgt(hi).any() || thi.cmplt(lo).any() {
+        return false;
+    }
+    let mut poly = Poly::of(t.map(|p| p.to_array()));
     for axis in 0..3 {
         for (bound, below) in [(lo[axis], false), (hi[axis], true)] {
-            clip_plane(&poly, axis, bound, below, &mut next);
-            std::mem::swap(&mut poly, &mut next);
-            if poly.is_empty() {
+            poly = poly.clip(axis, bound, below);
+            if poly.n == 0 {
                 return false;
             }
         }
@@ -161,20 +187,26 @@ pub fn triangle_meets_box(t: &[DVec3; 3], lo: DVec3, hi: DVec3) -> bool {
 }
 
 /// The area of a triangle's projection on the light plane (light x/y) clipped to the
-/// rectangle `[lo, hi]`, exactly (Sutherland-Hodgman, then the shoelace formula).
+/// rectangle `[lo, hi]`, exactly (Sutherland-Hodgman, then the shoelace formula; a triangle
+/// inside the rectangle keeps its area, one apart from it has none).
 pub fn clipped_area(t: &[DVec3; 3], lo: DVec2, hi: DVec2) -> f64 {
-    let mut poly: Vec<[f64; 2]> = t.iter().map(|p| [p.x, p.y]).collect();
-    let mut next = Vec::with_capacity(7);
+    let (tlo, thi) = (t[0].min(t[1]).min(t[2]).truncate(), t[0].max(t[1]).max(t[2]).truncate());
+    if tlo.cmpge(lo).all() && thi.cmple(hi).all() {
+        return projected_area(t);
+    }
+    if tlo.cmpgt(hi).any() || thi.cmplt(lo).any() {
+        return 0.0;
+    }
+    let mut poly = Poly::of(t.map(|p| [p.x, p.y]));
     for axis in 0..2 {
         for (bound, below) in [(lo[axis], false), (hi[axis], true)] {
-            clip_plane(&poly, axis, bound, below, &mut next);
-            std::mem::swap(&mut poly, &mut next);
-            if poly.len() < 3 {
+            poly = poly.clip(axis, bound, below);
+            if poly.n < 3 {
                 return 0.0;
             }
         }
     }
-    polygon_area(&poly)
+    polygon_area(&poly.v[..poly.n])
 }
 
 /// The (unsigned) area of a simple polygon.
@@ -214,8 +246,28 @@ impl CostCounts {
     }
 }
 
-/// One object in a light basis.
+/// Triangles per leaf of an object's tree.
+const LEAF: usize = 8;
+
+/// A node of an object's tree: a run of its triangles (spatially close: the object's
+/// triangles are in a Morton order of their world centroids) with its light-space bounds and
+/// projected area; an inner node has two children halving the run.
 #[derive(Debug, Clone, Copy, PartialEq)]
+struct Chunk {
+    /// Tight light-space bounds of its vertices.
+    lo: DVec3,
+    hi: DVec3,
+    /// Sum of its triangles' projected areas (world units²).
+    area: f64,
+    /// Its triangles: `order[start..end]`.
+    start: usize,
+    end: usize,
+    /// Its children in [`LightScene::chunks`]; None for a leaf.
+    children: Option<(usize, usize)>,
+}
+
+/// One object in a light basis.
+#[derive(Debug, Clone, PartialEq)]
 struct LightObject {
     /// Tight light-space bounds of its vertices.
     lo: DVec3,
@@ -225,44 +277,200 @@ struct LightObject {
     box_hi: DVec3,
     /// Sum of its triangles' projected areas (world units²).
     area: f64,
+    /// The root of its tree in [`LightScene::chunks`].
+    root: usize,
 }
 
 /// The scene in one light basis, made once per basis and shared by every window in it.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug)]
 pub struct LightScene {
     pub basis: LightBasis,
+    /// Every triangle in light coordinates, in the mesh's order.
     triangles: Vec<[DVec3; 3]>,
+    /// Triangle indices, each object's in a Morton order of their world centroids (so that a
+    /// chunk of consecutive ones is compact).
+    order: Vec<usize>,
+    chunks: Vec<Chunk>,
     objects: Vec<LightObject>,
+    /// The counts of volumes already counted without culling, by the exact bits of the volume
+    /// (a window a sweep meets again, e.g. a single cascade at every λ, is counted once).
+    seen: std::sync::Mutex<std::collections::HashMap<[u64; 8], CostCounts>>,
+}
+
+/// Volumes a [`LightScene`] remembers the counts of, at most.
+const REMEMBERED: usize = 1 << 14;
+
+/// Bounds of a set of light-space triangles.
+fn bounds_of<'a>(tris: impl Iterator<Item = &'a [DVec3; 3]>) -> (DVec3, DVec3) {
+    tris.flatten()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        })
+}
+
+/// Builds the tree over `order[start..end]` (light-space `triangles`) into `nodes`; returns
+/// its root.
+fn build_tree(triangles: &[[DVec3; 3]], order: &[usize], start: usize, end: usize, nodes: &mut Vec<Chunk>) -> usize {
+    if end - start <= LEAF {
+        let tris = order[start..end].iter().map(|&k| &triangles[k]);
+        let (lo, hi) = bounds_of(tris.clone());
+        nodes.push(Chunk {
+            lo,
+            hi,
+            area: tris.map(projected_area).sum(),
+            start,
+            end,
+            children: None,
+        });
+        return nodes.len() - 1;
+    }
+    // Split on a leaf boundary, so every leaf but the last is full.
+    let half = (end - start).div_ceil(2).div_ceil(LEAF) * LEAF;
+    let a = build_tree(triangles, order, start, start + half, nodes);
+    let b = build_tree(triangles, order, start + half, end, nodes);
+    let (x, y) = (nodes[a], nodes[b]);
+    nodes.push(Chunk {
+        lo: x.lo.min(y.lo),
+        hi: x.hi.max(y.hi),
+        area: x.area + y.area,
+        start,
+        end,
+        children: Some((a, b)),
+    });
+    nodes.len() - 1
+}
+
+/// The 30-bit Morton code of a point's place in a box (10 bits per axis).
+fn morton(p: DVec3, lo: DVec3, hi: DVec3) -> u32 {
+    let spread = |x: f64| {
+        let mut v = (x.clamp(0.0, 1.0) * 1023.0) as u32;
+        v = (v | (v << 16)) & 0x030000FF;
+        v = (v | (v << 8)) & 0x0300F00F;
+        v = (v | (v << 4)) & 0x030C30C3;
+        (v | (v << 2)) & 0x09249249
+    };
+    let t = (p - lo) / (hi - lo).max(DVec3::splat(1e-300));
+    spread(t.x) | (spread(t.y) << 1) | (spread(t.z) << 2)
 }
 
 impl LightScene {
     pub fn new(mesh: &Mesh, basis: &LightBasis) -> Self {
         let triangles: Vec<[DVec3; 3]> = mesh.triangles.iter().map(|t| t.map(|p| basis.to_light(p))).collect();
+        let mut order: Vec<usize> = Vec::with_capacity(mesh.triangles.len());
+        let mut chunks = Vec::new();
         let objects = mesh
             .objects
             .iter()
             .map(|o| {
-                let tris = &triangles[o.triangles.clone()];
-                let (lo, hi) = tris
-                    .iter()
-                    .flatten()
-                    .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-                        (lo.min(*p), hi.max(*p))
-                    });
+                let start = order.len();
+                let mut ids: Vec<(u32, usize)> = o
+                    .triangles
+                    .clone()
+                    .map(|k| {
+                        let t = &mesh.triangles[k];
+                        (morton((t[0] + t[1] + t[2]) / 3.0, o.bounds.min, o.bounds.max), k)
+                    })
+                    .collect();
+                ids.sort_unstable();
+                order.extend(ids.into_iter().map(|(_, k)| k));
+                let root = build_tree(&triangles, &order, start, order.len(), &mut chunks);
+                let area = chunks[root].area;
+                let (lo, hi) = bounds_of(triangles[o.triangles.clone()].iter());
                 let (box_lo, box_hi) = light_bounds_of(basis, &o.bounds);
                 LightObject {
                     lo,
                     hi,
                     box_lo,
                     box_hi,
-                    area: tris.iter().map(projected_area).sum(),
+                    area,
+                    root,
                 }
             })
             .collect();
         LightScene {
             basis: *basis,
             triangles,
+            order,
+            chunks,
             objects,
+            seen: Default::default(),
+        }
+    }
+
+    /// [`LightScene::counts`] without culling, remembered per volume: a volume counted before
+    /// (bit for bit the same window, depth range and texel) is not counted again.
+    pub fn counts_all(&self, mesh: &Mesh, v: &CasterVolume) -> CostCounts {
+        let key = [
+            v.lo.x.to_bits(),
+            v.lo.y.to_bits(),
+            v.lo.z.to_bits(),
+            v.hi.x.to_bits(),
+            v.hi.y.to_bits(),
+            v.hi.z.to_bits(),
+            v.texel.x.to_bits(),
+            v.texel.y.to_bits(),
+        ];
+        if let Some(c) = self.seen.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+            return *c;
+        }
+        let c = self.counts(mesh, v, |_| true);
+        let mut seen = self.seen.lock().unwrap_or_else(|e| e.into_inner());
+        if seen.len() < REMEMBERED {
+            seen.insert(key, c);
+        }
+        c
+    }
+
+    /// The triangles of a chunk.
+    fn tris<'a>(&'a self, c: &Chunk) -> impl Iterator<Item = &'a [DVec3; 3]> + 'a {
+        self.order[c.start..c.end].iter().map(|&k| &self.triangles[k])
+    }
+
+    /// Under node `n`: how many triangles intersect the volume `v` (when `count`) and their
+    /// projected area inside its rectangle (when `area`), in one walk of the tree: a node
+    /// inside (apart) settles a part for its whole subtree, a leaf crossing an edge is settled
+    /// triangle by triangle.
+    fn walk(&self, n: usize, v: &CasterVolume, mut count: bool, mut area: bool) -> (u64, f64) {
+        let c = &self.chunks[n];
+        let (mut k, mut a) = (0, 0.0);
+        if count {
+            if c.lo.cmpge(v.lo).all() && c.hi.cmple(v.hi).all() {
+                k = (c.end - c.start) as u64;
+                count = false;
+            } else if c.lo.cmpgt(v.hi).any() || c.hi.cmplt(v.lo).any() {
+                count = false;
+            }
+        }
+        if area {
+            let (lo, hi, rlo, rhi) = (c.lo.truncate(), c.hi.truncate(), v.lo.truncate(), v.hi.truncate());
+            if lo.cmpge(rlo).all() && hi.cmple(rhi).all() {
+                a = c.area;
+                area = false;
+            } else if lo.cmpgt(rhi).any() || hi.cmplt(rlo).any() {
+                area = false;
+            }
+        }
+        if !count && !area {
+            return (k, a);
+        }
+        match c.children {
+            Some((x, y)) => {
+                let (k1, a1) = self.walk(x, v, count, area);
+                let (k2, a2) = self.walk(y, v, count, area);
+                (k + k1 + k2, a + a1 + a2)
+            }
+            None => {
+                let (rlo, rhi) = (v.lo.truncate(), v.hi.truncate());
+                for t in self.tris(c) {
+                    if count && triangle_meets_box(t, v.lo, v.hi) {
+                        k += 1;
+                    }
+                    if area {
+                        a += clipped_area(t, rlo, rhi);
+                    }
+                }
+                (k, a)
+            }
         }
     }
 
@@ -273,36 +481,24 @@ impl LightScene {
         if v.is_empty() {
             return out;
         }
-        let (rlo, rhi) = (v.lo.truncate(), v.hi.truncate());
         let texel_area = v.texel.x * v.texel.y;
+        let apart3 = |lo: DVec3, hi: DVec3| lo.cmpgt(v.hi).any() || hi.cmplt(v.lo).any();
         let mut area = 0.0;
         for (k, (o, lo)) in mesh.objects.iter().zip(&self.objects).enumerate() {
             // The light-space bounds of the world box hold the box: apart from the volume on a
             // light axis, the two are apart (three of the separating axes, checked first).
-            if lo.box_lo.cmpgt(v.hi).any() || lo.box_hi.cmplt(v.lo).any() {
+            if apart3(lo.box_lo, lo.box_hi) {
                 continue;
             }
             if !keep(k) || !aabb_meets_volume(&o.bounds, v) {
                 continue;
             }
-            let tris = &self.triangles[o.triangles.clone()];
+            let n = o.triangles.len() as u64;
             out.caster_objects += 1;
-            out.caster_triangles += tris.len() as u64;
-            out.caster_triangles_inside += if lo.lo.cmpge(v.lo).all() && lo.hi.cmple(v.hi).all() {
-                tris.len() as u64
-            } else if lo.lo.cmpgt(v.hi).any() || lo.hi.cmplt(v.lo).any() {
-                0
-            } else {
-                tris.iter().filter(|t| triangle_meets_box(t, v.lo, v.hi)).count() as u64
-            };
-            let (olo, ohi) = (lo.lo.truncate(), lo.hi.truncate());
-            area += if olo.cmpge(rlo).all() && ohi.cmple(rhi).all() {
-                lo.area
-            } else if olo.cmpgt(rhi).any() || ohi.cmplt(rlo).any() {
-                0.0
-            } else {
-                tris.iter().map(|t| clipped_area(t, rlo, rhi)).sum()
-            };
+            out.caster_triangles += n;
+            let (inside, a) = self.walk(lo.root, v, true, true);
+            out.caster_triangles_inside += inside;
+            area += a;
         }
         out.raster_fragments = area / texel_area;
         out
@@ -332,7 +528,7 @@ impl ReceiverBox {
             .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
                 (lo.min(p), hi.max(p))
             });
-        if !(lo.x <= hi.x) {
+        if lo.x > hi.x {
             return None;
         }
         let pad = DVec3::new(pad_xy, pad_xy, pad_z);
