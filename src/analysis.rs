@@ -124,6 +124,37 @@ pub struct Summary {
     pub cost: cost::CostSummary,
 }
 
+impl Summary {
+    /// The summary of a scene that needs no cascades: every metric 0 (nothing to measure: no
+    /// map, no texel, no drift), `memory_bytes` as given, and nothing optional measured.
+    pub(crate) fn nothing_needed(memory_bytes: u64) -> Summary {
+        Summary {
+            cascades_needed: false,
+            z_lo: 0.0,
+            z_hi: 0.0,
+            max_aliasing: 0.0,
+            mean_aliasing: 0.0,
+            mean_log_aliasing: 0.0,
+            undersampled_fraction: 0.0,
+            shimmer: 0.0,
+            shimmer_snapped: 0.0,
+            shimmer_unsnapped: 0.0,
+            size_jitter: 0.0,
+            coverage_violations: 0,
+            memory_bytes,
+            lookup_error_max: 0.0,
+            lookup_error_rms: 0.0,
+            overlap_area_fraction: 0.0,
+            band_pixel_share: 0.0,
+            seam_crossings: None,
+            screen: None,
+            light: None,
+            truth: None,
+            cost: cost::CostSummary::default(),
+        }
+    }
+}
+
 /// Crawl and jumps of a moving light, the worst over the motion paths (texels; see
 /// `docs/metrics.md`).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
@@ -348,10 +379,6 @@ impl Analysis {
     /// The path without snapping.
     pub fn unsnapped(&self) -> Option<&PathResult> {
         self.measured().map(|m| &m.unsnapped)
-    }
-
-    pub fn lookup_error(&self) -> Option<&LookupError> {
-        self.measured().and_then(|m| m.lookup_error.as_ref())
     }
 
     /// The path result of the configured snap mode.
@@ -783,30 +810,13 @@ fn no_cascades(
         density: Vec::new(),
         outcome: Outcome::NoCascades,
         summary: Summary {
-            cascades_needed: false,
-            z_lo: 0.0,
-            z_hi: 0.0,
-            max_aliasing: 0.0,
-            mean_aliasing: 0.0,
-            mean_log_aliasing: 0.0,
-            undersampled_fraction: 0.0,
-            shimmer: 0.0,
-            shimmer_snapped: 0.0,
-            shimmer_unsnapped: 0.0,
-            size_jitter: 0.0,
-            coverage_violations: 0,
-            memory_bytes: memory,
-            lookup_error_max: 0.0,
-            lookup_error_rms: 0.0,
-            overlap_area_fraction: 0.0,
-            band_pixel_share: 0.0,
             seam_crossings: opts.seams.then_some(0.0),
             screen: visibility
                 .as_ref()
                 .map(|vis| screen::stats(vis, &[0.0, 0.0], &[0.0], visible)),
             light: config.motion.light.moves().then(LightSummary::default),
-            truth: None,
             cost: cost::nothing(config),
+            ..Summary::nothing_needed(memory)
         },
         ground_truth: None,
         preset: config

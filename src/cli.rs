@@ -54,40 +54,9 @@ pub struct SweepArgs {
     /// Output directory [default: out/<config name>/].
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// λ axis: start:end:step (0:1:0.05) or a list (0,0.5,1).
-    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
-    pub lambda: Option<String>,
-    /// Cascade counts: a range (1..8) or a list (2,4).
-    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
-    pub cascades: Option<String>,
-    /// Resolutions: a list (1024,2048).
-    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
-    pub resolution: Option<String>,
-    /// Fits: sphere, aabb or sphere,aabb.
-    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
-    pub fit: Option<String>,
-    /// Split ranges: bounds, visible or bounds,visible (side by side; scene geometry only).
-    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
-    pub split_range: Option<String>,
-    /// The preset's own split knob (unreal: CascadeDistributionExponent; bevy:
-    /// first_cascade_far_bound): a range (1:5:0.5) or a list (2,3,4) [default: around its value].
-    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
-    pub knob: Option<String>,
-    /// Shadow distances (shadow.max_distance), world units: a range (50:200:50) or a list (50,100,150).
-    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
-    pub distance: Option<String>,
-    /// Sun compass bearings, degrees from north toward east, in [0, 360): a range (0:345:15) or a
-    /// list (90,180). Every setting runs under every sun angle and is judged by its worst.
-    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
-    pub sun_azimuth: Option<String>,
-    /// Sun elevations, degrees above the horizon, in (0, 90]: a range (5:85:5) or a list (20,60).
-    /// The axis not given stays at the configured light's angle.
-    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
-    pub sun_elevation: Option<String>,
-    /// Light update rules of a moving light (shadow.light_update): every:1,2,4,8 and/or
-    /// quantize:0.1,0.25,0.5 (degrees).
-    #[arg(long, value_name = "SPEC")]
-    pub light_update: Option<String>,
+    /// The grid's axes (each overrides its `[sweep]` key) and `--preset`.
+    #[command(flatten)]
+    pub grid: crate::commands::sweep::grid::GridFlags,
     /// Worker threads, 1..=256 [default: one per core]. Results are identical at any count.
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u16).range(1..=256))]
     pub threads: Option<u16>,
@@ -97,9 +66,6 @@ pub struct SweepArgs {
     /// Skip the SVG/PNG figures (the report is written without them).
     #[arg(long)]
     pub no_plots: bool,
-    /// Sweep an engine preset's own axes (overrides shadow.preset); see `analyze --preset`.
-    #[arg(long)]
-    pub preset: Option<String>,
     /// What to print on stdout.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
@@ -170,19 +136,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
         Command::Sweep(args) => sweep::execute(&sweep::SweepRequest {
             config: args.config,
             out: args.out,
-            grid: crate::commands::sweep::grid::GridFlags {
-                preset: args.preset,
-                lambda: args.lambda,
-                cascades: args.cascades,
-                resolution: args.resolution,
-                fit: args.fit,
-                split_range: args.split_range,
-                knob: args.knob,
-                distance: args.distance,
-                sun_azimuth: args.sun_azimuth,
-                sun_elevation: args.sun_elevation,
-                light_update: args.light_update,
-            },
+            grid: args.grid,
             threads: args.threads,
             quiet: args.quiet,
             no_plots: args.no_plots,

@@ -103,11 +103,6 @@ impl GroundTruth {
         self.pcf
     }
 
-    /// The `(S5 snapped, S5 unsnapped)` pair, for the flicker-versus-shimmer figure.
-    pub fn s5(&self) -> (f64, f64) {
-        (self.summary.flicker_snapped, self.summary.flicker_unsnapped)
-    }
-
     /// A cascade's recommended depth bias (configured format) in the engine's own unit, or in
     /// world units without an engine rule.
     /// None when the cascade has too few receivers.

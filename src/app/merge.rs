@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use super::sweep::{plan, shard_hash, SweepRequest};
-use super::{default_out_dir, print_result, Format, Outcome};
+use super::{default_out_dir, Format, Outcome};
 use crate::commands::sweep::shard::{self, Manifest, ShardInput};
 use crate::commands::sweep::{flicker, optimize, SweepResult};
 use crate::error::{Error, Result, ShardError};
@@ -148,13 +148,6 @@ pub(crate) fn execute(args: &MergeRequest) -> Result<Outcome> {
             result.rows.len()
         );
     }
-    print_result(
-        args.format,
-        || report::sweep::stdout_table(&result),
-        || output::json_bytes("recommendation", &report::sweep::recommendation_value(&result)),
-        written.len(),
-        &dir,
-    )?;
-    super::sweep::print_engine_settings(args.format, &result);
+    super::sweep::print_decision(args.format, &result, written.len(), &dir)?;
     Ok(Outcome::Success)
 }

@@ -254,30 +254,32 @@ pub(crate) fn execute(args: &SweepRequest) -> Result<Outcome> {
         )?;
         return Ok(Outcome::Success);
     }
-    print_result(
-        args.format,
-        || report::sweep::stdout_table(&result),
-        || output::json_bytes("recommendation", &report::sweep::recommendation_value(&result)),
-        written.len(),
-        &dir,
-    )?;
-    print_engine_settings(args.format, &result);
-    // Which rows have S5, and how well S3 and S4 predict it (the JSON output stays one document).
-    if let (Format::Table, Some(s)) = (args.format, &result.flicker) {
-        println!("\nground truth:");
-        for l in report::flicker_sample::lines(s) {
-            println!("  {l}");
-        }
-    }
+    print_decision(args.format, &result, written.len(), &dir)?;
     Ok(Outcome::Success)
 }
 
-/// With a preset, `recommendation.<engine>.txt` closes the table output (`sweep`, `merge`);
-/// the JSON output stays one document.
-pub(crate) fn print_engine_settings(format: Format, result: &SweepResult) {
+/// What `sweep` and `merge` print once the files are written: the table and verdict (or the
+/// recommendation as JSON), then in the table output the engine's settings
+/// (`recommendation.<engine>.txt`, with a preset) and which rows have S5 and how well S3 and S4
+/// predict it (the JSON output stays one document).
+pub(crate) fn print_decision(format: Format, result: &SweepResult, written: usize, dir: &Path) -> Result<()> {
+    print_result(
+        format,
+        || report::sweep::stdout_table(result),
+        || output::json_bytes("recommendation", &report::sweep::recommendation_value(result)),
+        written,
+        dir,
+    )?;
     if format == Format::Table {
         if let Some(s) = &result.engine_setting {
             print!("\n{}:\n{}", s.file_name(), report::terms::text(s));
         }
+        if let Some(s) = &result.flicker {
+            println!("\nground truth:");
+            for l in report::flicker_sample::lines(s) {
+                println!("  {l}");
+            }
+        }
     }
+    Ok(())
 }

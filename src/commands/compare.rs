@@ -57,11 +57,6 @@ pub struct Verdict {
 }
 
 impl Verdict {
-    /// The best valid entry.
-    pub fn best(&self) -> Option<usize> {
-        self.ranked.first().copied()
-    }
-
     /// The verdict in one line: the best and by how much it beats the runner-up.
     pub(crate) fn line(&self, analyses: &[Analysis]) -> String {
         let name = self.objective.name();

@@ -169,55 +169,14 @@ fn check_elevations(v: &Validator<'_>, start: DVec3, path: &LightPath, frames: u
 /// Reads a light path CSV: a header `x,y,z` and one light direction (the way light travels)
 /// per frame; each must be finite, non-zero and point down (a sun above the horizon).
 pub(crate) fn read_light_file(path: &Path) -> Result<Vec<DVec3>> {
-    let file = crate::config::open_bounded(path, super::path_file::MAX_PATH_FILE_BYTES, "a light path file")?;
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(true)
-        .trim(csv::Trim::All)
-        .from_reader(std::io::BufReader::new(file));
-    let expected = ["x", "y", "z"];
-    let headers = reader.headers().map_err(|e| Error::data_file(path, 1, e.to_string()))?;
-    if headers.iter().collect::<Vec<_>>() != expected {
-        return Err(Error::data_file(
-            path,
-            1,
-            format!(
-                "header is {:?}; expected the columns x,y,z",
-                crate::config::clip_quote(&headers.iter().collect::<Vec<_>>().join(","))
-            ),
-        ));
-    }
     let mut rows = Vec::new();
-    for (i, record) in reader.records().enumerate() {
-        let line = i + 2;
-        if i >= MAX_ROWS {
-            return Err(Error::data_file(
-                path,
-                line,
-                format!("more than {MAX_ROWS} rows; a path has at most {MAX_ROWS} frames"),
-            ));
-        }
-        let record = record.map_err(|e| Error::data_file(path, line, e.to_string()))?;
-        if record.len() != 3 {
-            return Err(Error::data_file(
-                path,
-                line,
-                format!("{} values; expected 3 (x,y,z)", record.len()),
-            ));
-        }
-        let mut d = [0.0; 3];
-        for (j, field) in record.iter().enumerate() {
-            d[j] = field.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-                Error::data_file(
-                    path,
-                    line,
-                    format!(
-                        "column {} = {:?} is not a finite number",
-                        expected[j],
-                        crate::config::clip_quote(field)
-                    ),
-                )
-            })?;
-        }
+    for row in super::path_file::read_number_rows(
+        path,
+        "a light path file",
+        ["x", "y", "z"],
+        &format!("rows; a path has at most {MAX_ROWS} frames"),
+    )? {
+        let (d, line) = row?;
         let d = DVec3::from_array(d);
         let len = d.length();
         if !(len > 1e-12 && len.is_finite()) {

@@ -276,22 +276,7 @@ impl CheckReport {
                 }
             }
         }
-        let _ = writeln!(
-            out,
-            "result: {}",
-            if self.passed() {
-                "PASS".to_string()
-            } else {
-                let mut why = Vec::new();
-                if c.fail > 0 {
-                    why.push(format!("{} rule check{} failed", c.fail, plural(c.fail)));
-                }
-                if c.regressed > 0 {
-                    why.push(format!("{} metric{} regressed", c.regressed, plural(c.regressed)));
-                }
-                format!("FAIL ({})", why.join(", "))
-            }
-        );
+        let _ = writeln!(out, "result: {}", self.result_text(&c));
         out
     }
 

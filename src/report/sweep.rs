@@ -1087,7 +1087,6 @@ pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) ->
             h.push_str(&html::figure_bounded(stem, svg, caption));
         }
     }
-    let rec = r.recommendation.as_ref().map(|x| x.index);
     let (front, front_left) = front_shown(r);
     if !front.is_empty() {
         let _ = writeln!(
@@ -1095,25 +1094,10 @@ pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) ->
             "<h2>Pareto front</h2>\n<p>Memory against {}: no other configuration has both less memory and a lower value.</p>",
             html::escape(r.objective.name())
         );
-        let (head, rows, left, d) = config_table(r, &front);
-        h.push_str(&html::table(
-            &head,
-            &rows,
-            &left,
-            front.iter().position(|&i| Some(i) == rec),
-        ));
-        h.push_str(&html::definitions(&d));
+        html_config_table(&mut h, r, &front);
     }
     h.push_str("<h2>Top configurations</h2>\n");
-    let top = top_shown(r);
-    let (head, rows, left, d) = config_table(r, &top);
-    h.push_str(&html::table(
-        &head,
-        &rows,
-        &left,
-        top.iter().position(|&i| Some(i) == rec),
-    ));
-    h.push_str(&html::definitions(&d));
+    html_config_table(&mut h, r, &top_shown(r));
     let _ = writeln!(
         h,
         "<p>{}</p>",
@@ -1131,6 +1115,31 @@ pub(crate) fn report_html(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) ->
 }
 
 /// `report.md`: the same content for pasting into a review document.
+/// The HTML table of the sweep rows `shown` (the recommendation highlighted when among them)
+/// and its definitions.
+fn html_config_table(h: &mut String, r: &SweepResult, shown: &[usize]) {
+    let rec = r.recommendation.as_ref().map(|x| x.index);
+    let (head, rows, left, d) = config_table(r, shown);
+    h.push_str(&html::table(
+        &head,
+        &rows,
+        &left,
+        shown.iter().position(|&i| Some(i) == rec),
+    ));
+    h.push_str(&html::definitions(&d));
+}
+
+/// A Markdown section `## heading` listing `lines` as bullets; nothing when there are none.
+fn md_list(m: &mut String, heading: &str, lines: &[String]) {
+    if !lines.is_empty() {
+        let _ = writeln!(m, "## {heading}\n");
+        for l in lines {
+            let _ = writeln!(m, "- {l}");
+        }
+        m.push('\n');
+    }
+}
+
 pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> Vec<u8> {
     let mut m = String::new();
     let _ = writeln!(m, "# Cascaded shadow map sweep: {}\n", r.config.name);
@@ -1144,39 +1153,15 @@ pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, &str, Vec<u8>)]) -> V
         let _ = writeln!(m, "{}\n", c.sentence);
     }
     let edges = edge_lines(r);
-    if !edges.is_empty() {
-        m.push_str("## Edges of the range\n\n");
-        for l in edges {
-            let _ = writeln!(m, "- {l}");
-        }
-        m.push('\n');
-    }
+    md_list(&mut m, "Edges of the range", &edges);
     let alts = alternative_lines(r);
-    if !alts.is_empty() {
-        m.push_str("## Alternatives\n\n");
-        for l in alts {
-            let _ = writeln!(m, "- {l}");
-        }
-        m.push('\n');
-    }
+    md_list(&mut m, "Alternatives", &alts);
     let rivals = rival_lines(r);
-    if !rivals.is_empty() {
-        m.push_str("## Why the main rivals lost\n\n");
-        for l in rivals {
-            let _ = writeln!(m, "- {l}");
-        }
-        m.push('\n');
-    }
+    md_list(&mut m, "Why the main rivals lost", &rivals);
     m.push_str(&super::optimize::md_section(r));
     m.push_str(&super::flicker_sample::md_section(r));
     let sun = sun_lines(r);
-    if !sun.is_empty() {
-        m.push_str("## Sun angles\n\n");
-        for l in sun {
-            let _ = writeln!(m, "- {l}");
-        }
-        m.push('\n');
-    }
+    md_list(&mut m, "Sun angles", &sun);
     let _ = writeln!(m, "## Sweep\n\n{}.\n", grid_sentence(r));
     m.push_str("## Scene\n\n| | |\n|---|---|\n");
     for (k, v) in scene_facts(&r.config, &r.rows) {

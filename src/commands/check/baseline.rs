@@ -241,20 +241,6 @@ pub(crate) fn read_summary_json_for(path: &Path, scene_hash: &str) -> Result<BTr
     summary_from_json(&value, &path.display().to_string())
 }
 
-/// Reads a `summary.json` baseline.
-pub fn read_summary_json(path: &Path) -> Result<BTreeMap<SummaryMetric, f64>> {
-    let text = crate::config::read_bounded(path, 256 << 20, "a baseline file")?;
-    let label = path.display().to_string();
-    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
-        Error::from(IoError::DataFile {
-            path: path.to_path_buf(),
-            line: e.line(),
-            message: format!("not valid JSON ({e}); a summary.json from `csm-lab analyze` is expected"),
-        })
-    })?;
-    summary_from_json(&value, &label)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -366,14 +366,6 @@ pub(crate) fn evaluate_values(rule: &Rule, values: &std::collections::BTreeMap<&
     }
 }
 
-/// The summary metric values of an analysis, keyed by name (the shape of a sweep row).
-pub fn summary_map(a: &Analysis) -> std::collections::BTreeMap<&'static str, f64> {
-    crate::metric::summary_values(&a.summary)
-        .into_iter()
-        .map(|(m, v)| (m.name(), v))
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

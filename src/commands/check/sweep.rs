@@ -56,21 +56,6 @@ pub(crate) const SUN_COLUMNS: [&str; 2] = ["sun_azimuth_deg", "sun_elevation_deg
 pub(crate) const LIGHT_UPDATE_COLUMN: &str = "shadow.light_update";
 
 impl SweepKey {
-    /// The key of a config's own shadow setting.
-    pub fn of_config(config: &Config) -> Self {
-        SweepKey {
-            lambda: config.shadow.lambda,
-            cascades: config.shadow.cascades as u32,
-            resolution: config.shadow.resolution,
-            fit: config.shadow.fit.name().to_string(),
-            split_range: SplitRange::of(config.shadow.fit_depth_to_visible),
-            knob: crate::presets::axes(config).knob.map(|k| k.value),
-            distance: None,
-            sun: None,
-            light_update: None,
-        }
-    }
-
     /// `lambda=0.75 cascades=4 resolution=2048 fit=sphere` (and ` split_range=visible` when the
     /// splits divide the visible depths).
     pub fn label(&self) -> String {

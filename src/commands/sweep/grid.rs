@@ -208,97 +208,79 @@ pub fn parse_split_range_spec(spec: &str) -> Result<Axis<SplitRange>> {
     )
 }
 
-/// The grid flags of a sweep as given on the command line (`--preset`, `--lambda`,
-/// `--cascades`, `--resolution`, `--fit`, `--split-range`, `--knob`, `--distance`), unparsed:
-/// what `sweep` reads and what a shard's manifest records for `merge` to replay.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct GridFlags {
-    pub preset: Option<String>,
-    pub lambda: Option<String>,
-    pub cascades: Option<String>,
-    pub resolution: Option<String>,
-    pub fit: Option<String>,
-    pub split_range: Option<String>,
-    /// `--knob`: the preset's split knob.
-    pub knob: Option<String>,
-    /// `--distance`: shadow distances.
-    pub distance: Option<String>,
-    /// `--sun-azimuth`: sun compass bearings, degrees.
-    pub sun_azimuth: Option<String>,
-    /// `--sun-elevation`: sun elevations, degrees.
-    pub sun_elevation: Option<String>,
-    /// `--light-update`: the light update rules.
-    pub light_update: Option<String>,
+/// The grid's axes as flags: each axis once, with its `--flag` help and its spec parser. The
+/// macro below makes of this one list the command line's flags ([`GridFlags`], a clap group
+/// flattened into `sweep`), the keys a shard's manifest records them under, and the parsed
+/// [`SweepAxes`] a flag overrides its `[sweep]` key with. A new axis adds one line here, its
+/// field in [`SweepAxes`] and its `[sweep]` key (`config/sweep_spec.rs`), and its place in
+/// [`Grid`] and [`Setting`] (docs/architecture.md, "Add a sweep axis").
+macro_rules! grid_flags {
+    ($( $(#[doc = $doc:literal])* $name:ident => $parse:path ),* $(,)?) => {
+        /// The grid flags of a sweep as given on the command line, unparsed: what `sweep`
+        /// reads and what a shard's manifest records for `merge` to replay.
+        #[derive(Debug, Clone, Default, PartialEq, clap::Args)]
+        pub struct GridFlags {
+            /// Sweep an engine preset's own axes (overrides shadow.preset); see `analyze --preset`.
+            #[arg(long)]
+            pub preset: Option<String>,
+            $(
+                $(#[doc = $doc])*
+                #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
+                pub $name: Option<String>,
+            )*
+        }
+
+        impl GridFlags {
+            /// The flags' names without dashes, in the order of [`GridFlags::values`].
+            pub(crate) const KEYS: &'static [&'static str] = &["preset", $(stringify!($name)),*];
+
+            pub(crate) fn values(&self) -> Vec<&Option<String>> {
+                vec![&self.preset, $(&self.$name),*]
+            }
+
+            /// The flags from `get(key)` for each of [`GridFlags::KEYS`].
+            pub(crate) fn from_keys(get: impl Fn(&str) -> Option<String>) -> Self {
+                GridFlags {
+                    preset: get("preset"),
+                    $($name: get(stringify!($name)),)*
+                }
+            }
+
+            /// The axis flags parsed; an error names its flag.
+            pub fn overrides(&self) -> Result<SweepAxes> {
+                Ok(SweepAxes {
+                    $($name: self.$name.as_deref().map($parse).transpose()?,)*
+                })
+            }
+        }
+    };
 }
 
-impl GridFlags {
-    /// The flags' names without dashes, in the order of [`GridFlags::values`].
-    pub(crate) const KEYS: [&'static str; 11] = [
-        "preset",
-        "lambda",
-        "cascades",
-        "resolution",
-        "fit",
-        "split_range",
-        "knob",
-        "distance",
-        "sun_azimuth",
-        "sun_elevation",
-        "light_update",
-    ];
-
-    pub(crate) fn values(&self) -> [&Option<String>; 11] {
-        [
-            &self.preset,
-            &self.lambda,
-            &self.cascades,
-            &self.resolution,
-            &self.fit,
-            &self.split_range,
-            &self.knob,
-            &self.distance,
-            &self.sun_azimuth,
-            &self.sun_elevation,
-            &self.light_update,
-        ]
-    }
-
-    /// The flags from `get(key)` for each of [`GridFlags::KEYS`].
-    pub(crate) fn from_keys(get: impl Fn(&str) -> Option<String>) -> Self {
-        GridFlags {
-            preset: get("preset"),
-            lambda: get("lambda"),
-            cascades: get("cascades"),
-            resolution: get("resolution"),
-            fit: get("fit"),
-            split_range: get("split_range"),
-            knob: get("knob"),
-            distance: get("distance"),
-            sun_azimuth: get("sun_azimuth"),
-            sun_elevation: get("sun_elevation"),
-            light_update: get("light_update"),
-        }
-    }
-
-    /// The axis flags parsed; an error names its flag.
-    pub fn overrides(&self) -> Result<SweepAxes> {
-        Ok(SweepAxes {
-            lambda: self.lambda.as_deref().map(parse_lambda_spec).transpose()?,
-            cascades: self.cascades.as_deref().map(parse_cascades_spec).transpose()?,
-            resolution: self.resolution.as_deref().map(parse_resolution_spec).transpose()?,
-            fit: self.fit.as_deref().map(parse_fit_spec).transpose()?,
-            split_range: self.split_range.as_deref().map(parse_split_range_spec).transpose()?,
-            knob: self.knob.as_deref().map(parse_knob_spec).transpose()?,
-            distance: self.distance.as_deref().map(parse_distance_spec).transpose()?,
-            sun_azimuth: self.sun_azimuth.as_deref().map(parse_sun_azimuth_spec).transpose()?,
-            sun_elevation: self
-                .sun_elevation
-                .as_deref()
-                .map(parse_sun_elevation_spec)
-                .transpose()?,
-            light_update: self.light_update.as_deref().map(parse_light_update_spec).transpose()?,
-        })
-    }
+grid_flags! {
+    /// λ axis: start:end:step (0:1:0.05) or a list (0,0.5,1).
+    lambda => parse_lambda_spec,
+    /// Cascade counts: a range (1..8) or a list (2,4).
+    cascades => parse_cascades_spec,
+    /// Resolutions: a list (1024,2048).
+    resolution => parse_resolution_spec,
+    /// Fits: sphere, aabb or sphere,aabb.
+    fit => parse_fit_spec,
+    /// Split ranges: bounds, visible or bounds,visible (side by side; scene geometry only).
+    split_range => parse_split_range_spec,
+    /// The preset's own split knob (unreal: CascadeDistributionExponent; bevy:
+    /// first_cascade_far_bound): a range (1:5:0.5) or a list (2,3,4) [default: around its value].
+    knob => parse_knob_spec,
+    /// Shadow distances (shadow.max_distance), world units: a range (50:200:50) or a list (50,100,150).
+    distance => parse_distance_spec,
+    /// Sun compass bearings, degrees from north toward east, in [0, 360): a range (0:345:15) or a
+    /// list (90,180). Every setting runs under every sun angle and is judged by its worst.
+    sun_azimuth => parse_sun_azimuth_spec,
+    /// Sun elevations, degrees above the horizon, in (0, 90]: a range (5:85:5) or a list (20,60).
+    /// The axis not given stays at the configured light's angle.
+    sun_elevation => parse_sun_elevation_spec,
+    /// Light update rules of a moving light (shadow.light_update): every:1,2,4,8 and/or
+    /// quantize:0.1,0.25,0.5 (degrees).
+    light_update => parse_light_update_spec,
 }
 
 /// `--split-range` = `spec` (`ranges` parsed) is refused when it asks for visible splits

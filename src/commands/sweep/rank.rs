@@ -13,14 +13,9 @@ use crate::metric::SummaryMetric;
 // Pareto front and recommendation
 // ---------------------------------------------------------------------------------------------
 
-/// Indices of the rows on the Pareto front of memory against mean aliasing (both minimised),
+/// Indices of the rows on the Pareto front of memory against the objective (both minimised),
 /// ordered by memory. Among exact ties the first row in grid order is kept. Rows whose scene
 /// needs no cascades are left out.
-pub fn pareto_front(rows: &[Row]) -> Vec<usize> {
-    pareto_front_by(rows, SummaryMetric::named("mean_aliasing"))
-}
-
-/// [`pareto_front`] of memory against any objective metric.
 pub fn pareto_front_by(rows: &[Row], objective: SummaryMetric) -> Vec<usize> {
     front_of(
         rows,
@@ -186,13 +181,8 @@ pub fn acceptable(r: &Row) -> bool {
     r.summary.cascades_needed && r.summary.coverage_violations == 0 && r.summary.snapped_drift() <= STABLE_SHIMMER
 }
 
-/// Picks the recommendation by [`OBJECTIVE`]. None when no row needs cascades or none is
-/// acceptable.
-pub fn recommend(rows: &[Row], budget_mib: f64) -> Option<Recommendation> {
-    recommend_by(rows, budget_mib, SummaryMetric::named("mean_aliasing"))
-}
-
-/// [`recommend`] minimising any objective metric.
+/// Picks the recommendation minimising `objective`: the best acceptable row within the budget,
+/// else the best acceptable row. None when no row needs cascades or none is acceptable.
 pub fn recommend_by(rows: &[Row], budget_mib: f64, objective: SummaryMetric) -> Option<Recommendation> {
     recommend_within(rows, budget_mib, CostLimit::NONE, objective)
 }
@@ -875,22 +865,8 @@ mod tests {
                 max_aliasing: mean * 2.0,
                 mean_aliasing: mean,
                 mean_log_aliasing: mean,
-                undersampled_fraction: 0.0,
-                shimmer: 0.0,
-                shimmer_snapped: 0.0,
                 shimmer_unsnapped: 0.3,
-                size_jitter: 0.0,
-                coverage_violations: 0,
-                memory_bytes: memory,
-                lookup_error_max: 0.0,
-                lookup_error_rms: 0.0,
-                overlap_area_fraction: 0.0,
-                band_pixel_share: 0.0,
-                seam_crossings: None,
-                screen: None,
-                light: None,
-                truth: None,
-                cost: Default::default(),
+                ..Summary::nothing_needed(memory)
             },
         }
     }
@@ -908,7 +884,7 @@ mod tests {
                     )
                 })
                 .collect();
-            let front = pareto_front(&rows);
+            let front = pareto_front_by(&rows, SummaryMetric::named("mean_aliasing"));
             let dominated = |i: usize| {
                 rows.iter().enumerate().any(|(j, r)| {
                     j != i
@@ -1070,25 +1046,26 @@ mod tests {
     #[test]
     fn recommendation_respects_the_budget_and_falls_back_to_the_cheapest() {
         let mib = 1024 * 1024;
+        let mean = SummaryMetric::named("mean_aliasing");
         let rows = vec![
             row(80 * mib, 1.0, true),
             row(32 * mib, 2.0, true),
             row(64 * mib, 1.5, true),
         ];
-        let r = recommend(&rows, 64.0).unwrap();
+        let r = recommend_by(&rows, 64.0, mean).unwrap();
         assert_eq!((r.index, r.within_budget), (2, true));
-        let r = recommend(&rows, 16.0).unwrap();
+        let r = recommend_by(&rows, 16.0, mean).unwrap();
         assert_eq!((r.index, r.within_budget), (1, false));
         let mut unstable = rows.clone();
         unstable[2].summary.shimmer_snapped = 0.2;
-        assert_eq!(recommend(&unstable, 64.0).unwrap().index, 1);
-        assert!(recommend(&[row(mib, 1.0, false)], 64.0).is_none());
+        assert_eq!(recommend_by(&unstable, 64.0, mean).unwrap().index, 1);
+        assert!(recommend_by(&[row(mib, 1.0, false)], 64.0, mean).is_none());
         // Means within 1% are a tie decided by the worst case; beyond 1% the mean decides.
         let mut near = vec![row(mib, 1.0, true), row(mib, 1.009, true), row(mib, 1.02, true)];
         near[0].summary.max_aliasing = 10.0;
         near[1].summary.max_aliasing = 5.0;
         near[2].summary.max_aliasing = 1.0;
-        assert_eq!(recommend(&near, 64.0).unwrap().index, 1);
+        assert_eq!(recommend_by(&near, 64.0, mean).unwrap().index, 1);
     }
 
     #[test]

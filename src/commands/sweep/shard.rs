@@ -155,7 +155,7 @@ impl Manifest {
         ] {
             h.eat(field.as_bytes());
         }
-        for (key, value) in GridFlags::KEYS.into_iter().zip(self.flags.values()) {
+        for (key, value) in GridFlags::KEYS.iter().zip(self.flags.values()) {
             h.eat(key.as_bytes());
             h.eat(value.as_deref().unwrap_or("\u{0}").as_bytes());
         }
@@ -175,7 +175,7 @@ impl Manifest {
             config_hash: self.config_hash.clone(),
             manifest_digest: self.digest(),
             flags: GridFlags::KEYS
-                .into_iter()
+                .iter()
                 .zip(self.flags.values())
                 .filter_map(|(k, v)| v.clone().map(|v| (k.to_string(), v)))
                 .collect(),
