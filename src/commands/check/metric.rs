@@ -223,12 +223,14 @@ mod tests {
         dedup.sort_unstable();
         dedup.dedup();
         assert_eq!(dedup.len(), names.len());
-        // Ten names are both summary and per-cascade metrics (max_aliasing,
+        // Eighteen names are both summary and per-cascade metrics (max_aliasing,
         // coverage_violations, lookup_error_max, lookup_error_rms, overlap_area_fraction,
-        // light_crawl, light_jump, acne_fraction, edge_error_fraction, leak_fraction).
+        // light_crawl, light_jump, acne_fraction, edge_error_fraction, leak_fraction, and the
+        // eight cost metrics: caster_objects, caster_triangles, caster_triangles_inside,
+        // raster_fragments, texels_cleared, bytes_written, cost_index, shadow_ms).
         assert_eq!(
             names.len(),
-            SummaryMetric::all().count() + CascadeMetric::all().count() - 10 + DepthMetric::ALL.len()
+            SummaryMetric::all().count() + CascadeMetric::all().count() - 18 + DepthMetric::ALL.len()
         );
     }
 
