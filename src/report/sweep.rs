@@ -1000,8 +1000,16 @@ fn top_shown(r: &SweepResult) -> Vec<usize> {
 /// "N configurations: a λ values × b cascade counts × …, each analysed in full".
 fn grid_sentence(r: &SweepResult) -> String {
     format!(
-        "{}: {} × {} × {} × {}{}, each analysed in full",
+        "{}: {}, each analysed in full",
         count(r.rows.len() as u64, "configuration"),
+        grid_factors(r)
+    )
+}
+
+/// The grid's axes as factors: "a λ values × b cascade counts × c resolutions × d fits…".
+fn grid_factors(r: &SweepResult) -> String {
+    format!(
+        "{} × {} × {} × {}{}",
         count(r.grid.lambda.values.len() as u64, "λ value"),
         count(r.grid.cascades.values.len() as u64, "cascade count"),
         count(r.grid.resolution.values.len() as u64, "resolution"),
@@ -1321,14 +1329,10 @@ pub(crate) fn stdout_table(r: &SweepResult) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{}: {} ({} × {} × {} × {}{})",
+        "{}: {} ({})",
         r.config.name,
         count(r.rows.len() as u64, "configuration"),
-        count(r.grid.lambda.values.len() as u64, "λ value"),
-        count(r.grid.cascades.values.len() as u64, "cascade count"),
-        count(r.grid.resolution.values.len() as u64, "resolution"),
-        count(r.grid.fit.values.len() as u64, "fit"),
-        ranges_factor(r)
+        grid_factors(r)
     );
     if r.front.is_empty() {
         let _ = writeln!(

@@ -74,33 +74,25 @@ fn fast_walk_applies(rig: &Rig) -> bool {
 
 /// Walk the path once for one snap mode: shimmer and coverage together, so each window is
 /// computed once per frame.
-pub fn along_path<P: Borrow<CameraPose>, I>(
+pub fn along_path<P: Borrow<CameraPose>>(
     rig: &Rig,
-    poses: I,
+    poses: impl IntoIterator<Item = P, IntoIter: ExactSizeIterator>,
     probes: &[Vec<DVec3>],
     snapped: bool,
     opts: ShimmerOptions,
-) -> PathResult
-where
-    I: IntoIterator<Item = P>,
-    I::IntoIter: ExactSizeIterator,
-{
+) -> PathResult {
     along_path_lit(rig, poses, probes, None, snapped, opts)
 }
 
 /// [`along_path`] under a moving light (`light`; None or a still light is [`along_path`]).
-pub fn along_path_lit<P: Borrow<CameraPose>, I>(
+pub fn along_path_lit<P: Borrow<CameraPose>>(
     rig: &Rig,
-    poses: I,
+    poses: impl IntoIterator<Item = P, IntoIter: ExactSizeIterator>,
     probes: &[Vec<DVec3>],
     light: Option<LightTrack<'_>>,
     snapped: bool,
     opts: ShimmerOptions,
-) -> PathResult
-where
-    I: IntoIterator<Item = P>,
-    I::IntoIter: ExactSizeIterator,
-{
+) -> PathResult {
     let [r] = walk(&mut model(rig, probes, light), poses, [snapped], opts);
     r.finish(opts)
 }
