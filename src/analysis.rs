@@ -16,6 +16,7 @@ use csm_core::visibility::Visibility;
 use csm_core::walk::Cadence;
 use glam::DVec2;
 
+pub mod cost;
 pub mod ground_truth;
 
 /// Which optional parts to compute. The summary metrics are always computed and never depend
@@ -129,6 +130,10 @@ pub struct Summary {
     /// None otherwise, and then absent from every output.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub cache: Option<CacheSummary>,
+    /// What the setting costs to render (frame 0; docs/cost.md), flat under the registry's
+    /// names.
+    #[serde(flatten)]
+    pub cost: cost::CostSummary,
 }
 
 /// One view's own screen metrics in a level of views (`views.csv`).
@@ -212,6 +217,7 @@ impl Summary {
             truth: None,
             views: Vec::new(),
             cache: None,
+            cost: cost::CostSummary::default(),
         }
     }
 }
@@ -324,6 +330,9 @@ pub struct CascadeReport {
     /// then absent from every output.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub cache: Option<CascadeCache>,
+    /// What this cascade costs to render (frame 0), flat under the registry's names.
+    #[serde(flatten)]
+    pub cost: cost::CascadeCost,
 }
 
 /// One cascade's crawl (configured snapping) and jump (windows without snapping) under a
@@ -1027,6 +1036,7 @@ fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u
             .as_ref()
             .map(|t| if config.shadow.snap { &t.snapped } else { &t.unsnapped }),
     );
+    let (cascade_costs, cost_summary) = cost::measure(config, &rig, &lp0, &windows0, visibility.as_deref());
     let cascades = windows0
         .iter()
         .enumerate()
@@ -1072,6 +1082,7 @@ fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u
                 ),
                 truth: truth.as_ref().map(|t| t.cascades[i].clone()),
                 cache: cache.as_ref().map(|c| c.1[i]),
+                cost: cascade_costs[i],
             }
         })
         .collect();
@@ -1107,6 +1118,7 @@ fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u
         truth: truth.as_ref().map(|t| t.summary),
         views: Vec::new(),
         cache: cache.map(|c| c.0),
+        cost: cost_summary,
     };
     let preset = config
         .shadow
@@ -1154,6 +1166,7 @@ fn no_cascades(
                 .as_ref()
                 .map(|vis| screen::stats(vis, &[0.0, 0.0], &[0.0], visible)),
             light: config.motion.light.moves().then(LightSummary::default),
+            cost: cost::nothing(config),
             ..Summary::nothing_needed(memory)
         },
         ground_truth: None,

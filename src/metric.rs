@@ -741,6 +741,94 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         screen: true,
         value: |s| Value::Real(s.screen.as_ref().map_or(0.0, |x| x.visible_z_hi)),
     },
+    SummaryDef {
+        name: "caster_objects",
+        unit: "draws",
+        direction: Direction::HigherIsWorse,
+        help: "cost: draw calls of frame 0, summed over the cascades: the objects (the ground, a box, a glTF mesh primitive under its node) whose world bounds meet a cascade's caster volume (window rectangle, scene light near to cascade light far); culled by receivers with [cost] cull = \"receivers\"",
+        brief: "draw calls, all cascades (frame 0)",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| s.cost.counts.map_or(Value::Missing, |c| Value::Count(c.caster_objects)),
+    },
+    SummaryDef {
+        name: "caster_triangles",
+        unit: "triangles",
+        direction: Direction::HigherIsWorse,
+        help: "cost: the triangles of those objects, summed over the cascades (what the GPU processes)",
+        brief: "caster triangles, all cascades",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| s.cost.counts.map_or(Value::Missing, |c| Value::Count(c.caster_triangles)),
+    },
+    SummaryDef {
+        name: "caster_triangles_inside",
+        unit: "triangles",
+        direction: Direction::HigherIsWorse,
+        help: "cost: those triangles that intersect their cascade's caster volume (what a per-triangle culler keeps)",
+        brief: "caster triangles inside the volumes",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| s.cost.counts.map_or(Value::Missing, |c| Value::Count(c.caster_triangles_inside)),
+    },
+    SummaryDef {
+        name: "raster_fragments",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cost: area of the casters' triangles (no face culling) projected along the light and clipped exactly to each cascade's window, in texels, overdraw included, summed over the cascades",
+        brief: "fragments rasterised (texels, overdraw included)",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| s.cost.counts.map_or(Value::Missing, |c| Value::Real(c.raster_fragments)),
+    },
+    SummaryDef {
+        name: "texels_cleared",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cost: texels cleared per update, the sum of resolution^2 over the cascades rendered",
+        brief: "texels cleared per update",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: false,
+        value: |s| Value::Count(s.cost.texels_cleared),
+    },
+    SummaryDef {
+        name: "bytes_written",
+        unit: "bytes",
+        direction: Direction::HigherIsWorse,
+        help: "cost: bytes the clears write per update (texels_cleared x 4, 32-bit depth)",
+        brief: "bytes the clears write per update",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: false,
+        value: |s| Value::Count(s.cost.bytes_written),
+    },
+    SummaryDef {
+        name: "cost_index",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "cost: the linear cost model over draws, triangles, fragments and cleared texels (docs/cost.md), over the configured setting's (1 for the configured setting)",
+        brief: "cost over the configured setting's",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::maybe(s.cost.cost_index),
+    },
+    SummaryDef {
+        name: "shadow_ms",
+        unit: "ms",
+        direction: Direction::HigherIsWorse,
+        help: "cost: the cost model with the calibrated coefficients ([cost] ns_per_*), in milliseconds per frame; only when calibrated",
+        brief: "shadow rendering time (calibrated model)",
+        shown: Shown::Never,
+        in_rows: false,
+        screen: true,
+        value: |s| Value::maybe(s.cost.shadow_ms),
+    },
 ];
 
 /// A copyable handle on one registry entry: ordered, hashed and printed (`Debug`) by its
@@ -889,6 +977,8 @@ fn shown_for(d: &SummaryDef, s: &Summary) -> bool {
         && (!TRUTH_SUMMARY.contains(&d.name) || s.truth.is_some())
         && (!CACHE_METRICS.contains(&d.name) || s.cache.is_some())
         && (d.name != UPDATE_FLICKER || s.truth.is_some())
+        && (d.name != SHADOW_MS || s.cost.shadow_ms.is_some())
+        && (d.name != COST_INDEX || s.cost.cost_index.is_some())
 }
 
 /// The cached-cascade metrics (summary and per cascade): only with `[shadow] update_every`
@@ -907,6 +997,20 @@ pub(crate) const CACHE_METRICS: [&str; 9] = [
 
 /// The cached-cascade metric that also needs the ground-truth pass.
 const UPDATE_FLICKER: &str = "update_flicker";
+
+/// Whether a metric is a column of a per-configuration row: as [`shown_for`], but
+/// `cost_index` is a column whenever the counts are (n/a where it has no reference: a
+/// configured setting that needs no cascade).
+fn in_row_for(d: &SummaryDef, s: &Summary) -> bool {
+    d.in_rows && (shown_for(d, s) || (d.name == COST_INDEX && s.screen.is_some()))
+}
+
+/// The one cost metric in milliseconds: only with a calibrated model (`[cost] ns_per_*`),
+/// never from the default weights.
+const SHADOW_MS: &str = "shadow_ms";
+
+/// The cost relative to the configured setting: absent when there is nothing to relate it to.
+const COST_INDEX: &str = "cost_index";
 
 /// The moving-light metrics (`light_crawl*`, `light_jump*`, in the summary and per cascade):
 /// only when the light moves ([`Summary::light`]), absent from every output under a still
@@ -978,7 +1082,7 @@ pub(crate) fn summary_fields(
     if s.screen.is_some() {
         fields.push(split_range.name().to_string());
     }
-    for d in SUMMARY.iter().filter(|d| d.in_rows && shown_for(d, s)) {
+    for d in SUMMARY.iter().filter(|d| in_row_for(d, s)) {
         fields.push((d.value)(s).csv(d.name)?);
     }
     Ok(fields)
@@ -1359,6 +1463,70 @@ pub(crate) const CASCADE: &[CascadeDef] = &[
         screen: true,
         value: |c| Value::Real(c.screen.map_or(0.0, |x| x.texel_utilization)),
     },
+    CascadeDef {
+        name: "caster_objects",
+        unit: "draws",
+        direction: Direction::HigherIsWorse,
+        help: "cost: this cascade's draw calls at frame 0 (objects whose world bounds meet its caster volume)",
+        screen: true,
+        value: |c| c.cost.counts.map_or(Value::Missing, |x| Value::Count(x.caster_objects)),
+    },
+    CascadeDef {
+        name: "caster_triangles",
+        unit: "triangles",
+        direction: Direction::HigherIsWorse,
+        help: "cost: the triangles of those objects",
+        screen: true,
+        value: |c| c.cost.counts.map_or(Value::Missing, |x| Value::Count(x.caster_triangles)),
+    },
+    CascadeDef {
+        name: "caster_triangles_inside",
+        unit: "triangles",
+        direction: Direction::HigherIsWorse,
+        help: "cost: those triangles that intersect the caster volume",
+        screen: true,
+        value: |c| c.cost.counts.map_or(Value::Missing, |x| Value::Count(x.caster_triangles_inside)),
+    },
+    CascadeDef {
+        name: "raster_fragments",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cost: the casters' projected triangle area clipped to the window, in texels (overdraw included)",
+        screen: true,
+        value: |c| c.cost.counts.map_or(Value::Missing, |x| Value::Real(x.raster_fragments)),
+    },
+    CascadeDef {
+        name: "texels_cleared",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cost: resolution^2",
+        screen: false,
+        value: |c| Value::Count(c.cost.texels_cleared),
+    },
+    CascadeDef {
+        name: "bytes_written",
+        unit: "bytes",
+        direction: Direction::HigherIsWorse,
+        help: "cost: bytes the clear writes (texels_cleared x 4)",
+        screen: false,
+        value: |c| Value::Count(c.cost.bytes_written),
+    },
+    CascadeDef {
+        name: "cost_index",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "cost: this cascade's share of the setting's cost model (the cascades add up to the setting's cost_index)",
+        screen: true,
+        value: |c| Value::maybe(c.cost.cost_index),
+    },
+    CascadeDef {
+        name: "shadow_ms",
+        unit: "ms",
+        direction: Direction::HigherIsWorse,
+        help: "cost: this cascade's time from the calibrated model; only when calibrated",
+        screen: true,
+        value: |c| Value::maybe(c.cost.shadow_ms),
+    },
 ];
 
 handle!(
@@ -1382,6 +1550,7 @@ impl CascadeMetric {
             && (!TRUTH_CASCADE.contains(&d.name) || c.truth.is_some())
             && (!CACHE_METRICS.contains(&d.name) || c.cache.is_some())
             && (d.name != UPDATE_FLICKER || c.truth.is_some())
+            && (d.name != SHADOW_MS || c.cost.shadow_ms.is_some())
     }
 
     /// How to measure this metric when a cascade does not have it.
@@ -1402,8 +1571,9 @@ impl CascadeMetric {
 
 /// The columns of `cascades.csv` (the screen columns only with scene geometry, the
 /// moving-light columns only when the light moves, the ground-truth columns only when that pass
-/// ran, the cached-cascade columns only with cached cascades).
-pub fn cascade_columns(screen: bool, light: bool, truth: bool, cache: bool) -> Vec<&'static str> {
+/// ran, the cached-cascade columns only with cached cascades, `shadow_ms` only with a calibrated
+/// cost model).
+pub fn cascade_columns(screen: bool, light: bool, truth: bool, cache: bool, calibrated: bool) -> Vec<&'static str> {
     std::iter::once("cascade")
         .chain(
             CASCADE
@@ -1414,6 +1584,7 @@ pub fn cascade_columns(screen: bool, light: bool, truth: bool, cache: bool) -> V
                         && (truth || !TRUTH_CASCADE.contains(&d.name))
                         && (cache || !CACHE_METRICS.contains(&d.name))
                         && (truth || d.name != UPDATE_FLICKER)
+                        && (calibrated || d.name != SHADOW_MS)
                 })
                 .map(|d| d.name),
         )
@@ -1429,6 +1600,7 @@ pub fn cascade_fields(c: &CascadeReport) -> Result<Vec<String>> {
             && (c.truth.is_some() || !TRUTH_CASCADE.contains(&d.name))
             && (c.cache.is_some() || !CACHE_METRICS.contains(&d.name))
             && (c.truth.is_some() || d.name != UPDATE_FLICKER)
+            && (d.name != SHADOW_MS || c.cost.shadow_ms.is_some())
     }) {
         fields.push((d.value)(c).csv(d.name)?);
     }

@@ -240,7 +240,12 @@ pub(crate) fn run_with_progress(
             a
         })
         .collect();
-    let analyses: Vec<Analysis> = analyses;
+    let mut analyses: Vec<Analysis> = analyses;
+    // Each preset's render cost against the scene file's own setting (its cost_index 1).
+    let reference = crate::analysis::cost::configured_model(&scene);
+    for a in analyses.iter_mut() {
+        a.summary.cost.normalise(reference);
+    }
     Ok(Comparison {
         config_path: path.to_path_buf(),
         name,

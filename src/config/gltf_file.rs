@@ -48,7 +48,8 @@ pub struct GltfLight {
 /// What csm-lab reads from a glTF file: triangles, camera nodes and directional lights.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct GltfScene {
-    pub triangles: Vec<[DVec3; 3]>,
+    /// Triangles per draw call (mesh primitive under a node), in visiting order.
+    pub primitives: Vec<Vec<[DVec3; 3]>>,
     /// Perspective camera nodes, in visiting order.
     pub cameras: Vec<GltfCamera>,
     /// Camera nodes with an orthographic projection (not read: a player camera is perspective).
@@ -65,11 +66,21 @@ pub struct GltfScene {
 /// (an absolute path, a `..` component, another scheme) is refused unless `outside_buffers`
 /// (`scene.gltf_outside_buffers = true`).
 pub fn read_gltf(path: &Path, outside_buffers: bool) -> Result<Vec<[DVec3; 3]>, String> {
-    read_gltf_scene(path, outside_buffers).map(|s| s.triangles)
+    Ok(read_gltf_primitives(path, outside_buffers)?
+        .into_iter()
+        .flatten()
+        .collect())
 }
 
-/// The file's default scene: triangles as [`read_gltf`], plus its camera nodes and directional
-/// lights.
+/// [`read_gltf`], grouped by draw call: one entry per mesh primitive in `TRIANGLES` mode under
+/// each node that instances it, in the order of the node walk (a primitive whose triangles are
+/// all non-finite is an empty entry).
+pub fn read_gltf_primitives(path: &Path, outside_buffers: bool) -> Result<Vec<Vec<[DVec3; 3]>>, String> {
+    read_gltf_scene(path, outside_buffers).map(|s| s.primitives)
+}
+
+/// The file's default scene: triangles grouped by draw call as [`read_gltf_primitives`], plus
+/// its camera nodes and directional lights.
 pub fn read_gltf_scene(path: &Path, outside_buffers: bool) -> Result<GltfScene, String> {
     let bytes = read_file(path)?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| format!("not a valid glTF file: {e}"))?;
@@ -208,7 +219,7 @@ fn visit(
     let local = DMat4::from_cols_array_2d(&local.map(|c| c.map(f64::from)));
     let world = parent * local;
     node_extras(node, world, json, scene)?;
-    let out = &mut scene.triangles;
+    let out = &mut scene.primitives;
     if let Some(mesh) = node.mesh() {
         for primitive in mesh.primitives() {
             if primitive.mode() != gltf::mesh::Mode::Triangles {
@@ -237,6 +248,7 @@ fn visit(
                 }
                 None => (0..positions.len() as u32).collect(),
             };
+            let mut tris = Vec::with_capacity(indices.len() / 3);
             for t in indices.chunks_exact(3) {
                 let get = |i: u32| {
                     positions.get(i as usize).copied().ok_or_else(|| {
@@ -249,9 +261,10 @@ fn visit(
                 };
                 let tri = [get(t[0])?, get(t[1])?, get(t[2])?];
                 if tri.iter().all(|p| p.is_finite()) {
-                    out.push(tri);
+                    tris.push(tri);
                 }
             }
+            out.push(tris);
         }
     }
     for child in node.children() {

@@ -36,7 +36,7 @@ pub use csm_core::scene::{ShadowParams, SplitRange};
 pub use csm_core::fitting::Fit;
 pub use csm_core::scene::MotionPath;
 pub use csm_core::scene::{Precision, SnapSpace};
-pub use gltf_file::read_gltf;
+pub use gltf_file::{read_gltf, read_gltf_primitives};
 pub(crate) use gltf_file::{read_gltf_scene, GltfScene};
 pub use path_file::read_path_file;
 
@@ -511,6 +511,36 @@ pub struct Config {
     /// Warnings about the config that do not stop it (a view that sees no receiver, a glTF
     /// camera's aspect ratio unlike the screen's): printed on stderr when a file is loaded.
     pub(crate) warnings: Vec<String>,
+    /// `[cost]`: culling and the cost model's calibration.
+    pub cost: CostSettings,
+}
+
+/// `[cost] cull`: which casters each cascade draws (docs/cost.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CostCull {
+    /// Every object whose bounds meet the cascade's caster volume.
+    #[default]
+    None,
+    /// Only those of them that can shadow one of the cascade's visible receivers.
+    Receivers,
+}
+
+impl CostCull {
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            CostCull::None => "none",
+            CostCull::Receivers => "receivers",
+        }
+    }
+}
+
+/// `[cost]`: receiver-aware culling, and the cost model's coefficients in nanoseconds when the
+/// user measured them (all four or none).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CostSettings {
+    pub cull: CostCull,
+    /// `ns_per_draw`, `ns_per_triangle`, `ns_per_fragment`, `ns_per_texel_cleared`.
+    pub calibration: Option<csm_core::cost::CostModel>,
 }
 
 impl Config {
@@ -698,6 +728,16 @@ impl Config {
         });
         if self.truth.enabled {
             echo["ground_truth"] = self.truth.echo();
+        }
+        if self.cost != CostSettings::default() {
+            let mut cost = serde_json::json!({ "cull": self.cost.cull.name() });
+            if let Some(m) = self.cost.calibration {
+                cost["ns_per_draw"] = m.per_draw.into();
+                cost["ns_per_triangle"] = m.per_triangle.into();
+                cost["ns_per_fragment"] = m.per_fragment.into();
+                cost["ns_per_texel_cleared"] = m.per_texel_cleared.into();
+            }
+            echo["cost"] = cost;
         }
         echo
     }

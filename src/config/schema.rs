@@ -6,8 +6,8 @@ use serde::Deserialize;
 use toml::Spanned;
 
 /// csm-lab's own top-level tables.
-pub(crate) const SECTIONS: [&str; 10] = [
-    "camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep", "view", "views",
+pub(crate) const SECTIONS: [&str; 11] = [
+    "camera", "screen", "light", "scene", "shadow", "motion", "analysis", "sweep", "view", "views", "cost",
 ];
 
 /// The whole file: csm-lab's tables, and every other top-level key (engine tables or unknown).
@@ -81,6 +81,8 @@ pub(crate) struct RawConfig {
     pub(crate) view: Vec<RawView>,
     /// `[views]`: views from the glTF's cameras, a recorded path, or sampled player positions.
     pub(crate) views: Option<RawViews>,
+    #[serde(default)]
+    pub(crate) cost: RawCost,
 }
 
 /// One `[[view]]`: a named camera pose; `[camera]` gives what it leaves out (up, field of
@@ -230,6 +232,17 @@ pub(crate) struct RawMotion {
     pub(crate) sun_azimuth_step_deg: Option<f64>,
     pub(crate) sun_elevation_step_deg: Option<f64>,
     pub(crate) light_file: Option<String>,
+}
+
+/// `[cost]`: receiver-aware culling and the calibration of the cost model (docs/cost.md).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawCost {
+    pub(crate) cull: Option<String>,
+    pub(crate) ns_per_draw: Option<f64>,
+    pub(crate) ns_per_triangle: Option<f64>,
+    pub(crate) ns_per_fragment: Option<f64>,
+    pub(crate) ns_per_texel_cleared: Option<f64>,
 }
 
 #[derive(Debug, Default, Deserialize)]

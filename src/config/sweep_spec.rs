@@ -48,6 +48,11 @@ pub struct SweepSpec {
     pub axes: SweepAxes,
     /// Memory budget for the recommendation, MiB (2^20 bytes).
     pub memory_budget_mib: Option<f64>,
+    /// `cost_budget`: the largest `cost_index` (the configured setting's cost = 1) the
+    /// recommendation may have (docs/cost.md).
+    pub cost_budget: Option<f64>,
+    /// `shadow_ms_budget`: the largest `shadow_ms` (calibrated cost model only).
+    pub shadow_ms_budget: Option<f64>,
     /// A larger grid is an error, not an out-of-memory.
     pub max_configs: usize,
     /// `objective`: the name of the summary metric the recommendation minimises (None: the
@@ -230,6 +235,8 @@ pub(crate) struct RawSweep {
     sun_elevation: Option<RawAxis>,
     light_update: Option<Vec<String>>,
     memory_budget_mib: Option<f64>,
+    cost_budget: Option<f64>,
+    shadow_ms_budget: Option<f64>,
     max_configs: Option<i64>,
     objective: Option<String>,
     optimize_splits: Option<bool>,
@@ -434,6 +441,28 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
         }
         b => b,
     };
+    // The cost budgets need the counts, which need scene geometry.
+    let cost_budget = |key: &str, b: Option<f64>, what: &str| {
+        match b {
+        Some(b) if !(b.is_finite() && b > 0.0) => Err(v.invalid(key, b, what)),
+        Some(b) if !has_geometry => Err(v.invalid(
+            key,
+            b,
+            "a budget only with scene geometry: the cost counts need the scene's objects (give scene.ground, [[scene.box]] or scene.gltf)",
+        )),
+        b => Ok(b),
+    }
+    };
+    let shadow_ms_budget = cost_budget(
+        "sweep.shadow_ms_budget",
+        raw.shadow_ms_budget,
+        "a number of milliseconds > 0",
+    )?;
+    let cost_budget = cost_budget(
+        "sweep.cost_budget",
+        raw.cost_budget,
+        "a cost_index > 0 (the configured setting's cost is 1)",
+    )?;
     let max_configs = v.int_range(
         "sweep.max_configs",
         raw.max_configs.unwrap_or(DEFAULT_MAX_CONFIGS as i64),
@@ -501,6 +530,8 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
             light_update,
         },
         memory_budget_mib,
+        cost_budget,
+        shadow_ms_budget,
         max_configs,
         objective: raw.objective,
         optimize_splits: raw.optimize_splits.unwrap_or(false),

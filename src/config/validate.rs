@@ -76,6 +76,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
 
     truth.enabled = ground_truth(&raw.analysis, v, geometry.is_some(), &motion.light)?.unwrap_or(truth.enabled);
     let analysis = analysis_settings(&raw.analysis, v)?;
+    let cost = cost_settings(&raw.cost, v, geometry.is_some())?;
     if geometry.is_some() {
         sampled_pixels_fit(v, width, height, analysis.screen_scale())?;
     }
@@ -84,6 +85,15 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         .sweep
         .map(|s| super::sweep_spec::validate_raw(s, v, geometry.is_some()))
         .transpose()?;
+    if let Some(b) = sweep.as_ref().and_then(|s| s.shadow_ms_budget) {
+        if cost.calibration.is_none() {
+            return Err(v.invalid(
+                "sweep.shadow_ms_budget",
+                b,
+                "a budget in milliseconds only with a calibrated cost model: give [cost] ns_per_draw, ns_per_triangle, ns_per_fragment and ns_per_texel_cleared (docs/cost.md), or use sweep.cost_budget in cost_index units",
+            ));
+        }
+    }
 
     let mut config = Config {
         name: "config".to_string(),
@@ -107,6 +117,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         truth,
         views,
         warnings: Vec::new(),
+        cost,
     };
     check_camera_path(&config, v)?;
     super::view_sources::add_views(&mut config, raw.views.as_ref(), v, base_dir, gltf.as_ref())?;
@@ -779,6 +790,64 @@ fn analysis_settings(a: &super::schema::RawAnalysis, v: &Validator<'_>) -> Resul
     })
 }
 
+/// `[cost]`: `cull` is "none" or "receivers" (which needs scene geometry: the receivers come
+/// from the visibility pass); the four `ns_per_*` coefficients are finite, at least 0, and
+/// given all together or not at all.
+fn cost_settings(c: &super::schema::RawCost, v: &Validator<'_>, has_geometry: bool) -> Result<CostSettings> {
+    let cull = match c.cull.as_deref() {
+        None | Some("none") => CostCull::None,
+        Some("receivers") if has_geometry => CostCull::Receivers,
+        Some("receivers") => {
+            return Err(v.invalid(
+                "cost.cull",
+                "\"receivers\"",
+                "\"none\" without scene geometry: culling by receivers needs the visible receivers (give scene.ground, [[scene.box]] or scene.gltf)",
+            ))
+        }
+        Some(other) => return Err(v.invalid("cost.cull", format!("{other:?}"), "\"none\" or \"receivers\"")),
+    };
+    let keys = [
+        ("cost.ns_per_draw", c.ns_per_draw),
+        ("cost.ns_per_triangle", c.ns_per_triangle),
+        ("cost.ns_per_fragment", c.ns_per_fragment),
+        ("cost.ns_per_texel_cleared", c.ns_per_texel_cleared),
+    ];
+    let mut given = Vec::new();
+    for (key, x) in keys {
+        if let Some(x) = x {
+            if !(x.is_finite() && x >= 0.0) {
+                return Err(v.invalid(key, x, "a finite number of nanoseconds, at least 0"));
+            }
+            given.push(x);
+        }
+    }
+    let calibration = match given.len() {
+        0 => None,
+        4 => Some(csm_core::cost::CostModel {
+            per_draw: given[0],
+            per_triangle: given[1],
+            per_fragment: given[2],
+            per_texel_cleared: given[3],
+        }),
+        _ => {
+            let (missing, _) = keys.iter().find(|(_, x)| x.is_none()).expect("fewer than four given");
+            return Err(v.invalid(
+                missing,
+                "(missing)",
+                "all four of cost.ns_per_draw, cost.ns_per_triangle, cost.ns_per_fragment and cost.ns_per_texel_cleared, or none (docs/cost.md: calibration)",
+            ));
+        }
+    };
+    if calibration.is_some_and(|m| m.of(1.0, 1.0, 1.0, 1.0) <= 0.0) {
+        return Err(v.invalid(
+            "cost.ns_per_draw",
+            0,
+            "coefficients that are not all 0 (a frame that costs nothing cannot be calibrated)",
+        ));
+    }
+    Ok(CostSettings { cull, calibration })
+}
+
 /// Every pose of the motion path must be a valid camera (pitching through the up vector, or a
 /// path file row with position == target, is a config error, not a panic later).
 pub(crate) fn check_camera_path(config: &Config, v: &Validator<'_>) -> Result<()> {
@@ -902,25 +971,26 @@ fn scene(
             let allowed = |why: &str| format!("a readable glTF 2.0 file (.gltf or .glb) with triangles: {why}");
             let mut read = super::read_gltf_scene(&p, raw.gltf_outside_buffers)
                 .map_err(|why| v.invalid("scene.gltf", format!("{name:?}"), &allowed(&why)))?;
-            let tris = std::mem::take(&mut read.triangles);
+            let primitives = std::mem::take(&mut read.primitives);
             gltf_scene = Some(read);
-            if tris.is_empty() {
+            if primitives.iter().all(|t| t.is_empty()) {
                 return Err(v.invalid(
                     "scene.gltf",
                     format!("{name:?}"),
                     &allowed("its default scene has no triangles"),
                 ));
             }
-            for t in tris {
-                let t = t.map(|p| p + world_offset);
-                if t.iter().any(|p| p.abs().max_element() > MAX_WORLD) {
+            for tris in primitives {
+                let tris: Vec<[DVec3; 3]> = tris.into_iter().map(|t| t.map(|p| p + world_offset)).collect();
+                if tris.iter().flatten().any(|p| p.abs().max_element() > MAX_WORLD) {
                     return Err(v.invalid(
                         "scene.gltf",
                         format!("{name:?}"),
                         "vertices within ±1e9 world units (after scene.world_offset)",
                     ));
                 }
-                mesh.push(t);
+                // One draw call per primitive instance.
+                mesh.add_object(csm_core::mesh::ObjectKind::Primitive, tris);
             }
             Some(p)
         }

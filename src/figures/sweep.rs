@@ -843,6 +843,115 @@ impl Figure for ParetoFigure<'_> {
     }
 }
 
+/// Pareto front of the render cost (`cost_index`, the configured setting = 1) against the
+/// sweep's objective (`cost_pareto.png`; only with scene geometry, where the cost is counted).
+pub(crate) struct CostParetoFigure<'a>(pub &'a SweepResult);
+
+impl Figure for CostParetoFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        (960, 540 + legend_height(4, LEGEND_FONT))
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
+        let mut legend = Legend::default();
+        let r = self.0;
+        let obj = r.objective;
+        let title = format!("Render cost against {}: {}", obj.name(), r.config.name);
+        let pts: Vec<(f64, f64)> = r
+            .rows
+            .iter()
+            .filter(|x| x.summary.cascades_needed)
+            .filter_map(|x| Some((x.summary.cost.cost_index.filter(|c| *c > 0.0)?, obj.value(&x.summary))))
+            .filter(|p| p.1 > 0.0)
+            .collect();
+        if pts.is_empty() {
+            return draw_message(root, &title, "No configuration has a measured render cost.");
+        }
+        let (xmin, xmax) = pts
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
+        let (ymin, ymax) = pts
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
+        let budget = r.cost_limit.index;
+        let (x0, x1) = log_range(xmin.min(budget.unwrap_or(xmin)), xmax.max(budget.unwrap_or(xmax)));
+        let (y0, y1) = log_range(ymin, ymax);
+        let lines = 3 + usize::from(focus(r).is_some());
+        let mut chart = legend_frame(root, &title, 22, 70, lines, LEGEND_FONT)
+            .build_cartesian_2d(log_axis(x0, x1), log_axis(y0, y1))?;
+        chart
+            .configure_mesh()
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .x_desc("cost_index (log; draws, triangles, fragments and cleared texels; configured setting = 1)")
+            .y_desc(format!("{} (log; lower is better)", obj.name()))
+            .max_light_lines(3)
+            .axis_desc_style((FONT, 15))
+            .label_style((FONT, 13))
+            .draw()?;
+        let grey = palette::POINT;
+        let mut seen = std::collections::HashSet::new();
+        let shown: Vec<(f64, f64)> = pts
+            .iter()
+            .filter(|p| {
+                let (x, y) = chart.backend_coord(p);
+                seen.insert((x / 2, y / 2))
+            })
+            .copied()
+            .collect();
+        chart.draw_series(shown.iter().map(|p| Circle::new(*p, 3, grey.filled())))?;
+        legend.add("configuration", move |(x, y)| Circle::new((x + 8, y), 3, grey.filled()));
+        let limit = palette::LIMIT.stroke_width(2);
+        match budget {
+            Some(b) => {
+                chart.draw_series(DashedLineSeries::new(vec![(b, y0), (b, y1)], 6, 4, limit))?;
+                legend.add(format!("cost budget {}", tick(b)), move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], limit)
+                });
+            }
+            None => {
+                chart.draw_series(DashedLineSeries::new(vec![(1.0, y0), (1.0, y1)], 6, 4, limit))?;
+                legend.add("the configured setting's cost (1)", move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], limit)
+                });
+            }
+        }
+        let orange = series_color(1);
+        let front: Vec<(f64, f64)> = r
+            .cost_front
+            .iter()
+            .filter_map(|&i| Some((r.rows[i].summary.cost.cost_index?, obj.value(&r.rows[i].summary))))
+            .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+            .collect();
+        chart.draw_series(LineSeries::new(front.clone(), orange.stroke_width(3)))?;
+        legend.add(
+            "Pareto front (nothing is both cheaper to render and sharper)",
+            move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], orange.stroke_width(3)),
+        );
+        chart.draw_series(front.iter().map(|p| Circle::new(*p, 5, orange.filled())))?;
+        if let Some((rec, ok)) = focus(r) {
+            if let Some(c) = rec.summary.cost.cost_index.filter(|c| *c > 0.0) {
+                let p = (c, obj.value(&rec.summary));
+                let red = palette::RECOMMENDED;
+                chart.draw_series(std::iter::once(Circle::new(p, 9, red.stroke_width(3))))?;
+                legend.add(focus_word(ok), move |(x, y)| {
+                    Circle::new((x + 8, y), 6, red.stroke_width(2))
+                });
+                chart.draw_series(std::iter::once(
+                    EmptyElement::at(p)
+                        + Text::new(
+                            format!("{}: {}", focus_word(ok), setting_words(r, &rec.setting)),
+                            (14, -30),
+                            (FONT, 15).into_font().color(&red),
+                        ),
+                ))?;
+            }
+        }
+        draw_legend_below(root, legend, lines)?;
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

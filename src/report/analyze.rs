@@ -68,6 +68,7 @@ impl Exporter<Analysis> for CascadesCsv {
                 a.config.motion.light.moves(),
                 a.ground_truth.is_some(),
                 a.summary.cache.is_some(),
+                a.summary.cost.shadow_ms.is_some(),
             ),
             &rows,
         )
@@ -441,6 +442,7 @@ pub(crate) fn summary_table(a: &Analysis) -> String {
             let _ = writeln!(out, "  {line} (each view's own metrics: views.csv)");
         }
     }
+    out.push_str(&cost_table(a));
     if let Some(g) = &a.ground_truth {
         out.push_str(&super::ground_truth::recommendation(a, g));
     }
@@ -478,6 +480,87 @@ pub(crate) fn summary_table(a: &Analysis) -> String {
             let _ = writeln!(out, "  {k:<22} {v:>12}  {what}");
         }
     }
+    out
+}
+
+/// The cost block of `analyze`'s stdout: per cascade and in total, the draw calls, triangles
+/// (all, and inside the caster volume), fragments, cleared texels, `cost_index` and, when
+/// calibrated, `shadow_ms` (docs/cost.md).
+fn cost_table(a: &Analysis) -> String {
+    let mut out = String::new();
+    let s = &a.summary.cost;
+    let ms = s.shadow_ms.is_some();
+    let culled = if a.config.cost.cull == crate::config::CostCull::Receivers {
+        ", casters culled by receivers"
+    } else {
+        ""
+    };
+    let Some(total) = s.counts else {
+        let _ = writeln!(
+            out,
+            "cost (frame 0): {} texels cleared, {} bytes written per update; draws, triangles and fragments need scene geometry",
+            s.texels_cleared, s.bytes_written
+        );
+        return out;
+    };
+    let _ = writeln!(out, "cost (frame 0{culled}; docs/cost.md):");
+    let _ = write!(
+        out,
+        "{:>7} {:>7} {:>10} {:>10} {:>12} {:>12} {:>10}",
+        "cascade", "draws", "triangles", "inside", "fragments", "cleared", "cost_index"
+    );
+    let _ = writeln!(
+        out,
+        "{}",
+        if ms {
+            format!(" {:>10}", "shadow_ms")
+        } else {
+            String::new()
+        }
+    );
+    let row = |out: &mut String,
+               name: String,
+               c: &csm_core::cost::CostCounts,
+               cleared: u64,
+               index: Option<f64>,
+               t: Option<f64>| {
+        let _ = write!(
+            out,
+            "{:>7} {:>7} {:>10} {:>10} {:>12} {:>12} {:>10}",
+            name,
+            c.caster_objects,
+            c.caster_triangles,
+            c.caster_triangles_inside,
+            short_number(c.raster_fragments),
+            cleared,
+            index.map_or("n/a".to_string(), short_number)
+        );
+        let _ = writeln!(
+            out,
+            "{}",
+            t.map_or(String::new(), |t| format!(" {:>10}", short_number(t)))
+        );
+    };
+    for r in &a.cascades {
+        if let Some(c) = &r.cost.counts {
+            row(
+                &mut out,
+                r.cascade.to_string(),
+                c,
+                r.cost.texels_cleared,
+                r.cost.cost_index,
+                r.cost.shadow_ms,
+            );
+        }
+    }
+    row(
+        &mut out,
+        "total".to_string(),
+        &total,
+        s.texels_cleared,
+        s.cost_index,
+        s.shadow_ms,
+    );
     out
 }
 

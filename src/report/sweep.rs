@@ -178,6 +178,20 @@ pub(crate) fn recommendation_value(r: &SweepResult) -> serde_json::Value {
         "memory_budget_mib": r.budget_mib,
         "pareto_front": r.front.iter().map(|&i| row_json(&r.rows[i])).collect::<Vec<_>>(),
     });
+    if let Some(b) = r.cost_limit.index {
+        v["cost_budget"] = b.into();
+    }
+    if let Some(b) = r.cost_limit.ms {
+        v["shadow_ms_budget"] = b.into();
+    }
+    if !r.cost_front.is_empty() {
+        v["cost_pareto_front"] = r
+            .cost_front
+            .iter()
+            .map(|&i| row_json(&r.rows[i]))
+            .collect::<Vec<_>>()
+            .into();
+    }
     if let Some(o) = &r.optimized {
         v["optimized_splits"] = super::optimize::json(r, o);
     }
@@ -211,6 +225,18 @@ pub(crate) fn recommendation_value(r: &SweepResult) -> serde_json::Value {
         (Some(rec), Some(row)) => {
             v["within_budget"] = rec.within_budget.into();
             v["recommended"] = row_json(row);
+            if r.cost_limit.is_set() {
+                v["within_cost_budget"] = rec.within_cost.into();
+                v["cost_budget_effect"] = cost_budget_text(r).trim().into();
+                if let Some(i) = r.without_cost_budget {
+                    let free = &r.rows[i];
+                    let mut j = serde_json::json!({ "configuration": row_json(free) });
+                    if let Some(p) = percent_change(r.objective.value(&free.summary), r.objective.value(&row.summary)) {
+                        j["objective_change_percent"] = p.into();
+                    }
+                    v["without_cost_budget"] = j;
+                }
+            }
             v["alternatives"] = r
                 .alternatives
                 .iter()
@@ -240,6 +266,11 @@ pub(crate) fn recommendation_value(r: &SweepResult) -> serde_json::Value {
                             r.worst.value(&x.summary),
                         ),
                         ("shimmer_change_percent", row.summary.shimmer, x.summary.shimmer),
+                        (
+                            "cost_index_change_percent",
+                            row.summary.cost.cost_index.unwrap_or(0.0),
+                            x.summary.cost.cost_index.unwrap_or(0.0),
+                        ),
                     ] {
                         // Absent when the recommendation's value is 0 (no relative change).
                         if let Some(p) = percent_change(base, value) {
@@ -487,6 +518,7 @@ fn why_text(r: &SweepResult) -> String {
             n(r.budget_mib)
         );
     }
+    t.push_str(&cost_budget_text(r));
     if let Some(o) = r.configured.map(|i| &r.rows[i]) {
         let change = changes(r, o, rec);
         if !change.is_empty() && screen {
@@ -579,25 +611,114 @@ fn cost_text(r: &SweepResult, rec: &Row, x: &Row) -> String {
     parts.join(", ")
 }
 
+/// What the render-cost budget did to the recommendation, one or two sentences (empty
+/// without a cost budget).
+pub(crate) fn cost_budget_text(r: &SweepResult) -> String {
+    let (Some(rec), Some(row)) = (r.recommendation.as_ref(), r.recommended()) else {
+        return String::new();
+    };
+    if !r.cost_limit.is_set() {
+        return String::new();
+    }
+    let own = row.summary.cost.cost_index.map_or("n/a".to_string(), n);
+    if !rec.within_cost {
+        return format!(
+            " Nothing within the memory budget fits the render-cost budget ({}): this is the cheapest to render (cost_index {own}).",
+            cost_budget_words(r)
+        );
+    }
+    match r.without_cost_budget.map(|i| &r.rows[i]) {
+        None => format!(
+            " It fits the render-cost budget ({}) at cost_index {own}, and the budget changed nothing.",
+            cost_budget_words(r)
+        ),
+        Some(free) => {
+            let (a, b) = (r.objective.value(&free.summary), r.objective.value(&row.summary));
+            format!(
+                " The render-cost budget ({}) cost quality: without it the recommendation would be {} ({} {}, cost_index {}); within it {} {} at cost_index {own}{}.",
+                cost_budget_words(r),
+                setting_text(r, free),
+                r.objective.name(),
+                n(a),
+                free.summary.cost.cost_index.map_or("n/a".to_string(), n),
+                r.objective.name(),
+                n(b),
+                percent_change(a, b).map_or(String::new(), |p| format!(" ({})", signed_percent(p)))
+            )
+        }
+    }
+}
+
+/// The render-cost budget in words: "cost_index 0.8" and/or "shadow_ms 1.2 ms".
+pub(crate) fn cost_budget_words(r: &SweepResult) -> String {
+    let l = &r.cost_limit;
+    let mut parts = Vec::new();
+    if let Some(b) = l.index {
+        parts.push(format!("cost_index {}", n(b)));
+    }
+    if let Some(b) = l.ms {
+        parts.push(format!("shadow_ms {} ms", n(b)));
+    }
+    parts.join(" and ")
+}
+
+/// What rendering `x` instead of the recommendation `rec` saves and what it loses in quality.
+fn render_text(r: &SweepResult, rec: &Row, x: &Row) -> String {
+    let (a, b) = (&rec.summary, &x.summary);
+    let mut parts = Vec::new();
+    if let (Some(ca), Some(cb)) = (a.cost.cost_index, b.cost.cost_index) {
+        let saving = percent_change(ca, cb).map_or(String::new(), |p| {
+            format!(", saves {}", signed_percent(-p).trim_start_matches('+'))
+        });
+        parts.push(format!("cost_index {} against {}{saving}", n(cb), n(ca)));
+    }
+    if let (Some(ma), Some(mb)) = (a.cost.shadow_ms, b.cost.shadow_ms) {
+        parts.push(format!("shadow_ms {} against {}", n(mb), n(ma)));
+    }
+    if let (Some(ka), Some(kb)) = (a.cost.counts, b.cost.counts) {
+        parts.push(format!("{} draws against {}", kb.caster_objects, ka.caster_objects));
+    }
+    parts.push(format!(
+        "quality lost: {}",
+        versus(r.objective.name(), r.objective.value(a), r.objective.value(b))
+    ));
+    parts.join(", ")
+}
+
 /// One line per alternative kind: the alternative and its cost, or why there is none.
 fn alternative_lines(r: &SweepResult) -> Vec<String> {
     let Some(rec) = r.recommended() else {
         return Vec::new();
     };
     let alts = &r.alternatives;
-    [
-        AlternativeKind::Cheaper,
-        AlternativeKind::Sharper,
-        AlternativeKind::MoreStable,
-    ]
+    let kinds: &[AlternativeKind] = if rec.summary.cost.cost_index.is_some() {
+        &[
+            AlternativeKind::Cheaper,
+            AlternativeKind::Sharper,
+            AlternativeKind::MoreStable,
+            AlternativeKind::CheaperToRender,
+        ]
+    } else {
+        &[
+            AlternativeKind::Cheaper,
+            AlternativeKind::Sharper,
+            AlternativeKind::MoreStable,
+        ]
+    };
+    kinds
     .iter()
     .map(|&kind| {
         let head = match kind {
             AlternativeKind::Cheaper => "Cheaper",
             AlternativeKind::Sharper => "Sharper",
             AlternativeKind::MoreStable => "More stable",
+            AlternativeKind::CheaperToRender => "Cheaper to render",
         };
         match alts.iter().find(|a| a.kind == kind) {
+            Some(a) if kind == AlternativeKind::CheaperToRender => {
+                let x = &r.rows[a.index];
+                format!("{head}: {}: {}.", setting_text(r, x), render_text(r, rec, x))
+            }
             Some(a) => {
                 let x = &r.rows[a.index];
                 format!("{head}: {}: {}.", setting_text(r, x), cost_text(r, rec, x))
@@ -615,6 +736,10 @@ fn alternative_lines(r: &SweepResult) -> Vec<String> {
                         "No configuration within the budget that covers every slice shimmers less (the recommendation's shimmer is {} texel per frame).",
                         n(rec.summary.shimmer)
                     ),
+                    AlternativeKind::CheaperToRender => format!(
+                        "No configuration within the memory budget that covers every slice and is stable costs less to render (the recommendation's cost_index is {}).",
+                        rec.summary.cost.cost_index.map_or("n/a".to_string(), n)
+                    ),
                 }
             ),
         }
@@ -629,6 +754,7 @@ fn loss_name(r: &SweepResult, l: Loss) -> &'static str {
         Loss::CoverageMisses(_) => "coverage",
         Loss::Unstable(_) => "stability",
         Loss::OverBudget => "memory_budget",
+        Loss::OverCostBudget => "cost_budget",
         Loss::MoreMemory => "memory",
         Loss::Objective => "objective",
         Loss::MaxAliasing => r.worst.name(),
@@ -673,6 +799,16 @@ fn rival_text(r: &SweepResult, x: &Rival) -> String {
             n(mib(b.memory_bytes)),
             n(r.budget_mib),
             n(mib(a.memory_bytes)),
+            obj,
+            n(vb),
+            n(va),
+            pct(va, vb)
+        ),
+        Loss::OverCostBudget => format!(
+            "lost on the render-cost budget: cost_index {}{}, over the budget ({}), for {} {} against {}{}",
+            b.cost.cost_index.map_or("n/a".to_string(), n),
+            b.cost.shadow_ms.map_or(String::new(), |ms| format!(" ({} ms)", n(ms))),
+            cost_budget_words(r),
             obj,
             n(vb),
             n(va),
@@ -733,6 +869,14 @@ pub(crate) fn render_figures(r: &SweepResult) -> Result<Vec<(&'static str, Strin
     ];
     // Only a sun sweep has the sun figure (other sweeps keep their files).
     // Only a sweep with a ground-truth sample has the flicker scatter.
+    // Only a sweep whose rows have a render cost (scene geometry) has the cost figure.
+    if !r.cost_front.is_empty() {
+        out.push((
+            "cost_pareto",
+            "Pareto front of the render cost (cost_index) against the objective".to_string(),
+            crate::figures::sweep::CostParetoFigure(r).to_svg()?,
+        ));
+    }
     out.extend(super::flicker_sample::figure(r)?);
     if r.sun.is_some() {
         out.push((

@@ -60,13 +60,14 @@ fn compare_writes_one_csv_row_per_preset_and_every_file() {
         lines.next().unwrap(),
         "preset,lambda,cascades,resolution,fit,z_lo,z_hi,max_aliasing,mean_aliasing,mean_log_aliasing,\
 undersampled_fraction,shimmer,shimmer_snapped,shimmer_unsnapped,size_jitter,coverage_violations,memory_bytes,\
-overlap_area_fraction,snaps,coverage_worst_texels,min_slack_texels,receivers_outside_depth,casters_outside_depth"
+overlap_area_fraction,texels_cleared,bytes_written,snaps,coverage_worst_texels,min_slack_texels,receivers_outside_depth,\
+casters_outside_depth"
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     let names: Vec<&str> = rows.iter().map(|r| r[0]).collect();
     assert_eq!(names, ["bevy", "godot", "unreal", "threejs", "dart"]);
     for r in &rows {
-        assert_eq!(r.len(), 23);
+        assert_eq!(r.len(), 25);
         // [shadow] of BASE overrides the presets' counts and sizes.
         assert_eq!((r[2], r[3]), ("4", "2048"), "{r:?}");
     }

@@ -189,7 +189,12 @@ fn every_figure_of_every_command_draws_data_and_keeps_its_legend_off_it() {
     for c in CONFIGS {
         let cfg = config(c);
         let sweep = svgs_of(dir.path(), &format!("sweep-{c}"), &["sweep", &cfg, "--quiet"]);
-        assert_eq!(sweep.len(), 4, "{c}: {sweep:?}");
+        // With scene geometry a sweep also draws the render cost (cost_pareto).
+        let geometry = csm_lab::Config::load(std::path::Path::new(&cfg))
+            .unwrap()
+            .geometry
+            .is_some();
+        assert_eq!(sweep.len(), 4 + usize::from(geometry), "{c}: {sweep:?}");
         checked.extend(sweep);
         let analyze = svgs_of(dir.path(), &format!("analyze-{c}"), &["analyze", &cfg]);
         assert_eq!(analyze.len(), 3, "{c}: {analyze:?}");
@@ -212,10 +217,13 @@ fn every_figure_of_every_command_draws_data_and_keeps_its_legend_off_it() {
             &format!("preset-{p}"),
             &["sweep", &cfg, "--preset", p, "--quiet"],
         );
-        assert_eq!(sweep.len(), 4, "{p}: {sweep:?}");
+        // The default scene has geometry: cost_pareto beside the four.
+        assert_eq!(sweep.len(), 5, "{p}: {sweep:?}");
         checked.extend(sweep);
     }
-    assert_eq!(checked.len(), 5 * 10 + 11 * 4);
+    // Every bundled config and the default scene of the presets have geometry: each sweep
+    // draws cost_pareto beside its four figures.
+    assert_eq!(checked.len(), 5 * 11 + 11 * 5);
     let wrong: Vec<String> = checked.iter().flat_map(|p| problems(p)).collect();
     assert!(wrong.is_empty(), "{} problems:\n{}", wrong.len(), wrong.join("\n"));
 }

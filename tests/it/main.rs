@@ -15,6 +15,7 @@ mod cli_shard;
 mod cli_stress;
 mod cli_sweep;
 mod common;
+mod cost;
 mod engine_axes;
 mod engine_bias;
 mod engine_terms;

@@ -13,6 +13,7 @@
 //! [`rig_path`] walks the exact f64 rig and [`precision`] the binary32 pipeline.
 
 pub mod cascades;
+pub mod cost;
 pub mod depth_range;
 pub mod fitting;
 pub mod free_splits;

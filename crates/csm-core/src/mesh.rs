@@ -6,15 +6,45 @@
 //! (right-handed, +Y up, see [`crate::geometry`]). Winding is irrelevant: the visibility pass
 //! turns every normal toward the camera. Triangles with zero area are dropped when added:
 //! they can neither receive nor cast.
+//!
+//! **Objects.** The triangles are also grouped into the objects an engine would draw, one draw
+//! call each: the ground quad, each box, and each glTF mesh primitive under each node that
+//! instances it. [`Mesh::objects`] keeps each object's triangle range and world bounds (what
+//! the cost counts of [`crate::cost`] cull against). A triangle added with [`Mesh::push`] outside
+//! [`Mesh::add_object`] belongs to no object and is never counted as a caster.
+
+use std::ops::Range;
 
 use glam::DVec3;
 
 use crate::geometry::Aabb;
 
-/// A triangle soup, world units.
+/// A triangle soup, world units, and the draw calls it is made of.
 #[derive(Clone, Default, PartialEq)]
 pub struct Mesh {
     pub triangles: Vec<[DVec3; 3]>,
+    /// The objects (draw calls), in the order they were added; their triangle ranges are
+    /// disjoint and increasing.
+    pub objects: Vec<MeshObject>,
+}
+
+/// What kind of thing an object is (for tables and docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ObjectKind {
+    /// The ground quad (`scene.ground`).
+    Ground,
+    /// A box (`[[scene.box]]`).
+    Box,
+    /// One glTF mesh primitive under one node.
+    Primitive,
+}
+
+/// One draw call: a contiguous range of [`Mesh::triangles`] and the world bounds of its vertices.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshObject {
+    pub kind: ObjectKind,
+    pub triangles: Range<usize>,
+    pub bounds: Aabb,
 }
 
 impl std::fmt::Debug for Mesh {
@@ -32,17 +62,38 @@ impl Mesh {
         }
     }
 
-    /// A horizontal quad at height `y` over `[x0, x1] x [z0, z1]` (two triangles).
+    /// Adds the triangles of one object (one draw call; zero-area triangles dropped as by
+    /// [`Mesh::push`]). An object left without triangles is not recorded.
+    pub fn add_object(&mut self, kind: ObjectKind, triangles: impl IntoIterator<Item = [DVec3; 3]>) {
+        let start = self.triangles.len();
+        for t in triangles {
+            self.push(t);
+        }
+        let end = self.triangles.len();
+        if end == start {
+            return;
+        }
+        let mut it = self.triangles[start..end].iter().flatten();
+        let first = *it.next().expect("a non-empty range");
+        let (lo, hi) = it.fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        self.objects.push(MeshObject {
+            kind,
+            triangles: start..end,
+            bounds: Aabb::new(lo, hi),
+        });
+    }
+
+    /// A horizontal quad at height `y` over `[x0, x1] x [z0, z1]` (two triangles, one object).
     pub fn add_ground(&mut self, y: f64, x0: f64, x1: f64, z0: f64, z1: f64) {
         let a = DVec3::new(x0, y, z0);
         let b = DVec3::new(x1, y, z0);
         let c = DVec3::new(x1, y, z1);
         let d = DVec3::new(x0, y, z1);
-        self.push([a, b, c]);
-        self.push([a, c, d]);
+        self.add_object(ObjectKind::Ground, [[a, b, c], [a, c, d]]);
     }
 
-    /// The six faces of a box (twelve triangles; faces of a flat box with zero area are dropped).
+    /// The six faces of a box (twelve triangles, one object; faces of a flat box with zero area
+    /// are dropped).
     pub fn add_box(&mut self, b: &Aabb) {
         let p = |x: bool, y: bool, z: bool| {
             DVec3::new(
@@ -90,10 +141,8 @@ impl Mesh {
                 p(false, true, true),
             ],
         ];
-        for [a, b, c, d] in faces {
-            self.push([a, b, c]);
-            self.push([a, c, d]);
-        }
+        let tris = faces.into_iter().flat_map(|[a, b, c, d]| [[a, b, c], [a, c, d]]);
+        self.add_object(ObjectKind::Box, tris);
     }
 
     /// The bounding box of every vertex, or None for an empty mesh.
@@ -116,6 +165,9 @@ mod tests {
         m.add_box(&b);
         assert_eq!(m.triangles.len(), 12);
         assert_eq!(m.bounds(), Some(b));
+        assert_eq!(m.objects.len(), 1);
+        assert_eq!(m.objects[0].triangles, 0..12);
+        assert_eq!(m.objects[0].bounds, b);
     }
 
     #[test]
@@ -124,5 +176,24 @@ mod tests {
         let mut m = Mesh::default();
         m.add_box(&b);
         assert_eq!(m.triangles.len(), 4);
+        assert_eq!(m.objects[0].triangles, 0..4);
+    }
+
+    #[test]
+    fn objects_keep_their_ranges_and_bounds_and_skip_empty_ones() {
+        let mut m = Mesh::default();
+        m.add_ground(0.0, -5.0, 5.0, -2.0, 2.0);
+        let p = DVec3::new(1.0, 1.0, 1.0);
+        m.add_object(ObjectKind::Primitive, [[p, p, p]]);
+        let t = [DVec3::ZERO, DVec3::X, DVec3::new(0.0, 3.0, -1.0)];
+        m.add_object(ObjectKind::Primitive, [t]);
+        assert_eq!(m.objects.len(), 2);
+        assert_eq!(m.objects[0].triangles, 0..2);
+        assert_eq!(m.objects[0].kind, ObjectKind::Ground);
+        assert_eq!(m.objects[1].triangles, 2..3);
+        assert_eq!(
+            m.objects[1].bounds,
+            Aabb::new(DVec3::new(0.0, 0.0, -1.0), DVec3::new(1.0, 3.0, 0.0))
+        );
     }
 }

@@ -397,6 +397,8 @@ pub struct SceneGeometry {
     /// How many passes (and cast rays) the caches keep: [`CACHED_PASSES`], or more once a
     /// level of many views asks for it ([`SceneGeometry::keep_at_least`]).
     capacity: std::sync::atomic::AtomicUsize,
+    /// The scene in a light basis (cost counts), one per basis.
+    light_cache: Mutex<Vec<Arc<crate::cost::LightScene>>>,
 }
 
 /// The view without its light: the key of the light-independent part.
@@ -418,7 +420,29 @@ impl SceneGeometry {
             cache: Mutex::new(Vec::new()),
             hits_cache: Mutex::new(Vec::new()),
             capacity: std::sync::atomic::AtomicUsize::new(CACHED_PASSES),
+            light_cache: Mutex::new(Vec::new()),
         }
+    }
+
+    /// The scene's triangles and objects in light basis `basis` (cost counts), made once per
+    /// basis and shared by every window in it (the latest [`CACHED_PASSES`] bases are kept).
+    pub fn light_scene(&self, basis: &LightBasis) -> Arc<crate::cost::LightScene> {
+        {
+            let cache = self.light_cache.lock().unwrap_or_else(|e| e.into_inner());
+            if let Some(l) = cache.iter().find(|l| l.basis == *basis) {
+                return l.clone();
+            }
+        }
+        let l = Arc::new(crate::cost::LightScene::new(&self.mesh, basis));
+        let mut cache = self.light_cache.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(found) = cache.iter().find(|x| x.basis == *basis) {
+            return found.clone();
+        }
+        if cache.len() >= CACHED_PASSES {
+            cache.remove(0);
+        }
+        cache.push(l.clone());
+        l
     }
 
     /// What the BVH left out of the mesh (duplicate and binary32-degenerate triangles; see
@@ -598,7 +622,13 @@ mod tests {
             scale: 0.5,
             light: light.normalize(),
         };
-        (Mesh { triangles }, view)
+        (
+            Mesh {
+                triangles,
+                ..Mesh::default()
+            },
+            view,
+        )
     }
 
     #[test]

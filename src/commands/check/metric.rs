@@ -141,6 +141,7 @@ mod tests {
                 update_drift: 0.4375,
                 update_flicker: None,
             }),
+            cost: Default::default(),
         };
         let json = serde_json::to_value(&s).unwrap();
         // The registry writes every key as serde would (same JSON type: bool, integer, float).
@@ -215,6 +216,7 @@ mod tests {
                 update_drift: 0.3125,
                 update_flicker: None,
             }),
+            cost: Default::default(),
         };
         let json = serde_json::to_value(&c).unwrap();
         let obj = json.as_object().unwrap();
@@ -241,14 +243,16 @@ mod tests {
         dedup.sort_unstable();
         dedup.dedup();
         assert_eq!(dedup.len(), names.len());
-        // Sixteen names are both summary and per-cascade metrics (max_aliasing,
+        // Twenty-four names are both summary and per-cascade metrics (max_aliasing,
         // coverage_violations, lookup_error_max, lookup_error_rms, overlap_area_fraction,
-        // light_crawl, light_jump, acne_fraction, edge_error_fraction, leak_fraction, and the
+        // light_crawl, light_jump, acne_fraction, edge_error_fraction, leak_fraction, the
         // cached cascades' stale_coverage_violations, stale_coverage_fraction, stale_margin,
-        // stale_margin_world, update_drift, update_flicker).
+        // stale_margin_world, update_drift, update_flicker, and the eight cost metrics:
+        // caster_objects, caster_triangles, caster_triangles_inside, raster_fragments,
+        // texels_cleared, bytes_written, cost_index, shadow_ms).
         assert_eq!(
             names.len(),
-            SummaryMetric::all().count() + CascadeMetric::all().count() - 16 + DepthMetric::ALL.len()
+            SummaryMetric::all().count() + CascadeMetric::all().count() - 24 + DepthMetric::ALL.len()
         );
     }
 

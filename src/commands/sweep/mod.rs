@@ -53,6 +53,14 @@ pub struct SweepResult {
     /// closest ([`rank::no_recommendation`]): what the reports say when nothing is recommended.
     pub(crate) no_recommendation: NoRecommendation,
     pub budget_mib: f64,
+    /// The render-cost budget (`[sweep] cost_budget`, `shadow_ms_budget`).
+    pub cost_limit: rank::CostLimit,
+    /// With a cost budget that changed the recommendation: the row recommended without it
+    /// (what the budget cost in quality is the difference).
+    pub(crate) without_cost_budget: Option<usize>,
+    /// The Pareto front of `cost_index` against the objective (`cost_pareto.png`); empty
+    /// without scene geometry.
+    pub cost_front: Vec<usize>,
     /// The command that reproduces the sweep.
     pub command: String,
     /// The metric the recommendation minimises ([`rank::default_objective`]).
@@ -99,7 +107,13 @@ impl SweepResult {
     /// The result of a sweep's rows, in grid order ([`Grid::settings`]; with sun axes every
     /// (sun, setting) row, judged here per setting by its worst sun angle). Fails only when the
     /// engine setting to write cannot be built.
-    pub fn new(config: Config, grid: Grid, rows: Vec<Row>, command: String) -> Result<Self> {
+    pub fn new(config: Config, grid: Grid, mut rows: Vec<Row>, command: String) -> Result<Self> {
+        // Every row's cost against the configured setting's (1 = as configured).
+        let reference = crate::analysis::cost::configured_model(&config);
+        for r in rows.iter_mut() {
+            r.summary.cost.normalise(reference);
+        }
+        let cost_limit = rank::CostLimit::of(&config);
         let budget_mib = config
             .sweep
             .as_ref()
@@ -115,7 +129,15 @@ impl SweepResult {
             }
         };
         let front = rank::pareto_front_by(&rows, objective);
-        let recommendation = rank::recommend_by(&rows, budget_mib, objective, worst);
+        let cost_front = rank::cost_front(&rows, objective);
+        let recommendation = rank::recommend_within(&rows, budget_mib, cost_limit, objective, worst);
+        let without_cost_budget = if cost_limit.is_set() {
+            rank::recommend_by(&rows, budget_mib, objective, worst)
+                .map(|r| r.index)
+                .filter(|&i| Some(i) != recommendation.as_ref().map(|r| r.index))
+        } else {
+            None
+        };
         let no_recommendation = rank::no_recommendation(&rows, budget_mib, objective);
         let configured = rank::configured(&config, &rows);
         let ranked = rank::ranked(&rows, recommendation.as_ref(), budget_mib, objective, worst);
@@ -160,6 +182,9 @@ impl SweepResult {
             recommendation,
             no_recommendation,
             budget_mib,
+            cost_limit,
+            without_cost_budget,
+            cost_front,
             command,
             configured,
             ranked,

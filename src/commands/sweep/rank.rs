@@ -3,6 +3,7 @@
 
 use std::collections::BTreeSet;
 
+use crate::analysis::Summary;
 use crate::commands::sweep::grid::{FitGroup, Grid, Setting};
 use crate::commands::sweep::run::Row;
 use crate::config::Config;
@@ -32,6 +33,44 @@ fn front_of(rows: &[Row], candidates: impl Iterator<Item = usize>, objective: Su
         ra.memory_bytes
             .cmp(&rb.memory_bytes)
             .then(objective.value(ra).total_cmp(&objective.value(rb)))
+            .then(a.cmp(&b))
+    });
+    let mut front = Vec::new();
+    let mut best = f64::INFINITY;
+    for i in idx {
+        let m = objective.value(&rows[i].summary);
+        if m < best {
+            best = m;
+            front.push(i);
+        }
+    }
+    front
+}
+
+/// Indices of the rows on the Pareto front of `cost_index` against the objective (both
+/// minimised), ordered by cost; rows without a measured cost or cascades are left out.
+pub fn cost_front(rows: &[Row], objective: SummaryMetric) -> Vec<usize> {
+    cost_front_of(
+        rows,
+        (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed),
+        objective,
+    )
+}
+
+/// [`cost_front`] over the rows `candidates` (among exact ties the first in grid order).
+fn cost_front_of(rows: &[Row], candidates: impl Iterator<Item = usize>, objective: SummaryMetric) -> Vec<usize> {
+    let mut idx: Vec<usize> = candidates
+        .filter(|&i| rows[i].summary.cost.cost_index.is_some())
+        .collect();
+    let cost = |i: usize| rows[i].summary.cost.cost_index.unwrap_or(f64::INFINITY);
+    idx.sort_by(|&a, &b| {
+        cost(a)
+            .total_cmp(&cost(b))
+            .then(
+                objective
+                    .value(&rows[a].summary)
+                    .total_cmp(&objective.value(&rows[b].summary)),
+            )
             .then(a.cmp(&b))
     });
     let mut front = Vec::new();
@@ -92,6 +131,37 @@ pub(crate) fn objective_text(objective: SummaryMetric, worst: SummaryMetric) -> 
 /// worth a 20% worse worst case, so near-ties are decided by max aliasing.
 pub(crate) const MEAN_TOLERANCE: f64 = 0.01;
 
+/// The render-cost budget of a recommendation (`[sweep] cost_budget`, `shadow_ms_budget`):
+/// the largest `cost_index` and `shadow_ms` it may have; no limit where None.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CostLimit {
+    pub index: Option<f64>,
+    pub ms: Option<f64>,
+}
+
+impl CostLimit {
+    /// No cost budget.
+    pub const NONE: CostLimit = CostLimit { index: None, ms: None };
+
+    /// The budgets of a config's `[sweep]` table.
+    pub fn of(config: &Config) -> Self {
+        config.sweep.as_ref().map_or(Self::NONE, |s| CostLimit {
+            index: s.cost_budget,
+            ms: s.shadow_ms_budget,
+        })
+    }
+
+    pub fn is_set(&self) -> bool {
+        self.index.is_some() || self.ms.is_some()
+    }
+
+    /// Whether a row's cost fits (an unmeasured cost never fits a set budget).
+    pub fn fits(&self, s: &Summary) -> bool {
+        let within = |limit: Option<f64>, value: Option<f64>| limit.is_none_or(|b| value.is_some_and(|v| v <= b));
+        within(self.index, s.cost.cost_index) && within(self.ms, s.cost.shadow_ms)
+    }
+}
+
 /// The recommended row and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Recommendation {
@@ -99,6 +169,11 @@ pub struct Recommendation {
     pub budget_bytes: u64,
     /// False when nothing fits the budget: the cheapest acceptable configuration is returned.
     pub within_budget: bool,
+    /// The render-cost budget the recommendation was picked under.
+    pub cost_limit: CostLimit,
+    /// False when no acceptable row within the memory budget fits the cost budget: the one
+    /// cheapest to render is returned.
+    pub within_cost: bool,
 }
 
 /// Whether a row may be recommended: its scene needs cascades, it covers every slice
@@ -110,12 +185,26 @@ pub fn acceptable(r: &Row) -> bool {
 }
 
 /// Picks the recommendation minimising `objective`: the best acceptable row within the budget,
-/// else the best acceptable row, near-ties decided by `worst`, the worst case
-/// ([`crate::metric::worst_aliasing`]: on screen with geometry, else `max_aliasing`). None when
-/// no row needs cascades or none is acceptable.
+/// else the best acceptable row. None when no row needs cascades or none is acceptable.
+/// Near-ties are decided by `worst`, the worst case ([`crate::metric::worst_aliasing`]: on
+/// screen with geometry, else `max_aliasing`).
 pub fn recommend_by(
     rows: &[Row],
     budget_mib: f64,
+    objective: SummaryMetric,
+    worst: SummaryMetric,
+) -> Option<Recommendation> {
+    recommend_within(rows, budget_mib, CostLimit::NONE, objective, worst)
+}
+
+/// [`recommend_by`] under a render-cost budget too: the best acceptable row within both
+/// budgets; when no row within the memory budget fits the cost budget, the one with the lowest
+/// `cost_index` among them (best objective among equals); when none fits the memory budget,
+/// the cheapest in memory.
+pub fn recommend_within(
+    rows: &[Row],
+    budget_mib: f64,
+    cost: CostLimit,
     objective: SummaryMetric,
     worst: SummaryMetric,
 ) -> Option<Recommendation> {
@@ -126,12 +215,27 @@ pub fn recommend_by(
         .copied()
         .filter(|&i| rows[i].summary.memory_bytes <= budget_bytes)
         .collect();
-    if let Some(index) = pick(rows, &within, objective, worst) {
-        return Some(Recommendation {
-            index,
-            budget_bytes,
-            within_budget: true,
-        });
+    let both: Vec<usize> = within
+        .iter()
+        .copied()
+        .filter(|&i| cost.fits(&rows[i].summary))
+        .collect();
+    let made = |index: usize, within_budget: bool| Recommendation {
+        index,
+        budget_bytes,
+        within_budget,
+        cost_limit: cost,
+        within_cost: cost.fits(&rows[index].summary),
+    };
+    if let Some(index) = pick(rows, &both, objective, worst) {
+        return Some(made(index, true));
+    }
+    if !within.is_empty() {
+        // Nothing within the memory budget fits the cost budget: the cheapest to render.
+        let key = |i: usize| rows[i].summary.cost.cost_index.unwrap_or(f64::INFINITY);
+        let least = within.iter().map(|&i| key(i)).min_by(f64::total_cmp)?;
+        let cheap: Vec<usize> = within.iter().copied().filter(|&i| key(i) == least).collect();
+        return pick(rows, &cheap, objective, worst).map(|index| made(index, true));
     }
     // Nothing fits the budget: the cheapest acceptable configurations, best among them.
     let cheapest = ok.iter().map(|&i| rows[i].summary.memory_bytes).min()?;
@@ -139,11 +243,7 @@ pub fn recommend_by(
         .into_iter()
         .filter(|&i| rows[i].summary.memory_bytes == cheapest)
         .collect();
-    pick(rows, &cheap, objective, worst).map(|index| Recommendation {
-        index,
-        budget_bytes,
-        within_budget: false,
-    })
+    pick(rows, &cheap, objective, worst).map(|index| made(index, false))
 }
 
 /// Why no configuration qualified, and which one comes closest.
@@ -223,6 +323,8 @@ pub(crate) enum AlternativeKind {
     Sharper,
     /// Less shimmer in the configured snap mode.
     MoreStable,
+    /// A lower render cost (`cost_index`), for a higher objective.
+    CheaperToRender,
 }
 
 impl AlternativeKind {
@@ -232,6 +334,7 @@ impl AlternativeKind {
             AlternativeKind::Cheaper => "cheaper",
             AlternativeKind::Sharper => "sharper",
             AlternativeKind::MoreStable => "more_stable",
+            AlternativeKind::CheaperToRender => "cheaper_to_render",
         }
     }
 
@@ -246,6 +349,9 @@ impl AlternativeKind {
             }
             AlternativeKind::MoreStable => {
                 "the acceptable row within the budget with the least shimmer (configured snap mode),                  when that is below the recommendation's; ties go to the lower objective, then less memory"
+            }
+            AlternativeKind::CheaperToRender => {
+                "the acceptable row within the memory budget on the Pareto front of cost_index against the objective                  with the highest cost_index below the recommendation's: the lowest objective for a cheaper render"
             }
         }
     }
@@ -290,7 +396,11 @@ pub(crate) fn alternatives(rows: &[Row], rec: &Recommendation, objective: Summar
         r.memory_bytes
     };
     let stabler = ok()
-        .filter(|&i| rows[i].summary.memory_bytes <= limit && rows[i].summary.shimmer < r.shimmer)
+        .filter(|&i| {
+            rows[i].summary.memory_bytes <= limit
+                && rows[i].summary.shimmer < r.shimmer
+                && (!rec.within_cost || rec.cost_limit.fits(&rows[i].summary))
+        })
         .min_by(|&a, &b| {
             let (x, y) = (&rows[a].summary, &rows[b].summary);
             x.shimmer
@@ -299,10 +409,17 @@ pub(crate) fn alternatives(rows: &[Row], rec: &Recommendation, objective: Summar
                 .then(x.memory_bytes.cmp(&y.memory_bytes))
                 .then(a.cmp(&b))
         });
+    let render = r.cost.cost_index.and_then(|own| {
+        let pool = ok().filter(|&i| !rec.within_budget || rows[i].summary.memory_bytes <= rec.budget_bytes);
+        cost_front_of(rows, pool, objective)
+            .into_iter()
+            .rfind(|&i| rows[i].summary.cost.cost_index.is_some_and(|c| c < own))
+    });
     for (kind, pick) in [
         (AlternativeKind::Cheaper, cheaper),
         (AlternativeKind::Sharper, sharper),
         (AlternativeKind::MoreStable, stabler),
+        (AlternativeKind::CheaperToRender, render),
     ] {
         if let Some(index) = pick.filter(|&i| i != rec.index && !out.iter().any(|a: &Alternative| a.index == i)) {
             out.push(Alternative { kind, index });
@@ -348,6 +465,8 @@ pub(crate) enum Loss {
     Unstable(f64),
     /// Over the memory budget, which the recommendation fits.
     OverBudget,
+    /// Over the render-cost budget, which the recommendation fits.
+    OverCostBudget,
     /// Nothing fits the budget and the rival needs more memory than the recommendation.
     MoreMemory,
     /// A higher objective, beyond the [`MEAN_TOLERANCE`] tie.
@@ -387,6 +506,9 @@ pub(crate) fn loss(
     if rec.within_budget && s.memory_bytes > rec.budget_bytes {
         return Loss::OverBudget;
     }
+    if rec.within_cost && !rec.cost_limit.fits(s) {
+        return Loss::OverCostBudget;
+    }
     if !rec.within_budget && s.memory_bytes > r.memory_bytes {
         return Loss::MoreMemory;
     }
@@ -394,6 +516,7 @@ pub(crate) fn loss(
     // the recommendation was picked from.
     let pool = |i: usize| {
         acceptable(&rows[i])
+            && (!rec.within_cost || rec.cost_limit.fits(&rows[i].summary))
             && if rec.within_budget {
                 rows[i].summary.memory_bytes <= rec.budget_bytes
             } else {
@@ -454,7 +577,10 @@ pub(crate) fn ranked(
     let mut idx: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed).collect();
     let key = |i: usize| {
         let s = &rows[i].summary;
-        let ok = s.coverage_violations == 0 && s.snapped_drift() <= STABLE_SHIMMER && s.memory_bytes <= budget;
+        let ok = s.coverage_violations == 0
+            && s.snapped_drift() <= STABLE_SHIMMER
+            && s.memory_bytes <= budget
+            && rec.is_none_or(|r| !r.within_cost || r.cost_limit.fits(s));
         (!ok, objective.value(s), worst.value(s), s.memory_bytes, i)
     };
     idx.sort_by(|&a, &b| {
@@ -919,6 +1045,7 @@ mod tests {
                     Loss::CoverageMisses(n) => assert_eq!(n, s.coverage_violations),
                     Loss::Unstable(v) => assert!(v > STABLE_SHIMMER && s.coverage_violations == 0),
                     Loss::OverBudget => assert!(rec.within_budget && s.memory_bytes > rec.budget_bytes),
+                    Loss::OverCostBudget => panic!("no cost budget here"),
                     Loss::MoreMemory => assert!(!rec.within_budget && s.memory_bytes > r.summary.memory_bytes),
                     Loss::Objective => assert!(obj(&rows[x]) > obj(r) && acceptable(&rows[x])),
                     Loss::MaxAliasing => {

@@ -1,0 +1,247 @@
+//! What the configured setting costs to render, per cascade and in total (frame 0): the counts
+//! of `csm_core::cost`, the cleared texels and bytes, and the cost model (docs/cost.md).
+
+use crate::config::{Config, CostCull};
+use csm_core::cascades::{LightPose, Rig};
+use csm_core::cost::{self, CasterVolume, CostCounts, CostModel, ReceiverBox};
+use csm_core::fitting::Window;
+use csm_core::visibility::{SceneGeometry, Visibility};
+use glam::DVec3;
+
+/// The default weights of the cost model: relative costs of one draw call, one triangle, one
+/// fragment and one cleared texel, of the order of nanoseconds on a desktop GPU (docs/cost.md
+/// says where the orders come from). Only their ratios matter: `cost_index` divides by the
+/// configured setting's value, and no time is ever printed from them.
+pub(crate) const DEFAULT_MODEL: CostModel = CostModel {
+    per_draw: 2000.0,
+    per_triangle: 0.5,
+    per_fragment: 0.01,
+    per_texel_cleared: 0.002,
+};
+
+/// Bytes per texel of a depth map (32-bit depth, as `memory_bytes`).
+pub(crate) const BYTES_PER_TEXEL: u64 = 4;
+
+/// One cascade's cost. Serde writes it flat, under the registry's names (the per-cascade
+/// objects of `summary.json`).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct CascadeCost {
+    /// The counts; None without scene geometry (nothing to count).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub counts: Option<CostCounts>,
+    pub texels_cleared: u64,
+    pub bytes_written: u64,
+    /// This cascade's share of the configured setting's cost (the cascades' shares add up to
+    /// the setting's `cost_index`); None without geometry.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cost_index: Option<f64>,
+    /// Milliseconds from the calibrated coefficients (`[cost] ns_per_*`); None uncalibrated.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shadow_ms: Option<f64>,
+}
+
+impl CascadeCost {
+    /// The model's value with the default weights (relative units); None without geometry.
+    pub(crate) fn model(&self) -> Option<f64> {
+        self.counts.map(|c| model_of(&DEFAULT_MODEL, &c, self.texels_cleared))
+    }
+}
+
+/// The totals of a setting (the default: nothing measured, for hand-made summaries in tests).
+/// Serde writes it flat under the registry's names (a shard's rows carry it so).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct CostSummary {
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
+    pub counts: Option<CostCounts>,
+    pub texels_cleared: u64,
+    pub bytes_written: u64,
+    /// The model's value over the configured setting's: 1 for the configured setting itself.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cost_index: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shadow_ms: Option<f64>,
+}
+
+impl CostSummary {
+    /// The model's value with the default weights (relative units; not an output); None
+    /// without geometry.
+    pub(crate) fn model(&self) -> Option<f64> {
+        self.counts.map(|c| model_of(&DEFAULT_MODEL, &c, self.texels_cleared))
+    }
+
+    /// Sets `cost_index` against a reference setting's model value (the configured setting's).
+    pub(crate) fn normalise(&mut self, reference: Option<f64>) {
+        self.cost_index = match (self.model(), reference) {
+            (Some(m), Some(r)) if r > 0.0 => Some(m / r),
+            _ => None,
+        };
+    }
+}
+
+/// The model's value of a set of counts and cleared texels.
+fn model_of(m: &CostModel, c: &CostCounts, cleared: u64) -> f64 {
+    m.of(
+        c.caster_objects as f64,
+        c.caster_triangles as f64,
+        c.raster_fragments,
+        cleared as f64,
+    )
+}
+
+/// Cascade `i`'s caster volume for the frame of `lp` and its window `w`.
+pub fn volume(config: &Config, rig: &Rig, i: usize, lp: &LightPose, w: &Window) -> CasterVolume {
+    let basis = rig.basis(i, lp);
+    let (scene_near, _) = cost::light_depth_extent(&basis, &config.scene);
+    let far = rig.light_depth(i, lp, w, &config.scene).far;
+    let lo = w.min();
+    let hi = lo + glam::DVec2::new(w.width(), w.height());
+    CasterVolume {
+        basis,
+        lo: lo.extend(scene_near),
+        hi: hi.extend(far),
+        texel: w.texel,
+    }
+}
+
+/// The padding of the receivers' box for culling, in world units (across the light, along it):
+/// the filter's reach (half the PCF kernel, one more texel for a bilinear tap, half a texel for
+/// the texel a point falls in) plus the normal offset across the light; the normal offset and
+/// the depth bias (and one texel for the depth format's rounding) along it. See docs/cost.md.
+fn cull_padding(config: &Config, texel: f64) -> (f64, f64) {
+    let t = &config.truth;
+    let normal = t.normal_bias.unwrap_or(0.0).abs().max(1.0);
+    let filter = 0.5 * t.pcf as f64 + 1.5;
+    let xy = (filter + normal) * texel;
+    let z = (normal + 1.0) * texel + t.depth_bias.unwrap_or(0.0).abs();
+    (xy, z)
+}
+
+/// The world positions of the lit-facing samples of `vis` whose view depth is in one of
+/// `intervals` (the visible receivers of a cascade).
+fn receivers_in(vis: &Visibility, intervals: &[(f64, f64)]) -> Vec<DVec3> {
+    vis.samples
+        .iter()
+        .enumerate()
+        .filter_map(|(k, s)| {
+            let s = s.filter(|s| s.lit)?;
+            intervals
+                .iter()
+                .any(|&(a, b)| s.depth >= a && s.depth <= b)
+                .then(|| vis.position(k, s.depth))
+        })
+        .collect()
+}
+
+/// The objects cascade `i` keeps under receiver-aware culling (one flag per object): those
+/// whose bounds, extruded along the light to the scene's far side, meet the padded box of the
+/// cascade's visible receivers. None: culling is off.
+pub fn kept_objects(
+    config: &Config,
+    rig: &Rig,
+    i: usize,
+    v: &CasterVolume,
+    scene: &SceneGeometry,
+    vis: &Visibility,
+) -> Option<Vec<bool>> {
+    if config.cost.cull != CostCull::Receivers {
+        return None;
+    }
+    let light = scene.light_scene(&v.basis);
+    let intervals: Vec<(f64, f64)> = rig.covered_intervals(i).collect();
+    let (pad_xy, pad_z) = cull_padding(config, v.texel.x.max(v.texel.y));
+    let target = ReceiverBox::of(&v.basis, receivers_in(vis, &intervals), pad_xy, pad_z);
+    let (_, scene_far) = cost::light_depth_extent(&v.basis, &config.scene);
+    Some(
+        (0..scene.mesh.objects.len())
+            .map(|k| {
+                let (lo, hi) = light.object_box(k);
+                target.is_some_and(|t| t.shadowed_by(lo, hi, scene_far))
+            })
+            .collect(),
+    )
+}
+
+/// The cost of every cascade of frame 0 (windows `windows0` in the frame of `lp0`) and the
+/// totals, the totals' `cost_index` 1 (the configured setting).
+pub(crate) fn measure(
+    config: &Config,
+    rig: &Rig,
+    lp0: &LightPose,
+    windows0: &[Window],
+    vis: Option<&Visibility>,
+) -> (Vec<CascadeCost>, CostSummary) {
+    let geometry = config.geometry.as_ref().map(|g| &*g.scene);
+    let calibration = config.cost.calibration;
+    let mut cascades: Vec<CascadeCost> = windows0
+        .iter()
+        .enumerate()
+        .map(|(i, w)| {
+            let cleared = w.resolution as u64 * w.resolution as u64;
+            let counts = geometry.map(|scene| {
+                let v = volume(config, rig, i, lp0, w);
+                let light = scene.light_scene(&v.basis);
+                let kept = vis.and_then(|vis| kept_objects(config, rig, i, &v, scene, vis));
+                match kept {
+                    Some(kept) => light.counts(&scene.mesh, &v, |k| kept[k]),
+                    None => light.counts_all(&scene.mesh, &v),
+                }
+            });
+            CascadeCost {
+                counts,
+                texels_cleared: cleared,
+                bytes_written: cleared * BYTES_PER_TEXEL,
+                cost_index: None,
+                shadow_ms: calibration.and_then(|m| counts.map(|c| model_of(&m, &c, cleared) * 1e-6)),
+            }
+        })
+        .collect();
+    let mut total = CostSummary {
+        counts: geometry.map(|_| {
+            let mut t = CostCounts::default();
+            for c in cascades.iter().filter_map(|c| c.counts.as_ref()) {
+                t.add(c);
+            }
+            t
+        }),
+        texels_cleared: cascades.iter().map(|c| c.texels_cleared).sum(),
+        bytes_written: cascades.iter().map(|c| c.bytes_written).sum(),
+        cost_index: None,
+        shadow_ms: calibration
+            .and(geometry)
+            .map(|_| cascades.iter().filter_map(|c| c.shadow_ms).sum()),
+    };
+    let reference = total.model();
+    total.normalise(reference);
+    for c in cascades.iter_mut() {
+        c.cost_index = match (c.model(), reference) {
+            (Some(m), Some(t)) if t > 0.0 => Some(m / t),
+            _ => None,
+        };
+    }
+    (cascades, total)
+}
+
+/// The cost of a setting that needs no cascade: nothing is rendered.
+pub(crate) fn nothing(config: &Config) -> CostSummary {
+    let geometry = config.geometry.is_some();
+    CostSummary {
+        counts: geometry.then(CostCounts::default),
+        texels_cleared: 0,
+        bytes_written: 0,
+        cost_index: None,
+        shadow_ms: config.cost.calibration.and(geometry.then_some(0.0)),
+    }
+}
+
+/// The cost model's value of the configured setting at frame 0 (the `cost_index` reference
+/// of a sweep's rows); None without geometry or when the scene needs no cascade.
+pub(crate) fn configured_model(config: &Config) -> Option<f64> {
+    let rig = super::rig(config)?;
+    let pose0 = config.camera.pose();
+    let lp0 = LightPose::new(&rig.light, &pose0);
+    let windows0: Vec<Window> = (0..rig.cascade_count())
+        .map(|i| rig.window(i, &lp0, config.shadow.snap))
+        .collect();
+    let vis = config.setup().visibility();
+    measure(config, &rig, &lp0, &windows0, vis.as_deref()).1.model()
+}
