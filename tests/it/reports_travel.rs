@@ -112,8 +112,9 @@ fn the_sweep_report_shows_every_figure_from_the_single_file_captioned_by_the_obj
     assert!(std::fs::metadata(out.join("heatmap.svg")).unwrap().len() > 256 * 1024);
     let page = std::fs::read_to_string(out.join("report.html")).unwrap();
     let imgs = images(&page);
-    // The two camera views and the heat map (as a PNG no wider than the page), each decoding.
-    assert_eq!(imgs.len(), 3, "{:?}", imgs.iter().map(|i| &i.2).collect::<Vec<_>>());
+    // The plan of the view, the two camera views and the heat map (as a PNG no wider than the
+    // page), each decoding.
+    assert_eq!(imgs.len(), 4, "{:?}", imgs.iter().map(|i| &i.2).collect::<Vec<_>>());
     for (bytes, _, _) in &imgs {
         let (w, h, px) = decode_png(bytes);
         assert!(w > 0 && h > 0 && px.len() == (w * h * 3) as usize);
@@ -129,7 +130,7 @@ fn the_sweep_report_shows_every_figure_from_the_single_file_captioned_by_the_obj
     std::fs::write(alone.path().join("report.html"), &page).unwrap();
     assert_eq!(
         images(&std::fs::read_to_string(alone.path().join("report.html")).unwrap()).len(),
-        3
+        4
     );
 
     // Captions say what the figures draw, from the objective the verdict uses.
