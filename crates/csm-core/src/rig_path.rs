@@ -100,34 +100,26 @@ pub fn along_path_lit<P: Borrow<CameraPose>>(
 /// [`along_path`] with cached cascades (see [`Cadence`]; [`Cadence::EVERY_FRAME`] is
 /// [`along_path`], bit for bit). The held windows keep the rig's light basis, so the rig's
 /// basis must not follow the camera ([`Rig::fixed_basis`]) and the light must stand still.
-pub fn along_path_cached<P: Borrow<CameraPose>, I>(
+pub fn along_path_cached<P: Borrow<CameraPose>>(
     rig: &Rig,
-    poses: I,
+    poses: impl IntoIterator<Item = P, IntoIter: ExactSizeIterator>,
     probes: &[Vec<DVec3>],
     cadence: Cadence<'_>,
     snapped: bool,
     opts: ShimmerOptions,
-) -> PathResult
-where
-    I: IntoIterator<Item = P>,
-    I::IntoIter: ExactSizeIterator,
-{
+) -> PathResult {
     let [r] = walk_cached(&mut RigPath::new(rig, probes), poses, [snapped], opts, cadence);
     r.finish(opts)
 }
 
 /// [`along_path_both`] with cached cascades (see [`along_path_cached`]).
-pub fn along_path_both_cached<P: Borrow<CameraPose>, I>(
+pub fn along_path_both_cached<P: Borrow<CameraPose>>(
     rig: &Rig,
-    poses: I,
+    poses: impl IntoIterator<Item = P, IntoIter: ExactSizeIterator>,
     probes: &[Vec<DVec3>],
     cadence: Cadence<'_>,
     opts: ShimmerOptions,
-) -> (PathResult, PathResult)
-where
-    I: IntoIterator<Item = P>,
-    I::IntoIter: ExactSizeIterator,
-{
+) -> (PathResult, PathResult) {
     let [s, u] = walk_cached(&mut RigPath::new(rig, probes), poses, [true, false], opts, cadence);
     (s.finish(opts), u.finish(opts))
 }
@@ -142,31 +134,23 @@ fn model<'a>(rig: &'a Rig, probes: &'a [Vec<DVec3>], light: Option<LightTrack<'a
 
 /// Both snap modes in one walk, `(snapped, unsnapped)`: the same results as two calls of
 /// [`along_path`], bit for bit, with the per-frame work the modes share done once.
-pub fn along_path_both<P: Borrow<CameraPose>, I>(
+pub fn along_path_both<P: Borrow<CameraPose>>(
     rig: &Rig,
-    poses: I,
+    poses: impl IntoIterator<Item = P, IntoIter: ExactSizeIterator>,
     probes: &[Vec<DVec3>],
     opts: ShimmerOptions,
-) -> (PathResult, PathResult)
-where
-    I: IntoIterator<Item = P>,
-    I::IntoIter: ExactSizeIterator,
-{
+) -> (PathResult, PathResult) {
     along_path_both_lit(rig, poses, probes, None, opts)
 }
 
 /// [`along_path_both`] under a moving light (see [`along_path_lit`]).
-pub fn along_path_both_lit<P: Borrow<CameraPose>, I>(
+pub fn along_path_both_lit<P: Borrow<CameraPose>>(
     rig: &Rig,
-    poses: I,
+    poses: impl IntoIterator<Item = P, IntoIter: ExactSizeIterator>,
     probes: &[Vec<DVec3>],
     light: Option<LightTrack<'_>>,
     opts: ShimmerOptions,
-) -> (PathResult, PathResult)
-where
-    I: IntoIterator<Item = P>,
-    I::IntoIter: ExactSizeIterator,
-{
+) -> (PathResult, PathResult) {
     let [s, u] = walk(&mut model(rig, probes, light), poses, [true, false], opts);
     (s.finish(opts), u.finish(opts))
 }

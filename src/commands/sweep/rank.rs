@@ -27,45 +27,34 @@ pub fn pareto_front_by(rows: &[Row], objective: SummaryMetric) -> Vec<usize> {
 /// The Pareto front of memory against `objective` over the rows `candidates`, ordered by memory
 /// (among exact ties the first row in grid order is kept).
 fn front_of(rows: &[Row], candidates: impl Iterator<Item = usize>, objective: SummaryMetric) -> Vec<usize> {
-    let mut idx: Vec<usize> = candidates.collect();
-    idx.sort_by(|&a, &b| {
-        let (ra, rb) = (&rows[a].summary, &rows[b].summary);
-        ra.memory_bytes
-            .cmp(&rb.memory_bytes)
-            .then(objective.value(ra).total_cmp(&objective.value(rb)))
-            .then(a.cmp(&b))
-    });
-    let mut front = Vec::new();
-    let mut best = f64::INFINITY;
-    for i in idx {
-        let m = objective.value(&rows[i].summary);
-        if m < best {
-            best = m;
-            front.push(i);
-        }
-    }
-    front
+    // Bytes below 2^53 are exact as f64, so the order is the integers' order.
+    front_over(rows, candidates, |s| Some(s.memory_bytes as f64), objective)
 }
 
 /// Indices of the rows on the Pareto front of `cost_index` against the objective (both
 /// minimised), ordered by cost; rows without a measured cost or cascades are left out.
 pub fn cost_front(rows: &[Row], objective: SummaryMetric) -> Vec<usize> {
-    cost_front_of(
+    front_over(
         rows,
         (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed),
+        |s| s.cost.cost_index,
         objective,
     )
 }
 
-/// [`cost_front`] over the rows `candidates` (among exact ties the first in grid order).
-fn cost_front_of(rows: &[Row], candidates: impl Iterator<Item = usize>, objective: SummaryMetric) -> Vec<usize> {
-    let mut idx: Vec<usize> = candidates
-        .filter(|&i| rows[i].summary.cost.cost_index.is_some())
-        .collect();
-    let cost = |i: usize| rows[i].summary.cost.cost_index.unwrap_or(f64::INFINITY);
+/// The Pareto front of `price` (rows where it is None are left out) against `objective` over
+/// the rows `candidates`, both minimised, ordered by price; among exact ties the first row in
+/// grid order is kept.
+fn front_over(
+    rows: &[Row],
+    candidates: impl Iterator<Item = usize>,
+    price: impl Fn(&Summary) -> Option<f64>,
+    objective: SummaryMetric,
+) -> Vec<usize> {
+    let mut idx: Vec<usize> = candidates.filter(|&i| price(&rows[i].summary).is_some()).collect();
+    let p = |i: usize| price(&rows[i].summary).unwrap_or(f64::INFINITY);
     idx.sort_by(|&a, &b| {
-        cost(a)
-            .total_cmp(&cost(b))
+        p(a).total_cmp(&p(b))
             .then(
                 objective
                     .value(&rows[a].summary)
@@ -411,7 +400,7 @@ pub(crate) fn alternatives(rows: &[Row], rec: &Recommendation, objective: Summar
         });
     let render = r.cost.cost_index.and_then(|own| {
         let pool = ok().filter(|&i| !rec.within_budget || rows[i].summary.memory_bytes <= rec.budget_bytes);
-        cost_front_of(rows, pool, objective)
+        front_over(rows, pool, |s| s.cost.cost_index, objective)
             .into_iter()
             .rfind(|&i| rows[i].summary.cost.cost_index.is_some_and(|c| c < own))
     });
