@@ -253,17 +253,12 @@ fn served_runs(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<(usize, 
 /// The screen metrics of a configuration with selection `splits` and texel sizes `texel`;
 /// `visible` is the visible depth range already clipped (see [`visible_range`]).
 pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f64, f64)>) -> ScreenStats {
-    let total = vis.sample_count().max(1) as f64;
-    let receivers = vis.receivers.len();
     let (runs, counts) = served_runs(vis, splits, texel);
     let g = &vis.receivers;
     let n: usize = counts.iter().sum();
-    let (mut sum, mut max, mut under) = (0.0, 0.0f64, 0usize);
-    let (mut wsum, mut wtotal, mut wmax) = (0.0, 0u64, 0.0f64);
     let weights = &vis.weights;
-    let mut wp = vec![0.0; 3];
-    let p = if n == 0 {
-        vec![0.0; 3]
+    let (t, p, wp) = if n == 0 {
+        (Tally::empty(), vec![0.0; 3], vec![0.0; 3])
     } else {
         // Every served value lies in [min t * min g, max t * max g]; rounding is monotone, so
         // the bounds hold for the rounded products too, and the keys need no first pass.
@@ -272,53 +267,53 @@ pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f
             .iter()
             .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(r.2), h.max(r.2)));
         let buckets = Buckets::new(t_lo * g_lo, t_hi * g_hi);
-        let mut hist = vec![0u32; Buckets::COUNT];
-        let mut whist = vec![0u64; Buckets::COUNT];
-        for &(a, b, t) in &runs {
-            for (&(_, gk), &wk) in g[a..b].iter().zip(&weights[a..b]) {
-                let m = t * gk;
-                sum += m;
-                // A plain comparison (not f64::max, which also handles NaN): m is finite.
-                max = if m > max { m } else { max };
-                under += usize::from(m > 1.0);
-                let key = buckets.key(m);
-                hist[key] += 1;
-                whist[key] += wk as u64;
-                wtotal += wk as u64;
-                wsum += wk as f64 * m;
-                if wk > 0 && m > wmax {
-                    wmax = m;
-                }
-            }
-        }
-        if wtotal > 0 {
-            let targets = [50, 95, 99].map(|p| weight_target(p, wtotal));
-            wp = weighted_values_at(g, weights, &runs, buckets, &whist, &targets);
-        }
+        let t = tally(vis, &runs, buckets, n);
+        let wp = if t.wtotal > 0 {
+            let targets = [50, 95, 99].map(|p| weight_target(p, t.wtotal));
+            weighted_values_at(g, weights, &runs, buckets, &t.whist, &targets)
+        } else {
+            vec![0.0; 3]
+        };
         let ranks = [50.0, 95.0, 99.0].map(|p| rank_index(p, n));
-        values_at_ranks(g, &runs, buckets, &hist, &ranks)
+        let p = values_at_ranks(g, &runs, buckets, &t.hist, &ranks);
+        (t, p, wp)
     };
+    from_tally(vis, &counts, n, &t, [p[0], p[1], p[2]], [wp[0], wp[1], wp[2]], visible)
+}
+
+/// A pass's statistics from its tally: `n` served pixels, `counts` per cascade, the plain and
+/// weighted percentiles (p50, p95, p99) already selected.
+fn from_tally(
+    vis: &Visibility,
+    counts: &[usize],
+    n: usize,
+    t: &Tally,
+    plain: [f64; 3],
+    weighted: [f64; 3],
+    visible: Option<(f64, f64)>,
+) -> ScreenStats {
+    let total = vis.sample_count().max(1) as f64;
+    let receivers = vis.receivers.len();
     let (mean, under) = if n == 0 {
         (0.0, 0.0)
     } else {
-        (sum / n as f64, under as f64 / n as f64)
+        (t.sum / n as f64, t.under as f64 / n as f64)
     };
-    let (p50, p95, p99) = (p[0], p[1], p[2]);
     let (visible_z_lo, visible_z_hi) = visible.unwrap_or((0.0, 0.0));
     ScreenStats {
         receiver_fraction: receivers as f64 / total,
         self_shadowed_fraction: vis.self_shadowed as f64 / total,
         aliasing_mean: mean,
-        aliasing_p50: p50,
-        aliasing_p95: p95,
-        aliasing_p99: p99,
-        aliasing_max: max,
+        aliasing_p50: plain[0],
+        aliasing_p95: plain[1],
+        aliasing_p99: plain[2],
+        aliasing_max: t.max,
         undersampled_fraction: under,
-        visible_mean: if wtotal > 0 { wsum / wtotal as f64 } else { 0.0 },
-        visible_p50: wp[0],
-        visible_p95: wp[1],
-        visible_p99: wp[2],
-        visible_max: wmax,
+        visible_mean: if t.wtotal > 0 { t.wsum / t.wtotal as f64 } else { 0.0 },
+        visible_p50: weighted[0],
+        visible_p95: weighted[1],
+        visible_p99: weighted[2],
+        visible_max: t.wmax,
         visible_z_lo,
         visible_z_hi,
         cascade_pixels: counts
@@ -364,11 +359,9 @@ pub struct Pooled {
     pub views: Vec<ScreenStats>,
 }
 
-/// One part's first pass: its served runs and the histograms of its values and weights.
-struct PartPass {
-    runs: Vec<(usize, usize, f64)>,
-    counts: Vec<usize>,
-    n: usize,
+/// What one pass over served pixels accumulates: the histograms of the values and of the
+/// contrast weights, and the sums, maxima and undersampled count.
+struct Tally {
     hist: Vec<u32>,
     whist: Vec<u64>,
     sum: f64,
@@ -379,45 +372,65 @@ struct PartPass {
     wmax: f64,
 }
 
-fn first_pass(part: &PoolPart<'_>, runs: Vec<(usize, usize, f64)>, counts: Vec<usize>, buckets: Buckets) -> PartPass {
-    let vis = part.vis;
-    let n = counts.iter().sum();
-    let (mut sum, mut max, mut under) = (0.0, 0.0f64, 0usize);
-    let (mut wsum, mut wtotal, mut wmax) = (0.0, 0u64, 0.0f64);
-    let mut hist = vec![0u32; if n > 0 { Buckets::COUNT } else { 0 }];
-    let mut whist = vec![0u64; hist.len()];
+impl Tally {
+    /// Nothing counted (no histogram bins).
+    fn empty() -> Tally {
+        Tally {
+            hist: Vec::new(),
+            whist: Vec::new(),
+            sum: 0.0,
+            max: 0.0,
+            under: 0,
+            wsum: 0.0,
+            wtotal: 0,
+            wmax: 0.0,
+        }
+    }
+}
+
+/// The tally of the served `runs` of `vis` (histograms of `Buckets::COUNT` bins, or none when
+/// no pixel is served). [`stats`] and the pooled statistics both count through here, so their
+/// sums are equal bit for bit (the same operations in the same order).
+fn tally(vis: &Visibility, runs: &[(usize, usize, f64)], buckets: Buckets, served: usize) -> Tally {
+    let mut t = Tally::empty();
+    if served > 0 {
+        t.hist = vec![0u32; Buckets::COUNT];
+        t.whist = vec![0u64; Buckets::COUNT];
+    }
     let g = &vis.receivers;
     let weights = &vis.weights;
-    for &(a, b, t) in &runs {
+    for &(a, b, tx) in runs {
         for (&(_, gk), &wk) in g[a..b].iter().zip(&weights[a..b]) {
-            // The same operations in the same order as `stats`: equal sums, bit for bit.
-            let m = t * gk;
-            sum += m;
-            max = if m > max { m } else { max };
-            under += usize::from(m > 1.0);
+            let m = tx * gk;
+            t.sum += m;
+            // A plain comparison (not f64::max, which also handles NaN): m is finite.
+            t.max = if m > t.max { m } else { t.max };
+            t.under += usize::from(m > 1.0);
             let key = buckets.key(m);
-            hist[key] += 1;
-            whist[key] += wk as u64;
-            wtotal += wk as u64;
-            wsum += wk as f64 * m;
-            if wk > 0 && m > wmax {
-                wmax = m;
+            t.hist[key] += 1;
+            t.whist[key] += wk as u64;
+            t.wtotal += wk as u64;
+            t.wsum += wk as f64 * m;
+            if wk > 0 && m > t.wmax {
+                t.wmax = m;
             }
         }
     }
-    PartPass {
-        runs,
-        counts,
-        n,
-        hist,
-        whist,
-        sum,
-        max,
-        under,
-        wsum,
-        wtotal,
-        wmax,
-    }
+    t
+}
+
+/// One part's first pass: its served runs and their tally.
+struct PartPass {
+    runs: Vec<(usize, usize, f64)>,
+    counts: Vec<usize>,
+    n: usize,
+    t: Tally,
+}
+
+fn first_pass(part: &PoolPart<'_>, runs: Vec<(usize, usize, f64)>, counts: Vec<usize>, buckets: Buckets) -> PartPass {
+    let n = counts.iter().sum();
+    let t = tally(part.vis, &runs, buckets, n);
+    PartPass { runs, counts, n, t }
 }
 
 /// The weighted nearest-rank targets of one pool (the level, or one view alone): the pool's
@@ -543,7 +556,7 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
     let mut hist = vec![0u128; Buckets::COUNT];
     let mut whist = vec![0u128; Buckets::COUNT];
     for (p, pass) in parts.iter().zip(&passes) {
-        for (k, (&h, &w)) in pass.hist.iter().zip(&pass.whist).enumerate() {
+        for (k, (&h, &w)) in pass.t.hist.iter().zip(&pass.t.whist).enumerate() {
             hist[k] += h as u128 * p.steps as u128;
             whist[k] += w as u128 * p.steps as u128;
         }
@@ -551,7 +564,7 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
     let level = Targets::new(&hist, &whist, |x| x, |x| x);
     let own: Vec<Targets> = passes
         .iter()
-        .map(|pass| Targets::new(&pass.hist, &pass.whist, |x| x as u128, |x| x as u128))
+        .map(|pass| Targets::new(&pass.t.hist, &pass.t.whist, |x| x as u128, |x| x as u128))
         .collect();
 
     // The second pass: every part's values in the level's wanted buckets or its own.
@@ -592,47 +605,7 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
         .zip(&passes)
         .zip(&own_values)
         .map(|((p, pass), &(plain, weighted))| {
-            let receivers = p.vis.receivers.len();
-            let n = pass.n;
-            let (mean, under) = if n == 0 {
-                (0.0, 0.0)
-            } else {
-                (pass.sum / n as f64, pass.under as f64 / n as f64)
-            };
-            let total = p.vis.sample_count().max(1) as f64;
-            let (visible_z_lo, visible_z_hi) = p.visible.unwrap_or((0.0, 0.0));
-            ScreenStats {
-                receiver_fraction: receivers as f64 / total,
-                self_shadowed_fraction: p.vis.self_shadowed as f64 / total,
-                aliasing_mean: mean,
-                aliasing_p50: plain[0],
-                aliasing_p95: plain[1],
-                aliasing_p99: plain[2],
-                aliasing_max: pass.max,
-                undersampled_fraction: under,
-                visible_mean: if pass.wtotal > 0 {
-                    pass.wsum / pass.wtotal as f64
-                } else {
-                    0.0
-                },
-                visible_p50: weighted[0],
-                visible_p95: weighted[1],
-                visible_p99: weighted[2],
-                visible_max: pass.wmax,
-                visible_z_lo,
-                visible_z_hi,
-                cascade_pixels: pass
-                    .counts
-                    .iter()
-                    .map(|&c| {
-                        if receivers == 0 {
-                            0.0
-                        } else {
-                            c as f64 / receivers as f64
-                        }
-                    })
-                    .collect(),
-            }
+            from_tally(p.vis, &pass.counts, pass.n, &pass.t, plain, weighted, p.visible)
         })
         .collect();
 
@@ -650,9 +623,9 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
         parts[k].vis.sample_count().max(1) as u128
     });
     let (shadowed, _) = weighted_ratio(&|k| parts[k].vis.self_shadowed as u128, &|_| 0);
-    let (under, served) = weighted_ratio(&|k| passes[k].under as u128, &|k| passes[k].n as u128);
-    let sum: f64 = parts.iter().zip(&passes).map(|(p, x)| p.steps as f64 * x.sum).sum();
-    let wsum: f64 = parts.iter().zip(&passes).map(|(p, x)| p.steps as f64 * x.wsum).sum();
+    let (under, served) = weighted_ratio(&|k| passes[k].t.under as u128, &|k| passes[k].n as u128);
+    let sum: f64 = parts.iter().zip(&passes).map(|(p, x)| p.steps as f64 * x.t.sum).sum();
+    let wsum: f64 = parts.iter().zip(&passes).map(|(p, x)| p.steps as f64 * x.t.wsum).sum();
     let cascades = passes.iter().map(|x| x.counts.len()).max().unwrap_or(0);
     let cascade_pixels = (0..cascades)
         .map(|i| {
@@ -676,7 +649,7 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
         aliasing_p50: level_p.0[0],
         aliasing_p95: level_p.0[1],
         aliasing_p99: level_p.0[2],
-        aliasing_max: passes.iter().fold(0.0, |a, x| if x.max > a { x.max } else { a }),
+        aliasing_max: passes.iter().fold(0.0, |a, x| if x.t.max > a { x.t.max } else { a }),
         undersampled_fraction: if served > 0.0 { under / served } else { 0.0 },
         visible_mean: if level.contrast_total > 0 {
             wsum / level.contrast_total as f64
@@ -686,7 +659,7 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
         visible_p50: level_p.1[0],
         visible_p95: level_p.1[1],
         visible_p99: level_p.1[2],
-        visible_max: passes.iter().fold(0.0, |a, x| if x.wmax > a { x.wmax } else { a }),
+        visible_max: passes.iter().fold(0.0, |a, x| if x.t.wmax > a { x.t.wmax } else { a }),
         visible_z_lo,
         visible_z_hi,
         cascade_pixels,
