@@ -6,7 +6,7 @@ use plotters::prelude::*;
 
 use super::{
     colormap, draw_legend_below, draw_message, legend_frame, legend_height, linear_axis, log_axis, log_axis_with,
-    log_range, nice_ticks, palette, series_color, texels_per_pixel_chart, tick, ticked_axis, Figure, Legend,
+    log_range, nice_ticks, palette, series_color, texels_per_pixel_chart, tick, ticked_axis, Figure, Legend, LogAxis,
     PlotResult, FONT, LEGEND_FONT,
 };
 use crate::analysis::{analyze, mib, Analysis, AnalysisOptions};
@@ -15,6 +15,7 @@ use crate::commands::sweep::rank::STABLE_SHIMMER;
 use crate::commands::sweep::run::Row;
 use crate::commands::sweep::SweepResult;
 use crate::metric::SummaryMetric;
+use plotters::coord::cartesian::Cartesian2d;
 
 /// The configuration the figures single out: the recommended one, or when nothing qualifies the
 /// one that comes closest (false), or None when no configuration needs cascades.
@@ -762,12 +763,7 @@ impl Figure for ParetoFigure<'_> {
         if pts.is_empty() {
             return draw_message(root, &title, "No cascades needed for any configuration.");
         }
-        let (xmin, xmax) = pts
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
-        let (ymin, ymax) = pts
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
+        let ((xmin, xmax), (ymin, ymax)) = extent(&pts);
         let (x0, x1) = log_range(xmin.min(r.budget_mib), xmax.max(r.budget_mib));
         let (y0, y1) = log_range(ymin, ymax);
         let lines = 3 + usize::from(focus(r).is_some());
@@ -787,19 +783,7 @@ impl Figure for ParetoFigure<'_> {
             .axis_desc_style((FONT, 15))
             .label_style((FONT, 13))
             .draw()?;
-        let grey = palette::POINT;
-        // One dot per 2-pixel cell: a large sweep draws what can be seen, not every point.
-        let mut seen = std::collections::HashSet::new();
-        let shown: Vec<(f64, f64)> = pts
-            .iter()
-            .filter(|p| {
-                let (x, y) = chart.backend_coord(p);
-                seen.insert((x / 2, y / 2))
-            })
-            .copied()
-            .collect();
-        chart.draw_series(shown.iter().map(|p| Circle::new(*p, 3, grey.filled())))?;
-        legend.add("configuration", move |(x, y)| Circle::new((x + 8, y), 3, grey.filled()));
+        draw_configurations(&mut chart, &pts, &mut legend)?;
         let budget = palette::LIMIT.stroke_width(2);
         chart.draw_series(DashedLineSeries::new(
             vec![(r.budget_mib, y0), (r.budget_mib, y1)],
@@ -843,6 +827,36 @@ impl Figure for ParetoFigure<'_> {
     }
 }
 
+/// The ranges `((x_min, x_max), (y_min, y_max))` of positive points.
+fn extent(pts: &[(f64, f64)]) -> ((f64, f64), (f64, f64)) {
+    pts.iter().fold(
+        ((f64::INFINITY, 0.0f64), (f64::INFINITY, 0.0f64)),
+        |((a, b), (c, d)), p| ((a.min(p.0), b.max(p.0)), (c.min(p.1), d.max(p.1))),
+    )
+}
+
+/// Every configuration as a grey dot on a log-log chart, one dot per 2-pixel cell (a large
+/// sweep draws what can be seen, not every point), with its legend entry.
+fn draw_configurations<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<LogAxis, LogAxis>>,
+    pts: &[(f64, f64)],
+    legend: &mut Legend<DB>,
+) -> PlotResult {
+    let grey = palette::POINT;
+    let mut seen = std::collections::HashSet::new();
+    let shown: Vec<(f64, f64)> = pts
+        .iter()
+        .filter(|p| {
+            let (x, y) = chart.backend_coord(p);
+            seen.insert((x / 2, y / 2))
+        })
+        .copied()
+        .collect();
+    chart.draw_series(shown.iter().map(|p| Circle::new(*p, 3, grey.filled())))?;
+    legend.add("configuration", move |(x, y)| Circle::new((x + 8, y), 3, grey.filled()));
+    Ok(())
+}
+
 /// Pareto front of the render cost (`cost_index`, the configured setting = 1) against the
 /// sweep's objective (`cost_pareto.png`; only with scene geometry, where the cost is counted).
 pub(crate) struct CostParetoFigure<'a>(pub &'a SweepResult);
@@ -867,12 +881,7 @@ impl Figure for CostParetoFigure<'_> {
         if pts.is_empty() {
             return draw_message(root, &title, "No configuration has a measured render cost.");
         }
-        let (xmin, xmax) = pts
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
-        let (ymin, ymax) = pts
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
+        let ((xmin, xmax), (ymin, ymax)) = extent(&pts);
         let budget = r.cost_limit.index;
         let (x0, x1) = log_range(xmin.min(budget.unwrap_or(xmin)), xmax.max(budget.unwrap_or(xmax)));
         let (y0, y1) = log_range(ymin, ymax);
@@ -889,18 +898,7 @@ impl Figure for CostParetoFigure<'_> {
             .axis_desc_style((FONT, 15))
             .label_style((FONT, 13))
             .draw()?;
-        let grey = palette::POINT;
-        let mut seen = std::collections::HashSet::new();
-        let shown: Vec<(f64, f64)> = pts
-            .iter()
-            .filter(|p| {
-                let (x, y) = chart.backend_coord(p);
-                seen.insert((x / 2, y / 2))
-            })
-            .copied()
-            .collect();
-        chart.draw_series(shown.iter().map(|p| Circle::new(*p, 3, grey.filled())))?;
-        legend.add("configuration", move |(x, y)| Circle::new((x + 8, y), 3, grey.filled()));
+        draw_configurations(&mut chart, &pts, &mut legend)?;
         let limit = palette::LIMIT.stroke_width(2);
         match budget {
             Some(b) => {
