@@ -94,12 +94,56 @@ impl View {
             + self.pose.up * ((1.0 - 2.0 * v / h) * self.lens.tan_v)
     }
 
+    /// The pass's sampling grid once: for each sample column the term `r (2u/W - 1) tanH` of
+    /// [`View::ray`] at its pixel centre, for each sample row the term `u (1 - 2v/H) tanV`.
+    /// `forward + across[col] + down[row]` is `ray` of that sample's centre, bit for bit (the
+    /// same operations in the same order), without the per-pixel grid and rounding.
+    pub fn ray_terms(&self) -> RayTerms {
+        let (cols, rows) = self.grid();
+        let (w, h) = (self.width as f64, self.height as f64);
+        let across = (0..cols)
+            .map(|c| {
+                let (u, _) = self.pixel_centre(c, 0);
+                self.pose.right * ((2.0 * u / w - 1.0) * self.lens.tan_h)
+            })
+            .collect();
+        let down = (0..rows)
+            .map(|r| {
+                let (_, v) = self.pixel_centre(0, r);
+                self.pose.up * ((1.0 - 2.0 * v / h) * self.lens.tan_v)
+            })
+            .collect();
+        RayTerms {
+            forward: self.pose.forward,
+            cols: cols as usize,
+            across,
+            down,
+        }
+    }
+
     /// `(d_u, d_v)`: the ray direction's derivatives against screen x and y.
     pub fn ray_derivatives(&self) -> (DVec3, DVec3) {
         (
             self.pose.right * (2.0 * self.lens.tan_h / self.width as f64),
             -self.pose.up * (2.0 * self.lens.tan_v / self.height as f64),
         )
+    }
+}
+
+/// [`View::ray_terms`]: a view's ray directions per sample column and row.
+#[derive(Debug, Clone)]
+pub struct RayTerms {
+    forward: DVec3,
+    cols: usize,
+    across: Vec<DVec3>,
+    down: Vec<DVec3>,
+}
+
+impl RayTerms {
+    /// [`View::ray`] through the centre of sample `k` (row-major).
+    #[inline]
+    pub fn ray(&self, k: usize) -> DVec3 {
+        self.forward + self.across[k % self.cols] + self.down[k / self.cols]
     }
 }
 
@@ -141,9 +185,7 @@ pub struct Hits {
 
 impl Hits {
     fn new(view: View, cols: u32, rows: u32, hits: Vec<Option<Hit>>) -> Hits {
-        let mut by_depth: Vec<u32> = (0..hits.len() as u32).filter(|&k| hits[k as usize].is_some()).collect();
-        let depth = |k: u32| hits[k as usize].map_or(0.0, |h| h.depth);
-        by_depth.par_sort_by(|&a, &b| depth(a).total_cmp(&depth(b)).then(a.cmp(&b)));
+        let by_depth = depth_order(&hits);
         Hits {
             view,
             cols,
@@ -158,20 +200,22 @@ impl Hits {
     /// the rays again for that light.
     pub fn shade(&self, view: &View) -> Visibility {
         let light = LightBasis::new(view.light);
-        let cols = self.cols as usize;
+        let terms = view.ray_terms();
+        let derivatives = view.ray_derivatives();
+        let towards_light = -view.light.normalize();
         let samples: Vec<Option<Sample>> = self
             .hits
             .par_iter()
             .enumerate()
+            .with_min_len(4096)
             .map(|(k, h)| {
                 let h = h.as_ref()?;
-                let (u, v) = view.pixel_centre((k % cols) as u32, (k / cols) as u32);
-                let d = view.ray(u, v);
-                let nl = h.normal.dot(-view.light.normalize());
+                let d = terms.ray(k);
+                let nl = h.normal.dot(towards_light);
                 Some(Sample {
                     depth: h.depth,
                     lit: h.normal.dot(-view.light) > 0.0,
-                    factor: geometric_factor(view, &light, h.normal, d, h.depth),
+                    factor: factor_with(derivatives, &light, h.normal, d, h.depth),
                     contrast: nl.max(0.0),
                 })
             })
@@ -180,7 +224,8 @@ impl Hits {
         // list is the one sorting every (depth, factor, weight) triple would give.
         let mut lit: Vec<(f64, f64, u32)> = self
             .by_depth
-            .iter()
+            .par_iter()
+            .with_min_len(4096)
             .filter_map(|&k| {
                 samples[k as usize]
                     .filter(|s| s.lit)
@@ -196,9 +241,81 @@ impl Hits {
             }
             start = end;
         }
-        let receivers = lit.iter().map(|r| (r.0, r.1)).collect();
-        let weights = lit.iter().map(|r| r.2).collect();
+        let receivers = lit.par_iter().with_min_len(4096).map(|r| (r.0, r.1)).collect();
+        let weights = lit.par_iter().with_min_len(4096).map(|r| r.2).collect();
         Visibility::of_samples(*view, self.cols, self.rows, samples, receivers, weights)
+    }
+}
+
+/// The indices of the hit samples in increasing depth, ties in index order: what sorting by
+/// `(depth.total_cmp, index)` gives, by a stable least-significant-digit radix sort of the
+/// depths' order-preserving 64-bit keys (the map behind `f64::total_cmp`). Only the top 44
+/// bits are radix-sorted (four passes of 11 bits, a pass skipped when every key shares its
+/// digit); runs of keys equal in those bits are then sorted by the whole key, the index
+/// breaking ties. O(n), where the comparison sort it replaces fetched each depth through the
+/// pixel's hit on every comparison.
+fn depth_order(hits: &[Option<Hit>]) -> Vec<u32> {
+    let key = |d: f64| {
+        let b = d.to_bits();
+        // total_cmp's order as unsigned integers: negative numbers reversed, below positive.
+        if b >> 63 == 1 {
+            !b
+        } else {
+            b | (1 << 63)
+        }
+    };
+    let mut a: Vec<(u64, u32)> = hits
+        .iter()
+        .enumerate()
+        .filter_map(|(k, h)| h.map(|h| (key(h.depth), k as u32)))
+        .collect();
+    radix_sort_top44(&mut a);
+    a.into_iter().map(|(_, k)| k).collect()
+}
+
+/// Sorts `(key, index)` pairs given in increasing index order by `(key, index)`: see
+/// [`depth_order`].
+fn radix_sort_top44(a: &mut Vec<(u64, u32)>) {
+    const BITS: u32 = 11;
+    const LOW: u32 = 20;
+    const PASSES: usize = 4;
+    let buckets = 1usize << BITS;
+    let digit = |k: u64, p: usize| ((k >> (LOW + BITS * p as u32)) as usize) & (buckets - 1);
+    let mut counts = vec![0usize; buckets * PASSES];
+    for &(k, _) in a.iter() {
+        for p in 0..PASSES {
+            counts[p * buckets + digit(k, p)] += 1;
+        }
+    }
+    let mut b: Vec<(u64, u32)> = vec![(0, 0); a.len()];
+    for p in 0..PASSES {
+        let c = &mut counts[p * buckets..(p + 1) * buckets];
+        if c.iter().any(|&n| n == a.len()) {
+            continue;
+        }
+        let mut sum = 0;
+        for n in c.iter_mut() {
+            let here = *n;
+            *n = sum;
+            sum += here;
+        }
+        for &x in a.iter() {
+            let d = digit(x.0, p);
+            b[c[d]] = x;
+            c[d] += 1;
+        }
+        std::mem::swap(a, &mut b);
+    }
+    // Equal top bits: in index order (the passes are stable); order them by the whole key.
+    let top = |k: u64| k >> LOW;
+    let mut start = 0;
+    while start < a.len() {
+        let t = top(a[start].0);
+        let end = start + a[start..].iter().take_while(|x| top(x.0) == t).count();
+        if end - start > 1 && !a[start..end].is_sorted() {
+            a[start..end].sort_unstable();
+        }
+        start = end;
     }
 }
 
@@ -242,10 +359,31 @@ impl Visibility {
         receivers: Vec<(f64, f64)>,
         weights: Vec<u32>,
     ) -> Visibility {
-        let self_shadowed = samples.iter().flatten().filter(|s| !s.lit).count();
-        let depth_range = samples.iter().flatten().fold(None, |r: Option<(f64, f64)>, s| {
-            Some(r.map_or((s.depth, s.depth), |(lo, hi)| (lo.min(s.depth), hi.max(s.depth))))
-        });
+        // One pass over the samples for the count and the depth extent (min and max are
+        // exact, so any order gives the same extent).
+        let (self_shadowed, depth_range) = samples
+            .par_iter()
+            .with_min_len(4096)
+            .fold(
+                || (0usize, None::<(f64, f64)>),
+                |(n, r), s| match s {
+                    None => (n, r),
+                    Some(s) => (
+                        n + usize::from(!s.lit),
+                        Some(r.map_or((s.depth, s.depth), |(lo, hi)| (lo.min(s.depth), hi.max(s.depth)))),
+                    ),
+                },
+            )
+            .reduce(
+                || (0, None),
+                |(n, a), (m, b)| {
+                    let r = match (a, b) {
+                        (Some((l0, h0)), Some((l1, h1))) => Some((l0.min(l1), h0.max(h1))),
+                        (x, None) | (None, x) => x,
+                    };
+                    (n + m, r)
+                },
+            );
         let factor_range = receivers.iter().fold(None, |r: Option<(f64, f64)>, &(_, g)| {
             Some(r.map_or((g, g), |(lo, hi)| (lo.min(g), hi.max(g))))
         });
@@ -276,7 +414,12 @@ impl Visibility {
 
 /// `g = 1 / sigma_min(L [X_u X_v])` at a hit with view depth `t`, unit normal `n`, ray `d`.
 pub fn geometric_factor(view: &View, light: &LightBasis, n: DVec3, d: DVec3, t: f64) -> f64 {
-    let (du, dv) = view.ray_derivatives();
+    factor_with(view.ray_derivatives(), light, n, d, t)
+}
+
+/// [`geometric_factor`] with the view's ray derivatives `(d_u, d_v)` given.
+#[inline]
+fn factor_with((du, dv): (DVec3, DVec3), light: &LightBasis, n: DVec3, d: DVec3, t: f64) -> f64 {
     let nd = n.dot(d);
     let xu = t * (du - d * (n.dot(du) / nd));
     let xv = t * (dv - d * (n.dot(dv) / nd));
@@ -303,6 +446,9 @@ struct Tracer {
     /// None when no triangle is left (every one degenerate in binary32).
     bvh: Option<CwBvh>,
     tris: Vec<Triangle>,
+    /// `tris` in the order of the BVH's leaves (`in_bvh_order[i]` is
+    /// `tris[primitive_indices[i]]`): one fetch per intersection test, not two.
+    in_bvh_order: Vec<Triangle>,
     /// The mesh index of each BVH triangle (its first occurrence).
     mesh_index: Vec<u32>,
     dropped: BvhDropped,
@@ -365,9 +511,13 @@ impl Tracer {
         let (tris, mesh_index, dropped) = bvh_input(mesh);
         let bvh = (!tris.is_empty())
             .then(|| build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Default::default()));
+        let in_bvh_order = bvh.as_ref().map_or_else(Vec::new, |b| {
+            b.primitive_indices.iter().map(|&i| tris[i as usize]).collect()
+        });
         Tracer {
             bvh,
             tris,
+            in_bvh_order,
             mesh_index,
             dropped,
         }
@@ -376,14 +526,43 @@ impl Tracer {
     /// Mesh index of the nearest triangle along the ray within `[tmin, tmax]` (ray units), if
     /// any.
     fn nearest(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Option<usize> {
-        let bvh = self.bvh.as_ref()?;
         let ray = Ray::new(v3(origin), v3(dir), tmin as f32, tmax as f32);
-        let mut hit = RayHit::none();
-        let tris = &self.tris;
-        let indices = &bvh.primitive_indices;
-        bvh.ray_traverse(ray, &mut hit, |r, id| tris[indices[id] as usize].intersect(r))
-            .then(|| self.mesh_index[indices[hit.primitive_id as usize] as usize] as usize)
+        self.nearest_bvh(&ray).map(|b| self.mesh_index[b as usize] as usize)
     }
+
+    /// Index (into [`bvh_input`]'s triangles) of the nearest triangle along a binary32 ray.
+    fn nearest_bvh(&self, ray: &Ray) -> Option<u32> {
+        let bvh = self.bvh.as_ref()?;
+        let mut hit = RayHit::none();
+        let tris = &self.in_bvh_order;
+        bvh.ray_traverse(*ray, &mut hit, |r, id| tris[id].intersect(r))
+            .then(|| bvh.primitive_indices[hit.primitive_id as usize])
+    }
+}
+
+/// The binary32 ray the BVH traverses for the pixel whose (unnormalised) ray direction is `d`
+/// ([`View::ray`]): from the camera along `d / |d|`, over the view depths `[near, far]`
+/// widened by a relative 1e-4 (ray units are world units along the unit direction, so view
+/// depth `t` is `t |d|` along the ray). The hit is then recomputed in f64.
+pub fn traced_ray(view: &View, d: DVec3) -> Ray {
+    let len = d.length();
+    let slack = 1e-4;
+    Ray::new(
+        v3(view.pose.position),
+        v3(d / len),
+        (view.near * len * (1.0 - slack)) as f32,
+        (view.far * len * (1.0 + slack)) as f32,
+    )
+}
+
+/// The binary32 rays of every sampled pixel of a view, row-major: what [`SceneGeometry`]
+/// traverses, for a benchmark peer to trace the same rays.
+pub fn primary_rays(view: &View) -> Vec<Ray> {
+    let (cols, rows) = view.grid();
+    let terms = view.ray_terms();
+    (0..cols as usize * rows as usize)
+        .map(|k| traced_ray(view, terms.ray(k)))
+        .collect()
 }
 
 /// A scene's geometry with its BVH (built on first use) and the passes already made.
@@ -407,6 +586,27 @@ fn unlit(view: &View) -> View {
         light: DVec3::ZERO,
         ..*view
     }
+}
+
+/// Side of the square tiles in which the rays are traced.
+const TILE: usize = 8;
+
+/// `f` of every sample of a `cols x rows` grid, row-major, computed in bands of [`TILE`] rows
+/// (in parallel) and inside a band in `TILE x TILE` tiles: neighbouring rays traced one after
+/// the other walk the same BVH nodes. The order changes no value.
+fn tiled<T: Send + Clone + Default>(cols: usize, rows: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    let mut out: Vec<T> = vec![T::default(); cols * rows];
+    out.par_chunks_mut(cols * TILE).enumerate().for_each(|(band, out)| {
+        let band_rows = out.len() / cols;
+        for x0 in (0..cols).step_by(TILE) {
+            for y in 0..band_rows {
+                for x in x0..(x0 + TILE).min(cols) {
+                    out[y * cols + x] = f((band * TILE + y) * cols + x);
+                }
+            }
+        }
+    });
+    out
 }
 
 /// Passes (and cast rays) a scene keeps: the latest ones.
@@ -511,28 +711,17 @@ impl SceneGeometry {
     fn cast_rays(&self, view: &View) -> Hits {
         let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
         let (cols, rows) = view.grid();
-        let hits: Vec<Option<Hit>> = (0..cols as usize * rows as usize)
-            .into_par_iter()
-            .map(|k| {
-                let (u, v) = view.pixel_centre((k % cols as usize) as u32, (k / cols as usize) as u32);
-                self.hit(tracer, view, u, v)
-            })
-            .collect();
+        let terms = view.ray_terms();
+        let hits = tiled(cols as usize, rows as usize, |k| self.hit(tracer, view, terms.ray(k)));
         Hits::new(*view, cols, rows, hits)
     }
 
-    fn hit(&self, tracer: &Tracer, view: &View, u: f64, v: f64) -> Option<Hit> {
-        let d = view.ray(u, v);
-        let len = d.length();
-        // Ray units are world units along the normalised direction: depth t is t |d| along it.
+    fn hit(&self, tracer: &Tracer, view: &View, d: DVec3) -> Option<Hit> {
         let origin = view.pose.position;
-        let slack = 1e-4;
-        let id = tracer.nearest(
-            origin,
-            d / len,
-            view.near * len * (1.0 - slack),
-            view.far * len * (1.0 + slack),
-        )?;
+        let ray = traced_ray(view, d);
+        let id = tracer
+            .nearest_bvh(&ray)
+            .map(|b| tracer.mesh_index[b as usize] as usize)?;
         let [a, b, c] = self.mesh.triangles[id];
         let mut n = (b - a).cross(c - a).normalize();
         let mut nd = n.dot(d);
@@ -575,6 +764,24 @@ impl SceneGeometry {
         let nd = n.dot(dir);
         let t = if nd != 0.0 { n.dot(a - origin) / nd } else { tmin };
         Some(TriangleHit { t, triangle: id })
+    }
+
+    /// The triangles the BVH is built over ([`bvh_input`]), building it if needed.
+    pub fn bvh_triangles(&self) -> &[Triangle] {
+        &self.tracer.get_or_init(|| Tracer::new(&self.mesh)).tris
+    }
+
+    /// Traversal alone (no f64 hit, no sort), as the pass traverses: for each sample of the
+    /// view (row-major; its ray is [`primary_rays`]'), the index into
+    /// [`Self::bvh_triangles`] of the nearest triangle, or `u32::MAX` for a miss. Runs on the
+    /// caller's rayon pool.
+    pub fn trace(&self, view: &View) -> Vec<u32> {
+        let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
+        let (cols, rows) = view.grid();
+        let terms = view.ray_terms();
+        tiled(cols as usize, rows as usize, |k| {
+            tracer.nearest_bvh(&traced_ray(view, terms.ray(k))).unwrap_or(u32::MAX)
+        })
     }
 
     /// Unit normal of triangle `id` (winding order; not oriented).
@@ -675,6 +882,89 @@ mod tests {
                 assert!((s.factor - g).abs() <= 1e-9 * g, "{l} sample {k}: {} vs {g}", s.factor);
             }
         }
+    }
+
+    /// The radix depth order against the comparison sort it replaced, on depths with many
+    /// exact ties (a plane seen row by row), ties in the low bits only, near-equal values and
+    /// a few misses.
+    #[test]
+    fn depth_order_equals_sorting_by_depth_then_index() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut hits = Vec::new();
+        for k in 0..50_000u32 {
+            let r = next();
+            let depth = match r % 5 {
+                0 => 0.1 + (k / 97) as f64 * 0.37,                      // rows of equal depths
+                1 => f64::from_bits(40.0f64.to_bits() + (r >> 40) % 8), // equal top bits
+                2 => 1.0 + (r % 1000) as f64 * 1e-3,
+                3 => (r >> 11) as f64 / (1u64 << 53) as f64 * 999.0 + 0.1,
+                _ => -1.0,
+            };
+            let normal = DVec3::Y;
+            hits.push((depth > 0.0).then_some(Hit { depth, normal }));
+        }
+        let mut expected: Vec<u32> = (0..hits.len() as u32).filter(|&k| hits[k as usize].is_some()).collect();
+        let depth = |k: u32| hits[k as usize].unwrap().depth;
+        expected.sort_by(|&a, &b| depth(a).total_cmp(&depth(b)).then(a.cmp(&b)));
+        assert_eq!(depth_order(&hits), expected);
+        // Negative and signed-zero keys order as total_cmp orders them.
+        let odd = [-2.0, 0.0, -0.0, 3.5, -1e-300, 1e300, -0.0];
+        let hits: Vec<Option<Hit>> = odd
+            .iter()
+            .map(|&depth| {
+                Some(Hit {
+                    depth,
+                    normal: DVec3::Y,
+                })
+            })
+            .collect();
+        let mut expected: Vec<u32> = (0..odd.len() as u32).collect();
+        expected.sort_by(|&a, &b| odd[a as usize].total_cmp(&odd[b as usize]).then(a.cmp(&b)));
+        assert_eq!(depth_order(&hits), expected);
+    }
+
+    /// The traversal against a brute-force nearest hit over every triangle (the same binary32
+    /// test), on a terrain with boxes seen through a camera's full grid of rays.
+    #[test]
+    fn traversal_finds_the_nearest_triangle_of_a_brute_force_search() {
+        let (mut mesh, view) = scene_and_view(DVec3::new(-0.4, -1.0, -0.3));
+        for i in 0..6 {
+            let x = -30.0 + 11.0 * i as f64;
+            mesh.add_box(&crate::geometry::Aabb {
+                min: DVec3::new(x, 0.0, -60.0 - 7.0 * i as f64),
+                max: DVec3::new(x + 4.0, 2.0 + i as f64, -55.0 - 7.0 * i as f64),
+            });
+        }
+        let scene = SceneGeometry::new(mesh);
+        let tris = scene.bvh_triangles().to_vec();
+        let found = scene.trace(&view);
+        let rays = primary_rays(&view);
+        assert_eq!(found.len(), rays.len());
+        let mut hits = 0;
+        for (ray, &id) in rays.iter().zip(&found) {
+            let mut best = (ray.tmax, u32::MAX);
+            for (k, t) in tris.iter().enumerate() {
+                let d = t.intersect(ray);
+                if d >= ray.tmin && d < best.0 {
+                    best = (d, k as u32);
+                }
+            }
+            if best.1 == u32::MAX {
+                assert_eq!(id, u32::MAX);
+            } else {
+                hits += 1;
+                assert_ne!(id, u32::MAX);
+                // The same distance (a tie on a shared edge may pick either triangle).
+                assert_eq!(tris[id as usize].intersect(ray), best.0);
+            }
+        }
+        assert!(hits > rays.len() / 2, "{hits} of {}", rays.len());
     }
 
     #[test]
