@@ -290,7 +290,7 @@ fn radix_sort_top44(a: &mut Vec<(u64, u32)>) {
     let mut b: Vec<(u64, u32)> = vec![(0, 0); a.len()];
     for p in 0..PASSES {
         let c = &mut counts[p * buckets..(p + 1) * buckets];
-        if c.iter().any(|&n| n == a.len()) {
+        if c.contains(&a.len()) {
             continue;
         }
         let mut sum = 0;
