@@ -91,10 +91,29 @@ pub trait Figure {
         Ok(s.into_bytes())
     }
 
-    /// The SVG rasterised at twice its size (crisp on slides and high-DPI screens). Going
-    /// through the SVG keeps one drawing path, so the PNG shows exactly what the SVG shows.
+    /// The SVG rasterised at twice its size (crisp on slides and high-DPI screens; less for
+    /// a figure so large that it would pass [`MAX_PNG_PIXELS`], [`png_scale`]). Going through
+    /// the SVG keeps one drawing path, so the PNG shows exactly what the SVG shows.
     fn to_png(&self) -> Result<Vec<u8>> {
-        svg_to_png(&self.to_svg()?, 2.0)
+        let tree = ParsedSvg::parse(&self.to_svg()?)?;
+        tree.png(png_scale(tree.size()))
+    }
+}
+
+/// The most pixels a figure's PNG file has (give or take a row and a column of rounding): 8 million (32 MB while it is rasterised, RGBA),
+/// more than twice every bundled figure at twice its size, so only a figure of a large grid is
+/// drawn at less than 2×.
+pub(crate) const MAX_PNG_PIXELS: f32 = 8.0e6;
+
+/// PNG pixels per SVG unit for a figure of `size` (SVG units): 2, or less so that the PNG has
+/// at most [`MAX_PNG_PIXELS`] pixels. Keeps the memory of rasterising a figure bounded at any
+/// grid size.
+pub(crate) fn png_scale(size: (f32, f32)) -> f32 {
+    let area = size.0 * size.1;
+    if 4.0 * area <= MAX_PNG_PIXELS {
+        2.0
+    } else {
+        (MAX_PNG_PIXELS / area).sqrt()
     }
 }
 
@@ -167,11 +186,6 @@ impl ParsedSvg {
         let (w, h, rgb) = self.rgb(scale)?;
         encode_png_as(w, h, &rgb, true)
     }
-}
-
-/// Rasterises SVG bytes to an opaque PNG on a white background, `scale` pixels per SVG unit.
-pub(crate) fn svg_to_png(svg: &[u8], scale: f32) -> Result<Vec<u8>> {
-    ParsedSvg::parse(svg)?.png(scale)
 }
 
 /// Rasterises SVG bytes to RGB8 pixels on a white background: (width, height, pixels).
