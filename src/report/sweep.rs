@@ -1335,9 +1335,9 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
     let values = per_view.as_deref().map(|v| (r.objective.name(), v));
     let worst = r.level.as_ref().map(|c| c.worst);
     // Rasterising is most of the figures' time: each SVG is parsed once and rasterised from
-    // that tree for its PNG file (2×, less past `MAX_PNG_PIXELS`) and, when too large to inline as SVG, for the page's copy;
-    // the figures, their two sizes and the plan go in parallel (rayon keeps their order, so the
-    // files are the same at any thread count).
+    // that tree for its PNG file (2×, less past `MAX_PNG_PIXELS`) and, when too large to
+    // inline as SVG, for the page's copy; the figures, their two sizes and the plan go in
+    // parallel (rayon keeps their order, so the files are the same at any thread count).
     let (pngs, plan) = rayon::join(
         || {
             use rayon::prelude::*;
