@@ -3,6 +3,7 @@
 # paired LABEL_A LABEL_B -- CMD_A... -- CMD_B...
 #                                     A and B interleaved (A B A B ...), best of $RUNS each,
 #                                     one row each and a row with the CPU ratio B / A
+# Every row also gives the run's peak resident memory (max RSS, from /usr/bin/time's %M).
 # peer_python                         prints the venv's python (numpy, embreex), installing once
 # All rows go to stdout and to target/speed/speed.md.
 RUNS=${RUNS:-3}
@@ -15,18 +16,18 @@ speed_header() {
   : > "$SPEED_MD"
   speed_row "# csm-lab speed, $(date -u +%Y-%m-%dT%H:%MZ), commit $(git -C "$SPEED_ROOT" rev-parse --short HEAD 2>/dev/null || echo '?'), $(nproc) cores, best of $RUNS by CPU"
   speed_row ""
-  speed_row "| job | run | wall s | CPU s (user+sys) | user s | sys s | load at start |"
-  speed_row "|---|---|---|---|---|---|---|"
+  speed_row "| job | run | wall s | CPU s (user+sys) | user s | sys s | load at start | max RSS MiB |"
+  speed_row "|---|---|---|---|---|---|---|---|"
 }
 speed_section() { SPEED_JOB=$1; }
 speed_footer() { speed_row ""; speed_row "written to target/speed/speed.md"; }
 
-# one_run CMD...: prints "wall user sys" of one whole-process run; the command's own output is
+# one_run CMD...: prints "wall user sys maxrss_kb" of one whole-process run; the command's own output is
 # discarded (its exit status must be 0 or 1: 1 is a threshold verdict, not a failure).
 one_run() {
   local t
   t=$(mktemp)
-  /usr/bin/time -f '%e %U %S' -o "$t" "$@" >/dev/null 2>&1 || {
+  /usr/bin/time -f '%e %U %S %M' -o "$t" "$@" >/dev/null 2>&1 || {
     local rc=$?
     if [ "$rc" -ne 1 ]; then echo "speed: '$*' exited $rc" >&2; rm -f "$t"; return "$rc"; fi
   }
@@ -34,26 +35,26 @@ one_run() {
   rm -f "$t"
 }
 
-# best_of N CMD...: runs N times, prints "wall user sys cpu load" of the run with least CPU
+# best_of N CMD...: runs N times, prints "wall user sys cpu load maxrss_kb" of the run with least CPU
 best_of() {
   local n=$1; shift
   local best="" bestcpu=""
   for _ in $(seq "$n"); do
-    local load w u s cpu
+    local load w u s m cpu
     load=$(cut -d' ' -f1 /proc/loadavg)
-    read -r w u s < <(one_run "$@")
+    read -r w u s m < <(one_run "$@")
     cpu=$(awk -v u="$u" -v s="$s" 'BEGIN { printf "%.2f", u + s }')
     if [ -z "$bestcpu" ] || awk -v a="$cpu" -v b="$bestcpu" 'BEGIN { exit !(a < b) }'; then
-      bestcpu=$cpu; best="$w $u $s $cpu $load"
+      bestcpu=$cpu; best="$w $u $s $cpu $load $m"
     fi
   done
   echo "$best"
 }
 
-emit() { # label "wall user sys cpu load"
-  local label=$1 w u s cpu load
-  read -r w u s cpu load <<<"$2"
-  speed_row "| ${SPEED_JOB:-} | $label | $w | $cpu | $u | $s | $load |"
+emit() { # label "wall user sys cpu load maxrss_kb"
+  local label=$1 w u s cpu load m
+  read -r w u s cpu load m <<<"$2"
+  speed_row "| ${SPEED_JOB:-} | $label | $w | $cpu | $u | $s | $load | $(awk -v k="$m" 'BEGIN { printf "%.1f", k / 1024 }') |"
 }
 
 measure() {
@@ -79,7 +80,7 @@ paired() {
   emit "$lb" "$bestb"
   local ca cb
   ca=$(echo "$besta" | cut -d' ' -f4); cb=$(echo "$bestb" | cut -d' ' -f4)
-  speed_row "| ${SPEED_JOB:-} | CPU ratio $lb / $la | | $(awk -v a="$ca" -v b="$cb" 'BEGIN { if (a > 0) printf "%.2f×", b / a; else print "n/a" }') | | | |"
+  speed_row "| ${SPEED_JOB:-} | CPU ratio $lb / $la | | $(awk -v a="$ca" -v b="$cb" 'BEGIN { if (a > 0) printf "%.2f×", b / a; else print "n/a" }') | | | | |"
 }
 
 pick_less_cpu() {

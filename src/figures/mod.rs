@@ -91,10 +91,29 @@ pub trait Figure {
         Ok(s.into_bytes())
     }
 
-    /// The SVG rasterised at twice its size (crisp on slides and high-DPI screens). Going
-    /// through the SVG keeps one drawing path, so the PNG shows exactly what the SVG shows.
+    /// The SVG rasterised at twice its size (crisp on slides and high-DPI screens; less for
+    /// a figure so large that it would pass [`MAX_PNG_PIXELS`], [`png_scale`]). Going through
+    /// the SVG keeps one drawing path, so the PNG shows exactly what the SVG shows.
     fn to_png(&self) -> Result<Vec<u8>> {
-        svg_to_png(&self.to_svg()?, 2.0)
+        let tree = ParsedSvg::parse(&self.to_svg()?)?;
+        tree.png(png_scale(tree.size()))
+    }
+}
+
+/// The most pixels a figure's PNG file has (give or take a row and a column of rounding): 8 million (32 MB while it is rasterised, RGBA),
+/// more than twice every bundled figure at twice its size, so only a figure of a large grid is
+/// drawn at less than 2×.
+pub(crate) const MAX_PNG_PIXELS: f32 = 8.0e6;
+
+/// PNG pixels per SVG unit for a figure of `size` (SVG units): 2, or less so that the PNG has
+/// at most [`MAX_PNG_PIXELS`] pixels. Keeps the memory of rasterising a figure bounded at any
+/// grid size.
+pub(crate) fn png_scale(size: (f32, f32)) -> f32 {
+    let area = size.0 * size.1;
+    if 4.0 * area <= MAX_PNG_PIXELS {
+        2.0
+    } else {
+        (MAX_PNG_PIXELS / area).sqrt()
     }
 }
 
@@ -112,47 +131,72 @@ fn font_db() -> std::sync::Arc<resvg::usvg::fontdb::Database> {
     .clone()
 }
 
-/// The size of an SVG document in its own units (pixels): (width, height).
-pub(crate) fn svg_size(svg: &[u8]) -> Result<(f32, f32)> {
-    let opt = resvg::usvg::Options {
+/// The options resvg parses an SVG with: the embedded fonts.
+fn usvg_options() -> resvg::usvg::Options<'static> {
+    resvg::usvg::Options {
         font_family: "DejaVu Sans".to_string(),
         fontdb: font_db(),
         ..Default::default()
-    };
-    let tree = resvg::usvg::Tree::from_data(svg, &opt).map_err(|e| PlotError::Rasterise(e.to_string()))?;
-    Ok((tree.size().width(), tree.size().height()))
+    }
 }
 
-/// Rasterises SVG bytes to an opaque PNG on a white background, `scale` pixels per SVG unit.
-pub(crate) fn svg_to_png(svg: &[u8], scale: f32) -> Result<Vec<u8>> {
-    let (w, h, rgb) = svg_to_rgb(svg, scale)?;
-    encode_png(w, h, &rgb)
+/// An SVG document parsed once (text laid out into outlines) and rasterised at any number of
+/// scales from that one tree. Parsing is a third to a half of rasterising a chart at its own
+/// size, so a figure drawn at two sizes (the PNG file and a report's copy) is parsed once.
+pub(crate) struct ParsedSvg(resvg::usvg::Tree);
+
+impl ParsedSvg {
+    pub(crate) fn parse(svg: &[u8]) -> Result<Self> {
+        resvg::usvg::Tree::from_data(svg, &usvg_options())
+            .map(ParsedSvg)
+            .map_err(|e| PlotError::Rasterise(e.to_string()).into())
+    }
+
+    /// The document's size in its own units (pixels): (width, height).
+    pub(crate) fn size(&self) -> (f32, f32) {
+        (self.0.size().width(), self.0.size().height())
+    }
+
+    /// RGB8 pixels on a white background, `scale` pixels per SVG unit: (width, height, pixels).
+    pub(crate) fn rgb(&self, scale: f32) -> Result<(u32, u32, Vec<u8>)> {
+        use resvg::tiny_skia;
+        let (sw, sh) = self.size();
+        let (w, h) = ((sw * scale).ceil() as u32, (sh * scale).ceil() as u32);
+        let mut pixmap =
+            tiny_skia::Pixmap::new(w, h).ok_or_else(|| PlotError::Rasterise(format!("bad size {w}x{h}")))?;
+        pixmap.fill(tiny_skia::Color::WHITE);
+        resvg::render(
+            &self.0,
+            tiny_skia::Transform::from_scale(scale, scale),
+            &mut pixmap.as_mut(),
+        );
+        Ok((w, h, opaque_rgb(pixmap)))
+    }
+
+    /// A PNG `scale` pixels per SVG unit (the files' encoding, [`encode_png`]).
+    pub(crate) fn png(&self, scale: f32) -> Result<Vec<u8>> {
+        let (w, h, rgb) = self.rgb(scale)?;
+        encode_png(w, h, &rgb)
+    }
+
+    /// A PNG `scale` pixels per SVG unit, compressed for inlining into a page: no row filter
+    /// and the best deflate level. A chart is flat colour areas and text, which the default
+    /// (fast deflate, a left-neighbour filter) stores at about ten times the size.
+    pub(crate) fn png_compact(&self, scale: f32) -> Result<Vec<u8>> {
+        let (w, h, rgb) = self.rgb(scale)?;
+        encode_png_as(w, h, &rgb, true)
+    }
 }
 
 /// Rasterises SVG bytes to RGB8 pixels on a white background: (width, height, pixels).
 pub(crate) fn svg_to_rgb(svg: &[u8], scale: f32) -> Result<(u32, u32, Vec<u8>)> {
-    use resvg::tiny_skia;
-    let opt = resvg::usvg::Options {
-        font_family: "DejaVu Sans".to_string(),
-        fontdb: font_db(),
-        ..Default::default()
-    };
-    let tree = resvg::usvg::Tree::from_data(svg, &opt).map_err(|e| PlotError::Rasterise(e.to_string()))?;
-    let size = tree.size();
-    let (w, h) = (
-        (size.width() * scale).ceil() as u32,
-        (size.height() * scale).ceil() as u32,
-    );
-    let mut pixmap = tiny_skia::Pixmap::new(w, h).ok_or_else(|| PlotError::Rasterise(format!("bad size {w}x{h}")))?;
-    pixmap.fill(tiny_skia::Color::WHITE);
-    resvg::render(
-        &tree,
-        tiny_skia::Transform::from_scale(scale, scale),
-        &mut pixmap.as_mut(),
-    );
-    // Opaque background, so premultiplied RGBA equals straight RGBA: drop alpha.
-    // In place: pixel i's RGB moves from 4i to 3i (never past a pixel not yet read), which
-    // saves allocating and faulting in a second image-sized buffer.
+    ParsedSvg::parse(svg)?.rgb(scale)
+}
+
+/// An opaque pixmap's pixels as RGB8. Opaque, so premultiplied RGBA equals straight RGBA: the
+/// alpha is dropped, in place: pixel i's RGB moves from 4i to 3i (never past a pixel not yet
+/// read), which saves allocating and faulting in a second image-sized buffer.
+pub(crate) fn opaque_rgb(pixmap: resvg::tiny_skia::Pixmap) -> Vec<u8> {
     let mut rgb = pixmap.take();
     let n = rgb.len() / 4;
     for i in 0..n {
@@ -162,20 +206,12 @@ pub(crate) fn svg_to_rgb(svg: &[u8], scale: f32) -> Result<(u32, u32, Vec<u8>)> 
         rgb[d + 2] = rgb[s + 2];
     }
     rgb.truncate(3 * n);
-    Ok((w, h, rgb))
+    rgb
 }
 
 /// RGB8 pixels to PNG bytes.
 pub(crate) fn encode_png(w: u32, h: u32, rgb: &[u8]) -> Result<Vec<u8>> {
     encode_png_as(w, h, rgb, false)
-}
-
-/// A figure's SVG as a PNG `scale` pixels per SVG unit, compressed for inlining into a page:
-/// no row filter and the best deflate level. A chart is flat colour areas and text, which the
-/// default (fast deflate, a left-neighbour filter) stores at about ten times the size.
-pub(crate) fn svg_to_png_compact(svg: &[u8], scale: f32) -> Result<Vec<u8>> {
-    let (w, h, rgb) = svg_to_rgb(svg, scale)?;
-    encode_png_as(w, h, &rgb, true)
 }
 
 fn encode_png_as(w: u32, h: u32, rgb: &[u8], compact: bool) -> Result<Vec<u8>> {

@@ -64,6 +64,16 @@ pub(crate) fn plan_png(
     worst: Option<usize>,
     scale: f32,
 ) -> Result<Option<Vec<u8>>> {
+    Ok(plan_pngs(config, values, worst, &[scale])?.map(|mut v| v.remove(0)))
+}
+
+/// [`plan_png`] at each of `scales`, from one height image and one parsed overlay.
+pub(crate) fn plan_pngs(
+    config: &Config,
+    values: Option<(&str, &[f64])>,
+    worst: Option<usize>,
+    scales: &[f32],
+) -> Result<Option<Vec<Vec<u8>>>> {
     let Some(g) = &config.geometry else {
         return Ok(None);
     };
@@ -83,7 +93,7 @@ pub(crate) fn plan_png(
         worst,
         light: config.light_direction,
     };
-    plan.png(scale).map(Some)
+    plan.pngs(scales).map(Some)
 }
 
 /// The height image: (columns, rows, height of the top surface per cell, row-major from −Z to
@@ -363,34 +373,39 @@ impl Plan<'_> {
 
     /// The figure as PNG bytes: the height image under the SVG overlay, `scale` pixels per SVG
     /// unit.
+    #[cfg(test)]
     pub(crate) fn png(&self, scale: f32) -> Result<Vec<u8>> {
+        let mut v = self.pngs(&[scale])?;
+        Ok(v.remove(0))
+    }
+
+    /// The plan as a PNG at each of `scales`: the overlay, the height image and its shading
+    /// are made and parsed once, then painted and rasterised per scale (in parallel).
+    pub(crate) fn pngs(&self, scales: &[f32]) -> Result<Vec<Vec<u8>>> {
         let rect = drawn_rect(&self.bounds, self.views);
         let (svg, area, padded) = self.overlay(rect).map_err(|e| PlotError::Draw(e.0))?;
         let hm = heights(self.scene, rect, self.bounds.max.y, self.bounds.min.y);
         let colours = shade(&hm);
-        let (w, h) = (
-            (SIZE.0 as f32 * scale).ceil() as u32,
-            (SIZE.1 as f32 * scale).ceil() as u32,
-        );
-        let mut pixmap =
-            resvg::tiny_skia::Pixmap::new(w, h).ok_or_else(|| PlotError::Rasterise(format!("bad size {w}x{h}")))?;
-        pixmap.fill(resvg::tiny_skia::Color::WHITE);
-        paint_heights(&mut pixmap, &hm, &colours, area, padded, scale);
-        let opt = resvg::usvg::Options {
-            font_family: "DejaVu Sans".to_string(),
-            fontdb: super::font_db(),
-            ..Default::default()
-        };
-        let tree =
-            resvg::usvg::Tree::from_data(svg.as_bytes(), &opt).map_err(|e| PlotError::Rasterise(e.to_string()))?;
-        resvg::render(
-            &tree,
-            resvg::tiny_skia::Transform::from_scale(scale, scale),
-            &mut pixmap.as_mut(),
-        );
-        let rgba = pixmap.take();
-        let rgb: Vec<u8> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
-        super::encode_png(w, h, &rgb)
+        let tree = super::ParsedSvg::parse(svg.as_bytes())?;
+        scales
+            .par_iter()
+            .map(|&scale| {
+                let (w, h) = (
+                    (SIZE.0 as f32 * scale).ceil() as u32,
+                    (SIZE.1 as f32 * scale).ceil() as u32,
+                );
+                let mut pixmap = resvg::tiny_skia::Pixmap::new(w, h)
+                    .ok_or_else(|| PlotError::Rasterise(format!("bad size {w}x{h}")))?;
+                pixmap.fill(resvg::tiny_skia::Color::WHITE);
+                paint_heights(&mut pixmap, &hm, &colours, area, padded, scale);
+                resvg::render(
+                    &tree.0,
+                    resvg::tiny_skia::Transform::from_scale(scale, scale),
+                    &mut pixmap.as_mut(),
+                );
+                super::encode_png(w, h, &super::opaque_rgb(pixmap))
+            })
+            .collect()
     }
 }
 

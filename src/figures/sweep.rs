@@ -61,6 +61,32 @@ pub(crate) fn setting_words(r: &SweepResult, s: &Setting) -> String {
 /// lowest value among adjacent λ), which keeps the SVG bounded at any grid size.
 pub(crate) const MAX_HEAT_COLUMNS: usize = 48;
 
+/// The most resolutions a heat map draws panels for (its panel columns when λ is the x axis).
+/// A longer resolution axis shows the resolution of the figures' focus (the recommendation, or
+/// the closest row) and an even spread of the others, and says so in the figure's note; every
+/// row stays in `sweep.csv`. This bounds the figure's size, and so its memory, at any grid size.
+pub(crate) const MAX_HEAT_RESOLUTIONS: usize = 6;
+
+/// The resolutions a heat map draws: all of `resolutions` when there are at most `most`;
+/// otherwise `most` of them in grid order: `focus` (when given) and an even spread over the
+/// axis (its first and last included), the spread's pick nearest `focus` replaced by it.
+pub(crate) fn shown_resolutions(resolutions: &[u32], focus: Option<u32>, most: usize) -> Vec<u32> {
+    let n = resolutions.len();
+    if n <= most {
+        return resolutions.to_vec();
+    }
+    assert!(most >= 2, "a spread needs its two ends");
+    let mut picks: Vec<usize> = (0..most).map(|i| (i * (n - 1) + (most - 1) / 2) / (most - 1)).collect();
+    if let Some(f) = focus.and_then(|f| resolutions.iter().position(|&r| r == f)) {
+        if !picks.contains(&f) {
+            let nearest = (0..most).min_by_key(|&k| picks[k].abs_diff(f)).expect("most >= 2");
+            picks[nearest] = f;
+            picks.sort_unstable();
+        }
+    }
+    picks.into_iter().map(|i| resolutions[i]).collect()
+}
+
 /// Aliasing over λ × cascade count, one panel per metric, resolution and fit (or over resolution ×
 /// cascade count when the grid has one λ, as for engine presets). Each panel has its own colour
 /// scale, so the effect of λ shows within every resolution.
@@ -128,12 +154,22 @@ impl HeatmapFigure<'_> {
         (n.div_ceil(per), per)
     }
 
+    /// The resolutions with panels ([`shown_resolutions`]; every one unless λ is the x axis
+    /// and the grid has more than [`MAX_HEAT_RESOLUTIONS`]).
+    fn resolutions(&self) -> Vec<u32> {
+        let all = &self.0.grid.resolution.values;
+        if !self.lambda_axis() {
+            return all.clone();
+        }
+        shown_resolutions(all, focus(self.0).map(|x| x.0.setting.resolution), MAX_HEAT_RESOLUTIONS)
+    }
+
     /// (panel columns, panel rows).
     fn layout(&self) -> (usize, usize) {
         let fits = self.0.fit_groups.len().max(1);
         let metrics = heat_metrics(self.0).len();
         if self.lambda_axis() {
-            (self.0.grid.resolution.values.len().max(1), metrics * fits)
+            (self.resolutions().len().max(1), metrics * fits)
         } else {
             (metrics, fits)
         }
@@ -148,7 +184,7 @@ impl HeatmapFigure<'_> {
             None => x.setting.lambda,
         };
         let counts = &r.grid.cascades.values;
-        let resolutions = &r.grid.resolution.values;
+        let resolutions = &self.resolutions();
         let rec = focus(r).map(|x| x.0.setting);
         let y_labels: Vec<String> = counts.iter().map(|c| c.to_string()).collect();
         let within = |x: &Row| mib(x.summary.memory_bytes) <= r.budget_mib;
@@ -306,10 +342,20 @@ impl Figure for HeatmapFigure<'_> {
             Some((x, ok)) => format!("Red ring: {} ({})", focus_word(ok), setting_words(r, &x.setting)),
             None => "No configuration needs cascades: nothing is marked".to_string(),
         };
-        let note = format!(
+        let mut note = format!(
             "Lower is better; each panel has its own colour scale. {rec}. White line: {} MiB memory budget (cells above or right of it exceed it). Grey: no cascades needed.",
             tick(r.budget_mib)
         );
+        let (shown, all) = (self.resolutions().len(), r.grid.resolution.values.len());
+        if shown < all {
+            note.push_str(&format!(
+                " Panels for {shown} of the {all} resolutions ({} and an even spread; sweep.csv has every row).",
+                match focus(r) {
+                    Some((x, _)) => format!("the red ring's {}²", x.setting.resolution),
+                    None => "the first and last".to_string(),
+                }
+            ));
+        }
         let font = if note.len() as f64 * 7.0 * k > f64::from(w) {
             12
         } else {
@@ -953,6 +999,39 @@ impl Figure for CostParetoFigure<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_heat_map_shows_every_resolution_up_to_six_then_the_focus_and_an_even_spread() {
+        let all: Vec<u32> = (0..60).map(|i| 256 + 64 * i).collect();
+        for n in 1..=all.len() {
+            let axis = &all[..n];
+            for focus in std::iter::once(None).chain(axis.iter().copied().map(Some)) {
+                let shown = shown_resolutions(axis, focus, 6);
+                if n <= 6 {
+                    assert_eq!(shown, axis);
+                    continue;
+                }
+                assert_eq!(shown.len(), 6, "n {n}, focus {focus:?}");
+                let at: Vec<usize> = shown
+                    .iter()
+                    .map(|r| axis.iter().position(|a| a == r).unwrap())
+                    .collect();
+                assert!(at.windows(2).all(|w| w[0] < w[1]), "in grid order, distinct: {at:?}");
+                if let Some(f) = focus {
+                    assert!(shown.contains(&f), "n {n}: {f} missing from {shown:?}");
+                }
+                // Brute force: the even spread is the nearest index to i (n − 1) / 5.
+                let spread: Vec<usize> = (0..6)
+                    .map(|i| (i as f64 * (n - 1) as f64 / 5.0).round() as usize)
+                    .collect();
+                let differ = at.iter().filter(|i| !spread.contains(i)).count();
+                match focus.map(|f| axis.iter().position(|&a| a == f).unwrap()) {
+                    Some(f) if !spread.contains(&f) => assert_eq!(differ, 1, "only the focus replaces a pick"),
+                    _ => assert_eq!(at, spread, "n {n}"),
+                }
+            }
+        }
+    }
 
     #[test]
     fn five_numbers_are_min_quartiles_median_max() {

@@ -85,16 +85,26 @@ pub(crate) fn figure_png(stem: &str, png: &[u8], width: u32, caption: &str, svg_
     )
 }
 
-/// Inline as SVG when small, as a PNG of at most [`INLINE_PNG_WIDTH`] pixels when not
-/// ([`INLINE_SVG_LIMIT`]): never a reference to a file the page needs.
-pub(crate) fn figure_bounded(stem: &str, svg: &[u8], caption: &str) -> crate::error::Result<String> {
+/// The PNG a page inlines in place of an SVG larger than [`INLINE_SVG_LIMIT`]: at most
+/// [`INLINE_PNG_WIDTH`] pixels wide, rasterised from the figure's parsed SVG (`tree`, so a
+/// figure rasterised for its PNG file too is parsed once): (PNG bytes, width in pixels). None
+/// for an SVG small enough to inline as it is.
+pub(crate) fn inline_png(svg: &[u8], tree: &crate::figures::ParsedSvg) -> crate::error::Result<Option<(Vec<u8>, u32)>> {
     if svg.len() <= INLINE_SVG_LIMIT {
-        return Ok(figure(svg, caption));
+        return Ok(None);
     }
-    let (w, _) = crate::figures::svg_size(svg)?;
+    let (w, _) = tree.size();
     let scale = (INLINE_PNG_WIDTH / w).min(1.0);
-    let png = crate::figures::svg_to_png_compact(svg, scale)?;
-    Ok(figure_png(stem, &png, (w * scale).ceil() as u32, caption, svg.len()))
+    Ok(Some((tree.png_compact(scale)?, (w * scale).ceil() as u32)))
+}
+
+/// Inline as SVG when small, as the PNG [`inline_png`] made when not ([`INLINE_SVG_LIMIT`]):
+/// never a reference to a file the page needs.
+pub(crate) fn figure_bounded(stem: &str, svg: &[u8], caption: &str, png: Option<&(Vec<u8>, u32)>) -> String {
+    match png {
+        Some((png, width)) => figure_png(stem, png, *width, caption, svg.len()),
+        None => figure(svg, caption),
+    }
 }
 
 /// Definitions of a table's columns, as a definition list under the table: (term, text).

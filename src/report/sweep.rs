@@ -13,7 +13,7 @@ use crate::commands::sweep::SweepResult;
 use crate::config::Config;
 use crate::error::Result;
 use crate::figures::sweep::{HeatmapFigure, LambdaDensityFigure, ParetoFigure, ShimmerSweepFigure};
-use crate::figures::{svg_to_png, Figure};
+use crate::figures::Figure;
 use crate::metric;
 use crate::metric::worst_words;
 use crate::output::{count, json_bytes, num, percent_change, short_number as n, signed_percent};
@@ -1095,6 +1095,7 @@ fn rest_sentence(r: &SweepResult, front_left: usize) -> String {
 pub(crate) fn report_html(
     r: &SweepResult,
     figures: &[(&str, String, Vec<u8>)],
+    inline: &[Option<(Vec<u8>, u32)>],
     sheet: Option<&[u8]>,
     plan: Option<&[u8]>,
 ) -> Result<Vec<u8>> {
@@ -1182,8 +1183,13 @@ pub(crate) fn report_html(
     }
     if !figures.is_empty() {
         h.push_str("<h2>Plots</h2>\n");
-        for (stem, caption, svg) in figures {
-            h.push_str(&html::figure_bounded(stem, svg, caption)?);
+        for (i, (stem, caption, svg)) in figures.iter().enumerate() {
+            h.push_str(&html::figure_bounded(
+                stem,
+                svg,
+                caption,
+                inline.get(i).and_then(Option::as_ref),
+            ));
         }
     }
     let (front, front_left) = front_shown(r);
@@ -1319,18 +1325,48 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
         json_bytes("recommendation", &recommendation_value(r))?,
     )];
     let figures = if plots { render_figures(r)? } else { Vec::new() };
-    // Rasterising is most of the time of a small sweep: the figures go to PNG in parallel
-    // (rayon keeps their order, so the files are the same at any thread count).
-    let pngs = {
-        use rayon::prelude::*;
-        figures
-            .par_iter()
-            .map(|(_, _, svg)| svg_to_png(svg, 2.0))
-            .collect::<Result<Vec<_>>>()?
-    };
-    for ((stem, _, svg), png) in figures.iter().zip(pngs) {
+    // The plan of the level's views, with scene geometry and plots, each view coloured by its
+    // objective at the level's choice and the worst ringed; the report inlines a copy at the
+    // figure's own size, so the page stays small.
+    let per_view: Option<Vec<f64>> = r
+        .level
+        .as_ref()
+        .map(|c| c.views.iter().map(|v| v.objective_at_level).collect());
+    let values = per_view.as_deref().map(|v| (r.objective.name(), v));
+    let worst = r.level.as_ref().map(|c| c.worst);
+    // Rasterising is most of the figures' time: each SVG is parsed once and rasterised from
+    // that tree for its PNG file (2×, less past `MAX_PNG_PIXELS`) and, when too large to
+    // inline as SVG, for the page's copy; the figures, their two sizes and the plan go in
+    // parallel (rayon keeps their order, so the files are the same at any thread count).
+    let (pngs, plan) = rayon::join(
+        || {
+            use rayon::prelude::*;
+            figures
+                .par_iter()
+                .map(|(_, _, svg)| {
+                    let tree = crate::figures::ParsedSvg::parse(svg)?;
+                    let (file, inline) = rayon::join(
+                        || tree.png(crate::figures::png_scale(tree.size())),
+                        || html::inline_png(svg, &tree),
+                    );
+                    Ok((file?, inline?))
+                })
+                .collect::<Result<Vec<_>>>()
+        },
+        || {
+            if plots {
+                crate::figures::plan::plan_pngs(&r.config, values, worst, &[2.0, 1.0])
+            } else {
+                Ok(None)
+            }
+        },
+    );
+    let (pngs, plan) = (pngs?, plan?);
+    let mut inline = Vec::with_capacity(pngs.len());
+    for ((stem, _, svg), (png, page_png)) in figures.iter().zip(pngs) {
         files.push((format!("{stem}.svg"), svg.clone()));
         files.push((format!("{stem}.png"), png));
+        inline.push(page_png);
     }
     if let Some(o) = &r.optimized {
         files.push((super::optimize::FILE.to_string(), super::optimize::csv(r, o)?));
@@ -1355,29 +1391,19 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
     if let Some(png) = &sheet {
         files.push((super::views::SHEET.to_string(), png.clone()));
     }
-    // The plan of the level's views, with scene geometry and plots, each view coloured by its
-    // objective at the level's choice and the worst ringed; the report inlines a copy at the
-    // figure's own size, so the page stays small.
-    let per_view: Option<Vec<f64>> = r
-        .level
-        .as_ref()
-        .map(|c| c.views.iter().map(|v| v.objective_at_level).collect());
-    let values = per_view.as_deref().map(|v| (r.objective.name(), v));
-    let worst = r.level.as_ref().map(|c| c.worst);
-    let (plan, plan_inline) = if plots {
-        (
-            crate::figures::plan::plan_png(&r.config, values, worst, 2.0)?,
-            crate::figures::plan::plan_png(&r.config, values, worst, 1.0)?,
-        )
-    } else {
-        (None, None)
+    let (plan, plan_inline) = match plan {
+        Some(mut v) => {
+            let inline = v.pop();
+            (v.pop(), inline)
+        }
+        None => (None, None),
     };
     if let Some(png) = plan {
         files.push((crate::figures::plan::FILE.to_string(), png));
     }
     files.push((
         "report.html".to_string(),
-        report_html(r, &figures, sheet.as_deref(), plan_inline.as_deref())?,
+        report_html(r, &figures, &inline, sheet.as_deref(), plan_inline.as_deref())?,
     ));
     files.push(("report.md".to_string(), report_md(r, &figures, sheet.is_some())));
     if let Some(s) = &r.engine_setting {

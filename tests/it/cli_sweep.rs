@@ -553,3 +553,58 @@ fn a_recommendation_at_the_edge_of_a_swept_range_is_named_with_the_range_to_try_
         objective(&rec)
     );
 }
+
+/// Width and height of a PNG, from its header.
+fn png_size(bytes: &[u8]) -> (u32, u32) {
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    let be = |i: usize| u32::from_be_bytes(bytes[i..i + 4].try_into().unwrap());
+    (be(16), be(20))
+}
+
+#[test]
+fn a_heat_map_of_many_resolutions_draws_six_of_them_and_its_png_stays_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = small_config(dir.path());
+    let out = dir.path().join("o");
+    // 9 resolutions × 3 λ × 2 counts × 2 fits: more resolutions than the heat map has panels for.
+    let resolutions: Vec<String> = (0..9).map(|i| (512 + 128 * i).to_string()).collect();
+    let o = sweep(
+        &cfg,
+        &out,
+        &["--cascades", "2,4", "--resolution", &resolutions.join(",")],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let rec: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("recommendation.json")).unwrap()).unwrap();
+    let focus = rec["recommended"]["resolution"].as_u64().expect("a recommendation");
+    let svg = std::fs::read_to_string(out.join("heatmap.svg")).unwrap();
+    // The panels' captions name their resolution: "<metric> · <res>² · <fit>".
+    let mut shown: Vec<u64> = svg
+        .split(" · ")
+        .filter_map(|part| part.strip_suffix('²').and_then(|r| r.parse().ok()))
+        .collect();
+    shown.sort_unstable();
+    shown.dedup();
+    assert_eq!(shown.len(), 6, "{shown:?}");
+    assert!(
+        shown.contains(&focus),
+        "the recommendation's {focus}² has a panel: {shown:?}"
+    );
+    let all: Vec<u64> = resolutions.iter().map(|r| r.parse().unwrap()).collect();
+    assert!(shown.iter().all(|r| all.contains(r)));
+    assert!(
+        svg.contains(&format!(
+            "Panels for 6 of the 9 resolutions (the red ring&apos;s {focus}² and an even spread"
+        )),
+        "the note says which panels are drawn"
+    );
+    // Six panel columns (400 SVG pixels each) and four rows (2 metrics × 2 fits): 2440 × 1310,
+    // which at 2× would be 12.8 million pixels; the PNG is scaled to at most 8 million.
+    assert!(svg.starts_with("<svg width=\"2440\" height=\"1310\""), "{}", &svg[..60]);
+    let (w, h) = png_size(&std::fs::read(out.join("heatmap.png")).unwrap());
+    let scale = (8.0e6f64 / (2440.0 * 1310.0)).sqrt();
+    assert_eq!((w, h), ((2440.0 * scale).ceil() as u32, (1310.0 * scale).ceil() as u32));
+    assert!(f64::from(w) * f64::from(h) <= 8.0e6 + f64::from(w + h));
+    // A figure under the cap keeps 2×.
+    assert_eq!(png_size(&std::fs::read(out.join("pareto.png")).unwrap()), (1920, 1264));
+}
