@@ -385,3 +385,78 @@ fn plane_depth(t: &LightTri, q: DVec2) -> f64 {
     );
     wp * p.z + wr * r.z + ws * s.z
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Aabb;
+    use crate::mesh::Mesh;
+    use crate::rng::SplitMix64;
+
+    /// The default scene's ground and boxes (a tree canopy above its trunk, a low wall).
+    fn scene() -> SceneGeometry {
+        let mut mesh = Mesh::default();
+        mesh.add_ground(0.0, -200.0, 200.0, -200.0, 200.0);
+        for (min, max) in [
+            ([-40.0, 0.0, -90.0], [-20.0, 40.0, -60.0]),
+            ([15.0, 0.0, -70.0], [35.0, 25.0, -45.0]),
+            ([-12.0, 0.0, -160.0], [12.0, 30.0, -130.0]),
+            ([-7.2, 0.0, -24.2], [-6.8, 3.0, -23.8]),
+            ([-9.0, 3.0, -26.0], [-5.0, 7.0, -22.0]),
+            ([5.0, 0.0, -20.0], [25.0, 1.5, -19.5]),
+        ] {
+            mesh.add_box(&Aabb::new(DVec3::from(min), DVec3::from(max)));
+        }
+        SceneGeometry::new(mesh)
+    }
+
+    /// Rays along the light from before every triangle, through points spread over the scene's
+    /// footprint and clustered at its edges: wherever the cover names a triangle (or a miss),
+    /// the BVH names the same one and the hit distance is the same to the bit. The cover must
+    /// decide most rays, or it is no fast path.
+    #[test]
+    fn the_cover_agrees_with_the_bvh_wherever_it_decides() {
+        let scene = scene();
+        let b = scene.mesh.bounds().unwrap();
+        for light in [
+            DVec3::new(-0.4, -1.0, -0.3),
+            DVec3::new(0.3, -0.2, 0.9),
+            DVec3::new(0.0, -1.0, 0.0),
+            DVec3::new(1.0, -1e-3, 0.0),
+        ] {
+            let basis = LightBasis::new(light);
+            let cover = LightCover::new(&scene, &basis);
+            let (lo, hi) = (0..8).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+                let z = basis.z.dot(b.corner(c));
+                (lo.min(z), hi.max(z))
+            });
+            let start = lo - 1.0;
+            let mut rng = SplitMix64::new(7);
+            let mut decided = 0;
+            let n = 40_000;
+            for k in 0..n {
+                // Half uniform over the footprint, half within a unit of a box corner.
+                let q = if k % 2 == 0 {
+                    let p = DVec3::new(rng.range(-230.0, 230.0), rng.range(0.0, 40.0), rng.range(-230.0, 230.0));
+                    basis.to_light_xy(p)
+                } else {
+                    let c = scene.mesh.triangles[(rng.next_u64() % scene.mesh.triangles.len() as u64) as usize][0];
+                    basis.to_light_xy(c) + DVec2::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0))
+                };
+                let origin = basis.x * q.x + basis.y * q.y + basis.z * start;
+                let bvh = scene.first_hit(origin, basis.z, 0.0, hi - lo + 2.0);
+                match cover.at(q) {
+                    Cell::Unknown => continue,
+                    Cell::Miss => assert_eq!(bvh, None, "{light} at {q}"),
+                    Cell::Owner(t) => {
+                        let h = bvh.unwrap_or_else(|| panic!("{light} at {q}: the BVH misses {t}"));
+                        assert_eq!(h.triangle, t, "{light} at {q}");
+                        assert_eq!(cover.hit(&scene, t, origin, basis.z, 0.0).t.to_bits(), h.t.to_bits());
+                    }
+                }
+                decided += 1;
+            }
+            assert!(decided > n * 7 / 10, "{light}: the cover decided {decided} of {n} rays");
+        }
+    }
+}

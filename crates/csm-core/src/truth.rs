@@ -1861,3 +1861,47 @@ pub fn flip_image(cols: u32, rows: u32, points: &[Receiver], f: &Flicker) -> Fli
     }
     FlipImage { cols, rows, flips }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::floor;
+
+    /// The library-free floor equals `f64::floor` to the bit, at whole numbers and either side
+    /// of them, at signed zeros, beyond 2^52, at the infinities and on random values.
+    #[test]
+    fn floor_is_f64_floor_to_the_bit() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MAX,
+            f64::MIN,
+            1e300,
+            -1e300,
+        ];
+        for k in -5i64..=5 {
+            let x = k as f64;
+            xs.extend([x, x.next_up(), x.next_down(), x + 0.5]);
+        }
+        for e in 50..=54 {
+            let x = 2f64.powi(e);
+            xs.extend([
+                x,
+                -x,
+                x.next_up(),
+                x.next_down(),
+                -x.next_down(),
+                -x.next_up(),
+                x + 0.5,
+                -x - 0.5,
+            ]);
+        }
+        let mut rng = crate::rng::SplitMix64::new(3);
+        xs.extend((0..10_000).map(|_| rng.range(-1e6, 1e6)));
+        for x in xs {
+            assert_eq!(floor(x).to_bits(), x.floor().to_bits(), "{x}");
+        }
+        assert!(floor(f64::NAN).is_nan());
+    }
+}
