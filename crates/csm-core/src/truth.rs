@@ -2,14 +2,14 @@
 //!
 //! **The map.** A cascade's depth map holds, at each texel centre, the light depth of the first
 //! surface a ray along the light meets there (the point-sampling rasterisation rule; both faces
-//! of every triangle cast, no culling). Maps are never rasterised whole: [`ShadowMaps`] casts the
-//! ray of a texel the first time a receiver reads it and keeps the depth, keyed by the texel's
-//! grid (cascade, light basis, texel size and the window origin's fraction of a texel) and its
-//! whole-texel index on that grid. A snapped window moves by whole texels, so its grid stays the
-//! same and every frame reuses the texels read before; an unsnapped window's fraction changes
-//! each frame, so its grid is new each frame and only texels shared within the frame are reused
-//! (a grid not read in a frame is dropped). The fraction is rounded to `2^-20` texel for the key
-//! and for the texel centres (a shift below a millionth of a texel).
+//! of every triangle cast, no culling). Maps are never rasterised whole: [`ShadowMaps`] traces
+//! a texel's ray when a receiver reads it, through the scene's [`LightCover`] in the grid's
+//! basis where a cell names the first triangle for certain and through the BVH elsewhere. A
+//! texel lies on a grid (cascade, light basis, texel size and the window origin's fraction of a
+//! texel) at a whole-texel index. A snapped window moves by whole texels, so its grid stays the
+//! same from frame to frame; an unsnapped window's fraction changes each frame, so its grid is
+//! new each frame (a grid not read in a frame is dropped). The fraction is rounded to `2^-20`
+//! texel for the key and for the texel centres (a shift below a millionth of a texel).
 //!
 //! **A receiver** `p` (a world-fixed point with unit normal `n` turned toward the light) read
 //! by cascade `i`: the normal offset moves it to `p' = p + v`; its texel is the floor of its
