@@ -2,14 +2,14 @@
 //!
 //! **The map.** A cascade's depth map holds, at each texel centre, the light depth of the first
 //! surface a ray along the light meets there (the point-sampling rasterisation rule; both faces
-//! of every triangle cast, no culling). Maps are never rasterised whole: [`ShadowMaps`] casts the
-//! ray of a texel the first time a receiver reads it and keeps the depth, keyed by the texel's
-//! grid (cascade, light basis, texel size and the window origin's fraction of a texel) and its
-//! whole-texel index on that grid. A snapped window moves by whole texels, so its grid stays the
-//! same and every frame reuses the texels read before; an unsnapped window's fraction changes
-//! each frame, so its grid is new each frame and only texels shared within the frame are reused
-//! (a grid not read in a frame is dropped). The fraction is rounded to `2^-20` texel for the key
-//! and for the texel centres (a shift below a millionth of a texel).
+//! of every triangle cast, no culling). Maps are never rasterised whole: [`ShadowMaps`] traces
+//! a texel's ray when a receiver reads it, through the scene's [`LightCover`] in the grid's
+//! basis where a cell names the first triangle for certain and through the BVH elsewhere. A
+//! texel lies on a grid (cascade, light basis, texel size and the window origin's fraction of a
+//! texel) at a whole-texel index. A snapped window moves by whole texels, so its grid stays the
+//! same from frame to frame; an unsnapped window's fraction changes each frame, so its grid is
+//! new each frame (a grid not read in a frame is dropped). The fraction is rounded to `2^-20`
+//! texel for the key and for the texel centres (a shift below a millionth of a texel).
 //!
 //! **A receiver** `p` (a world-fixed point with unit normal `n` turned toward the light) read
 //! by cascade `i`: the normal offset moves it to `p' = p + v`; its texel is the floor of its
@@ -34,6 +34,7 @@ use std::sync::Arc;
 use crate::cascades::{LightPose, Rig};
 use crate::fitting::Window;
 use crate::geometry::{Aabb, CameraPose, LightBasis};
+use crate::light_cover::{Cell, LightCover};
 use crate::metrics::cascade_at;
 use crate::precision::{frame_anchors, EnginePipeline};
 use crate::scene::SnapSpace;
@@ -528,6 +529,16 @@ struct GridKey {
     fraction: [i64; 2],
 }
 
+/// A family of grids: one cascade's grids in one basis with one texel size (they differ only
+/// by the window origin's fraction). A receiver's placement before the fraction is the same
+/// on each.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct FamilyKey {
+    cascade: u32,
+    basis: [u64; 6],
+    texel: [u64; 2],
+}
+
 struct Grid {
     basis: LightBasis,
     texel: DVec2,
@@ -536,7 +547,11 @@ struct Grid {
     /// Light depth where texel rays start, and how far they go.
     start: f64,
     length: f64,
-    texels: Fast<(i64, i64), Stored>,
+    /// The scene's light-space cover in this basis, when one is made (see [`ShadowMaps`]).
+    cover: Option<Arc<LightCover>>,
+    family: u32,
+    /// The texels read so far (for the counts; a cache would hold their rays).
+    seen: Fast<(i64, i64), ()>,
     used: bool,
 }
 
@@ -552,7 +567,8 @@ impl Grid {
 pub struct CacheStats {
     /// Texel reads by receivers (a receiver whose texel did not change reads it again).
     pub reads: u64,
-    /// Rays cast for texels not yet held.
+    /// Texels read for the first time on their grid: the rays a cache that keeps every texel
+    /// of a live grid casts (most are answered by the light-space cover without a ray).
     pub rays: u64,
 }
 
@@ -572,11 +588,22 @@ impl CacheStats {
     }
 }
 
-/// The cascades' depth maps, sampled on demand.
+/// The cascades' depth maps, sampled on demand: a texel's content is the first hit of its ray,
+/// found through the scene's [`LightCover`] in the grid's basis where that cell is certain and
+/// by the BVH elsewhere. A basis gets a cover when it is met in a second frame (or already has
+/// one): a basis that turns every frame keeps to the BVH.
 pub struct ShadowMaps<'a> {
     scene: &'a SceneGeometry,
     grids: Vec<Option<Grid>>,
     index: Fast<GridKey, usize>,
+    families: Fast<FamilyKey, u32>,
+    /// Per family, the texels its last dropped grid had read (the next one's set is made that
+    /// large up front).
+    family_reads: Vec<usize>,
+    /// Bases met in earlier frames, and in this one.
+    bases: Vec<LightBasis>,
+    frame_bases: Vec<LightBasis>,
+    count: bool,
     pub stats: CacheStats,
 }
 
@@ -593,13 +620,26 @@ pub struct FrameGrid {
 }
 
 impl<'a> ShadowMaps<'a> {
+    /// Maps that count their reads and rays ([`ShadowMaps::stats`]).
     pub fn new(scene: &'a SceneGeometry) -> Self {
         ShadowMaps {
             scene,
             grids: Vec::new(),
             index: Fast::default(),
+            families: Fast::default(),
+            family_reads: Vec::new(),
+            bases: Vec::new(),
+            frame_bases: Vec::new(),
+            count: true,
             stats: CacheStats::default(),
         }
+    }
+
+    /// The same, counting reads and rays only when `count` is set (counting the rays keeps a
+    /// set of the texels read per grid).
+    pub fn counting(mut self, count: bool) -> Self {
+        self.count = count;
+        self
     }
 
     /// The grid of cascade `cascade`'s window `w` in basis `basis` (made on first use).
@@ -619,17 +659,40 @@ impl<'a> ShadowMaps<'a> {
             texel: [w.texel.x.to_bits(), w.texel.y.to_bits()],
             fraction: [fraction.x as i64, fraction.y as i64],
         };
+        if !self.frame_bases.contains(basis) {
+            self.frame_bases.push(*basis);
+        }
         let id = match self.index.get(&key) {
             Some(&id) => id,
             None => {
                 let (start, length) = self.ray_span(basis);
+                let cover = self.scene.light_cover(basis, self.bases.contains(basis));
+                let next = self.families.len() as u32;
+                let family = *self
+                    .families
+                    .entry(FamilyKey {
+                        cascade: key.cascade,
+                        basis: key.basis,
+                        texel: key.texel,
+                    })
+                    .or_insert(next);
+                if family as usize == self.family_reads.len() {
+                    self.family_reads.push(0);
+                }
+                let reads = if self.count {
+                    self.family_reads[family as usize]
+                } else {
+                    0
+                };
                 self.grids.push(Some(Grid {
                     basis: *basis,
                     texel: w.texel,
                     fraction: fraction / FRACTION_STEPS,
                     start,
                     length,
-                    texels: Fast::default(),
+                    cover,
+                    family,
+                    seen: Fast::with_capacity_and_hasher(reads, Default::default()),
                     used: false,
                 }));
                 let id = self.grids.len() - 1;
@@ -637,8 +700,12 @@ impl<'a> ShadowMaps<'a> {
                 id
             }
         };
+        let eligible = self.bases.contains(basis);
         if let Some(g) = self.grids[id].as_mut() {
             g.used = true;
+            if g.cover.is_none() && eligible {
+                g.cover = self.scene.light_cover(basis, true);
+            }
         }
         FrameGrid {
             id,
@@ -669,6 +736,7 @@ impl<'a> ShadowMaps<'a> {
         for slot in self.grids.iter_mut() {
             if let Some(g) = slot {
                 if !g.used {
+                    self.family_reads[g.family as usize] = g.seen.len();
                     *slot = None;
                 } else {
                     g.used = false;
@@ -677,38 +745,31 @@ impl<'a> ShadowMaps<'a> {
         }
         let grids = &self.grids;
         self.index.retain(|_, id| grids[*id].is_some());
-    }
-
-    /// Casts the rays of the texels in `wanted` that are not held yet (in parallel; the
-    /// result does not depend on the order).
-    pub fn fetch(&mut self, mut wanted: Vec<(usize, (i64, i64))>) {
-        wanted.sort_unstable();
-        wanted.dedup();
-        wanted.retain(|(id, g)| {
-            self.grids[*id]
-                .as_ref()
-                .is_some_and(|grid| !grid.texels.contains_key(g))
-        });
-        self.stats.rays += wanted.len() as u64;
-        let scene = self.scene;
-        let grids = &self.grids;
-        let found: Vec<Stored> = wanted
-            .par_iter()
-            .map(|(id, g)| {
-                let grid = grids[*id].as_ref().expect("retained above");
-                trace_texel(scene, grid, *g)
-            })
-            .collect();
-        for ((id, g), s) in wanted.into_iter().zip(found) {
-            if let Some(grid) = self.grids[id].as_mut() {
-                grid.texels.insert(g, s);
+        for b in self.frame_bases.drain(..) {
+            if !self.bases.contains(&b) {
+                self.bases.push(b);
             }
         }
     }
 
-    /// A held texel (call [`ShadowMaps::fetch`] first); None if it was never fetched.
+    /// Counts the texels in `wanted` that no receiver read before on their grid as rays (what
+    /// a cache that casts each texel once would cast). Texels themselves are traced when read.
+    pub fn fetch(&mut self, wanted: Vec<(usize, (i64, i64))>) {
+        if !self.count {
+            return;
+        }
+        for (id, g) in wanted {
+            if let Some(grid) = self.grids[id].as_mut() {
+                if grid.seen.insert(g, ()).is_none() {
+                    self.stats.rays += 1;
+                }
+            }
+        }
+    }
+
+    /// What texel `g` of grid `id` holds (its ray traced now); None for a grid dropped.
     pub fn stored(&self, id: usize, g: (i64, i64)) -> Option<Stored> {
-        self.grids[id].as_ref()?.texels.get(&g).copied()
+        Some(trace_texel(self.scene, self.grids[id].as_ref()?, g))
     }
 
     pub fn basis(&self, id: usize) -> LightBasis {
@@ -740,6 +801,24 @@ impl<'a> ShadowMaps<'a> {
         }
     }
 
+    /// [`ShadowMaps::place_in`] reusing `memo`, the receiver's placement before the fraction
+    /// on the last f64 grid family it was placed on (filled or replaced here).
+    fn place_memo(&self, fg: &FrameGrid, r: &Receiver, bias: &Bias, memo: &mut Option<(u32, Unplaced)>) -> Placement {
+        let grid = self.grids[fg.id].as_ref().expect("a grid of this frame");
+        if fg.matrix.is_some() {
+            return self.place_in(fg, r, bias);
+        }
+        let u = match memo {
+            Some((f, u)) if *f == grid.family => *u,
+            _ => {
+                let u = unplaced(grid.basis, grid.texel, r, bias);
+                *memo = Some((grid.family, u));
+                u
+            }
+        };
+        u.on(grid.fraction)
+    }
+
     /// The world point a held texel's depth stands for: the hit of its ray.
     fn hit_point(&self, id: usize, g: (i64, i64), depth: f64) -> DVec3 {
         let grid = self.grids[id].as_ref().expect("a grid of this frame");
@@ -748,12 +827,19 @@ impl<'a> ShadowMaps<'a> {
     }
 }
 
-/// The ray of texel `g`: from its centre, before every triangle, along the light.
+/// The ray of texel `g`: from its centre, before every triangle, along the light. Its first
+/// hit is the triangle the cover names for the cell (the distance computed as the BVH's hit
+/// computes it), or the BVH's where the cover is not certain.
 fn trace_texel(scene: &SceneGeometry, grid: &Grid, g: (i64, i64)) -> Stored {
     let c = grid.centre(g);
     let b = &grid.basis;
     let origin = b.x * c.x + b.y * c.y + b.z * grid.start;
-    match scene.first_hit(origin, b.z, 0.0, grid.length) {
+    let hit = match grid.cover.as_deref().map(|cover| (cover, cover.at(c))) {
+        Some((_, Cell::Miss)) => None,
+        Some((cover, Cell::Owner(t))) => Some(cover.hit(scene, t, origin, b.z, 0.0)),
+        _ => scene.first_hit(origin, b.z, 0.0, grid.length),
+    };
+    match hit {
         Some(h) => Stored {
             depth: grid.start + h.t,
             triangle: Some(h.triangle),
@@ -778,6 +864,23 @@ pub struct Placement {
     pub slope: f64,
     /// Depth bias plus slope bias times the slope.
     pub bias: f64,
+}
+
+/// `x.floor()`, to the bit, without a call into the maths library (the baseline x86-64 target
+/// has no rounding instruction): below 2^52 in magnitude through an integer, above it `x` is
+/// whole already; zero, infinities and NaN come back as they are.
+#[inline]
+fn floor(x: f64) -> f64 {
+    if x.abs() < 4_503_599_627_370_496.0 && x != 0.0 {
+        let t = x as i64 as f64;
+        if t > x {
+            t - 1.0
+        } else {
+            t
+        }
+    } else {
+        x
+    }
 }
 
 /// Largest depth slope per texel kept (a surface edge-on to the light).
@@ -808,16 +911,43 @@ fn depth_slope(basis: LightBasis, texel: DVec2, r: &Receiver) -> f64 {
 }
 
 fn place(basis: LightBasis, texel: DVec2, fraction: DVec2, r: &Receiver, bias: &Bias) -> Placement {
+    unplaced(basis, texel, r, bias).on(fraction)
+}
+
+/// A receiver's placement on a grid family before the window origin's fraction: its (offset)
+/// light x/y in texels, light depth, depth slope and bias.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Unplaced {
+    q: DVec2,
+    depth: f64,
+    slope: f64,
+    bias: f64,
+}
+
+fn unplaced(basis: LightBasis, texel: DVec2, r: &Receiver, bias: &Bias) -> Unplaced {
     let p = offset_point(basis, texel, r, bias);
     let q = DVec2::new(basis.x.dot(p), basis.y.dot(p));
-    let s = q / texel - fraction;
     let slope = depth_slope(basis, texel, r);
-    Placement {
-        at: s,
-        texel: (s.x.floor() as i64, s.y.floor() as i64),
+    Unplaced {
+        q: q / texel,
         depth: basis.z.dot(p),
         slope,
         bias: bias.facing.apply(bias.depth + bias.slope * slope, r.n.dot(-basis.z)),
+    }
+}
+
+impl Unplaced {
+    /// The placement on the grid whose window origin has this fraction of a texel.
+    #[inline]
+    fn on(self, fraction: DVec2) -> Placement {
+        let s = self.q - fraction;
+        Placement {
+            at: s,
+            texel: (floor(s.x) as i64, floor(s.y) as i64),
+            depth: self.depth,
+            slope: self.slope,
+            bias: self.bias,
+        }
     }
 }
 
@@ -868,10 +998,10 @@ pub fn footprint(at: DVec2, k: u32, filter: PcfFilter) -> impl Iterator<Item = (
         .flat_map(move |t| {
             let mut out = [((0i64, 0i64), 0.0f64); 4];
             match filter {
-                PcfFilter::Nearest => out[0] = ((t.x.floor() as i64, t.y.floor() as i64), tap),
+                PcfFilter::Nearest => out[0] = ((floor(t.x) as i64, floor(t.y) as i64), tap),
                 PcfFilter::Bilinear => {
                     let b = t - DVec2::splat(0.5);
-                    let i0 = b.floor();
+                    let i0 = DVec2::new(floor(b.x), floor(b.y));
                     let f = b - i0;
                     let (i, j) = (i0.x as i64, i0.y as i64);
                     out = [
@@ -1049,28 +1179,30 @@ impl Answer {
 /// The map's answer for one receiver in its cascade's grid, None when its texel is outside
 /// the window. Reads held texels only.
 fn answer(maps: &ShadowMaps, fg: &FrameGrid, r: &Receiver, s: &Sampling, cascade: usize) -> Option<Answer> {
-    answer_with(maps, fg, r, s, cascade, &s.bias[cascade])
+    answer_at(maps, fg, r, s, cascade, &maps.place_in(fg, r, &s.bias[cascade]))
 }
 
-fn answer_with(
+/// [`answer`] at a placement of the receiver (from [`ShadowMaps::place_in`] with its cascade's
+/// bias).
+fn answer_at(
     maps: &ShadowMaps,
     fg: &FrameGrid,
     r: &Receiver,
     s: &Sampling,
     cascade: usize,
-    bias: &Bias,
+    pl: &Placement,
 ) -> Option<Answer> {
-    let pl = maps.place_in(fg, r, bias);
     if !inside(fg, pl.texel) {
         return None;
     }
+    let grid = maps.grids[fg.id].as_ref().expect("a grid of this frame");
     let (near, far) = s.ranges[cascade];
-    let own_depth = maps.basis(fg.id).z.dot(r.p);
+    let own_depth = grid.basis.z.dot(r.p);
     let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
     let mut own_only = true;
     for (g, w) in footprint(pl.at, s.pcf, s.filter) {
-        let held = maps.stored(fg.id, g);
-        let stored = held.map_or(f64::INFINITY, |x| x.depth);
+        let held = trace_texel(maps.scene, grid, g);
+        let stored = held.depth;
         let (lit, lit_unbiased) = match &fg.matrix {
             None => {
                 let stored = s.format.map_or(stored, |f| f.quantise(stored, near, far));
@@ -1096,9 +1228,7 @@ fn answer_with(
             unb_w += w;
             unb_n += 1;
         }
-        own_only &= held
-            .and_then(|x| x.triangle)
-            .is_some_and(|t| same_plane(maps.scene, t, r));
+        own_only &= held.triangle.is_some_and(|t| same_plane(maps.scene, t, r));
     }
     let pass = |w: f64, n: u32| match s.filter {
         // Whole counts for the vote: no rounding of 1/k² sums.
@@ -1150,14 +1280,16 @@ pub fn frame_states(
         .par_iter()
         .map(|r| key_of(maps, &grids, rig, pose, r, s))
         .collect();
-    let wanted: Vec<(usize, (i64, i64))> = points
-        .iter()
-        .zip(&keys)
-        .filter_map(|(r, k)| k.map(|(i, _, _)| texels_read(maps, &grids[i], r, s, i)))
-        .flatten()
-        .collect();
-    maps.stats.reads += wanted.len() as u64;
-    maps.fetch(wanted);
+    if maps.count {
+        let wanted: Vec<(usize, (i64, i64))> = points
+            .iter()
+            .zip(&keys)
+            .filter_map(|(r, k)| k.map(|(i, _, _)| texels_read(maps, &grids[i], r, s, i)))
+            .flatten()
+            .collect();
+        maps.stats.reads += wanted.len() as u64;
+        maps.fetch(wanted);
+    }
     let states = points
         .par_iter()
         .zip(&keys)
@@ -1257,6 +1389,7 @@ pub fn flicker_cached(
     let mut maps = ShadowMaps::new(scene);
     let n = points.len();
     let mut keys: Vec<Key> = vec![None; n];
+    let mut memo: Vec<Option<(u32, Unplaced)>> = vec![None; n];
     let mut states: Vec<Option<Answer>> = vec![None; n];
     let mut flips = vec![0u32; n];
     let mut steps = vec![0u32; n];
@@ -1282,40 +1415,53 @@ pub fn flicker_cached(
         } else {
             frame_grids(&mut maps, rig, light, &pose, snapped, s)
         };
-        let new_keys: Vec<Key> = points
+        // One parallel pass: each receiver's key, and its answer when the key changed (every
+        // receiver with the binary32 pipeline: its matrix, hence every depth, is rebuilt each
+        // frame). On the grid of its previous key (f64) a receiver keeps its texel, so only
+        // whether the window still holds it is asked.
+        let step: Vec<(Key, Option<Option<Answer>>)> = points
             .par_iter()
-            .map(|r| key_of(&maps, &grids, rig, &pose, r, s))
+            .zip(&keys)
+            .zip(memo.par_iter_mut())
+            .map(|((r, &old), memo)| {
+                let Some(i) = reading_cascade(rig, &pose, r.p) else {
+                    return (None, None);
+                };
+                let fg = &grids[i];
+                if let Some((oi, oid, og)) = old {
+                    if oi == i && oid == fg.id && fg.matrix.is_none() {
+                        return (inside(fg, og).then_some((i, fg.id, og)), None);
+                    }
+                }
+                let pl = maps.place_memo(fg, r, &s.bias[i], memo);
+                let key = inside(fg, pl.texel).then_some((i, fg.id, pl.texel));
+                let changed = key.is_some() && (rebuilt || key != old);
+                (key, changed.then(|| answer_at(&maps, fg, r, s, i, &pl)))
+            })
             .collect();
+        let new_keys: Vec<Key> = step.iter().map(|x| x.0).collect();
         let k2 = (s.pcf * s.pcf * per_tap) as u64;
-        maps.stats.reads += new_keys.iter().flatten().count() as u64 * k2;
-        // Texels to fetch: those of receivers whose key changed (every receiver with the
-        // binary32 pipeline: its matrix, hence every depth, is rebuilt each frame).
-        let changed: Vec<usize> = (0..n)
-            .filter(|&j| new_keys[j].is_some() && (rebuilt || new_keys[j] != keys[j]))
-            .collect();
-        let wanted: Vec<(usize, (i64, i64))> = changed
-            .iter()
-            .flat_map(|&j| {
-                let (i, _, _) = new_keys[j].expect("changed keys are Some");
-                texels_read(&maps, &grids[i], &points[j], s, i)
-            })
-            .collect();
-        maps.fetch(wanted);
-        let answers: Vec<Option<Answer>> = changed
-            .par_iter()
-            .map(|&j| {
-                let (i, _, _) = new_keys[j].expect("changed keys are Some");
-                answer(&maps, &grids[i], &points[j], s, i)
-            })
-            .collect();
-        let mut next = states.clone();
-        for j in 0..n {
-            if new_keys[j].is_none() {
-                next[j] = None;
-            }
+        if maps.count {
+            maps.stats.reads += new_keys.iter().flatten().count() as u64 * k2;
+            // The texels a cache would fetch: those of receivers whose key changed.
+            let wanted: Vec<(usize, (i64, i64))> = step
+                .iter()
+                .enumerate()
+                .filter(|(_, x)| x.1.is_some())
+                .flat_map(|(j, x)| {
+                    let (i, _, _) = x.0.expect("changed keys are Some");
+                    texels_read(&maps, &grids[i], &points[j], s, i)
+                })
+                .collect();
+            maps.fetch(wanted);
         }
-        for (&j, a) in changed.iter().zip(answers) {
-            next[j] = a;
+        let mut next = states.clone();
+        for (j, (key, answer)) in step.into_iter().enumerate() {
+            if key.is_none() {
+                next[j] = None;
+            } else if let Some(a) = answer {
+                next[j] = a;
+            }
         }
         if t > 0 {
             for j in 0..n {
@@ -1511,17 +1657,19 @@ fn frame_zero_on(
         .zip(cascades)
         .map(|(r, c)| c.map(|i| maps.place(grids[i].id, r, &Bias::ZERO)))
         .collect();
-    let mut wanted = Vec::new();
-    for (j, c) in cascades.iter().enumerate() {
-        if let (Some(i), Some(z)) = (*c, zero[j]) {
-            let id = grids[i].id;
-            wanted.push((id, z.texel));
-            wanted.extend(footprint(z.at, s.pcf, s.filter).map(|(g, _)| (id, g)));
-            wanted.extend(texels_read(&maps, &grids[i], &points[j], s, i));
+    if maps.count {
+        let mut wanted = Vec::new();
+        for (j, c) in cascades.iter().enumerate() {
+            if let (Some(i), Some(z)) = (*c, zero[j]) {
+                let id = grids[i].id;
+                wanted.push((id, z.texel));
+                wanted.extend(footprint(z.at, s.pcf, s.filter).map(|(g, _)| (id, g)));
+                wanted.extend(texels_read(&maps, &grids[i], &points[j], s, i));
+            }
         }
+        maps.stats.reads += wanted.len() as u64;
+        maps.fetch(wanted);
     }
-    maps.stats.reads += wanted.len() as u64;
-    maps.fetch(wanted);
     let out = points
         .par_iter()
         .enumerate()
@@ -1531,11 +1679,11 @@ fn frame_zero_on(
             let (cascade, answer, excess, own, slope, needed) = match (cascades[j], zero[j]) {
                 (Some(i), Some(z)) if inside(&grids[i], z.texel) => {
                     let fg = &grids[i];
-                    let stored = maps.stored(fg.id, z.texel).expect("fetched");
+                    let stored = maps.stored(fg.id, z.texel).expect("a grid of this frame");
                     let own = stored.triangle.is_some_and(|t| same_plane(scene, t, r));
                     let reads: Vec<(f64, f64, bool)> = footprint(z.at, s.pcf, s.filter)
                         .map(|(g, w)| {
-                            let st = maps.stored(fg.id, g).expect("fetched");
+                            let st = maps.stored(fg.id, g).expect("a grid of this frame");
                             let own = st.triangle.is_some_and(|t| same_plane(scene, t, r));
                             (z.depth - st.depth, w, own)
                         })
@@ -1712,4 +1860,48 @@ pub fn flip_image(cols: u32, rows: u32, points: &[Receiver], f: &Flicker) -> Fli
         flips[r.pixel] = rate;
     }
     FlipImage { cols, rows, flips }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::floor;
+
+    /// The library-free floor equals `f64::floor` to the bit, at whole numbers and either side
+    /// of them, at signed zeros, beyond 2^52, at the infinities and on random values.
+    #[test]
+    fn floor_is_f64_floor_to_the_bit() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MAX,
+            f64::MIN,
+            1e300,
+            -1e300,
+        ];
+        for k in -5i64..=5 {
+            let x = k as f64;
+            xs.extend([x, x.next_up(), x.next_down(), x + 0.5]);
+        }
+        for e in 50..=54 {
+            let x = 2f64.powi(e);
+            xs.extend([
+                x,
+                -x,
+                x.next_up(),
+                x.next_down(),
+                -x.next_down(),
+                -x.next_up(),
+                x + 0.5,
+                -x - 0.5,
+            ]);
+        }
+        let mut rng = crate::rng::SplitMix64::new(3);
+        xs.extend((0..10_000).map(|_| rng.range(-1e6, 1e6)));
+        for x in xs {
+            assert_eq!(floor(x).to_bits(), x.floor().to_bits(), "{x}");
+        }
+        assert!(floor(f64::NAN).is_nan());
+    }
 }

@@ -578,6 +578,8 @@ pub struct SceneGeometry {
     capacity: std::sync::atomic::AtomicUsize,
     /// The scene in a light basis (cost counts), one per basis.
     light_cache: Mutex<Vec<Arc<crate::cost::LightScene>>>,
+    /// The ground truth's light-space covers (texel rays), one per basis.
+    cover_cache: Mutex<Vec<Arc<crate::light_cover::LightCover>>>,
 }
 
 /// The view without its light: the key of the light-independent part.
@@ -621,7 +623,34 @@ impl SceneGeometry {
             hits_cache: Mutex::new(Vec::new()),
             capacity: std::sync::atomic::AtomicUsize::new(CACHED_PASSES),
             light_cache: Mutex::new(Vec::new()),
+            cover_cache: Mutex::new(Vec::new()),
         }
+    }
+
+    /// The light-space cover of the scene in `basis` (the ground truth's texel rays), made
+    /// once per basis when `make` is set, else only looked up (the latest [`CACHED_PASSES`]
+    /// bases are kept).
+    pub fn light_cover(&self, basis: &LightBasis, make: bool) -> Option<Arc<crate::light_cover::LightCover>> {
+        let same = |c: &Arc<crate::light_cover::LightCover>| c.basis == *basis;
+        {
+            let cache = self.cover_cache.lock().unwrap_or_else(|e| e.into_inner());
+            if let Some(c) = cache.iter().find(|c| same(c)) {
+                return Some(c.clone());
+            }
+        }
+        if !make {
+            return None;
+        }
+        let c = Arc::new(crate::light_cover::LightCover::new(self, basis));
+        let mut cache = self.cover_cache.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(found) = cache.iter().find(|c| same(c)) {
+            return Some(found.clone());
+        }
+        if cache.len() >= CACHED_PASSES {
+            cache.remove(0);
+        }
+        cache.push(c.clone());
+        Some(c)
     }
 
     /// The scene's triangles and objects in light basis `basis` (cost counts), made once per

@@ -1,0 +1,462 @@
+//! Which triangle a ray along the light meets first, decided per cell of a light-space grid
+//! where that is certain: the fast path of the ground truth's texel rays
+//! (docs/ground-truth.md, "The map").
+//!
+//! A texel's ray starts before every triangle and runs along the light, so the triangle it
+//! meets first depends only on where it crosses light-space x/y. A [`LightCover`] splits the
+//! scene's light-space footprint into cells and classifies each one, on first use:
+//!
+//! - **empty** when no triangle's projection comes within the margin `δ` of the cell: every
+//!   ray through it misses;
+//! - **owned** by triangle `T` when the cell grown by `δ` lies inside `T`'s projection and
+//!   every other triangle's part over that grown cell lies at least `δ` deeper along the light
+//!   than `T`'s plane: every ray through the cell meets `T` first;
+//! - **unknown** otherwise (an edge, a silhouette or a tie runs through it): the BVH answers.
+//!
+//! `δ` is [`MARGIN_REL`] times the scene's coordinate scale, orders of magnitude above the
+//! error of the BVH's binary32 ray and triangle tests, so the BVH's own answer for a ray
+//! through an owned cell is that triangle (its mesh index as the BVH reports it: the first of
+//! identical binary32 triangles; zero-area ones are never owners or obstacles, since the BVH
+//! leaves them out). A coarse cell that is unknown is split into [`FINE`]² fine cells,
+//! classified the same way. The hit distance is then computed from the triangle exactly as
+//! [`SceneGeometry::first_hit`] computes it, so a texel's stored depth is the same to the bit.
+
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::OnceLock;
+
+use glam::{DVec2, DVec3};
+
+use crate::geometry::LightBasis;
+use crate::visibility::{bvh_input, SceneGeometry, TriangleHit};
+
+/// The margin `δ` (light-space x/y and depth) is this fraction of `1 +` the scene's largest
+/// absolute coordinate: about 1,700 binary32 unit roundoffs of it, where the BVH's
+/// ray and triangle tests err by a few tens.
+pub const MARGIN_REL: f64 = 1e-4;
+
+/// Cells per side of a refined cell.
+pub const FINE: usize = 16;
+
+/// How many times a cell is refined at most.
+pub const LEVELS: usize = 2;
+
+const UNKNOWN: u32 = u32::MAX;
+const EMPTY: u32 = u32::MAX - 1;
+const AMBIGUOUS: u32 = u32::MAX - 2;
+const REFINED: u32 = u32::MAX - 3;
+
+/// What a cell says about the rays through it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cell {
+    /// No triangle: the ray misses.
+    Miss,
+    /// This triangle (mesh index) is met first.
+    Owner(usize),
+    /// Not certain: cast the ray.
+    Unknown,
+}
+
+/// A triangle in light coordinates (x, y across the light, z its depth along it).
+#[derive(Debug, Clone, Copy)]
+struct LightTri {
+    p: [DVec3; 3],
+    /// Its mesh index (the one the BVH reports).
+    mesh: u32,
+}
+
+/// The scene's triangles over a light-space grid, classified lazily (see the module docs).
+pub struct LightCover {
+    pub basis: LightBasis,
+    tris: Vec<LightTri>,
+    lo: DVec2,
+    cell: DVec2,
+    inv: DVec2,
+    cols: usize,
+    rows: usize,
+    /// The coarse cells.
+    coarse: Node,
+    /// Candidates per coarse cell (CSR): triangles whose grown bounding box meets the grown cell.
+    start: Vec<u32>,
+    cand: Vec<u32>,
+    margin: f64,
+    /// The triangles' edge vectors' cross products, as `first_hit` computes them.
+    normals: Vec<DVec3>,
+}
+
+/// A block of cells: per cell its class (`UNKNOWN` until classified, `EMPTY`, `AMBIGUOUS`,
+/// `REFINED` or the owner's mesh index) and, once refined, its [`FINE`]² sub-cells.
+struct Node {
+    class: Box<[AtomicU32]>,
+    sub: Box<[OnceLock<Box<Node>>]>,
+}
+
+impl Node {
+    fn new(cells: usize) -> Node {
+        Node {
+            class: (0..cells).map(|_| AtomicU32::new(UNKNOWN)).collect(),
+            sub: (0..cells).map(|_| OnceLock::new()).collect(),
+        }
+    }
+}
+
+impl std::fmt::Debug for LightCover {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LightCover")
+            .field("triangles", &self.tris.len())
+            .field("cols", &self.cols)
+            .field("rows", &self.rows)
+            .finish()
+    }
+}
+
+impl LightCover {
+    /// The cover of `scene` in `basis` (no cell classified yet).
+    pub fn new(scene: &SceneGeometry, basis: &LightBasis) -> LightCover {
+        let mesh = &scene.mesh;
+        let (_, index, _) = bvh_input(mesh);
+        let scale = mesh
+            .bounds()
+            .map_or(1.0, |b| b.min.abs().max(b.max.abs()).max_element())
+            + 1.0;
+        let margin = MARGIN_REL * scale;
+        let light = |v: DVec3| DVec3::new(basis.x.dot(v), basis.y.dot(v), basis.z.dot(v));
+        let tris: Vec<LightTri> = index
+            .iter()
+            .map(|&k| LightTri {
+                p: mesh.triangles[k as usize].map(light),
+                mesh: k,
+            })
+            .collect();
+        let normals = mesh
+            .triangles
+            .iter()
+            .map(|[a, b, c]| (*b - *a).cross(*c - *a))
+            .collect();
+        let (mut lo, mut hi) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
+        for t in &tris {
+            for p in t.p {
+                lo = lo.min(p.truncate());
+                hi = hi.max(p.truncate());
+            }
+        }
+        if tris.is_empty() || !(lo.is_finite() && hi.is_finite()) {
+            lo = DVec2::ZERO;
+            hi = DVec2::ONE;
+        }
+        let lo = lo - DVec2::splat(2.0 * margin);
+        let hi = hi + DVec2::splat(2.0 * margin);
+        // About 16 coarse cells per triangle, between 16 and 512 per side.
+        let side = ((tris.len() as f64).sqrt() * 4.0).ceil().clamp(16.0, 512.0) as usize;
+        let (cols, rows) = (side, side);
+        let cell = (hi - lo) / DVec2::new(cols as f64, rows as f64);
+        let inv = DVec2::ONE / cell;
+        // Bin each triangle's grown bounding box into the coarse cells it meets.
+        let range = |t: &LightTri| {
+            let (mut a, mut b) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
+            for p in t.p {
+                a = a.min(p.truncate());
+                b = b.max(p.truncate());
+            }
+            let a = ((a - DVec2::splat(2.0 * margin) - lo) * inv).floor().max(DVec2::ZERO);
+            let b = ((b + DVec2::splat(2.0 * margin) - lo) * inv).floor();
+            let b = b.min(DVec2::new(cols as f64 - 1.0, rows as f64 - 1.0));
+            (a.x as usize, a.y as usize, b.x as usize, b.y as usize)
+        };
+        let mut count = vec![0u32; cols * rows + 1];
+        for t in &tris {
+            let (x0, y0, x1, y1) = range(t);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    count[y * cols + x + 1] += 1;
+                }
+            }
+        }
+        for i in 1..count.len() {
+            count[i] += count[i - 1];
+        }
+        let start = count.clone();
+        let mut cand = vec![0u32; *count.last().unwrap_or(&0) as usize];
+        for (k, t) in tris.iter().enumerate() {
+            let (x0, y0, x1, y1) = range(t);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let c = y * cols + x;
+                    cand[count[c] as usize] = k as u32;
+                    count[c] += 1;
+                }
+            }
+        }
+        LightCover {
+            basis: *basis,
+            tris,
+            lo,
+            cell,
+            inv,
+            cols,
+            rows,
+            coarse: Node::new(cols * rows),
+            start,
+            cand,
+            margin,
+            normals,
+        }
+    }
+
+    /// What the cell under light-space x/y `q` says (classifying it on first use, and refining
+    /// an uncertain cell into [`FINE`]² cells up to [`LEVELS`] times).
+    #[inline]
+    pub fn at(&self, q: DVec2) -> Cell {
+        let u = (q - self.lo) * self.inv;
+        if !(u.x >= 0.0 && u.y >= 0.0 && u.x < self.cols as f64 && u.y < self.rows as f64) {
+            // Outside the grid: at least 2δ from every triangle's projection (or not a number).
+            return if u.is_finite() { Cell::Miss } else { Cell::Unknown };
+        }
+        let (i, j) = (u.x as usize, u.y as usize);
+        let cands = self.candidates(i, j);
+        let mut node = &self.coarse;
+        let mut k = j * self.cols + i;
+        // The cell's minimum corner and size, and `u` within it (0 to 1 per axis).
+        let mut a = self.lo + self.cell * DVec2::new(i as f64, j as f64);
+        let mut size = self.cell;
+        let mut u = u - DVec2::new(i as f64, j as f64);
+        let mut level = 0;
+        loop {
+            let mut class = node.class[k].load(Ordering::Relaxed);
+            if class == UNKNOWN {
+                class = match classify(&self.tris, cands, a, a + size, self.margin) {
+                    AMBIGUOUS if level < LEVELS => REFINED,
+                    c => c,
+                };
+                node.class[k].store(class, Ordering::Relaxed);
+            }
+            match class {
+                EMPTY => return Cell::Miss,
+                AMBIGUOUS => return Cell::Unknown,
+                REFINED => {
+                    node = node.sub[k].get_or_init(|| Box::new(Node::new(FINE * FINE)));
+                    // `u` is at least 0: truncation is its floor.
+                    let v = u * FINE as f64;
+                    let (x, y) = ((v.x as usize).min(FINE - 1), (v.y as usize).min(FINE - 1));
+                    let f = DVec2::new(x as f64, y as f64);
+                    k = y * FINE + x;
+                    size /= FINE as f64;
+                    a += size * f;
+                    u = v - f;
+                    level += 1;
+                }
+                t => return Cell::Owner(t as usize),
+            }
+        }
+    }
+
+    /// The hit of the ray from `origin` along `dir` on mesh triangle `id`, as
+    /// [`SceneGeometry::first_hit`] computes it once the BVH has named the triangle.
+    #[inline]
+    pub fn hit(&self, scene: &SceneGeometry, id: usize, origin: DVec3, dir: DVec3, tmin: f64) -> TriangleHit {
+        let dir = dir + DVec3::ZERO;
+        let a = scene.mesh.triangles[id][0];
+        let n = self.normals[id];
+        let nd = n.dot(dir);
+        let t = if nd != 0.0 { n.dot(a - origin) / nd } else { tmin };
+        TriangleHit { t, triangle: id }
+    }
+
+    fn candidates(&self, i: usize, j: usize) -> &[u32] {
+        let c = j * self.cols + i;
+        &self.cand[self.start[c] as usize..self.start[c + 1] as usize]
+    }
+}
+
+/// A convex polygon in light coordinates (at most 7 vertices: a triangle clipped by 4 lines).
+struct Poly {
+    v: [DVec3; 8],
+    n: usize,
+}
+
+impl Poly {
+    /// Keeps the part where `side(p) >= 0` (`side` linear in x/y), interpolating depth.
+    fn clip(&self, side: impl Fn(DVec3) -> f64) -> Poly {
+        let mut out = Poly {
+            v: [DVec3::ZERO; 8],
+            n: 0,
+        };
+        for k in 0..self.n {
+            let (p, q) = (self.v[k], self.v[(k + 1) % self.n]);
+            let (sp, sq) = (side(p), side(q));
+            if sp >= 0.0 {
+                out.push(p);
+            }
+            if (sp >= 0.0) != (sq >= 0.0) {
+                let t = sp / (sp - sq);
+                out.push(p + (q - p) * t);
+            }
+        }
+        out
+    }
+
+    fn push(&mut self, p: DVec3) {
+        if self.n < self.v.len() {
+            self.v[self.n] = p;
+            self.n += 1;
+        }
+    }
+}
+
+/// Twice the signed area of 2D triangle (a, b, c).
+fn cross2(a: DVec2, b: DVec2, c: DVec2) -> f64 {
+    (b - a).perp_dot(c - a)
+}
+
+/// The class of the rectangle `[a, b]` (light-space x/y) among `cands`: `EMPTY`, an owner's
+/// mesh index, or `AMBIGUOUS` (see the module docs).
+fn classify(tris: &[LightTri], cands: &[u32], a: DVec2, b: DVec2, margin: f64) -> u32 {
+    let (a, b) = (a - DVec2::splat(margin), b + DVec2::splat(margin));
+    let corners = [a, DVec2::new(b.x, a.y), b, DVec2::new(a.x, b.y)];
+    // The candidates' parts over the grown cell.
+    let mut parts: Vec<(usize, Poly)> = Vec::with_capacity(cands.len());
+    for &k in cands {
+        let t = &tris[k as usize];
+        let mut p = Poly {
+            v: [DVec3::ZERO; 8],
+            n: 3,
+        };
+        p.v[..3].copy_from_slice(&t.p);
+        let p = p
+            .clip(|v| v.x - a.x)
+            .clip(|v| b.x - v.x)
+            .clip(|v| v.y - a.y)
+            .clip(|v| b.y - v.y);
+        if p.n >= 3 {
+            parts.push((k as usize, p));
+        }
+    }
+    if parts.is_empty() {
+        return EMPTY;
+    }
+    // The owner must contain the grown cell; of several, the nearest at its centre.
+    let centre = (a + b) * 0.5;
+    let mut owner: Option<(usize, f64)> = None;
+    for (k, _) in &parts {
+        let t = &tris[*k];
+        let [p, q, r] = t.p.map(|v| v.truncate());
+        let area = cross2(p, q, r);
+        if area == 0.0 {
+            continue;
+        }
+        let inside = corners.iter().all(|&c| {
+            [cross2(p, q, c), cross2(q, r, c), cross2(r, p, c)]
+                .iter()
+                .all(|e| e * area > 0.0)
+        });
+        if inside {
+            let z = plane_depth(t, centre);
+            if owner.is_none_or(|(_, best)| z < best) {
+                owner = Some((*k, z));
+            }
+        }
+    }
+    let Some((o, _)) = owner else {
+        return AMBIGUOUS;
+    };
+    let t = &tris[o];
+    for (k, part) in &parts {
+        if *k == o {
+            continue;
+        }
+        if part.v[..part.n]
+            .iter()
+            .any(|v| v.z.is_nan() || v.z < plane_depth(t, v.truncate()) + margin)
+        {
+            return AMBIGUOUS;
+        }
+    }
+    t.mesh
+}
+
+/// The depth of triangle `t`'s plane over light-space x/y `q` (barycentric interpolation).
+fn plane_depth(t: &LightTri, q: DVec2) -> f64 {
+    let [p, r, s] = t.p;
+    let (p2, r2, s2) = (p.truncate(), r.truncate(), s.truncate());
+    let area = cross2(p2, r2, s2);
+    let (wp, wr, ws) = (
+        cross2(r2, s2, q) / area,
+        cross2(s2, p2, q) / area,
+        cross2(p2, r2, q) / area,
+    );
+    wp * p.z + wr * r.z + ws * s.z
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Aabb;
+    use crate::mesh::Mesh;
+    use crate::rng::SplitMix64;
+
+    /// The default scene's ground and boxes (a tree canopy above its trunk, a low wall).
+    fn scene() -> SceneGeometry {
+        let mut mesh = Mesh::default();
+        mesh.add_ground(0.0, -200.0, 200.0, -200.0, 200.0);
+        for (min, max) in [
+            ([-40.0, 0.0, -90.0], [-20.0, 40.0, -60.0]),
+            ([15.0, 0.0, -70.0], [35.0, 25.0, -45.0]),
+            ([-12.0, 0.0, -160.0], [12.0, 30.0, -130.0]),
+            ([-7.2, 0.0, -24.2], [-6.8, 3.0, -23.8]),
+            ([-9.0, 3.0, -26.0], [-5.0, 7.0, -22.0]),
+            ([5.0, 0.0, -20.0], [25.0, 1.5, -19.5]),
+        ] {
+            mesh.add_box(&Aabb::new(DVec3::from(min), DVec3::from(max)));
+        }
+        SceneGeometry::new(mesh)
+    }
+
+    /// Rays along the light from before every triangle, through points spread over the scene's
+    /// footprint and clustered at its edges: wherever the cover names a triangle (or a miss),
+    /// the BVH names the same one and the hit distance is the same to the bit. The cover must
+    /// decide most rays, or it is no fast path.
+    #[test]
+    fn the_cover_agrees_with_the_bvh_wherever_it_decides() {
+        let scene = scene();
+        let b = scene.mesh.bounds().unwrap();
+        for light in [
+            DVec3::new(-0.4, -1.0, -0.3),
+            DVec3::new(0.3, -0.2, 0.9),
+            DVec3::new(0.0, -1.0, 0.0),
+            DVec3::new(1.0, -1e-3, 0.0),
+        ] {
+            let basis = LightBasis::new(light);
+            let cover = LightCover::new(&scene, &basis);
+            let (lo, hi) = (0..8).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+                let z = basis.z.dot(b.corner(c));
+                (lo.min(z), hi.max(z))
+            });
+            let start = lo - 1.0;
+            let mut rng = SplitMix64::new(7);
+            let mut decided = 0;
+            let n = 40_000;
+            for k in 0..n {
+                // Half uniform over the footprint, half within a unit of a box corner.
+                let q = if k % 2 == 0 {
+                    let p = DVec3::new(rng.range(-230.0, 230.0), rng.range(0.0, 40.0), rng.range(-230.0, 230.0));
+                    basis.to_light_xy(p)
+                } else {
+                    let c = scene.mesh.triangles[(rng.next_u64() % scene.mesh.triangles.len() as u64) as usize][0];
+                    basis.to_light_xy(c) + DVec2::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0))
+                };
+                let origin = basis.x * q.x + basis.y * q.y + basis.z * start;
+                let bvh = scene.first_hit(origin, basis.z, 0.0, hi - lo + 2.0);
+                match cover.at(q) {
+                    Cell::Unknown => continue,
+                    Cell::Miss => assert_eq!(bvh, None, "{light} at {q}"),
+                    Cell::Owner(t) => {
+                        let h = bvh.unwrap_or_else(|| panic!("{light} at {q}: the BVH misses {t}"));
+                        assert_eq!(h.triangle, t, "{light} at {q}");
+                        assert_eq!(cover.hit(&scene, t, origin, basis.z, 0.0).t.to_bits(), h.t.to_bits());
+                    }
+                }
+                decided += 1;
+            }
+            assert!(decided > n * 7 / 10, "{light}: the cover decided {decided} of {n} rays");
+        }
+    }
+}
