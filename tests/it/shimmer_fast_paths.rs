@@ -86,3 +86,72 @@ fn coverage_of_shrunken_windows_matches_a_per_corner_count() {
         }
     }
 }
+
+/// The sweep's probe-free walk of both snap modes (a still light, a fixed basis, a sphere
+/// fit, no S4 and no rows: `along_path_both` takes it) against the generic walk of each mode
+/// (`along_path`), bit for bit, on random scenes, paths, grids, snap rules and anchors, with
+/// windows shrunk so that corners fall outside.
+mod probe_free_walk {
+    use super::*;
+    use csm_core::snapping::{SnapMode, SnapRule};
+    use glam::DVec2;
+    use proptest::prelude::*;
+
+    fn bits(r: &csm_core::shimmer::PathResult) -> String {
+        // Debug prints every f64 in its shortest round-trip form: equal text, equal bits
+        // (signed zeros included), unlike `==`.
+        format!("{r:?}")
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+        #[test]
+        fn equals_the_generic_walk_bit_for_bit(
+            path in prop::sample::select(vec!["strafe", "dolly", "yaw", "pitch", "orbit", "still"]),
+            step in 0.001f64..2.0,
+            frames in 2usize..40,
+            lambda in 0.0f64..=1.0,
+            cascades in 1usize..=8,
+            resolution in prop::sample::select(vec![256u32, 512, 1000, 2048, 4096]),
+            offset in prop::sample::select(vec![0.0f64, 1234.5, 1e5]),
+            light in (-1.0f64..1.0, -1.0f64..-0.05, -1.0f64..1.0),
+            snap in (0usize..3, prop::sample::select(vec![1u32, 2, 4])),
+            anchor in (-3.0f64..3.0, -3.0f64..3.0, any::<bool>()),
+            shrink in prop::collection::vec(0.5f64..1.0, 8),
+        ) {
+            let step = if path == "yaw" || path == "pitch" || path == "orbit" { step.min(1.0) } else { step };
+            let text = with(&[
+                ("camera.position", &format!("position = [{offset}, 10.0, {offset}]")),
+                ("camera.target", &format!("target = [{offset}, 0.0, {}]", offset - 50.0)),
+                ("scene.min", &format!("min = [{}, 0.0, {}]", offset - 200.0, offset - 200.0)),
+                ("scene.max", &format!("max = [{}, 40.0, {}]", offset + 200.0, offset + 200.0)),
+                ("light.direction", &format!("direction = [{}, {}, {}]", light.0, light.1, light.2)),
+                ("shadow.lambda", &format!("lambda = {lambda}")),
+                ("shadow.cascades", &format!("cascades = {cascades}")),
+                ("shadow.resolution", &format!("resolution = {resolution}")),
+                ("motion.path", &format!("path = \"{path}\"")),
+                ("motion.step", &format!("step = {step}")),
+                ("motion.frames", &format!("frames = {frames}")),
+            ]);
+            let c = config(&text);
+            let mut rig = csm_lab::analysis::rig(&c).unwrap();
+            rig.snap_rule = SnapRule {
+                mode: [SnapMode::Round, SnapMode::Floor, SnapMode::Trunc][snap.0],
+                step_texels: snap.1,
+            };
+            if anchor.2 {
+                rig.scheme.snap_anchor = DVec2::new(anchor.0, anchor.1);
+            }
+            for (side, k) in rig.sphere_side.iter_mut().zip(&shrink) {
+                if *k < 0.75 {
+                    *side *= *k;
+                }
+            }
+            let poses = c.camera_path().unwrap();
+            let opts = all_options()[0];
+            let (s, u) = along_path_both(&rig, &poses, &[], opts);
+            prop_assert_eq!(bits(&s), bits(&along_path(&rig, &poses, &[], true, opts)));
+            prop_assert_eq!(bits(&u), bits(&along_path(&rig, &poses, &[], false, opts)));
+        }
+    }
+}
