@@ -155,3 +155,35 @@ mod probe_free_walk {
         }
     }
 }
+
+/// Every engine preset's rig (axis-centred, box-centred and tight windows, snap anchors,
+/// selection intervals): `along_path_both` (the probe-free walk wherever it applies) against the
+/// generic walk of each mode, bit for bit, on a strafe, a dolly and a yaw.
+#[test]
+fn every_preset_walks_both_modes_as_the_generic_walk_does_bit_for_bit() {
+    for preset in csm_lab::presets::PresetName::ALL {
+        for (path, step) in [("strafe", "0.37"), ("dolly", "0.9"), ("yaw", "0.3")] {
+            let scene = common::BASE.split("[shadow]").next().unwrap();
+            let text = format!(
+                "{scene}[shadow]\npreset = \"{}\"\n\n[motion]\npath = \"{path}\"\nframes = 60\nstep = {step}\n",
+                preset.as_str()
+            );
+            let c = config(&text);
+            let rig = csm_lab::analysis::rig(&c).unwrap();
+            let poses = c.camera_path().unwrap();
+            let opts = all_options()[0];
+            let (s, u) = along_path_both(&rig, &poses, &[], opts);
+            let name = preset.as_str();
+            assert_eq!(
+                format!("{s:?}"),
+                format!("{:?}", along_path(&rig, &poses, &[], true, opts)),
+                "{name} {path}"
+            );
+            assert_eq!(
+                format!("{u:?}"),
+                format!("{:?}", along_path(&rig, &poses, &[], false, opts)),
+                "{name} {path}"
+            );
+        }
+    }
+}
