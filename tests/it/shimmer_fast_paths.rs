@@ -86,3 +86,104 @@ fn coverage_of_shrunken_windows_matches_a_per_corner_count() {
         }
     }
 }
+
+/// The sweep's probe-free walk of both snap modes (a still light, a fixed basis, a sphere
+/// fit, no S4 and no rows: `along_path_both` takes it) against the generic walk of each mode
+/// (`along_path`), bit for bit, on random scenes, paths, grids, snap rules and anchors, with
+/// windows shrunk so that corners fall outside.
+mod probe_free_walk {
+    use super::*;
+    use csm_core::snapping::{SnapMode, SnapRule};
+    use glam::DVec2;
+    use proptest::prelude::*;
+
+    fn bits(r: &csm_core::shimmer::PathResult) -> String {
+        // Debug prints every f64 in its shortest round-trip form: equal text, equal bits
+        // (signed zeros included), unlike `==`.
+        format!("{r:?}")
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+        #[test]
+        fn equals_the_generic_walk_bit_for_bit(
+            path in prop::sample::select(vec!["strafe", "dolly", "yaw", "pitch", "orbit", "still"]),
+            step in 0.001f64..2.0,
+            frames in 2usize..40,
+            lambda in 0.0f64..=1.0,
+            cascades in 1usize..=8,
+            resolution in prop::sample::select(vec![256u32, 512, 1000, 2048, 4096]),
+            offset in prop::sample::select(vec![0.0f64, 1234.5, 1e5]),
+            light in (-1.0f64..1.0, -1.0f64..-0.05, -1.0f64..1.0),
+            snap in (0usize..3, prop::sample::select(vec![1u32, 2, 4])),
+            anchor in (-3.0f64..3.0, -3.0f64..3.0, any::<bool>()),
+            shrink in prop::collection::vec(0.5f64..1.0, 8),
+        ) {
+            let step = if path == "yaw" || path == "pitch" || path == "orbit" { step.min(1.0) } else { step };
+            let text = with(&[
+                ("camera.position", &format!("position = [{offset}, 10.0, {offset}]")),
+                ("camera.target", &format!("target = [{offset}, 0.0, {}]", offset - 50.0)),
+                ("scene.min", &format!("min = [{}, 0.0, {}]", offset - 200.0, offset - 200.0)),
+                ("scene.max", &format!("max = [{}, 40.0, {}]", offset + 200.0, offset + 200.0)),
+                ("light.direction", &format!("direction = [{}, {}, {}]", light.0, light.1, light.2)),
+                ("shadow.lambda", &format!("lambda = {lambda}")),
+                ("shadow.cascades", &format!("cascades = {cascades}")),
+                ("shadow.resolution", &format!("resolution = {resolution}")),
+                ("motion.path", &format!("path = \"{path}\"")),
+                ("motion.step", &format!("step = {step}")),
+                ("motion.frames", &format!("frames = {frames}")),
+            ]);
+            let c = config(&text);
+            let mut rig = csm_lab::analysis::rig(&c).unwrap();
+            rig.snap_rule = SnapRule {
+                mode: [SnapMode::Round, SnapMode::Floor, SnapMode::Trunc][snap.0],
+                step_texels: snap.1,
+            };
+            if anchor.2 {
+                rig.scheme.snap_anchor = DVec2::new(anchor.0, anchor.1);
+            }
+            for (side, k) in rig.sphere_side.iter_mut().zip(&shrink) {
+                if *k < 0.75 {
+                    *side *= *k;
+                }
+            }
+            let poses = c.camera_path().unwrap();
+            let opts = all_options()[0];
+            let (s, u) = along_path_both(&rig, &poses, &[], opts);
+            prop_assert_eq!(bits(&s), bits(&along_path(&rig, &poses, &[], true, opts)));
+            prop_assert_eq!(bits(&u), bits(&along_path(&rig, &poses, &[], false, opts)));
+        }
+    }
+}
+
+/// Every engine preset's rig (axis-centred, box-centred and tight windows, snap anchors,
+/// selection intervals): `along_path_both` (the probe-free walk wherever it applies) against the
+/// generic walk of each mode, bit for bit, on a strafe, a dolly and a yaw.
+#[test]
+fn every_preset_walks_both_modes_as_the_generic_walk_does_bit_for_bit() {
+    for preset in csm_lab::presets::PresetName::ALL {
+        for (path, step) in [("strafe", "0.37"), ("dolly", "0.9"), ("yaw", "0.3")] {
+            let scene = common::BASE.split("[shadow]").next().unwrap();
+            let text = format!(
+                "{scene}[shadow]\npreset = \"{}\"\n\n[motion]\npath = \"{path}\"\nframes = 60\nstep = {step}\n",
+                preset.as_str()
+            );
+            let c = config(&text);
+            let rig = csm_lab::analysis::rig(&c).unwrap();
+            let poses = c.camera_path().unwrap();
+            let opts = all_options()[0];
+            let (s, u) = along_path_both(&rig, &poses, &[], opts);
+            let name = preset.as_str();
+            assert_eq!(
+                format!("{s:?}"),
+                format!("{:?}", along_path(&rig, &poses, &[], true, opts)),
+                "{name} {path}"
+            );
+            assert_eq!(
+                format!("{u:?}"),
+                format!("{:?}", along_path(&rig, &poses, &[], false, opts)),
+                "{name} {path}"
+            );
+        }
+    }
+}

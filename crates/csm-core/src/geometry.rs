@@ -182,6 +182,13 @@ impl CameraPose {
         Self::look_to(position, target - position, up)
     }
 
+    /// This pose's axes at another `position`: `look_to(position, d, up)` for the `d` and `up`
+    /// this pose was made from, which give the same axes (None for a non-finite position, as
+    /// there).
+    pub fn moved_to(&self, position: DVec3) -> Option<Self> {
+        position.is_finite().then_some(CameraPose { position, ..*self })
+    }
+
     pub fn look_to(position: DVec3, direction: DVec3, up: DVec3) -> Option<Self> {
         let forward = direction.try_normalize()?;
         let right = forward.cross(up).try_normalize()?;

@@ -68,14 +68,11 @@ impl Poses<'_> {
         }
         let s = self.motion.step * t as f64;
         let pose = match path {
-            MotionPath::Strafe => {
-                let d = pose0.right * s;
-                CameraPose::look_to(cam.position + d, dir0, up)
-            }
-            MotionPath::Dolly => {
-                let d = pose0.forward * s;
-                CameraPose::look_to(cam.position + d, dir0, up)
-            }
+            // A translation keeps frame 0's view direction and up: `look_to` of those gives
+            // frame 0's axes, so only the position is new (and must be finite, as `look_to`
+            // requires): the same pose, bit for bit, without three normalisations per frame.
+            MotionPath::Strafe => pose0.moved_to(cam.position + pose0.right * s),
+            MotionPath::Dolly => pose0.moved_to(cam.position + pose0.forward * s),
             MotionPath::Yaw => {
                 let q = DQuat::from_axis_angle(up.normalize(), s);
                 CameraPose::look_to(cam.position, q * dir0, up)
@@ -129,3 +126,51 @@ impl Iterator for Poses<'_> {
 }
 
 impl ExactSizeIterator for Poses<'_> {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    /// A strafe or dolly pose is `look_to` of the moved position with frame 0's view direction
+    /// and up, bit for bit (the poses keep frame 0's axes instead of recomputing them).
+    #[test]
+    fn translated_poses_equal_look_to_bit_for_bit() {
+        let mut rng = crate::rng::SplitMix64::new(3);
+        let v =
+            |rng: &mut crate::rng::SplitMix64, s: f64| DVec3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
+        for k in 0..2000 {
+            let scale = [1.0, 1e3, 1e6][k % 3];
+            let position = v(&mut rng, scale);
+            let cam = Camera {
+                position,
+                target: position + v(&mut rng, 100.0),
+                up: v(&mut rng, 1.0),
+                fov_y: 1.0,
+                aspect: 1.5,
+                near: 0.1,
+                far: 100.0,
+                screen_height: 1080,
+            };
+            let pose0 = CameraPose::look_at(cam.position, cam.target, cam.up);
+            let Some(pose0) = pose0 else { continue };
+            for (path, axis) in [(MotionPath::Strafe, pose0.right), (MotionPath::Dolly, pose0.forward)] {
+                let motion = Motion {
+                    path,
+                    frames: 50,
+                    step: rng.range(-3.0, 3.0),
+                };
+                for (t, pose) in poses(&cam, &motion).enumerate() {
+                    let got = pose.expect("a translation keeps a valid camera");
+                    let want = CameraPose::look_to(
+                        cam.position + axis * (motion.step * t as f64),
+                        cam.target - cam.position,
+                        cam.up,
+                    )
+                    .expect("valid");
+                    assert_eq!(format!("{got:?}"), format!("{want:?}"), "frame {t}");
+                }
+            }
+        }
+    }
+}

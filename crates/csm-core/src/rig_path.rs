@@ -8,7 +8,7 @@ use std::borrow::Borrow;
 
 use glam::{DVec2, DVec3};
 
-use crate::cascades::{bounds_2d, LightPose, Rig};
+use crate::cascades::{bounds_2d, LightPose, Rig, WindowRule};
 use crate::fitting::{Fit, Window};
 use crate::geometry::{Aabb, CameraPose, LightBasis};
 use crate::light_motion::LightTrack;
@@ -151,8 +151,184 @@ pub fn along_path_both_lit<P: Borrow<CameraPose>>(
     light: Option<LightTrack<'_>>,
     opts: ShimmerOptions,
 ) -> (PathResult, PathResult) {
-    let [s, u] = walk(&mut model(rig, probes, light), poses, [true, false], opts);
+    let still = light.as_ref().is_none_or(|l| !l.motion.moves());
+    let [s, u] = if still && without_probes(rig, opts) {
+        walk_without_probes(rig, poses)
+    } else {
+        walk(&mut model(rig, probes, light), poses, [true, false], opts)
+    };
     (s.finish(opts), u.finish(opts))
+}
+
+/// Whether [`walk_without_probes`] gives what [`walk`] gives: a fixed basis with the fast
+/// coverage test, no probe needed (S3 has the closed form every frame), no per-frame rows.
+fn without_probes(rig: &Rig, opts: ShimmerOptions) -> bool {
+    fast_walk_applies(rig) && !needs_probes(rig, opts) && !opts.frame_rows
+}
+
+/// Both snap modes `[snapped, unsnapped]` of a still light and a fixed basis when no probe is
+/// needed (see [`without_probes`]): per frame the camera frame in light space, per cascade the
+/// slice corners' extremes, the two windows, their coverage margins and the closed-form drift
+/// of each window against its predecessor. The same operations in the same order as
+/// [`walk`] with a [`RigPath`] (so the same totals, bit for bit), without the generic walker's
+/// per-mode bookkeeping for probes, held cascades and moving lights: the sweep's walk.
+fn walk_without_probes<P: Borrow<CameraPose>>(rig: &Rig, poses: impl IntoIterator<Item = P>) -> [PathTotals; 2] {
+    if let WindowRule::AxisCentred { centre_depth } = &rig.scheme.window {
+        let n = rig.resolution as f64;
+        if rig.sphere_side.iter().all(|&side| side / n > 0.0) {
+            return walk_axis_centred(rig, centre_depth, poses);
+        }
+    }
+    let m = rig.cascade_count();
+    let n = rig.resolution as f64;
+    let mut totals = [PathTotals::new(true, m), PathTotals::new(false, m)];
+    let mut prev: [Vec<Option<Window>>; 2] = [vec![None; m], vec![None; m]];
+    for pose in poses {
+        let lp = LightPose::new(&rig.light, pose.borrow());
+        for (i, s) in rig.slices.iter().enumerate() {
+            let corners = lp.corners(&rig.lens, s.near, s.far);
+            let bounds = bounds_2d(&corners);
+            let mut texels: Option<CornerTexels> = None;
+            for (k, snapped) in [true, false].into_iter().enumerate() {
+                let w = rig.window_in(i, &lp, snapped);
+                let tot = &mut totals[k];
+                if !matches!(&texels, Some(ct) if ct.texel == w.texel) {
+                    texels = Some(CornerTexels::new(&corners, bounds, w.texel));
+                }
+                let ct = texels.as_ref().expect("set above");
+                let o = w.origin_texels;
+                // As in `RigPath::cover`: the smallest margin from the extreme corners, and the
+                // per-corner test only when some corner can lie outside.
+                let slack = (ct.lo.x - o.x)
+                    .min(n - (ct.hi.x - o.x))
+                    .min(ct.lo.y - o.y)
+                    .min(n - (ct.hi.y - o.y));
+                tot.slack(i, slack);
+                if -slack > 1e-9 {
+                    for c in &corners {
+                        tot.corner(i, w.texel_coords(*c), n, (*c / w.texel).abs().max_element());
+                    }
+                }
+                let before = &mut prev[k][i];
+                if let Some(p) = before {
+                    let (pt, wt) = (p.texel, w.texel);
+                    // As in `walk`: an unchanged texel size has no size change and the closed
+                    // form; a changed one (no probes to land) counts a pair of zero drift.
+                    let (size_change, ms) = if wt == pt {
+                        (0.0, closed_form_drift(p.origin_texels, o))
+                    } else {
+                        (((wt.x / pt.x - 1.0).abs()).max((wt.y / pt.y - 1.0).abs()), 0.0)
+                    };
+                    tot.closed_pair(size_change, ms);
+                }
+                *before = Some(w);
+            }
+        }
+    }
+    totals
+}
+
+/// The lower and upper light-space bounds of the 4 corners of a slice's cap at depth `z`, bit
+/// for bit the bounds of [`LightPose::point`] at `(±tanH, ±tanV, z)`: a corner is
+/// `((p + F·z) + R·(sx·z)) + U·(sy·z)` per axis, `sx·z` is `±(tanH·z)` exactly, and rounded
+/// addition is monotone in each operand, so the smallest corner adds the two negative terms
+/// and the largest the two positive ones (`x + (−y)` is `x − y` exactly).
+#[inline]
+fn cap_bounds(lp: &LightPose, th: f64, tv: f64, z: f64) -> (DVec2, DVec2) {
+    let axis = lp.position + lp.forward * z;
+    let r = (lp.right * th).abs();
+    let u = (lp.up * tv).abs();
+    (axis - r - u, axis + r + u)
+}
+
+/// [`walk_without_probes`] for windows centred on the view axis (every sphere fit): each
+/// cascade's texel size is fixed, so every frame pair has the closed-form drift and no size
+/// change, the two snap modes share the window centre in texels, and the slice corners'
+/// extremes come from the two caps' bounds ([`cap_bounds`]): what [`Rig::window_in`],
+/// [`crate::fitting::Window::centred`] and `RigPath::cover` compute, bit for bit, with
+/// every per-cascade constant (texel size, the caps' image slopes times depth, the snap
+/// anchor in texels) taken out of the frame loop.
+fn walk_axis_centred<P: Borrow<CameraPose>>(
+    rig: &Rig,
+    centre_depth: &[f64],
+    poses: impl IntoIterator<Item = P>,
+) -> [PathTotals; 2] {
+    struct Cascade {
+        texel: DVec2,
+        depth: f64,
+        near: f64,
+        far: f64,
+        /// `tanH·z` and `tanV·z` at the near and the far cap.
+        slopes: [(f64, f64); 2],
+        /// The snap anchor in texels (added to both origins) when it is not zero.
+        anchor_texels: Option<DVec2>,
+        /// Each mode's window origin in the previous frame.
+        prev: Option<[DVec2; 2]>,
+    }
+    let m = rig.cascade_count();
+    let n = rig.resolution as f64;
+    let half = DVec2::splat(0.5 * n);
+    let anchor = rig.scheme.snap_anchor;
+    let snap = rig.scheme.snaps.then_some(rig.snap_rule);
+    let (th, tv) = (rig.lens.tan_h, rig.lens.tan_v);
+    let mut cascades: Vec<Cascade> = (0..m)
+        .map(|i| {
+            let s = &rig.slices[i];
+            let texel = DVec2::splat(rig.sphere_side[i]) / n;
+            Cascade {
+                texel,
+                depth: centre_depth[i],
+                near: s.near,
+                far: s.far,
+                slopes: [(th * s.near, tv * s.near), (th * s.far, tv * s.far)],
+                anchor_texels: (anchor != DVec2::ZERO).then(|| anchor / texel),
+                prev: None,
+            }
+        })
+        .collect();
+    let mut totals = [PathTotals::new(true, m), PathTotals::new(false, m)];
+    for pose in poses {
+        let lp = LightPose::new(&rig.light, pose.borrow());
+        for (i, c) in cascades.iter_mut().enumerate() {
+            // The window centre in texels (`Rig::centred`, `Window::centred`), shared by the
+            // modes; snapped, it is rounded on the rule's grid.
+            let centre = lp.position + lp.forward * c.depth;
+            let centred = if anchor == DVec2::ZERO { centre } else { centre - anchor };
+            let ct = centred / c.texel;
+            let snapped = match snap {
+                Some(rule) => DVec2::new(rule.apply(ct.x), rule.apply(ct.y)),
+                None => ct,
+            };
+            let mut origins = [snapped - half, ct - half];
+            if let Some(a) = c.anchor_texels {
+                origins = origins.map(|o| o + a);
+            }
+            // The slice corners' extremes, in texels (`CornerTexels::new` of their bounds).
+            let (lo_n, hi_n) = cap_bounds(&lp, c.slopes[0].0, c.slopes[0].1, c.near);
+            let (lo_f, hi_f) = cap_bounds(&lp, c.slopes[1].0, c.slopes[1].1, c.far);
+            let (lo, hi) = (lo_n.min(lo_f) / c.texel, hi_n.max(hi_f) / c.texel);
+            for (k, o) in origins.iter().enumerate() {
+                let tot = &mut totals[k];
+                let slack = (lo.x - o.x).min(n - (hi.x - o.x)).min(lo.y - o.y).min(n - (hi.y - o.y));
+                tot.slack(i, slack);
+                if -slack > 1e-9 {
+                    let w = Window {
+                        texel: c.texel,
+                        origin_texels: *o,
+                        resolution: rig.resolution,
+                    };
+                    for corner in lp.corners(&rig.lens, c.near, c.far) {
+                        tot.corner(i, w.texel_coords(corner), n, (corner / c.texel).abs().max_element());
+                    }
+                }
+                if let Some(p) = &c.prev {
+                    tot.closed_pair(0.0, closed_form_drift(p[k], *o));
+                }
+            }
+            c.prev = Some(origins);
+        }
+    }
+    totals
 }
 
 /// The extremes of one cascade's slice corners in texel units (`corner / T`, before the

@@ -34,7 +34,7 @@ pub fn wrap(x: f64) -> f64 {
 /// `f64::round` (ties away from zero), bit for bit, without the libm call that baseline x86-64
 /// makes for it: this sits in the innermost shimmer loops.
 #[inline]
-fn round_half_away(x: f64) -> f64 {
+pub(crate) fn round_half_away(x: f64) -> f64 {
     // At 2^52 and beyond every double is an integer (and NaN/inf fall through too).
     if x.is_nan() || x.abs() >= 4_503_599_627_370_496.0 {
         return x.round();

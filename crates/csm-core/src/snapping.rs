@@ -8,6 +8,8 @@
 //! snapped value is an exact integer in floating point and frame-to-frame differences of texel
 //! coordinates are exact integers too, even a million units from the origin.
 
+use crate::shimmer::{floor_exact, round_half_away};
+
 /// How an engine rounds the window centre onto its grid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -42,9 +44,11 @@ impl SnapRule {
     pub fn apply(&self, texels: f64) -> f64 {
         let step = self.step_texels as f64;
         let q = texels / step;
+        // The inlined roundings are `f64::round` and `f64::floor` bit for bit, without the libm
+        // call baseline x86-64 makes for them (this runs per cascade, frame and snap mode).
         let snapped = match self.mode {
-            SnapMode::Round => q.round(),
-            SnapMode::Floor => q.floor(),
+            SnapMode::Round => round_half_away(q),
+            SnapMode::Floor => floor_exact(q),
             SnapMode::Trunc => q.trunc(),
         };
         snapped * step

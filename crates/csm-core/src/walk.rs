@@ -375,6 +375,17 @@ impl PathTotals {
         }
     }
 
+    /// A frame pair whose S3 has the closed form (mean square `ms`, every probe alike) and
+    /// no S4 or row is asked for: what [`walk`] adds for such a pair, bit for bit (S1 `size_change`
+    /// into the jitter, `ms` as both the mean and the largest square).
+    #[inline]
+    pub(crate) fn closed_pair(&mut self, size_change: f64, ms: f64) {
+        self.jitter = self.jitter.max(size_change);
+        self.sum_ms += ms;
+        self.pairs += 1;
+        self.max_drift_sq = self.max_drift_sq.max(ms);
+    }
+
     pub fn finish(mut self, opts: ShimmerOptions) -> PathResult {
         for s in &mut self.coverage.min_slack_texels {
             if !s.is_finite() {
