@@ -249,7 +249,11 @@ enum Stretch {
 fn stretch() -> impl Strategy<Value = Stretch> {
     let v = || -5.0f64..5.0;
     prop_oneof![
-        (1usize..80, -0.05f64..0.05, -0.01f64..0.01).prop_map(|(frames, yaw, pitch)| Stretch::Turn { frames, yaw, pitch }),
+        (1usize..80, -0.05f64..0.05, -0.01f64..0.01).prop_map(|(frames, yaw, pitch)| Stretch::Turn {
+            frames,
+            yaw,
+            pitch
+        }),
         (1usize..80, v(), v(), v()).prop_map(|(frames, x, y, z)| Stretch::Move {
             frames,
             step: DVec3::new(x, y, z) * 0.2
@@ -275,7 +279,11 @@ fn path(stretches: &[(Stretch, usize)]) -> Vec<CameraPose> {
         for k in 0..*back {
             let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
             match s {
-                Stretch::Turn { frames, yaw: dy, pitch: dp } => {
+                Stretch::Turn {
+                    frames,
+                    yaw: dy,
+                    pitch: dp,
+                } => {
                     for _ in 0..*frames {
                         yaw += sign * dy;
                         pitch = (pitch + sign * dp).clamp(-1.2, 1.2);

@@ -8,9 +8,6 @@
 //! the upper end is not above the lower one. csm-lab's own pipeline fits what it selects, so its
 //! bands are empty; engines with an overlap, a transition or a fade have one per split.
 
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
-
 use glam::{DVec2, DVec3};
 
 use crate::cascades::{LightPose, Rig};
@@ -192,8 +189,8 @@ const KAPPA: f64 = 1e-14;
 const ROUNDING: f64 = 1e-12;
 
 /// Groups of points by their distance from the origin: a point's bound uses its group's
-/// largest distance, at most twice its own (or 2^-20 of the largest distance of all).
-const GROUPS: usize = 21;
+/// largest distance, at most √2 times its own (or 2^-20 of the largest distance of all).
+const GROUPS: usize = 41;
 
 /// Counts the frames in which each of a set of world-fixed points changes cascade, frame by
 /// frame as the camera moves, without computing every point's depth in every frame.
@@ -206,7 +203,7 @@ const GROUPS: usize = 21;
 /// sets it aside until the sum of these bounds since then could reach its distance to the
 /// nearest split value (its slack). The sums run as integer odometers (bounds rounded up,
 /// slacks rounded down, in units of a power of two), one per group of points of similar
-/// distance from `o`, with a min-heap of the odometer readings at which each point is due. A
+/// distance from `o`, with a monotone queue (a radix heap) of the odometer readings at which each point is due. A
 /// point set aside kept its cascade in every frame in between, so each change is counted in
 /// the frame it happens: the counts equal a computation of every point in every frame, exactly.
 /// A point whose slack is not finite or below the bound of one frame is computed every frame.
@@ -235,9 +232,81 @@ struct Group {
     /// The largest distance of a point of the group from the origin.
     radius: f64,
     /// The sum, since frame 0, of the group's bound on a depth change per frame, rounded up.
-    odometer: u128,
+    odometer: u64,
     /// `(reading, point)`: the point is computed again when the odometer reaches the reading.
-    due: BinaryHeap<Reverse<(u128, u32)>>,
+    due: RadixQueue,
+}
+
+/// A monotone min-queue of `(reading, point)` (a radix heap): every reading pushed is at least
+/// the last one taken out, so an entry sits in the bucket of the highest bit in which its
+/// reading differs from that one, and moves only to lower buckets. Taking out every entry up to
+/// a reading costs a few operations per entry, not a heap's sift through log n levels.
+struct RadixQueue {
+    last: u64,
+    buckets: Vec<Vec<(u64, u32)>>,
+    /// Bit b set when bucket b holds entries.
+    full: u128,
+}
+
+impl RadixQueue {
+    fn new() -> Self {
+        RadixQueue {
+            last: 0,
+            buckets: vec![Vec::new(); 65],
+            full: 0,
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.full == 0
+    }
+
+    #[inline]
+    fn bucket(last: u64, reading: u64) -> usize {
+        (u64::BITS - (reading ^ last).leading_zeros()) as usize
+    }
+
+    /// Adds an entry; `reading` is at least every reading taken out so far.
+    #[inline]
+    fn push(&mut self, reading: u64, point: u32) {
+        debug_assert!(reading >= self.last);
+        let b = Self::bucket(self.last, reading);
+        self.buckets[b].push((reading, point));
+        self.full |= 1 << b;
+    }
+
+    /// Takes out every entry whose reading is at most `limit`, into `out` (in no set order).
+    fn take_upto(&mut self, limit: u64, out: &mut Vec<u32>) {
+        while self.full != 0 {
+            if self.full & 1 != 0 {
+                // Bucket 0 holds readings equal to `last`.
+                if self.last > limit {
+                    return;
+                }
+                out.extend(self.buckets[0].drain(..).map(|(_, k)| k));
+                self.full &= !1;
+                continue;
+            }
+            let b = self.full.trailing_zeros() as usize;
+            let min = self.buckets[b].iter().map(|e| e.0).min().expect("a full bucket");
+            if min > limit {
+                return;
+            }
+            // Every entry of bucket b differs from `min` below bit b: they spread to lower buckets.
+            self.last = min;
+            let entries = std::mem::take(&mut self.buckets[b]);
+            self.full &= !(1 << b);
+            for &(r, k) in &entries {
+                let to = Self::bucket(min, r);
+                self.buckets[to].push((r, k));
+                self.full |= 1 << to;
+            }
+            // Keep the emptied bucket's allocation.
+            let mut entries = entries;
+            entries.clear();
+            self.buckets[b] = entries;
+        }
+    }
 }
 
 impl<'a> SeamCounter<'a> {
@@ -306,8 +375,12 @@ impl<'a> SeamCounter<'a> {
         self.group = dist
             .iter()
             .map(|&r| {
-                let level = (r / far).log2().floor();
-                let level = if level.is_nan() { 0.0 } else { level.clamp(-(GROUPS as f64 - 1.0), 0.0) };
+                let level = (2.0 * (r / far).log2()).floor();
+                let level = if level.is_nan() {
+                    0.0
+                } else {
+                    level.clamp(-(GROUPS as f64 - 1.0), 0.0)
+                };
                 (level + (GROUPS as f64 - 1.0)) as u8
             })
             .collect();
@@ -315,23 +388,23 @@ impl<'a> SeamCounter<'a> {
             .map(|_| Group {
                 radius: 0.0,
                 odometer: 0,
-                due: BinaryHeap::new(),
+                due: RadixQueue::new(),
             })
             .collect();
         for (&g, &r) in self.group.iter().zip(&dist) {
             let radius = &mut self.groups[g as usize].radius;
             *radius = radius.max(r);
         }
-        // Units: 2^-40 of the extent of the points and the origin (a power of two, so the
-        // conversions to units are exact).
+        // Units: 2^-32 of the extent of the points and the origin (a power of two, so the
+        // conversions to units are exact); 10^6 frames of the largest turns stay below 2^53.
         let extent = far.max(o.length()).max(f64::MIN_POSITIVE);
         let k = (extent.log2().ceil() as i32).clamp(-960, 960);
-        self.scale = 2f64.powi(40 - k);
+        self.scale = 2f64.powi(32 - k);
         self.cascade = vec![0; self.points.len()];
         for k in 0..self.points.len() {
             let (cascade, reading) = self.compute(k, pose);
             self.cascade[k] = cascade;
-            self.groups[self.group[k] as usize].due.push(Reverse((reading, k as u32)));
+            self.groups[self.group[k] as usize].due.push(reading, k as u32);
         }
     }
 
@@ -352,38 +425,31 @@ impl<'a> SeamCounter<'a> {
                 continue;
             }
             let bound = (g.radius * per_unit + base) * (1.0 + ROUNDING) * self.scale;
-            let step = if bound.is_finite() && bound < 1e38 {
-                bound.ceil() as u128
-            } else {
-                u128::MAX
-            };
+            // Truncated plus one: at least the bound (a saturated odometer computes every
+            // point every frame).
+            let step = if bound < 1e18 { bound as u64 + 1 } else { u64::MAX };
             g.odometer = g.odometer.saturating_add(step);
-            while let Some(&Reverse((reading, k))) = g.due.peek() {
-                if reading > g.odometer {
-                    break;
-                }
-                g.due.pop();
-                self.due.push(k);
-            }
+            g.due.take_upto(g.odometer, &mut self.due);
         }
         for n in 0..self.due.len() {
             let k = self.due[n] as usize;
             let (cascade, reading) = self.compute(k, pose);
             self.changed += u64::from(cascade != self.cascade[k]);
             self.cascade[k] = cascade;
-            self.groups[self.group[k] as usize].due.push(Reverse((reading, k as u32)));
+            self.groups[self.group[k] as usize].due.push(reading, k as u32);
         }
     }
 
     /// Point `k`'s cascade in the frame of `pose`, and the odometer reading (of its group, as
     /// it stands) at which it must be computed again.
-    fn compute(&mut self, k: usize, pose: &CameraPose) -> (usize, u128) {
+    fn compute(&mut self, k: usize, pose: &CameraPose) -> (usize, u64) {
         self.evaluated += 1;
         let d = (self.points[k] - pose.position).dot(pose.forward);
         let slack = self.splits.iter().map(|&s| (d - s).abs()).fold(f64::INFINITY, f64::min);
         let units = slack * (1.0 - ROUNDING) * self.scale;
-        // Not finite (or NaN): computed again next frame.
-        let units = if units.is_finite() { units.floor() as u128 } else { 0 };
+        // Truncated (the floor of a non-negative number); not finite (or NaN): computed
+        // again next frame.
+        let units = if units.is_finite() { units as u64 } else { 0 };
         let odometer = self.groups[self.group[k] as usize].odometer;
         (index(self.splits, d), odometer.saturating_add(units))
     }

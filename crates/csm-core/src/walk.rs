@@ -540,12 +540,32 @@ fn flip_kernel<M: PathModel>(
 #[inline(never)]
 fn centre_flip_kernel(texel: DVec2, prev: &[DVec2], cur: &[DVec2]) -> (usize, usize) {
     let inv = flip_divisor(texel);
-    let flipped = prev
-        .iter()
-        .zip(cur)
-        .filter(|&(a, b)| moved_half_texel(*b - *a, texel, inv))
-        .count();
-    (flipped, prev.len().min(cur.len()))
+    let served = prev.len().min(cur.len());
+    let Some(k) = inv else {
+        let flipped = prev
+            .iter()
+            .zip(cur)
+            .filter(|&(a, b)| moved_half_texel(*b - *a, texel, inv))
+            .count();
+        return (flipped, served);
+    };
+    // [`moved_half_texel`] with its shortcut spelled out, without branches: the product
+    // decides unless some axis is within 1e-9 of half a texel (or NaN); then the function
+    // itself decides every probe again.
+    let (mut flipped, mut unsure) = (0usize, false);
+    for (a, b) in prev.iter().zip(cur) {
+        let (qx, qy) = ((b.x - a.x).abs() * k.x, (b.y - a.y).abs() * k.y);
+        unsure |= !((qx - 0.5).abs() > 1e-9) | !((qy - 0.5).abs() > 1e-9);
+        flipped += usize::from((qx >= 0.5) | (qy >= 0.5));
+    }
+    if unsure {
+        flipped = prev
+            .iter()
+            .zip(cur)
+            .filter(|&(a, b)| moved_half_texel(*b - *a, texel, inv))
+            .count();
+    }
+    (flipped, served)
 }
 
 /// The largest squared move of a probe's texel coordinates, not wrapped, over the probes
