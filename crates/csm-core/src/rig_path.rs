@@ -202,7 +202,8 @@ fn exact_limit(scaled: &[DVec2]) -> (f64, f64) {
     let mut u = 0.0f64;
     let mut gap = 1.0f64;
     for c in scaled.iter().flat_map(|q| [q.x, q.y]) {
-        if !(c.abs() < (1u64 << 50) as f64) {
+        // (NaN fails the comparison too.)
+        if c.abs() >= (1u64 << 50) as f64 || c.is_nan() {
             return (f64::INFINITY, 0.0);
         }
         u = u.max(c.abs());
@@ -213,7 +214,7 @@ fn exact_limit(scaled: &[DVec2]) -> (f64, f64) {
     }
     // 2^(k−53) ≤ gap/2: k = floor(log2(gap)) + 52, at most 51 (whole numbers below 2^51).
     let k = (gap.log2().floor() + 52.0).min(51.0);
-    if !(k > 0.0) {
+    if k.is_nan() || k <= 0.0 {
         return (u, 0.0);
     }
     (u, 2f64.powi(k as i32))

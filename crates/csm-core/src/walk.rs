@@ -555,7 +555,9 @@ fn centre_flip_kernel(texel: DVec2, prev: &[DVec2], cur: &[DVec2]) -> (usize, us
     let (mut flipped, mut unsure) = (0usize, false);
     for (a, b) in prev.iter().zip(cur) {
         let (qx, qy) = ((b.x - a.x).abs() * k.x, (b.y - a.y).abs() * k.y);
-        unsure |= !((qx - 0.5).abs() > 1e-9) | !((qy - 0.5).abs() > 1e-9);
+        // (NaN is unsure too: it fails `> 1e-9`.)
+        let sure = ((qx - 0.5).abs() > 1e-9) & ((qy - 0.5).abs() > 1e-9);
+        unsure |= !sure;
         flipped += usize::from((qx >= 0.5) | (qy >= 0.5));
     }
     if unsure {
