@@ -655,6 +655,35 @@ pub(crate) fn cadence(config: &Config, rig: &Rig) -> Vec<usize> {
 const HELD_POSES: usize = 1 << 14;
 
 /// An iterator of a known length (a chain of a held and a streamed part reports none).
+/// The poses as they are read, each also handed to the seam counter (when there is one).
+struct Counted<'a, 'c, I> {
+    poses: I,
+    counter: &'a mut Option<seams::SeamCounter<'c>>,
+}
+
+fn counted<'a, 'c, I: ExactSizeIterator<Item = CameraPose>>(
+    poses: I,
+    counter: &'a mut Option<seams::SeamCounter<'c>>,
+) -> Counted<'a, 'c, I> {
+    Counted { poses, counter }
+}
+
+impl<I: Iterator<Item = CameraPose>> Iterator for Counted<'_, '_, I> {
+    type Item = CameraPose;
+    fn next(&mut self) -> Option<CameraPose> {
+        let p = self.poses.next()?;
+        if let Some(c) = self.counter.as_mut() {
+            c.frame(&p);
+        }
+        Some(p)
+    }
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        self.poses.size_hint()
+    }
+}
+
+impl<I: ExactSizeIterator<Item = CameraPose>> ExactSizeIterator for Counted<'_, '_, I> {}
+
 struct ExactLen<I>(I, usize);
 
 impl<I: Iterator> Iterator for ExactLen<I> {
@@ -1349,6 +1378,11 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
         ExactLen(all, frames)
     };
     let remainder = (frames % PROGRESS_FRAMES) as u64;
+    // Seam crossings read the same poses as the snapped walk, on its thread: the counter
+    // follows each pose as the walk reads it (incremental: only the receivers whose depth
+    // could have reached a split since they were last computed are computed again).
+    let mut counter = w.seams.then(|| seams::SeamCounter::new(&w.rig.splits, w.seam_points));
+    let mut no_counter = None;
     // Inside a parallel batch (a sweep, a comparison) every core is busy already: one walk
     // of both snap modes computes the values they share once per frame. Alone, the two
     // modes walk on two threads. Either way the totals are the same, bit for bit.
@@ -1361,41 +1395,47 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
                 every: w.cadence,
                 first_frame: 0,
             };
-            let one = |snapped| rig_path::along_path_cached(w.rig, poses(), w.probes, cadence, snapped, w.sopts);
+            let one = |poses, snapped| rig_path::along_path_cached(w.rig, poses, w.probes, cadence, snapped, w.sopts);
             let (s, u) = if batch {
-                rig_path::along_path_both_cached(w.rig, poses(), w.probes, cadence, w.sopts)
+                rig_path::along_path_both_cached(w.rig, counted(poses(), &mut counter), w.probes, cadence, w.sopts)
             } else {
-                rayon::join(|| one(true), || one(false))
+                rayon::join(
+                    || one(counted(poses(), &mut counter), true),
+                    || one(counted(poses(), &mut no_counter), false),
+                )
             };
             (s, u, None)
         }
         Precision::F64 => {
             let light = light_track(w.config, 0);
-            let one = |snapped| rig_path::along_path_lit(w.rig, poses(), w.probes, light, snapped, w.sopts);
+            let one = |poses, snapped| rig_path::along_path_lit(w.rig, poses, w.probes, light, snapped, w.sopts);
             let (s, u) = if batch {
-                rig_path::along_path_both_lit(w.rig, poses(), w.probes, light, w.sopts)
+                rig_path::along_path_both_lit(w.rig, counted(poses(), &mut counter), w.probes, light, w.sopts)
             } else {
-                rayon::join(|| one(true), || one(false))
+                rayon::join(
+                    || one(counted(poses(), &mut counter), true),
+                    || one(counted(poses(), &mut no_counter), false),
+                )
             };
             (s, u, None)
         }
         Precision::F32 => {
             let space = w.config.shadow.snap_space;
-            let one = |snapped| precision::along_path(w.rig, poses(), w.probes, space, snapped, w.sopts);
+            let one = |poses, snapped| precision::along_path(w.rig, poses, w.probes, space, snapped, w.sopts);
             let (s, u) = if batch {
-                precision::along_path_both(w.rig, poses(), w.probes, space, w.sopts)
+                precision::along_path_both(w.rig, counted(poses(), &mut counter), w.probes, space, w.sopts)
             } else {
-                rayon::join(|| one(true), || one(false))
+                rayon::join(
+                    || one(counted(poses(), &mut counter), true),
+                    || one(counted(poses(), &mut no_counter), false),
+                )
             };
             let lookup = if w.config.shadow.snap { s.lookup } else { u.lookup };
             (s.path, u.path, Some(lookup))
         }
     };
     (w.on_frames)(2 * remainder);
-    let crossings = w.seams.then(|| {
-        let streamed = (frames > HELD_POSES).then(generated).into_iter().flatten();
-        seams::seam_crossings(&w.rig.splits, w.seam_points, held.iter().copied().chain(streamed))
-    });
+    let crossings = counter.map(|c| c.rate());
     PathWalk {
         snapped: walked.0,
         unsnapped: walked.1,

@@ -2,8 +2,10 @@
 //! `seam_crossings`, each checked against a computation of its own (brute-force counts).
 
 use csm_core::geometry::CameraPose;
+use csm_core::seams;
 use csm_lab::analysis::{analyze, AnalysisOptions};
 use glam::DVec3;
+use proptest::prelude::*;
 
 use crate::common::{config, with, BASE};
 
@@ -210,4 +212,173 @@ fn the_split_jump_is_the_texel_ratio_of_neighbours() {
         assert_eq!(k[i].split_jump, k[i + 1].texel_size / k[i].texel_size);
     }
     assert_eq!(k[k.len() - 1].split_jump, 0.0);
+}
+
+/// The cascade a view depth reads, from the definition (docs/metrics.md): none (`m`) before the
+/// first split or beyond the last; else the number of interior splits at or before it.
+fn cascade_of(splits: &[f64], d: f64) -> usize {
+    let m = splits.len() - 1;
+    if d < splits[0] || d > splits[m] {
+        return m;
+    }
+    splits[1..m].iter().filter(|&&s| s <= d).count().min(m - 1)
+}
+
+/// Every point's cascade recomputed in every frame: the changes between consecutive frames.
+fn brute_force_changes(splits: &[f64], points: &[DVec3], poses: &[CameraPose]) -> u64 {
+    let depth = |p: DVec3, pose: &CameraPose| (p - pose.position).dot(pose.forward);
+    let mut changes = 0;
+    for pair in poses.windows(2) {
+        for &p in points {
+            changes += u64::from(cascade_of(splits, depth(p, &pair[0])) != cascade_of(splits, depth(p, &pair[1])));
+        }
+    }
+    changes
+}
+
+/// One stretch of a random camera path: `frames` frames of a per-frame turn (radians, about
+/// +Y, and a pitch), a per-frame move, or a jump to anywhere.
+#[derive(Debug, Clone)]
+enum Stretch {
+    Turn { frames: usize, yaw: f64, pitch: f64 },
+    Move { frames: usize, step: DVec3 },
+    Jump { to: DVec3, yaw: f64 },
+    Still { frames: usize },
+}
+
+fn stretch() -> impl Strategy<Value = Stretch> {
+    let v = || -5.0f64..5.0;
+    prop_oneof![
+        (1usize..80, -0.05f64..0.05, -0.01f64..0.01).prop_map(|(frames, yaw, pitch)| Stretch::Turn {
+            frames,
+            yaw,
+            pitch
+        }),
+        (1usize..80, v(), v(), v()).prop_map(|(frames, x, y, z)| Stretch::Move {
+            frames,
+            step: DVec3::new(x, y, z) * 0.2
+        }),
+        (-50.0f64..50.0, -5.0f64..5.0, -50.0f64..50.0, -3.2f64..3.2).prop_map(|(x, y, z, yaw)| Stretch::Jump {
+            to: DVec3::new(x, y, z),
+            yaw
+        }),
+        (1usize..10).prop_map(|frames| Stretch::Still { frames }),
+    ]
+}
+
+/// The poses of a path of stretches, each stretch repeated `back` times with its direction
+/// reversed every other time (the camera turns or moves back over where it was).
+fn path(stretches: &[(Stretch, usize)]) -> Vec<CameraPose> {
+    let (mut position, mut yaw, mut pitch) = (DVec3::new(0.0, 10.0, 0.0), 0.0f64, -0.2f64);
+    let pose = |p: DVec3, yaw: f64, pitch: f64| {
+        let dir = DVec3::new(-yaw.sin() * pitch.cos(), pitch.sin(), -yaw.cos() * pitch.cos());
+        CameraPose::look_to(p, dir, DVec3::Y).unwrap()
+    };
+    let mut out = vec![pose(position, yaw, pitch)];
+    for (s, back) in stretches {
+        for k in 0..*back {
+            let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+            match s {
+                Stretch::Turn {
+                    frames,
+                    yaw: dy,
+                    pitch: dp,
+                } => {
+                    for _ in 0..*frames {
+                        yaw += sign * dy;
+                        pitch = (pitch + sign * dp).clamp(-1.2, 1.2);
+                        out.push(pose(position, yaw, pitch));
+                    }
+                }
+                Stretch::Move { frames, step } => {
+                    for _ in 0..*frames {
+                        position += sign * *step;
+                        out.push(pose(position, yaw, pitch));
+                    }
+                }
+                Stretch::Jump { to, yaw: y } => {
+                    position = *to;
+                    yaw = *y;
+                    out.push(pose(position, yaw, pitch));
+                }
+                Stretch::Still { frames } => {
+                    for _ in 0..*frames {
+                        out.push(pose(position, yaw, pitch));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 400, .. ProptestConfig::default() })]
+
+    /// The incremental count (`SeamCounter`, which computes a point again only when its depth
+    /// could have reached a split) equals the count of every point in every frame, on random
+    /// paths that turn, move, jump, stand still and go back over themselves, with points
+    /// anywhere and points exactly on a split's depth in frame 0.
+    #[test]
+    fn the_incremental_seam_count_equals_the_per_frame_count(
+        gaps in prop::collection::vec(prop_oneof![4 => 0.5f64..40.0, 1 => Just(0.0)], 2..6),
+        first in 0.05f64..5.0,
+        points in prop::collection::vec((-120.0f64..120.0, -10.0f64..50.0, -120.0f64..120.0), 1..40),
+        on_split in prop::collection::vec((0usize..8, -30.0f64..30.0), 0..6),
+        stretches in prop::collection::vec((stretch(), 1usize..4), 1..8),
+    ) {
+        let splits: Vec<f64> = std::iter::once(first)
+            .chain(gaps.iter().scan(first, |d, g| { *d += g; Some(*d) }))
+            .collect();
+        let poses = path(&stretches);
+        let p0 = poses[0];
+        let mut pts: Vec<DVec3> = points.iter().map(|&(x, y, z)| DVec3::new(x, y, z)).collect();
+        // Exactly on a split in frame 0 (up to the rounding of the depth), off the view axis.
+        pts.extend(on_split.iter().map(|&(j, side)| {
+            p0.position + p0.forward * splits[j % splits.len()] + p0.right * side
+        }));
+        let mut counter = seams::SeamCounter::new(&splits, &pts);
+        for p in &poses {
+            counter.frame(p);
+        }
+        let expected = brute_force_changes(&splits, &pts, &poses);
+        prop_assert_eq!(counter.changes(), expected);
+        prop_assert_eq!(counter.steps(), poses.len() as u64 - 1);
+        let rate = expected as f64 / ((poses.len() - 1) as f64 * pts.len() as f64);
+        prop_assert_eq!(counter.rate().to_bits(), if poses.len() > 1 { rate.to_bits() } else { 0f64.to_bits() });
+        prop_assert!(counter.evaluations() <= (poses.len() * pts.len()) as u64);
+    }
+}
+
+#[test]
+fn a_long_yaw_computes_few_receivers_per_frame_and_counts_as_every_frame() {
+    // 4,096 points on a 400 x 400 ground, the default camera yawing 0.05 degrees a frame for
+    // 20,000 frames (2.8 turns): the incremental count equals the brute-force one while it
+    // computes a small share of the point-frames.
+    let splits = [0.1, 9.86, 21.67, 46.21, 150.0];
+    let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        (rng >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let pts: Vec<DVec3> = (0..4096)
+        .map(|_| DVec3::new(400.0 * next() - 200.0, 40.0 * next() * next(), 400.0 * next() - 200.0))
+        .collect();
+    let step = 0.05f64.to_radians();
+    let poses: Vec<CameraPose> = (0..20_000)
+        .map(|t| {
+            let q = glam::DQuat::from_axis_angle(DVec3::Y, step * t as f64);
+            CameraPose::look_to(DVec3::new(0.0, 10.0, 0.0), q * DVec3::new(0.0, -10.0, -50.0), DVec3::Y).unwrap()
+        })
+        .collect();
+    let mut counter = seams::SeamCounter::new(&splits, &pts);
+    for p in &poses {
+        counter.frame(p);
+    }
+    assert_eq!(counter.changes(), brute_force_changes(&splits, &pts, &poses));
+    assert!(counter.changes() > 10_000, "{}", counter.changes());
+    let share = counter.evaluations() as f64 / (poses.len() * pts.len()) as f64;
+    assert!(share < 0.05, "computed {share} of the point-frames");
 }

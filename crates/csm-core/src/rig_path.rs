@@ -355,6 +355,47 @@ impl CornerTexels {
     }
 }
 
+/// `f64::floor`, bit for bit, for `|x| < 2^51`, without branches: adding and subtracting
+/// 1.5 · 2^52 rounds `x` to a whole number (the sum's last place is 1), one less when that
+/// rounded up; the result carries the sign of `x` (floor(−0.0) is −0.0).
+#[inline(always)]
+fn floor_small(x: f64) -> f64 {
+    const C: f64 = 6_755_399_441_055_744.0;
+    let r = (x + C) - C;
+    let r = if r > x { r - 1.0 } else { r };
+    r.copysign(x)
+}
+
+/// For probes at texel coordinates `scaled` (x/y divided by the texel size, before the window
+/// origin is subtracted): `(u, limit)` with `u` the largest coordinate magnitude and `limit` a
+/// power of two such that for every whole number `o` with `|o| + u < limit`, each coordinate
+/// `x` lands on the texel `o + floor(x − o) = floor(x)`, so its sampled centre does not depend
+/// on `o`. The subtraction `x − o` is exact but for rounding below 2^(k−53) (|x − o| < 2^k);
+/// it can change the floor only by rounding up to the next whole number, which needs
+/// `1 − frac(x)` within that rounding. `limit = 2^k` with `2^(k−53) ≤ min(1 − frac(x)) / 2`.
+/// `(∞, 0)` (never) for coordinates that are not finite or not below 2^50.
+fn exact_limit(scaled: &[DVec2]) -> (f64, f64) {
+    let mut u = 0.0f64;
+    let mut gap = 1.0f64;
+    for c in scaled.iter().flat_map(|q| [q.x, q.y]) {
+        // (NaN fails the comparison too.)
+        if c.abs() >= (1u64 << 50) as f64 || c.is_nan() {
+            return (f64::INFINITY, 0.0);
+        }
+        u = u.max(c.abs());
+        let f = c - c.floor();
+        if f > 0.0 {
+            gap = gap.min(1.0 - f);
+        }
+    }
+    // 2^(k−53) ≤ gap/2: k = floor(log2(gap)) + 52, at most 51 (whole numbers below 2^51).
+    let k = (gap.log2().floor() + 52.0).min(51.0);
+    if k.is_nan() || k <= 0.0 {
+        return (u, 0.0);
+    }
+    (u, 2f64.powi(k as i32))
+}
+
 /// The exact f64 [`Rig`] as a [`PathModel`]. With a fixed light basis a static probe has the
 /// same light-space x/y in every frame and same-size windows have the closed-form drift; with
 /// a basis that follows the camera each frame reads the probes through its own basis.
@@ -367,6 +408,11 @@ pub struct RigPath<'a> {
     /// first landing. A window of that texel size (a sphere fit's, every frame) lands the
     /// probes with one subtraction each, bit for bit as [`Window::texel_coords`].
     probe_texels: Vec<std::cell::OnceCell<(DVec2, Vec<DVec2>)>>,
+    /// Fixed basis: per cascade, for the texel size of `probe_texels`, `(u, limit)`: the
+    /// largest |probe x/y divided by it| and a power of two such that for every whole-texel
+    /// origin `o` with `|o| + u < limit` a probe lands on the texel `floor(x/y / texel)`
+    /// whatever `o` (0: never known).
+    probe_exact: Vec<std::cell::OnceCell<(f64, f64)>>,
     fixed: bool,
     /// Fixed basis and selection inside the fitted slices: coverage from the slice corners'
     /// extremes, shared by the snap modes.
@@ -409,6 +455,7 @@ impl<'a> RigPath<'a> {
             probes,
             probe_xy: rig.fixed_probe_xy(probes),
             probe_texels: (0..rig.cascade_count()).map(|_| std::cell::OnceCell::new()).collect(),
+            probe_exact: (0..rig.cascade_count()).map(|_| std::cell::OnceCell::new()).collect(),
             fixed: rig.fixed_basis(),
             fast: fast_walk_applies(rig),
             lp: None,
@@ -615,6 +662,57 @@ impl PathModel for RigPath<'_> {
         }
     }
 
+    /// A fixed basis with a still light: a landing is a function of the cascade and the
+    /// window, every probe is served and a landing's centre is where it stays.
+    fn lands_centres(&self) -> bool {
+        self.fixed && self.light.is_none()
+    }
+
+    /// The `centre` of each landing of [`PathModel::land`], by the same operations.
+    fn land_centres(&self, i: usize, w: &RigWindow, out: &mut Vec<DVec2>) {
+        let win = &w.window;
+        let xy = self.probe_xy.get(i).map_or(&[][..], |v| &v[..]);
+        let (texel, scaled) =
+            self.probe_texels[i].get_or_init(|| (win.texel, xy.iter().map(|q| *q / win.texel).collect()));
+        let (o, t) = (win.origin_texels, win.texel);
+        let (u_max, _) = *self.probe_exact[i].get_or_init(|| exact_limit(scaled));
+        if *texel == t && u_max + o.x.abs().max(o.y.abs()) < (1u64 << 51) as f64 {
+            // Every |x − o| is below 2^51: the branch-free floor applies.
+            out.extend(scaled.iter().map(|u| {
+                let s = *u - o;
+                (o + DVec2::new(floor_small(s.x), floor_small(s.y)) + 0.5) * t
+            }));
+        } else if *texel == t {
+            out.extend(scaled.iter().map(|u| {
+                let s = *u - o;
+                (o + DVec2::new(floor_exact(s.x), floor_exact(s.y)) + 0.5) * t
+            }));
+        } else {
+            out.extend(xy.iter().map(|q| {
+                let s = win.texel_coords(*q);
+                (o + DVec2::new(floor_exact(s.x), floor_exact(s.y)) + 0.5) * t
+            }));
+        }
+    }
+
+    /// A snapped window that moved by whole texels: every probe stays on its texel when both
+    /// origins are whole numbers of texels within the limit of [`exact_limit`].
+    fn unchanged_centres(&self, i: usize, p: &RigWindow, w: &RigWindow) -> Option<usize> {
+        let (a, b) = (&p.window, &w.window);
+        let whole = |o: DVec2| o.x.fract() == 0.0 && o.y.fract() == 0.0;
+        if !self.fixed || a.texel != b.texel || !whole(a.origin_texels) || !whole(b.origin_texels) {
+            return None;
+        }
+        let xy = self.probe_xy.get(i).map_or(&[][..], |v| &v[..]);
+        let (texel, scaled) = self.probe_texels[i].get_or_init(|| (b.texel, xy.iter().map(|q| *q / b.texel).collect()));
+        if *texel != b.texel {
+            return None;
+        }
+        let (u, limit) = *self.probe_exact[i].get_or_init(|| exact_limit(scaled));
+        let inside = |o: DVec2| o.x.abs() + u < limit && o.y.abs() + u < limit;
+        (inside(a.origin_texels) && inside(b.origin_texels)).then_some(scaled.len())
+    }
+
     /// With a fixed basis a landing depends only on the window's texel size and origin.
     #[inline]
     fn same_landings(&self, p: &RigWindow, w: &RigWindow) -> bool {
@@ -630,6 +728,51 @@ impl PathModel for RigPath<'_> {
             earlier.centre
         } else {
             self.basis_of(w.cascade).to_light_xy(earlier.world)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The branch-free floor equals `f64::floor` bit for bit below 2^51: whole numbers and
+    /// their neighbours, halves (ties), signed zeros, tiny and large values.
+    #[test]
+    fn the_branch_free_floor_is_f64_floor() {
+        let mut rng = crate::rng::SplitMix64::new(11);
+        let mut cases = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            -2.5,
+            1e-300,
+            -1e-300,
+            0.49999999999999994,
+        ];
+        let top = (1u64 << 51) as f64;
+        for w in [1.0, 2.0, 3.0, 1e6, 4503599627370495.0 / 2.0, top - 1.0] {
+            for x in [w, -w] {
+                cases.extend([
+                    x,
+                    f64::from_bits(x.to_bits() + 1),
+                    f64::from_bits(x.to_bits() - 1),
+                    x + 0.5,
+                    x - 0.5,
+                ]);
+            }
+        }
+        for _ in 0..200_000 {
+            let x = rng.range(-1.0, 1.0) * 10f64.powf(rng.range(-20.0, 15.3));
+            cases.push(x);
+            cases.push(x.round() + rng.range(-1e-9, 1e-9));
+        }
+        for x in cases.into_iter().filter(|x| x.abs() < top) {
+            assert_eq!(floor_small(x).to_bits(), x.floor().to_bits(), "{x:e}");
         }
     }
 }

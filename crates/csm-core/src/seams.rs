@@ -170,29 +170,287 @@ fn index(splits: &[f64], d: f64) -> usize {
 /// The fraction of `points` whose cascade (by their view depth in each frame and the selection
 /// `splits`; leaving or entering the shadowed range counts as a change) differs from the
 /// previous frame's, averaged over the frame-to-frame steps of `poses`. 0 with fewer than two
-/// frames or no point. Memory: one index per point.
+/// frames or no point. [`SeamCounter`] fed every pose: memory is a few words per point,
+/// whatever the path's length.
 pub fn seam_crossings(splits: &[f64], points: &[DVec3], poses: impl IntoIterator<Item = CameraPose>) -> f64 {
-    if points.is_empty() {
-        return 0.0;
-    }
-    let depth = |p: DVec3, pose: &CameraPose| (p - pose.position).dot(pose.forward);
-    let mut prev: Vec<usize> = Vec::new();
-    let (mut changed, mut steps) = (0u64, 0u64);
+    let mut counter = SeamCounter::new(splits, points);
     for pose in poses {
-        if prev.is_empty() {
-            prev = points.iter().map(|&p| index(splits, depth(p, &pose))).collect();
-            continue;
-        }
-        for (k, &p) in points.iter().enumerate() {
-            let i = index(splits, depth(p, &pose));
-            changed += u64::from(i != prev[k]);
-            prev[k] = i;
-        }
-        steps += 1;
+        counter.frame(&pose);
     }
-    if steps == 0 {
-        0.0
-    } else {
-        changed as f64 / (steps as f64 * points.len() as f64)
+    counter.rate()
+}
+
+/// Relative bound on the rounding of a computed view depth `(p − c)·f`: at most
+/// `KAPPA · (|p| + |c|) · |f|` (the true bound is about 4 units in the last place, 9e-16).
+const KAPPA: f64 = 1e-14;
+
+/// Inflation of each frame's depth bound and deflation of each slack, covering the rounding of
+/// the few operations that compute them (each a few units in the 16th digit).
+const ROUNDING: f64 = 1e-12;
+
+/// Groups of points by their distance from the origin: a point's bound uses its group's
+/// largest distance, at most √2 times its own (or 2^-20 of the largest distance of all).
+const GROUPS: usize = 41;
+
+/// Counts the frames in which each of a set of world-fixed points changes cascade, frame by
+/// frame as the camera moves, without computing every point's depth in every frame.
+///
+/// Between frames `u` and `u + 1` a point `p`'s view depth `(p − c)·f` changes by
+/// `(p − c_u)·(f_{u+1} − f_u) − (c_{u+1} − c_u)·f_{u+1}`, so by at most
+/// `(|p − o| + |o − c_u|)·|Δf| + |Δc|·|f_{u+1}|` for any fixed point `o` (frame 0's camera
+/// position), plus the rounding of the two computed depths. Its cascade can change only when
+/// its depth reaches a split value, so after computing a point's depth and cascade the counter
+/// sets it aside until the sum of these bounds since then could reach its distance to the
+/// nearest split value (its slack). The sums run as integer odometers (bounds rounded up,
+/// slacks rounded down, in units of a power of two), one per group of points of similar
+/// distance from `o`, with a monotone queue (a radix heap) of the odometer readings at which each point is due. A
+/// point set aside kept its cascade in every frame in between, so each change is counted in
+/// the frame it happens: the counts equal a computation of every point in every frame, exactly.
+/// A point whose slack is not finite or below the bound of one frame is computed every frame.
+pub struct SeamCounter<'a> {
+    splits: &'a [f64],
+    points: &'a [DVec3],
+    /// Each point's cascade as last computed (unchanged since).
+    cascade: Vec<usize>,
+    /// Frame 0's camera position: distances are measured from it.
+    origin: DVec3,
+    groups: Vec<Group>,
+    /// Which group each point is in.
+    group: Vec<u8>,
+    /// Odometer units per world unit (a power of two).
+    scale: f64,
+    prev: Option<CameraPose>,
+    /// Points due this frame (reused).
+    due: Vec<u32>,
+    changed: u64,
+    steps: u64,
+    evaluated: u64,
+}
+
+/// Points of similar distance from the origin, with their odometer.
+struct Group {
+    /// The largest distance of a point of the group from the origin.
+    radius: f64,
+    /// The sum, since frame 0, of the group's bound on a depth change per frame, rounded up.
+    odometer: u64,
+    /// `(reading, point)`: the point is computed again when the odometer reaches the reading.
+    due: RadixQueue,
+}
+
+/// A monotone min-queue of `(reading, point)` (a radix heap): every reading pushed is at least
+/// the last one taken out, so an entry sits in the bucket of the highest bit in which its
+/// reading differs from that one, and moves only to lower buckets. Taking out every entry up to
+/// a reading costs a few operations per entry, not a heap's sift through log n levels.
+struct RadixQueue {
+    last: u64,
+    buckets: Vec<Vec<(u64, u32)>>,
+    /// Bit b set when bucket b holds entries.
+    full: u128,
+}
+
+impl RadixQueue {
+    fn new() -> Self {
+        RadixQueue {
+            last: 0,
+            buckets: vec![Vec::new(); 65],
+            full: 0,
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.full == 0
+    }
+
+    #[inline]
+    fn bucket(last: u64, reading: u64) -> usize {
+        (u64::BITS - (reading ^ last).leading_zeros()) as usize
+    }
+
+    /// Adds an entry; `reading` is at least every reading taken out so far.
+    #[inline]
+    fn push(&mut self, reading: u64, point: u32) {
+        debug_assert!(reading >= self.last);
+        let b = Self::bucket(self.last, reading);
+        self.buckets[b].push((reading, point));
+        self.full |= 1 << b;
+    }
+
+    /// Takes out every entry whose reading is at most `limit`, into `out` (in no set order).
+    fn take_upto(&mut self, limit: u64, out: &mut Vec<u32>) {
+        while self.full != 0 {
+            if self.full & 1 != 0 {
+                // Bucket 0 holds readings equal to `last`.
+                if self.last > limit {
+                    return;
+                }
+                out.extend(self.buckets[0].drain(..).map(|(_, k)| k));
+                self.full &= !1;
+                continue;
+            }
+            let b = self.full.trailing_zeros() as usize;
+            let min = self.buckets[b].iter().map(|e| e.0).min().expect("a full bucket");
+            if min > limit {
+                return;
+            }
+            // Every entry of bucket b differs from `min` below bit b: they spread to lower buckets.
+            self.last = min;
+            let entries = std::mem::take(&mut self.buckets[b]);
+            self.full &= !(1 << b);
+            for &(r, k) in &entries {
+                let to = Self::bucket(min, r);
+                self.buckets[to].push((r, k));
+                self.full |= 1 << to;
+            }
+            // Keep the emptied bucket's allocation.
+            let mut entries = entries;
+            entries.clear();
+            self.buckets[b] = entries;
+        }
+    }
+}
+
+impl<'a> SeamCounter<'a> {
+    /// A counter of `points` under the selection `splits` (sorted), before any frame.
+    pub fn new(splits: &'a [f64], points: &'a [DVec3]) -> Self {
+        SeamCounter {
+            splits,
+            points,
+            cascade: Vec::new(),
+            origin: DVec3::ZERO,
+            groups: Vec::new(),
+            group: Vec::new(),
+            scale: 1.0,
+            prev: None,
+            due: Vec::new(),
+            changed: 0,
+            steps: 0,
+            evaluated: 0,
+        }
+    }
+
+    /// The next frame's camera pose.
+    pub fn frame(&mut self, pose: &CameraPose) {
+        if self.points.is_empty() {
+            return;
+        }
+        match self.prev {
+            None => self.first(pose),
+            Some(prev) => self.next(&prev, pose),
+        }
+        self.prev = Some(*pose);
+    }
+
+    /// Changes counted so far (a point changing cascade between two consecutive frames).
+    pub fn changes(&self) -> u64 {
+        self.changed
+    }
+
+    /// Frame-to-frame steps so far.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// Depths computed so far (points × frames for the brute-force count).
+    pub fn evaluations(&self) -> u64 {
+        self.evaluated
+    }
+
+    /// Changes per point and step: [`seam_crossings`]. 0 with no step or no point.
+    pub fn rate(&self) -> f64 {
+        if self.steps == 0 || self.points.is_empty() {
+            0.0
+        } else {
+            self.changed as f64 / (self.steps as f64 * self.points.len() as f64)
+        }
+    }
+
+    /// Frame 0: every point's cascade, its group and its first due reading.
+    fn first(&mut self, pose: &CameraPose) {
+        let o = pose.position;
+        self.origin = o;
+        let dist: Vec<f64> = self.points.iter().map(|p| (*p - o).length()).collect();
+        let far = dist.iter().copied().fold(0.0, f64::max);
+        // Group by the binary exponent of the distance relative to the farthest; a group's
+        // radius is the largest distance actually in it, so a misplaced point costs time only.
+        self.group = dist
+            .iter()
+            .map(|&r| {
+                let level = (2.0 * (r / far).log2()).floor();
+                let level = if level.is_nan() {
+                    0.0
+                } else {
+                    level.clamp(-(GROUPS as f64 - 1.0), 0.0)
+                };
+                (level + (GROUPS as f64 - 1.0)) as u8
+            })
+            .collect();
+        self.groups = (0..GROUPS)
+            .map(|_| Group {
+                radius: 0.0,
+                odometer: 0,
+                due: RadixQueue::new(),
+            })
+            .collect();
+        for (&g, &r) in self.group.iter().zip(&dist) {
+            let radius = &mut self.groups[g as usize].radius;
+            *radius = radius.max(r);
+        }
+        // Units: 2^-32 of the extent of the points and the origin (a power of two, so the
+        // conversions to units are exact); 10^6 frames of the largest turns stay below 2^53.
+        let extent = far.max(o.length()).max(f64::MIN_POSITIVE);
+        let k = (extent.log2().ceil() as i32).clamp(-960, 960);
+        self.scale = 2f64.powi(32 - k);
+        self.cascade = vec![0; self.points.len()];
+        for k in 0..self.points.len() {
+            let (cascade, reading) = self.compute(k, pose);
+            self.cascade[k] = cascade;
+            self.groups[self.group[k] as usize].due.push(reading, k as u32);
+        }
+    }
+
+    /// A frame after the first: advance the odometers, compute the points that are due.
+    fn next(&mut self, prev: &CameraPose, pose: &CameraPose) {
+        self.steps += 1;
+        let (fq, ft) = (prev.forward.length(), pose.forward.length());
+        let turn = (pose.forward - prev.forward).length();
+        let o = self.origin;
+        // The bound of a point at distance r from the origin: r · per_unit + base.
+        let per_unit = turn + KAPPA * (fq + ft);
+        let base = (o - prev.position).length() * turn
+            + (pose.position - prev.position).length() * ft
+            + KAPPA * ((o.length() + prev.position.length()) * fq + (o.length() + pose.position.length()) * ft);
+        self.due.clear();
+        for g in &mut self.groups {
+            if g.due.is_empty() {
+                continue;
+            }
+            let bound = (g.radius * per_unit + base) * (1.0 + ROUNDING) * self.scale;
+            // Truncated plus one: at least the bound (a saturated odometer computes every
+            // point every frame).
+            let step = if bound < 1e18 { bound as u64 + 1 } else { u64::MAX };
+            g.odometer = g.odometer.saturating_add(step);
+            g.due.take_upto(g.odometer, &mut self.due);
+        }
+        for n in 0..self.due.len() {
+            let k = self.due[n] as usize;
+            let (cascade, reading) = self.compute(k, pose);
+            self.changed += u64::from(cascade != self.cascade[k]);
+            self.cascade[k] = cascade;
+            self.groups[self.group[k] as usize].due.push(reading, k as u32);
+        }
+    }
+
+    /// Point `k`'s cascade in the frame of `pose`, and the odometer reading (of its group, as
+    /// it stands) at which it must be computed again.
+    fn compute(&mut self, k: usize, pose: &CameraPose) -> (usize, u64) {
+        self.evaluated += 1;
+        let d = (self.points[k] - pose.position).dot(pose.forward);
+        let slack = self.splits.iter().map(|&s| (d - s).abs()).fold(f64::INFINITY, f64::min);
+        let units = slack * (1.0 - ROUNDING) * self.scale;
+        // Truncated (the floor of a non-negative number); not finite (or NaN): computed
+        // again next frame.
+        let units = if units.is_finite() { units as u64 } else { 0 };
+        let odometer = self.groups[self.group[k] as usize].odometer;
+        (index(self.splits, d), odometer.saturating_add(units))
     }
 }

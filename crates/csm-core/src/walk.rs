@@ -102,6 +102,28 @@ pub trait PathModel {
     fn same_landings(&self, _p: &Self::Win, _w: &Self::Win) -> bool {
         false
     }
+    /// True when [`PathModel::land_centres`] serves this walk: every probe is served in every
+    /// window, [`PathModel::centre_in`] of a landing is its own centre, and
+    /// [`PathModel::land`] is a function of the cascade and the window alone (it reads no
+    /// frame state and adds nothing to the totals), so the walk may land a window of an
+    /// earlier frame later, or not at all. The walk then lands only the texel centres when a
+    /// frame pair needs nothing else (S3 in closed form, S4 asked for).
+    fn lands_centres(&self) -> bool {
+        false
+    }
+    /// The centres of the sampled texels where cascade `i`'s probes land in `w`, into `out`
+    /// (which arrives empty): the `centre` of each [`PathModel::land`] landing, bit for bit.
+    /// Called only when [`PathModel::lands_centres`].
+    fn land_centres(&self, _i: usize, _w: &Self::Win, _out: &mut Vec<DVec2>) {
+        unreachable!("land_centres without lands_centres")
+    }
+    /// When every probe of cascade `i` lands in `w` on the texel centre it landed on in `p` (the
+    /// same cascade's window one frame earlier, `p` and `w` different), bit for bit: the number
+    /// of probes (all served). None unless known without landing them. Called only when
+    /// [`PathModel::lands_centres`].
+    fn unchanged_centres(&self, _i: usize, _p: &Self::Win, _w: &Self::Win) -> Option<usize> {
+        None
+    }
     /// True when the light used for the shadows can change along the path (a moving light):
     /// the walk then splits the frame pairs into crawl and jumps.
     fn light_moves(&self) -> bool {
@@ -524,6 +546,41 @@ fn flip_kernel<M: PathModel>(
     (flipped, served)
 }
 
+/// [`flip_kernel`] on the texel centres alone (a model that [`PathModel::lands_centres`]):
+/// `(flipped, served)`, the same counts bit for bit.
+#[inline(never)]
+fn centre_flip_kernel(texel: DVec2, prev: &[DVec2], cur: &[DVec2]) -> (usize, usize) {
+    let inv = flip_divisor(texel);
+    let served = prev.len().min(cur.len());
+    let Some(k) = inv else {
+        let flipped = prev
+            .iter()
+            .zip(cur)
+            .filter(|&(a, b)| moved_half_texel(*b - *a, texel, inv))
+            .count();
+        return (flipped, served);
+    };
+    // [`moved_half_texel`] with its shortcut spelled out, without branches: the product
+    // decides unless some axis is within 1e-9 of half a texel (or NaN); then the function
+    // itself decides every probe again.
+    let (mut flipped, mut unsure) = (0usize, false);
+    for (a, b) in prev.iter().zip(cur) {
+        let (qx, qy) = ((b.x - a.x).abs() * k.x, (b.y - a.y).abs() * k.y);
+        // (NaN is unsure too: it fails `> 1e-9`.)
+        let sure = ((qx - 0.5).abs() > 1e-9) & ((qy - 0.5).abs() > 1e-9);
+        unsure |= !sure;
+        flipped += usize::from((qx >= 0.5) | (qy >= 0.5));
+    }
+    if unsure {
+        flipped = prev
+            .iter()
+            .zip(cur)
+            .filter(|&(a, b)| moved_half_texel(*b - *a, texel, inv))
+            .count();
+    }
+    (flipped, served)
+}
+
 /// The largest squared move of a probe's texel coordinates, not wrapped, over the probes
 /// served in both windows: how far a world-fixed point moved within the map (a jump, when the
 /// light was updated between the two frames).
@@ -546,6 +603,19 @@ struct ModeState<M: PathModel> {
     current: Vec<Option<Landing>>,
     /// How many of `prev_landings` are served, once counted.
     prev_served: Vec<Option<usize>>,
+    /// A model that lands centres: what is held for each cascade's previous window (its
+    /// landings, its centres or neither), the centres, and this frame's.
+    prev_held: Vec<Held>,
+    prev_centres: Vec<Vec<DVec2>>,
+    current_centres: Vec<DVec2>,
+}
+
+/// What the walk holds of a previous window's probes (a model that lands centres).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Held {
+    Nothing,
+    Landings,
+    Centres,
 }
 
 /// The one loop along a path: for every frame (in order) and every cascade, calls
@@ -622,7 +692,14 @@ where
         prev_landings: vec![Vec::new(); m],
         current: Vec::new(),
         prev_served: vec![None; m],
+        prev_held: vec![Held::Nothing; m],
+        prev_centres: vec![Vec::new(); m],
+        current_centres: Vec::new(),
     });
+    // A model that lands centres lands nothing up front: each frame pair lands what it needs
+    // (centres, or full landings when S3 has no closed form), the previous window's too when
+    // they are not held.
+    let centres = probes && !moving && !M::SKIP_UNSERVED && model.lands_centres();
     each_cascade_frame(model, poses, |model, t, i, shared| {
         for st in &mut states {
             // A cascade not updated this frame keeps the window of its last update.
@@ -646,13 +723,15 @@ where
                 }
             }
             let same = probes && st.prev[i].as_ref().is_some_and(|p| model.same_landings(p, &w));
-            let landings = &mut st.current;
-            landings.clear();
-            if probes && !same {
-                model.land(i, shared, &w, landings, &mut st.totals);
+            st.current.clear();
+            if probes && !same && !centres {
+                model.land(i, shared, &w, &mut st.current, &mut st.totals);
             }
+            // With centres: what this frame landed (full landings or centres), if anything.
+            let mut landed = Held::Nothing;
+            // With centres: every probe's centre is unchanged (the number of probes).
+            let mut unchanged = None;
             if let Some(p) = &st.prev[i] {
-                let pl = &st.prev_landings[i];
                 let (pt, wt) = (M::texel(p), M::texel(&w));
                 // x / x is exactly 1, so an unchanged size gives exactly 0 without the divisions.
                 let size_change = if wt == pt {
@@ -665,15 +744,49 @@ where
                 } else {
                     model.closed_form(p, &w)
                 };
+                if centres && !same {
+                    if closed.is_none() {
+                        if st.prev_held[i] != Held::Landings {
+                            st.prev_landings[i].clear();
+                            model.land(i, shared, p, &mut st.prev_landings[i], &mut st.totals);
+                            st.prev_held[i] = Held::Landings;
+                            st.prev_served[i] = None;
+                        }
+                        model.land(i, shared, &w, &mut st.current, &mut st.totals);
+                        landed = Held::Landings;
+                    } else if !opts.cell_flips {
+                    } else if let Some(n) = model.unchanged_centres(i, p, &w) {
+                        // The centres held for `p`, if any, are `w`'s too.
+                        unchanged = Some(n);
+                        landed = if st.prev_held[i] == Held::Centres {
+                            Held::Centres
+                        } else {
+                            Held::Nothing
+                        };
+                    } else {
+                        if st.prev_held[i] != Held::Centres {
+                            st.prev_centres[i].clear();
+                            model.land_centres(i, p, &mut st.prev_centres[i]);
+                            st.prev_held[i] = Held::Centres;
+                        }
+                        st.current_centres.clear();
+                        model.land_centres(i, &w, &mut st.current_centres);
+                        landed = Held::Centres;
+                    }
+                }
+                let pl = &st.prev_landings[i];
+                let landings = &st.current;
                 st.totals.jitter = st.totals.jitter.max(size_change);
                 let drift = match closed {
                     Some(ms) if !opts.cell_flips => Some((ms, ms, None)),
                     // Every probe lands where it landed a frame ago (a snapped window that
                     // did not move): what the kernels give for equal landings, without them.
                     _ if same => {
-                        let served =
-                            *st.prev_served[i].get_or_insert_with(|| pl.iter().filter(|l| l.is_some()).count());
-                        if M::SKIP_UNSERVED && served == 0 {
+                        // (Counted only when it matters: a model that lands centres holds no
+                        // landings here, and skips no pair.)
+                        if M::SKIP_UNSERVED
+                            && *st.prev_served[i].get_or_insert_with(|| pl.iter().filter(|l| l.is_some()).count()) == 0
+                        {
                             None
                         } else {
                             let (ms, mx_sq) = closed.map_or((0.0, 0.0), |ms| (ms, ms));
@@ -682,7 +795,13 @@ where
                     }
                     // S3 has the closed form: the probes only count S4 flips.
                     Some(ms) => {
-                        let (flipped, served) = flip_kernel(model, &w, pl, landings);
+                        let (flipped, served) = if let Some(n) = unchanged {
+                            (0, n)
+                        } else if landed == Held::Centres {
+                            centre_flip_kernel(M::texel(&w), &st.prev_centres[i], &st.current_centres)
+                        } else {
+                            flip_kernel(model, &w, pl, landings)
+                        };
                         if M::SKIP_UNSERVED && served == 0 {
                             None
                         } else {
@@ -729,8 +848,23 @@ where
             }
             st.prev[i] = Some(w);
             if !same {
-                std::mem::swap(&mut st.prev_landings[i], &mut st.current);
-                st.prev_served[i] = None;
+                if !centres {
+                    std::mem::swap(&mut st.prev_landings[i], &mut st.current);
+                    st.prev_served[i] = None;
+                } else {
+                    // Landings equal to the previous window's stay held (`same`); else what
+                    // this frame landed, if anything, is held for the next.
+                    match landed {
+                        Held::Landings => {
+                            std::mem::swap(&mut st.prev_landings[i], &mut st.current);
+                            st.prev_served[i] = None;
+                        }
+                        Held::Centres if unchanged.is_some() => {}
+                        Held::Centres => std::mem::swap(&mut st.prev_centres[i], &mut st.current_centres),
+                        Held::Nothing => {}
+                    }
+                    st.prev_held[i] = landed;
+                }
             }
         }
     });
