@@ -25,15 +25,27 @@ pub(crate) const EXTRA_COLUMNS: [&str; 5] = [
 ];
 
 /// The header of `compare.csv`.
-pub(crate) fn columns(screen: bool) -> Vec<&'static str> {
+pub(crate) fn columns(cols: metric::RowColumns) -> Vec<&'static str> {
     std::iter::once("preset")
-        .chain(metric::summary_columns(screen))
+        .chain(metric::summary_columns(cols))
         .chain(EXTRA_COLUMNS)
         .collect()
 }
 
+/// The optional columns of `compare.csv`: the screen and cost columns with scene geometry,
+/// `shadow_ms` when calibrated, the means over the path when some preset measured them.
+pub(crate) fn row_columns(c: &Comparison) -> metric::RowColumns {
+    let screen = c.analyses.iter().any(|a| a.config.geometry.is_some());
+    metric::RowColumns {
+        screen,
+        calibrated: screen && c.analyses.iter().any(|a| a.config.cost.calibration.is_some()),
+        means: c.analyses.iter().any(|a| a.summary.cost.means.is_some()),
+    }
+}
+
 /// One CSV row per preset.
 pub(crate) fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
+    let cols = row_columns(c);
     c.analyses
         .iter()
         .map(|a| {
@@ -53,6 +65,7 @@ pub(crate) fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
                 &fit_label(a),
                 crate::config::SplitRange::of(a.config.shadow.fit_depth_to_visible),
                 s,
+                cols,
             )?);
             fields.extend([
                 a.config.shadow.snap.to_string(),
@@ -74,10 +87,7 @@ impl Exporter<Comparison> for CompareCsv {
     }
 
     fn render(&self, c: &Comparison) -> Result<Vec<u8>> {
-        csv_bytes(
-            &columns(c.analyses.iter().any(|a| a.config.geometry.is_some())),
-            &rows(c)?,
-        )
+        csv_bytes(&columns(row_columns(c)), &rows(c)?)
     }
 }
 

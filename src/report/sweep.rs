@@ -78,6 +78,7 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
             (&sun.all, sun.setting_of.clone(), worst)
         }
     };
+    let cols = row_columns(r);
     let rows = all.iter().enumerate().map(|(k, row)| {
         let i = setting_of[k];
         let st = &row.setting;
@@ -88,6 +89,7 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
             st.fit.name(),
             st.split_range,
             &row.summary,
+            cols,
         )?;
         // A shard's slice decides nothing: its pareto and recommended cells are empty.
         let decided = |b: bool| {
@@ -124,7 +126,7 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         }
         Ok(fields)
     });
-    let header: Vec<&str> = metric::summary_columns(r.config.geometry.is_some())
+    let header: Vec<&str> = metric::summary_columns(cols)
         .into_iter()
         .chain(SWEEP_EXTRA_COLUMNS)
         .chain(knob_key)
@@ -134,6 +136,18 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         .chain(r.sun.iter().flat_map(|_| SUN_COLUMNS))
         .collect();
     crate::output::csv_write_from(out, &header, rows)
+}
+
+/// The optional columns of `sweep.csv`: the screen and cost columns with scene geometry,
+/// `shadow_ms` when calibrated, the means over the path when the rows measured them.
+pub(crate) fn row_columns(r: &SweepResult) -> metric::RowColumns {
+    let screen = r.config.geometry.is_some();
+    let rows = r.sun.as_ref().map_or(&r.rows[..], |s| &s.all[..]);
+    metric::RowColumns {
+        screen,
+        calibrated: screen && r.config.cost.calibration.is_some(),
+        means: rows.iter().any(|x| x.summary.cost.means.is_some()),
+    }
 }
 
 fn row_json(row: &Row) -> serde_json::Value {

@@ -280,7 +280,12 @@ pub fn compare_rows(current: &[SweepRow], baseline: &[SweepRow], tol: &Tolerance
     // Exactly the columns sweep.csv has (the registry's row metrics), and of those only the
     // ones the baseline table has: an older table without a column is not 1,000 regressions.
     let in_base = |m: &SummaryMetric| baseline.first().is_none_or(|b| b.metrics.contains_key(m.name()));
-    let columns: Vec<SummaryMetric> = SummaryMetric::all().filter(|m| m.def().in_rows).collect();
+    // The optional columns (shadow_ms, the means over the path) only when the current table
+    // has them.
+    let in_current = |m: &SummaryMetric| current.first().is_some_and(|r| r.metrics.contains_key(m.name()));
+    let columns: Vec<SummaryMetric> = SummaryMetric::all()
+        .filter(|m| m.def().in_rows && (!crate::metric::optional_row_column(m.name()) || in_current(m)))
+        .collect();
     let mut out = SweepComparison {
         matched: Vec::new(),
         only_current: Vec::new(),
