@@ -396,9 +396,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: cascade renders per frame on average, the sum over cascades of 1 / update_every (the cascade count without caching); only with [shadow] update_every",
         brief: "cached: cascade renders per frame (sum of 1/update_every)",
         shown: Shown::Fixed,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.renders_per_frame)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.renders_per_frame)),
     },
     SummaryDef {
         name: "stale_coverage_violations",
@@ -407,9 +407,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: frames in which a cascade kept an earlier window that does not hold the current slice (a coverage hole), summed over cascades and motion paths, configured snapping; only with [shadow] update_every",
         brief: "cached: stale frames whose window misses the slice",
         shown: Shown::Never,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Count(s.cache.map_or(0, |c| c.stale_coverage_violations)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Count(c.stale_coverage_violations)),
     },
     SummaryDef {
         name: "stale_coverage_fraction",
@@ -418,9 +418,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: the worst cascade's share of the frames walked with such a hole; only with [shadow] update_every",
         brief: "cached: worst cascade's share of frames with a hole",
         shown: Shown::Never,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.stale_coverage_fraction)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.stale_coverage_fraction)),
     },
     SummaryDef {
         name: "stale_margin",
@@ -429,9 +429,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: the largest growth of a held window, in its own texels on every side, that covers the slice in every stale frame (0 when none has a hole); only with [shadow] update_every",
         brief: "cached: window growth that closes every hole (texels)",
         shown: Shown::Fixed,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.stale_margin)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.stale_margin)),
     },
     SummaryDef {
         name: "stale_margin_world",
@@ -440,9 +440,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: stale_margin in world units (each cascade's growth times its texel size), the largest over the cascades; only with [shadow] update_every",
         brief: "cached: the same in world units",
         shown: Shown::Fixed,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.stale_margin_world)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.stale_margin_world)),
     },
     SummaryDef {
         name: "update_drift",
@@ -451,9 +451,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: the worst cascade's RMS sub-texel drift (S3) over the frame pairs at which it is rendered again, configured snapping, worst over the motion paths (a held window does not drift between updates); only with [shadow] update_every",
         brief: "cached: RMS drift at a cascade's updates (texels)",
         shown: Shown::Fixed,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.update_drift)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.update_drift)),
     },
     SummaryDef {
         name: "update_flicker",
@@ -1087,7 +1087,21 @@ pub(crate) struct RowColumns {
     pub(crate) calibrated: bool,
     /// The rows carry the means over the path ([`COST_MEANS`]).
     pub(crate) means: bool,
+    /// Some row caches cascades: the cached-cascade figures ([`ROW_CACHE`]; n/a in a row that
+    /// renders every cascade every frame).
+    pub(crate) cache: bool,
 }
+
+/// The cached-cascade figures that are columns of a per-configuration table when some row
+/// caches cascades (`update_flicker` needs the ground-truth pass, which sweep rows skip).
+const ROW_CACHE: [&str; 6] = [
+    "renders_per_frame",
+    "stale_coverage_violations",
+    "stale_coverage_fraction",
+    "stale_margin",
+    "stale_margin_world",
+    "update_drift",
+];
 
 impl RowColumns {
     /// Whether the optional column `name` is in a table of these columns (true for a column
@@ -1099,6 +1113,8 @@ impl RowColumns {
             self.calibrated
         } else if COST_MEANS.contains(&name) {
             self.means
+        } else if ROW_CACHE.contains(&name) {
+            self.cache
         } else {
             true
         }
@@ -1107,7 +1123,7 @@ impl RowColumns {
 
 /// Whether a summary metric is a column only in some tables ([`RowColumns`]).
 pub(crate) fn optional_row_column(name: &str) -> bool {
-    name == SHADOW_MS || COST_MEANS.contains(&name)
+    name == SHADOW_MS || COST_MEANS.contains(&name) || ROW_CACHE.contains(&name)
 }
 
 /// The cached-cascade metrics (summary and per cascade): only with `[shadow] update_every`
@@ -1133,7 +1149,9 @@ const UPDATE_FLICKER: &str = "update_flicker";
 fn in_row_for(d: &SummaryDef, s: &Summary, cols: RowColumns) -> bool {
     d.in_rows
         && cols.has(d.name)
-        && (shown_for(d, s) || ((d.name == COST_INDEX || optional_row_column(d.name)) && s.screen.is_some()))
+        && (shown_for(d, s)
+            || ((d.name == COST_INDEX || optional_row_column(d.name)) && s.screen.is_some())
+            || ROW_CACHE.contains(&d.name))
 }
 
 /// The one cost metric in milliseconds: only with a calibrated model (`[cost] ns_per_*`),
