@@ -989,6 +989,10 @@ impl SummaryMetric {
         let name = self.name();
         if TRUTH_SUMMARY.contains(&name) {
             Some("it comes from the ground-truth pass: set `[analysis] ground_truth = true` in the config (it needs scene geometry)")
+        } else if COST_COUNTS.contains(&name) {
+            Some("it is a cost count: it needs scene geometry (scene.ground, [[scene.box]] or scene.gltf) and cost.counts on")
+        } else if COST_MEANS.contains(&name) {
+            Some("it is a mean over the camera path of the cost counts: it needs scene geometry with cost.counts on, cost.cull = \"none\", a still light and a light basis that does not follow the camera (a sweep also needs [sweep] cost_means = true or cached cascades; shadow_ms_mean a calibrated [cost])")
         } else if self.def().screen {
             Some("it is a screen metric: give the config scene geometry (scene.ground, [[scene.box]] or scene.gltf)")
         } else if is_light_motion(name) {
@@ -1056,10 +1060,20 @@ fn shown_for(d: &SummaryDef, s: &Summary) -> bool {
         && (d.name != UPDATE_FLICKER || s.truth.is_some())
         && (d.name != SHADOW_MS || s.cost.shadow_ms.is_some())
         && (d.name != COST_INDEX || s.cost.cost_index.is_some())
+        && (!COST_COUNTS.contains(&d.name) || s.cost.counts.is_some())
         && (!COST_MEANS.contains(&d.name) || s.cost.means.is_some())
         && (d.name != COST_INDEX_MEAN || s.cost.means.is_some_and(|m| m.cost_index_mean.is_some()))
         && (d.name != SHADOW_MS_MEAN || s.cost.means.is_some_and(|m| m.shadow_ms_mean.is_some()))
 }
+
+/// The cost counts (summary and per cascade): with scene geometry unless `[cost] counts =
+/// false`; absent from `summary.json` otherwise, `n/a` in a table that has the column.
+const COST_COUNTS: [&str; 4] = [
+    "caster_objects",
+    "caster_triangles",
+    "caster_triangles_inside",
+    "raster_fragments",
+];
 
 /// The cost counts' means over the camera path (summary and per cascade): only where measured
 /// (`crate::analysis::cost::means_measurable`), absent from every output otherwise.
@@ -1150,7 +1164,8 @@ fn in_row_for(d: &SummaryDef, s: &Summary, cols: RowColumns) -> bool {
     d.in_rows
         && cols.has(d.name)
         && (shown_for(d, s)
-            || ((d.name == COST_INDEX || optional_row_column(d.name)) && s.screen.is_some())
+            || ((d.name == COST_INDEX || COST_COUNTS.contains(&d.name) || optional_row_column(d.name))
+                && s.screen.is_some())
             || ROW_CACHE.contains(&d.name))
 }
 
@@ -1757,6 +1772,7 @@ impl CascadeMetric {
             && (!CACHE_METRICS.contains(&d.name) || c.cache.is_some())
             && (d.name != UPDATE_FLICKER || c.truth.is_some())
             && (d.name != SHADOW_MS || c.cost.shadow_ms.is_some())
+            && (!COST_COUNTS.contains(&d.name) || c.cost.counts.is_some())
             && (!COST_MEANS.contains(&d.name) || c.cost.means.is_some())
             && (d.name != COST_INDEX_MEAN || c.cost.means.is_some_and(|m| m.cost_index_mean.is_some()))
             && (d.name != SHADOW_MS_MEAN || c.cost.means.is_some_and(|m| m.shadow_ms_mean.is_some()))

@@ -224,12 +224,21 @@ pub fn kept_objects(
     )
 }
 
+/// The scene whose casters are counted: the config's geometry, unless `[cost] counts = false`.
+fn counted(config: &Config) -> Option<&SceneGeometry> {
+    config
+        .geometry
+        .as_ref()
+        .filter(|_| config.cost.counts)
+        .map(|g| &*g.scene)
+}
+
 /// Whether the means over the camera path are measured for `config` when asked: with scene
 /// geometry, without culling (the visible receivers are frame 0's only), and for a pipeline
 /// whose light basis stays put along the path (a still light and a basis that does not follow
 /// the camera: each frame then reads the scene in the same light basis). docs/cost.md.
 pub(crate) fn means_measurable(config: &Config, rig: Option<&Rig>) -> bool {
-    config.geometry.is_some()
+    counted(config).is_some()
         && config.cost.cull == CostCull::None
         && !config.motion.light.moves()
         && rig.is_none_or(|r| r.fixed_basis())
@@ -241,7 +250,7 @@ pub(crate) fn means_measurable(config: &Config, rig: Option<&Rig>) -> bool {
 /// and `shadow_ms_mean` are left to [`CostMeans::finish`].
 pub(crate) fn path_means(config: &Config, rig: &Rig, every: &[usize]) -> Vec<CostMeans> {
     let m = rig.cascade_count();
-    let Some(scene) = config.geometry.as_ref().map(|g| &*g.scene) else {
+    let Some(scene) = counted(config) else {
         return vec![CostMeans::default(); m];
     };
     let setup = config.setup();
@@ -290,7 +299,7 @@ pub(crate) fn measure(
     vis: Option<&Visibility>,
     means: Option<Vec<CostMeans>>,
 ) -> (Vec<CascadeCost>, CostSummary) {
-    let geometry = config.geometry.as_ref().map(|g| &*g.scene);
+    let geometry = counted(config);
     let calibration = config.cost.calibration;
     let mut cascades: Vec<CascadeCost> = windows0
         .iter()
@@ -358,7 +367,7 @@ pub(crate) fn measure(
 /// The cost of a setting that needs no cascade: nothing is rendered (in any frame, when the
 /// means over the path are asked for).
 pub(crate) fn nothing(config: &Config, means: bool) -> CostSummary {
-    let geometry = config.geometry.is_some();
+    let geometry = counted(config).is_some();
     CostSummary {
         counts: geometry.then(CostCounts::default),
         texels_cleared: 0,

@@ -611,11 +611,25 @@ impl CostCull {
 
 /// `[cost]`: receiver-aware culling, and the cost model's coefficients in nanoseconds when the
 /// user measured them (all four or none).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CostSettings {
+    /// `counts = false` skips the cost counts (draws, triangles, fragments, `cost_index` and
+    /// their means are then absent, as without geometry): for a scene too large to count in a
+    /// sweep, and to measure what counting costs (docs/cost.md).
+    pub counts: bool,
     pub cull: CostCull,
     /// `ns_per_draw`, `ns_per_triangle`, `ns_per_fragment`, `ns_per_texel_cleared`.
     pub calibration: Option<csm_core::cost::CostModel>,
+}
+
+impl Default for CostSettings {
+    fn default() -> Self {
+        CostSettings {
+            counts: true,
+            cull: CostCull::None,
+            calibration: None,
+        }
+    }
 }
 
 impl Config {
@@ -806,6 +820,9 @@ impl Config {
         }
         if self.cost != CostSettings::default() {
             let mut cost = serde_json::json!({ "cull": self.cost.cull.name() });
+            if !self.cost.counts {
+                cost["counts"] = false.into();
+            }
             if let Some(m) = self.cost.calibration {
                 cost["ns_per_draw"] = m.per_draw.into();
                 cost["ns_per_triangle"] = m.per_triangle.into();

@@ -499,8 +499,14 @@ fn cost_table(a: &Analysis) -> String {
     let Some(total) = s.counts else {
         let _ = writeln!(
             out,
-            "cost (frame 0): {} texels cleared, {} bytes written per update; draws, triangles and fragments need scene geometry",
-            s.texels_cleared, s.bytes_written
+            "cost (frame 0): {} texels cleared, {} bytes written per update; draws, triangles and fragments {}",
+            s.texels_cleared,
+            s.bytes_written,
+            if a.config.geometry.is_some() {
+                "not counted (cost.counts = false)"
+            } else {
+                "need scene geometry"
+            }
         );
         return out;
     };
