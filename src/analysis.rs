@@ -39,6 +39,10 @@ pub struct AnalysisOptions {
     /// The ground-truth pass, when the config asks for it (`[analysis] ground_truth`); sweeps
     /// leave it out.
     pub ground_truth: bool,
+    /// The cost counts' means over the camera path (`*_mean`, docs/cost.md), where they can
+    /// be measured ([`cost::means_measurable`]); a sweep asks for them with
+    /// `[sweep] cost_means` or when a setting caches cascades.
+    pub cost_means: bool,
 }
 
 impl AnalysisOptions {
@@ -51,6 +55,7 @@ impl AnalysisOptions {
             light_depth: true,
             seams: true,
             ground_truth: true,
+            cost_means: true,
         }
     }
 
@@ -63,6 +68,7 @@ impl AnalysisOptions {
             light_depth: false,
             seams: false,
             ground_truth: false,
+            cost_means: false,
         }
     }
 }
@@ -977,7 +983,9 @@ fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u
             .as_ref()
             .map(|t| if config.shadow.snap { &t.snapped } else { &t.unsnapped }),
     );
-    let (cascade_costs, cost) = cost::measure(config, &rig, &frame0.light, &frame0.windows, vis);
+    let cost_means = (opts.cost_means && cost::means_measurable(config, Some(&rig)))
+        .then(|| cost::path_means(config, &rig, &cadence(config, &rig)));
+    let (cascade_costs, cost) = cost::measure(config, &rig, &frame0.light, &frame0.windows, vis, cost_means);
     let parts = CameraParts {
         config,
         rig: &rig,
@@ -1282,7 +1290,7 @@ fn no_cascades(
                 .as_ref()
                 .map(|vis| screen::stats(vis, &[0.0, 0.0], &[0.0], visible)),
             light: config.motion.light.moves().then(LightSummary::default),
-            cost: cost::nothing(config),
+            cost: cost::nothing(config, opts.cost_means),
             ..Summary::nothing_needed(memory)
         },
         ground_truth: None,

@@ -33,7 +33,7 @@ pub enum Command {
     /// Build the cascades of one scene and shadow setting, measure them, write CSV/JSON/SVG.
     Analyze(analyze::AnalyzeRequest),
     /// Sweep λ × cascades × resolution (× fit) in parallel; write CSV, plots and a report.
-    Sweep(SweepArgs),
+    Sweep(Box<SweepArgs>),
     /// Gate on quality: judge threshold rules and compare with a baseline (exit 1 on failure).
     Check(CheckArgs),
     /// Run a battery of pathological inputs through validation and analysis, check invariants,

@@ -396,9 +396,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: cascade renders per frame on average, the sum over cascades of 1 / update_every (the cascade count without caching); only with [shadow] update_every",
         brief: "cached: cascade renders per frame (sum of 1/update_every)",
         shown: Shown::Fixed,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.renders_per_frame)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.renders_per_frame)),
     },
     SummaryDef {
         name: "stale_coverage_violations",
@@ -407,9 +407,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: frames in which a cascade kept an earlier window that does not hold the current slice (a coverage hole), summed over cascades and motion paths, configured snapping; only with [shadow] update_every",
         brief: "cached: stale frames whose window misses the slice",
         shown: Shown::Never,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Count(s.cache.map_or(0, |c| c.stale_coverage_violations)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Count(c.stale_coverage_violations)),
     },
     SummaryDef {
         name: "stale_coverage_fraction",
@@ -418,9 +418,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: the worst cascade's share of the frames walked with such a hole; only with [shadow] update_every",
         brief: "cached: worst cascade's share of frames with a hole",
         shown: Shown::Never,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.stale_coverage_fraction)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.stale_coverage_fraction)),
     },
     SummaryDef {
         name: "stale_margin",
@@ -429,9 +429,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: the largest growth of a held window, in its own texels on every side, that covers the slice in every stale frame (0 when none has a hole); only with [shadow] update_every",
         brief: "cached: window growth that closes every hole (texels)",
         shown: Shown::Fixed,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.stale_margin)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.stale_margin)),
     },
     SummaryDef {
         name: "stale_margin_world",
@@ -440,9 +440,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: stale_margin in world units (each cascade's growth times its texel size), the largest over the cascades; only with [shadow] update_every",
         brief: "cached: the same in world units",
         shown: Shown::Fixed,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.stale_margin_world)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.stale_margin_world)),
     },
     SummaryDef {
         name: "update_drift",
@@ -451,9 +451,9 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cached cascades: the worst cascade's RMS sub-texel drift (S3) over the frame pairs at which it is rendered again, configured snapping, worst over the motion paths (a held window does not drift between updates); only with [shadow] update_every",
         brief: "cached: RMS drift at a cascade's updates (texels)",
         shown: Shown::Fixed,
-        in_rows: false,
+        in_rows: true,
         screen: false,
-        value: |s| Value::Real(s.cache.map_or(0.0, |c| c.update_drift)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.update_drift)),
     },
     SummaryDef {
         name: "update_flicker",
@@ -825,9 +825,86 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         help: "cost: the cost model with the calibrated coefficients ([cost] ns_per_*), in milliseconds per frame; only when calibrated",
         brief: "shadow rendering time (calibrated model)",
         shown: Shown::Never,
-        in_rows: false,
+        in_rows: true,
         screen: true,
         value: |s| Value::maybe(s.cost.shadow_ms),
+    },
+    SummaryDef {
+        name: "caster_objects_mean",
+        unit: "draws",
+        direction: Direction::HigherIsWorse,
+        help: "cost: caster_objects per frame on average over every frame of the motion paths (a cascade held by [shadow] update_every draws nothing in its stale frames); with scene geometry, without culling, under a fixed light basis",
+        brief: "draw calls per frame, mean over the path",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| s.cost.means.map_or(Value::Missing, |m| Value::Real(m.caster_objects_mean)),
+    },
+    SummaryDef {
+        name: "caster_triangles_mean",
+        unit: "triangles",
+        direction: Direction::HigherIsWorse,
+        help: "cost: caster_triangles per frame on average over the motion paths (as caster_objects_mean)",
+        brief: "caster triangles per frame, mean over the path",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| s.cost.means.map_or(Value::Missing, |m| Value::Real(m.caster_triangles_mean)),
+    },
+    SummaryDef {
+        name: "caster_triangles_inside_mean",
+        unit: "triangles",
+        direction: Direction::HigherIsWorse,
+        help: "cost: caster_triangles_inside per frame on average over the motion paths (as caster_objects_mean)",
+        brief: "caster triangles inside, mean over the path",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| s.cost.means.map_or(Value::Missing, |m| Value::Real(m.caster_triangles_inside_mean)),
+    },
+    SummaryDef {
+        name: "raster_fragments_mean",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cost: raster_fragments per frame on average over the motion paths (as caster_objects_mean)",
+        brief: "fragments per frame, mean over the path",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| s.cost.means.map_or(Value::Missing, |m| Value::Real(m.raster_fragments_mean)),
+    },
+    SummaryDef {
+        name: "texels_cleared_mean",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cost: texels cleared per frame on average over the motion paths (a held cascade clears nothing in its stale frames)",
+        brief: "texels cleared per frame, mean over the path",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| s.cost.means.map_or(Value::Missing, |m| Value::Real(m.texels_cleared_mean)),
+    },
+    SummaryDef {
+        name: "cost_index_mean",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "cost: the cost model of the means over the motion paths, over the configured setting's frame 0 (below cost_index where cached cascades save)",
+        brief: "cost per frame over the path, over the configured frame 0",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::maybe(s.cost.means.and_then(|m| m.cost_index_mean)),
+    },
+    SummaryDef {
+        name: "shadow_ms_mean",
+        unit: "ms",
+        direction: Direction::HigherIsWorse,
+        help: "cost: the calibrated cost model of the means over the motion paths, in milliseconds per frame; only when calibrated",
+        brief: "shadow rendering time per frame over the path (calibrated)",
+        shown: Shown::Never,
+        in_rows: true,
+        screen: true,
+        value: |s| Value::maybe(s.cost.means.and_then(|m| m.shadow_ms_mean)),
     },
 ];
 
@@ -912,6 +989,10 @@ impl SummaryMetric {
         let name = self.name();
         if TRUTH_SUMMARY.contains(&name) {
             Some("it comes from the ground-truth pass: set `[analysis] ground_truth = true` in the config (it needs scene geometry)")
+        } else if COST_COUNTS.contains(&name) {
+            Some("it is a cost count: it needs scene geometry (scene.ground, [[scene.box]] or scene.gltf) and cost.counts on")
+        } else if COST_MEANS.contains(&name) {
+            Some("it is a mean over the camera path of the cost counts: it needs scene geometry with cost.counts on, cost.cull = \"none\", a still light and a light basis that does not follow the camera (a sweep also needs [sweep] cost_means = true or cached cascades; shadow_ms_mean a calibrated [cost])")
         } else if self.def().screen {
             Some("it is a screen metric: give the config scene geometry (scene.ground, [[scene.box]] or scene.gltf)")
         } else if is_light_motion(name) {
@@ -979,6 +1060,84 @@ fn shown_for(d: &SummaryDef, s: &Summary) -> bool {
         && (d.name != UPDATE_FLICKER || s.truth.is_some())
         && (d.name != SHADOW_MS || s.cost.shadow_ms.is_some())
         && (d.name != COST_INDEX || s.cost.cost_index.is_some())
+        && (!COST_COUNTS.contains(&d.name) || s.cost.counts.is_some())
+        && (!COST_MEANS.contains(&d.name) || s.cost.means.is_some())
+        && (d.name != COST_INDEX_MEAN || s.cost.means.is_some_and(|m| m.cost_index_mean.is_some()))
+        && (d.name != SHADOW_MS_MEAN || s.cost.means.is_some_and(|m| m.shadow_ms_mean.is_some()))
+}
+
+/// The cost counts (summary and per cascade): with scene geometry unless `[cost] counts =
+/// false`; absent from `summary.json` otherwise, `n/a` in a table that has the column.
+const COST_COUNTS: [&str; 4] = [
+    "caster_objects",
+    "caster_triangles",
+    "caster_triangles_inside",
+    "raster_fragments",
+];
+
+/// The cost counts' means over the camera path (summary and per cascade): only where measured
+/// (`crate::analysis::cost::means_measurable`), absent from every output otherwise.
+pub(crate) const COST_MEANS: [&str; 7] = [
+    "caster_objects_mean",
+    "caster_triangles_mean",
+    "caster_triangles_inside_mean",
+    "raster_fragments_mean",
+    "texels_cleared_mean",
+    COST_INDEX_MEAN,
+    SHADOW_MS_MEAN,
+];
+
+const COST_INDEX_MEAN: &str = "cost_index_mean";
+const SHADOW_MS_MEAN: &str = "shadow_ms_mean";
+
+/// The optional columns of a per-configuration table (`sweep.csv`, `compare.csv`) beyond the
+/// screen metrics: `shadow_ms` only with a calibrated cost model, the means over the path only
+/// when the rows measured them, `shadow_ms_mean` only with both.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) struct RowColumns {
+    /// Scene geometry: the screen metrics and the cost counts.
+    pub(crate) screen: bool,
+    /// `[cost] ns_per_*`: `shadow_ms`.
+    pub(crate) calibrated: bool,
+    /// The rows carry the means over the path ([`COST_MEANS`]).
+    pub(crate) means: bool,
+    /// Some row caches cascades: the cached-cascade figures ([`ROW_CACHE`]; n/a in a row that
+    /// renders every cascade every frame).
+    pub(crate) cache: bool,
+}
+
+/// The cached-cascade figures that are columns of a per-configuration table when some row
+/// caches cascades (`update_flicker` needs the ground-truth pass, which sweep rows skip).
+const ROW_CACHE: [&str; 6] = [
+    "renders_per_frame",
+    "stale_coverage_violations",
+    "stale_coverage_fraction",
+    "stale_margin",
+    "stale_margin_world",
+    "update_drift",
+];
+
+impl RowColumns {
+    /// Whether the optional column `name` is in a table of these columns (true for a column
+    /// that is not optional).
+    fn has(self, name: &str) -> bool {
+        if name == SHADOW_MS_MEAN {
+            self.calibrated && self.means
+        } else if name == SHADOW_MS {
+            self.calibrated
+        } else if COST_MEANS.contains(&name) {
+            self.means
+        } else if ROW_CACHE.contains(&name) {
+            self.cache
+        } else {
+            true
+        }
+    }
+}
+
+/// Whether a summary metric is a column only in some tables ([`RowColumns`]).
+pub(crate) fn optional_row_column(name: &str) -> bool {
+    name == SHADOW_MS || COST_MEANS.contains(&name) || ROW_CACHE.contains(&name)
 }
 
 /// The cached-cascade metrics (summary and per cascade): only with `[shadow] update_every`
@@ -1001,8 +1160,13 @@ const UPDATE_FLICKER: &str = "update_flicker";
 /// Whether a metric is a column of a per-configuration row: as [`shown_for`], but
 /// `cost_index` is a column whenever the counts are (n/a where it has no reference: a
 /// configured setting that needs no cascade).
-fn in_row_for(d: &SummaryDef, s: &Summary) -> bool {
-    d.in_rows && (shown_for(d, s) || (d.name == COST_INDEX && s.screen.is_some()))
+fn in_row_for(d: &SummaryDef, s: &Summary, cols: RowColumns) -> bool {
+    d.in_rows
+        && cols.has(d.name)
+        && (shown_for(d, s)
+            || ((d.name == COST_INDEX || COST_COUNTS.contains(&d.name) || optional_row_column(d.name))
+                && s.screen.is_some())
+            || ROW_CACHE.contains(&d.name))
 }
 
 /// The one cost metric in milliseconds: only with a calibrated model (`[cost] ns_per_*`),
@@ -1055,14 +1219,14 @@ pub(crate) const SPLIT_RANGE_COLUMN: &str = "split_range";
 /// The columns every per-configuration table shares (`sweep.csv`, `compare.csv`): the setting,
 /// then the summary metrics marked `in_rows`. A contract: users' scripts and CI baselines read
 /// them by name. The screen metrics are columns only with scene geometry (`screen`).
-pub(crate) fn summary_columns(screen: bool) -> Vec<&'static str> {
+pub(crate) fn summary_columns(cols: RowColumns) -> Vec<&'static str> {
     SETTING_COLUMNS
         .into_iter()
-        .chain(screen.then_some(SPLIT_RANGE_COLUMN))
+        .chain(cols.screen.then_some(SPLIT_RANGE_COLUMN))
         .chain(
             SUMMARY
                 .iter()
-                .filter(|d| d.in_rows && (screen || !d.screen))
+                .filter(|d| d.in_rows && (cols.screen || !d.screen) && cols.has(d.name))
                 .map(|d| d.name),
         )
         .collect()
@@ -1077,12 +1241,13 @@ pub(crate) fn summary_fields(
     fit: &str,
     split_range: SplitRange,
     s: &Summary,
+    cols: RowColumns,
 ) -> Result<Vec<String>> {
     let mut fields = vec![lambda, cascades.to_string(), resolution.to_string(), fit.to_string()];
     if s.screen.is_some() {
         fields.push(split_range.name().to_string());
     }
-    for d in SUMMARY.iter().filter(|d| in_row_for(d, s)) {
+    for d in SUMMARY.iter().filter(|d| in_row_for(d, s, cols)) {
         fields.push((d.value)(s).csv(d.name)?);
     }
     Ok(fields)
@@ -1527,6 +1692,62 @@ pub(crate) const CASCADE: &[CascadeDef] = &[
         screen: true,
         value: |c| Value::maybe(c.cost.shadow_ms),
     },
+    CascadeDef {
+        name: "caster_objects_mean",
+        unit: "draws",
+        direction: Direction::HigherIsWorse,
+        help: "cost: this cascade's draw calls per frame on average over the motion paths (0 in the frames it is held)",
+        screen: true,
+        value: |c| c.cost.means.map_or(Value::Missing, |m| Value::Real(m.caster_objects_mean)),
+    },
+    CascadeDef {
+        name: "caster_triangles_mean",
+        unit: "triangles",
+        direction: Direction::HigherIsWorse,
+        help: "cost: its caster triangles per frame on average over the motion paths",
+        screen: true,
+        value: |c| c.cost.means.map_or(Value::Missing, |m| Value::Real(m.caster_triangles_mean)),
+    },
+    CascadeDef {
+        name: "caster_triangles_inside_mean",
+        unit: "triangles",
+        direction: Direction::HigherIsWorse,
+        help: "cost: its caster triangles inside the volume per frame on average over the motion paths",
+        screen: true,
+        value: |c| c.cost.means.map_or(Value::Missing, |m| Value::Real(m.caster_triangles_inside_mean)),
+    },
+    CascadeDef {
+        name: "raster_fragments_mean",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cost: its fragments per frame on average over the motion paths",
+        screen: true,
+        value: |c| c.cost.means.map_or(Value::Missing, |m| Value::Real(m.raster_fragments_mean)),
+    },
+    CascadeDef {
+        name: "texels_cleared_mean",
+        unit: "texels",
+        direction: Direction::HigherIsWorse,
+        help: "cost: its cleared texels per frame on average over the motion paths (resolution^2 over update_every, about)",
+        screen: true,
+        value: |c| c.cost.means.map_or(Value::Missing, |m| Value::Real(m.texels_cleared_mean)),
+    },
+    CascadeDef {
+        name: "cost_index_mean",
+        unit: "",
+        direction: Direction::HigherIsWorse,
+        help: "cost: this cascade's share of the setting's cost_index_mean (the cascades add up to it)",
+        screen: true,
+        value: |c| Value::maybe(c.cost.means.and_then(|m| m.cost_index_mean)),
+    },
+    CascadeDef {
+        name: "shadow_ms_mean",
+        unit: "ms",
+        direction: Direction::HigherIsWorse,
+        help: "cost: this cascade's calibrated time per frame over the motion paths; only when calibrated",
+        screen: true,
+        value: |c| Value::maybe(c.cost.means.and_then(|m| m.shadow_ms_mean)),
+    },
 ];
 
 handle!(
@@ -1551,6 +1772,10 @@ impl CascadeMetric {
             && (!CACHE_METRICS.contains(&d.name) || c.cache.is_some())
             && (d.name != UPDATE_FLICKER || c.truth.is_some())
             && (d.name != SHADOW_MS || c.cost.shadow_ms.is_some())
+            && (!COST_COUNTS.contains(&d.name) || c.cost.counts.is_some())
+            && (!COST_MEANS.contains(&d.name) || c.cost.means.is_some())
+            && (d.name != COST_INDEX_MEAN || c.cost.means.is_some_and(|m| m.cost_index_mean.is_some()))
+            && (d.name != SHADOW_MS_MEAN || c.cost.means.is_some_and(|m| m.shadow_ms_mean.is_some()))
     }
 
     /// How to measure this metric when a cascade does not have it.
@@ -1573,7 +1798,15 @@ impl CascadeMetric {
 /// moving-light columns only when the light moves, the ground-truth columns only when that pass
 /// ran, the cached-cascade columns only with cached cascades, `shadow_ms` only with a calibrated
 /// cost model).
-pub fn cascade_columns(screen: bool, light: bool, truth: bool, cache: bool, calibrated: bool) -> Vec<&'static str> {
+#[allow(clippy::fn_params_excessive_bools)]
+pub fn cascade_columns(
+    screen: bool,
+    light: bool,
+    truth: bool,
+    cache: bool,
+    calibrated: bool,
+    means: bool,
+) -> Vec<&'static str> {
     std::iter::once("cascade")
         .chain(
             CASCADE
@@ -1585,6 +1818,8 @@ pub fn cascade_columns(screen: bool, light: bool, truth: bool, cache: bool, cali
                         && (cache || !CACHE_METRICS.contains(&d.name))
                         && (truth || d.name != UPDATE_FLICKER)
                         && (calibrated || d.name != SHADOW_MS)
+                        && (means || !COST_MEANS.contains(&d.name))
+                        && ((calibrated && means) || d.name != SHADOW_MS_MEAN)
                 })
                 .map(|d| d.name),
         )
@@ -1601,6 +1836,8 @@ pub fn cascade_fields(c: &CascadeReport) -> Result<Vec<String>> {
             && (c.cache.is_some() || !CACHE_METRICS.contains(&d.name))
             && (c.truth.is_some() || d.name != UPDATE_FLICKER)
             && (d.name != SHADOW_MS || c.cost.shadow_ms.is_some())
+            && (!COST_MEANS.contains(&d.name) || c.cost.means.is_some())
+            && (d.name != SHADOW_MS_MEAN || c.cost.means.is_some_and(|m| m.shadow_ms_mean.is_some()))
     }) {
         fields.push((d.value)(c).csv(d.name)?);
     }

@@ -38,6 +38,9 @@ pub struct CascadeCost {
     /// Milliseconds from the calibrated coefficients (`[cost] ns_per_*`); None uncalibrated.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shadow_ms: Option<f64>,
+    /// The means over the camera path ([`path_means`]); None when not measured.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub means: Option<CostMeans>,
 }
 
 impl CascadeCost {
@@ -60,6 +63,61 @@ pub struct CostSummary {
     pub cost_index: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shadow_ms: Option<f64>,
+    /// The means over the camera path ([`path_means`]); None when not measured.
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
+    pub means: Option<CostMeans>,
+}
+
+/// What is rendered per frame on average along the camera path(s): the mean over every frame
+/// of every motion path of the sum, over the cascades rendered in that frame, of their counts
+/// for that frame's windows. A cascade held by `[shadow] update_every` renders nothing in its
+/// stale frames, so its share is its counts over the frames that render it, times the share
+/// of frames that do (about 1 / update_every): what caching saves. See docs/cost.md.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct CostMeans {
+    pub caster_objects_mean: f64,
+    pub caster_triangles_mean: f64,
+    pub caster_triangles_inside_mean: f64,
+    pub raster_fragments_mean: f64,
+    pub texels_cleared_mean: f64,
+    /// The mean model value over the configured setting's frame-0 value (the reference of
+    /// `cost_index`); None without a reference.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cost_index_mean: Option<f64>,
+    /// The calibrated model of the means, in milliseconds; None uncalibrated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shadow_ms_mean: Option<f64>,
+}
+
+impl CostMeans {
+    /// The default model's value of the means (relative units).
+    fn model(&self) -> f64 {
+        self.model_with(&DEFAULT_MODEL)
+    }
+
+    fn model_with(&self, m: &CostModel) -> f64 {
+        m.of(
+            self.caster_objects_mean,
+            self.caster_triangles_mean,
+            self.raster_fragments_mean,
+            self.texels_cleared_mean,
+        )
+    }
+
+    fn add(&mut self, o: &CostMeans) {
+        self.caster_objects_mean += o.caster_objects_mean;
+        self.caster_triangles_mean += o.caster_triangles_mean;
+        self.caster_triangles_inside_mean += o.caster_triangles_inside_mean;
+        self.raster_fragments_mean += o.raster_fragments_mean;
+        self.texels_cleared_mean += o.texels_cleared_mean;
+    }
+
+    /// Sets `cost_index_mean` against `reference` and `shadow_ms_mean` from `calibration`.
+    fn finish(&mut self, reference: Option<f64>, calibration: Option<CostModel>) {
+        let model = self.model();
+        self.cost_index_mean = reference.filter(|&r| r > 0.0).map(|r| model / r);
+        self.shadow_ms_mean = calibration.map(|m| self.model_with(&m) * 1e-6);
+    }
 }
 
 impl CostSummary {
@@ -69,12 +127,17 @@ impl CostSummary {
         self.counts.map(|c| model_of(&DEFAULT_MODEL, &c, self.texels_cleared))
     }
 
-    /// Sets `cost_index` against a reference setting's model value (the configured setting's).
+    /// Sets `cost_index` (and `cost_index_mean`) against a reference setting's model value
+    /// (the configured setting's frame 0).
     pub(crate) fn normalise(&mut self, reference: Option<f64>) {
         self.cost_index = match (self.model(), reference) {
             (Some(m), Some(r)) if r > 0.0 => Some(m / r),
             _ => None,
         };
+        if let Some(means) = self.means.as_mut() {
+            let model = means.model();
+            means.cost_index_mean = reference.filter(|&r| r > 0.0).map(|r| model / r);
+        }
     }
 }
 
@@ -161,16 +224,82 @@ pub fn kept_objects(
     )
 }
 
+/// The scene whose casters are counted: the config's geometry, unless `[cost] counts = false`.
+fn counted(config: &Config) -> Option<&SceneGeometry> {
+    config
+        .geometry
+        .as_ref()
+        .filter(|_| config.cost.counts)
+        .map(|g| &*g.scene)
+}
+
+/// Whether the means over the camera path are measured for `config` when asked: with scene
+/// geometry, without culling (the visible receivers are frame 0's only), and for a pipeline
+/// whose light basis stays put along the path (a still light and a basis that does not follow
+/// the camera: each frame then reads the scene in the same light basis). docs/cost.md.
+pub(crate) fn means_measurable(config: &Config, rig: Option<&Rig>) -> bool {
+    counted(config).is_some()
+        && config.cost.cull == CostCull::None
+        && !config.motion.light.moves()
+        && rig.is_none_or(|r| r.fixed_basis())
+}
+
+/// Each cascade's means over every frame of every motion path (see [`CostMeans`]): in frame
+/// `t` of a path (counted from 0 on each path) cascade `i` is rendered when `t` is a multiple
+/// of its cadence `every[i]` (empty: every frame), with that frame's window. `cost_index_mean`
+/// and `shadow_ms_mean` are left to [`CostMeans::finish`].
+pub(crate) fn path_means(config: &Config, rig: &Rig, every: &[usize]) -> Vec<CostMeans> {
+    let m = rig.cascade_count();
+    let Some(scene) = counted(config) else {
+        return vec![CostMeans::default(); m];
+    };
+    let setup = config.setup();
+    let motions = std::iter::once(setup.motion.clone()).chain(config.extra_motions().into_iter().map(|(_, m)| m));
+    let mut sums = vec![CostCounts::default(); m];
+    let mut cleared = vec![0u64; m];
+    let mut frames = 0u64;
+    for motion in motions {
+        for (t, pose) in csm_core::motion::poses(&setup.camera, &motion).enumerate() {
+            let pose = pose.expect("validated when the config was loaded");
+            frames += 1;
+            let lp = LightPose::new(&rig.light, &pose);
+            for i in 0..m {
+                if t % every.get(i).copied().unwrap_or(1).max(1) != 0 {
+                    continue;
+                }
+                let w = rig.window(i, &lp, config.shadow.snap);
+                let v = volume(config, rig, i, &lp, &w);
+                sums[i].add(&scene.light_scene(&v.basis).counts_all(&scene.mesh, &v));
+                cleared[i] += w.resolution as u64 * w.resolution as u64;
+            }
+        }
+    }
+    let f = frames.max(1) as f64;
+    (0..m)
+        .map(|i| CostMeans {
+            caster_objects_mean: sums[i].caster_objects as f64 / f,
+            caster_triangles_mean: sums[i].caster_triangles as f64 / f,
+            caster_triangles_inside_mean: sums[i].caster_triangles_inside as f64 / f,
+            raster_fragments_mean: sums[i].raster_fragments / f,
+            texels_cleared_mean: cleared[i] as f64 / f,
+            cost_index_mean: None,
+            shadow_ms_mean: None,
+        })
+        .collect()
+}
+
 /// The cost of every cascade of frame 0 (windows `windows0` in the frame of `lp0`) and the
-/// totals, the totals' `cost_index` 1 (the configured setting).
+/// totals, the totals' `cost_index` 1 (the configured setting). With `means` (the cascades'
+/// [`path_means`]) the means over the path too, against the same reference.
 pub(crate) fn measure(
     config: &Config,
     rig: &Rig,
     lp0: &LightPose,
     windows0: &[Window],
     vis: Option<&Visibility>,
+    means: Option<Vec<CostMeans>>,
 ) -> (Vec<CascadeCost>, CostSummary) {
-    let geometry = config.geometry.as_ref().map(|g| &*g.scene);
+    let geometry = counted(config);
     let calibration = config.cost.calibration;
     let mut cascades: Vec<CascadeCost> = windows0
         .iter()
@@ -192,6 +321,7 @@ pub(crate) fn measure(
                 bytes_written: cleared * BYTES_PER_TEXEL,
                 cost_index: None,
                 shadow_ms: calibration.and_then(|m| counts.map(|c| model_of(&m, &c, cleared) * 1e-6)),
+                means: means.as_ref().map(|x| x[i]),
             }
         })
         .collect();
@@ -209,27 +339,45 @@ pub(crate) fn measure(
         shadow_ms: calibration
             .and(geometry)
             .map(|_| cascades.iter().filter_map(|c| c.shadow_ms).sum()),
+        means: means.as_ref().map(|x| {
+            let mut t = CostMeans::default();
+            for c in x {
+                t.add(c);
+            }
+            t
+        }),
     };
     let reference = total.model();
     total.normalise(reference);
+    if let Some(t) = total.means.as_mut() {
+        t.finish(reference, calibration);
+    }
     for c in cascades.iter_mut() {
         c.cost_index = match (c.model(), reference) {
             (Some(m), Some(t)) if t > 0.0 => Some(m / t),
             _ => None,
         };
+        if let Some(x) = c.means.as_mut() {
+            x.finish(reference, calibration);
+        }
     }
     (cascades, total)
 }
 
-/// The cost of a setting that needs no cascade: nothing is rendered.
-pub(crate) fn nothing(config: &Config) -> CostSummary {
-    let geometry = config.geometry.is_some();
+/// The cost of a setting that needs no cascade: nothing is rendered (in any frame, when the
+/// means over the path are asked for).
+pub(crate) fn nothing(config: &Config, means: bool) -> CostSummary {
+    let geometry = counted(config).is_some();
     CostSummary {
         counts: geometry.then(CostCounts::default),
         texels_cleared: 0,
         bytes_written: 0,
         cost_index: None,
         shadow_ms: config.cost.calibration.and(geometry.then_some(0.0)),
+        means: (means && means_measurable(config, None)).then(|| CostMeans {
+            shadow_ms_mean: config.cost.calibration.map(|_| 0.0),
+            ..CostMeans::default()
+        }),
     }
 }
 
@@ -243,5 +391,5 @@ pub(crate) fn configured_model(config: &Config) -> Option<f64> {
         .map(|i| rig.window(i, &lp0, config.shadow.snap))
         .collect();
     let vis = config.setup().visibility();
-    measure(config, &rig, &lp0, &windows0, vis.as_deref()).1.model()
+    measure(config, &rig, &lp0, &windows0, vis.as_deref(), None).1.model()
 }

@@ -133,7 +133,10 @@ pub fn sweep_files(args: &SweepRequest) -> Result<(SweepResult, output::Rendered
     }
     let progress = super::progress::Progress::new(args.quiet, settings.len() as u64, "configurations");
     let start = std::time::Instant::now();
-    let rows = run_settings(&config, &settings, args.threads.map(usize::from), &|| progress.inc(1))?;
+    let means = crate::commands::sweep::run::cost_means(&config, &grid);
+    let rows = run_settings(&config, &settings, means, args.threads.map(usize::from), &|| {
+        progress.inc(1)
+    })?;
     let compute = start.elapsed();
     let analysed = rows.len();
     progress.writing();

@@ -252,6 +252,81 @@ impl UpdateEvery {
     }
 }
 
+/// Most cascades a per-cascade cadence of a sweep's `update_every` axis lists (the largest
+/// cascade count csm-lab takes).
+pub(crate) const MAX_CADENCE_CASCADES: usize = 16;
+
+/// One value of a sweep's `update_every` axis (`--update-every 1,2,1/1/2/4`): a
+/// `shadow.update_every` as written, one cadence for every cascade (`4`) or one per cascade
+/// (`1/1/2/4`, nearest first). Fixed size so that a grid point stays `Copy`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct SweptCadence {
+    /// The cadences, `len` of them used; `len` 0 means one value, `every[0]`, for every cascade.
+    every: [u16; MAX_CADENCE_CASCADES],
+    len: u8,
+}
+
+impl SweptCadence {
+    /// The value of one written token (`4`, `1/1/2/4`): each cadence a whole number in
+    /// 1..=256, at most 16 of them.
+    pub(crate) fn parse(token: &str) -> std::result::Result<SweptCadence, String> {
+        let parts: Vec<&str> = token.split('/').map(str::trim).collect();
+        if parts.len() > MAX_CADENCE_CASCADES {
+            return Err(format!(
+                "{token:?} lists {} cascades; at most {MAX_CADENCE_CASCADES}",
+                parts.len()
+            ));
+        }
+        let mut every = [0u16; MAX_CADENCE_CASCADES];
+        for (i, p) in parts.iter().enumerate() {
+            every[i] = p
+                .parse::<u16>()
+                .ok()
+                .filter(|k| (1..=256).contains(k))
+                .ok_or_else(|| format!("{p:?} in {token:?} is not a whole number of frames in 1..=256"))?;
+        }
+        Ok(SweptCadence {
+            every,
+            len: if parts.len() == 1 { 0 } else { parts.len() as u8 },
+        })
+    }
+
+    /// As `shadow.update_every` holds it.
+    pub(crate) fn update_every(self) -> UpdateEvery {
+        if self.len == 0 {
+            UpdateEvery::All(u32::from(self.every[0]))
+        } else {
+            UpdateEvery::PerCascade(self.every[..self.len as usize].iter().map(|&k| u32::from(k)).collect())
+        }
+    }
+
+    /// As written on the command line and in `sweep.csv`'s `shadow.update_every` column: `4`,
+    /// `1/1/2/4`.
+    pub(crate) fn label(self) -> String {
+        let n = (self.len as usize).max(1);
+        self.every[..n]
+            .iter()
+            .map(|k| k.to_string())
+            .collect::<Vec<_>>()
+            .join("/")
+    }
+}
+
+/// The values of an `update_every` axis written as `4,1/1/2/4`: each a [`SweptCadence`], none
+/// twice.
+pub(crate) fn parse_update_every_list(spec: &str) -> std::result::Result<Vec<SweptCadence>, String> {
+    let values = spec
+        .split(',')
+        .map(|t| SweptCadence::parse(t.trim()))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    for (i, v) in values.iter().enumerate() {
+        if values[..i].contains(v) {
+            return Err(format!("{} is listed twice", v.label()));
+        }
+    }
+    Ok(values)
+}
+
 impl std::ops::Deref for ShadowSettings {
     type Target = ShadowParams;
     fn deref(&self) -> &ShadowParams {
@@ -536,11 +611,25 @@ impl CostCull {
 
 /// `[cost]`: receiver-aware culling, and the cost model's coefficients in nanoseconds when the
 /// user measured them (all four or none).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CostSettings {
+    /// `counts = false` skips the cost counts (draws, triangles, fragments, `cost_index` and
+    /// their means are then absent, as without geometry): for a scene too large to count in a
+    /// sweep, and to measure what counting costs (docs/cost.md).
+    pub counts: bool,
     pub cull: CostCull,
     /// `ns_per_draw`, `ns_per_triangle`, `ns_per_fragment`, `ns_per_texel_cleared`.
     pub calibration: Option<csm_core::cost::CostModel>,
+}
+
+impl Default for CostSettings {
+    fn default() -> Self {
+        CostSettings {
+            counts: true,
+            cull: CostCull::None,
+            calibration: None,
+        }
+    }
 }
 
 impl Config {
@@ -731,6 +820,9 @@ impl Config {
         }
         if self.cost != CostSettings::default() {
             let mut cost = serde_json::json!({ "cull": self.cost.cull.name() });
+            if !self.cost.counts {
+                cost["counts"] = false.into();
+            }
             if let Some(m) = self.cost.calibration {
                 cost["ns_per_draw"] = m.per_draw.into();
                 cost["ns_per_triangle"] = m.per_triangle.into();

@@ -238,6 +238,7 @@ pub(crate) struct RawMotion {
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawCost {
+    pub(crate) counts: Option<bool>,
     pub(crate) cull: Option<String>,
     pub(crate) ns_per_draw: Option<f64>,
     pub(crate) ns_per_triangle: Option<f64>,

@@ -39,6 +39,9 @@ pub struct SweepAxes {
     /// `light_update = ["every:1", "every:4", "quantize:0.5"]`: the engine's light update rule
     /// (a moving light only).
     pub light_update: Option<Axis<csm_core::light_motion::LightUpdate>>,
+    /// `update_every = [1, 2, "1/1/2/4"]`: cached cascades (`shadow.update_every`), one
+    /// cadence for every cascade or one per cascade written `1/1/2/4`.
+    pub update_every: Option<Axis<super::SweptCadence>>,
 }
 
 /// The `[sweep]` table as validated.
@@ -63,6 +66,9 @@ pub struct SweepSpec {
     /// `ground_truth = true`: also measure the flicker S5 of a sample of the rows
     /// (`sweep --ground-truth`).
     pub ground_truth: bool,
+    /// `cost_means = true`: every row also measures the cost counts' means over the camera
+    /// path (`*_mean` columns; on anyway when a setting caches cascades). docs/cost.md.
+    pub cost_means: bool,
 }
 
 pub(crate) const DEFAULT_MAX_CONFIGS: usize = 100_000;
@@ -234,6 +240,7 @@ pub(crate) struct RawSweep {
     sun_azimuth: Option<RawAxis>,
     sun_elevation: Option<RawAxis>,
     light_update: Option<Vec<String>>,
+    update_every: Option<Vec<RawCadence>>,
     memory_budget_mib: Option<f64>,
     cost_budget: Option<f64>,
     shadow_ms_budget: Option<f64>,
@@ -241,6 +248,16 @@ pub(crate) struct RawSweep {
     objective: Option<String>,
     optimize_splits: Option<bool>,
     ground_truth: Option<bool>,
+    cost_means: Option<bool>,
+}
+
+/// One value of `[sweep] update_every`: a whole number (every cascade) or a per-cascade
+/// cadence written as a string, `"1/1/2/4"`.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+enum RawCadence {
+    Int(i64),
+    Text(String),
 }
 
 pub(crate) fn fmt_list<T: std::fmt::Display>(v: &[T]) -> String {
@@ -516,6 +533,33 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
                 })
         })
         .transpose()?;
+    let update_every = raw
+        .update_every
+        .map(|list| {
+            let spec = list
+                .iter()
+                .map(|x| match x {
+                    RawCadence::Int(k) => k.to_string(),
+                    RawCadence::Text(t) => t.trim().to_string(),
+                })
+                .collect::<Vec<_>>()
+                .join(",");
+            super::parse_update_every_list(&spec)
+                .map(|values| Axis {
+                    values,
+                    spec: spec.clone(),
+                })
+                .map_err(|why| {
+                    v.invalid(
+                        "sweep.update_every",
+                        format!("[{spec}]"),
+                        &format!(
+                            "frames between renders in 1..=256: one per value for every cascade (2) or one per cascade as a string (\"1/1/2/4\"), each value once: {why}"
+                        ),
+                    )
+                })
+        })
+        .transpose()?;
     Ok(SweepSpec {
         axes: SweepAxes {
             lambda,
@@ -528,6 +572,7 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
             sun_azimuth,
             sun_elevation,
             light_update,
+            update_every,
         },
         memory_budget_mib,
         cost_budget,
@@ -536,5 +581,6 @@ pub(crate) fn validate_raw(raw: RawSweep, v: &Validator<'_>, has_geometry: bool)
         objective: raw.objective,
         optimize_splits: raw.optimize_splits.unwrap_or(false),
         ground_truth: raw.ground_truth.unwrap_or(false),
+        cost_means: raw.cost_means.unwrap_or(false),
     })
 }

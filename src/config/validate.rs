@@ -95,6 +95,22 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         }
     }
 
+    if !cost.counts {
+        let budgets = sweep.as_ref().map(|s| {
+            [
+                ("sweep.cost_budget", s.cost_budget),
+                ("sweep.shadow_ms_budget", s.shadow_ms_budget),
+            ]
+        });
+        if let Some((key, Some(b))) = budgets.into_iter().flatten().find(|(_, b)| b.is_some()) {
+            return Err(v.invalid(
+                key,
+                b,
+                "no render-cost budget with cost.counts = false: the budget is judged on the counts (drop the budget or set cost.counts = true)",
+            ));
+        }
+    }
+
     let mut config = Config {
         name: "config".to_string(),
         path: None,
@@ -794,8 +810,16 @@ fn analysis_settings(a: &super::schema::RawAnalysis, v: &Validator<'_>) -> Resul
 /// from the visibility pass); the four `ns_per_*` coefficients are finite, at least 0, and
 /// given all together or not at all.
 fn cost_settings(c: &super::schema::RawCost, v: &Validator<'_>, has_geometry: bool) -> Result<CostSettings> {
+    let counts = c.counts.unwrap_or(true);
     let cull = match c.cull.as_deref() {
         None | Some("none") => CostCull::None,
+        Some("receivers") if !counts => {
+            return Err(v.invalid(
+                "cost.cull",
+                "\"receivers\"",
+                "\"none\" with cost.counts = false: culling changes the counts, which are not taken",
+            ))
+        }
         Some("receivers") if has_geometry => CostCull::Receivers,
         Some("receivers") => {
             return Err(v.invalid(
@@ -845,7 +869,11 @@ fn cost_settings(c: &super::schema::RawCost, v: &Validator<'_>, has_geometry: bo
             "coefficients that are not all 0 (a frame that costs nothing cannot be calibrated)",
         ));
     }
-    Ok(CostSettings { cull, calibration })
+    Ok(CostSettings {
+        counts,
+        cull,
+        calibration,
+    })
 }
 
 /// Every pose of the motion path must be a valid camera (pitching through the up vector, or a

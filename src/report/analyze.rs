@@ -69,6 +69,7 @@ impl Exporter<Analysis> for CascadesCsv {
                 a.ground_truth.is_some(),
                 a.summary.cache.is_some(),
                 a.summary.cost.shadow_ms.is_some(),
+                a.summary.cost.means.is_some(),
             ),
             &rows,
         )
@@ -498,8 +499,14 @@ fn cost_table(a: &Analysis) -> String {
     let Some(total) = s.counts else {
         let _ = writeln!(
             out,
-            "cost (frame 0): {} texels cleared, {} bytes written per update; draws, triangles and fragments need scene geometry",
-            s.texels_cleared, s.bytes_written
+            "cost (frame 0): {} texels cleared, {} bytes written per update; draws, triangles and fragments {}",
+            s.texels_cleared,
+            s.bytes_written,
+            if a.config.geometry.is_some() {
+                "not counted (cost.counts = false)"
+            } else {
+                "need scene geometry"
+            }
         );
         return out;
     };
@@ -561,6 +568,51 @@ fn cost_table(a: &Analysis) -> String {
         s.cost_index,
         s.shadow_ms,
     );
+    if let Some(total) = &s.means {
+        let held = if a.summary.cache.is_some() {
+            "; a held cascade renders nothing in its stale frames"
+        } else {
+            ""
+        };
+        let _ = writeln!(out, "cost per frame, mean over the camera path{held}:");
+        let _ = writeln!(
+            out,
+            "{:>7} {:>7} {:>10} {:>10} {:>12} {:>12} {:>10}{}",
+            "cascade",
+            "draws",
+            "triangles",
+            "inside",
+            "fragments",
+            "cleared",
+            "cost_index",
+            if ms {
+                format!(" {:>10}", "shadow_ms")
+            } else {
+                String::new()
+            }
+        );
+        let mean_row = |out: &mut String, name: String, m: &crate::analysis::cost::CostMeans| {
+            let _ = writeln!(
+                out,
+                "{:>7} {:>7} {:>10} {:>10} {:>12} {:>12} {:>10}{}",
+                name,
+                short_number(m.caster_objects_mean),
+                short_number(m.caster_triangles_mean),
+                short_number(m.caster_triangles_inside_mean),
+                short_number(m.raster_fragments_mean),
+                short_number(m.texels_cleared_mean),
+                m.cost_index_mean.map_or("n/a".to_string(), short_number),
+                m.shadow_ms_mean
+                    .map_or(String::new(), |t| format!(" {:>10}", short_number(t)))
+            );
+        };
+        for r in &a.cascades {
+            if let Some(m) = &r.cost.means {
+                mean_row(&mut out, r.cascade.to_string(), m);
+            }
+        }
+        mean_row(&mut out, "total".to_string(), total);
+    }
     out
 }
 

@@ -25,15 +25,28 @@ pub(crate) const EXTRA_COLUMNS: [&str; 5] = [
 ];
 
 /// The header of `compare.csv`.
-pub(crate) fn columns(screen: bool) -> Vec<&'static str> {
+pub(crate) fn columns(cols: metric::RowColumns) -> Vec<&'static str> {
     std::iter::once("preset")
-        .chain(metric::summary_columns(screen))
+        .chain(metric::summary_columns(cols))
         .chain(EXTRA_COLUMNS)
         .collect()
 }
 
+/// The optional columns of `compare.csv`: the screen and cost columns with scene geometry,
+/// `shadow_ms` when calibrated, the means over the path when some preset measured them.
+pub(crate) fn row_columns(c: &Comparison) -> metric::RowColumns {
+    let screen = c.analyses.iter().any(|a| a.config.geometry.is_some());
+    metric::RowColumns {
+        screen,
+        calibrated: screen && c.analyses.iter().any(|a| a.config.cost.calibration.is_some()),
+        means: c.analyses.iter().any(|a| a.summary.cost.means.is_some()),
+        cache: c.analyses.iter().any(|a| a.summary.cache.is_some()),
+    }
+}
+
 /// One CSV row per preset.
 pub(crate) fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
+    let cols = row_columns(c);
     c.analyses
         .iter()
         .map(|a| {
@@ -53,6 +66,7 @@ pub(crate) fn rows(c: &Comparison) -> Result<Vec<Vec<String>>> {
                 &fit_label(a),
                 crate::config::SplitRange::of(a.config.shadow.fit_depth_to_visible),
                 s,
+                cols,
             )?);
             fields.extend([
                 a.config.shadow.snap.to_string(),
@@ -74,10 +88,7 @@ impl Exporter<Comparison> for CompareCsv {
     }
 
     fn render(&self, c: &Comparison) -> Result<Vec<u8>> {
-        csv_bytes(
-            &columns(c.analyses.iter().any(|a| a.config.geometry.is_some())),
-            &rows(c)?,
-        )
+        csv_bytes(&columns(row_columns(c)), &rows(c)?)
     }
 }
 
@@ -498,6 +509,66 @@ pub(crate) fn summary_table(c: &Comparison) -> String {
     let _ = writeln!(out, "{}", c.verdict.line(&c.analyses));
     for l in c.verdict.invalid_lines(&c.analyses) {
         let _ = writeln!(out, "  not ranked: {l}");
+    }
+    out.push_str(&cost_table(c, w));
+    out
+}
+
+/// Each preset's render cost on stdout (frame 0, as `compare.csv` has it): draw calls,
+/// triangles (all, and inside the caster volumes), fragments, cleared texels, `cost_index`
+/// against the scene file's own setting, `shadow_ms` when calibrated, and `cost_index_mean`
+/// when the means over the path were measured. Empty without scene geometry (nothing to count).
+fn cost_table(c: &Comparison, w: usize) -> String {
+    let mut out = String::new();
+    if c.analyses.iter().all(|a| a.summary.cost.counts.is_none()) {
+        return out;
+    }
+    let ms = c.analyses.iter().any(|a| a.summary.cost.shadow_ms.is_some());
+    let means = c.analyses.iter().any(|a| a.summary.cost.means.is_some());
+    let na = |x: Option<f64>| x.map_or("n/a".to_string(), short);
+    let _ = writeln!(
+        out,
+        "render cost (frame 0; cost_index against the scene file's own setting; docs/cost.md):"
+    );
+    let _ = write!(
+        out,
+        "{:<w$} {:>7} {:>10} {:>10} {:>12} {:>12} {:>10}",
+        "preset", "draws", "triangles", "inside", "fragments", "cleared", "cost_index"
+    );
+    if ms {
+        let _ = write!(out, " {:>10}", "shadow_ms");
+    }
+    if means {
+        let _ = write!(out, " {:>10}", "path mean");
+    }
+    let _ = writeln!(out);
+    for a in &c.analyses {
+        let s = &a.summary.cost;
+        let k = s.counts.unwrap_or_default();
+        let _ = write!(
+            out,
+            "{:<w$} {:>7} {:>10} {:>10} {:>12} {:>12} {:>10}",
+            label(a).as_str(),
+            k.caster_objects,
+            k.caster_triangles,
+            k.caster_triangles_inside,
+            short(k.raster_fragments),
+            s.texels_cleared,
+            na(s.cost_index)
+        );
+        if ms {
+            let _ = write!(out, " {:>10}", na(s.shadow_ms));
+        }
+        if means {
+            let _ = write!(out, " {:>10}", na(s.means.and_then(|m| m.cost_index_mean)));
+        }
+        let _ = writeln!(out);
+    }
+    if means {
+        let _ = writeln!(
+            out,
+            "  path mean: cost_index_mean, the cost per frame on average over the camera path (n/a: not measured for a light basis that follows the camera)"
+        );
     }
     out
 }

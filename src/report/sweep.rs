@@ -66,6 +66,7 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
     // column.
     let light = r.config.motion.light.moves();
     let light_update = r.grid.light_update.is_some();
+    let update_every = r.grid.update_every.is_some();
     // A sun sweep writes every (sun, setting) row; `pareto` and `recommended` mark every row of
     // the setting, `worst_sun` the setting's worst angle.
     let (all, setting_of, worst): (&[Row], Vec<usize>, Vec<bool>) = match &r.sun {
@@ -78,6 +79,7 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
             (&sun.all, sun.setting_of.clone(), worst)
         }
     };
+    let cols = row_columns(r);
     let rows = all.iter().enumerate().map(|(k, row)| {
         let i = setting_of[k];
         let st = &row.setting;
@@ -88,6 +90,7 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
             st.fit.name(),
             st.split_range,
             &row.summary,
+            cols,
         )?;
         // A shard's slice decides nothing: its pareto and recommended cells are empty.
         let decided = |b: bool| {
@@ -117,6 +120,9 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         if let (true, Some(u)) = (light_update, st.light_update) {
             fields.push(crate::config::light_update_label(u));
         }
+        if let (true, Some(u)) = (update_every, st.update_every) {
+            fields.push(u.label());
+        }
         if let Some(sun) = st.sun.filter(|_| r.sun.is_some()) {
             fields.push(num("sun_azimuth_deg", sun.azimuth_deg)?);
             fields.push(num("sun_elevation_deg", sun.elevation_deg)?);
@@ -124,16 +130,30 @@ fn write_sweep_csv(r: &SweepResult, out: &mut dyn std::io::Write) -> Result<()> 
         }
         Ok(fields)
     });
-    let header: Vec<&str> = metric::summary_columns(r.config.geometry.is_some())
+    let header: Vec<&str> = metric::summary_columns(cols)
         .into_iter()
         .chain(SWEEP_EXTRA_COLUMNS)
         .chain(knob_key)
         .chain(distance.then_some("shadow.max_distance"))
         .chain(light.then_some(["light_crawl", "light_jump"]).into_iter().flatten())
         .chain(light_update.then_some(crate::commands::check::sweep::LIGHT_UPDATE_COLUMN))
+        .chain(update_every.then_some(crate::commands::check::sweep::UPDATE_EVERY_COLUMN))
         .chain(r.sun.iter().flat_map(|_| SUN_COLUMNS))
         .collect();
     crate::output::csv_write_from(out, &header, rows)
+}
+
+/// The optional columns of `sweep.csv`: the screen and cost columns with scene geometry,
+/// `shadow_ms` when calibrated, the means over the path when the rows measured them.
+pub(crate) fn row_columns(r: &SweepResult) -> metric::RowColumns {
+    let screen = r.config.geometry.is_some();
+    let rows = r.sun.as_ref().map_or(&r.rows[..], |s| &s.all[..]);
+    metric::RowColumns {
+        screen,
+        calibrated: screen && r.config.cost.calibration.is_some(),
+        means: rows.iter().any(|x| x.summary.cost.means.is_some()),
+        cache: rows.iter().any(|x| x.summary.cache.is_some()),
+    }
 }
 
 fn row_json(row: &Row) -> serde_json::Value {
@@ -160,6 +180,9 @@ fn row_json(row: &Row) -> serde_json::Value {
     }
     if let Some(u) = row.setting.light_update {
         v["light_update"] = serde_json::json!(crate::config::light_update_label(u));
+    }
+    if let Some(u) = row.setting.update_every {
+        v["update_every"] = serde_json::json!(u.label());
     }
     for (k, x) in metric::summary_json(&row.summary) {
         v[k] = x;

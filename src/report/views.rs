@@ -20,7 +20,7 @@ pub(crate) const FILE: &str = "views.csv";
 fn view_metrics() -> Vec<SummaryMetric> {
     SUMMARY
         .iter()
-        .filter(|d| d.screen && d.in_rows)
+        .filter(|d| d.screen && d.in_rows && !crate::metric::optional_row_column(d.name))
         .map(|d| SummaryMetric::named(d.name))
         .collect()
 }

@@ -456,7 +456,7 @@ fn all_ones_is_todays_analysis_and_a_cached_cascade_reports_its_cost() {
     );
     assert!(s.stale_coverage_violations > 0, "a tight fit under a turn leaves holes");
     assert_eq!(s.stale_margin, per.iter().map(|c| c.stale_margin).fold(0.0, f64::max));
-    let cols = csm_lab::metric::cascade_columns(false, false, false, true, false);
+    let cols = csm_lab::metric::cascade_columns(false, false, false, true, false, false);
     for name in [
         "update_every",
         "stale_coverage_violations",

@@ -27,6 +27,7 @@ fn key(lambda: f64, cascades: u32, resolution: u32, fit: &str) -> SweepKey {
         distance: None,
         sun: None,
         light_update: None,
+        update_every: None,
     }
 }
 

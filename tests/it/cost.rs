@@ -684,3 +684,297 @@ fn cost_budgets_need_geometry_and_milliseconds_need_calibration() {
     let e = Config::from_toml_str(&text, "t.toml", None).unwrap_err().to_string();
     assert!(e.contains("sweep.shadow_ms_budget") && e.contains("calibrated"), "{e}");
 }
+
+// ---------------------------------------------------------------------------------------------
+// Means over the camera path, cached cascades' savings, the update_every axis
+// ---------------------------------------------------------------------------------------------
+
+/// The default scene with a short path (and `extra` appended to `[shadow]`).
+fn short_path(frames: usize, shadow_extra: &str, tail: &str) -> String {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/configs/default.toml")).unwrap();
+    let text = text.split("[sweep]").next().unwrap().to_string();
+    let text = text
+        .replace("frames = 240", &format!("frames = {frames}"))
+        .replace("[shadow]\n", &format!("[shadow]\n{shadow_extra}\n"));
+    assert!(text.contains(&format!("frames = {frames}")));
+    text + tail
+}
+
+/// The means over the path are, per cascade, the counts of every frame's caster volume
+/// counted by brute force (separating axes, a sampled rasterisation), summed over the frames
+/// that render the cascade (all, or `t mod k = 0` with a cadence) and divided by the frames
+/// walked; a held cascade's cleared texels are resolution² over the share of frames that
+/// render it. The totals add the cascades, `cost_index_mean` is the model of the means over
+/// the configured frame 0's, and frame 0's counts stay what they were.
+#[test]
+fn the_means_over_the_path_are_the_brute_force_counts_of_the_frames_rendered() {
+    let frames = 12;
+    for cadence in ["", "update_every = [1, 1, 2, 4]", "update_every = 3"] {
+        let c = Config::from_toml_str(&short_path(frames, cadence, ""), "d.toml", None).unwrap();
+        let opts = AnalysisOptions {
+            cost_means: true,
+            ..AnalysisOptions::summary_only()
+        };
+        let a = analyze(&c, &opts);
+        let plain = analyze(&c, &AnalysisOptions::summary_only());
+        assert!(plain.summary.cost.means.is_none());
+        assert_eq!(plain.summary.cost.counts, a.summary.cost.counts, "{cadence}");
+        let rig = a.rig().unwrap();
+        let mesh = &c.geometry.as_ref().unwrap().scene.mesh;
+        let every: Vec<usize> = match cadence {
+            "" => vec![1; 4],
+            "update_every = 3" => vec![3; 4],
+            _ => vec![1, 1, 2, 4],
+        };
+        let setup = c.setup();
+        let poses: Vec<_> = csm_core::motion::poses(&setup.camera, &setup.motion)
+            .map(|p| p.unwrap())
+            .collect();
+        assert_eq!(poses.len(), frames);
+        let mut total_objects = 0.0;
+        for (i, r) in a.cascades.iter().enumerate() {
+            let m = r.cost.means.expect("measured");
+            let (mut objects, mut tris, mut inside, mut frag, mut bound, mut cleared) =
+                (0u64, 0u64, 0u64, 0.0, 0.0, 0u64);
+            for (t, pose) in poses.iter().enumerate() {
+                if t % every[i] != 0 {
+                    continue;
+                }
+                let lp = csm_core::cascades::LightPose::new(&rig.light, pose);
+                let w = rig.window(i, &lp, c.shadow.snap);
+                let v = csm_lab::analysis::cost::volume(&c, rig, i, &lp, &w);
+                let (o, k, n) = brute_counts(mesh, &v);
+                objects += o;
+                tris += k;
+                inside += n;
+                let (f, b) = brute_fragments(mesh, &v, 120);
+                frag += f;
+                bound += b;
+                cleared += 2048 * 2048;
+            }
+            let f = frames as f64;
+            assert_eq!(m.caster_objects_mean, objects as f64 / f, "{cadence} cascade {i}");
+            assert_eq!(m.caster_triangles_mean, tris as f64 / f, "{cadence} cascade {i}");
+            assert_eq!(
+                m.caster_triangles_inside_mean,
+                inside as f64 / f,
+                "{cadence} cascade {i}"
+            );
+            assert!(
+                (m.raster_fragments_mean - frag / f).abs() <= bound / f,
+                "{cadence} cascade {i}: {} against {} ± {}",
+                m.raster_fragments_mean,
+                frag / f,
+                bound / f
+            );
+            assert_eq!(m.texels_cleared_mean, cleared as f64 / f, "{cadence} cascade {i}");
+            // The renders: frame 0 and every k-th frame after it.
+            let renders = frames.div_ceil(every[i]) as f64;
+            assert_eq!(m.texels_cleared_mean, 2048.0 * 2048.0 * renders / f);
+            total_objects += m.caster_objects_mean;
+        }
+        let t = a.summary.cost.means.unwrap();
+        assert!((t.caster_objects_mean - total_objects).abs() < 1e-12);
+        let model = |o: f64, k: f64, fr: f64, cl: f64| 2000.0 * o + 0.5 * k + 0.01 * fr + 0.002 * cl;
+        let counts = a.summary.cost.counts.unwrap();
+        let frame0 = model(
+            counts.caster_objects as f64,
+            counts.caster_triangles as f64,
+            counts.raster_fragments,
+            a.summary.cost.texels_cleared as f64,
+        );
+        let mean = model(
+            t.caster_objects_mean,
+            t.caster_triangles_mean,
+            t.raster_fragments_mean,
+            t.texels_cleared_mean,
+        );
+        assert!((t.cost_index_mean.unwrap() - mean / frame0).abs() < 1e-12, "{cadence}");
+        let shares: f64 = a
+            .cascades
+            .iter()
+            .map(|r| r.cost.means.unwrap().cost_index_mean.unwrap())
+            .sum();
+        assert!((shares - t.cost_index_mean.unwrap()).abs() < 1e-12);
+        if !cadence.is_empty() {
+            assert!(t.cost_index_mean.unwrap() < 0.9, "{cadence}: caching saves");
+        }
+    }
+}
+
+/// Where the means cannot be measured they are absent, never 0: with receiver-aware culling
+/// (the visible receivers are frame 0's) and for a preset whose light basis follows the camera.
+#[test]
+fn the_means_are_absent_with_culling_and_a_basis_that_follows_the_camera() {
+    let opts = AnalysisOptions::full();
+    let culled = Config::from_toml_str(&short_path(6, "", "\n[cost]\ncull = \"receivers\"\n"), "d.toml", None).unwrap();
+    assert!(analyze(&culled, &opts).summary.cost.means.is_none());
+    let filament = Config::from_toml_str(&short_path(6, "preset = \"filament\"", ""), "d.toml", None).unwrap();
+    let a = analyze(&filament, &opts);
+    assert!(a.summary.cost.counts.is_some());
+    assert!(a.summary.cost.means.is_none());
+    let json = csm_lab::metric::summary_json(&a.summary);
+    assert!(
+        json.iter()
+            .all(|(k, _)| !k.ends_with("_mean") || k.contains("aliasing")),
+        "{json:?}"
+    );
+    let plain = Config::from_toml_str(&short_path(6, "", ""), "d.toml", None).unwrap();
+    assert!(analyze(&plain, &opts).summary.cost.means.is_some());
+}
+
+/// The `update_every` axis: each row equals a single-setting sweep of the config with that
+/// cadence (the same summary, bit for bit), and `sweep.csv` names the cadence and carries the
+/// means and the cached-cascade columns (n/a where a row renders every cascade every frame).
+#[test]
+fn the_update_every_axis_rows_equal_single_setting_runs() {
+    use csm_lab::commands::sweep::grid::{parse_update_every_spec, Grid};
+    use csm_lab::commands::sweep::run::run;
+    use csm_lab::config::sweep_spec::SweepAxes;
+    let tail = "\n[sweep]\nlambda = [0.75]\ncascades = [4]\nresolution = [1024]\n";
+    let base = Config::from_toml_str(&short_path(16, "", tail), "d.toml", None).unwrap();
+    let axes = SweepAxes {
+        update_every: Some(parse_update_every_spec("1,2,1/1/2/4").unwrap()),
+        ..SweepAxes::default()
+    };
+    let grid = Grid::resolve(&base, &axes).unwrap();
+    assert_eq!(grid.len(), 3);
+    let rows = run(&base, &grid, Some(2), &|| {}).unwrap();
+    for (row, value) in rows.iter().zip(["1", "2", "[1, 1, 2, 4]"]) {
+        let single_tail = format!("{tail}cost_means = true\n");
+        let text = short_path(16, &format!("update_every = {value}"), &single_tail);
+        let single = Config::from_toml_str(&text, "d.toml", None).unwrap();
+        let one = Grid::resolve(&single, &SweepAxes::default()).unwrap();
+        assert_eq!(one.len(), 1);
+        let alone = run(&single, &one, Some(1), &|| {}).unwrap();
+        assert_eq!(row.summary, alone[0].summary, "update_every = {value}");
+        assert!(row.summary.cost.means.is_some(), "{value}");
+        assert_eq!(row.summary.cache.is_some(), value != "1", "{value}");
+    }
+    // The saving: a far cascade held for 4 frames and two held for 2 cost less per frame.
+    let mean = |k: usize| rows[k].summary.cost.means.unwrap().cost_index_mean.unwrap();
+    assert!(mean(1) < mean(2) && mean(2) < mean(0));
+    assert_eq!(rows[0].summary.cost.cost_index, rows[1].summary.cost.cost_index);
+
+    // On the command line: the column, the means, and n/a for the uncached row.
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("d.toml");
+    std::fs::write(&cfg, short_path(16, "", tail)).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+        .args([
+            "sweep",
+            cfg.to_str().unwrap(),
+            "--quiet",
+            "--no-plots",
+            "--update-every",
+            "1,1/1/2/4",
+            "--out",
+        ])
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (header, csv) = crate::common::read_csv(&dir.path().join("out/sweep.csv"));
+    let at = |r: usize, name: &str| {
+        csv[r][header
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("{name} in {header:?}"))]
+        .clone()
+    };
+    assert_eq!(
+        (at(0, "shadow.update_every"), at(1, "shadow.update_every")),
+        ("1".into(), "1/1/2/4".into())
+    );
+    assert_eq!(
+        (at(0, "renders_per_frame"), at(1, "renders_per_frame")),
+        ("n/a".into(), "2.75".into())
+    );
+    assert!(at(1, "cost_index_mean").parse::<f64>().unwrap() < at(0, "cost_index_mean").parse::<f64>().unwrap());
+    assert!(!header.iter().any(|h| h == "shadow_ms"));
+
+    // A per-cascade cadence of another cascade count is refused, naming the key.
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+        .args([
+            "sweep",
+            cfg.to_str().unwrap(),
+            "--quiet",
+            "--no-plots",
+            "--update-every",
+            "1/2",
+            "--out",
+        ])
+        .arg(dir.path().join("bad"))
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&bad.stderr);
+    assert!(e.contains("shadow.update_every") && e.contains("[1, 2]"), "{e}");
+    let e = parse_update_every_spec("1,0").unwrap_err().to_string();
+    assert!(e.contains("--update-every") && e.contains("1..=256"), "{e}");
+    let e = parse_update_every_spec("2,2").unwrap_err().to_string();
+    assert!(e.contains("twice"), "{e}");
+}
+
+/// A calibrated sweep writes `shadow_ms` per row (the calibrated model of the row's counts);
+/// an uncalibrated one never does.
+#[test]
+fn a_calibrated_sweep_writes_shadow_ms_per_row() {
+    let dir = tempfile::tempdir().unwrap();
+    let tail = "\n[sweep]\nlambda = [0.5, 0.75]\ncascades = [2, 4]\nresolution = [1024]\n\n[cost]\nns_per_draw = 3000.0\nns_per_triangle = 0.5\nns_per_fragment = 0.02\nns_per_texel_cleared = 0.004\n";
+    let cfg = dir.path().join("d.toml");
+    std::fs::write(&cfg, short_path(8, "", tail)).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_csm-lab"))
+        .args(["sweep", cfg.to_str().unwrap(), "--quiet", "--no-plots", "--out"])
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (header, csv) = crate::common::read_csv(&dir.path().join("out/sweep.csv"));
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("{name}"))
+    };
+    assert_eq!(csv.len(), 4);
+    for r in &csv {
+        let x = |n: &str| r[col(n)].parse::<f64>().unwrap();
+        let ns = 3000.0 * x("caster_objects")
+            + 0.5 * x("caster_triangles")
+            + 0.02 * x("raster_fragments")
+            + 0.004 * x("texels_cleared");
+        assert!((x("shadow_ms") - ns * 1e-6).abs() <= 1e-12 * (1.0 + ns), "{r:?}");
+    }
+}
+
+/// `[cost] counts = false` skips the counts (absent, as without geometry; every other metric
+/// as with them), and refuses what needs them: a render-cost budget, culling.
+#[test]
+fn counts_can_be_switched_off_and_then_nothing_needs_them() {
+    let on = Config::from_toml_str(&short_path(6, "", ""), "d.toml", None).unwrap();
+    let off = Config::from_toml_str(&short_path(6, "", "\n[cost]\ncounts = false\n"), "d.toml", None).unwrap();
+    let (a, b) = (
+        analyze(&on, &AnalysisOptions::full()),
+        analyze(&off, &AnalysisOptions::full()),
+    );
+    assert!(a.summary.cost.counts.is_some() && a.summary.cost.means.is_some());
+    assert_eq!(b.summary.cost.counts, None);
+    assert_eq!((b.summary.cost.cost_index, b.summary.cost.means), (None, None));
+    assert_eq!(b.summary.cost.texels_cleared, a.summary.cost.texels_cleared);
+    let mut without_cost = b.summary.clone();
+    without_cost.cost = a.summary.cost;
+    assert_eq!(without_cost, a.summary, "counting changes no other metric");
+    for (tail, key) in [
+        ("\n[cost]\ncounts = false\ncull = \"receivers\"\n", "cost.cull"),
+        (
+            "\n[sweep]\ncost_budget = 0.8\n\n[cost]\ncounts = false\n",
+            "sweep.cost_budget",
+        ),
+    ] {
+        let e = Config::from_toml_str(&short_path(6, "", tail), "d.toml", None)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(key) && e.contains("counts = false"), "{e}");
+    }
+}

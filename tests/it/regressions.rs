@@ -182,6 +182,7 @@ fn sweeping_to_a_fit_binary32_cannot_hold_is_refused_naming_the_key_before_any_w
         sun_azimuth: None,
         sun_elevation: None,
         light_update: None,
+        update_every: None,
     };
     let grid = Grid::resolve(&base, &overrides).unwrap();
     let done = std::sync::atomic::AtomicUsize::new(0);

@@ -821,7 +821,7 @@ fn the_recommended_bias_keeps_its_promise_on_the_default_scene() {
         } else {
             assert!(ct.points < truth::MIN_POINTS);
             let fields = csm_lab::metric::cascade_fields(&a.cascades[i]).unwrap();
-            let cols = csm_lab::metric::cascade_columns(true, false, true, false, false);
+            let cols = csm_lab::metric::cascade_columns(true, false, true, false, false, false);
             let at = |name: &str| fields[cols.iter().position(|c| *c == name).unwrap()].clone();
             assert_eq!(at("acne_fraction"), "n/a");
             assert_eq!(at("bias_needed"), "n/a");

@@ -243,16 +243,17 @@ mod tests {
         dedup.sort_unstable();
         dedup.dedup();
         assert_eq!(dedup.len(), names.len());
-        // Twenty-four names are both summary and per-cascade metrics (max_aliasing,
+        // Thirty-one names are both summary and per-cascade metrics (max_aliasing,
         // coverage_violations, lookup_error_max, lookup_error_rms, overlap_area_fraction,
         // light_crawl, light_jump, acne_fraction, edge_error_fraction, leak_fraction, the
         // cached cascades' stale_coverage_violations, stale_coverage_fraction, stale_margin,
-        // stale_margin_world, update_drift, update_flicker, and the eight cost metrics:
+        // stale_margin_world, update_drift, update_flicker, the eight cost metrics:
         // caster_objects, caster_triangles, caster_triangles_inside, raster_fragments,
-        // texels_cleared, bytes_written, cost_index, shadow_ms).
+        // texels_cleared, bytes_written, cost_index, shadow_ms, and their seven means over the
+        // path: caster_objects_mean, ..., texels_cleared_mean, cost_index_mean, shadow_ms_mean).
         assert_eq!(
             names.len(),
-            SummaryMetric::all().count() + CascadeMetric::all().count() - 24 + DepthMetric::ALL.len()
+            SummaryMetric::all().count() + CascadeMetric::all().count() - 31 + DepthMetric::ALL.len()
         );
     }
 

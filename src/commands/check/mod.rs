@@ -31,6 +31,7 @@ pub fn check_options() -> AnalysisOptions {
         light_depth: true,
         seams: true,
         ground_truth: true,
+        cost_means: true,
         ..AnalysisOptions::summary_only()
     }
 }

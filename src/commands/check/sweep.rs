@@ -45,6 +45,8 @@ pub struct SweepKey {
     pub sun: Option<(f64, f64)>,
     /// The light update rule, when swept (the `shadow.light_update` column: `every:4`, ...).
     pub light_update: Option<String>,
+    /// Cached cascades, when swept (the `shadow.update_every` column: `2`, `1/1/2/4`).
+    pub update_every: Option<String>,
 }
 
 /// The `sweep.csv` column of a swept shadow distance.
@@ -54,6 +56,8 @@ pub(crate) const DISTANCE_COLUMN: &str = "shadow.max_distance";
 pub(crate) const SUN_COLUMNS: [&str; 2] = ["sun_azimuth_deg", "sun_elevation_deg"];
 /// The `sweep.csv` column of a swept light update rule.
 pub(crate) const LIGHT_UPDATE_COLUMN: &str = "shadow.light_update";
+/// The `sweep.csv` column of swept cached cascades.
+pub(crate) const UPDATE_EVERY_COLUMN: &str = "shadow.update_every";
 
 impl SweepKey {
     /// `lambda=0.75 cascades=4 resolution=2048 fit=sphere` (and ` split_range=visible` when the
@@ -76,6 +80,9 @@ impl SweepKey {
         if let Some(u) = &self.light_update {
             extra.push_str(&format!(" light_update={u}"));
         }
+        if let Some(u) = &self.update_every {
+            extra.push_str(&format!(" update_every={u}"));
+        }
         format!(
             "lambda={} cascades={} resolution={} fit={}{range}{extra}",
             self.lambda, self.cascades, self.resolution, self.fit
@@ -97,6 +104,7 @@ impl Ord for SweepKey {
             .then(opt_cmp(self.sun.map(|s| s.0), other.sun.map(|s| s.0)))
             .then(opt_cmp(self.sun.map(|s| s.1), other.sun.map(|s| s.1)))
             .then_with(|| self.light_update.cmp(&other.light_update))
+            .then_with(|| self.update_every.cmp(&other.update_every))
     }
 }
 
@@ -280,7 +288,12 @@ pub fn compare_rows(current: &[SweepRow], baseline: &[SweepRow], tol: &Tolerance
     // Exactly the columns sweep.csv has (the registry's row metrics), and of those only the
     // ones the baseline table has: an older table without a column is not 1,000 regressions.
     let in_base = |m: &SummaryMetric| baseline.first().is_none_or(|b| b.metrics.contains_key(m.name()));
-    let columns: Vec<SummaryMetric> = SummaryMetric::all().filter(|m| m.def().in_rows).collect();
+    // The optional columns (shadow_ms, the means over the path) only when the current table
+    // has them.
+    let in_current = |m: &SummaryMetric| current.first().is_some_and(|r| r.metrics.contains_key(m.name()));
+    let columns: Vec<SummaryMetric> = SummaryMetric::all()
+        .filter(|m| m.def().in_rows && (!crate::metric::optional_row_column(m.name()) || in_current(m)))
+        .collect();
     let mut out = SweepComparison {
         matched: Vec::new(),
         only_current: Vec::new(),
@@ -339,12 +352,14 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
     }
     let range_idx = column(crate::metric::SPLIT_RANGE_COLUMN);
     // A swept engine knob is the column named by its config key (`<engine>.<knob>`).
-    let knob_idx = headers
-        .iter()
-        .position(|h| h.trim().contains('.') && h.trim() != DISTANCE_COLUMN && h.trim() != LIGHT_UPDATE_COLUMN);
+    let knob_idx = headers.iter().position(|h| {
+        let h = h.trim();
+        h.contains('.') && h != DISTANCE_COLUMN && h != LIGHT_UPDATE_COLUMN && h != UPDATE_EVERY_COLUMN
+    });
     let distance_idx = column(DISTANCE_COLUMN);
     let sun_idx = column(SUN_COLUMNS[0]).zip(column(SUN_COLUMNS[1]));
     let light_update_idx = column(LIGHT_UPDATE_COLUMN);
+    let update_every_idx = column(UPDATE_EVERY_COLUMN);
     let recommended_idx = column("recommended");
     let metric_cols: Vec<(usize, SummaryMetric)> = headers
         .iter()
@@ -393,6 +408,7 @@ pub fn parse_sweep_csv(text: &str, path: &Path) -> Result<Vec<SweepRow>> {
                 None => None,
             },
             light_update: light_update_idx.map(|i| field(i).to_string()),
+            update_every: update_every_idx.map(|i| field(i).to_string()),
             lambda: number(key_idx[0], "lambda")?,
             cascades: int(key_idx[1], "cascades")?,
             resolution: int(key_idx[2], "resolution")?,
@@ -499,6 +515,7 @@ pub fn sweep_rows_for(config: &Config) -> Result<Vec<SweepRow>> {
                 distance: r.setting.distance,
                 sun: r.setting.sun.map(|x| (x.azimuth_deg, x.elevation_deg)),
                 light_update: r.setting.light_update.map(crate::config::light_update_label),
+                update_every: r.setting.update_every.map(|u| u.label()),
             },
             // Only what was measured: an unmeasured metric has no value (never 0).
             metrics: SummaryMetric::all()
@@ -525,6 +542,7 @@ mod tests {
             distance: None,
             sun: None,
             light_update: None,
+            update_every: None,
         };
         assert_eq!(k(0.5, "sphere"), k(0.5, "sphere"));
         assert!(k(0.25, "sphere") < k(0.5, "aabb"));

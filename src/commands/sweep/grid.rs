@@ -11,7 +11,7 @@ use crate::config::sweep_spec::{
     cascades_ok, check_values, decimal_range, fmt_list, lambda_ok, resolution_ok, sun_azimuth_ok, sun_elevation_ok,
     Axis, SweepAxes, DEFAULT_MAX_CONFIGS,
 };
-use crate::config::{Config, Fit, SplitRange};
+use crate::config::{Config, Fit, SplitRange, SweptCadence};
 use crate::error::{Error, GridError, Result};
 use csm_core::light_motion::LightUpdate;
 use csm_core::sun::SunAngles;
@@ -34,6 +34,8 @@ pub struct Grid {
     pub sun: Option<SunGrid>,
     /// The light update rule (`shadow.light_update`), when swept (a moving light only).
     pub light_update: Option<Axis<LightUpdate>>,
+    /// Cached cascades (`shadow.update_every`), when swept.
+    pub update_every: Option<Axis<SweptCadence>>,
     /// What was left out of the `[sweep]` table because the preset has no such axis or value.
     pub notes: Vec<String>,
 }
@@ -146,6 +148,17 @@ pub fn parse_light_update_spec(spec: &str) -> Result<Axis<LightUpdate>> {
             spec: spec.to_string(),
         })
         .map_err(|why| Error::flag("--light-update", spec, why))
+}
+
+/// `--update-every VALUES`: cached cascades (`shadow.update_every`), `2,4` (every cascade) or
+/// `1/1/2/4` (one cadence per cascade, nearest first), or both.
+pub fn parse_update_every_spec(spec: &str) -> Result<Axis<SweptCadence>> {
+    crate::config::parse_update_every_list(spec)
+        .map(|values| Axis {
+            values,
+            spec: spec.to_string(),
+        })
+        .map_err(|why| Error::flag("--update-every", spec, why))
 }
 
 /// `--distance VALUES`: shadow distances in world units.
@@ -281,6 +294,9 @@ grid_flags! {
     /// Light update rules of a moving light (shadow.light_update): every:1,2,4,8 and/or
     /// quantize:0.1,0.25,0.5 (degrees).
     light_update => parse_light_update_spec,
+    /// Cached cascades (shadow.update_every): frames between two renders, one value for every
+    /// cascade (1,2,4) or one per cascade nearest first (1/1/2/4), or both (1,1/1/2/4).
+    update_every => parse_update_every_spec,
 }
 
 /// `--split-range` = `spec` (`ranges` parsed) is refused when it asks for visible splits
@@ -326,6 +342,7 @@ impl Grid {
             distance: r.distance()?,
             sun: SunGrid::resolve(config, overrides.sun_azimuth.clone(), overrides.sun_elevation.clone()),
             light_update: r.light_update()?,
+            update_every: r.update_every(),
             notes: r.notes,
         };
         grid.check_size(max_configs)?;
@@ -355,6 +372,10 @@ impl Grid {
         if let Some(u) = &self.light_update {
             extra.push_str(&format!(" × {} light updates", u.values.len()));
             more_flags.push_str(", --light-update");
+        }
+        if let Some(u) = &self.update_every {
+            extra.push_str(&format!(" × {} update cadences", u.values.len()));
+            more_flags.push_str(", --update-every");
         }
         Err(GridError::TooLarge {
             configs: n,
@@ -666,6 +687,13 @@ impl Resolve<'_> {
         }
         Ok(light_update)
     }
+
+    /// Cached-cascade cadences: the flag, else the table's. A value the pipeline cannot cache
+    /// with (binary32, a moving light, a basis that follows the camera, a per-cascade list of
+    /// another count) is refused when its points are built, naming `shadow.update_every`.
+    fn update_every(&self) -> Option<Axis<SweptCadence>> {
+        self.flags.update_every.clone().or(self.table.update_every.clone())
+    }
 }
 
 impl Grid {
@@ -679,6 +707,7 @@ impl Grid {
             * self.distance.as_ref().map_or(1, |a| a.values.len())
             * self.sun.as_ref().map_or(1, SunGrid::len)
             * self.light_update.as_ref().map_or(1, |a| a.values.len())
+            * self.update_every.as_ref().map_or(1, |a| a.values.len())
     }
 
     /// Settings per sun angle: the grid without its sun axes.
@@ -692,7 +721,7 @@ impl Grid {
 
     /// All settings in row order: the sun's elevation and azimuth when swept (outermost), then
     /// split range, then fit, then distance, then resolution, then cascades, then the knob,
-    /// then the light update, then λ (innermost).
+    /// then the light update, then the update cadence, then λ (innermost).
     pub(crate) fn settings(&self) -> Vec<Setting> {
         let base = self.settings_without_sun();
         match &self.sun {
@@ -716,6 +745,10 @@ impl Grid {
             .light_update
             .as_ref()
             .map_or(vec![None], |a| a.values.iter().map(|&v| Some(v)).collect());
+        let cadences: Vec<Option<SweptCadence>> = self
+            .update_every
+            .as_ref()
+            .map_or(vec![None], |a| a.values.iter().map(|&v| Some(v)).collect());
         let mut out = Vec::with_capacity(self.len());
         for &split_range in &self.split_range.values {
             for &fit in &self.fit.values {
@@ -724,18 +757,21 @@ impl Grid {
                         for &cascades in &self.cascades.values {
                             for &knob in &knobs {
                                 for &light_update in &updates {
-                                    for &lambda in &self.lambda.values {
-                                        out.push(Setting {
-                                            lambda,
-                                            cascades,
-                                            resolution,
-                                            fit,
-                                            split_range,
-                                            knob,
-                                            distance,
-                                            light_update,
-                                            sun: None,
-                                        });
+                                    for &update_every in &cadences {
+                                        for &lambda in &self.lambda.values {
+                                            out.push(Setting {
+                                                lambda,
+                                                cascades,
+                                                resolution,
+                                                fit,
+                                                split_range,
+                                                knob,
+                                                distance,
+                                                light_update,
+                                                update_every,
+                                                sun: None,
+                                            });
+                                        }
                                     }
                                 }
                             }
@@ -777,6 +813,9 @@ impl Grid {
         if let Some(u) = &self.light_update {
             out.push_str(&format!(" --light-update {}", u.spec));
         }
+        if let Some(u) = &self.update_every {
+            out.push_str(&format!(" --update-every {}", u.spec));
+        }
         out
     }
 }
@@ -797,6 +836,9 @@ pub struct Setting {
     pub sun: Option<Sun>,
     /// The light update rule (None: not swept; the config's own).
     pub light_update: Option<LightUpdate>,
+    /// Cached cascades (None: not swept; the config's own `shadow.update_every`).
+    #[serde(default)]
+    pub update_every: Option<SweptCadence>,
 }
 
 impl Setting {
@@ -805,6 +847,18 @@ impl Setting {
     /// engine's; [`Grid::resolve`] has already checked every point, so this does not fail for
     /// a resolved grid.
     pub fn apply(&self, base: &Config) -> Result<Config> {
+        // The cadence first: a per-cascade cadence fits one cascade count, which the shadow
+        // steps check.
+        let cached;
+        let base = match self.update_every {
+            None => base,
+            Some(u) => {
+                let mut c = base.clone();
+                c.shadow.update_every = u.update_every().caching();
+                cached = c;
+                &cached
+            }
+        };
         let mut c = self.apply_shadow(base)?;
         if let Some(u) = self.light_update {
             c.motion.light.update = u;
@@ -865,6 +919,9 @@ impl Setting {
         }
         if let Some(u) = self.light_update {
             extra.push_str(&format!(", light update {}", crate::config::light_update_label(u)));
+        }
+        if let Some(u) = self.update_every {
+            extra.push_str(&format!(", update every {}", u.label()));
         }
         format!(
             "{} x {}^2, lambda {}, {}{range}{extra}",

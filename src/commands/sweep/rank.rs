@@ -867,6 +867,7 @@ mod tests {
                 distance: None,
                 sun: None,
                 light_update: None,
+                update_every: None,
             },
             summary: Summary {
                 cascades_needed,

@@ -19,13 +19,28 @@ pub struct Row {
 /// Runs the full analysis of every setting in parallel. `threads` = None uses rayon's default
 /// pool; `on_done` is called once per finished configuration (progress bars).
 pub fn run(base: &Config, grid: &Grid, threads: Option<usize>, on_done: &(dyn Fn() + Sync)) -> Result<Vec<Row>> {
-    run_settings(base, &grid.settings(), threads, on_done)
+    run_settings(base, &grid.settings(), cost_means(base, grid), threads, on_done)
 }
 
-/// [`run`] over some settings of a grid (a shard's slice), in their order.
+/// Whether a sweep's rows measure the cost counts' means over the camera path
+/// (`AnalysisOptions::cost_means`): when `[sweep] cost_means = true`, or when a setting of the
+/// grid caches cascades (`shadow.update_every` in the config or on the axis), whose saving the
+/// means show. Decided for the whole grid, so every row (and every shard) has the same columns.
+pub(crate) fn cost_means(base: &Config, grid: &Grid) -> bool {
+    base.sweep.as_ref().is_some_and(|s| s.cost_means)
+        || base.shadow.update_every.is_some()
+        || grid
+            .update_every
+            .as_ref()
+            .is_some_and(|a| a.values.iter().any(|u| u.update_every().caching().is_some()))
+}
+
+/// [`run`] over some settings of a grid (a shard's slice), in their order; `cost_means` as
+/// [`cost_means`] decided it for the whole grid.
 pub(crate) fn run_settings(
     base: &Config,
     settings: &[Setting],
+    cost_means: bool,
     threads: Option<usize>,
     on_done: &(dyn Fn() + Sync),
 ) -> Result<Vec<Row>> {
@@ -63,7 +78,11 @@ pub(crate) fn run_settings(
         settings
             .par_iter()
             .map(|s| {
-                let a = analyze(&point(s)?, &AnalysisOptions::summary_only());
+                let opts = AnalysisOptions {
+                    cost_means,
+                    ..AnalysisOptions::summary_only()
+                };
+                let a = analyze(&point(s)?, &opts);
                 on_done();
                 Ok(Row {
                     setting: *s,

@@ -279,6 +279,9 @@ pub(crate) fn config_hash(
     if let Some(u) = &grid.light_update {
         h.eat(format!("{u:?}").as_bytes());
     }
+    if let Some(u) = &grid.update_every {
+        h.eat(format!("{u:?}").as_bytes());
+    }
     h.eat(command.as_bytes());
     h.hex()
 }
@@ -517,6 +520,7 @@ pub(crate) fn join(shards: Vec<ShardInput>, grid: &Grid) -> Result<Vec<Row>> {
                             .sun
                             .map(|s| (s.azimuth_deg.to_bits(), s.elevation_deg.to_bits()))
                     && p.light_update == row.setting.light_update
+                    && p.update_every == row.setting.update_every
             });
             if !same || slots[index].is_some() {
                 return Err(ShardError::dir(

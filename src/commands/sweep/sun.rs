@@ -154,6 +154,7 @@ mod tests {
                 distance: None,
                 sun: Some(sun),
                 light_update: None,
+                update_every: None,
             },
             summary: Summary {
                 cascades_needed: true,
