@@ -91,8 +91,8 @@ struct Node {
 }
 
 impl Node {
-    fn new(cells: usize) -> Node {
-        Node {
+    fn new(cells: usize) -> Self {
+        Self {
             class: (0..cells).map(|_| AtomicU32::new(UNKNOWN)).collect(),
             sub: (0..cells).map(|_| OnceLock::new()).collect(),
         }
@@ -111,7 +111,7 @@ impl std::fmt::Debug for LightCover {
 
 impl LightCover {
     /// The cover of `scene` in `basis` (no cell classified yet).
-    pub fn new(scene: &SceneGeometry, basis: &LightBasis) -> LightCover {
+    pub fn new(scene: &SceneGeometry, basis: &LightBasis) -> Self {
         let mesh = &scene.mesh;
         let (_, index, _) = bvh_input(mesh);
         let scale = mesh
@@ -186,7 +186,7 @@ impl LightCover {
                 }
             }
         }
-        LightCover {
+        Self {
             basis: *basis,
             tris,
             lo,
@@ -275,8 +275,8 @@ struct Poly {
 
 impl Poly {
     /// Keeps the part where `side(p) >= 0` (`side` linear in x/y), interpolating depth.
-    fn clip(&self, side: impl Fn(DVec3) -> f64) -> Poly {
-        let mut out = Poly {
+    fn clip(&self, side: impl Fn(DVec3) -> f64) -> Self {
+        let mut out = Self {
             v: [DVec3::ZERO; 8],
             n: 0,
         };
