@@ -1183,6 +1183,54 @@ mod tests {
         }
     }
 
+    /// The remembered pool equals `pool` bit for bit: texel sizes scaled by powers of two
+    /// (entries shared, the undersampled counts read from the octaves) and by other factors
+    /// (new entries), with weights; a repeat is a hit, not a new entry.
+    #[test]
+    fn the_remembered_pool_equals_the_pool_at_every_scale() {
+        let vis: Vec<Visibility> = [(11, 4000, 5.0, 100), (12, 2500, 9.0, 0), (13, 7000, 3.0, 50)]
+            .iter()
+            .map(|&(seed, n, spread, extra)| synthetic(seed, n, spread, extra))
+            .collect();
+        let splits: [Vec<f64>; 3] = [
+            vec![0.5, 10.0, 40.0, 150.0],
+            vec![2.0, 30.0, 90.0, 210.0],
+            vec![1.0, 200.0],
+        ];
+        let base: [Vec<f64>; 3] = [vec![0.5, 2.0, 7.0], vec![1.1, 3.3, 9.0], vec![4.0]];
+        let memo = PoolMemo::default();
+        let entries = |m: &PoolMemo| m.entries.lock().unwrap().len();
+        // 2^k scales share one entry; 0.7 and 3 are new ones. The values straddle m = 1 at
+        // most scales, so the undersampled counts change with the scale.
+        let scales = [1.0, 0.5, 0.25, 2.0, 1.0 / 64.0, 0.7, 3.0, 0.5];
+        let mut unders = Vec::new();
+        for (i, &scale) in scales.iter().enumerate() {
+            let texels: Vec<Vec<f64>> = base.iter().map(|t| t.iter().map(|&x| x * scale).collect()).collect();
+            let parts: Vec<PoolPart<'_>> = (0..3)
+                .map(|k| PoolPart {
+                    vis: &vis[k],
+                    splits: &splits[k],
+                    texel: &texels[k],
+                    visible: Some((1.0, 150.0 + k as f64)),
+                    steps: view_weight_steps([1.0, 2.5, 0.5][k]),
+                })
+                .collect();
+            let direct = pool(&parts);
+            assert_eq!(pool_memo(&parts, &memo), direct, "scale {scale}");
+            unders.push(direct.level.undersampled_fraction);
+            let want = match i {
+                0..=4 => 1,
+                5 => 2,
+                _ => 3,
+            };
+            assert_eq!(entries(&memo), want, "after scale {scale}");
+        }
+        // The shared entries answered different undersampled fractions.
+        unders.sort_by(f64::total_cmp);
+        unders.dedup();
+        assert!(unders.len() >= 5, "{unders:?}");
+    }
+
     fn served_of(p: &PoolPart<'_>) -> usize {
         let m = p.splits.len() - 1;
         p.vis
