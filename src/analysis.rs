@@ -902,45 +902,25 @@ fn analyze_camera(
     camera_screen: bool,
 ) -> Analysis {
     let rig = rig(config);
-    // A preset has its own range (no scene clipping): the view depths that read its cascades.
-    let range = match (&config.shadow.preset, &rig) {
-        (None, _) => depth_range::for_setup(&config.setup()),
-        (Some(_), Some(r)) => DepthRange::Range {
-            z_lo: r.splits[0],
-            z_hi: r.splits[r.cascade_count()],
-        },
-        (Some(_), None) => DepthRange::Empty,
-    };
+    let range = analysed_range(config, rig.as_ref());
     let memory = match &rig {
         Some(r) => memory_bytes(r.cascade_count(), r.resolution),
         None => memory_bytes(config.shadow.cascades, config.shadow.resolution),
     };
     let setup = config.setup();
     let visibility = setup.visibility();
-    // The visible depths within the bounds' range (the same range with or without fitting
-    // the splits to them).
-    let visible = visibility.as_ref().and_then(|vis| {
-        let mut bounds_only = setup.clone();
-        bounds_only.shadow.fit_depth_to_visible = false;
-        let (lo, hi) = depth_range::for_setup(&bounds_only).bounds()?;
-        screen::visible_range(vis, lo, hi)
-    });
+    let visible = visible_depths(&setup, visibility.as_deref());
     let Some(rig) = rig else {
         return no_cascades(config, opts, range, memory, visibility.as_deref(), visible);
     };
     let (z_lo, z_hi) = range.bounds().expect("a rig implies a range");
-    let pose0: CameraPose = config.camera.pose();
-    let lp0 = LightPose::new(&rig.light, &pose0);
-    let windows0: Vec<_> = (0..rig.cascade_count())
-        .map(|i| rig.window(i, &lp0, config.shadow.snap))
-        .collect();
-    let texel: Vec<f64> = windows0.iter().map(|w| w.texel_size()).collect();
+    let frame0 = Frame0::of(config, &rig);
     let k = rig.lens.pixels_per_unit_slope(config.screen.height);
-    let aggregates = metrics::aggregates(&rig.splits, &texel, k);
+    let aggregates = metrics::aggregates(&rig.splits, &frame0.texel, k);
     let density = if opts.density_profile {
         metrics::density_profile(
             &rig.splits,
-            &texel,
+            &frame0.texel,
             &rig.lens,
             config.screen.height,
             config.analysis.density_samples,
@@ -948,195 +928,75 @@ fn analyze_camera(
     } else {
         Vec::new()
     };
-
-    let sopts = ShimmerOptions {
-        cell_flips: opts.cell_flips,
-        probe_drift: false,
-        frame_rows: opts.frame_rows,
-    };
-    // Probes cost more than the rest of a sphere-fit analysis; place them only when used
-    // (the f32 emulation always looks probes up: its drift and lookup error are per probe).
-    let probes = probes(config, &rig, &pose0, sopts);
-    let seam_points = seam_points(config, opts.seams, &rig, &pose0, visibility.as_deref());
-    // With precision = "f32" every path metric measures the emulated binary32 pipeline.
-    // The poses are generated as the walk reads them (a long path is never held), and the
-    // two snap modes walk on their own threads: each mode's totals are the same, bit for bit,
-    // as in one walk of both (`along_path_both`).
-    let setup = config.setup();
-    let every = cadence(config, &rig);
-    let walker = Walker {
+    let walks = walk_every_path(
         config,
-        setup: &setup,
-        rig: &rig,
-        cadence: &every,
-        probes: &probes,
-        seam_points: &seam_points,
-        sopts,
-        seams: opts.seams,
+        opts,
+        &setup,
+        &rig,
+        &frame0.pose,
+        visibility.as_deref(),
         on_frames,
-    };
-    let walk = |motion: &csm_core::scene::Motion| {
-        let w = walk_path(&walker, motion);
-        (w.snapped, w.unsnapped, w.lookup_error, w.crossings)
-    };
-    let (snapped, unsnapped, lookup_error, mut seam_crossings) = walk(&setup.motion);
-    let extra: Vec<ExtraPathResult> = config
-        .extra_motions()
-        .into_iter()
-        .map(|(name, motion)| {
-            let (snapped, unsnapped, lookup_error, crossings) = walk(&motion);
-            if let (Some(c), Some(x)) = (seam_crossings.as_mut(), crossings) {
-                *c = c.max(x);
-            }
-            ExtraPathResult {
-                name,
-                snapped,
-                unsnapped,
-                lookup_error,
-            }
-        })
-        .collect();
-    // Coverage and S7 over every path: violations add up, the worst and the slack take the
-    // extreme, S7 the largest of the paths.
-    let PathTotals {
-        coverage,
-        lookup_error,
-        worst_snapped,
-        worst_unsnapped,
-        jitter,
-        stale,
-    } = path_totals(config.shadow.snap, &snapped, &unsnapped, lookup_error, &extra);
-    let screen_stats = visibility.as_ref().map(|vis| {
-        if camera_screen {
-            screen::stats(vis, &rig.splits, &texel, visible)
-        } else {
-            screen::cascade_shares_only(vis, &rig.splits, &texel)
-        }
-    });
-    let utilization = match (&visibility, opts.light_depth) {
-        (Some(vis), true) => texel_utilization(vis, &rig, &lp0, &windows0),
-        _ => vec![0.0; rig.cascade_count()],
-    };
-    let bands = seams::bands(&rig);
-    let overlap = seams::overlap_area(&rig, &lp0, &windows0, &bands);
-    let band_pixels = visibility
-        .as_ref()
-        .map_or_else(|| vec![0.0; bands.len()], |vis| seams::band_shares(vis, &bands));
-    let at_split = |v: &[f64], i: usize| v.get(i).copied().unwrap_or(0.0);
-    let cascade_lookup = |i: usize| {
-        lookup_error
-            .as_ref()
-            .map_or((0.0, 0.0), |l| (l.cascade_max[i], l.cascade_rms[i]))
-    };
-
-    // Light depth ranges: always for a preset (its report needs them), else when asked for.
-    let depths = (opts.light_depth || config.shadow.preset.is_some()).then(|| {
-        windows0
-            .iter()
-            .enumerate()
-            .map(|(i, w)| rig.light_depth(i, &lp0, w, &config.scene))
-            .collect::<Vec<_>>()
-    });
+    );
     let truth = if config.truth.enabled && opts.ground_truth {
         ground_truth::run(config, &rig, on_frames)
     } else {
         None
     };
+    let vis = visibility.as_deref();
+    // Light depth ranges: always for a preset (its report needs them), else when asked for.
+    let depths = (opts.light_depth || config.shadow.preset.is_some()).then(|| {
+        (frame0.windows.iter().enumerate())
+            .map(|(i, w)| rig.light_depth(i, &frame0.light, w, &config.scene))
+            .collect::<Vec<_>>()
+    });
+    let bands = seams::bands(&rig);
     let cache = cache_figures(
-        stale.as_ref(),
+        walks.totals.stale.as_ref(),
         truth
             .as_ref()
             .map(|t| if config.shadow.snap { &t.snapped } else { &t.unsnapped }),
     );
-    let (cascade_costs, cost_summary) = cost::measure(config, &rig, &lp0, &windows0, visibility.as_deref());
-    let cascades = windows0
-        .iter()
-        .enumerate()
-        .map(|(i, w)| {
-            let (light_near, light_far) = match (&depths, opts.light_depth) {
-                (Some(d), true) => (d[i].near, d[i].far),
-                _ => (0.0, 0.0),
-            };
-            CascadeReport {
-                cascade: i,
-                near: rig.slices[i].near,
-                far: rig.slices[i].far,
-                radius: rig.slices[i].sphere.radius,
-                width: w.width(),
-                height: w.height(),
-                texel_size: w.texel_size(),
-                centre_x: w.centre().x,
-                centre_y: w.centre().y,
-                centre_x_texels: w.origin_texels.x + 0.5 * w.resolution as f64,
-                centre_y_texels: w.origin_texels.y + 0.5 * w.resolution as f64,
-                light_near,
-                light_far,
-                coverage_violations: coverage.violations[i],
-                coverage_worst_texels: coverage.worst_texels[i],
-                min_slack_texels: coverage.min_slack_texels[i],
-                max_aliasing: aggregates.cascade_max_aliasing[i],
-                min_aliasing: aggregates.cascade_min_aliasing[i],
-                lookup_error_max: cascade_lookup(i).0,
-                lookup_error_rms: cascade_lookup(i).1,
-                split_jump: at_split(&aggregates.split_jumps, i),
-                band_near: bands.get(i).map_or(rig.slices[i].far, |b| b.0),
-                band_far: bands.get(i).map_or(rig.slices[i].far, |b| b.1),
-                overlap_area_fraction: at_split(&overlap, i),
-                screen: screen_stats.as_ref().map(|st| CascadeScreen {
-                    pixels: st.cascade_pixels[i],
-                    band_pixels: at_split(&band_pixels, i),
-                    texel_utilization: utilization[i],
-                }),
-                light: CascadeLight::of(
-                    config.shadow.snap,
-                    i,
-                    std::iter::once((&snapped, &unsnapped)).chain(extra.iter().map(|e| (&e.snapped, &e.unsnapped))),
-                ),
-                truth: truth.as_ref().map(|t| t.cascades[i].clone()),
-                cache: cache.as_ref().map(|c| c.1[i]),
-                cost: cascade_costs[i],
+    let (cascade_costs, cost) = cost::measure(config, &rig, &frame0.light, &frame0.windows, vis);
+    let parts = CameraParts {
+        config,
+        rig: &rig,
+        aggregates: &aggregates,
+        walks: &walks,
+        screen: vis.map(|v| {
+            if camera_screen {
+                screen::stats(v, &rig.splits, &frame0.texel, visible)
+            } else {
+                screen::cascade_shares_only(v, &rig.splits, &frame0.texel)
             }
-        })
-        .collect();
-
-    let summary = Summary {
-        cascades_needed: true,
-        z_lo,
-        z_hi,
-        max_aliasing: aggregates.max_aliasing,
-        mean_aliasing: aggregates.mean_aliasing,
-        mean_log_aliasing: aggregates.mean_log_aliasing,
-        undersampled_fraction: aggregates.undersampled_fraction,
-        shimmer: if config.shadow.snap {
-            worst_snapped
-        } else {
-            worst_unsnapped
+        }),
+        utilization: match (vis, opts.light_depth) {
+            (Some(v), true) => texel_utilization(v, &rig, &frame0.light, &frame0.windows),
+            _ => vec![0.0; rig.cascade_count()],
         },
-        shimmer_snapped: worst_snapped,
-        shimmer_unsnapped: worst_unsnapped,
-        size_jitter: jitter,
-        coverage_violations: coverage.total(),
-        memory_bytes: memory,
-        lookup_error_max: lookup_error.as_ref().map_or(0.0, |l| l.max),
-        lookup_error_rms: lookup_error.as_ref().map_or(0.0, |l| l.rms),
-        overlap_area_fraction: overlap.iter().sum(),
-        band_pixel_share: band_pixels.iter().sum(),
-        seam_crossings,
-        screen: screen_stats,
-        light: LightSummary::of(
-            config.shadow.snap,
-            std::iter::once((&snapped, &unsnapped)).chain(extra.iter().map(|e| (&e.snapped, &e.unsnapped))),
-        ),
-        truth: truth.as_ref().map(|t| t.summary),
-        views: Vec::new(),
-        cache: cache.map(|c| c.0),
-        cost: cost_summary,
+        overlap: seams::overlap_area(&rig, &frame0.light, &frame0.windows, &bands),
+        band_pixels: vis.map_or_else(|| vec![0.0; bands.len()], |v| seams::band_shares(v, &bands)),
+        bands,
+        light_depths: depths.as_deref().filter(|_| opts.light_depth),
+        truth: truth.as_ref(),
+        cache: cache.as_ref(),
+        cascade_costs: &cascade_costs,
     };
+    let cascades = (frame0.windows.iter().enumerate())
+        .map(|(i, w)| parts.cascade(i, w))
+        .collect();
+    let summary = parts.summary(z_lo, z_hi, memory, cost);
     let preset = config
         .shadow
         .preset
         .as_ref()
         .map(|p| crate::presets::report(p, Some(&rig), depths.unwrap_or_default()));
+    let Walks {
+        snapped,
+        unsnapped,
+        extra,
+        totals,
+        ..
+    } = walks;
     Analysis {
         config: config.clone(),
         range,
@@ -1149,10 +1009,239 @@ fn analyze_camera(
             aggregates,
             snapped,
             unsnapped,
-            lookup_error,
+            lookup_error: totals.lookup_error,
             extra,
         })),
         summary,
+    }
+}
+
+/// The view depths an analysis reads its cascades over. A preset has its own range (no scene
+/// clipping).
+fn analysed_range(config: &Config, rig: Option<&Rig>) -> DepthRange {
+    match (&config.shadow.preset, rig) {
+        (None, _) => depth_range::for_setup(&config.setup()),
+        (Some(_), Some(r)) => DepthRange::Range {
+            z_lo: r.splits[0],
+            z_hi: r.splits[r.cascade_count()],
+        },
+        (Some(_), None) => DepthRange::Empty,
+    }
+}
+
+/// The visible depths within the bounds' range (the same range with or without fitting the
+/// splits to them).
+fn visible_depths(setup: &csm_core::scene::Setup, vis: Option<&Visibility>) -> Option<(f64, f64)> {
+    let vis = vis?;
+    let mut bounds_only = setup.clone();
+    bounds_only.shadow.fit_depth_to_visible = false;
+    let (lo, hi) = depth_range::for_setup(&bounds_only).bounds()?;
+    screen::visible_range(vis, lo, hi)
+}
+
+/// The configured camera's first frame: its pose, the light's pose, the cascades' windows and
+/// their texel sizes.
+struct Frame0 {
+    pose: CameraPose,
+    light: LightPose,
+    windows: Vec<csm_core::fitting::Window>,
+    texel: Vec<f64>,
+}
+
+impl Frame0 {
+    fn of(config: &Config, rig: &Rig) -> Frame0 {
+        let pose = config.camera.pose();
+        let light = LightPose::new(&rig.light, &pose);
+        let windows: Vec<_> = (0..rig.cascade_count())
+            .map(|i| rig.window(i, &light, config.shadow.snap))
+            .collect();
+        let texel = windows.iter().map(|w| w.texel_size()).collect();
+        Frame0 {
+            pose,
+            light,
+            windows,
+            texel,
+        }
+    }
+}
+
+/// Every camera path walked in both snap modes: the configured path, the extra ones, and
+/// their totals.
+struct Walks {
+    snapped: PathResult,
+    unsnapped: PathResult,
+    extra: Vec<ExtraPathResult>,
+    /// The most crossings of any path.
+    seam_crossings: Option<f64>,
+    totals: PathTotals,
+}
+
+/// Walks the configured path and every extra one (`walk_path`), and totals them.
+fn walk_every_path(
+    config: &Config,
+    opts: &AnalysisOptions,
+    setup: &csm_core::scene::Setup,
+    rig: &Rig,
+    pose0: &CameraPose,
+    vis: Option<&Visibility>,
+    on_frames: &(dyn Fn(u64) + Sync),
+) -> Walks {
+    let sopts = ShimmerOptions {
+        cell_flips: opts.cell_flips,
+        probe_drift: false,
+        frame_rows: opts.frame_rows,
+    };
+    // Probes cost more than the rest of a sphere-fit analysis; place them only when used
+    // (the f32 emulation always looks probes up: its drift and lookup error are per probe).
+    let probes = probes(config, rig, pose0, sopts);
+    let seam_points = seam_points(config, opts.seams, rig, pose0, vis);
+    let every = cadence(config, rig);
+    let walker = Walker {
+        config,
+        setup,
+        rig,
+        cadence: &every,
+        probes: &probes,
+        seam_points: &seam_points,
+        sopts,
+        seams: opts.seams,
+        on_frames,
+    };
+    let first = walk_path(&walker, &setup.motion);
+    let mut seam_crossings = first.crossings;
+    let extra: Vec<ExtraPathResult> = config
+        .extra_motions()
+        .into_iter()
+        .map(|(name, motion)| {
+            let w = walk_path(&walker, &motion);
+            if let (Some(c), Some(x)) = (seam_crossings.as_mut(), w.crossings) {
+                *c = c.max(x);
+            }
+            ExtraPathResult {
+                name,
+                snapped: w.snapped,
+                unsnapped: w.unsnapped,
+                lookup_error: w.lookup_error,
+            }
+        })
+        .collect();
+    let totals = path_totals(
+        config.shadow.snap,
+        &first.snapped,
+        &first.unsnapped,
+        first.lookup_error,
+        &extra,
+    );
+    Walks {
+        snapped: first.snapped,
+        unsnapped: first.unsnapped,
+        extra,
+        seam_crossings,
+        totals,
+    }
+}
+
+/// What one camera's analysis measured, laid out per cascade ([`CascadeReport`]) and in all
+/// ([`Summary`]).
+struct CameraParts<'a> {
+    config: &'a Config,
+    rig: &'a Rig,
+    aggregates: &'a Aggregates,
+    walks: &'a Walks,
+    screen: Option<ScreenStats>,
+    utilization: Vec<f64>,
+    bands: Vec<(f64, f64)>,
+    overlap: Vec<f64>,
+    band_pixels: Vec<f64>,
+    /// Each cascade's light depth range, when asked for.
+    light_depths: Option<&'a [csm_core::cascades::LightDepth]>,
+    truth: Option<&'a ground_truth::GroundTruth>,
+    cache: Option<&'a (CacheSummary, Vec<CascadeCache>)>,
+    cascade_costs: &'a [cost::CascadeCost],
+}
+
+impl CameraParts<'_> {
+    /// Every path's results in both snap modes, the configured one first.
+    fn paths(&self) -> impl Iterator<Item = (&PathResult, &PathResult)> {
+        let w = self.walks;
+        std::iter::once((&w.snapped, &w.unsnapped)).chain(w.extra.iter().map(|e| (&e.snapped, &e.unsnapped)))
+    }
+
+    fn cascade(&self, i: usize, w: &csm_core::fitting::Window) -> CascadeReport {
+        let (rig, a, t) = (self.rig, self.aggregates, &self.walks.totals);
+        let at_split = |v: &[f64]| v.get(i).copied().unwrap_or(0.0);
+        let (light_near, light_far) = self.light_depths.map_or((0.0, 0.0), |d| (d[i].near, d[i].far));
+        let (lookup_error_max, lookup_error_rms) =
+            (t.lookup_error.as_ref()).map_or((0.0, 0.0), |l| (l.cascade_max[i], l.cascade_rms[i]));
+        CascadeReport {
+            cascade: i,
+            near: rig.slices[i].near,
+            far: rig.slices[i].far,
+            radius: rig.slices[i].sphere.radius,
+            width: w.width(),
+            height: w.height(),
+            texel_size: w.texel_size(),
+            centre_x: w.centre().x,
+            centre_y: w.centre().y,
+            centre_x_texels: w.origin_texels.x + 0.5 * w.resolution as f64,
+            centre_y_texels: w.origin_texels.y + 0.5 * w.resolution as f64,
+            light_near,
+            light_far,
+            coverage_violations: t.coverage.violations[i],
+            coverage_worst_texels: t.coverage.worst_texels[i],
+            min_slack_texels: t.coverage.min_slack_texels[i],
+            max_aliasing: a.cascade_max_aliasing[i],
+            min_aliasing: a.cascade_min_aliasing[i],
+            lookup_error_max,
+            lookup_error_rms,
+            split_jump: at_split(&a.split_jumps),
+            band_near: self.bands.get(i).map_or(rig.slices[i].far, |b| b.0),
+            band_far: self.bands.get(i).map_or(rig.slices[i].far, |b| b.1),
+            overlap_area_fraction: at_split(&self.overlap),
+            screen: self.screen.as_ref().map(|st| CascadeScreen {
+                pixels: st.cascade_pixels[i],
+                band_pixels: at_split(&self.band_pixels),
+                texel_utilization: self.utilization[i],
+            }),
+            light: CascadeLight::of(self.config.shadow.snap, i, self.paths()),
+            truth: self.truth.map(|t| t.cascades[i].clone()),
+            cache: self.cache.map(|c| c.1[i]),
+            cost: self.cascade_costs[i],
+        }
+    }
+
+    fn summary(self, z_lo: f64, z_hi: f64, memory_bytes: u64, cost: cost::CostSummary) -> Summary {
+        let (a, t) = (self.aggregates, &self.walks.totals);
+        Summary {
+            cascades_needed: true,
+            z_lo,
+            z_hi,
+            max_aliasing: a.max_aliasing,
+            mean_aliasing: a.mean_aliasing,
+            mean_log_aliasing: a.mean_log_aliasing,
+            undersampled_fraction: a.undersampled_fraction,
+            shimmer: if self.config.shadow.snap {
+                t.worst_snapped
+            } else {
+                t.worst_unsnapped
+            },
+            shimmer_snapped: t.worst_snapped,
+            shimmer_unsnapped: t.worst_unsnapped,
+            size_jitter: t.jitter,
+            coverage_violations: t.coverage.total(),
+            memory_bytes,
+            lookup_error_max: t.lookup_error.as_ref().map_or(0.0, |l| l.max),
+            lookup_error_rms: t.lookup_error.as_ref().map_or(0.0, |l| l.rms),
+            overlap_area_fraction: self.overlap.iter().sum(),
+            band_pixel_share: self.band_pixels.iter().sum(),
+            seam_crossings: self.walks.seam_crossings,
+            light: LightSummary::of(self.config.shadow.snap, self.paths()),
+            truth: self.truth.map(|t| t.summary),
+            views: Vec::new(),
+            cache: self.cache.map(|c| c.0),
+            cost,
+            screen: self.screen,
+        }
     }
 }
 

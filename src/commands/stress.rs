@@ -184,6 +184,14 @@ impl StressInputs {
     }
 }
 
+impl StressInputs {
+    /// The camera moves along `motion` by `step` per frame.
+    fn moving(&mut self, motion: &'static str, step: f64) {
+        self.motion = motion;
+        self.step = step;
+    }
+}
+
 fn case(name: &str, edit: impl FnOnce(&mut StressInputs)) -> StressCase {
     let mut inputs = StressInputs::baseline();
     edit(&mut inputs);
@@ -289,22 +297,10 @@ pub fn battery() -> Vec<StressCase> {
             i.world_offset = [1e6, 0.0, 1e6];
         }),
         case("no snapping", |i| i.snap = false),
-        case("dolly", |i| {
-            i.motion = "dolly";
-            i.step = 0.21;
-        }),
-        case("yaw", |i| {
-            i.motion = "yaw";
-            i.step = 0.5;
-        }),
-        case("pitch", |i| {
-            i.motion = "pitch";
-            i.step = 0.5;
-        }),
-        case("orbit", |i| {
-            i.motion = "orbit";
-            i.step = 2.0;
-        }),
+        case("dolly", |i| i.moving("dolly", 0.21)),
+        case("yaw", |i| i.moving("yaw", 0.5)),
+        case("pitch", |i| i.moving("pitch", 0.5)),
+        case("orbit", |i| i.moving("orbit", 2.0)),
         // Millimetre-thin slices 200 km out: valid in f64, but one binary32 step there (1.6 cm)
         // is wider than the slice, so the f32 emulation must refuse rather than emit NaN.
         case("mm AABB slices at 2e5 (beyond binary32)", |i| {
@@ -325,8 +321,7 @@ pub fn battery() -> Vec<StressCase> {
     }
     cases.push(case("world offset -1e6 yaw", |i| {
         i.world_offset = [-1e6, -1e3, -1e6];
-        i.motion = "yaw";
-        i.step = 0.5;
+        i.moving("yaw", 0.5);
     }));
     cases.extend([
         rejected("near 0", "camera.near", |i| i.near = 0.0),
@@ -346,8 +341,7 @@ pub fn battery() -> Vec<StressCase> {
             i.up = [0.0, 1.0, 0.0];
         }),
         rejected("pitch over the top", "motion.step", |i| {
-            i.motion = "pitch";
-            i.step = 10.0;
+            i.moving("pitch", 10.0);
             i.frames = 30;
         }),
     ]);

@@ -296,32 +296,27 @@ pub(crate) mod palette {
     /// View depths where nothing visible lies (shaded in the depth charts).
     pub(crate) const NOT_VISIBLE: RGBColor = RGBColor(160, 160, 160);
 
+    /// Colours written as 0xRRGGBB, the way palettes are usually published.
+    const fn from_hex<const N: usize>(hex: [u32; N]) -> [RGBColor; N] {
+        let mut out = [RGBColor(0, 0, 0); N];
+        let mut i = 0;
+        while i < N {
+            let h = hex[i];
+            out[i] = RGBColor((h >> 16) as u8, (h >> 8) as u8, h as u8);
+            i += 1;
+        }
+        out
+    }
+
     /// Series of a chart, in order.
-    pub(crate) const SERIES: [RGBColor; 8] = [
-        RGBColor(0, 114, 178),
-        RGBColor(213, 94, 0),
-        RGBColor(0, 158, 115),
-        RGBColor(204, 121, 167),
-        RGBColor(230, 159, 0),
-        RGBColor(86, 180, 233),
-        RGBColor(120, 120, 120),
-        RGBColor(160, 40, 40),
-    ];
+    pub(crate) const SERIES: [RGBColor; 8] = from_hex([
+        0x0072B2, 0xD55E00, 0x009E73, 0xCC79A7, 0xE69F00, 0x56B4E9, 0x787878, 0xA02828,
+    ]);
 
     /// Presets of a comparison, in order.
-    pub(crate) const PRESETS: [RGBColor; 11] = [
-        RGBColor(31, 119, 180),
-        RGBColor(255, 127, 14),
-        RGBColor(44, 160, 44),
-        RGBColor(214, 39, 40),
-        RGBColor(148, 103, 189),
-        RGBColor(140, 86, 75),
-        RGBColor(227, 119, 194),
-        RGBColor(127, 127, 127),
-        RGBColor(188, 189, 34),
-        RGBColor(23, 190, 207),
-        RGBColor(0, 0, 128),
-    ];
+    pub(crate) const PRESETS: [RGBColor; 11] = from_hex([
+        0x1F77B4, 0xFF7F0E, 0x2CA02C, 0xD62728, 0x9467BD, 0x8C564B, 0xE377C2, 0x7F7F7F, 0xBCBD22, 0x17BECF, 0x000080,
+    ]);
 }
 
 /// Distinct, colour-blind-friendly-ish colours for series.

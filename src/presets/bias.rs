@@ -19,12 +19,26 @@ pub struct EngineBias {
     /// The setting's value is the rule's own unit times this (Godot's bias is in percent of
     /// the depth range).
     pub scale: f64,
-    /// Whether the engine sets one value for every cascade (then the recommendation is the
-    /// largest cascade's).
-    pub one_for_all: bool,
 }
 
+/// Every engine modelled sets one depth bias for all its cascades, so the value to give back
+/// is the largest cascade's (the report says so).
 impl EngineBias {
+    /// A rule whose setting is in the rule's own unit.
+    pub(crate) const fn new(rule: BiasRule, setting: &'static str, unit: &'static str) -> Self {
+        EngineBias {
+            rule,
+            setting,
+            unit,
+            scale: 1.0,
+        }
+    }
+
+    /// The same rule with the setting's value the rule's own unit times `scale`.
+    pub(crate) const fn scaled(self, scale: f64) -> Self {
+        EngineBias { scale, ..self }
+    }
+
     /// A world-unit depth bias in the engine's own setting for a cascade.
     pub fn own_value(&self, world: f64, texel: f64, range: f64) -> f64 {
         self.rule.depth_in_own_units(world, texel, range) * self.scale

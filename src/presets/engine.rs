@@ -115,6 +115,21 @@ impl EngineScheme {
     }
 }
 
+/// A rule in words for the reports: a fixed sentence, or one written from the engine's knobs.
+pub enum Described<K: 'static> {
+    Fixed(&'static str),
+    From(fn(&K) -> String),
+}
+
+impl<K> Described<K> {
+    pub fn text(&self, k: &K) -> String {
+        match self {
+            Described::Fixed(s) => (*s).to_string(),
+            Described::From(f) => f(k),
+        }
+    }
+}
+
 /// A snap rule: rounding mode and step in texels.
 pub fn snap(mode: SnapMode, step_texels: u32) -> SnapRule {
     SnapRule { mode, step_texels }
@@ -215,7 +230,7 @@ pub trait Engine: Sync + 'static {
         "world origin"
     }
     /// The light depth rule in words.
-    fn light_depth_rule(k: &Self::Knobs) -> String;
+    const LIGHT_DEPTH: Described<Self::Knobs>;
 
     /// The engine's default shadow bias as the ground truth models it, or why it models none
     /// (no default: an engine must answer).
@@ -402,7 +417,7 @@ impl<E: KnobsOf> DynEngine for E {
     }
 
     fn light_depth_rule(&self, k: &Knobs) -> String {
-        E::light_depth_rule(own::<E>(k))
+        E::LIGHT_DEPTH.text(own::<E>(k))
     }
 
     fn bias(&self) -> BiasModel {

@@ -27,7 +27,7 @@ mod terms;
 pub use apply::{apply, PresetChoice};
 pub use closest::Target;
 pub(crate) use closest::{complete_fractions, fit_split_knob, log_misfit};
-pub use engine::{snap, Counts, Engine, Fitting, Knob};
+pub use engine::{snap, Counts, Described, Engine, Fitting, Knob};
 pub(crate) use engine::{DynEngine, EngineScheme, KnobContext, KnobsOf};
 pub use engines::{Knobs, PresetName};
 pub(crate) use free_splits::free_split_engines;

@@ -137,7 +137,7 @@ pub(crate) fn recommendation(a: &Analysis, g: &GroundTruth) -> String {
             c.points
         );
     }
-    if g.engine.is_some_and(|e| e.one_for_all) {
+    if g.engine.is_some() {
         let _ = writeln!(
             out,
             "  one value for every cascade: {setting} = {}",

@@ -19,3 +19,13 @@ pub(crate) mod sweep;
 pub mod terms;
 pub mod truth;
 pub(crate) mod views;
+
+/// A camera pose as CSV columns: the position and the target, in world units as written.
+pub(crate) const POSE_COLUMNS: [&str; 6] = [
+    "position_x",
+    "position_y",
+    "position_z",
+    "target_x",
+    "target_y",
+    "target_z",
+];

@@ -9,15 +9,15 @@ use crate::output;
 /// Columns of `stress.csv`: the inputs, then one column per invariant's worst value, the f32
 /// residuals, which invariants failed, the status and a note (the error of a rejected input,
 /// or why binary32 was not run).
-pub const STRESS_COLUMNS: [&str; 53] = [
-    "case",
-    "expect",
-    "position_x",
-    "position_y",
-    "position_z",
-    "target_x",
-    "target_y",
-    "target_z",
+pub fn stress_columns() -> Vec<&'static str> {
+    let mut head = vec!["case", "expect"];
+    head.extend(super::POSE_COLUMNS);
+    head.extend(INPUT_AND_RESULT_COLUMNS);
+    head
+}
+
+/// The columns after the camera's position and target.
+const INPUT_AND_RESULT_COLUMNS: [&str; 45] = [
     "up_x",
     "up_y",
     "up_z",
@@ -138,7 +138,7 @@ fn row(r: &CaseResult) -> Vec<String> {
 /// `stress.csv`: one row per case.
 pub(crate) fn csv(results: &[CaseResult]) -> Result<Vec<u8>> {
     let rows: Vec<Vec<String>> = results.iter().map(row).collect();
-    output::csv_bytes(&STRESS_COLUMNS, &rows)
+    output::csv_bytes(&stress_columns(), &rows)
 }
 
 /// The terminal table.

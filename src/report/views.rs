@@ -50,17 +50,10 @@ pub(crate) fn csv(
     choice: Option<(&SweepResult, &LevelChoice)>,
 ) -> Result<Vec<u8>> {
     let metrics = view_metrics();
-    let mut head: Vec<&str> = vec![
-        "name",
-        "position_x",
-        "position_y",
-        "position_z",
-        "target_x",
-        "target_y",
-        "target_z",
-        "weight",
-        "worst",
-    ];
+    let mut head: Vec<&str> = vec!["name"];
+    head.extend(super::POSE_COLUMNS);
+    head.push("weight");
+    head.push("worst");
     head.extend(metrics.iter().map(|m| m.name()));
     if choice.is_some() {
         head.extend([
@@ -77,15 +70,8 @@ pub(crate) fn csv(
         let cam = &config.views[k].camera;
         let (p, t) = (cam.position - off, cam.target - off);
         let mut row = vec![v.name.clone()];
-        for (what, x) in [
-            ("position_x", p.x),
-            ("position_y", p.y),
-            ("position_z", p.z),
-            ("target_x", t.x),
-            ("target_y", t.y),
-            ("target_z", t.z),
-            ("weight", v.weight),
-        ] {
+        let pose = super::POSE_COLUMNS.into_iter().zip([p.x, p.y, p.z, t.x, t.y, t.z]);
+        for (what, x) in pose.chain([("weight", v.weight)]) {
             row.push(num(what, x)?);
         }
         row.push((worst == Some(k)).to_string());

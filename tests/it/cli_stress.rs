@@ -28,7 +28,7 @@ fn stress_passes_the_default_battery_and_writes_one_row_per_case() {
     let text = std::fs::read_to_string(dir.path().join("stress.csv")).unwrap();
     let mut reader = csv::Reader::from_reader(text.as_bytes());
     let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
-    assert_eq!(header, csm_lab::report::stress::STRESS_COLUMNS);
+    assert_eq!(header, csm_lab::report::stress::stress_columns());
     let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.unwrap()).collect();
     assert_eq!(rows.len(), n, "one row per case");
     let col = |name: &str| header.iter().position(|h| h == name).unwrap();
@@ -95,7 +95,7 @@ fn a_violated_f32_drift_limit_exits_1_and_names_the_invariant() {
     let text = std::fs::read_to_string(dir.path().join("stress.csv")).unwrap();
     let mut reader = csv::Reader::from_reader(text.as_bytes());
     let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.unwrap()).collect();
-    let n = csm_lab::report::stress::STRESS_COLUMNS.len();
+    let n = csm_lab::report::stress::stress_columns().len();
     let (failed, status) = (n - 3, n - 2);
     let get = |name: &str| rows.iter().find(|r| &r[0] == name).unwrap();
     assert_eq!(

@@ -90,7 +90,6 @@ pub(crate) fn extremes(metric: DepthMetric, splits: &[f64], texel: &[f64], k: f6
 #[cfg(test)]
 mod tests {
     use super::*;
-    use csm_core::rng::SplitMix64;
     use csm_core::splits::practical;
 
     fn value(metric: DepthMetric, splits: &[f64], texel: &[f64], k: f64, d: f64) -> f64 {
@@ -101,61 +100,49 @@ mod tests {
         }
     }
 
-    /// The exact extremes against dense sampling of the sawtooth, on random splits, texel
-    /// sizes and ranges (including ranges inside one cascade and ranges over many).
-    #[test]
-    fn extremes_agree_with_dense_sampling() {
-        let mut rng = SplitMix64::new(17);
-        for case in 0..300 {
-            let n = 10f64.powf(rng.range(-2.0, 1.0));
-            let f = n * 10f64.powf(rng.range(0.5, 3.0));
-            let m = 1 + (rng.unit() * 8.0) as usize;
-            let s = practical(n, f, m, rng.unit());
-            let t: Vec<f64> = (0..m).map(|_| rng.range(0.001, 0.5)).collect();
-            let k = rng.range(300.0, 2000.0);
-            let (mut lo, mut hi) = (rng.range(n, f), rng.range(n, f));
-            if lo > hi {
-                std::mem::swap(&mut lo, &mut hi);
-            }
-            if case % 5 == 0 {
-                // The whole range.
-                (lo, hi) = (n, f);
-            }
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
+
+        /// The exact extremes against dense sampling of the sawtooth, on random splits, texel
+        /// sizes and ranges (including ranges inside one cascade and ranges over many: `whole`
+        /// takes the full range).
+        #[test]
+        fn extremes_agree_with_dense_sampling(
+            log_n in -2.0f64..1.0,
+            decades in 0.5f64..3.0,
+            lambda in 0.0f64..1.0,
+            t in proptest::collection::vec(0.001f64..0.5, 1..=8),
+            k in 300.0f64..2000.0,
+            ends in (0.0f64..1.0, 0.0f64..1.0),
+            whole in proptest::bool::weighted(0.2),
+        ) {
+            let n = 10f64.powf(log_n);
+            let f = n * 10f64.powf(decades);
+            let m = t.len();
+            let s = practical(n, f, m, lambda);
+            let at = |u: f64| n + (f - n) * u;
+            let (lo, hi) = if whole { (n, f) } else { (at(ends.0.min(ends.1)), at(ends.0.max(ends.1))) };
             for metric in DepthMetric::ALL {
                 let e = extremes(metric, &s, &t, k, lo, hi);
                 // Samples: a dense grid plus each split approached from both sides.
                 let cells = 20_000;
                 let mut depths: Vec<f64> = (0..=cells).map(|j| lo + (hi - lo) * j as f64 / cells as f64).collect();
-                for &c in &s[1..m] {
-                    for d in [c * (1.0 - 1e-12), c] {
-                        if d >= lo && d <= hi {
-                            depths.push(d);
-                        }
-                    }
-                }
+                depths.extend(s[1..m].iter().flat_map(|&c| [c * (1.0 - 1e-12), c]).filter(|d| (lo..=hi).contains(d)));
                 let vals: Vec<f64> = depths.iter().map(|&d| value(metric, &s, &t, k, d)).collect();
                 let smax = vals.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
                 let smin = vals.iter().cloned().fold(f64::INFINITY, f64::min);
                 // Sampling never beats the exact extreme, and gets within rounding of it.
-                assert!(smax <= e.max.value * (1.0 + 1e-9), "case {case}: {smax} > {:?}", e.max);
-                assert!(smin >= e.min.value * (1.0 - 1e-9), "case {case}: {smin} < {:?}", e.min);
-                assert!(
-                    (smax - e.max.value).abs() <= 1e-9 * e.max.value,
-                    "case {case} max {smax} {:?}",
-                    e.max
-                );
-                assert!(
-                    (smin - e.min.value).abs() <= 1e-9 * e.min.value,
-                    "case {case} min {smin} {:?}",
-                    e.min
-                );
+                proptest::prop_assert!(smax <= e.max.value * (1.0 + 1e-9), "{smax} > {:?}", e.max);
+                proptest::prop_assert!(smin >= e.min.value * (1.0 - 1e-9), "{smin} < {:?}", e.min);
+                proptest::prop_assert!((smax - e.max.value).abs() <= 1e-9 * e.max.value, "max {smax} {:?}", e.max);
+                proptest::prop_assert!((smin - e.min.value).abs() <= 1e-9 * e.min.value, "min {smin} {:?}", e.min);
                 // The reported depth and cascade give the reported value.
                 for x in [e.max, e.min] {
-                    assert!(x.depth >= lo && x.depth <= hi);
-                    assert!(x.depth >= s[x.cascade] && x.depth <= s[x.cascade + 1]);
+                    proptest::prop_assert!(x.depth >= lo && x.depth <= hi);
+                    proptest::prop_assert!(x.depth >= s[x.cascade] && x.depth <= s[x.cascade + 1]);
                     let a = k * t[x.cascade] / x.depth;
                     let v = if metric == DepthMetric::Aliasing { a } else { 1.0 / a };
-                    assert_eq!(v, x.value);
+                    proptest::prop_assert_eq!(v, x.value);
                 }
             }
         }

@@ -2,8 +2,7 @@
 //! band, windows of the slice diameter rounded up to whole units, floor snapping, and the
 //! light's own look-to basis (x mirrored against csm-lab's).
 
-use crate::presets::{
-    around, check_range, non_negative, positive, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, Knob,
+use crate::presets::{Described, around, check_range, non_negative, positive, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, Knob,
     KnobContext, Layout, Terms, Values,
 };
 use glam::DVec3;
@@ -90,18 +89,16 @@ impl Engine for Bevy {
     /// Receiver moved by normal x normal_bias x texel (normal_bias pre-multiplied by sqrt 2)
     /// and by depth_bias toward the light; defaults 0.02 and 1.8.
     fn bias() -> BiasModel {
-        BiasModel::Rule(EngineBias {
-            rule: BiasRule::World {
+        BiasModel::Rule(EngineBias::new(
+            BiasRule::World {
                 depth: 0.02,
                 slope: 0.0,
                 normal_texels: 1.8 * std::f64::consts::SQRT_2,
                 offset: NormalOffset::Along,
             },
-            setting: "DirectionalLight::shadow_depth_bias",
-            unit: "world units",
-            scale: 1.0,
-            one_for_all: true,
-        })
+            "DirectionalLight::shadow_depth_bias",
+            "world units",
+        ))
     }
 
     /// `CascadeShadowConfig::bounds`: the far bounds of every cascade but the last, as fractions
@@ -322,9 +319,7 @@ impl Engine for Bevy {
         )
     }
 
-    fn light_depth_rule(_: &BevyKnobs) -> String {
-        "slice's own z extent; casters kept (unclipped depth)".to_string()
-    }
+    const LIGHT_DEPTH: Described<BevyKnobs> = Described::Fixed("slice's own z extent; casters kept (unclipped depth)");
 
     const TERMS: Terms = Terms {
         comment: "//",

@@ -1,7 +1,7 @@
 //! Dart: the reference `computeCascades` (API documentation): practical split on
 //! [near, shadow distance] with the last boundary from the formula, corner-average spheres.
 
-use crate::presets::{unit, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Terms, Values};
+use crate::presets::{Described, unit, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Terms, Values};
 use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
@@ -95,9 +95,7 @@ impl Engine for Dart {
         format!("practical, λ {} on [near, max_distance], 1..4 cascades", k.lambda)
     }
 
-    fn light_depth_rule(_: &DartKnobs) -> String {
-        "not shown in the reference: modelled as fitted to the scene".to_string()
-    }
+    const LIGHT_DEPTH: Described<DartKnobs> = Described::Fixed("not shown in the reference: modelled as fitted to the scene");
 
     const TERMS: Terms = Terms {
         comment: "#",

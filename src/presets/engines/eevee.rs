@@ -1,8 +1,7 @@
 //! Blender EEVEE (2017, `eevee_shadow_cascade_setup`): practical split with a fade overlap,
 //! far-cap-centred spheres, round snapping on a grid through the lamp, the lamp's clip range.
 
-use crate::presets::{
-    centre, half_extent_along, non_negative, ordered, point_or, unit, Counts, Dims, Engine, EngineScheme, Fields,
+use crate::presets::{Described, centre, half_extent_along, non_negative, ordered, point_or, unit, Counts, Dims, Engine, EngineScheme, Fields,
     Fitting, KnobContext, Layout, Terms, Values,
 };
 use serde::{Deserialize, Serialize};
@@ -67,17 +66,16 @@ impl Engine for Eevee {
     /// The 2017 cascade code: 0.05 x the lamp's bias (default 1) in depth normalised over
     /// the lamp's clip range.
     fn bias() -> BiasModel {
-        BiasModel::Rule(EngineBias {
-            rule: BiasRule::RangeFraction {
+        BiasModel::Rule(EngineBias::new(
+            BiasRule::RangeFraction {
                 fraction: EEVEE_BIAS_FACTOR * EEVEE_LAMP_BIAS,
                 normal_texels: 0.0,
                 offset: NormalOffset::Along,
             },
-            setting: "Lamp bias (shadow_buffer_bias)",
-            unit: "lamp bias (1 = 0.05 of the lamp's clip range)",
-            scale: 1.0 / EEVEE_BIAS_FACTOR,
-            one_for_all: true,
-        })
+            "Lamp bias (shadow_buffer_bias)",
+            "lamp bias (1 = 0.05 of the lamp's clip range)",
+        )
+        .scaled(1.0 / EEVEE_BIAS_FACTOR))
     }
 
     fn knobs(t: &EeveeTable, cx: &KnobContext<'_>) -> Result<EeveeKnobs> {
@@ -165,9 +163,7 @@ impl Engine for Eevee {
         "grid through the lamp position"
     }
 
-    fn light_depth_rule(k: &EeveeKnobs) -> String {
-        format!("lamp clip {} to {}", k.clip_start, k.clip_end)
-    }
+    const LIGHT_DEPTH: Described<EeveeKnobs> = Described::From(|k| format!("lamp clip {} to {}", k.clip_start, k.clip_end));
 
     const TERMS: Terms = Terms {
         comment: "#",

@@ -3,8 +3,7 @@
 //! light basis fixed in the world: a look-to along the light with the world-origin transform's
 //! x axis (+X) as the up reference, as `computeDirectionalShadowBounds` builds it.
 
-use crate::presets::{
-    complete_fractions, fractions, snap, unit, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext,
+use crate::presets::{Described, complete_fractions, fractions, snap, unit, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext,
     Layout, Target, Terms, Values,
 };
 use glam::{DVec2, DVec3};
@@ -78,18 +77,16 @@ impl Engine for Filament {
     /// Light camera moved by constantBias (world units); normal bias 0.5 x normalBias x
     /// texel; polygon offset slope 2 (its constant 0.5 is in depth-buffer steps: left out).
     fn bias() -> BiasModel {
-        BiasModel::Rule(EngineBias {
-            rule: BiasRule::World {
+        BiasModel::Rule(EngineBias::new(
+            BiasRule::World {
                 depth: 0.001,
                 slope: 2.0,
                 normal_texels: 0.5,
                 offset: NormalOffset::Along,
             },
-            setting: "ShadowOptions.constantBias",
-            unit: "world units",
-            scale: 1.0,
-            one_for_all: true,
-        })
+            "ShadowOptions.constantBias",
+            "world units",
+        ))
     }
 
     /// `cascadeSplitPositions`: fractions of [near, shadowFar]; setting them switches the split
@@ -224,9 +221,7 @@ impl Engine for Filament {
         "world origin, basis from +X (fixed in the world)"
     }
 
-    fn light_depth_rule(_: &FilamentKnobs) -> String {
-        "from receiver and caster bounds".to_string()
-    }
+    const LIGHT_DEPTH: Described<FilamentKnobs> = Described::Fixed("from receiver and caster bounds");
 
     const TERMS: Terms = Terms {
         comment: "//",

@@ -2,8 +2,7 @@
 //! optional blend splits, corner-average spheres with a texel of border, 2-texel round snap,
 //! a pancaked caster range.
 
-use crate::presets::{
-    complete_fractions, fractions, non_negative, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting,
+use crate::presets::{Described, complete_fractions, fractions, non_negative, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting,
     KnobContext, Layout, Target, Terms, Values,
 };
 use serde::{Deserialize, Serialize};
@@ -46,17 +45,16 @@ impl Engine for Godot {
     /// Depth bias = bias / 100 x the cascade's depth range; normal bias x texel x
     /// (1 - max(0, N.L)) with its part along the light removed; defaults 0.1 and 2.0.
     fn bias() -> BiasModel {
-        BiasModel::Rule(EngineBias {
-            rule: BiasRule::RangeFraction {
+        BiasModel::Rule(EngineBias::new(
+            BiasRule::RangeFraction {
                 fraction: 0.1 / 100.0,
                 normal_texels: 2.0,
                 offset: NormalOffset::Lateral,
             },
-            setting: "DirectionalLight3D.shadow_bias",
-            unit: "percent of the cascade's depth range",
-            scale: 100.0,
-            one_for_all: true,
-        })
+            "DirectionalLight3D.shadow_bias",
+            "percent of the cascade's depth range",
+        )
+        .scaled(100.0))
     }
 
     /// `directional_shadow_split_1..3`: fractions of [near, max distance].
@@ -160,9 +158,7 @@ impl Engine for Godot {
         )
     }
 
-    fn light_depth_rule(k: &GodotKnobs) -> String {
-        format!("sphere ± r, {} toward the light; casters pancaked", k.pancake_size)
-    }
+    const LIGHT_DEPTH: Described<GodotKnobs> = Described::From(|k| format!("sphere ± r, {} toward the light; casters pancaked", k.pancake_size));
 
     const TERMS: Terms = Terms {
         comment: "#",

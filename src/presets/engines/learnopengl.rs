@@ -1,8 +1,7 @@
 //! A C++/OpenGL tutorial-style implementation (LearnOpenGL's cascade chapter): fixed planes,
 //! an off-by-one cascade selection, padded boxes seen from a light position.
 
-use crate::presets::{
-    centre, non_negative, point_or, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Target,
+use crate::presets::{Described, centre, non_negative, point_or, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Target,
     Terms, Values,
 };
 use serde::{Deserialize, Serialize};
@@ -49,16 +48,14 @@ impl Engine for LearnOpenGl {
     /// The seed's shader: max(0.05 (1 - N.L), 0.005) in depth normalised over each cascade's
     /// padded light depth range.
     fn bias() -> BiasModel {
-        BiasModel::Rule(EngineBias {
-            rule: BiasRule::RangeFacing {
+        BiasModel::Rule(EngineBias::new(
+            BiasRule::RangeFacing {
                 factor: 0.05,
                 floor: 0.005,
             },
-            setting: "the 0.005 floor of max(0.05 (1 - N.L), 0.005)",
-            unit: "normalised depth",
-            scale: 1.0,
-            one_for_all: true,
-        })
+            "the 0.005 floor of max(0.05 (1 - N.L), 0.005)",
+            "normalised depth",
+        ))
     }
 
     fn knobs(t: &LearnOpenGlTable, cx: &KnobContext<'_>) -> Result<LearnOpenGlKnobs> {
@@ -134,9 +131,7 @@ impl Engine for LearnOpenGl {
         format!("fixed planes {:?}, off-by-one selection", k.planes)
     }
 
-    fn light_depth_rule(k: &LearnOpenGlKnobs) -> String {
-        format!("mirrored: light-view z ± {} passed as distances", k.pad_z)
-    }
+    const LIGHT_DEPTH: Described<LearnOpenGlKnobs> = Described::From(|k| format!("mirrored: light-view z ± {} passed as distances", k.pad_z));
 
     const TERMS: Terms = Terms {
         comment: "#",

@@ -2,8 +2,7 @@
 //! at the light-space box centre, floor snapping, fixed light near/far with a margin; with
 //! `fade` (a property set after construction) blend bands between cascades and grown windows.
 
-use crate::presets::{
-    log_misfit, non_negative, ordered, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout,
+use crate::presets::{Described, log_misfit, non_negative, ordered, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout,
     Target, Terms, Values,
 };
 use serde::{Deserialize, Serialize};
@@ -96,17 +95,15 @@ impl Engine for Threejs {
 
     /// shadowBias 1e-6 in normalised depth: a fraction of the light depth range.
     fn bias() -> BiasModel {
-        BiasModel::Rule(EngineBias {
-            rule: BiasRule::RangeFraction {
+        BiasModel::Rule(EngineBias::new(
+            BiasRule::RangeFraction {
                 fraction: 1e-6,
                 normal_texels: 0.0,
                 offset: NormalOffset::Along,
             },
-            setting: "CSM shadowBias",
-            unit: "normalised depth",
-            scale: 1.0,
-            one_for_all: true,
-        })
+            "CSM shadowBias",
+            "normalised depth",
+        ))
     }
 
     fn knobs(t: &ThreejsTable, cx: &KnobContext<'_>) -> Result<ThreejsKnobs> {
@@ -254,12 +251,10 @@ impl Engine for Threejs {
         }
     }
 
-    fn light_depth_rule(k: &ThreejsKnobs) -> String {
-        format!(
+    const LIGHT_DEPTH: Described<ThreejsKnobs> = Described::From(|k| format!(
             "fixed {} to {} from a light {} in front of the slice",
             k.light_near, k.light_far, k.light_margin
-        )
-    }
+        ));
 
     const TERMS: Terms = Terms {
         comment: "//",

@@ -1,8 +1,7 @@
 //! Unity's built-in render pipeline (vendor documentation; closed source): fractions of the
 //! shadow distance, Stable Fit modelled as csm-lab's minimal sphere with round snapping.
 
-use crate::presets::{
-    check_range, complete_fractions, distance_fractions, fractions, minimal_sphere_scheme, Counts, Dims, Engine,
+use crate::presets::{Described, check_range, complete_fractions, distance_fractions, fractions, minimal_sphere_scheme, Counts, Dims, Engine,
     EngineScheme, Fields, Fitting, KnobContext, Layout, Target, Terms, Values,
 };
 use serde::{Deserialize, Serialize};
@@ -111,9 +110,7 @@ impl Engine for Unity {
         )
     }
 
-    fn light_depth_rule(_: &UnityKnobs) -> String {
-        "engine side: modelled as fitted to the scene".to_string()
-    }
+    const LIGHT_DEPTH: Described<UnityKnobs> = Described::Fixed("engine side: modelled as fitted to the scene");
 
     const TERMS: Terms = Terms {
         comment: "//",

@@ -1,7 +1,7 @@
 //! The Unity C# sample (a blog's cascade code): fixed fractions of the far plane, tight boxes
 //! whose centre is discarded (the window sits on the light axis through the world origin).
 
-use crate::presets::{Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Terms, Values};
+use crate::presets::{Described, Counts, Dims, Engine, EngineScheme, Fields, Fitting, KnobContext, Layout, Terms, Values};
 use serde::{Deserialize, Serialize};
 
 use crate::config::Fit;
@@ -38,17 +38,16 @@ impl Engine for UnitySample {
     /// The sample adds 0.005 to the casters' clip-space z; on OpenGL (z in [-1, 1]) that is
     /// 0.0025 of the cascade's light depth range away from the light.
     fn bias() -> BiasModel {
-        BiasModel::Rule(EngineBias {
-            rule: BiasRule::RangeFraction {
+        BiasModel::Rule(EngineBias::new(
+            BiasRule::RangeFraction {
                 fraction: UNITY_SAMPLE_CLIP_BIAS / 2.0,
                 normal_texels: 0.0,
                 offset: NormalOffset::Along,
             },
-            setting: "_gShadowBias",
-            unit: "clip-space z on OpenGL (2 x normalised depth)",
-            scale: 2.0,
-            one_for_all: true,
-        })
+            "_gShadowBias",
+            "clip-space z on OpenGL (2 x normalised depth)",
+        )
+        .scaled(2.0))
     }
 
     fn knobs(t: &UnitySampleTable, _cx: &KnobContext<'_>) -> Result<UnitySampleKnobs> {
@@ -101,9 +100,7 @@ impl Engine for UnitySample {
         "near + {0.067, 0.2, 0.467}·far, 4 cascades".to_string()
     }
 
-    fn light_depth_rule(_: &UnitySampleKnobs) -> String {
-        "slice's own z extent; casters in front are lost".to_string()
-    }
+    const LIGHT_DEPTH: Described<UnitySampleKnobs> = Described::Fixed("slice's own z extent; casters in front are lost");
 
     const TERMS: Terms = Terms {
         comment: "#",

@@ -2,8 +2,7 @@
 //! fractions of the shadow distance, one atlas of 2048 (tiles of 1024 from two cascades on),
 //! modelled like Unity's built-in pipeline for the fit and snap.
 
-use crate::presets::{
-    check_range, complete_fractions, distance_fractions, fractions, minimal_sphere_scheme, Counts, Dims, Engine,
+use crate::presets::{Described, check_range, complete_fractions, distance_fractions, fractions, minimal_sphere_scheme, Counts, Dims, Engine,
     EngineScheme, Fields, Fitting, KnobContext, Layout, Target, Terms, Values,
 };
 use serde::{Deserialize, Serialize};
@@ -42,16 +41,14 @@ impl Engine for UnityUrp {
 
     /// Depth and normal bias scale with each cascade's texel size; defaults 1 and 1.
     fn bias() -> BiasModel {
-        BiasModel::Rule(EngineBias {
-            rule: BiasRule::Texels {
+        BiasModel::Rule(EngineBias::new(
+            BiasRule::Texels {
                 depth_texels: 1.0,
                 normal_texels: 1.0,
             },
-            setting: "Depth Bias",
-            unit: "texels of the cascade",
-            scale: 1.0,
-            one_for_all: true,
-        })
+            "Depth Bias",
+            "texels of the cascade",
+        ))
     }
 
     const FREE_SPLITS: Option<FreeSplits<UnityUrpKnobs>> = Some(FreeSplits {
@@ -138,9 +135,7 @@ impl Engine for UnityUrp {
         )
     }
 
-    fn light_depth_rule(_: &UnityUrpKnobs) -> String {
-        "engine side: modelled as fitted to the scene".to_string()
-    }
+    const LIGHT_DEPTH: Described<UnityUrpKnobs> = Described::Fixed("engine side: modelled as fitted to the scene");
 
     const TERMS: Terms = Terms {
         comment: "//",

@@ -2,8 +2,7 @@
 //! with a transition band, Unreal's bounding sphere with a 4-texel border, fmod snapping.
 //! Centimetre constants are converted to metres.
 
-use crate::presets::{
-    around, check_range, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, Knob, KnobContext, Layout, Terms,
+use crate::presets::{Described, around, check_range, snap, Counts, Dims, Engine, EngineScheme, Fields, Fitting, Knob, KnobContext, Layout, Terms,
     Values,
 };
 use serde::{Deserialize, Serialize};
@@ -76,19 +75,18 @@ impl Engine for Unreal {
     /// receiver's angle to the light, capped at 1. The radius over the resolution is half a
     /// texel, so 2.5 texels plus 3.75 texels x min(tan, 1).
     fn bias() -> BiasModel {
-        BiasModel::Rule(EngineBias {
-            rule: BiasRule::TexelsTangent {
+        BiasModel::Rule(EngineBias::new(
+            BiasRule::TexelsTangent {
                 depth_texels: UNREAL_CSM_DEPTH_BIAS * UNREAL_SHADOW_BIAS / 2.0,
                 tangent_texels: UNREAL_CSM_DEPTH_BIAS * UNREAL_SHADOW_BIAS / 2.0
                     * UNREAL_CSM_SLOPE_SCALE
                     * UNREAL_SHADOW_SLOPE_BIAS,
                 cap: UNREAL_MAX_SLOPE,
             },
-            setting: "DirectionalLight Shadow Bias (ShadowBias)",
-            unit: "Unreal's Shadow Bias (1 = r.Shadow.CSMDepthBias 10 x half a texel of the cascade)",
-            scale: 2.0 / UNREAL_CSM_DEPTH_BIAS,
-            one_for_all: true,
-        })
+            "DirectionalLight Shadow Bias (ShadowBias)",
+            "Unreal's Shadow Bias (1 = r.Shadow.CSMDepthBias 10 x half a texel of the cascade)",
+        )
+        .scaled(2.0 / UNREAL_CSM_DEPTH_BIAS))
     }
 
     fn knobs(t: &UnrealTable, cx: &KnobContext<'_>) -> Result<UnrealKnobs> {
@@ -176,9 +174,7 @@ impl Engine for Unreal {
         )
     }
 
-    fn light_depth_rule(_: &UnrealKnobs) -> String {
-        "sphere ± max(r, 50 m); casters kept".to_string()
-    }
+    const LIGHT_DEPTH: Described<UnrealKnobs> = Described::Fixed("sphere ± max(r, 50 m); casters kept");
 
     const TERMS: Terms = Terms {
         comment: ";",
