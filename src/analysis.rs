@@ -748,8 +748,9 @@ pub(crate) fn analyze_with_progress(
     opts: &AnalysisOptions,
     on_frames: &(dyn Fn(u64) + Sync),
 ) -> Analysis {
-    let mut a = analyze_camera(config, opts, on_frames);
-    if let Some(level) = level_screen(config) {
+    let level = level_screen(config);
+    let mut a = analyze_camera(config, opts, on_frames, level.is_none());
+    if let Some(level) = level {
         a.summary.screen = Some(level.screen);
         a.summary.band_pixel_share = level.band_pixel_share;
         a.summary.views = level.views;
@@ -844,7 +845,7 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
             steps: screen::view_weight_steps(v.weight),
         })
         .collect();
-    let pooled = screen::pool(&parts);
+    let pooled = screen::pool_memo(&parts, &geometry.pool_memo);
     // Band k's receivers of each view, pooled band by band (a view without that band has none).
     let band_count = |x: &ScreenInputs, k: usize| -> u64 {
         x.bands.get(k).map_or(0, |&(lo, hi)| {
@@ -927,7 +928,14 @@ pub(crate) fn warm_views(config: &Config, rays_only: bool) {
 }
 
 /// [`analyze_with_progress`] for `[camera]` alone: every metric of the camera and its path.
-fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u64) + Sync)) -> Analysis {
+/// `camera_screen`: measure `[camera]`'s screen statistics (a level of views replaces them
+/// with its pooled ones, so only the cascades' pixel shares are counted then).
+fn analyze_camera(
+    config: &Config,
+    opts: &AnalysisOptions,
+    on_frames: &(dyn Fn(u64) + Sync),
+    camera_screen: bool,
+) -> Analysis {
     let rig = rig(config);
     let range = analysed_range(config, rig.as_ref());
     let memory = match &rig {
@@ -991,7 +999,13 @@ fn analyze_camera(config: &Config, opts: &AnalysisOptions, on_frames: &(dyn Fn(u
         rig: &rig,
         aggregates: &aggregates,
         walks: &walks,
-        screen: vis.map(|v| screen::stats(v, &rig.splits, &frame0.texel, visible)),
+        screen: vis.map(|v| {
+            if camera_screen {
+                screen::stats(v, &rig.splits, &frame0.texel, visible)
+            } else {
+                screen::cascade_shares_only(v, &rig.splits, &frame0.texel)
+            }
+        }),
         utilization: match (vis, opts.light_depth) {
             (Some(v), true) => texel_utilization(v, &rig, &frame0.light, &frame0.windows),
             _ => vec![0.0; rig.cascade_count()],

@@ -533,6 +533,9 @@ pub struct GeometrySettings {
     /// `[scene] gltf`, resolved against the config's folder.
     pub gltf: Option<PathBuf>,
     pub scene: Arc<csm_core::visibility::SceneGeometry>,
+    /// A level's pooled screen statistics already computed (a cache shared by every setting
+    /// of a sweep, `csm_core::screen::pool_memo`).
+    pub(crate) pool_memo: Arc<csm_core::screen::PoolMemo>,
 }
 
 impl GeometrySettings {

@@ -1055,6 +1055,7 @@ fn scene(
         boxes,
         gltf,
         scene: Arc::new(csm_core::visibility::SceneGeometry::new(mesh)),
+        pool_memo: Arc::default(),
     };
     Ok((bounds, Some(geometry), gltf_scene))
 }

@@ -6,7 +6,7 @@
 use std::fmt::Write as _;
 
 use crate::analysis::Summary;
-use crate::commands::sweep::level::{view_summary, worst_of, LevelChoice};
+use crate::commands::sweep::level::{sees_receivers, view_summary, worst_of, LevelChoice};
 use crate::commands::sweep::SweepResult;
 use crate::config::Config;
 use crate::error::Result;
@@ -34,7 +34,8 @@ pub(crate) fn worst_view(s: &Summary, objective: SummaryMetric) -> Option<(usize
     let values: Vec<f64> = (0..s.views.len())
         .map(|k| objective.value(&view_summary(s, k)))
         .collect();
-    let k = worst_of(&values, objective);
+    let seen: Vec<bool> = (0..s.views.len()).map(|k| sees_receivers(s, k)).collect();
+    let k = worst_of(&values, &seen, objective);
     Some((k, s.views[k].name.as_str(), values[k]))
 }
 
@@ -75,12 +76,23 @@ pub(crate) fn csv(
         }
         row.push((worst == Some(k)).to_string());
         let own = view_summary(s, k);
+        let seen = sees_receivers(s, k);
         for m in &metrics {
-            row.push(m.typed(&own).csv(m.name())?);
+            // A view that sees no receiver measured its fractions only: no statistic of m.
+            let measured = seen || matches!(m.name(), "screen_receiver_fraction" | "screen_self_shadowed_fraction");
+            row.push(if measured {
+                m.typed(&own).csv(m.name())?
+            } else {
+                String::new()
+            });
         }
         if let Some((r, c)) = choice {
             let x = &c.views[k];
-            row.push(num("objective_at_level", x.objective_at_level)?);
+            row.push(if x.seen {
+                num("objective_at_level", x.objective_at_level)?
+            } else {
+                String::new()
+            });
             row.push(x.alone.map_or(String::new(), |i| r.rows[i].setting.label()));
             row.push(match x.objective_alone {
                 Some(o) => num("alone_objective", o)?,
@@ -139,6 +151,13 @@ pub(crate) fn sweep_lines(r: &SweepResult) -> Vec<String> {
         n(c.views[c.worst].objective_at_level)
     )];
     for v in &c.views {
+        if !v.seen {
+            lines.push(format!(
+                "{}: sees no receiver (no surface facing the light on its screen): no screen metrics of its own",
+                v.name
+            ));
+            continue;
+        }
         let mut l = format!(
             "{}: {} {} at the level's choice",
             v.name,
@@ -170,10 +189,12 @@ pub(crate) fn sweep_json(r: &SweepResult) -> Option<serde_json::Value> {
         "worst_view": c.views[c.worst].name,
         "at": r.rows[c.at].setting.label(),
         "views": c.views.iter().map(|v| {
-            let mut j = serde_json::json!({
-                "name": v.name,
-                "objective_at_level": v.objective_at_level,
-            });
+            let mut j = serde_json::json!({ "name": v.name });
+            if v.seen {
+                j["objective_at_level"] = v.objective_at_level.into();
+            } else {
+                j["sees_no_receiver"] = true.into();
+            }
             if let (Some(i), Some(o)) = (v.alone, v.objective_alone) {
                 j["alone"] = r.rows[i].setting.label().into();
                 j["alone_objective"] = o.into();

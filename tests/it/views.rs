@@ -171,14 +171,16 @@ fn the_sweep_over_views_equals_the_per_view_sweeps() {
     use csm_lab::commands::sweep::grid::Grid;
     use csm_lab::commands::sweep::run::run;
     use csm_lab::config::sweep_spec::SweepAxes;
-    let axes = "\n[sweep]\nlambda = [0.25, 0.75]\ncascades = [2, 4]\nresolution = [1024]\n";
+    // One cascade builds the same cascades at every λ, and the resolutions scale the texel
+    // sizes: the rows that share one remembered pool (screen::pool_memo) are checked too.
+    let axes = "\n[sweep]\nlambda = [0.25, 0.75]\ncascades = [1, 2, 4]\nresolution = [512, 1024]\n";
     let text = level(&VIEWS) + axes;
     let c = common::config(&text);
     let grid = Grid::resolve(&c, &SweepAxes::default()).unwrap();
     let rows = run(&c, &grid, Some(2), &|| {}).unwrap();
     let camera = common::config(&(scene() + axes));
     let cam_rows = run(&camera, &grid, Some(1), &|| {}).unwrap();
-    assert_eq!(rows.len(), 4);
+    assert_eq!(rows.len(), 12);
     for (k, &(_, p, t, _)) in VIEWS.iter().enumerate() {
         let alone = camera_at(p, t);
         let own = run(&alone, &grid, Some(1), &|| {}).unwrap();
@@ -201,6 +203,54 @@ fn the_sweep_over_views_equals_the_per_view_sweeps() {
             .fold(0.0, f64::max);
         assert_eq!(r.summary.screen.as_ref().unwrap().aliasing_max, max);
     }
+}
+
+/// A view that sees no receiver (it looks at the sky): a warning naming it, and the run goes
+/// on; it has no screen statistics of its own (blank in `views.csv`, no choice of its own, never
+/// the worst view), and the level's pool is that of the other views alone.
+#[test]
+fn a_view_that_sees_no_receiver_is_a_warning_naming_it_and_has_no_statistics() {
+    let dir = tempfile::tempdir().unwrap();
+    let views = [VIEWS[0], ("sky", [0.0, 2.0, 0.0], [0.1, 100.0, 0.0], 1.0)];
+    let text = level(&views) + "\n[sweep]\nlambda = [0.5, 0.75]\ncascades = [2, 4]\nresolution = [1024]\n";
+    let cfg = dir.path().join("sky.toml");
+    std::fs::write(&cfg, &text).unwrap();
+    let out_dir = dir.path().join("out");
+    let o = run_cli(&[
+        "sweep",
+        cfg.to_str().unwrap(),
+        "--no-plots",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert_eq!(o.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("warning:") && stderr.contains("view \"sky\" sees no receiver"),
+        "{stderr}"
+    );
+    assert!(stdout.contains("sky: sees no receiver"), "{stdout}");
+    assert!(stdout.contains("the worst view is street"), "{stdout}");
+    let (head, rows) = read_csv(&out_dir.join("views.csv"));
+    let col = |key: &str| head.iter().position(|h| h == key).unwrap();
+    let sky = rows.iter().find(|r| r[0] == "sky").unwrap();
+    assert_eq!(sky[col("screen_receiver_fraction")], "0");
+    for key in [
+        "screen_aliasing_p95",
+        "visible_aliasing_p95",
+        "screen_aliasing_mean",
+        "alone_setting",
+        "objective_at_level",
+    ] {
+        assert_eq!(sky[col(key)], "", "{key}");
+    }
+    assert_eq!(sky[col("worst")], "false");
+    // The level pools the street view's pixels only: its percentiles are the street view's.
+    let c = common::config(&text);
+    let lvl = level_screen(&c).unwrap();
+    assert_eq!(lvl.screen.aliasing_p95, lvl.views[0].screen.aliasing_p95);
+    assert_eq!(lvl.screen.visible_p95, lvl.views[0].screen.visible_p95);
+    assert!(lvl.screen.receiver_fraction < lvl.views[0].screen.receiver_fraction);
 }
 
 fn rejected(text: &str) -> String {

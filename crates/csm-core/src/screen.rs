@@ -281,6 +281,14 @@ pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f
     from_tally(vis, &counts, n, &t, [p[0], p[1], p[2]], [wp[0], wp[1], wp[2]], visible)
 }
 
+/// [`stats`] with only the per-cascade pixel shares (`cascade_pixels`) and the receiver and
+/// self-shadowed fractions measured, every statistic of `m` 0: for a camera whose screen
+/// statistics a level of views replaces, whose cascades still report their shares.
+pub fn cascade_shares_only(vis: &Visibility, splits: &[f64], texel: &[f64]) -> ScreenStats {
+    let (_, counts) = served_runs(vis, splits, texel);
+    from_tally(vis, &counts, 0, &Tally::empty(), [0.0; 3], [0.0; 3], None)
+}
+
 /// A pass's statistics from its tally: `n` served pixels, `counts` per cascade, the plain and
 /// weighted percentiles (p50, p95, p99) already selected.
 fn from_tally(
@@ -370,6 +378,8 @@ struct Tally {
     wsum: f64,
     wtotal: u64,
     wmax: f64,
+    /// Served values per [`octave`] (only when asked for; empty otherwise).
+    octaves: Vec<u32>,
 }
 
 impl Tally {
@@ -384,6 +394,7 @@ impl Tally {
             wsum: 0.0,
             wtotal: 0,
             wmax: 0.0,
+            octaves: Vec::new(),
         }
     }
 }
@@ -392,16 +403,32 @@ impl Tally {
 /// no pixel is served). [`stats`] and the pooled statistics both count through here, so their
 /// sums are equal bit for bit (the same operations in the same order).
 fn tally(vis: &Visibility, runs: &[(usize, usize, f64)], buckets: Buckets, served: usize) -> Tally {
+    tally_counting::<false>(vis, runs, buckets, served)
+}
+
+/// [`tally`], and with `OCTAVES` also each value's [`octave`] counted (`Tally::octaves`).
+fn tally_counting<const OCTAVES: bool>(
+    vis: &Visibility,
+    runs: &[(usize, usize, f64)],
+    buckets: Buckets,
+    served: usize,
+) -> Tally {
     let mut t = Tally::empty();
     if served > 0 {
         t.hist = vec![0u32; Buckets::COUNT];
         t.whist = vec![0u64; Buckets::COUNT];
+        if OCTAVES {
+            t.octaves = vec![0u32; OCTAVES_COUNT];
+        }
     }
     let g = &vis.receivers;
     let weights = &vis.weights;
     for &(a, b, tx) in runs {
         for (&(_, gk), &wk) in g[a..b].iter().zip(&weights[a..b]) {
             let m = tx * gk;
+            if OCTAVES {
+                t.octaves[octave(m)] += 1;
+            }
             t.sum += m;
             // A plain comparison (not f64::max, which also handles NaN): m is finite.
             t.max = if m > t.max { m } else { t.max };
@@ -427,9 +454,14 @@ struct PartPass {
     t: Tally,
 }
 
-fn first_pass(part: &PoolPart<'_>, runs: Vec<(usize, usize, f64)>, counts: Vec<usize>, buckets: Buckets) -> PartPass {
+fn first_pass<const OCTAVES: bool>(
+    part: &PoolPart<'_>,
+    runs: Vec<(usize, usize, f64)>,
+    counts: Vec<usize>,
+    buckets: Buckets,
+) -> PartPass {
     let n = counts.iter().sum();
-    let t = tally(part.vis, &runs, buckets, n);
+    let t = tally_counting::<OCTAVES>(part.vis, &runs, buckets, n);
     PartPass { runs, counts, n, t }
 }
 
@@ -454,12 +486,13 @@ impl Targets {
         let mut at = Vec::with_capacity(6);
         for (k, total) in [plain_total, contrast_total].into_iter().enumerate() {
             let weight = |bucket: usize| if k == 0 { a(hist[bucket]) } else { b(whist[bucket]) };
+            // The targets increase: each search goes on from where the previous one stopped.
+            let (mut bucket, mut below) = (0, 0u128);
             for p in [50u128, 95, 99] {
                 if total == 0 {
                     continue;
                 }
                 let target = (p * total).div_ceil(100).max(1);
-                let (mut bucket, mut below) = (0, 0u128);
                 while below + weight(bucket) < target {
                     below += weight(bucket);
                     bucket += 1;
@@ -528,6 +561,12 @@ impl Targets {
 /// view's histograms on a bucket key common to all views, the second gathers the values of the
 /// buckets that hold a wanted rank, of the level or of the view itself.
 pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
+    pool_passes::<false>(parts).0
+}
+
+/// [`pool`], with each part's first pass (its served count and, with `OCTAVES`, its values per
+/// [`octave`]).
+fn pool_passes<const OCTAVES: bool>(parts: &[PoolPart<'_>]) -> (Pooled, Vec<PartPass>) {
     // The bounds of every served value of every part, as in `stats`, for one common key.
     let mut lo = f64::INFINITY;
     let mut hi = 0.0f64;
@@ -549,7 +588,7 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
     let passes: Vec<PartPass> = parts
         .iter()
         .zip(served)
-        .map(|(p, (runs, counts))| first_pass(p, runs, counts, buckets))
+        .map(|(p, (runs, counts))| first_pass::<OCTAVES>(p, runs, counts, buckets))
         .collect();
 
     // The level's histograms and targets, and each part's own.
@@ -664,7 +703,207 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
         visible_z_hi,
         cascade_pixels,
     };
-    Pooled { level, views }
+    (Pooled { level, views }, passes)
+}
+
+/// Number of [`octave`]s: every finite `m >= 0` has one below it.
+const OCTAVES_COUNT: usize = 2048;
+
+/// A value's octave: `(bits(m) - 1) >> 52`, so that a normal `m` with octave `b` lies in
+/// `(2^(b - 1023), 2^(b - 1022)]` and `m > 2^j` exactly when `b >= j + 1023` (0 counts in octave 0).
+#[inline]
+fn octave(m: f64) -> usize {
+    (m.to_bits().saturating_sub(1) >> 52) as usize
+}
+
+/// `2^e` as an f64 (`e` in the normal range).
+fn pow2(e: i32) -> f64 {
+    f64::from_bits(((1023 + e) as u64) << 52)
+}
+
+/// Pooled statistics already computed, by their inputs up to one power-of-two factor of every
+/// texel size (see [`pool_memo`]). A cache: two memos always compare equal.
+#[derive(Default)]
+pub struct PoolMemo {
+    entries: std::sync::Mutex<std::collections::HashMap<Vec<u64>, std::sync::Arc<MemoEntry>>>,
+}
+
+impl std::fmt::Debug for PoolMemo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let n = self.entries.lock().map_or(0, |e| e.len());
+        f.debug_struct("PoolMemo").field("entries", &n).finish()
+    }
+}
+
+impl PartialEq for PoolMemo {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+/// View statistics the memo keeps at most (entries times views): about 50 MB.
+const MEMO_VIEW_STATS: usize = 200_000;
+
+/// One memo entry: the pooled statistics at the normalised texel sizes, and per part its
+/// served count and, for the undersampled counts at any scale, the number of its values at or
+/// above each octave (ascending octaves, those that hold values only).
+struct MemoEntry {
+    pooled: Pooled,
+    served: Vec<u64>,
+    above: Vec<Vec<(u16, u64)>>,
+}
+
+impl MemoEntry {
+    /// Part `k`'s values above `2^j` (at the normalised scale).
+    fn count_above(&self, k: usize, j: i32) -> u64 {
+        let b = j + 1023;
+        let list = &self.above[k];
+        let at = list.partition_point(|&(o, _)| (o as i32) < b);
+        list.get(at).map_or(0, |x| x.1)
+    }
+}
+
+/// The normalising exponent of a level's texel sizes: that of the first positive texel size,
+/// when every served value, at either scale, keeps far from the ends of the f64 range (so that
+/// scaling by `2^e` is exact through every product, sum and quotient of [`pool`]); else None.
+fn normaliser(parts: &[PoolPart<'_>]) -> Option<i32> {
+    let first = parts
+        .iter()
+        .flat_map(|p| p.texel.iter())
+        .find(|&&t| t > 0.0 && t.is_normal())?;
+    let e = ((first.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+    let (lo_ok, hi_ok) = (pow2(-1000), pow2(800));
+    let f = pow2(-e);
+    for p in parts {
+        let Some((g_lo, g_hi)) = p.vis.factor_range else {
+            continue;
+        };
+        for &t in p.texel {
+            if t == 0.0 {
+                continue;
+            }
+            for scaled in [t, t * f] {
+                let (lo, hi) = (scaled * g_lo, scaled * g_hi);
+                if !(lo >= lo_ok && hi <= hi_ok && scaled.is_normal()) {
+                    return None;
+                }
+            }
+        }
+    }
+    Some(e)
+}
+
+/// [`pool`], remembered in `memo`. Every statistic of [`pool`] but the undersampled fractions
+/// scales exactly with the texel sizes when they all change by one power-of-two factor `2^e`
+/// (a product `t g` of a normal result, its sums, means, maxima and percentiles are all scaled
+/// by `2^e` without rounding), and the undersampled count `m > 1` is the count of normalised
+/// values above `2^-e`, read from the values' octaves. So the statistics of texel sizes
+/// `t · 2^e` are computed once, at `t`, for every `e`: a sweep's resolutions (powers of two)
+/// share one computation, and so do settings that build the same cascades (a single
+/// cascade at every λ). The result equals [`pool`]'s bit for bit; when a value could leave the
+/// normal range at either scale, [`pool`] runs as is.
+pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
+    let Some(e) = normaliser(parts) else {
+        return pool(parts);
+    };
+    let f = pow2(-e);
+    let texels: Vec<Vec<f64>> = parts.iter().map(|p| p.texel.iter().map(|&t| t * f).collect()).collect();
+    let norm: Vec<PoolPart<'_>> = parts
+        .iter()
+        .zip(&texels)
+        .map(|(p, t)| PoolPart { texel: t, ..*p })
+        .collect();
+    let key: Vec<u64> = norm
+        .iter()
+        .flat_map(|p| {
+            let v = &p.vis.view;
+            let head = [
+                p.vis.receivers.as_ptr() as usize as u64,
+                p.vis.receivers.len() as u64,
+                p.steps,
+                v.pose.position.x.to_bits(),
+                v.pose.position.y.to_bits(),
+                v.pose.position.z.to_bits(),
+                v.light.x.to_bits(),
+                v.light.y.to_bits(),
+                v.light.z.to_bits(),
+                p.visible.map_or(u64::MAX, |x| x.0.to_bits()),
+                p.visible.map_or(u64::MAX, |x| x.1.to_bits()),
+                p.splits.len() as u64,
+            ];
+            head.into_iter()
+                .chain(p.splits.iter().map(|x| x.to_bits()))
+                .chain(p.texel.iter().map(|x| x.to_bits()))
+        })
+        .collect();
+    let found = memo.entries.lock().ok().and_then(|m| m.get(&key).cloned());
+    let entry = found.unwrap_or_else(|| {
+        let (pooled, passes) = pool_passes::<true>(&norm);
+        let above = passes
+            .iter()
+            .map(|pass| {
+                let mut list = Vec::new();
+                let mut acc = 0u64;
+                for (b, &c) in pass.t.octaves.iter().enumerate().rev() {
+                    if c > 0 {
+                        acc += c as u64;
+                        list.push((b as u16, acc));
+                    }
+                }
+                list.reverse();
+                list
+            })
+            .collect();
+        let entry = std::sync::Arc::new(MemoEntry {
+            pooled,
+            served: passes.iter().map(|p| p.n as u64).collect(),
+            above,
+        });
+        if let Ok(mut m) = memo.entries.lock() {
+            if (m.len() + 1) * parts.len().max(1) > MEMO_VIEW_STATS {
+                m.clear();
+            }
+            m.insert(key, entry.clone());
+        }
+        entry
+    });
+    // Back to the true scale: the values times 2^e, the undersampled counts above 2^-e.
+    let s = pow2(e);
+    let under: Vec<u64> = (0..parts.len()).map(|k| entry.count_above(k, -e)).collect();
+    let scale = |st: &ScreenStats, under: Option<f64>| ScreenStats {
+        aliasing_mean: st.aliasing_mean * s,
+        aliasing_p50: st.aliasing_p50 * s,
+        aliasing_p95: st.aliasing_p95 * s,
+        aliasing_p99: st.aliasing_p99 * s,
+        aliasing_max: st.aliasing_max * s,
+        undersampled_fraction: under.unwrap_or(st.undersampled_fraction),
+        visible_mean: st.visible_mean * s,
+        visible_p50: st.visible_p50 * s,
+        visible_p95: st.visible_p95 * s,
+        visible_p99: st.visible_p99 * s,
+        visible_max: st.visible_max * s,
+        ..st.clone()
+    };
+    let views = entry
+        .pooled
+        .views
+        .iter()
+        .enumerate()
+        .map(|(k, st)| {
+            let n = entry.served[k];
+            scale(st, Some(if n == 0 { 0.0 } else { under[k] as f64 / n as f64 }))
+        })
+        .collect();
+    let (mut u, mut n) = (0u128, 0u128);
+    for (k, p) in parts.iter().enumerate() {
+        u += under[k] as u128 * p.steps as u128;
+        n += entry.served[k] as u128 * p.steps as u128;
+    }
+    let level_under = if n > 0 { u as f64 / n as f64 } else { 0.0 };
+    Pooled {
+        level: scale(&entry.pooled.level, Some(level_under)),
+        views,
+    }
 }
 
 /// A share pooled over views: `Σ s_k a_k / Σ s_k b_k` for each view's count `a_k` out of
@@ -942,6 +1181,54 @@ mod tests {
             assert_eq!((l.visible_z_lo, l.visible_z_hi), (1.0, 103.0));
             assert_eq!(l.cascade_pixels.len(), 5);
         }
+    }
+
+    /// The remembered pool equals `pool` bit for bit: texel sizes scaled by powers of two
+    /// (entries shared, the undersampled counts read from the octaves) and by other factors
+    /// (new entries), with weights; a repeat is a hit, not a new entry.
+    #[test]
+    fn the_remembered_pool_equals_the_pool_at_every_scale() {
+        let vis: Vec<Visibility> = [(11, 4000, 5.0, 100), (12, 2500, 9.0, 0), (13, 7000, 3.0, 50)]
+            .iter()
+            .map(|&(seed, n, spread, extra)| synthetic(seed, n, spread, extra))
+            .collect();
+        let splits: [Vec<f64>; 3] = [
+            vec![0.5, 10.0, 40.0, 150.0],
+            vec![2.0, 30.0, 90.0, 210.0],
+            vec![1.0, 200.0],
+        ];
+        let base: [Vec<f64>; 3] = [vec![0.5, 2.0, 7.0], vec![1.1, 3.3, 9.0], vec![4.0]];
+        let memo = PoolMemo::default();
+        let entries = |m: &PoolMemo| m.entries.lock().unwrap().len();
+        // 2^k scales share one entry; 0.7 and 3 are new ones. The values straddle m = 1 at
+        // most scales, so the undersampled counts change with the scale.
+        let scales = [1.0, 0.5, 0.25, 2.0, 1.0 / 64.0, 0.7, 3.0, 0.5];
+        let mut unders = Vec::new();
+        for (i, &scale) in scales.iter().enumerate() {
+            let texels: Vec<Vec<f64>> = base.iter().map(|t| t.iter().map(|&x| x * scale).collect()).collect();
+            let parts: Vec<PoolPart<'_>> = (0..3)
+                .map(|k| PoolPart {
+                    vis: &vis[k],
+                    splits: &splits[k],
+                    texel: &texels[k],
+                    visible: Some((1.0, 150.0 + k as f64)),
+                    steps: view_weight_steps([1.0, 2.5, 0.5][k]),
+                })
+                .collect();
+            let direct = pool(&parts);
+            assert_eq!(pool_memo(&parts, &memo), direct, "scale {scale}");
+            unders.push(direct.level.undersampled_fraction);
+            let want = match i {
+                0..=4 => 1,
+                5 => 2,
+                _ => 3,
+            };
+            assert_eq!(entries(&memo), want, "after scale {scale}");
+        }
+        // The shared entries answered different undersampled fractions.
+        unders.sort_by(f64::total_cmp);
+        unders.dedup();
+        assert!(unders.len() >= 5, "{unders:?}");
     }
 
     fn served_of(p: &PoolPart<'_>) -> usize {

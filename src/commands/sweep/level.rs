@@ -23,6 +23,9 @@ pub struct ViewChoice {
     /// the level's choice costs this view; None without its own choice or when its objective
     /// there is 0.
     pub cost: Option<f64>,
+    /// The view sees a lit-facing receiver (its pass has one; the same at every setting). A
+    /// view that sees none has no screen statistics of its own: no choice, never the worst.
+    pub seen: bool,
 }
 
 /// Every view's choice beside the level's.
@@ -47,10 +50,22 @@ pub(crate) fn view_summary(summary: &Summary, k: usize) -> Summary {
     }
 }
 
-/// The index of the worst of `values` by `objective`'s direction (the first of equals).
-pub(crate) fn worst_of(values: &[f64], objective: SummaryMetric) -> usize {
-    let mut worst = 0;
+/// Whether view `k` of a summary sees any lit-facing receiver (its own screen statistics
+/// measure something).
+pub(crate) fn sees_receivers(summary: &Summary, k: usize) -> bool {
+    summary.views[k].screen.receiver_fraction > 0.0
+}
+
+/// The index of the worst of `values` by `objective`'s direction among those `seen` (the first
+/// of equals; the first value when none is seen).
+pub(crate) fn worst_of(values: &[f64], seen: &[bool], objective: SummaryMetric) -> usize {
+    let Some(mut worst) = seen.iter().position(|&s| s) else {
+        return 0;
+    };
     for (k, &x) in values.iter().enumerate() {
+        if !seen[k] {
+            continue;
+        }
         let worse = match objective.direction() {
             Direction::LowerIsWorse => x < values[worst],
             _ => x > values[worst],
@@ -84,9 +99,12 @@ pub(crate) fn choose(
                     summary: view_summary(&r.summary, k),
                 })
                 .collect();
-            // Views exist only with geometry: the worst case is on screen.
-            let alone =
-                rank::recommend_by(&own, budget_mib, objective, crate::metric::worst_aliasing(true)).map(|r| r.index);
+            // Views exist only with geometry: the worst case is on screen. A view that sees no
+            // receiver has no statistics to choose by.
+            let seen = sees_receivers(&rows[at].summary, k);
+            let alone = rank::recommend_by(&own, budget_mib, objective, crate::metric::worst_aliasing(true))
+                .map(|r| r.index)
+                .filter(|_| seen);
             let objective_alone = alone.map(|i| objective.value(&own[i].summary));
             let objective_at_level = objective.value(&own[at].summary);
             let cost = objective_alone
@@ -101,13 +119,15 @@ pub(crate) fn choose(
                 objective_alone,
                 objective_at_level,
                 cost: cost.filter(|c| c.is_finite()),
+                seen,
             }
         })
         .collect();
     let values: Vec<f64> = views.iter().map(|v| v.objective_at_level).collect();
+    let seen: Vec<bool> = views.iter().map(|v| v.seen).collect();
     Some(LevelChoice {
         at,
-        worst: worst_of(&values, objective),
+        worst: worst_of(&values, &seen, objective),
         views,
     })
 }
