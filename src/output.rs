@@ -361,8 +361,14 @@ pub(crate) fn recover(dir: &Path) -> (usize, usize) {
         }
         let staging = e.path();
         let Some(names) = marked_names(&staging, id) else {
-            // A run killed between making its staging directory and writing the marker leaves
-            // it empty; removing an empty directory removes nothing of anyone's.
+            // A run killed between making its staging directory and finishing the marker leaves
+            // it empty or with a partial marker (nothing else is written before the marker is
+            // whole). The marker is csm-lab's own file; removing it and then an empty directory
+            // removes nothing of anyone's (remove_dir refuses a directory with anything else).
+            let partial = staging.join(STAGING_MARKER);
+            if std::fs::symlink_metadata(&partial).is_ok_and(|m| m.is_file()) {
+                let _ = std::fs::remove_file(&partial);
+            }
             if std::fs::remove_dir(&staging).is_ok() {
                 removed += 1;
             }

@@ -27,7 +27,7 @@ use std::sync::OnceLock;
 use glam::{DVec2, DVec3};
 
 use crate::geometry::LightBasis;
-use crate::visibility::{bvh_input, SceneGeometry, TriangleHit};
+use crate::mesh::Mesh;
 
 /// The margin `δ` (light-space x/y and depth) is this fraction of `1 +` the scene's largest
 /// absolute coordinate: about 1,700 binary32 unit roundoffs of it, where the BVH's
@@ -110,10 +110,9 @@ impl std::fmt::Debug for LightCover {
 }
 
 impl LightCover {
-    /// The cover of `scene` in `basis` (no cell classified yet).
-    pub fn new(scene: &SceneGeometry, basis: &LightBasis) -> Self {
-        let mesh = &scene.mesh;
-        let (_, index, _) = bvh_input(mesh);
+    /// The cover of `mesh` in `basis` (no cell classified yet), over its triangles `index`
+    /// (the distinct ones the BVH holds).
+    pub fn new(mesh: &Mesh, index: &[u32], basis: &LightBasis) -> Self {
         let scale = mesh
             .bounds()
             .map_or(1.0, |b| b.min.abs().max(b.max.abs()).max_element())
@@ -252,13 +251,16 @@ impl LightCover {
     /// The hit of the ray from `origin` along `dir` on mesh triangle `id`, as
     /// [`SceneGeometry::first_hit`] computes it once the BVH has named the triangle.
     #[inline]
-    pub fn hit(&self, scene: &SceneGeometry, id: usize, origin: DVec3, dir: DVec3, tmin: f64) -> TriangleHit {
+    pub fn hit_distance(&self, mesh: &Mesh, id: usize, origin: DVec3, dir: DVec3, tmin: f64) -> f64 {
         let dir = dir + DVec3::ZERO;
-        let a = scene.mesh.triangles[id][0];
+        let a = mesh.triangles[id][0];
         let n = self.normals[id];
         let nd = n.dot(dir);
-        let t = if nd != 0.0 { n.dot(a - origin) / nd } else { tmin };
-        TriangleHit { t, triangle: id }
+        if nd != 0.0 {
+            n.dot(a - origin) / nd
+        } else {
+            tmin
+        }
     }
 
     fn candidates(&self, i: usize, j: usize) -> &[u32] {
@@ -392,6 +394,7 @@ mod tests {
     use crate::geometry::Aabb;
     use crate::mesh::Mesh;
     use crate::rng::SplitMix64;
+    use crate::visibility::SceneGeometry;
 
     /// The default scene's ground and boxes (a tree canopy above its trunk, a low wall).
     fn scene() -> SceneGeometry {
@@ -425,7 +428,7 @@ mod tests {
             DVec3::new(1.0, -1e-3, 0.0),
         ] {
             let basis = LightBasis::new(light);
-            let cover = LightCover::new(&scene, &basis);
+            let cover = LightCover::new(&scene.mesh, &crate::visibility::bvh_input(&scene.mesh).1, &basis);
             let (lo, hi) = (0..8).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
                 let z = basis.z.dot(b.corner(c));
                 (lo.min(z), hi.max(z))
@@ -451,7 +454,10 @@ mod tests {
                     Cell::Owner(t) => {
                         let h = bvh.unwrap_or_else(|| panic!("{light} at {q}: the BVH misses {t}"));
                         assert_eq!(h.triangle, t, "{light} at {q}");
-                        assert_eq!(cover.hit(&scene, t, origin, basis.z, 0.0).t.to_bits(), h.t.to_bits());
+                        assert_eq!(
+                            cover.hit_distance(&scene.mesh, t, origin, basis.z, 0.0).to_bits(),
+                            h.t.to_bits()
+                        );
                     }
                 }
                 decided += 1;

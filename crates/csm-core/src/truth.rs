@@ -836,7 +836,10 @@ fn trace_texel(scene: &SceneGeometry, grid: &Grid, g: (i64, i64)) -> Stored {
     let origin = b.x * c.x + b.y * c.y + b.z * grid.start;
     let hit = match grid.cover.as_deref().map(|cover| (cover, cover.at(c))) {
         Some((_, Cell::Miss)) => None,
-        Some((cover, Cell::Owner(t))) => Some(cover.hit(scene, t, origin, b.z, 0.0)),
+        Some((cover, Cell::Owner(t))) => Some(crate::visibility::TriangleHit {
+            t: cover.hit_distance(&scene.mesh, t, origin, b.z, 0.0),
+            triangle: t,
+        }),
         _ => scene.first_hit(origin, b.z, 0.0, grid.length),
     };
     match hit {

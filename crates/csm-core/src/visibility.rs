@@ -641,7 +641,11 @@ impl SceneGeometry {
         if !make {
             return None;
         }
-        let c = Arc::new(crate::light_cover::LightCover::new(self, basis));
+        let c = Arc::new(crate::light_cover::LightCover::new(
+            &self.mesh,
+            &bvh_input(&self.mesh).1,
+            basis,
+        ));
         let mut cache = self.cover_cache.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(found) = cache.iter().find(|c| same(c)) {
             return Some(found.clone());

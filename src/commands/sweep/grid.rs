@@ -760,16 +760,12 @@ impl Grid {
                                     for &update_every in &cadences {
                                         for &lambda in &self.lambda.values {
                                             out.push(Setting {
-                                                lambda,
-                                                cascades,
-                                                resolution,
-                                                fit,
                                                 split_range,
                                                 knob,
                                                 distance,
                                                 light_update,
                                                 update_every,
-                                                sun: None,
+                                                ..Setting::plain(lambda, cascades, resolution, fit)
                                             });
                                         }
                                     }
@@ -842,6 +838,23 @@ pub struct Setting {
 }
 
 impl Setting {
+    /// λ, cascade count, resolution and fit on the bounds' depth range, every other axis not
+    /// swept (the config's own).
+    pub(crate) fn plain(lambda: f64, cascades: usize, resolution: u32, fit: Fit) -> Setting {
+        Setting {
+            lambda,
+            cascades,
+            resolution,
+            fit,
+            split_range: SplitRange::Bounds,
+            knob: None,
+            distance: None,
+            sun: None,
+            light_update: None,
+            update_every: None,
+        }
+    }
+
     /// The base config with this setting applied. With a preset, λ goes to the engine's own
     /// λ-like knob (when it has one) and the count and map size are checked against the
     /// engine's; [`Grid::resolve`] has already checked every point, so this does not fail for

@@ -853,22 +853,11 @@ pub(crate) fn range_edges(config: &Config, grid: &Grid, rows: &[Row], rec: Optio
 mod tests {
     use super::*;
     use crate::analysis::Summary;
-    use crate::config::{Fit, SplitRange};
+    use crate::config::Fit;
 
     fn row(memory: u64, mean: f64, cascades_needed: bool) -> Row {
         Row {
-            setting: Setting {
-                lambda: 0.5,
-                cascades: 1,
-                resolution: 512,
-                fit: Fit::Sphere,
-                split_range: SplitRange::Bounds,
-                knob: None,
-                distance: None,
-                sun: None,
-                light_update: None,
-                update_every: None,
-            },
+            setting: Setting::plain(0.5, 1, 512, Fit::Sphere),
             summary: Summary {
                 cascades_needed,
                 z_lo: 1.0,
