@@ -361,12 +361,16 @@ pub(crate) fn recover(dir: &Path) -> (usize, usize) {
         }
         let staging = e.path();
         let Some(names) = marked_names(&staging, id) else {
-            // A run killed between making its staging directory and finishing the marker leaves
-            // it empty or with a partial marker (nothing else is written before the marker is
-            // whole). The marker is csm-lab's own file; removing it and then an empty directory
-            // removes nothing of anyone's (remove_dir refuses a directory with anything else).
+            // A run killed between making its staging directory and finishing the marker's
+            // first line leaves it empty or with a marker that is a strict prefix of
+            // "csm-lab staging <its id>\n" (nothing else is written before the marker). Only
+            // such a marker is removed, then the directory if empty: nothing of anyone's goes
+            // (another id's marker, or any other file, keeps the directory).
             let partial = staging.join(STAGING_MARKER);
-            if std::fs::symlink_metadata(&partial).is_ok_and(|m| m.is_file()) {
+            let header = format!("csm-lab staging {id}\n");
+            if std::fs::symlink_metadata(&partial).is_ok_and(|m| m.is_file())
+                && std::fs::read(&partial).is_ok_and(|b| b.len() < header.len() && header.as_bytes().starts_with(&b))
+            {
                 let _ = std::fs::remove_file(&partial);
             }
             if std::fs::remove_dir(&staging).is_ok() {
@@ -710,6 +714,10 @@ mod set_tests {
         // An incomplete one (one file written), and one killed before its marker (empty).
         staged(d, "fedcba9876543210", "XyZ789", &names, &set("partial")[..1], false);
         std::fs::create_dir(d.join(format!("{STAGING_PREFIX}00000000000000aa-Empty1"))).unwrap();
+        // One killed while writing its marker's first line: a strict prefix of its own header.
+        let half = d.join(format!("{STAGING_PREFIX}00000000000000bb-Half12"));
+        std::fs::create_dir(&half).unwrap();
+        std::fs::write(half.join(STAGING_MARKER), "csm-lab stag").unwrap();
         // Lookalikes that are not csm-lab's: no marker, a marker of another id, a user file in
         // a marked directory, a file named like a staging directory, user temporaries.
         let unmarked = d.join(format!("{STAGING_PREFIX}1111111111111111-mywork"));
@@ -722,7 +730,7 @@ mod set_tests {
         std::fs::write(d.join(format!("{STAGING_PREFIX}5555555555555555-File12")), "a file").unwrap();
         std::fs::write(d.join(".a.csv.Q1w2E3.tmp"), "mine").unwrap();
         std::fs::write(d.join(".a.csv.backup.tmp"), "mine").unwrap();
-        assert_eq!(recover(d), (1, 2));
+        assert_eq!(recover(d), (1, 3));
         let user = |mut want: Vec<(String, String)>| {
             want.push((format!("{STAGING_PREFIX}1111111111111111-mywork"), "<dir>".to_string()));
             want.push((format!("{STAGING_PREFIX}2222222222222222-Forged"), "<dir>".to_string()));
