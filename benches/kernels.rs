@@ -282,7 +282,18 @@ fn ground_truth(c: &mut Criterion) {
     };
     let poses = || csm_core::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
     for snapped in [true, false] {
-        let f = truth::flicker(&scene, &rig, &rig.light, poses(), snapped, &points, &s, &mut |_, _| {});
+        let every = csm_core::walk::Cadence::EVERY_FRAME;
+        let f = truth::flicker_cached(
+            &scene,
+            &rig,
+            &rig.light,
+            poses(),
+            snapped,
+            &points,
+            &s,
+            every,
+            &mut |_, _| {},
+        );
         println!(
             "ground truth walk, {} frames, snapped {snapped}: {} texel reads, {} rays, cache hit rate {:.4}",
             f.frames,
@@ -303,7 +314,7 @@ fn ground_truth(c: &mut Criterion) {
     group.throughput(criterion::Throughput::Elements(2 * points.len() as u64));
     group.bench_function("two_unsnapped_frames_rays", |b| {
         b.iter(|| {
-            black_box(truth::flicker(
+            black_box(truth::flicker_cached(
                 &scene,
                 &rig,
                 &rig.light,
@@ -311,6 +322,7 @@ fn ground_truth(c: &mut Criterion) {
                 false,
                 &points,
                 &s,
+                csm_core::walk::Cadence::EVERY_FRAME,
                 &mut |_, _| {},
             ))
         })

@@ -365,7 +365,7 @@ fn a_held_map_flips_no_receiver_between_its_updates() {
             &mut |_, _| {},
         )
     };
-    let plain = csm_core::truth::flicker(
+    let plain = csm_core::truth::flicker_cached(
         scene,
         &rig,
         &rig.light,
@@ -373,6 +373,7 @@ fn a_held_map_flips_no_receiver_between_its_updates() {
         false,
         &points,
         &sampling,
+        Cadence::EVERY_FRAME,
         &mut |_, _| {},
     );
     let ones = run(&[1, 1, 1, 1]);

@@ -1344,35 +1344,12 @@ impl Flicker {
 /// grid and texel; a receiver whose key did not change keeps its state (the map content under
 /// it is the same), the others are answered again from the texel cache. O(points) memory
 /// besides the cache. `on_frame(t, states)` sees every frame's states (for pictures).
-#[allow(clippy::too_many_arguments)]
-pub fn flicker(
-    scene: &SceneGeometry,
-    rig: &Rig,
-    light: &LightBasis,
-    poses: impl Iterator<Item = CameraPose>,
-    snapped: bool,
-    points: &[Receiver],
-    s: &Sampling,
-    on_frame: &mut dyn FnMut(usize, &[Option<Answer>]),
-) -> Flicker {
-    flicker_cached(
-        scene,
-        rig,
-        light,
-        poses,
-        snapped,
-        points,
-        s,
-        crate::walk::Cadence::EVERY_FRAME,
-        on_frame,
-    )
-}
-
-/// [`flicker`] with cached cascades: a cascade not rendered again in a frame (see
+///
+/// With cached cascades (`cadence`): a cascade not rendered again in a frame (see
 /// [`crate::walk::Cadence`]) keeps the window, and so the map, of its last update; a receiver
 /// it serves then keeps its texel and its state, and one that the held window no longer holds
-/// has no answer (its step is not counted). With [`crate::walk::Cadence::EVERY_FRAME`] this is
-/// [`flicker`].
+/// has no answer (its step is not counted). [`crate::walk::Cadence::EVERY_FRAME`] renders every
+/// cascade every frame.
 #[allow(clippy::too_many_arguments)]
 pub fn flicker_cached(
     scene: &SceneGeometry,
