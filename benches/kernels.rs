@@ -7,13 +7,12 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use glam::{DVec2, DVec3};
+use glam::DVec2;
 
 use csm_core::cascades::{LightPose, Rig};
 use csm_core::depth_range;
 use csm_core::fitting::{minimal_sphere, Window};
 use csm_core::geometry::{Lens, LightBasis};
-use csm_core::mesh::Mesh;
 use csm_core::snapping::SnapRule;
 use csm_core::splits;
 use csm_core::visibility::SceneGeometry;
@@ -22,6 +21,10 @@ use csm_lab::commands::sweep::grid::Grid;
 use csm_lab::commands::sweep::run as sweep;
 use csm_lab::config::sweep_spec::SweepAxes;
 use csm_lab::config::Config;
+
+#[path = "common/terrain.rs"]
+mod terrain;
+use terrain::terrain;
 
 fn default_config() -> Config {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/default.toml");
@@ -105,29 +108,6 @@ fn default_sweep(c: &mut Criterion) {
         b.iter(|| black_box(sweep::run(&bounds_only, &grid, None, &|| {}).expect("sweep runs")))
     });
     group.finish();
-}
-
-/// A heightfield over [-200, 200]^2 with `n` x `n` cells (2 n^2 triangles).
-fn terrain(n: usize) -> Mesh {
-    let mut m = Mesh::default();
-    let p = |i: usize, j: usize| {
-        let (x, z) = (
-            -200.0 + 400.0 * i as f64 / n as f64,
-            -200.0 + 400.0 * j as f64 / n as f64,
-        );
-        DVec3::new(
-            x,
-            0.6 * (x * 0.05).sin() * (z * 0.07).cos() + 0.3 * (x * 0.13 + z * 0.11).sin(),
-            z,
-        )
-    };
-    for j in 0..n {
-        for i in 0..n {
-            m.push([p(i, j), p(i, j + 1), p(i + 1, j + 1)]);
-            m.push([p(i, j), p(i + 1, j + 1), p(i + 1, j)]);
-        }
-    }
-    m
 }
 
 fn visibility_pass(c: &mut Criterion) {

@@ -24,10 +24,12 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use csm_core::mesh::Mesh;
 use csm_core::visibility::{primary_rays, SceneGeometry};
 use csm_lab::config::Config;
-use glam::DVec3;
+
+#[path = "../benches/common/terrain.rs"]
+mod terrain;
+use terrain::terrain;
 
 /// CPU time (user + sys) of the whole process so far, in seconds.
 fn cpu_seconds() -> f64 {
@@ -42,30 +44,6 @@ fn cpu<T>(f: impl FnOnce() -> T) -> (T, f64) {
     let t0 = cpu_seconds();
     let r = f();
     (r, cpu_seconds() - t0)
-}
-
-/// A heightfield over [-200, 200]^2 with `n` x `n` cells (2 n^2 triangles): the terrain of
-/// `benches/kernels.rs` and `tools/bvh-race`.
-fn terrain(n: usize) -> Mesh {
-    let mut m = Mesh::default();
-    let p = |i: usize, j: usize| {
-        let (x, z) = (
-            -200.0 + 400.0 * i as f64 / n as f64,
-            -200.0 + 400.0 * j as f64 / n as f64,
-        );
-        DVec3::new(
-            x,
-            0.6 * (x * 0.05).sin() * (z * 0.07).cos() + 0.3 * (x * 0.13 + z * 0.11).sin(),
-            z,
-        )
-    };
-    for j in 0..n {
-        for i in 0..n {
-            m.push([p(i, j), p(i, j + 1), p(i + 1, j + 1)]);
-            m.push([p(i, j), p(i + 1, j + 1), p(i + 1, j)]);
-        }
-    }
-    m
 }
 
 fn write_le(path: &Path, words: impl Iterator<Item = [u8; 4]>) {
