@@ -18,6 +18,7 @@ use glam::DVec2;
 
 pub mod cost;
 pub mod ground_truth;
+pub(crate) mod views_truth;
 
 /// Which optional parts to compute. The summary metrics are always computed and never depend
 /// on these switches (but `seams`, which adds `seam_crossings` or leaves it out), so a sweep
@@ -150,6 +151,14 @@ pub struct ViewScreen {
     pub screen: ScreenStats,
     /// Share of the view's lit-facing receiver pixels inside a blend band (every split).
     pub band_pixel_share: f64,
+    /// The ground-truth pass judged this view (`analyze` with ground truth; at most
+    /// [`views_truth::MAX_JUDGED`] views of a level are).
+    #[serde(skip)]
+    pub judged: bool,
+    /// A judged view's own ground-truth metrics (None when not judged, or when the view needs
+    /// no cascades).
+    #[serde(skip)]
+    pub truth: Option<ground_truth::TruthSummary>,
 }
 
 /// What cached cascades cost and save, over the motion paths with the configured snapping
@@ -720,12 +729,12 @@ pub(crate) fn frames_walked(config: &Config) -> u64 {
     2 * (first + config.motion.extra.len() as u64 * config.motion.frames as u64)
 }
 
-/// [`frames_walked`] plus the ground-truth pass's frames (both snap modes of the first path)
-/// when it runs: the progress bar's length for [`analyze_with_progress`] with `opts`.
+/// [`frames_walked`] plus the ground-truth pass's frames (both snap modes of the first path,
+/// for `[camera]` and each judged view of a level) when it runs: the progress bar's length for [`analyze_with_progress`] with `opts`.
 pub(crate) fn frames_walked_with(config: &Config, opts: &AnalysisOptions) -> u64 {
-    let truth = if config.truth.enabled && opts.ground_truth && config.geometry.is_some() {
+    let truth = if ground_truth_runs(config, opts) {
         let setup = config.setup();
-        2 * csm_core::motion::poses(&setup.camera, &setup.motion).len() as u64
+        2 * csm_core::motion::poses(&setup.camera, &setup.motion).len() as u64 + views_truth::frames(config)
     } else {
         0
     };
@@ -754,8 +763,19 @@ pub(crate) fn analyze_with_progress(
         a.summary.screen = Some(level.screen);
         a.summary.band_pixel_share = level.band_pixel_share;
         a.summary.views = level.views;
+        // Ground truth over the level: the judged views pooled (the camera's pass stays for
+        // cascades.csv, bias.csv and the pictures).
+        if ground_truth_runs(config, opts) {
+            views_truth::apply(config, &mut a.summary, a.ground_truth.as_ref(), on_frames);
+        }
     }
     a
+}
+
+/// Whether an analysis with `opts` runs the ground-truth pass (on `[camera]`, and on the
+/// judged views of a level).
+fn ground_truth_runs(config: &Config, opts: &AnalysisOptions) -> bool {
+    config.truth.enabled && opts.ground_truth && config.geometry.is_some()
 }
 
 /// The level's screen metrics, pooled over its configured views, and each view's own.
@@ -766,11 +786,50 @@ pub struct LevelScreen {
     pub views: Vec<ViewScreen>,
 }
 
-/// The config as seen from one of its views: `[camera]` replaced by the view's camera.
+/// The config as seen from one of its views: `[camera]` replaced by the view's camera, and no
+/// views of its own (the view is its one camera; so a level's views are not copied once per
+/// view, and an analysis of it measures that view alone).
 pub(crate) fn config_for_view(config: &Config, view: &crate::config::ViewSettings) -> Config {
+    // Every field named, so a new one is not forgotten here.
+    let Config {
+        name,
+        path,
+        camera: _,
+        screen,
+        light_direction,
+        light_direction_as_written,
+        scene,
+        geometry,
+        world_offset,
+        shadow,
+        motion,
+        analysis,
+        sweep,
+        preset_input,
+        truth,
+        views: _,
+        warnings: _,
+        cost,
+    } = config;
     Config {
+        name: name.clone(),
+        path: path.clone(),
         camera: view.camera.clone(),
-        ..config.clone()
+        screen: *screen,
+        light_direction: *light_direction,
+        light_direction_as_written: *light_direction_as_written,
+        scene: *scene,
+        geometry: geometry.clone(),
+        world_offset: *world_offset,
+        shadow: shadow.clone(),
+        motion: motion.clone(),
+        analysis: analysis.clone(),
+        sweep: sweep.clone(),
+        preset_input: preset_input.clone(),
+        truth: truth.clone(),
+        views: Vec::new(),
+        warnings: Vec::new(),
+        cost: *cost,
     }
 }
 
@@ -874,6 +933,8 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
             weight: v.weight,
             screen: st,
             band_pixel_share: seams::band_shares(&x.vis, &x.bands).iter().sum(),
+            judged: false,
+            truth: None,
         })
         .collect();
     Some(LevelScreen {

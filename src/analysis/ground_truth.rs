@@ -430,24 +430,25 @@ pub(crate) fn analyze_for_flicker(c: &Config) -> crate::analysis::Analysis {
 }
 
 /// The (S3, S4, S5) points of an analysis from [`analyze_for_flicker`]: snapped, then
-/// unsnapped; none without the pass or cascades.
+/// unsnapped; none without the pass or cascades. S5 is the summary's: `[camera]`'s, or a
+/// level's pooled over its judged views.
 pub(crate) fn points_of(a: &crate::analysis::Analysis) -> Vec<FlickerPoint> {
-    match (&a.ground_truth, a.snapped(), a.unsnapped()) {
-        (Some(g), Some(s), Some(u)) => vec![
+    match (&a.ground_truth, a.summary.truth, a.snapped(), a.unsnapped()) {
+        (Some(g), Some(t), Some(s), Some(u)) => vec![
             FlickerPoint {
                 snapped: true,
                 s3: s.stats.rms,
                 s4: s.stats.cell_flip_rate,
-                s5: g.summary.flicker_snapped,
-                s5_edge: g.summary.flicker_edge_snapped,
+                s5: t.flicker_snapped,
+                s5_edge: t.flicker_edge_snapped,
                 bias_source: g.bias_source,
             },
             FlickerPoint {
                 snapped: false,
                 s3: u.stats.rms,
                 s4: u.stats.cell_flip_rate,
-                s5: g.summary.flicker_unsnapped,
-                s5_edge: g.summary.flicker_edge_unsnapped,
+                s5: t.flicker_unsnapped,
+                s5_edge: t.flicker_edge_unsnapped,
                 bias_source: g.bias_source,
             },
         ],

@@ -136,9 +136,9 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
         cost,
     };
     check_camera_path(&config, v)?;
-    super::view_sources::add_views(&mut config, raw.views.as_ref(), v, base_dir, gltf.as_ref())?;
+    let sources = super::view_sources::add_views(&mut config, raw.views.as_ref(), v, base_dir, gltf.as_ref())?;
     // Every view of the level, however it was named: not inside geometry, seeing a receiver.
-    super::view_sources::check_views(&mut config, v)?;
+    super::view_sources::check_views(&mut config, v, &sources)?;
     // The binary32 range check needs the cascades, which an engine preset may change: it runs
     // once the preset is applied (`crate::load`).
     Ok(config)

@@ -48,22 +48,30 @@ fn unique(name: &str, taken: &[ViewSettings]) -> String {
         .expect("an unused suffix exists")
 }
 
+/// Where each view of `config.views` came from: `(end, key)` in order, each source's views
+/// ending before index `end` (the `[[view]]` entries first, then `views.from_gltf`,
+/// `views.from_path`, `views.sample`), so an error about a view names the key that made it.
+pub(crate) type ViewKeys = Vec<(usize, &'static str)>;
+
 /// Appends the views `[views]` names to `config.views`, in the order glTF cameras, path poses,
-/// sampled positions. `gltf` is what `scene.gltf` held (None without one).
+/// sampled positions, and says which key made which ([`ViewKeys`]). `gltf` is what
+/// `scene.gltf` held (None without one).
 pub(crate) fn add_views(
     config: &mut Config,
     raw: Option<&RawViews>,
     v: &Validator<'_>,
     base_dir: Option<&Path>,
     gltf: Option<&GltfScene>,
-) -> Result<()> {
+) -> Result<ViewKeys> {
+    let mut keys = vec![(config.views.len(), "view")];
     let Some(raw) = raw else {
-        return Ok(());
+        return Ok(keys);
     };
     if raw.from_gltf == Some(true) {
         let (views, warnings) = gltf_views(config, v, gltf)?;
         config.views.extend(views);
         config.warnings.extend(warnings);
+        keys.push((config.views.len(), "views.from_gltf"));
     }
     let path_keys_alone = raw.from_path.is_none() && raw.every.is_some();
     if path_keys_alone {
@@ -76,9 +84,24 @@ pub(crate) fn add_views(
     if let Some(from) = &raw.from_path {
         let views = path_views(config, v, base_dir, from, raw.every)?;
         config.views.extend(views);
+        keys.push((config.views.len(), "views.from_path"));
     }
     sampled_views(config, v, raw)?;
-    Ok(())
+    keys.push((config.views.len(), "views.sample"));
+    Ok(keys)
+}
+
+/// The key an error about view `k` names: `camera.position` for `[camera]` (no view
+/// configured), `view[k].position` for a `[[view]]` entry, else the `[views]` key that made it.
+fn view_key(k: usize, configured: bool, keys: &[(usize, &'static str)]) -> String {
+    if !configured {
+        return "camera.position".to_string();
+    }
+    match keys.iter().find(|(end, _)| k < *end).map(|x| x.1) {
+        Some("view") => format!("view[{k}].position"),
+        Some(key) => key.to_string(),
+        None => "views".to_string(),
+    }
 }
 
 /// `views.from_gltf = true`: one view per perspective camera node, named by its node; and a
@@ -387,24 +410,20 @@ pub(crate) fn gltf_light(v: &Validator<'_>, gltf: Option<&GltfScene>) -> Result<
 /// The checks every view of the level gets (`[camera]` when no view is configured): a view
 /// inside geometry is an error naming it; a view that sees no receiver adds a warning to
 /// `config.warnings`. Without geometry there is nothing to check.
-pub(crate) fn check_views(config: &mut Config, v: &Validator<'_>) -> Result<()> {
+pub(crate) fn check_views(config: &mut Config, v: &Validator<'_>, keys: &[(usize, &'static str)]) -> Result<()> {
     let Some(geometry) = &config.geometry else {
         return Ok(());
     };
     let scene = &geometry.scene;
     let views = config.level_views();
-    let key = if config.views.is_empty() {
-        "camera.position"
-    } else {
-        "views"
-    };
+    let configured = !config.views.is_empty();
     let mesh = scene.mesh.bounds().unwrap_or(config.scene);
     let reach = viewpoints::reach(&Aabb::new(
         config.scene.min.min(mesh.min),
         config.scene.max.max(mesh.max),
     ));
     let mut warnings = Vec::new();
-    for view in &views {
+    for (k, view) in views.iter().enumerate() {
         let c = &view.camera;
         let e = viewpoints::enclosure(scene, c.position, reach);
         if e.inside() {
@@ -422,7 +441,7 @@ pub(crate) fn check_views(config: &mut Config, v: &Validator<'_>) -> Result<()> 
                 )
             };
             return Err(v.invalid(
-                key,
+                &view_key(k, configured, keys),
                 format!("view {:?} at {:?}", view.name, c.position.to_array()),
                 &format!("views that do not stand inside geometry; this one does ({why})"),
             ));

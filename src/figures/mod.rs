@@ -315,7 +315,8 @@ pub use crate::output::short_number as short;
 pub(crate) mod palette {
     use plotters::style::RGBColor;
 
-    /// A heatmap cell without a value (no cascades needed).
+    /// A heatmap cell without a value (no cascades needed), or a view of the plan without one
+    /// (it sees no receiver).
     pub(crate) const NO_DATA: RGBColor = RGBColor(220, 220, 220);
     /// The outline of the recommended heatmap cell.
     pub(crate) const MARKED: RGBColor = RGBColor(255, 0, 0);

@@ -46,7 +46,8 @@ pub(crate) struct Plan<'a> {
     pub(crate) views: &'a [ViewSettings],
     /// The screen's aspect ratio (every view's).
     pub(crate) aspect: f64,
-    /// A value per view (same order) and its name, e.g. the objective; None: one colour.
+    /// A value per view (same order) and its name, e.g. the objective; None: one colour. A
+    /// value that is not a number marks a view without one (drawn grey).
     pub(crate) values: Option<(&'a str, &'a [f64])>,
     /// The index of the worst view, ringed.
     pub(crate) worst: Option<usize>,
@@ -172,16 +173,25 @@ fn drawn_rect(bounds: &Aabb, views: &[ViewSettings]) -> (f64, f64, f64, f64) {
     (x0 - m, x1 + m, z0 - m, z1 + m)
 }
 
-/// The view's colour: by its value on the colour map, or one colour.
+/// The view's colour: by its value on the colour map, neutral grey ([`palette::NO_DATA`]) for
+/// a view without one (not a number: a view that sees no receiver has no objective), or one
+/// colour when no values are given.
 fn view_colour(values: Option<(&str, &[f64])>, k: usize) -> RGBColor {
     match values {
         Some((_, v)) => {
             let (lo, hi) = value_range(v);
-            let x = v.get(k).copied().unwrap_or(lo);
-            colormap(if hi > lo { (x - lo) / (hi - lo) } else { 0.5 })
+            match v.get(k).copied().filter(|x| x.is_finite()) {
+                Some(x) => colormap(if hi > lo { (x - lo) / (hi - lo) } else { 0.5 }),
+                None => palette::NO_DATA,
+            }
         }
         None => series_color(0),
     }
+}
+
+/// Whether some view has no value (drawn neutral grey, and said in the key).
+fn some_without_value(values: Option<(&str, &[f64])>) -> bool {
+    values.is_some_and(|(_, v)| v.iter().any(|x| !x.is_finite()))
 }
 
 fn value_range(v: &[f64]) -> (f64, f64) {
@@ -362,6 +372,13 @@ impl Plan<'_> {
                 key.draw(&Rectangle::new([(10, y), (34, y + h)], BLACK.stroke_width(1)))?;
                 key.draw(&text(super::short(hi), 42, y - 6))?;
                 key.draw(&text(super::short(lo), 42, y + h - 8))?;
+                if some_without_value(self.values) {
+                    let y = y + h + 30;
+                    key.draw(&Circle::new((20, y + 4), 6, palette::NO_DATA.filled()))?;
+                    key.draw(&Circle::new((20, y + 4), 6, BLACK.stroke_width(1)))?;
+                    key.draw(&text("sees no receiver:".to_string(), 38, y - 3))?;
+                    key.draw(&text("no value".to_string(), 38, y + 15))?;
+                }
             }
             None => {
                 key.draw(&Circle::new((20, y + 4), 6, series_color(0).filled()))?;
@@ -473,7 +490,9 @@ pub(crate) fn caption(config: &Config, values: Option<&str>) -> String {
     s
 }
 
-/// `plan.png` of `analyze` (written with scene geometry): the configured level's views.
+/// `plan.png` of `analyze` (written with scene geometry): the configured level's views; for a
+/// level, each coloured by its objective at the analysed setting (grey when it sees no
+/// receiver) and the worst view ringed, as `views.csv` names it.
 pub(crate) struct PlanPng;
 
 impl crate::output::Exporter<crate::analysis::Analysis> for PlanPng {
@@ -481,8 +500,34 @@ impl crate::output::Exporter<crate::analysis::Analysis> for PlanPng {
         FILE
     }
     fn render(&self, a: &crate::analysis::Analysis) -> Result<Vec<u8>> {
-        Ok(plan_png(&a.config, None, None, 2.0)?.unwrap_or_default())
+        let Some((name, values, worst)) = level_values(&a.summary, &a.config) else {
+            return Ok(plan_png(&a.config, None, None, 2.0)?.unwrap_or_default());
+        };
+        Ok(plan_png(&a.config, Some((name, &values)), worst, 2.0)?.unwrap_or_default())
     }
+}
+
+/// A level's per-view objective (not a number for a view that sees no receiver), the
+/// objective's name and the worst view (None when no view sees a receiver); None without
+/// views.
+fn level_values(s: &crate::analysis::Summary, config: &Config) -> Option<(&'static str, Vec<f64>, Option<usize>)> {
+    use crate::commands::sweep::level::{sees_receivers, view_summary, worst_of};
+    if s.views.is_empty() {
+        return None;
+    }
+    let objective = crate::commands::sweep::rank::default_objective(config);
+    let seen: Vec<bool> = (0..s.views.len()).map(|k| sees_receivers(s, k)).collect();
+    let values: Vec<f64> = (0..s.views.len())
+        .map(|k| {
+            if seen[k] {
+                objective.value(&view_summary(s, k))
+            } else {
+                f64::NAN
+            }
+        })
+        .collect();
+    let worst = seen.iter().any(|&x| x).then(|| worst_of(&values, &seen, objective));
+    Some((objective.name(), values, worst))
 }
 
 /// The plan's file name.
@@ -587,5 +632,98 @@ mod tests {
             (rx - hx).abs() < 1.5 && (ry - hy).abs() < 1.5,
             "ring ({rx}, {ry}) dot ({hx}, {hy})"
         );
+    }
+
+    /// `analyze`'s plan of a level colours each view by its objective (the colour map's ends
+    /// at the lowest and highest) and rings the worst, the view `views.csv` marks.
+    #[test]
+    fn analyzes_plan_of_a_level_colours_the_views_and_rings_the_worst() {
+        use crate::output::Exporter;
+        let text = crate::analysis::views_truth::TEST_LEVEL;
+        let c = Config::from_toml_str(text, "t.toml", None).unwrap();
+        let a = crate::analysis::analyze(&c, &crate::analysis::AnalysisOptions::summary_only());
+        let (name, values, worst) = level_values(&a.summary, &c).unwrap();
+        assert_eq!(name, "visible_aliasing_p95");
+        // Each view's own visible p95, and the largest of them (every view sees the ground).
+        let own: Vec<f64> = a.summary.views.iter().map(|v| v.screen.visible_p95).collect();
+        assert_eq!(values, own);
+        let largest = (0..own.len()).fold(0, |w, k| if own[k] > own[w] { k } else { w });
+        assert_eq!(worst, Some(largest));
+        assert!(own.iter().any(|&x| x != own[largest]), "{own:?}");
+        let png = PlanPng.render(&a).unwrap();
+        // At scale 2 the key starts at 2 × (SIZE.0 − KEY_W) pixels.
+        let mut reader = png::Decoder::new(std::io::Cursor::new(&png)).read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        let count = |c: RGBColor| {
+            (0..info.height)
+                .flat_map(|y| (0..2 * (SIZE.0 - KEY_W)).map(move |x| ((y * info.width + x) * 3) as usize))
+                .filter(|&o| buf[o..o + 3] == [c.0, c.1, c.2])
+                .count()
+        };
+        assert!(count(colormap(0.0)) > 50 && count(colormap(1.0)) > 50);
+        assert!(count(palette::MARKED) > 50);
+        assert_eq!(count(series_color(0)), 0, "no view in the single colour");
+        // Without views: no values, so one colour and nothing ringed.
+        let plain = Config::from_toml_str(text.split("[[view]]").next().unwrap(), "t.toml", None).unwrap();
+        let b = crate::analysis::analyze(&plain, &crate::analysis::AnalysisOptions::summary_only());
+        assert!(level_values(&b.summary, &plain).is_none());
+    }
+
+    /// A view without a value (it sees no receiver) is drawn neutral grey, not at the colour
+    /// map's low end, and the key says so; the others keep the colour map's ends.
+    #[test]
+    fn a_view_without_a_value_is_grey_not_the_lowest_colour() {
+        let mut m = Mesh::default();
+        m.add_ground(0.0, -50.0, 50.0, -50.0, 50.0);
+        let scene = SceneGeometry::new(m);
+        let camera = |name: &str, x: f64| ViewSettings {
+            name: name.to_string(),
+            camera: crate::config::CameraSettings {
+                position: DVec3::new(x, 2.0, 20.0),
+                target: DVec3::new(x, 0.0, 0.0),
+                up: DVec3::Y,
+                fov_y_deg: 50.0,
+                near: 0.1,
+                far: 100.0,
+            },
+            weight: 1.0,
+        };
+        let views = [camera("low", -30.0), camera("sky", 0.0), camera("high", 30.0)];
+        let rgb = |c: RGBColor| [c.0, c.1, c.2];
+        let png_with = |values: &[f64]| {
+            let plan = Plan {
+                title: "test".to_string(),
+                scene: &scene,
+                bounds: scene.mesh.bounds().unwrap(),
+                views: &views,
+                aspect: 16.0 / 9.0,
+                values: Some(("objective", values)),
+                worst: None,
+                light: DVec3::new(0.3, -1.0, 0.2).normalize(),
+            };
+            plan.png(1.0).unwrap()
+        };
+        let png = png_with(&[1.0, f64::NAN, 3.0]);
+        let ((gx, gy), n_grey) = centroid(&png, rgb(palette::NO_DATA));
+        let ((lx, _), n_low) = centroid(&png, rgb(colormap(0.0)));
+        let ((hx, _), n_high) = centroid(&png, rgb(colormap(1.0)));
+        assert!(n_grey > 20 && n_low > 20 && n_high > 20, "{n_grey} {n_low} {n_high}");
+        // The grey dot is the middle view's, half way between the others.
+        assert!((gx - (lx + hx) / 2.0).abs() < 1.5, "{gx} between {lx} and {hx}");
+        // With a value of 0 instead, that view takes the colour map's low end: no grey dot.
+        let png = png_with(&[1.0, 0.0, 3.0]);
+        let (_, n_grey) = centroid(&png, rgb(palette::NO_DATA));
+        assert_eq!(n_grey, 0);
+        let ((zx, zy), _) = centroid(&png, rgb(colormap(0.0)));
+        // The grey dot is where that view's dot is (the grey of its frustum's thin lines, where
+        // they are drawn unblended, pulls the centre up the page a little).
+        assert!(
+            (zx - gx).abs() < 1.5 && (zy - gy).abs() < 25.0,
+            "grey ({gx}, {gy}), the view's dot ({zx}, {zy})"
+        );
+        // The key names the grey dot only when some view has no value.
+        assert!(some_without_value(Some(("o", &[1.0, f64::NAN]))));
+        assert!(!some_without_value(Some(("o", &[1.0, 0.0]))));
     }
 }

@@ -215,6 +215,9 @@ pub fn summary_value(a: &Analysis) -> serde_json::Value {
     if let Some(views) = super::views::json(s, objective) {
         obj.insert("views".into(), views);
     }
+    if let Some(judged) = super::views::truth_json(s) {
+        obj.insert("ground_truth_views".into(), judged);
+    }
     if let Some(g) = &a.ground_truth {
         obj.insert("bias_source".into(), g.bias_source.name().into());
         obj.insert("pcf_filter".into(), g.filter.name().into());
@@ -444,6 +447,9 @@ pub(crate) fn summary_table(a: &Analysis) -> String {
         }
     }
     out.push_str(&cost_table(a));
+    if let Some(line) = super::views::truth_line(s) {
+        let _ = writeln!(out, "{line}");
+    }
     if let Some(g) = &a.ground_truth {
         out.push_str(&super::ground_truth::recommendation(a, g));
     }

@@ -1175,9 +1175,11 @@ pub(crate) fn report_html(
     h.push_str(&html::facts(&scene_facts(&r.config, &r.rows)));
     // Where the views stand (plan.png), with scene geometry.
     if let Some(png) = plan {
+        // A level's views are coloured by their objective at the level's choice.
+        let coloured = r.level.as_ref().map(|_| r.objective.name());
         h.push_str(&html::png_figures(&[(
             png.to_vec(),
-            crate::figures::plan::caption(&r.config, None),
+            crate::figures::plan::caption(&r.config, coloured),
         )]));
     }
     // The camera view of the recommended configuration, with scene geometry.
@@ -1268,8 +1270,8 @@ fn md_list(m: &mut String, heading: &str, lines: &[String]) {
 }
 
 /// `report.md`: the same content for pasting into a review document. A level's contact sheet
-/// (`views.png`) is linked in its "Views" section when one was drawn.
-pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, String, Vec<u8>)], sheet: bool) -> Vec<u8> {
+/// (`views.png`) and plan (`plan.png`, `plan`) are linked in its "Views" section when drawn.
+pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, String, Vec<u8>)], sheet: bool, plan: bool) -> Vec<u8> {
     let mut m = String::new();
     let _ = writeln!(m, "# Cascaded shadow map sweep: {}\n", r.config.name);
     let _ = writeln!(
@@ -1297,6 +1299,13 @@ pub(crate) fn report_md(r: &SweepResult, figures: &[(&str, String, Vec<u8>)], sh
         m.push_str("Each view's own screen metrics at the level's choice: [views.csv](views.csv).\n\n");
         if sheet {
             m.push_str("![Every view's per-pixel aliasing at the level's choice, one colour scale; the worst view framed in red](views.png)\n\n");
+        }
+        if plan {
+            let _ = writeln!(
+                m,
+                "![{}](plan.png)\n",
+                crate::figures::plan::caption(&r.config, Some(r.objective.name()))
+            );
         }
     }
     let _ = writeln!(m, "## Sweep\n\n{}.\n", grid_sentence(r));
@@ -1351,10 +1360,13 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
     // The plan of the level's views, with scene geometry and plots, each view coloured by its
     // objective at the level's choice and the worst ringed; the report inlines a copy at the
     // figure's own size, so the page stays small.
-    let per_view: Option<Vec<f64>> = r
-        .level
-        .as_ref()
-        .map(|c| c.views.iter().map(|v| v.objective_at_level).collect());
+    // A view that sees no receiver has no objective: not a number, drawn neutral.
+    let per_view: Option<Vec<f64>> = r.level.as_ref().map(|c| {
+        c.views
+            .iter()
+            .map(|v| if v.seen { v.objective_at_level } else { f64::NAN })
+            .collect()
+    });
     let values = per_view.as_deref().map(|v| (r.objective.name(), v));
     let worst = r.level.as_ref().map(|c| c.worst);
     // Rasterising is most of the figures' time: each SVG is parsed once and rasterised from
@@ -1428,7 +1440,11 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
         "report.html".to_string(),
         report_html(r, &figures, &inline, sheet.as_deref(), plan_inline.as_deref())?,
     ));
-    files.push(("report.md".to_string(), report_md(r, &figures, sheet.is_some())));
+    let level_plan = r.level.is_some() && plan_inline.is_some();
+    files.push((
+        "report.md".to_string(),
+        report_md(r, &figures, sheet.is_some(), level_plan),
+    ));
     if let Some(s) = &r.engine_setting {
         files.push(super::terms::file(s));
     }

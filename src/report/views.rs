@@ -55,6 +55,16 @@ pub(crate) fn csv(
     head.push("weight");
     head.push("worst");
     head.extend(metrics.iter().map(|m| m.name()));
+    // With the ground truth over the views: whether each view was judged, and its own values.
+    let truth = s.views.iter().any(|v| v.judged);
+    let truth_metrics: Vec<SummaryMetric> = crate::metric::TRUTH_SUMMARY
+        .iter()
+        .map(|n| SummaryMetric::named(n))
+        .collect();
+    if truth {
+        head.push("ground_truth_judged");
+        head.extend(truth_metrics.iter().map(|m| m.name()));
+    }
     if choice.is_some() {
         head.extend([
             "objective_at_level",
@@ -85,6 +95,17 @@ pub(crate) fn csv(
             } else {
                 String::new()
             });
+        }
+        if truth {
+            row.push(v.judged.to_string());
+            let own = Summary { truth: v.truth, ..own };
+            for m in &truth_metrics {
+                row.push(if v.truth.is_some() {
+                    m.typed(&own).csv(m.name())?
+                } else {
+                    String::new()
+                });
+            }
         }
         if let Some((r, c)) = choice {
             let x = &c.views[k];
@@ -120,6 +141,43 @@ pub(crate) fn json(s: &Summary, objective: SummaryMetric) -> Option<serde_json::
         "worst_value": value,
         "names": s.views.iter().map(|v| v.name.as_str()).collect::<Vec<_>>(),
     }))
+}
+
+/// `summary.json`'s `ground_truth_views` for a level whose views the ground truth judged: the
+/// judged views' names, how many of how many, the rule that chose them and what is pooled.
+pub(crate) fn truth_json(s: &Summary) -> Option<serde_json::Value> {
+    let names = judged_names(s)?;
+    Some(serde_json::json!({
+        "count": names.len(),
+        "of": s.views.len(),
+        "names": names,
+        "rule": crate::analysis::views_truth::RULE,
+        "pooled": TRUTH_POOLED,
+    }))
+}
+
+/// What the level's ground-truth keys hold, and what stays `[camera]`'s.
+const TRUTH_POOLED: &str = "acne_fraction, edge_error_fraction, leak_fraction and the flicker_* keys pool the judged \
+                            views' receivers, each view weighted; bias_source, pcf_filter, bias.csv, cascades.csv's \
+                            ground-truth columns and the shadow pictures are [camera]'s pass";
+
+/// The judged views' names, in the config's order; None when the ground truth judged none.
+fn judged_names(s: &Summary) -> Option<Vec<&str>> {
+    let names: Vec<&str> = s.views.iter().filter(|v| v.judged).map(|v| v.name.as_str()).collect();
+    (!names.is_empty()).then_some(names)
+}
+
+/// `analyze`'s stdout line for the ground truth over a level: "ground truth pooled over K of N
+/// views: a, b, c (...)"; None when no view was judged.
+pub(crate) fn truth_line(s: &Summary) -> Option<String> {
+    let names = judged_names(s)?;
+    let chosen = crate::analysis::views_truth::chosen(names.len(), s.views.len());
+    Some(format!(
+        "ground truth over the level: acne, edge, leak and flicker above pool {} of {} views ({chosen}: {}); each view's own in views.csv; the bias, receivers and pictures below are [camera]'s",
+        names.len(),
+        s.views.len(),
+        names.join(", ")
+    ))
 }
 
 /// The stdout line of a level: "views: 3 pooled; worst view: NAME (objective X; level Y)".

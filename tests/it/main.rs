@@ -54,3 +54,4 @@ mod truth;
 mod truth_binary32;
 mod view_sources;
 mod views;
+mod views_truth;

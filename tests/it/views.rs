@@ -9,7 +9,7 @@ use csm_lab::analysis::{analyze, level_screen, AnalysisOptions};
 use csm_lab::Config;
 
 /// The default scene with a ground and three boxes (scene geometry: screen metrics).
-fn scene() -> String {
+pub(crate) fn scene() -> String {
     with(&[("scene.ground", "ground = 0.0")])
         + "\n[[scene.box]]\nmin = [-40.0, 0.0, -90.0]\nmax = [-20.0, 40.0, -60.0]\n\
            [[scene.box]]\nmin = [15.0, 0.0, -70.0]\nmax = [35.0, 25.0, -45.0]\n\
@@ -17,7 +17,7 @@ fn scene() -> String {
 }
 
 /// Three views of the scene: (name, position, target, weight).
-const VIEWS: [(&str, [f64; 3], [f64; 3], f64); 3] = [
+pub(crate) const VIEWS: [(&str, [f64; 3], [f64; 3], f64); 3] = [
     ("street", [5.0, 1.7, 10.0], [-20.0, 2.0, -60.0], 1.0),
     ("roof", [40.0, 30.0, 20.0], [0.0, 0.0, -80.0], 2.0),
     ("corner", [-60.0, 8.0, -20.0], [10.0, 0.0, -100.0], 0.5),
@@ -27,7 +27,7 @@ fn view_entry(name: &str, p: [f64; 3], t: [f64; 3], weight: f64) -> String {
     format!("\n[[view]]\nname = \"{name}\"\nposition = {p:?}\ntarget = {t:?}\nweight = {weight:?}\n")
 }
 
-fn level(views: &[(&str, [f64; 3], [f64; 3], f64)]) -> String {
+pub(crate) fn level(views: &[(&str, [f64; 3], [f64; 3], f64)]) -> String {
     let mut text = scene();
     for &(n, p, t, w) in views {
         text += &view_entry(n, p, t, w);
@@ -36,7 +36,7 @@ fn level(views: &[(&str, [f64; 3], [f64; 3], f64)]) -> String {
 }
 
 /// The scene with `[camera]` at the view's pose and no views.
-fn camera_at(p: [f64; 3], t: [f64; 3]) -> Config {
+pub(crate) fn camera_at(p: [f64; 3], t: [f64; 3]) -> Config {
     let text = scene()
         .replace("position = [0.0, 10.0, 0.0]", &format!("position = {p:?}"))
         .replace("target = [0.0, 0.0, -50.0]", &format!("target = {t:?}"));
@@ -318,7 +318,7 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_csm-lab"))
 }
 
-fn run_cli(args: &[&str]) -> Output {
+pub(crate) fn run_cli(args: &[&str]) -> Output {
     bin().args(args).output().unwrap()
 }
 

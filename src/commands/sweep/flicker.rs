@@ -76,6 +76,11 @@ pub struct FlickerSample {
     /// The recommended row's ground-truth pass (its pictures go into the report), when the
     /// sweep recommends a row.
     pub recommended_truth: Option<std::sync::Arc<crate::analysis::ground_truth::GroundTruth>>,
+    /// A level of views: the names of the views each row's S5 pools (the judged views,
+    /// `crate::analysis::views_truth::judged`) and how many views the level has; empty and 0
+    /// without configured views.
+    pub views: Vec<String>,
+    pub view_count: usize,
 }
 
 impl FlickerSample {
@@ -96,7 +101,26 @@ impl FlickerSample {
         } else {
             String::new()
         };
-        format!("S5 computed for {k} of {} rows: {rule}{tail}", self.rows)
+        format!(
+            "S5 computed for {k} of {} rows: {rule}{tail}{}",
+            self.rows,
+            self.views_clause()
+        )
+    }
+
+    /// "; each row's S5 pools the ground truth of K of N views (names)" for a level; empty
+    /// without views.
+    pub(crate) fn views_clause(&self) -> String {
+        if self.views.is_empty() {
+            return String::new();
+        }
+        let all = crate::analysis::views_truth::chosen(self.views.len(), self.view_count);
+        format!(
+            "; each row's S5 pools the ground truth of {} of the level's {} views ({all}: {})",
+            self.views.len(),
+            self.view_count,
+            self.views.join(", ")
+        )
     }
 
     /// The snapped and unsnapped points, in row order (snapped first per row).
@@ -171,6 +195,8 @@ pub(crate) fn measure(
         indices,
         measured: sampled,
         recommended_truth,
+        views: crate::analysis::views_truth::judged_names(config),
+        view_count: config.views.len(),
     })
 }
 
