@@ -88,6 +88,8 @@ pub fn aabb_meets_volume(b: &Aabb, v: &CasterVolume) -> bool {
     // Radius of box A (world axes) and box B (light axes) along `axis`.
     let ra = |axis: DVec3| ea.x * axis.x.abs() + ea.y * axis.y.abs() + ea.z * axis.z.abs();
     let rb = |axis: DVec3| (0..3).map(|k| eb_arr[k] * axis.dot(axes_b[k]).abs()).sum::<f64>();
+    // The tolerance's scale, the same for every axis (hoisted: three square roots per axis).
+    let tol = 1e-12 * (1.0 + d.length() + ea.length() + eb.length());
     let separated = |axis: DVec3| {
         let len = axis.length();
         // A near-zero cross product (parallel edges) is not a separating direction of its own:
@@ -95,7 +97,7 @@ pub fn aabb_meets_volume(b: &Aabb, v: &CasterVolume) -> bool {
         if len < 1e-12 {
             return false;
         }
-        d.dot(axis).abs() > ra(axis) + rb(axis) + 1e-12 * (1.0 + d.length() + ea.length() + eb.length()) * len
+        d.dot(axis).abs() > ra(axis) + rb(axis) + tol * len
     };
     let world = [DVec3::X, DVec3::Y, DVec3::Z];
     for a in world {

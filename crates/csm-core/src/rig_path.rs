@@ -98,30 +98,19 @@ pub fn along_path_lit<P: Borrow<CameraPose>>(
 }
 
 /// [`along_path`] with cached cascades (see [`Cadence`]; [`Cadence::EVERY_FRAME`] is
-/// [`along_path`], bit for bit). The held windows keep the rig's light basis, so the rig's
-/// basis must not follow the camera ([`Rig::fixed_basis`]) and the light must stand still.
-pub fn along_path_cached<P: Borrow<CameraPose>>(
+/// [`along_path`], bit for bit), one result per snap mode of `modes` in its order: `[snapped]`
+/// for one walk, `[true, false]` for both modes in one walk (as [`along_path_both`]). The held
+/// windows keep the rig's light basis, so the rig's basis must not follow the camera
+/// ([`Rig::fixed_basis`]) and the light must stand still.
+pub fn along_path_cached<P: Borrow<CameraPose>, const K: usize>(
     rig: &Rig,
     poses: impl IntoIterator<Item = P, IntoIter: ExactSizeIterator>,
     probes: &[Vec<DVec3>],
     cadence: Cadence<'_>,
-    snapped: bool,
+    modes: [bool; K],
     opts: ShimmerOptions,
-) -> PathResult {
-    let [r] = walk_cached(&mut RigPath::new(rig, probes), poses, [snapped], opts, cadence);
-    r.finish(opts)
-}
-
-/// [`along_path_both`] with cached cascades (see [`along_path_cached`]).
-pub fn along_path_both_cached<P: Borrow<CameraPose>>(
-    rig: &Rig,
-    poses: impl IntoIterator<Item = P, IntoIter: ExactSizeIterator>,
-    probes: &[Vec<DVec3>],
-    cadence: Cadence<'_>,
-    opts: ShimmerOptions,
-) -> (PathResult, PathResult) {
-    let [s, u] = walk_cached(&mut RigPath::new(rig, probes), poses, [true, false], opts, cadence);
-    (s.finish(opts), u.finish(opts))
+) -> [PathResult; K] {
+    walk_cached(&mut RigPath::new(rig, probes), poses, modes, opts, cadence).map(|r| r.finish(opts))
 }
 
 fn model<'a>(rig: &'a Rig, probes: &'a [Vec<DVec3>], light: Option<LightTrack<'a>>) -> RigPath<'a> {
