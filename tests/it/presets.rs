@@ -1672,7 +1672,9 @@ fn applying_a_preset_to_a_validated_scene_equals_loading_with_it() {
 #[test]
 fn the_light_far_shortcut_equals_the_light_depth_far_plane_for_every_preset() {
     let own = load(&scene("path = \"strafe\"\nframes = 40\nstep = 0.05", ""));
-    let presets = csm_lab::presets::PresetName::ALL.iter().map(|p| preset_config(p.as_str(), "", ""));
+    let presets = csm_lab::presets::PresetName::ALL
+        .iter()
+        .map(|p| preset_config(p.as_str(), "", ""));
     for c in std::iter::once(own).chain(presets) {
         let rig = csm_lab::analysis::rig(&c).unwrap();
         for pose in c.camera_path().unwrap() {
