@@ -6,7 +6,7 @@ measure "bench --repeats 5 (whole process)" -- \
   "$BIN" bench --repeats 5 --quiet --out target/speed/out/bench
 bench_load=$(cut -d' ' -f1 /proc/loadavg)
 "$BIN" bench --repeats 5 --quiet --out target/speed/out/bench |
-  awk 'NF == 9 && $1 ~ /^[a-z0-9_]+$/ && $2 ~ /\./ {
+  awk 'NF == 8 && $1 ~ /^[a-z0-9_]+$/ && $2 ~ /\./ {
          printf "%s reaches 1e-3 at %s (%s s, error %s); default %s: error %s, %s s\n", $1, $3, $4, $5, $6, $7, $8
        }' |
   while read -r bench_line; do
