@@ -561,7 +561,11 @@ fn culling_by_receivers_never_changes_the_ground_truth_states() {
 #[test]
 fn culling_keeps_the_objects_of_a_scan_of_every_receiver() {
     let biased = "[shadow]\npcf = 3\nnormal_bias = 2.5\ndepth_bias = 0.01\n";
-    for (name, shadow) in [("default", "[shadow]\n"), ("village", "[shadow]\n"), ("default", biased)] {
+    for (name, shadow) in [
+        ("default", "[shadow]\n"),
+        ("village", "[shadow]\n"),
+        ("default", biased),
+    ] {
         let text = std::fs::read_to_string(format!("{}/configs/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
         let dir = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/configs"));
         for lambda in [0.2, 0.75, 0.95] {

@@ -264,7 +264,10 @@ fn on_side(x: f64, bound: f64, below: bool) -> bool {
 fn single_crossing(blo: DVec3, bhi: DVec3, lo: DVec3, hi: DVec3, axes: usize) -> Option<(usize, f64, bool)> {
     let mut found = None;
     for axis in 0..axes {
-        for (crosses, bound, below) in [(blo[axis] < lo[axis], lo[axis], false), (bhi[axis] > hi[axis], hi[axis], true)] {
+        for (crosses, bound, below) in [
+            (blo[axis] < lo[axis], lo[axis], false),
+            (bhi[axis] > hi[axis], hi[axis], true),
+        ] {
             if crosses {
                 if found.is_some() {
                     return None;
@@ -568,6 +571,12 @@ impl LightScene {
                 (k + k1 + k2, a + a1 + a2)
             }
             None => {
+                if count && area {
+                    if let Some(plane) = single_crossing(c.lo, c.hi, v.lo, v.hi, 3).filter(|p| p.0 < 2) {
+                        let (k1, a1) = self.leaf_both(c, v, plane);
+                        return (k + k1, a + a1);
+                    }
+                }
                 if count {
                     k += self.leaf_meeting(c, v);
                 }
@@ -577,6 +586,30 @@ impl LightScene {
                 (k, a)
             }
         }
+    }
+
+    /// [`LightScene::leaf_meeting`] and [`LightScene::leaf_area`] in one pass over the
+    /// triangles, for a leaf whose bounds cross one plane of the volume only, a window edge:
+    /// that edge is then also the one edge of the rectangle the leaf crosses, and a triangle
+    /// with a vertex on its inner side both meets the volume and has its area (whole, or
+    /// clipped when a vertex lies beyond), in the same order as `leaf_area` adds them.
+    fn leaf_both(&self, c: &Chunk, v: &CasterVolume, (axis, bound, below): (usize, f64, bool)) -> (u64, f64) {
+        let (rlo, rhi) = (v.lo.truncate(), v.hi.truncate());
+        let (mut k, mut a) = (0, 0.0);
+        for t in &self.triangles[c.tris()] {
+            match t.iter().filter(|p| on_side(p[axis], bound, below)).count() {
+                0 => {}
+                3 => {
+                    k += 1;
+                    a += projected_area(t);
+                }
+                _ => {
+                    k += 1;
+                    a += clipped_area(t, rlo, rhi);
+                }
+            }
+        }
+        (k, a)
     }
 
     /// How many triangles of leaf `c` meet the volume: [`triangle_meets_box`] of each. When
@@ -933,7 +966,11 @@ mod tests {
         }
         let mut area = 0.0;
         for (k, (o, lo)) in mesh.objects.iter().zip(&light.objects).enumerate() {
-            if lo.box_lo.cmpgt(v.hi).any() || lo.box_hi.cmplt(v.lo).any() || !keep(k) || !aabb_meets_volume(&o.bounds, v) {
+            if lo.box_lo.cmpgt(v.hi).any()
+                || lo.box_hi.cmplt(v.lo).any()
+                || !keep(k)
+                || !aabb_meets_volume(&o.bounds, v)
+            {
                 continue;
             }
             out.caster_objects += 1;
@@ -951,9 +988,20 @@ mod tests {
     fn terrain(mesh: &mut Mesh, n: usize, s: f64, seed: f64) {
         let h = |i: usize, j: usize| (seed * (i as f64 + 1.3) * 0.71).sin() * (seed * (j as f64 + 0.7) * 0.37).cos();
         let p = |i: usize, j: usize| {
-            DVec3::new(-s + 2.0 * s * i as f64 / n as f64, h(i, j), -s + 2.0 * s * j as f64 / n as f64)
+            DVec3::new(
+                -s + 2.0 * s * i as f64 / n as f64,
+                h(i, j),
+                -s + 2.0 * s * j as f64 / n as f64,
+            )
         };
-        let tris = (0..n).flat_map(|j| (0..n).flat_map(move |i| [[p(i, j), p(i, j + 1), p(i + 1, j + 1)], [p(i, j), p(i + 1, j + 1), p(i + 1, j)]]));
+        let tris = (0..n).flat_map(|j| {
+            (0..n).flat_map(move |i| {
+                [
+                    [p(i, j), p(i, j + 1), p(i + 1, j + 1)],
+                    [p(i, j), p(i + 1, j + 1), p(i + 1, j)],
+                ]
+            })
+        });
         mesh.add_object(ObjectKind::Primitive, tris.collect::<Vec<_>>());
     }
 
