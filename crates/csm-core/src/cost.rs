@@ -837,7 +837,8 @@ impl ReceiverIndex {
     pub fn bounds(&self, intervals: &[(f64, f64)]) -> (DVec3, DVec3) {
         let mut acc = NO_BOUNDS;
         for &(a, b) in intervals {
-            if !(a <= b) {
+            // An empty or reversed interval (or a NaN end) holds no receiver.
+            if a.partial_cmp(&b).is_none_or(|o| o.is_gt()) {
                 continue;
             }
             let i0 = self.depths.partition_point(|&d| d < a);
