@@ -6,7 +6,6 @@ use csm_core::cascades::{LightPose, Rig};
 use csm_core::cost::{self, CasterVolume, CostCounts, CostModel, ReceiverBox};
 use csm_core::fitting::Window;
 use csm_core::visibility::{SceneGeometry, Visibility};
-use glam::DVec3;
 use rayon::prelude::*;
 
 /// The default weights of the cost model: relative costs of one draw call, one triangle, one
@@ -180,20 +179,16 @@ fn cull_padding(config: &Config, texel: f64) -> (f64, f64) {
     (xy, z)
 }
 
-/// The world positions of the lit-facing samples of `vis` whose view depth is in one of
-/// `intervals` (the visible receivers of a cascade).
-fn receivers_in(vis: &Visibility, intervals: &[(f64, f64)]) -> Vec<DVec3> {
-    vis.samples
-        .iter()
-        .enumerate()
-        .filter_map(|(k, s)| {
+/// The visible receivers of `vis` in the light basis of `light`: every lit-facing sample's
+/// view depth and light-space point, sorted by depth once per pass and basis (see
+/// [`cost::ReceiverIndex`]).
+fn receiver_index(light: &cost::LightScene, vis: &Visibility) -> std::sync::Arc<cost::ReceiverIndex> {
+    light.receiver_index(&vis.view, || {
+        cost::ReceiverIndex::new(vis.samples.iter().enumerate().filter_map(|(k, s)| {
             let s = s.filter(|s| s.lit)?;
-            intervals
-                .iter()
-                .any(|&(a, b)| s.depth >= a && s.depth <= b)
-                .then(|| vis.position(k, s.depth))
-        })
-        .collect()
+            Some((s.depth, light.basis.to_light(vis.position(k, s.depth))))
+        }))
+    })
 }
 
 /// The objects cascade `i` keeps under receiver-aware culling (one flag per object): those
@@ -213,7 +208,8 @@ pub fn kept_objects(
     let light = scene.light_scene(&v.basis);
     let intervals: Vec<(f64, f64)> = rig.covered_intervals(i).collect();
     let (pad_xy, pad_z) = cull_padding(config, v.texel.x.max(v.texel.y));
-    let target = ReceiverBox::of(&v.basis, receivers_in(vis, &intervals), pad_xy, pad_z);
+    let (lo, hi) = receiver_index(&light, vis).bounds(&intervals);
+    let target = ReceiverBox::padded(lo, hi, pad_xy, pad_z);
     let (_, scene_far) = cost::light_depth_extent(&v.basis, &config.scene);
     Some(
         (0..scene.mesh.objects.len())

@@ -553,6 +553,64 @@ fn culling_by_receivers_never_changes_the_ground_truth_states() {
     }
 }
 
+/// The objects each cascade keeps under culling (found through the receivers sorted by view
+/// depth once per pass and basis, and a range query per cascade) are those of the documented
+/// rule applied by brute force: a scan of every sampled pixel for the lit-facing ones in the
+/// cascade's depth intervals, their padded light-space box, and each object's world box in
+/// light space extruded to the scene's far side. Several λ, so the intervals move.
+#[test]
+fn culling_keeps_the_objects_of_a_scan_of_every_receiver() {
+    let biased = "[shadow]\npcf = 3\nnormal_bias = 2.5\ndepth_bias = 0.01\n";
+    for (name, shadow) in [
+        ("default", "[shadow]\n"),
+        ("village", "[shadow]\n"),
+        ("default", biased),
+    ] {
+        let text = std::fs::read_to_string(format!("{}/configs/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+        let dir = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/configs"));
+        for lambda in [0.2, 0.75, 0.95] {
+            let text = format!("{text}\n[cost]\ncull = \"receivers\"\n")
+                .replace("[shadow]\n", shadow)
+                .replace("lambda = 0.75", &format!("lambda = {lambda}"));
+            let c = Config::from_toml_str(&text, "c.toml", Some(dir)).unwrap();
+            let rig = csm_lab::analysis::rig(&c).unwrap();
+            let scene = &c.geometry.as_ref().unwrap().scene;
+            let lp = csm_core::cascades::LightPose::new(&rig.light, &c.camera.pose());
+            let vis = c.setup().visibility().unwrap();
+            let mut kept_some = 0;
+            for i in 0..rig.cascade_count() {
+                let w = rig.window(i, &lp, c.shadow.snap);
+                let v = csm_lab::analysis::cost::volume(&c, &rig, i, &lp, &w);
+                let kept = csm_lab::analysis::cost::kept_objects(&c, &rig, i, &v, scene, &vis).unwrap();
+                // The rule, by brute force.
+                let intervals: Vec<(f64, f64)> = rig.covered_intervals(i).collect();
+                let points = vis.samples.iter().enumerate().filter_map(|(k, s)| {
+                    let s = s.filter(|s| s.lit && intervals.iter().any(|&(a, b)| s.depth >= a && s.depth <= b))?;
+                    Some(vis.position(k, s.depth))
+                });
+                let texel = v.texel.x.max(v.texel.y);
+                let n = c.truth.normal_bias.unwrap_or(0.0).abs().max(1.0);
+                let pad_xy = (c.truth.pcf as f64 / 2.0 + 1.5 + n) * texel;
+                let pad_z = (n + 1.0) * texel + c.truth.depth_bias.unwrap_or(0.0).abs();
+                let target = cost::ReceiverBox::of(&v.basis, points, pad_xy, pad_z);
+                let (_, far) = cost::light_depth_extent(&v.basis, &c.scene);
+                let expected: Vec<bool> = scene
+                    .mesh
+                    .objects
+                    .iter()
+                    .map(|o| {
+                        let (lo, hi) = cost::light_bounds_of(&v.basis, &o.bounds);
+                        target.is_some_and(|t| t.shadowed_by(lo, hi, far))
+                    })
+                    .collect();
+                assert_eq!(kept, expected, "{name} λ {lambda} cascade {i}");
+                kept_some += kept.iter().filter(|&&k| k).count();
+            }
+            assert!(kept_some > 0, "{name} λ {lambda}: nothing kept");
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Sweeps: columns, cost_index against the configured setting, the cost budget
 // ---------------------------------------------------------------------------------------------

@@ -20,11 +20,16 @@
 //!   The clipping is exact (Sutherland-Hodgman against the rectangle's four edges).
 //!
 //! **Speed.** [`LightScene`] holds the scene in one light basis: every triangle in light
-//! coordinates, each object's tight light-space bounds and its whole projected area. For a
-//! volume, an object outside the rectangle costs nothing more, one inside it adds its
-//! precomputed area and triangle count, and only objects crossing an edge are clipped triangle
-//! by triangle. [`LightScene::counts`] therefore costs O(objects) plus the triangles of the
-//! objects on the window's edges.
+//! coordinates, and per object its light-space bounds, its whole projected area and a tree
+//! over its triangles (nodes with their bounds, area and triangle count, stored depth first,
+//! the triangles in the leaves' order). For a volume, an object outside it costs a comparison,
+//! a node inside the rectangle (the volume) adds its stored area (triangle count), a node
+//! apart adds nothing, and only leaves crossing a plane are settled triangle by triangle:
+//! with one plane crossed, by comparing the triangles' vertices with that plane; otherwise by
+//! clipping, against only the planes the polygon crosses. [`LightScene::counts`] therefore
+//! costs O(objects) plus the leaves on the window's edges and the volume's far plane. The
+//! area is the same sum whatever is settled where: a node's area is its children's sum and a
+//! leaf's the sum of its triangles' in order, so every shortcut gives the same bits.
 //!
 //! **Receiver-aware culling** ([`ReceiverBox`]): an object is kept for a cascade only when its
 //! bounds, extruded along the light to the scene's far side, meet the light-space box of that
@@ -156,6 +161,17 @@ impl<const N: usize> Poly<N> {
         Poly { v, n: 3 }
     }
 
+    /// Whether every vertex lies in the half-space of [`Poly::clip`]: the clip would then give
+    /// back the polygon unchanged (the same vertices in the same order), so it can be skipped.
+    fn within(&self, axis: usize, bound: f64, keep_below: bool) -> bool {
+        let v = &self.v[..self.n];
+        if keep_below {
+            v.iter().all(|p| p[axis] <= bound)
+        } else {
+            v.iter().all(|p| p[axis] >= bound)
+        }
+    }
+
     /// Clipped to the half-space `p[axis] <= bound` (`keep_below`) or `p[axis] >= bound`
     /// (Sutherland-Hodgman, one plane).
     fn clip(&self, axis: usize, bound: f64, keep_below: bool) -> Self {
@@ -198,6 +214,9 @@ pub fn triangle_meets_box(t: &[DVec3; 3], lo: DVec3, hi: DVec3) -> bool {
     let mut poly = Poly::of(t.map(|p| p.to_array()));
     for axis in 0..3 {
         for (bound, below) in [(lo[axis], false), (hi[axis], true)] {
+            if poly.within(axis, bound, below) {
+                continue;
+            }
             poly = poly.clip(axis, bound, below);
             if poly.n == 0 {
                 return false;
@@ -221,6 +240,9 @@ pub fn clipped_area(t: &[DVec3; 3], lo: DVec2, hi: DVec2) -> f64 {
     let mut poly = Poly::of(t.map(|p| [p.x, p.y]));
     for axis in 0..2 {
         for (bound, below) in [(lo[axis], false), (hi[axis], true)] {
+            if poly.within(axis, bound, below) {
+                continue;
+            }
             poly = poly.clip(axis, bound, below);
             if poly.n < 3 {
                 return 0.0;
@@ -246,6 +268,36 @@ fn polygon_area(poly: &[[f64; 2]]) -> f64 {
 pub fn projected_area(t: &[DVec3; 3]) -> f64 {
     let (a, b, c) = (t[0], t[1], t[2]);
     0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)).abs()
+}
+
+/// Whether `x` lies on the inner side of a box plane: `x <= bound` (`below`) or `x >= bound`.
+fn on_side(x: f64, bound: f64, below: bool) -> bool {
+    if below {
+        x <= bound
+    } else {
+        x >= bound
+    }
+}
+
+/// The one plane of the box `[lo, hi]` (its first `axes` axes) that the bounds `[blo, bhi]`
+/// cross, as `(axis, bound, below)` with the inner side `x <= bound` (`below`) or `x >= bound`;
+/// None when they lie beyond none or more than one of those planes.
+fn single_crossing(blo: DVec3, bhi: DVec3, lo: DVec3, hi: DVec3, axes: usize) -> Option<(usize, f64, bool)> {
+    let mut found = None;
+    for axis in 0..axes {
+        for (crosses, bound, below) in [
+            (blo[axis] < lo[axis], lo[axis], false),
+            (bhi[axis] > hi[axis], hi[axis], true),
+        ] {
+            if crosses {
+                if found.is_some() {
+                    return None;
+                }
+                found = Some((axis, bound, below));
+            }
+        }
+    }
+    found
 }
 
 /// One cascade's cost counts in one frame.
@@ -280,11 +332,25 @@ struct Chunk {
     hi: DVec3,
     /// Sum of its triangles' projected areas (world units²).
     area: f64,
-    /// Its triangles: `order[start..end]`.
-    start: usize,
-    end: usize,
-    /// Its children in [`LightScene::chunks`]; None for a leaf.
-    children: Option<(usize, usize)>,
+    /// Its triangles: [`LightScene::triangles`]`[start..end]`.
+    start: u32,
+    end: u32,
+    /// Its second child in [`LightScene::chunks`], 0 for a leaf. The nodes are stored in
+    /// depth-first order, so an inner node's first child is the next node and a walk down
+    /// the tree reads memory mostly forward (the walk is bound by fetching nodes).
+    right: u32,
+}
+
+impl Chunk {
+    /// Its triangles' range in [`LightScene::triangles`].
+    fn tris(&self) -> std::ops::Range<usize> {
+        self.start as usize..self.end as usize
+    }
+
+    /// Its two children (it is node `me`); None for a leaf.
+    fn children(&self, me: usize) -> Option<(usize, usize)> {
+        (self.right != 0).then(|| (me + 1, self.right as usize))
+    }
 }
 
 /// One object in a light basis.
@@ -306,11 +372,10 @@ struct LightObject {
 #[derive(Debug)]
 pub struct LightScene {
     pub basis: LightBasis,
-    /// Every triangle in light coordinates, in the mesh's order.
+    /// Every triangle in light coordinates, each object's in a Morton order of their world
+    /// centroids (so that a chunk of consecutive ones is compact), in the order of its tree's
+    /// leaves: a chunk's triangles are `triangles[start..end]`, read in sequence.
     triangles: Vec<[DVec3; 3]>,
-    /// Triangle indices, each object's in a Morton order of their world centroids (so that a
-    /// chunk of consecutive ones is compact).
-    order: Vec<usize>,
     chunks: Vec<Chunk>,
     objects: Vec<LightObject>,
     /// The separating axes of this basis, for the objects' boxes against a volume.
@@ -318,7 +383,16 @@ pub struct LightScene {
     /// The counts of volumes already counted without culling, by the exact bits of the volume
     /// (a window a sweep meets again, e.g. a single cascade at every λ, is counted once).
     seen: std::sync::Mutex<std::collections::HashMap<[u64; 8], CostCounts>>,
+    /// The receiver indices of visibility passes in this basis, by the key of their pass
+    /// ([`LightScene::receiver_index`]); the latest [`KEPT_INDICES`].
+    receivers: std::sync::Mutex<Vec<ReceiverEntry>>,
 }
+
+/// A cached [`ReceiverIndex`] and the key of its pass.
+type ReceiverEntry = (Box<dyn std::any::Any + Send + Sync>, std::sync::Arc<ReceiverIndex>);
+
+/// Receiver indices a [`LightScene`] keeps (one per visibility pass in its basis).
+const KEPT_INDICES: usize = 8;
 
 /// Volumes a [`LightScene`] remembers the counts of, at most.
 const REMEMBERED: usize = 1 << 14;
@@ -334,6 +408,8 @@ fn bounds_of<'a>(tris: impl Iterator<Item = &'a [DVec3; 3]>) -> (DVec3, DVec3) {
 /// Builds the tree over `order[start..end]` (light-space `triangles`) into `nodes`; returns
 /// its root.
 fn build_tree(triangles: &[[DVec3; 3]], order: &[usize], start: usize, end: usize, nodes: &mut Vec<Chunk>) -> usize {
+    let me = nodes.len();
+    let index = |k: usize| u32::try_from(k).expect("fewer than 2^32 triangles and nodes");
     if end - start <= LEAF {
         let tris = order[start..end].iter().map(|&k| &triangles[k]);
         let (lo, hi) = bounds_of(tris.clone());
@@ -341,26 +417,31 @@ fn build_tree(triangles: &[[DVec3; 3]], order: &[usize], start: usize, end: usiz
             lo,
             hi,
             area: tris.map(projected_area).sum(),
-            start,
-            end,
-            children: None,
+            start: index(start),
+            end: index(end),
+            right: 0,
         });
-        return nodes.len() - 1;
+        return me;
     }
+    // The node first (depth-first order), filled in once its children are built.
+    nodes.push(Chunk {
+        lo: DVec3::ZERO,
+        hi: DVec3::ZERO,
+        area: 0.0,
+        start: index(start),
+        end: index(end),
+        right: 0,
+    });
     // Split on a leaf boundary, so every leaf but the last is full.
     let half = (end - start).div_ceil(2).div_ceil(LEAF) * LEAF;
     let a = build_tree(triangles, order, start, start + half, nodes);
     let b = build_tree(triangles, order, start + half, end, nodes);
     let (x, y) = (nodes[a], nodes[b]);
-    nodes.push(Chunk {
-        lo: x.lo.min(y.lo),
-        hi: x.hi.max(y.hi),
-        area: x.area + y.area,
-        start,
-        end,
-        children: Some((a, b)),
-    });
-    nodes.len() - 1
+    nodes[me].lo = x.lo.min(y.lo);
+    nodes[me].hi = x.hi.max(y.hi);
+    nodes[me].area = x.area + y.area;
+    nodes[me].right = index(b);
+    me
 }
 
 /// The 30-bit Morton code of a point's place in a box (10 bits per axis).
@@ -412,13 +493,42 @@ impl LightScene {
             .collect();
         LightScene {
             basis: *basis,
-            triangles,
-            order,
+            triangles: order.iter().map(|&k| triangles[k]).collect(),
             chunks,
             objects,
             axes: SeparatingAxes::new(basis),
             seen: Default::default(),
+            receivers: Default::default(),
         }
+    }
+
+    /// The receiver index of a visibility pass in this basis, made by `make` once per `key`
+    /// (whatever identifies the pass: the caller's view) and shared by every cascade and sweep
+    /// row that culls by that pass's receivers.
+    pub fn receiver_index<K: Clone + PartialEq + Send + Sync + 'static>(
+        &self,
+        key: &K,
+        make: impl FnOnce() -> ReceiverIndex,
+    ) -> std::sync::Arc<ReceiverIndex> {
+        let find = |cache: &[ReceiverEntry]| {
+            cache
+                .iter()
+                .find(|(k, _)| k.downcast_ref::<K>() == Some(key))
+                .map(|(_, r)| r.clone())
+        };
+        if let Some(r) = find(&self.receivers.lock().unwrap_or_else(|e| e.into_inner())) {
+            return r;
+        }
+        let made = std::sync::Arc::new(make());
+        let mut cache = self.receivers.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(r) = find(&cache) {
+            return r;
+        }
+        if cache.len() >= KEPT_INDICES {
+            cache.remove(0);
+        }
+        cache.push((Box::new(key.clone()), made.clone()));
+        made
     }
 
     /// [`LightScene::counts`] without culling, remembered per volume: a volume counted before
@@ -446,8 +556,9 @@ impl LightScene {
     }
 
     /// The triangles of a chunk.
+    #[cfg(test)]
     fn tris<'a>(&'a self, c: &Chunk) -> impl Iterator<Item = &'a [DVec3; 3]> + 'a {
-        self.order[c.start..c.end].iter().map(|&k| &self.triangles[k])
+        self.triangles[c.tris()].iter()
     }
 
     /// Under node `n`: how many triangles intersect the volume `v` (when `count`) and their
@@ -477,25 +588,97 @@ impl LightScene {
         if !count && !area {
             return (k, a);
         }
-        match c.children {
+        match c.children(n) {
             Some((x, y)) => {
                 let (k1, a1) = self.walk(x, v, count, area);
                 let (k2, a2) = self.walk(y, v, count, area);
                 (k + k1 + k2, a + a1 + a2)
             }
             None => {
-                let (rlo, rhi) = (v.lo.truncate(), v.hi.truncate());
-                for t in self.tris(c) {
-                    if count && triangle_meets_box(t, v.lo, v.hi) {
-                        k += 1;
+                if count && area {
+                    if let Some(plane) = single_crossing(c.lo, c.hi, v.lo, v.hi, 3).filter(|p| p.0 < 2) {
+                        let (k1, a1) = self.leaf_both(c, v, plane);
+                        return (k + k1, a + a1);
                     }
-                    if area {
-                        a += clipped_area(t, rlo, rhi);
-                    }
+                }
+                if count {
+                    k += self.leaf_meeting(c, v);
+                }
+                if area {
+                    a += self.leaf_area(c, v);
                 }
                 (k, a)
             }
         }
+    }
+
+    /// [`LightScene::leaf_meeting`] and [`LightScene::leaf_area`] in one pass over the
+    /// triangles, for a leaf whose bounds cross one plane of the volume only, a window edge:
+    /// that edge is then also the one edge of the rectangle the leaf crosses, and a triangle
+    /// with a vertex on its inner side both meets the volume and has its area (whole, or
+    /// clipped when a vertex lies beyond), in the same order as `leaf_area` adds them.
+    fn leaf_both(&self, c: &Chunk, v: &CasterVolume, (axis, bound, below): (usize, f64, bool)) -> (u64, f64) {
+        let (rlo, rhi) = (v.lo.truncate(), v.hi.truncate());
+        let (mut k, mut a) = (0, 0.0);
+        for t in &self.triangles[c.tris()] {
+            match t.iter().filter(|p| on_side(p[axis], bound, below)).count() {
+                0 => {}
+                3 => {
+                    k += 1;
+                    a += projected_area(t);
+                }
+                _ => {
+                    k += 1;
+                    a += clipped_area(t, rlo, rhi);
+                }
+            }
+        }
+        (k, a)
+    }
+
+    /// How many triangles of leaf `c` meet the volume: [`triangle_meets_box`] of each. When
+    /// the leaf's bounds cross one plane of the box only, a triangle meets it exactly when a
+    /// vertex lies on the inner side of that plane (that vertex is then inside the box, the
+    /// leaf lying within every other plane; with none, the triangle's bounds are apart), so no
+    /// triangle is clipped.
+    fn leaf_meeting(&self, c: &Chunk, v: &CasterVolume) -> u64 {
+        let tris = &self.triangles[c.tris()];
+        match single_crossing(c.lo, c.hi, v.lo, v.hi, 3) {
+            Some((axis, bound, below)) => tris
+                .iter()
+                .filter(|t| t.iter().any(|p| on_side(p[axis], bound, below)))
+                .count() as u64,
+            None => tris.iter().filter(|t| triangle_meets_box(t, v.lo, v.hi)).count() as u64,
+        }
+    }
+
+    /// The sum of leaf `c`'s triangles' [`clipped_area`]s, in order from 0. When the leaf's
+    /// bounds cross one edge of the rectangle only, a triangle with every vertex on the inner
+    /// side of that edge is inside the rectangle (its projected area, as `clipped_area` gives
+    /// it), one with every vertex beyond it is apart (0, nothing added), and only the others
+    /// are clipped.
+    fn leaf_area(&self, c: &Chunk, v: &CasterVolume) -> f64 {
+        let (rlo, rhi) = (v.lo.truncate(), v.hi.truncate());
+        let tris = &self.triangles[c.tris()];
+        let mut a = 0.0;
+        match single_crossing(c.lo, c.hi, v.lo, v.hi, 2) {
+            Some((axis, bound, below)) => {
+                for t in tris {
+                    let inner = t.iter().filter(|p| on_side(p[axis], bound, below)).count();
+                    if inner == 3 {
+                        a += projected_area(t);
+                    } else if inner > 0 {
+                        a += clipped_area(t, rlo, rhi);
+                    }
+                }
+            }
+            None => {
+                for t in tris {
+                    a += clipped_area(t, rlo, rhi);
+                }
+            }
+        }
+        a
     }
 
     /// The counts of a volume in this basis, over the objects `keep` accepts (by index into
@@ -553,6 +736,12 @@ impl ReceiverBox {
             .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
                 (lo.min(p), hi.max(p))
             });
+        Self::padded(lo, hi, pad_xy, pad_z)
+    }
+
+    /// The light-space bounds `[lo, hi]` of the receivers grown by `pad_xy` across the light and
+    /// `pad_z` along it; None when the bounds are empty (`lo.x > hi.x`: no receiver).
+    pub fn padded(lo: DVec3, hi: DVec3, pad_xy: f64, pad_z: f64) -> Option<Self> {
         if lo.x > hi.x {
             return None;
         }
@@ -573,6 +762,117 @@ impl ReceiverBox {
             && hi.y >= self.lo.y
             && lo.z <= self.hi.z
             && scene_far.max(hi.z) >= self.lo.z
+    }
+}
+
+/// Receivers per block of a [`ReceiverIndex`] (the leaves of its tree).
+const BLOCK: usize = 32;
+
+/// Light-space bounds: `(lo, hi)`, empty as `(+inf, -inf)`.
+type Bounds3 = (DVec3, DVec3);
+
+const NO_BOUNDS: Bounds3 = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+
+fn merge(a: Bounds3, b: Bounds3) -> Bounds3 {
+    (a.0.min(b.0), a.1.max(b.1))
+}
+
+fn bounds_of_points(points: &[DVec3]) -> Bounds3 {
+    points.iter().fold(NO_BOUNDS, |(lo, hi), p| (lo.min(*p), hi.max(*p)))
+}
+
+/// The visible receivers of one visibility pass in one light basis, for receiver-aware
+/// culling: each receiver's view depth and light-space point, sorted by view depth once, and
+/// a segment tree of the light-space bounds of blocks of [`BLOCK`] consecutive receivers. The
+/// bounds of the receivers whose view depth lies in an interval (one cascade's) are then two
+/// binary searches, the two partial blocks at the ends and O(log n) nodes, instead of a scan
+/// of every sample per cascade. The bounds are a minimum and a maximum per axis, which no
+/// order changes: they equal a scan's (the two can differ only in the sign of a zero, which
+/// [`ReceiverBox::padded`]'s non-zero padding removes).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReceiverIndex {
+    /// View depths, ascending.
+    depths: Vec<f64>,
+    /// Light-space points, in the order of `depths`.
+    points: Vec<DVec3>,
+    /// The tree over the blocks: node 1 the root, node `k`'s children `2k` and `2k + 1`, block
+    /// `b` at `leaves + b`.
+    tree: Vec<Bounds3>,
+    leaves: usize,
+}
+
+impl ReceiverIndex {
+    /// The index of `receivers`: `(view depth, light-space point)`, in any order.
+    pub fn new(receivers: impl IntoIterator<Item = (f64, DVec3)>) -> Self {
+        let mut r: Vec<(f64, DVec3)> = receivers.into_iter().collect();
+        r.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (depths, points): (Vec<f64>, Vec<DVec3>) = r.into_iter().unzip();
+        let leaves = points.len().div_ceil(BLOCK).next_power_of_two();
+        let mut tree = vec![NO_BOUNDS; 2 * leaves];
+        for (b, block) in points.chunks(BLOCK).enumerate() {
+            tree[leaves + b] = bounds_of_points(block);
+        }
+        for k in (1..leaves).rev() {
+            tree[k] = merge(tree[2 * k], tree[2 * k + 1]);
+        }
+        ReceiverIndex {
+            depths,
+            points,
+            tree,
+            leaves,
+        }
+    }
+
+    /// How many receivers it holds.
+    pub fn len(&self) -> usize {
+        self.depths.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.depths.is_empty()
+    }
+
+    /// The light-space bounds of the receivers whose view depth lies in one of the closed
+    /// `intervals` (`a <= depth <= b`); `(+inf, -inf)` when there is none.
+    pub fn bounds(&self, intervals: &[(f64, f64)]) -> (DVec3, DVec3) {
+        let mut acc = NO_BOUNDS;
+        for &(a, b) in intervals {
+            // An empty or reversed interval (or a NaN end) holds no receiver.
+            if a.partial_cmp(&b).is_none_or(|o| o.is_gt()) {
+                continue;
+            }
+            let i0 = self.depths.partition_point(|&d| d < a);
+            let i1 = self.depths.partition_point(|&d| d <= b).max(i0);
+            acc = merge(acc, self.range(i0, i1));
+        }
+        acc
+    }
+
+    /// The bounds of the points `i0..i1` (sorted order).
+    fn range(&self, i0: usize, i1: usize) -> Bounds3 {
+        // The whole blocks inside `i0..i1`: `b0..b1`.
+        let (b0, b1) = (i0.div_ceil(BLOCK), i1 / BLOCK);
+        if b0 >= b1 {
+            return bounds_of_points(&self.points[i0..i1]);
+        }
+        let mut acc = merge(
+            bounds_of_points(&self.points[i0..b0 * BLOCK]),
+            bounds_of_points(&self.points[b1 * BLOCK..i1]),
+        );
+        let (mut l, mut r) = (b0 + self.leaves, b1 + self.leaves);
+        while l < r {
+            if l & 1 == 1 {
+                acc = merge(acc, self.tree[l]);
+                l += 1;
+            }
+            if r & 1 == 1 {
+                r -= 1;
+                acc = merge(acc, self.tree[r]);
+            }
+            l >>= 1;
+            r >>= 1;
+        }
+        acc
     }
 }
 
@@ -611,5 +911,258 @@ mod tests {
         // Cut at x = 1: the part with x <= 1 is the triangle minus the corner triangle of area 0.5.
         assert!((clipped_area(&t, DVec2::splat(-1.0), DVec2::new(1.0, 3.0)) - 1.5).abs() < 1e-12);
         assert_eq!(clipped_area(&t, DVec2::splat(5.0), DVec2::splat(6.0)), 0.0);
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // The fast paths against their plain definitions, bit for bit
+    // -----------------------------------------------------------------------------------------
+
+    use crate::mesh::ObjectKind;
+    use proptest::prelude::*;
+
+    /// A triangle's clip by the box's six planes, every plane clipped (no plane skipped).
+    fn meets_plain(t: &[DVec3; 3], lo: DVec3, hi: DVec3) -> bool {
+        if t.iter().any(|p| p.cmpge(lo).all() && p.cmple(hi).all()) {
+            return true;
+        }
+        let (tlo, thi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
+        if tlo.cmpgt(hi).any() || thi.cmplt(lo).any() {
+            return false;
+        }
+        let mut poly = Poly::of(t.map(|p| p.to_array()));
+        for axis in 0..3 {
+            for (bound, below) in [(lo[axis], false), (hi[axis], true)] {
+                poly = poly.clip(axis, bound, below);
+                if poly.n == 0 {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// A triangle's projected area clipped to the rectangle, every edge clipped.
+    fn area_plain(t: &[DVec3; 3], lo: DVec2, hi: DVec2) -> f64 {
+        let (tlo, thi) = (t[0].min(t[1]).min(t[2]).truncate(), t[0].max(t[1]).max(t[2]).truncate());
+        if tlo.cmpge(lo).all() && thi.cmple(hi).all() {
+            return projected_area(t);
+        }
+        if tlo.cmpgt(hi).any() || thi.cmplt(lo).any() {
+            return 0.0;
+        }
+        let mut poly = Poly::of(t.map(|p| [p.x, p.y]));
+        for axis in 0..2 {
+            for (bound, below) in [(lo[axis], false), (hi[axis], true)] {
+                poly = poly.clip(axis, bound, below);
+                if poly.n < 3 {
+                    return 0.0;
+                }
+            }
+        }
+        polygon_area(&poly.v[..poly.n])
+    }
+
+    /// The definition the walk evaluates: under node `n`, the triangles meeting the volume and
+    /// the tree's sum of every triangle's clipped area (a leaf adds its triangles in order from
+    /// 0, an inner node its two children), with no node settled by its bounds.
+    fn tree_plain(light: &LightScene, n: usize, v: &CasterVolume) -> (u64, f64) {
+        let c = &light.chunks[n];
+        match c.children(n) {
+            Some((x, y)) => {
+                let (k1, a1) = tree_plain(light, x, v);
+                let (k2, a2) = tree_plain(light, y, v);
+                (k1 + k2, a1 + a2)
+            }
+            None => {
+                let (mut k, mut a) = (0, 0.0);
+                for t in light.tris(c) {
+                    k += u64::from(meets_plain(t, v.lo, v.hi));
+                    a += area_plain(t, v.lo.truncate(), v.hi.truncate());
+                }
+                (k, a)
+            }
+        }
+    }
+
+    /// [`LightScene::counts`] by [`tree_plain`] for every object that meets the volume.
+    fn counts_plain(light: &LightScene, mesh: &Mesh, v: &CasterVolume, keep: impl Fn(usize) -> bool) -> CostCounts {
+        let mut out = CostCounts::default();
+        if v.is_empty() {
+            return out;
+        }
+        let mut area = 0.0;
+        for (k, (o, lo)) in mesh.objects.iter().zip(&light.objects).enumerate() {
+            if lo.box_lo.cmpgt(v.hi).any()
+                || lo.box_hi.cmplt(v.lo).any()
+                || !keep(k)
+                || !aabb_meets_volume(&o.bounds, v)
+            {
+                continue;
+            }
+            out.caster_objects += 1;
+            out.caster_triangles += o.triangles.len() as u64;
+            let (inside, a) = tree_plain(light, lo.root, v);
+            out.caster_triangles_inside += inside;
+            area += a;
+        }
+        out.raster_fragments = area / (v.texel.x * v.texel.y);
+        out
+    }
+
+    /// A rolling terrain of `n` x `n` cells over `[-s, s]²` (two triangles a cell), with
+    /// heights from `seed`: one object of many triangles, so that its tree is deep.
+    fn terrain(mesh: &mut Mesh, n: usize, s: f64, seed: f64) {
+        let h = |i: usize, j: usize| (seed * (i as f64 + 1.3) * 0.71).sin() * (seed * (j as f64 + 0.7) * 0.37).cos();
+        let p = |i: usize, j: usize| {
+            DVec3::new(
+                -s + 2.0 * s * i as f64 / n as f64,
+                h(i, j),
+                -s + 2.0 * s * j as f64 / n as f64,
+            )
+        };
+        let tris = (0..n).flat_map(|j| {
+            (0..n).flat_map(move |i| {
+                [
+                    [p(i, j), p(i, j + 1), p(i + 1, j + 1)],
+                    [p(i, j), p(i + 1, j + 1), p(i + 1, j)],
+                ]
+            })
+        });
+        mesh.add_object(ObjectKind::Primitive, tris.collect::<Vec<_>>());
+    }
+
+    fn scene() -> impl Strategy<Value = Mesh> {
+        (
+            prop::collection::vec((2usize..40, 5.0..40.0f64, 0.1..3.0f64), 1..3),
+            prop::collection::vec((-30.0..30.0f64, -3.0..3.0f64, -30.0..30.0f64, 0.2..6.0f64), 0..5),
+        )
+            .prop_map(|(grounds, boxes)| {
+                let mut m = Mesh::default();
+                for (n, s, seed) in grounds {
+                    terrain(&mut m, n, s, seed);
+                }
+                for (x, y, z, e) in boxes {
+                    let c = DVec3::new(x, y, z);
+                    m.add_box(&Aabb::new(c - DVec3::splat(e), c + DVec3::splat(e)));
+                }
+                m
+            })
+    }
+
+    /// A light and a volume in its space; with `snap` its x and y bounds are moved onto light
+    /// coordinates of scene vertices (edges through vertices: the ties of the clipping).
+    fn volume(mesh: &Mesh, d: DVec3, r: [f64; 6], snap: Option<[usize; 4]>) -> CasterVolume {
+        let basis = LightBasis::new(d);
+        let mut lo = DVec3::new(-40.0 + 60.0 * r[0], -40.0 + 60.0 * r[1], -60.0 + 40.0 * r[2]);
+        let mut hi = lo + DVec3::new(1.0 + 50.0 * r[3], 1.0 + 50.0 * r[4], 1.0 + 80.0 * r[5]);
+        if let Some(k) = snap {
+            let vertex = |i: usize| basis.to_light(mesh.triangles[i / 3 % mesh.triangles.len()][i % 3]);
+            let (a, b) = (vertex(k[0]), vertex(k[1]));
+            let (c, e) = (vertex(k[2]), vertex(k[3]));
+            (lo.x, hi.x) = (a.x.min(b.x), a.x.max(b.x));
+            (lo.y, hi.y) = (c.y.min(e.y), c.y.max(e.y));
+            lo.z = lo.z.min(a.z);
+            hi.z = c.z;
+        }
+        CasterVolume {
+            basis,
+            lo,
+            hi,
+            texel: DVec2::new(0.25, 0.5),
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+        /// The walk (nodes settled by their bounds, planes a polygon lies within skipped, the
+        /// triangles of a node read in tree order) gives the plain definition's counts, and
+        /// the same bits of `raster_fragments`.
+        #[test]
+        fn the_walk_equals_the_plain_tree_sum_bit_for_bit(
+            m in scene(),
+            d in (-1.0..1.0f64, -1.0..-0.2f64, -1.0..1.0f64),
+            r in prop::array::uniform6(0.0..1.0f64),
+            snap in prop::option::of(prop::array::uniform4(0usize..100_000)),
+            mask in prop::collection::vec(any::<bool>(), 1..8),
+        ) {
+            let v = volume(&m, DVec3::new(d.0, d.1, d.2), r, snap);
+            let light = LightScene::new(&m, &v.basis);
+            let keep = |k: usize| mask[k % mask.len()];
+            for c in [(light.counts(&m, &v, |_| true), counts_plain(&light, &m, &v, |_| true)),
+                      (light.counts(&m, &v, keep), counts_plain(&light, &m, &v, keep))] {
+                prop_assert_eq!(c.0.caster_objects, c.1.caster_objects);
+                prop_assert_eq!(c.0.caster_triangles, c.1.caster_triangles);
+                prop_assert_eq!(c.0.caster_triangles_inside, c.1.caster_triangles_inside);
+                prop_assert_eq!(c.0.raster_fragments.to_bits(), c.1.raster_fragments.to_bits());
+            }
+            prop_assert_eq!(light.counts_all(&m, &v), counts_plain(&light, &m, &v, |_| true));
+        }
+
+        /// Skipping the planes a polygon lies within changes no answer and no bit of an area,
+        /// also for triangles with vertices on the box's planes.
+        #[test]
+        fn skipping_planes_changes_no_clip(
+            t in prop::array::uniform3((0i32..9, 0i32..9, 0i32..9)),
+            jitter in prop::array::uniform3(-0.5..0.5f64),
+            b in (0i32..5, 0i32..5, 0i32..5, 1i32..6, 1i32..6, 1i32..6),
+        ) {
+            // Vertices on a half-unit grid (many on the box's planes), some moved off it.
+            let t: [DVec3; 3] = std::array::from_fn(|k| {
+                let (x, y, z) = t[k];
+                DVec3::new(x as f64 * 0.5, y as f64 * 0.5 + jitter[k] * f64::from(k == 1), z as f64 * 0.5)
+            });
+            let lo = DVec3::new(b.0 as f64, b.1 as f64, b.2 as f64) * 0.5;
+            let hi = lo + DVec3::new(b.3 as f64, b.4 as f64, b.5 as f64) * 0.5;
+            prop_assert_eq!(triangle_meets_box(&t, lo, hi), meets_plain(&t, lo, hi));
+            prop_assert_eq!(
+                clipped_area(&t, lo.truncate(), hi.truncate()).to_bits(),
+                area_plain(&t, lo.truncate(), hi.truncate()).to_bits()
+            );
+        }
+
+        /// The bounds of the receivers in view-depth intervals equal a scan of every receiver
+        /// (the same minima and maxima), with ties in depth, intervals ending on a receiver's
+        /// depth, empty and reversed intervals, and any number of receivers around a block's
+        /// size.
+        #[test]
+        fn the_receiver_index_equals_a_scan(
+            pts in prop::collection::vec((0u8..40, point()), 0..300),
+            intervals in prop::collection::vec((0u8..42, 0u8..42), 0..3),
+        ) {
+            let pts: Vec<(f64, DVec3)> = pts.into_iter().map(|(d, p)| (d as f64 * 0.5, p)).collect();
+            let intervals: Vec<(f64, f64)> = intervals.into_iter().map(|(a, b)| (a as f64 * 0.5, b as f64 * 0.5)).collect();
+            let index = ReceiverIndex::new(pts.iter().copied());
+            prop_assert_eq!(index.len(), pts.len());
+            let scan = pts
+                .iter()
+                .filter(|(d, _)| intervals.iter().any(|&(a, b)| *d >= a && *d <= b))
+                .fold(NO_BOUNDS, |(lo, hi), (_, p)| (lo.min(*p), hi.max(*p)));
+            prop_assert_eq!(index.bounds(&intervals), scan);
+        }
+    }
+
+    fn point() -> impl Strategy<Value = DVec3> {
+        (-50.0..50.0f64, -50.0..50.0f64, -50.0..50.0f64).prop_map(|(x, y, z)| DVec3::new(x, y, z))
+    }
+
+    /// A LightScene keeps one receiver index per key, made once.
+    #[test]
+    fn a_receiver_index_is_made_once_per_key() {
+        let mut m = Mesh::default();
+        m.add_ground(0.0, -1.0, 1.0, -1.0, 1.0);
+        let light = LightScene::new(&m, &LightBasis::new(DVec3::new(0.1, -1.0, 0.2)));
+        let made = std::cell::Cell::new(0);
+        let make = |d: f64| {
+            made.set(made.get() + 1);
+            ReceiverIndex::new([(d, DVec3::splat(d))])
+        };
+        let a = light.receiver_index(&1u32, || make(1.0));
+        let b = light.receiver_index(&1u32, || make(2.0));
+        let c = light.receiver_index(&2u32, || make(3.0));
+        assert!(std::sync::Arc::ptr_eq(&a, &b));
+        assert_eq!(made.get(), 2);
+        assert_eq!(c.bounds(&[(0.0, 5.0)]), (DVec3::splat(3.0), DVec3::splat(3.0)));
+        assert_eq!(a.bounds(&[(0.0, 5.0)]), (DVec3::splat(1.0), DVec3::splat(1.0)));
     }
 }
