@@ -12,6 +12,7 @@
 //! [`shimmer`] defines the motion metrics, [`walk`] is the one walk along a camera path,
 //! [`rig_path`] walks the exact f64 rig and [`precision`] the binary32 pipeline.
 
+mod bvh4;
 pub mod cascades;
 pub mod cost;
 pub mod depth_range;

@@ -42,13 +42,11 @@
 use std::sync::{Arc, Mutex, OnceLock};
 
 use glam::DVec3;
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
+use obvhs::ray::Ray;
 use obvhs::triangle::Triangle;
-use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
+use crate::bvh4::{Bvh4, Entry};
 use crate::geometry::{CameraPose, Lens, LightBasis};
 use crate::mesh::Mesh;
 
@@ -440,15 +438,12 @@ pub fn sigma_min_2x2(a: f64, b: f64, c: f64, d: f64) -> f64 {
     (det / smax).max(smax / MAX_ANISOTROPY)
 }
 
-/// The BVH over a mesh's triangles (binary32, as the crate builds it), each distinct
-/// binary32 triangle once.
+/// The BVH over a mesh's triangles (binary32, [`crate::bvh4`]), each distinct binary32
+/// triangle once.
 struct Tracer {
     /// None when no triangle is left (every one degenerate in binary32).
-    bvh: Option<CwBvh>,
+    bvh: Option<Bvh4>,
     tris: Vec<Triangle>,
-    /// `tris` in the order of the BVH's leaves (`in_bvh_order[i]` is
-    /// `tris[primitive_indices[i]]`): one fetch per intersection test, not two.
-    in_bvh_order: Vec<Triangle>,
     /// The mesh index of each BVH triangle (its first occurrence).
     mesh_index: Vec<u32>,
     dropped: BvhDropped,
@@ -509,15 +504,10 @@ fn v3(p: DVec3) -> glam_bvh::Vec3A {
 impl Tracer {
     fn new(mesh: &Mesh) -> Tracer {
         let (tris, mesh_index, dropped) = bvh_input(mesh);
-        let bvh = (!tris.is_empty())
-            .then(|| build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Default::default()));
-        let in_bvh_order = bvh.as_ref().map_or_else(Vec::new, |b| {
-            b.primitive_indices.iter().map(|&i| tris[i as usize]).collect()
-        });
+        let bvh = (!tris.is_empty()).then(|| Bvh4::new(&tris));
         Tracer {
             bvh,
             tris,
-            in_bvh_order,
             mesh_index,
             dropped,
         }
@@ -530,14 +520,23 @@ impl Tracer {
         self.nearest_bvh(&ray).map(|b| self.mesh_index[b as usize] as usize)
     }
 
-    /// Index (into [`bvh_input`]'s triangles) of the nearest triangle along a binary32 ray.
+    /// Index (into [`bvh_input`]'s triangles) of the nearest triangle along a binary32 ray:
+    /// least hit distance, ties to the least index ([`crate::bvh4`]).
     fn nearest_bvh(&self, ray: &Ray) -> Option<u32> {
         let bvh = self.bvh.as_ref()?;
-        let mut hit = RayHit::none();
-        let tris = &self.in_bvh_order;
-        bvh.ray_traverse(*ray, &mut hit, |r, id| tris[id].intersect(r))
-            .then(|| bvh.primitive_indices[hit.primitive_id as usize])
+        STACK.with(|s| {
+            let mut s = s.borrow_mut();
+            if s.capacity() == 0 {
+                *s = bvh.stack();
+            }
+            bvh.nearest(ray, &mut s)
+        })
     }
+}
+
+thread_local! {
+    /// Each thread's traversal stack, reused by every ray it traces.
+    static STACK: std::cell::RefCell<Vec<Entry>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// The binary32 ray the BVH traverses for the pixel whose (unnormalised) ray direction is `d`
@@ -988,14 +987,9 @@ mod tests {
                     best = (d, k as u32);
                 }
             }
-            if best.1 == u32::MAX {
-                assert_eq!(id, u32::MAX);
-            } else {
-                hits += 1;
-                assert_ne!(id, u32::MAX);
-                // The same distance (a tie on a shared edge may pick either triangle).
-                assert_eq!(tris[id as usize].intersect(ray), best.0);
-            }
+            // The very triangle: a tie on a shared edge goes to the least index either way.
+            assert_eq!(id, best.1);
+            hits += usize::from(id != u32::MAX);
         }
         assert!(hits > rays.len() / 2, "{hits} of {}", rays.len());
     }
