@@ -141,9 +141,7 @@ fn visibility_pass(c: &mut Criterion) {
     for (name, mesh) in [("default_scene_full_hd", mesh), ("terrain_100k_full_hd", big)] {
         let scene = SceneGeometry::new(mesh);
         let _ = scene.bvh_dropped();
-        group.bench_function(name, |b| {
-            b.iter(|| one.install(|| black_box(scene.trace(&view).len())))
-        });
+        group.bench_function(name, |b| b.iter(|| one.install(|| black_box(scene.trace(&view).len()))));
     }
     group.finish();
 }

@@ -140,6 +140,9 @@ pub(crate) struct Bvh4 {
     leaves: Vec<Tri4>,
     /// The index (in the list given to [`Bvh4::new`]) of each leaf's triangles.
     ids: Vec<[u32; 4]>,
+    /// Each leaf's widened box, `[min x, max x, min y, max y, min z, max z]` (what its parent
+    /// holds): a packet's rays test it one by one before the triangles.
+    leaf_box: Vec<[f32; 6]>,
     /// The longest the traversal stack gets: three per level, plus one.
     stack_len: usize,
 }
@@ -196,6 +199,7 @@ impl Bvh4 {
             },
             leaves: Vec::with_capacity(b2.len() / 4 + 1),
             ids: Vec::with_capacity(b2.len() / 4 + 1),
+            leaf_box: Vec::with_capacity(b2.len() / 4 + 1),
             stack_len: 1,
         };
         // A small subtree's triangles as one leaf: (leaf index, triangle count).
@@ -216,6 +220,9 @@ impl Bvh4 {
             ids[..ks.len()].copy_from_slice(&ks);
             out.leaves.push(Tri4::new(&lane));
             out.ids.push(ids);
+            let a = b2[id].aabb();
+            let (lo, hi) = widened(a.min.into(), a.max.into());
+            out.leaf_box.push([lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]]);
             ((out.leaves.len() - 1) as u32, ks.len() as u32)
         };
         if small(0) {
@@ -282,18 +289,9 @@ impl Bvh4 {
     /// ([`Bvh4::stack`]).
     #[inline]
     pub(crate) fn nearest(&self, ray: &Ray, stack: &mut Vec<Entry>) -> Option<u32> {
-        let inv = |d: f32| {
-            if d.abs() > 1e-30 {
-                1.0 / d
-            } else if d.is_sign_negative() {
-                -1e30
-            } else {
-                1e30
-            }
-        };
         let o = [ray.origin.x, ray.origin.y, ray.origin.z];
         let d = [ray.direction.x, ray.direction.y, ray.direction.z];
-        let id = [inv(d[0]), inv(d[1]), inv(d[2])];
+        let id = [inverse(d[0]), inverse(d[1]), inverse(d[2])];
         // Per axis, whether the ray enters a box through its max plane.
         let neg = [id[0] < 0.0, id[1] < 0.0, id[2] < 0.0];
         let mut best_t = ray.tmax;
@@ -366,6 +364,177 @@ impl Bvh4 {
                 match stack.pop() {
                     None => return (best != NONE).then_some(best),
                     Some(e) if e.near > best_t => {}
+                    Some(e) => {
+                        cur = e;
+                        break;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Most rays traced as one packet.
+pub(crate) const PACKET: usize = 64;
+
+/// `1 / d`, or `±1e30` where `|d| <= 1e-30` (see the module documentation).
+#[inline(always)]
+fn inverse(d: f32) -> f32 {
+    if d.abs() > 1e-30 {
+        1.0 / d
+    } else if d.is_sign_negative() {
+        -1e30
+    } else {
+        1e30
+    }
+}
+
+impl Bvh4 {
+    /// [`Bvh4::nearest`] of each of up to [`PACKET`] rays (`u32::MAX` for none), traced
+    /// together when they share their origin and, per axis, the sign of their direction (a
+    /// tile of primary rays): a node is visited once for the packet, when the interval of its
+    /// rays' slab distances (the least entry and the greatest exit over the packet) says that
+    /// one of them may meet it; a leaf's box is then tested by each ray, and its triangles by
+    /// those that meet it. Every test is conservative for each ray's own box test, so each
+    /// ray's answer is the one it gets alone. Other rays are traced one by one.
+    pub(crate) fn nearest_packet(&self, rays: &[Ray], out: &mut [u32], stack: &mut Vec<Entry>) {
+        let n = rays.len();
+        assert!(n <= PACKET && out.len() == n);
+        if n == 0 {
+            return;
+        }
+        let origin = rays[0].origin;
+        let o = [origin.x, origin.y, origin.z];
+        let mut d = [[0f32; PACKET]; 3];
+        let mut id = [[0f32; PACKET]; 3];
+        let mut tmin = [0f32; PACKET];
+        let mut tmax = [0f32; PACKET];
+        let mut shared = true;
+        for (r, ray) in rays.iter().enumerate() {
+            shared &= ray.origin.x.to_bits() == origin.x.to_bits()
+                && ray.origin.y.to_bits() == origin.y.to_bits()
+                && ray.origin.z.to_bits() == origin.z.to_bits();
+            let dr = [ray.direction.x, ray.direction.y, ray.direction.z];
+            for a in 0..3 {
+                d[a][r] = dr[a];
+                id[a][r] = inverse(dr[a]);
+            }
+            tmin[r] = ray.tmin;
+            tmax[r] = ray.tmax;
+        }
+        let neg = [id[0][0] < 0.0, id[1][0] < 0.0, id[2][0] < 0.0];
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        for a in 0..3 {
+            for &x in &id[a][..n] {
+                shared &= (x < 0.0) == neg[a];
+                lo[a] = min(lo[a], x);
+                hi[a] = max(hi[a], x);
+            }
+        }
+        if !shared {
+            for (ray, out) in rays.iter().zip(out.iter_mut()) {
+                *out = self.nearest(ray, stack).unwrap_or(NONE);
+            }
+            return;
+        }
+        let tmin_lo = tmin[..n].iter().fold(f32::INFINITY, |m, &t| min(m, t));
+        let mut best_t = tmax;
+        let mut best = [NONE; PACKET];
+        // The greatest distance at which a ray of the packet may still find a nearer hit.
+        let mut reach = tmax[..n].iter().fold(f32::NEG_INFINITY, |m, &t| max(m, t));
+        // Per axis, the lanes of the planes through which the rays enter and leave a box.
+        let (ax, ay, az) = (usize::from(neg[0]), 2 + usize::from(neg[1]), 4 + usize::from(neg[2]));
+        stack.clear();
+        let mut cur = Entry {
+            near: tmin_lo,
+            ..self.root
+        };
+        loop {
+            if cur.count > 0 {
+                let b = &self.leaf_box[cur.child as usize];
+                let (nx, ny, nz) = (b[ax] - o[0], b[ay] - o[1], b[az] - o[2]);
+                let (fx, fy, fz) = (b[ax ^ 1] - o[0], b[ay ^ 1] - o[1], b[az ^ 1] - o[2]);
+                let mut meets = [false; PACKET];
+                for r in 0..n {
+                    let t0 = max(max(nx * id[0][r], ny * id[1][r]), max(nz * id[2][r], tmin[r]));
+                    let t1 = min(min(fx * id[0][r], fy * id[1][r]), min(fz * id[2][r], best_t[r]));
+                    meets[r] = t0 <= t1;
+                }
+                let leaf = &self.leaves[cur.child as usize];
+                let ids = &self.ids[cur.child as usize];
+                for r in 0..n {
+                    if !meets[r] {
+                        continue;
+                    }
+                    let ts = leaf.intersect(o, [d[0][r], d[1][r], d[2][r]], tmin[r], tmax[r]);
+                    for (i, &t) in ts.iter().enumerate().take(cur.count as usize) {
+                        if t < best_t[r] || (t == best_t[r] && best[r] != NONE && ids[i] < best[r]) {
+                            best_t[r] = t;
+                            best[r] = ids[i];
+                        }
+                    }
+                }
+                reach = best_t[..n].iter().fold(f32::NEG_INFINITY, |m, &t| max(m, t));
+            } else {
+                let nd = &self.nodes[cur.child as usize];
+                let mut t0 = [0f32; 4];
+                let mut t1 = [0f32; 4];
+                for i in 0..4 {
+                    let (nx, ny, nz) = (nd.b[ax][i] - o[0], nd.b[ay][i] - o[1], nd.b[az][i] - o[2]);
+                    let (fx, fy, fz) = (nd.b[ax ^ 1][i] - o[0], nd.b[ay ^ 1][i] - o[1], nd.b[az ^ 1][i] - o[2]);
+                    // Rounded products are monotonic in each factor: the least entry and the
+                    // greatest exit over the packet are at the ends of its inverse directions.
+                    let ex = min(nx * lo[0], nx * hi[0]);
+                    let ey = min(ny * lo[1], ny * hi[1]);
+                    let ez = min(nz * lo[2], nz * hi[2]);
+                    let lx = max(fx * lo[0], fx * hi[0]);
+                    let ly = max(fy * lo[1], fy * hi[1]);
+                    let lz = max(fz * lo[2], fz * hi[2]);
+                    t0[i] = max(max(ex, ey), max(ez, tmin_lo));
+                    t1[i] = min(min(lx, ly), min(lz, reach));
+                }
+                let mut mask = 0u32;
+                for i in 0..4 {
+                    mask |= u32::from(t0[i] <= t1[i]) << i;
+                }
+                if mask != 0 {
+                    let entry = |i: usize| Entry {
+                        child: nd.child[i],
+                        count: nd.count[i],
+                        near: t0[i],
+                    };
+                    let first = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        cur = entry(first);
+                        continue;
+                    }
+                    let mut met = [entry(first); 4];
+                    let mut m = 1;
+                    while mask != 0 {
+                        let e = entry(mask.trailing_zeros() as usize);
+                        mask &= mask - 1;
+                        let mut k = m;
+                        while k > 0 && met[k - 1].near < e.near {
+                            met[k] = met[k - 1];
+                            k -= 1;
+                        }
+                        met[k] = e;
+                        m += 1;
+                    }
+                    stack.extend_from_slice(&met[..m - 1]);
+                    cur = met[m - 1];
+                    continue;
+                }
+            }
+            loop {
+                match stack.pop() {
+                    None => {
+                        out.copy_from_slice(&best[..n]);
+                        return;
+                    }
+                    Some(e) if e.near > reach => {}
                     Some(e) => {
                         cur = e;
                         break;
@@ -478,7 +647,7 @@ mod tests {
                 match kind {
                     1 => d[0] = 0.0,
                     2 => { d[2] = -0.0; d[0] = 0.0 }
-                    3 => d[1] = d[1] * 1e-3,
+                    3 => d[1] *= 1e-3,
                     _ => {}
                 }
                 let r = ray(o, d, tmin, 60.0);
@@ -522,6 +691,42 @@ mod tests {
             }
         }
         assert!(hits > 12_000, "{hits} hits, {ties} ties");
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// A packet's answers are each ray's own: rays from one origin in a narrow cone (one
+        /// packet), in a wide one (mixed signs: one by one), and from two origins.
+        #[test]
+        fn packets_equal_brute_force(
+            n in 1usize..10,
+            heights in prop::collection::vec(-2.0f32..2.0, 1..40),
+            loose in prop::collection::vec(prop::array::uniform9(-15.0f32..15.0), 0..20),
+            o in prop::array::uniform3(-12.0f32..12.0),
+            axis in prop::array::uniform3(-1.0f32..1.0),
+            spread in prop::sample::select(vec![1e-4f32, 1e-2, 0.2, 2.0]),
+            jitter in prop::collection::vec(prop::array::uniform3(-1.0f32..1.0), 1..=PACKET),
+            moved in any::<bool>(),
+        ) {
+            let tris = scene(n, &heights, &loose);
+            let bvh = Bvh4::new(&tris);
+            let mut stack = bvh.stack();
+            let rays: Vec<Ray> = jitter
+                .iter()
+                .enumerate()
+                .map(|(k, j)| {
+                    let d = [axis[0] + spread * j[0], axis[1] + spread * j[1], axis[2] + spread * j[2]];
+                    let o = if moved && k % 2 == 1 { [o[0] + 0.5, o[1], o[2]] } else { o };
+                    ray(o, d, 0.05 * (k % 3) as f32, 40.0 + k as f32)
+                })
+                .collect();
+            let mut out = vec![0u32; rays.len()];
+            bvh.nearest_packet(&rays, &mut out, &mut stack);
+            for (r, &got) in rays.iter().zip(&out) {
+                prop_assert_eq!(got, nearest_brute_force(&tris, r).unwrap_or(NONE), "{:?}", r);
+            }
+        }
     }
 
     /// Rays straight down onto the shared vertices and edges of a flat grid, and along it: every

@@ -46,7 +46,7 @@ use obvhs::ray::Ray;
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
-use crate::bvh4::{Bvh4, Entry};
+use crate::bvh4::{Bvh4, Entry, PACKET};
 use crate::geometry::{CameraPose, Lens, LightBasis};
 use crate::mesh::Mesh;
 
@@ -589,21 +589,45 @@ fn unlit(view: &View) -> View {
     }
 }
 
-/// Side of the square tiles in which the rays are traced.
+/// Side of the square tiles in which the rays are traced (one packet each).
 const TILE: usize = 8;
+const _: () = assert!(TILE * TILE <= PACKET);
 
-/// `f` of every sample of a `cols x rows` grid, row-major, computed in bands of [`TILE`] rows
-/// (in parallel) and inside a band in `TILE x TILE` tiles: neighbouring rays traced one after
-/// the other walk the same BVH nodes. The order changes no value.
-fn tiled<T: Send + Clone + Default>(cols: usize, rows: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+/// `f(k, id)` of every sample `k` of a `cols x rows` grid, row-major, where `id` is the
+/// nearest BVH triangle along `ray(k)` (an index into [`bvh_input`]'s triangles, or
+/// `u32::MAX`). The grid goes in bands of [`TILE`] rows (in parallel) and a band in
+/// `TILE x TILE` tiles, each tile's rays traced as one packet ([`Bvh4::nearest_packet`]: each
+/// ray's answer is its own). The order changes no value.
+fn tiled<T: Send + Clone + Default>(
+    tracer: &Tracer,
+    cols: usize,
+    rows: usize,
+    ray: impl Fn(usize) -> Ray + Sync,
+    f: impl Fn(usize, u32) -> T + Sync,
+) -> Vec<T> {
     let mut out: Vec<T> = vec![T::default(); cols * rows];
     out.par_chunks_mut(cols * TILE).enumerate().for_each(|(band, out)| {
         let band_rows = out.len() / cols;
+        let mut stack = tracer.bvh.as_ref().map_or_else(Vec::new, Bvh4::stack);
+        let mut rays = Vec::with_capacity(TILE * TILE);
+        let mut at = Vec::with_capacity(TILE * TILE);
+        let mut ids = [u32::MAX; TILE * TILE];
         for x0 in (0..cols).step_by(TILE) {
+            rays.clear();
+            at.clear();
             for y in 0..band_rows {
                 for x in x0..(x0 + TILE).min(cols) {
-                    out[y * cols + x] = f((band * TILE + y) * cols + x);
+                    at.push(y * cols + x);
+                    rays.push(ray((band * TILE + y) * cols + x));
                 }
+            }
+            let ids = &mut ids[..rays.len()];
+            match &tracer.bvh {
+                Some(bvh) => bvh.nearest_packet(&rays, ids, &mut stack),
+                None => ids.fill(u32::MAX),
+            }
+            for (&i, &id) in at.iter().zip(ids.iter()) {
+                out[i] = f(band * TILE * cols + i, id);
             }
         }
     });
@@ -744,16 +768,24 @@ impl SceneGeometry {
         let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
         let (cols, rows) = view.grid();
         let terms = view.ray_terms();
-        let hits = tiled(cols as usize, rows as usize, |k| self.hit(tracer, view, terms.ray(k)));
+        let hits = tiled(
+            tracer,
+            cols as usize,
+            rows as usize,
+            |k| traced_ray(view, terms.ray(k)),
+            |k, id| self.hit(tracer, view, terms.ray(k), id),
+        );
         Hits::new(*view, cols, rows, hits)
     }
 
-    fn hit(&self, tracer: &Tracer, view: &View, d: DVec3) -> Option<Hit> {
+    /// The hit of the sample whose ray direction is `d`, given the BVH triangle its binary32
+    /// ray meets first (`u32::MAX` for none).
+    fn hit(&self, tracer: &Tracer, view: &View, d: DVec3, bvh_id: u32) -> Option<Hit> {
         let origin = view.pose.position;
-        let ray = traced_ray(view, d);
-        let id = tracer
-            .nearest_bvh(&ray)
-            .map(|b| tracer.mesh_index[b as usize] as usize)?;
+        if bvh_id == u32::MAX {
+            return None;
+        }
+        let id = tracer.mesh_index[bvh_id as usize] as usize;
         let [a, b, c] = self.mesh.triangles[id];
         let mut n = (b - a).cross(c - a).normalize();
         let mut nd = n.dot(d);
@@ -811,9 +843,13 @@ impl SceneGeometry {
         let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
         let (cols, rows) = view.grid();
         let terms = view.ray_terms();
-        tiled(cols as usize, rows as usize, |k| {
-            tracer.nearest_bvh(&traced_ray(view, terms.ray(k))).unwrap_or(u32::MAX)
-        })
+        tiled(
+            tracer,
+            cols as usize,
+            rows as usize,
+            |k| traced_ray(view, terms.ray(k)),
+            |_, id| id,
+        )
     }
 
     /// Unit normal of triangle `id` (winding order; not oriented).
