@@ -12,7 +12,7 @@
 //! `d = f + r (2u/W - 1) tanH + u (1 - 2v/H) tanV`. Because `d . f = 1`, the ray parameter `t`
 //! of a hit *is* its view depth. Only hits with `near <= t <= far` count.
 //!
-//! **Exact hits.** The BVH (crate `obvhs`, binary32) only finds which triangle is nearest;
+//! **Exact hits.** The BVH ([`crate::bvh4`], binary32) only finds which triangle is nearest;
 //! the hit point, depth and normal are then recomputed in f64 from that triangle's plane, so
 //! the analytic tests hold to f64 precision.
 //!
