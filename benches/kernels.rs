@@ -132,6 +132,18 @@ fn visibility_pass(c: &mut Criterion) {
         b.iter(|| black_box(SceneGeometry::new(big.clone()).cast(&view).receivers.len()))
     });
     group.finish();
+    // Traversal alone (which triangle each full-HD primary ray meets; the BVH built once), on
+    // one thread: the kernel `scripts/speed/20-rays.sh` pairs with Embree.
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a pool");
+    let mut group = c.benchmark_group("traversal");
+    group.sample_size(10);
+    group.throughput(criterion::Throughput::Elements(1920 * 1080));
+    for (name, mesh) in [("default_scene_full_hd", mesh), ("terrain_100k_full_hd", big)] {
+        let scene = SceneGeometry::new(mesh);
+        let _ = scene.bvh_dropped();
+        group.bench_function(name, |b| b.iter(|| one.install(|| black_box(scene.trace(&view).len()))));
+    }
+    group.finish();
 }
 
 /// `recommendation.<engine>.txt`: matching Unreal's exponent to csm-lab's cascades (the 1-D

@@ -6,12 +6,14 @@
 //! `light_from_world`. The inputs are the plain values of [`scene`]. This crate knows no
 //! configuration file, file format, CLI or report: the application crate (`csm-lab`) calls into
 //! it. Its dependencies are glam (vectors), serde (derives only), rayon (parallel walks and
-//! ray casts) and obvhs (the BVH of the visibility pass); the architecture test holds it to that.
+//! ray casts) and obvhs (the binary BVH that the visibility pass's four-wide BVH is collapsed
+//! from); the architecture test holds it to that.
 //!
 //! Inside, plain values sit at the bottom ([`scene`], [`geometry`]) and no module circle exists:
 //! [`shimmer`] defines the motion metrics, [`walk`] is the one walk along a camera path,
 //! [`rig_path`] walks the exact f64 rig and [`precision`] the binary32 pipeline.
 
+mod bvh4;
 pub mod cascades;
 pub mod cost;
 pub mod depth_range;

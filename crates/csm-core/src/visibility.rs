@@ -12,7 +12,7 @@
 //! `d = f + r (2u/W - 1) tanH + u (1 - 2v/H) tanV`. Because `d . f = 1`, the ray parameter `t`
 //! of a hit *is* its view depth. Only hits with `near <= t <= far` count.
 //!
-//! **Exact hits.** The BVH (crate `obvhs`, binary32) only finds which triangle is nearest;
+//! **Exact hits.** The BVH ([`crate::bvh4`], binary32) only finds which triangle is nearest;
 //! the hit point, depth and normal are then recomputed in f64 from that triangle's plane, so
 //! the analytic tests hold to f64 precision.
 //!
@@ -42,13 +42,11 @@
 use std::sync::{Arc, Mutex, OnceLock};
 
 use glam::DVec3;
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
+use obvhs::ray::Ray;
 use obvhs::triangle::Triangle;
-use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
+use crate::bvh4::{Bvh4, Entry, PACKET};
 use crate::geometry::{CameraPose, Lens, LightBasis};
 use crate::mesh::Mesh;
 
@@ -440,15 +438,12 @@ pub fn sigma_min_2x2(a: f64, b: f64, c: f64, d: f64) -> f64 {
     (det / smax).max(smax / MAX_ANISOTROPY)
 }
 
-/// The BVH over a mesh's triangles (binary32, as the crate builds it), each distinct
-/// binary32 triangle once.
+/// The BVH over a mesh's triangles (binary32, [`crate::bvh4`]), each distinct binary32
+/// triangle once.
 struct Tracer {
     /// None when no triangle is left (every one degenerate in binary32).
-    bvh: Option<CwBvh>,
+    bvh: Option<Bvh4>,
     tris: Vec<Triangle>,
-    /// `tris` in the order of the BVH's leaves (`in_bvh_order[i]` is
-    /// `tris[primitive_indices[i]]`): one fetch per intersection test, not two.
-    in_bvh_order: Vec<Triangle>,
     /// The mesh index of each BVH triangle (its first occurrence).
     mesh_index: Vec<u32>,
     dropped: BvhDropped,
@@ -509,15 +504,10 @@ fn v3(p: DVec3) -> glam_bvh::Vec3A {
 impl Tracer {
     fn new(mesh: &Mesh) -> Tracer {
         let (tris, mesh_index, dropped) = bvh_input(mesh);
-        let bvh = (!tris.is_empty())
-            .then(|| build_cwbvh_from_tris(&tris, BvhBuildParams::fast_build(), &mut Default::default()));
-        let in_bvh_order = bvh.as_ref().map_or_else(Vec::new, |b| {
-            b.primitive_indices.iter().map(|&i| tris[i as usize]).collect()
-        });
+        let bvh = (!tris.is_empty()).then(|| Bvh4::new(&tris));
         Tracer {
             bvh,
             tris,
-            in_bvh_order,
             mesh_index,
             dropped,
         }
@@ -530,14 +520,23 @@ impl Tracer {
         self.nearest_bvh(&ray).map(|b| self.mesh_index[b as usize] as usize)
     }
 
-    /// Index (into [`bvh_input`]'s triangles) of the nearest triangle along a binary32 ray.
+    /// Index (into [`bvh_input`]'s triangles) of the nearest triangle along a binary32 ray:
+    /// least hit distance, ties to the least index ([`crate::bvh4`]).
     fn nearest_bvh(&self, ray: &Ray) -> Option<u32> {
         let bvh = self.bvh.as_ref()?;
-        let mut hit = RayHit::none();
-        let tris = &self.in_bvh_order;
-        bvh.ray_traverse(*ray, &mut hit, |r, id| tris[id].intersect(r))
-            .then(|| bvh.primitive_indices[hit.primitive_id as usize])
+        STACK.with(|s| {
+            let mut s = s.borrow_mut();
+            if s.capacity() == 0 {
+                *s = bvh.stack();
+            }
+            bvh.nearest(ray, &mut s)
+        })
     }
+}
+
+thread_local! {
+    /// Each thread's traversal stack, reused by every ray it traces.
+    static STACK: std::cell::RefCell<Vec<Entry>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// The binary32 ray the BVH traverses for the pixel whose (unnormalised) ray direction is `d`
@@ -590,21 +589,45 @@ fn unlit(view: &View) -> View {
     }
 }
 
-/// Side of the square tiles in which the rays are traced.
+/// Side of the square tiles in which the rays are traced (one packet each).
 const TILE: usize = 8;
+const _: () = assert!(TILE * TILE <= PACKET);
 
-/// `f` of every sample of a `cols x rows` grid, row-major, computed in bands of [`TILE`] rows
-/// (in parallel) and inside a band in `TILE x TILE` tiles: neighbouring rays traced one after
-/// the other walk the same BVH nodes. The order changes no value.
-fn tiled<T: Send + Clone + Default>(cols: usize, rows: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+/// `f(k, id)` of every sample `k` of a `cols x rows` grid, row-major, where `id` is the
+/// nearest BVH triangle along `ray(k)` (an index into [`bvh_input`]'s triangles, or
+/// `u32::MAX`). The grid goes in bands of [`TILE`] rows (in parallel) and a band in
+/// `TILE x TILE` tiles, each tile's rays traced as one packet ([`Bvh4::nearest_packet`]: each
+/// ray's answer is its own). The order changes no value.
+fn tiled<T: Send + Clone + Default>(
+    tracer: &Tracer,
+    cols: usize,
+    rows: usize,
+    ray: impl Fn(usize) -> Ray + Sync,
+    f: impl Fn(usize, u32) -> T + Sync,
+) -> Vec<T> {
     let mut out: Vec<T> = vec![T::default(); cols * rows];
     out.par_chunks_mut(cols * TILE).enumerate().for_each(|(band, out)| {
         let band_rows = out.len() / cols;
+        let mut stack = tracer.bvh.as_ref().map_or_else(Vec::new, Bvh4::stack);
+        let mut rays = Vec::with_capacity(TILE * TILE);
+        let mut at = Vec::with_capacity(TILE * TILE);
+        let mut ids = [u32::MAX; TILE * TILE];
         for x0 in (0..cols).step_by(TILE) {
+            rays.clear();
+            at.clear();
             for y in 0..band_rows {
                 for x in x0..(x0 + TILE).min(cols) {
-                    out[y * cols + x] = f((band * TILE + y) * cols + x);
+                    at.push(y * cols + x);
+                    rays.push(ray((band * TILE + y) * cols + x));
                 }
+            }
+            let ids = &mut ids[..rays.len()];
+            match &tracer.bvh {
+                Some(bvh) => bvh.nearest_packet(&rays, ids, &mut stack),
+                None => ids.fill(u32::MAX),
+            }
+            for (&i, &id) in at.iter().zip(ids.iter()) {
+                out[i] = f(band * TILE * cols + i, id);
             }
         }
     });
@@ -745,16 +768,24 @@ impl SceneGeometry {
         let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
         let (cols, rows) = view.grid();
         let terms = view.ray_terms();
-        let hits = tiled(cols as usize, rows as usize, |k| self.hit(tracer, view, terms.ray(k)));
+        let hits = tiled(
+            tracer,
+            cols as usize,
+            rows as usize,
+            |k| traced_ray(view, terms.ray(k)),
+            |k, id| self.hit(tracer, view, terms.ray(k), id),
+        );
         Hits::new(*view, cols, rows, hits)
     }
 
-    fn hit(&self, tracer: &Tracer, view: &View, d: DVec3) -> Option<Hit> {
+    /// The hit of the sample whose ray direction is `d`, given the BVH triangle its binary32
+    /// ray meets first (`u32::MAX` for none).
+    fn hit(&self, tracer: &Tracer, view: &View, d: DVec3, bvh_id: u32) -> Option<Hit> {
         let origin = view.pose.position;
-        let ray = traced_ray(view, d);
-        let id = tracer
-            .nearest_bvh(&ray)
-            .map(|b| tracer.mesh_index[b as usize] as usize)?;
+        if bvh_id == u32::MAX {
+            return None;
+        }
+        let id = tracer.mesh_index[bvh_id as usize] as usize;
         let [a, b, c] = self.mesh.triangles[id];
         let mut n = (b - a).cross(c - a).normalize();
         let mut nd = n.dot(d);
@@ -812,9 +843,13 @@ impl SceneGeometry {
         let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
         let (cols, rows) = view.grid();
         let terms = view.ray_terms();
-        tiled(cols as usize, rows as usize, |k| {
-            tracer.nearest_bvh(&traced_ray(view, terms.ray(k))).unwrap_or(u32::MAX)
-        })
+        tiled(
+            tracer,
+            cols as usize,
+            rows as usize,
+            |k| traced_ray(view, terms.ray(k)),
+            |_, id| id,
+        )
     }
 
     /// Unit normal of triangle `id` (winding order; not oriented).
@@ -988,14 +1023,9 @@ mod tests {
                     best = (d, k as u32);
                 }
             }
-            if best.1 == u32::MAX {
-                assert_eq!(id, u32::MAX);
-            } else {
-                hits += 1;
-                assert_ne!(id, u32::MAX);
-                // The same distance (a tie on a shared edge may pick either triangle).
-                assert_eq!(tris[id as usize].intersect(ray), best.0);
-            }
+            // The very triangle: a tie on a shared edge goes to the least index either way.
+            assert_eq!(id, best.1);
+            hits += usize::from(id != u32::MAX);
         }
         assert!(hits > rays.len() / 2, "{hits} of {}", rays.len());
     }
