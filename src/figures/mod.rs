@@ -142,9 +142,9 @@ fn usvg_options() -> resvg::usvg::Options<'static> {
     }
 }
 
-/// An SVG document parsed once (text laid out into outlines) and rasterised at any number of
-/// scales from that one tree. Parsing is a third to a half of rasterising a chart at its own
-/// size, so a figure drawn at two sizes (the PNG file and a report's copy) is parsed once.
+/// An SVG document parsed (text laid out into outlines), to rasterise from that tree. Parsing
+/// is a third to a half of rasterising a chart at its own size, and a figure's PNG file is also
+/// the copy a report inlines, so each figure is parsed and rasterised once.
 pub(crate) struct ParsedSvg(resvg::usvg::Tree);
 
 impl ParsedSvg {
