@@ -28,7 +28,7 @@ use csm_core::visibility::SceneGeometry;
 
 /// Cells of the height image along the scene's longer side.
 pub(crate) const GRID: usize = 256;
-/// The figure's size in SVG units (the PNG is twice that).
+/// The figure's size in SVG units and the PNG's in pixels (a report page shows it at that size).
 const SIZE: (u32, u32) = (1000, 860);
 /// Width of the key at the right.
 const KEY_W: u32 = 230;
@@ -57,8 +57,8 @@ pub(crate) struct Plan<'a> {
 
 /// `plan.png` of `config`'s level views, or None without scene geometry. `values` (a name and
 /// one number per view of [`Config::level_views`]) colour the views; `worst` rings one.
-/// `scale` is PNG pixels per SVG unit: 2 for the file (as every figure's PNG), 1 for the copy a
-/// report inlines.
+/// `scale` is PNG pixels per SVG unit: 1 for the file and the copy a report inlines (the size
+/// a page shows it, as every figure's PNG: [`super::png_scale`]).
 pub(crate) fn plan_png(
     config: &Config,
     values: Option<(&str, &[f64])>,
@@ -420,7 +420,7 @@ impl Plan<'_> {
                     resvg::tiny_skia::Transform::from_scale(scale, scale),
                     &mut pixmap.as_mut(),
                 );
-                super::encode_png(w, h, &super::opaque_rgb(pixmap))
+                super::encode_figure_png(w, h, &super::opaque_rgb(pixmap))
             })
             .collect()
     }
@@ -501,9 +501,9 @@ impl crate::output::Exporter<crate::analysis::Analysis> for PlanPng {
     }
     fn render(&self, a: &crate::analysis::Analysis) -> Result<Vec<u8>> {
         let Some((name, values, worst)) = level_values(&a.summary, &a.config) else {
-            return Ok(plan_png(&a.config, None, None, 2.0)?.unwrap_or_default());
+            return Ok(plan_png(&a.config, None, None, 1.0)?.unwrap_or_default());
         };
-        Ok(plan_png(&a.config, Some((name, &values)), worst, 2.0)?.unwrap_or_default())
+        Ok(plan_png(&a.config, Some((name, &values)), worst, 1.0)?.unwrap_or_default())
     }
 }
 

@@ -95,11 +95,18 @@ fn compose(cols: u32, rows: u32, colour: &[[u8; 3]], legend: &str) -> Result<Vec
     let (lw, lh, lrgb) = svg_to_rgb(legend.replace("{W}", &w.to_string()).as_bytes(), 1.0)?;
     let h = rows * k + lh;
     let mut out = vec![255u8; (w * h * 3) as usize];
-    for y in 0..rows * k {
-        for x in 0..w {
-            let c = colour[((y / k) * cols + x / k) as usize];
-            let o = ((y * w + x) * 3) as usize;
-            out[o..o + 3].copy_from_slice(&c);
+    // Each sampled row is enlarged once (every pixel k times) and copied to its k rows.
+    let row = (w * 3) as usize;
+    for (y, line) in out[..row * (rows * k) as usize]
+        .chunks_exact_mut(row * k as usize)
+        .enumerate()
+    {
+        let (first, rest) = line.split_at_mut(row);
+        for (x, px) in first.chunks_exact_mut(3).enumerate() {
+            px.copy_from_slice(&colour[y * cols as usize + x / k as usize]);
+        }
+        for copy in rest.chunks_exact_mut(row) {
+            copy.copy_from_slice(first);
         }
     }
     for y in 0..lh {

@@ -64,13 +64,10 @@ pub(crate) fn figure(svg: &[u8], caption: &str) -> String {
 }
 
 /// The largest SVG inlined in a page as SVG; a larger one (a figure of a big grid) is inlined
-/// as a PNG of at most [`INLINE_PNG_WIDTH`] pixels, linked to the full files beside the page,
-/// so the page stays small and still shows every figure when sent on its own.
+/// as its PNG file (at most the page's width, [`crate::figures::png_scale`]), linked to the
+/// full files beside the page, so the page stays small and still shows every figure when sent
+/// on its own.
 pub(crate) const INLINE_SVG_LIMIT: usize = 256 * 1024;
-
-/// The widest PNG a page inlines in place of a large SVG, in pixels: the page's column (1280
-/// pixels of text width; the figures are drawn legible at that width).
-pub(crate) const INLINE_PNG_WIDTH: f32 = 1280.0;
 
 /// A figure inlined as a PNG data URI, linked to the full `{stem}.svg` and `{stem}.png` beside
 /// the page.
@@ -85,17 +82,12 @@ pub(crate) fn figure_png(stem: &str, png: &[u8], width: u32, caption: &str, svg_
     )
 }
 
-/// The PNG a page inlines in place of an SVG larger than [`INLINE_SVG_LIMIT`]: at most
-/// [`INLINE_PNG_WIDTH`] pixels wide, rasterised from the figure's parsed SVG (`tree`, so a
-/// figure rasterised for its PNG file too is parsed once): (PNG bytes, width in pixels). None
-/// for an SVG small enough to inline as it is.
-pub(crate) fn inline_png(svg: &[u8], tree: &crate::figures::ParsedSvg) -> crate::error::Result<Option<(Vec<u8>, u32)>> {
-    if svg.len() <= INLINE_SVG_LIMIT {
-        return Ok(None);
-    }
-    let (w, _) = tree.size();
-    let scale = (INLINE_PNG_WIDTH / w).min(1.0);
-    Ok(Some((tree.png_compact(scale)?, (w * scale).ceil() as u32)))
+/// What a page inlines in place of an SVG larger than [`INLINE_SVG_LIMIT`]: the figure's PNG
+/// file itself (`png`, `width` pixels wide: the size a page shows it,
+/// [`crate::figures::png_scale`]), so the figure is rasterised and encoded once: (PNG bytes,
+/// width in pixels). None for an SVG small enough to inline as it is.
+pub(crate) fn inline_png(svg: &[u8], png: &[u8], width: u32) -> Option<(Vec<u8>, u32)> {
+    (svg.len() > INLINE_SVG_LIMIT).then(|| (png.to_vec(), width))
 }
 
 /// Inline as SVG when small, as the PNG [`inline_png`] made when not ([`INLINE_SVG_LIMIT`]):

@@ -1358,8 +1358,8 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
     )];
     let figures = if plots { render_figures(r)? } else { Vec::new() };
     // The plan of the level's views, with scene geometry and plots, each view coloured by its
-    // objective at the level's choice and the worst ringed; the report inlines a copy at the
-    // figure's own size, so the page stays small.
+    // objective at the level's choice and the worst ringed; drawn at its own size, the size
+    // the page shows it, so the report inlines the file itself.
     // A view that sees no receiver has no objective: not a number, drawn neutral.
     let per_view: Option<Vec<f64>> = r.level.as_ref().map(|c| {
         c.views
@@ -1369,10 +1369,10 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
     });
     let values = per_view.as_deref().map(|v| (r.objective.name(), v));
     let worst = r.level.as_ref().map(|c| c.worst);
-    // Rasterising is most of the figures' time: each SVG is parsed once and rasterised from
-    // that tree for its PNG file (2×, less past `MAX_PNG_PIXELS`) and, when too large to
-    // inline as SVG, for the page's copy; the figures, their two sizes and the plan go in
-    // parallel (rayon keeps their order, so the files are the same at any thread count).
+    // Rasterising is most of the figures' time: each SVG is parsed and rasterised once, at
+    // the size the page shows it (`figures::png_scale`), and that PNG file is also the page's
+    // copy when the SVG is too large to inline; the figures and the plan go in parallel
+    // (rayon keeps their order, so the files are the same at any thread count).
     let (pngs, plan) = rayon::join(
         || {
             use rayon::prelude::*;
@@ -1380,17 +1380,16 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
                 .par_iter()
                 .map(|(_, _, svg)| {
                     let tree = crate::figures::ParsedSvg::parse(svg)?;
-                    let (file, inline) = rayon::join(
-                        || tree.png(crate::figures::png_scale(tree.size())),
-                        || html::inline_png(svg, &tree),
-                    );
-                    Ok((file?, inline?))
+                    let (w, h, rgb) = tree.rgb(crate::figures::png_scale(tree.size()))?;
+                    let file = crate::figures::encode_figure_png(w, h, &rgb)?;
+                    let inline = html::inline_png(svg, &file, w);
+                    Ok((file, inline))
                 })
                 .collect::<Result<Vec<_>>>()
         },
         || {
             if plots {
-                crate::figures::plan::plan_pngs(&r.config, values, worst, &[2.0, 1.0])
+                crate::figures::plan::plan_png(&r.config, values, worst, 1.0)
             } else {
                 Ok(None)
             }
@@ -1426,21 +1425,16 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
     if let Some(png) = &sheet {
         files.push((super::views::SHEET.to_string(), png.clone()));
     }
-    let (plan, plan_inline) = match plan {
-        Some(mut v) => {
-            let inline = v.pop();
-            (v.pop(), inline)
-        }
-        None => (None, None),
-    };
-    if let Some(png) = plan {
-        files.push((crate::figures::plan::FILE.to_string(), png));
+    // The plan's file is drawn at the size the page shows it, so the page inlines the same
+    // bytes.
+    if let Some(png) = &plan {
+        files.push((crate::figures::plan::FILE.to_string(), png.clone()));
     }
     files.push((
         "report.html".to_string(),
-        report_html(r, &figures, &inline, sheet.as_deref(), plan_inline.as_deref())?,
+        report_html(r, &figures, &inline, sheet.as_deref(), plan.as_deref())?,
     ));
-    let level_plan = r.level.is_some() && plan_inline.is_some();
+    let level_plan = r.level.is_some() && plan.is_some();
     files.push((
         "report.md".to_string(),
         report_md(r, &figures, sheet.is_some(), level_plan),

@@ -599,12 +599,14 @@ fn a_heat_map_of_many_resolutions_draws_six_of_them_and_its_png_stays_bounded() 
         "the note says which panels are drawn"
     );
     // Six panel columns (400 SVG pixels each) and four rows (2 metrics × 2 fits): 2440 × 1310,
-    // which at 2× would be 12.8 million pixels; the PNG is scaled to at most 8 million.
+    // wider than a page: the PNG is the page's 1280 pixels wide, the height in proportion.
     assert!(svg.starts_with("<svg width=\"2440\" height=\"1310\""), "{}", &svg[..60]);
     let (w, h) = png_size(&std::fs::read(out.join("heatmap.png")).unwrap());
-    let scale = (8.0e6f64 / (2440.0 * 1310.0)).sqrt();
-    assert_eq!((w, h), ((2440.0 * scale).ceil() as u32, (1310.0 * scale).ceil() as u32));
-    assert!(f64::from(w) * f64::from(h) <= 8.0e6 + f64::from(w + h));
-    // A figure under the cap keeps 2×.
-    assert_eq!(png_size(&std::fs::read(out.join("pareto.png")).unwrap()), (1920, 1264));
+    let scale = 1280.0f32 / 2440.0;
+    assert_eq!((w, h), (1280, (1310.0 * scale).ceil() as u32));
+    // A figure no wider than a page keeps its own size.
+    assert!(std::fs::read_to_string(out.join("pareto.svg"))
+        .unwrap()
+        .starts_with("<svg width=\"960\" height=\"632\""));
+    assert_eq!(png_size(&std::fs::read(out.join("pareto.png")).unwrap()), (960, 632));
 }

@@ -109,3 +109,27 @@ pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
         .collect();
     (header, rows)
 }
+
+/// Standard base64 decoding (the page's data URIs), written here.
+pub fn unbase64(s: &str) -> Vec<u8> {
+    let val = |c: u8| match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        b'/' => 63,
+        _ => panic!("not base64: {c}"),
+    };
+    let mut out = Vec::new();
+    for chunk in s.as_bytes().chunks(4) {
+        let n = chunk.iter().take_while(|c| **c != b'=').count();
+        let mut v = 0u32;
+        for (i, c) in chunk.iter().enumerate() {
+            v |= u32::from(if i < n { val(*c) } else { 0 }) << (18 - 6 * i);
+        }
+        for i in 0..n - 1 {
+            out.push((v >> (16 - 8 * i)) as u8);
+        }
+    }
+    out
+}

@@ -10,6 +10,8 @@ use csm_lab::figures::truth::{
 use csm_lab::figures::Figure;
 use csm_lab::report::truth::{section, Animation, TruthPictures};
 
+use crate::common::unbase64;
+
 /// A decoded RGB8 image.
 struct Rgb {
     w: u32,
@@ -654,30 +656,6 @@ fn a_constant_flicker_has_no_correlation_and_no_nan() {
     let (stem, caption, bytes) = truth::flicker_vs_shimmer_figure("d", &pts).unwrap();
     assert_eq!(stem, "flicker_vs_shimmer");
     assert!(caption.contains("S5") && bytes.starts_with(b"<svg"));
-}
-
-/// Standard base64 decoding (the page's data URIs), written here.
-fn unbase64(s: &str) -> Vec<u8> {
-    let val = |c: u8| match c {
-        b'A'..=b'Z' => c - b'A',
-        b'a'..=b'z' => c - b'a' + 26,
-        b'0'..=b'9' => c - b'0' + 52,
-        b'+' => 62,
-        b'/' => 63,
-        _ => panic!("not base64: {c}"),
-    };
-    let mut out = Vec::new();
-    for chunk in s.as_bytes().chunks(4) {
-        let n = chunk.iter().take_while(|c| **c != b'=').count();
-        let mut v = 0u32;
-        for (i, c) in chunk.iter().enumerate() {
-            v |= u32::from(if i < n { val(*c) } else { 0 }) << (18 - 6 * i);
-        }
-        for i in 0..n - 1 {
-            out.push((v >> (16 - 8 * i)) as u8);
-        }
-    }
-    out
 }
 
 #[test]

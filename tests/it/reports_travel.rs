@@ -8,6 +8,8 @@ use std::process::Command;
 
 use serde_json::Value;
 
+use crate::common::unbase64;
+
 fn run(dir: &Path, args: &[&str]) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_csm-lab"))
         .args(args)
@@ -16,30 +18,6 @@ fn run(dir: &Path, args: &[&str]) -> String {
         .unwrap();
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
     String::from_utf8(out.stdout).unwrap()
-}
-
-/// Standard base64 decoding, written here (independent of the encoder under test).
-fn unbase64(s: &str) -> Vec<u8> {
-    let val = |c: u8| match c {
-        b'A'..=b'Z' => c - b'A',
-        b'a'..=b'z' => c - b'a' + 26,
-        b'0'..=b'9' => c - b'0' + 52,
-        b'+' => 62,
-        b'/' => 63,
-        _ => panic!("not base64: {c}"),
-    };
-    let mut out = Vec::new();
-    for chunk in s.as_bytes().chunks(4) {
-        let n = chunk.iter().take_while(|c| **c != b'=').count();
-        let mut v = 0u32;
-        for (i, c) in chunk.iter().enumerate() {
-            v |= u32::from(if i < n { val(*c) } else { 0 }) << (18 - 6 * i);
-        }
-        for i in 0..n - 1 {
-            out.push((v >> (16 - 8 * i)) as u8);
-        }
-    }
-    out
 }
 
 /// A decoded PNG: (width, height, RGB8 pixels).
@@ -125,6 +103,14 @@ fn the_sweep_report_shows_every_figure_from_the_single_file_captioned_by_the_obj
         .expect("the heat map inlined");
     let (w, _, _) = decode_png(&heat.0);
     assert_eq!(w, 1280);
+    // One raster serves the file and the page: the inlined heat map has heatmap.png's pixels
+    // (another compression), and the inlined plan is plan.png itself.
+    assert_eq!(
+        decode_png(&heat.0),
+        decode_png(&std::fs::read(out.join("heatmap.png")).unwrap())
+    );
+    let plan = std::fs::read(out.join("plan.png")).unwrap();
+    assert!(imgs.iter().any(|i| i.0 == plan), "plan.png inlined as it is");
     // The page can be sent alone: the report's files beside it are linked, never needed.
     let alone = tempfile::tempdir().unwrap();
     std::fs::write(alone.path().join("report.html"), &page).unwrap();

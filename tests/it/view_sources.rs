@@ -143,7 +143,7 @@ fn centroid(png: &[u8], colour: [u8; 3], right: u32) -> (f64, f64) {
 
 #[test]
 fn plan_png_puts_the_camera_where_it_stands_with_x_right_and_minus_z_up() {
-    // The plan is written with geometry, as a 2000 x 1720 PNG; the dot of the one view moves
+    // The plan is written with geometry, as a 1000 x 860 PNG (its own size, the size a page shows it); the dot of the one view moves
     // across the page as the camera moves: +x to the right, -z up, linearly and with one scale.
     let dot = [0u8, 114, 178];
     let at = |x: f64, z: f64| {
@@ -160,21 +160,21 @@ fn plan_png_puts_the_camera_where_it_stands_with_x_right_and_minus_z_up() {
         let out = analyze(dir.path(), &text);
         assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
         let png = std::fs::read(dir.path().join("out/plan.png")).unwrap();
-        assert_eq!(&png[16..24], &[0, 0, 0x07, 0xd0, 0, 0, 0x06, 0xb8], "2000 x 1720");
-        centroid(&png, dot, 1540)
+        assert_eq!(&png[16..24], &[0, 0, 0x03, 0xe8, 0, 0, 0x03, 0x5c], "1000 x 860");
+        centroid(&png, dot, 770)
     };
     let (o, right, up) = (at(0.0, 0.0), at(100.0, 0.0), at(0.0, -100.0));
     let (left, down) = (at(-100.0, 0.0), at(0.0, 100.0));
     // Right and left of the centre by the same distance; up and down likewise.
-    assert!(right.0 - o.0 > 100.0 && (right.1 - o.1).abs() < 1.0, "{o:?} {right:?}");
+    assert!(right.0 - o.0 > 50.0 && (right.1 - o.1).abs() < 0.5, "{o:?} {right:?}");
     assert!(
-        ((right.0 - o.0) - (o.0 - left.0)).abs() < 1.5,
+        ((right.0 - o.0) - (o.0 - left.0)).abs() < 0.75,
         "{left:?} {o:?} {right:?}"
     );
-    assert!(o.1 - up.1 > 100.0 && (up.0 - o.0).abs() < 1.0, "{o:?} {up:?}");
-    assert!(((o.1 - up.1) - (down.1 - o.1)).abs() < 1.5, "{up:?} {o:?} {down:?}");
+    assert!(o.1 - up.1 > 50.0 && (up.0 - o.0).abs() < 0.5, "{o:?} {up:?}");
+    assert!(((o.1 - up.1) - (down.1 - o.1)).abs() < 0.75, "{up:?} {o:?} {down:?}");
     // One scale on both axes.
-    assert!(((right.0 - o.0) - (o.1 - up.1)).abs() < 1.5, "{o:?} {right:?} {up:?}");
+    assert!(((right.0 - o.0) - (o.1 - up.1)).abs() < 0.75, "{o:?} {right:?} {up:?}");
     // Without geometry there is no plan.
     let dir = tempfile::tempdir().unwrap();
     let out = analyze(dir.path(), BASE);
