@@ -347,6 +347,9 @@ pub struct Visibility {
     pub depth_range: Option<(f64, f64)>,
     /// Smallest and largest factor `g` of the receivers, or None without receivers.
     pub factor_range: Option<(f64, f64)>,
+    /// What the screen statistics of every setting read, made on first use
+    /// ([`Visibility::index`]).
+    pub screen_index: crate::screen::IndexCell,
 }
 
 impl Visibility {
@@ -397,6 +400,7 @@ impl Visibility {
             self_shadowed,
             depth_range,
             factor_range,
+            screen_index: Default::default(),
         }
     }
 
