@@ -90,10 +90,14 @@ struct Buckets {
 }
 
 impl Buckets {
-    /// Buckets of a level's pool.
+    /// Most buckets of a pool.
     const COUNT: usize = 4096;
-    /// Buckets of one view's own pool.
-    const VIEW_COUNT: usize = 256;
+
+    /// The bucket count for a pool of `groups` groups: a power of two, about four buckets per
+    /// group, from 256 to [`Self::COUNT`].
+    fn count_for(groups: usize) -> usize {
+        (4 * groups).next_power_of_two().clamp(256, Self::COUNT)
+    }
 
     /// Keys below `count` (a power of two) for the values in `[lo, hi]`.
     fn new(lo: f64, hi: f64, count: usize) -> Self {
@@ -152,6 +156,8 @@ fn served_runs(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<(usize, 
 const BUCKET: usize = 128;
 /// Receivers per block of a [`ScreenIndex`]'s depth-order prefix sums.
 const BLOCK: usize = 64;
+/// Receivers per row of a [`ScreenIndex`]'s bucket counts (in depth order).
+const ROW: usize = 256;
 /// Binary digits of the whole numbers a view's `g` is counted in: the largest `g` of a view is
 /// below `2^(SUM_BITS - b)` units, `b` the binary digits of the view's receiver count, so any
 /// sum of them stays below `2^SUM_BITS`.
@@ -163,10 +169,12 @@ const WEIGHT_BITS: i32 = 25;
 /// What every setting's statistics of one pass read, made once per pass (it depends on the
 /// view and the light only, see [`Visibility::index`]). The receivers, ranked by `g` (ties by
 /// depth), are cut into buckets of [`BUCKET`] consecutive ranks; each bucket lists its
-/// receivers in depth order, with `g`, the contrast weight and the running sum of the weights.
-/// So the receivers of a cascade (a depth range) in one bucket are a slice found by a binary
-/// search, and all their values `t g` lie between `t` times the bucket's smallest and largest
-/// `g`. The sums of `g` and `w g` over depth ranges are read from prefix sums in whole units.
+/// receivers in depth order, with `g` and the contrast weight. Every [`ROW`] receivers (in
+/// depth order) a row holds each bucket's count and contrast weight of the receivers before.
+/// So the receivers of a cascade (a depth range) in one bucket are a slice located by a row
+/// and at most `ROW - 1` receivers counted on, and all their values `t g` lie between `t` times
+/// the bucket's smallest and largest `g`. The sums of `g` and `w g` over depth ranges are read
+/// from prefix sums in whole units.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ScreenIndex {
     /// Bucket `b`'s entries are `start[b]..start[b + 1]`.
@@ -175,8 +183,12 @@ pub struct ScreenIndex {
     idx: Vec<u32>,
     g: Vec<f64>,
     w: Vec<u32>,
-    /// `wpre[i]`: the contrast weights of the entries before `i`.
-    wpre: Vec<u64>,
+    /// Per receiver (depth order): its bucket.
+    bucket_of: Vec<u32>,
+    /// Row `j` (buckets-long): per bucket, the count and the contrast weight of its receivers
+    /// before receiver `j ROW`.
+    rows: Vec<u32>,
+    wrows: Vec<u64>,
     /// Per bucket: its smallest and largest `g`.
     glo: Vec<f64>,
     ghi: Vec<f64>,
@@ -243,12 +255,24 @@ impl ScreenIndex {
         let start = (0..=buckets).map(|b| (b * BUCKET).min(n) as u32).collect();
         let g: Vec<f64> = order.iter().map(|&i| r[i as usize].1).collect();
         let w: Vec<u32> = order.iter().map(|&i| vis.weights[i as usize]).collect();
-        let mut wpre = Vec::with_capacity(n + 1);
-        let mut acc = 0u64;
-        wpre.push(0);
-        for &x in &w {
-            acc += x as u64;
-            wpre.push(acc);
+        let mut bucket_of = vec![0u32; n];
+        for (b, chunk) in order.chunks(BUCKET).enumerate() {
+            for &i in chunk {
+                bucket_of[i as usize] = b as u32;
+            }
+        }
+        let mut rows = Vec::with_capacity((n / ROW + 1) * buckets);
+        let mut wrows = Vec::with_capacity((n / ROW + 1) * buckets);
+        let (mut count, mut weight) = (vec![0u32; buckets], vec![0u64; buckets]);
+        for k in 0..=n {
+            if k % ROW == 0 {
+                rows.extend_from_slice(&count);
+                wrows.extend_from_slice(&weight);
+            }
+            if k < n {
+                count[bucket_of[k] as usize] += 1;
+                weight[bucket_of[k] as usize] += vis.weights[k] as u64;
+            }
         }
         // The largest g is below 2^top.
         let g_hi = ghi.last().copied().unwrap_or(0.0);
@@ -271,7 +295,9 @@ impl ScreenIndex {
             idx: order,
             g,
             w,
-            wpre,
+            bucket_of,
+            rows,
+            wrows,
             glo,
             ghi,
             unit,
@@ -321,6 +347,8 @@ struct ViewPass<'a> {
     counts: Vec<usize>,
     n: usize,
     groups: Vec<Group>,
+    /// Per run: its groups, `groups[a..b]`, in bucket order (so their bounds never decrease).
+    run_groups: Vec<(usize, usize)>,
     /// Sums over served pixels: `t g`, `w t g`, `w`; the undersampled count; the maxima.
     sum: f64,
     wsum: f64,
@@ -346,6 +374,7 @@ impl<'a> ViewPass<'a> {
             counts,
             n,
             groups: Vec::new(),
+            run_groups: Vec::new(),
             sum: 0.0,
             wsum: 0.0,
             wtotal: 0,
@@ -379,20 +408,31 @@ impl<'a> ViewPass<'a> {
             pass.wsum += t * wg;
             pass.wtotal += sums[jb].2 - sums[ja].2;
         }
-        // Each bucket's entries at each bound (binary searches in its depth-ordered list).
+        // Each bucket's entries before each bound, and their contrast weight: the row at or
+        // below the bound, and the receivers from it to the bound counted on.
         let nb = bounds.len();
-        let mut cut = vec![0u32; ix.buckets() * nb];
-        for b in 0..ix.buckets() {
-            let (s, e) = (ix.start[b] as usize, ix.start[b + 1] as usize);
-            let list = &ix.idx[s..e];
-            let mut at = 0;
-            for (j, &p) in bounds.iter().enumerate() {
-                at += list[at..].partition_point(|&i| (i as usize) < p);
-                cut[b * nb + j] = (s + at) as u32;
+        let buckets = ix.buckets();
+        let mut cut = vec![0u32; buckets * nb];
+        let mut wcut = vec![0u64; buckets * nb];
+        for (j, &p) in bounds.iter().enumerate() {
+            let row = p / ROW;
+            let (c, w) = (
+                &ix.rows[row * buckets..][..buckets],
+                &ix.wrows[row * buckets..][..buckets],
+            );
+            for b in 0..buckets {
+                cut[b * nb + j] = ix.start[b] + c[b];
+                wcut[b * nb + j] = w[b];
+            }
+            for k in row * ROW..p {
+                let b = ix.bucket_of[k] as usize;
+                cut[b * nb + j] += 1;
+                wcut[b * nb + j] += vis.weights[k] as u64;
             }
         }
         let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
         for (&(_, _, t), &(ja, jb)) in pass.runs.iter().zip(&ends) {
+            let first = pass.groups.len();
             let mut top = None;
             let mut wtop = None;
             for b in 0..ix.buckets() {
@@ -401,7 +441,7 @@ impl<'a> ViewPass<'a> {
                     continue;
                 }
                 let (vlo, vhi) = (t * ix.glo[b], t * ix.ghi[b]);
-                let cw = ix.wpre[ghi as usize] - ix.wpre[glo as usize];
+                let cw = wcut[b * nb + jb] - wcut[b * nb + ja];
                 pass.groups.push(Group {
                     lo: glo,
                     hi: ghi,
@@ -434,11 +474,14 @@ impl<'a> ViewPass<'a> {
                     }
                 }
             }
+            pass.run_groups.push((first, pass.groups.len()));
             // The maxima: the largest g of the run's highest bucket (of weight above 0 for
             // the visible maximum); t g never decreases with g.
             if let Some(k) = top {
                 let gr = pass.groups[k];
-                let g = ix.g[gr.lo as usize..gr.hi as usize].iter().fold(0.0f64, |a, &x| a.max(x));
+                let g = ix.g[gr.lo as usize..gr.hi as usize]
+                    .iter()
+                    .fold(0.0f64, |a, &x| a.max(x));
                 let m = t * g;
                 pass.max = if m > pass.max { m } else { pass.max };
             }
@@ -509,21 +552,25 @@ fn select(pools: &[(&ViewPass<'_>, u64)], buckets: Buckets, count: usize) -> ([[
             for &(pass, s) in pools {
                 let s = s as u128;
                 let ix = pass.ix;
-                for gr in &pass.groups {
-                    if buckets.key(gr.vlo) > hi || buckets.key(gr.vhi) < lo {
-                        continue;
-                    }
-                    for i in gr.lo as usize..gr.hi as usize {
-                        let w = if kind == 0 { s } else { ix.w[i] as u128 * s };
-                        if w == 0 {
-                            continue;
-                        }
-                        let m = gr.t * ix.g[i];
-                        let k = buckets.key(m);
-                        if k < lo {
-                            below += w;
-                        } else if k <= hi {
-                            cands.push((m, w));
+                // A run's groups reaching into the range are consecutive: those after every
+                // group ending below it, before the first starting above it.
+                for &(a, z) in &pass.run_groups {
+                    let run = &pass.groups[a..z];
+                    let from = run.partition_point(|gr| buckets.key(gr.vhi) < lo);
+                    let to = from + run[from..].partition_point(|gr| buckets.key(gr.vlo) <= hi);
+                    for gr in &run[from..to] {
+                        for i in gr.lo as usize..gr.hi as usize {
+                            let w = if kind == 0 { s } else { ix.w[i] as u128 * s };
+                            if w == 0 {
+                                continue;
+                            }
+                            let m = gr.t * ix.g[i];
+                            let k = buckets.key(m);
+                            if k < lo {
+                                below += w;
+                            } else if k <= hi {
+                                cands.push((m, w));
+                            }
                         }
                     }
                 }
@@ -539,7 +586,7 @@ fn select(pools: &[(&ViewPass<'_>, u64)], buckets: Buckets, count: usize) -> ([[
 /// which are sorted.
 fn resolve(mut cands: Vec<(f64, u128)>, mut below: u128, target: u128) -> f64 {
     const COUNT: usize = 1024;
-    while cands.len() > 256 {
+    while cands.len() > 64 {
         let (lo, hi) = cands
             .iter()
             .fold((f64::INFINITY, 0.0f64), |(l, h), x| (l.min(x.0), h.max(x.0)));
@@ -601,7 +648,8 @@ pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f
 fn own_stats(pass: &ViewPass<'_>, visible: Option<(f64, f64)>) -> ScreenStats {
     let (plain, weighted) = match pass.range {
         Some((lo, hi)) => {
-            let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, Buckets::VIEW_COUNT), Buckets::VIEW_COUNT);
+            let count = Buckets::count_for(pass.groups.len());
+            let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, count), count);
             (v[0], v[1])
         }
         None => ([0.0; 3], [0.0; 3]),
@@ -609,7 +657,10 @@ fn own_stats(pass: &ViewPass<'_>, visible: Option<(f64, f64)>) -> ScreenStats {
     let (mean, under) = if pass.n == 0 {
         (0.0, 0.0)
     } else {
-        (quotient(pass.sum, 0.0, pass.n as f64), pass.under as f64 / pass.n as f64)
+        (
+            quotient(pass.sum, 0.0, pass.n as f64),
+            pass.under as f64 / pass.n as f64,
+        )
     };
     let visible_mean = if pass.wtotal > 0 {
         quotient(pass.wsum, 0.0, pass.wtotal as f64)
@@ -748,7 +799,10 @@ fn pool_passes<'a>(parts: &[PoolPart<'a>], octaves: bool) -> (Pooled, Vec<ViewPa
         .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)));
     let pools: Vec<(&ViewPass<'_>, u64)> = passes.iter().zip(parts).map(|(x, p)| (x, p.steps)).collect();
     let (level_p, totals) = match range {
-        Some((lo, hi)) => select(&pools, Buckets::new(lo, hi, Buckets::COUNT), Buckets::COUNT),
+        Some((lo, hi)) => {
+            let count = Buckets::count_for(passes.iter().map(|p| p.groups.len()).sum());
+            select(&pools, Buckets::new(lo, hi, count), count)
+        }
         None => ([[0.0; 3]; 2], [0; 2]),
     };
 
@@ -792,7 +846,11 @@ fn pool_passes<'a>(parts: &[PoolPart<'a>], octaves: bool) -> (Pooled, Vec<ViewPa
     let level = ScreenStats {
         receiver_fraction: recv / samples,
         self_shadowed_fraction: shadowed / samples,
-        aliasing_mean: if served > 0.0 { quotient(sum.0, sum.1, served) } else { 0.0 },
+        aliasing_mean: if served > 0.0 {
+            quotient(sum.0, sum.1, served)
+        } else {
+            0.0
+        },
         aliasing_p50: level_p[0][0],
         aliasing_p95: level_p[0][1],
         aliasing_p99: level_p[0][2],
@@ -833,7 +891,9 @@ impl PartialEq for IndexCell {
 
 impl std::fmt::Debug for IndexCell {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("IndexCell").field("made", &self.0.get().is_some()).finish()
+        f.debug_struct("IndexCell")
+            .field("made", &self.0.get().is_some())
+            .finish()
     }
 }
 
@@ -1114,16 +1174,26 @@ mod tests {
             let splits = [0.5, cut as f64 + 0.5, n as f64 + 1.0];
             let texel = [0.7, 1.9];
             let st = stats(&vis, &splits, &texel, None);
-            let mut all: Vec<f64> = (0..n).map(|k| if k < cut { 0.7 * g[k].1 } else { 1.9 * g[k].1 }).collect();
+            let mut all: Vec<f64> = (0..n)
+                .map(|k| if k < cut { 0.7 * g[k].1 } else { 1.9 * g[k].1 })
+                .collect();
             let sum: f64 = all.iter().sum();
             all.sort_by(f64::total_cmp);
             let want: Vec<f64> = [50.0, 95.0, 99.0].iter().map(|&p| all[rank_index(p, n)]).collect();
-            assert_eq!(vec![st.aliasing_p50, st.aliasing_p95, st.aliasing_p99], want, "n = {n}, spread = {spread}");
+            assert_eq!(
+                vec![st.aliasing_p50, st.aliasing_p95, st.aliasing_p99],
+                want,
+                "n = {n}, spread = {spread}"
+            );
             assert_eq!(st.aliasing_max, all[n - 1]);
             let under = all.iter().filter(|&&m| m > 1.0).count();
             assert_eq!(st.undersampled_fraction, under as f64 / n as f64);
             let mean = sum / n as f64;
-            assert!((st.aliasing_mean - mean).abs() <= 1e-13 * mean, "{} vs {mean}", st.aliasing_mean);
+            assert!(
+                (st.aliasing_mean - mean).abs() <= 1e-13 * mean,
+                "{} vs {mean}",
+                st.aliasing_mean
+            );
         }
     }
 
@@ -1171,11 +1241,19 @@ mod tests {
                     unreachable!()
                 })
                 .collect();
-            assert_eq!(vec![st.visible_p50, st.visible_p95, st.visible_p99], want, "n = {n}, spread = {spread}");
+            assert_eq!(
+                vec![st.visible_p50, st.visible_p95, st.visible_p99],
+                want,
+                "n = {n}, spread = {spread}"
+            );
             let vmax = all.iter().filter(|x| x.1 > 0).map(|x| x.0).fold(0.0, f64::max);
             assert_eq!(st.visible_max, vmax);
             let mean = wsum / total as f64;
-            assert!((st.visible_mean - mean).abs() <= 1e-13 * mean, "{} vs {mean}", st.visible_mean);
+            assert!(
+                (st.visible_mean - mean).abs() <= 1e-13 * mean,
+                "{} vs {mean}",
+                st.visible_mean
+            );
         }
     }
 
