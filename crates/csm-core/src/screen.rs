@@ -872,35 +872,10 @@ fn pool_passes<'a>(parts: &[PoolPart<'a>], octaves: bool) -> (Pooled, Vec<ViewPa
     (Pooled { level, views }, passes)
 }
 
-/// A pass's [`ScreenIndex`], made on first use ([`Visibility::index`]). A cache: a clone
-/// starts empty and any two compare equal.
-#[derive(Default)]
-pub struct IndexCell(std::sync::OnceLock<ScreenIndex>);
-
-impl Clone for IndexCell {
-    fn clone(&self) -> Self {
-        IndexCell::default()
-    }
-}
-
-impl PartialEq for IndexCell {
-    fn eq(&self, _: &Self) -> bool {
-        true
-    }
-}
-
-impl std::fmt::Debug for IndexCell {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("IndexCell")
-            .field("made", &self.0.get().is_some())
-            .finish()
-    }
-}
-
 impl Visibility {
     /// The pass's [`ScreenIndex`] (made once, on first use).
     pub fn index(&self) -> &ScreenIndex {
-        self.screen_index.0.get_or_init(|| ScreenIndex::of(self))
+        self.screen_index.get_or_init(|| ScreenIndex::of(self))
     }
 }
 
