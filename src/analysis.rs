@@ -889,10 +889,16 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
     let geometry = config.geometry.as_ref()?;
     // One pass per view, shared by every setting of a sweep: none may be evicted.
     geometry.scene.keep_at_least(2 * config.views.len() + 8);
+    // Each view's config is the config without its views and with the view's camera: the
+    // views are left out once here, not copied for every view.
+    let base = Config {
+        views: Vec::new(),
+        ..config.clone()
+    };
     let inputs: Vec<ScreenInputs> = config
         .views
         .iter()
-        .map(|v| screen_inputs(&config_for_view(config, v)))
+        .map(|v| screen_inputs(&config_for_view(&base, v)))
         .collect::<Option<_>>()?;
     let parts: Vec<screen::PoolPart<'_>> = inputs
         .iter()

@@ -8,11 +8,21 @@
 //! of its cascade times the pixel's geometric factor, see [`crate::visibility`]).
 //!
 //! Because the receivers are sorted by depth once, each cascade serves a contiguous run of
-//! them: a configuration costs one multiplication per pixel plus three selections
-//! (`select_nth_unstable`) for the percentiles, with no geometry.
+//! them. A [`ScreenIndex`], made once per pass, ranks them by `g` in buckets that each list
+//! their receivers in depth order, with prefix sums: a configuration then costs per cascade a
+//! binary search per bucket and reads few values, not every pixel.
 //!
 //! **Percentiles** are nearest-rank: with the `n` served values sorted ascending, the
 //! `p`-th percentile is the value of rank `max(1, ceil(p n / 100))`.
+//!
+//! **Means** are `Σ_i T_i G_i / n`, `G_i` the sum of `g` over the pixels cascade `i` serves,
+//! summed exactly: every `g` of a pass is counted in whole units of one power of two
+//! `2^u` (rounded down; `u` is 126 binary places, less those of the receiver count, below the
+//! pass's largest `g`, so a unit is below `2^-100` of any large `g`), so `G_i` is a whole
+//! number whatever the order or grouping of its pixels, rounded once to f64. The products
+//! `T_i G_i` are added in cascade order and the quotient is rounded once (a fused
+//! multiply-add corrects the remainder), so a sum and a count scaled alike give the same mean.
+//! The visible mean is `Σ_i T_i (Σ w g)_i / Σ w` the same way (`w g` in units of `2^(u+25)`).
 //!
 //! **Visible aliasing** weighs each served pixel by its direct-light contrast `w = N · L`
 //! (0 when the surface faces away from the light, 1 when it faces the light; stored as whole
@@ -72,7 +82,7 @@ pub fn percentile(values: &mut [f64], p: f64) -> f64 {
 
 /// A monotone bucket key for positive finite values in `[lo, hi]`: a positive finite f64
 /// orders like its bit pattern, so `(bits - bits(lo)) >> shift` never decreases with the
-/// value, and `shift` is chosen so that every key is below [`Buckets::COUNT`].
+/// value, and `shift` is chosen so that every key is below the bucket count.
 #[derive(Clone, Copy)]
 struct Buckets {
     base: u64,
@@ -80,12 +90,20 @@ struct Buckets {
 }
 
 impl Buckets {
+    /// Most buckets of a pool.
     const COUNT: usize = 4096;
 
-    fn new(lo: f64, hi: f64) -> Self {
+    /// The bucket count for a pool of `groups` groups: a power of two, about four buckets per
+    /// group, from 256 to [`Self::COUNT`].
+    fn count_for(groups: usize) -> usize {
+        (4 * groups).next_power_of_two().clamp(256, Self::COUNT)
+    }
+
+    /// Keys below `count` (a power of two) for the values in `[lo, hi]`.
+    fn new(lo: f64, hi: f64, count: usize) -> Self {
         let base = lo.to_bits();
         let span = hi.to_bits() - base;
-        let shift = (u64::BITS - span.leading_zeros()).saturating_sub(Self::COUNT.trailing_zeros());
+        let shift = (u64::BITS - span.leading_zeros()).saturating_sub(count.trailing_zeros());
         Buckets { base, shift }
     }
 
@@ -95,126 +113,10 @@ impl Buckets {
     }
 }
 
-/// For each wanted 0-based rank (increasing): its bucket and its rank inside that bucket.
-fn locate(hist: &[u32], ranks: &[usize]) -> Vec<(usize, usize)> {
-    let (mut bucket, mut below) = (0, 0);
-    ranks
-        .iter()
-        .map(|&r| {
-            while below + hist[bucket] as usize <= r {
-                below += hist[bucket] as usize;
-                bucket += 1;
-            }
-            (bucket, r - below)
-        })
-        .collect()
-}
-
-/// Exact nearest-rank values at the 0-based `ranks` (increasing) of the served values `t g`,
-/// without storing or sorting them: `runs` are `(start, end, t)` ranges of receivers, `hist`
-/// the counts of every value's bucket. One pass gathers the values of the wanted buckets only
-/// and a selection inside each gives the exact value.
-fn values_at_ranks(
-    g: &[(f64, f64)],
-    runs: &[(usize, usize, f64)],
-    buckets: Buckets,
-    hist: &[u32],
-    ranks: &[usize],
-) -> Vec<f64> {
-    let wanted = locate(hist, ranks);
-    // Bucket -> which gathered list it feeds (u8::MAX: none); the wanted buckets are few.
-    let mut slot = vec![u8::MAX; Buckets::COUNT];
-    let mut lists: Vec<Vec<u64>> = Vec::new();
-    for &(b, _) in &wanted {
-        if slot[b] == u8::MAX {
-            slot[b] = lists.len() as u8;
-            lists.push(Vec::with_capacity(hist[b] as usize));
-        }
-    }
-    for &(a, b, t) in runs {
-        for &(_, gk) in &g[a..b] {
-            let m = t * gk;
-            let s = slot[buckets.key(m)];
-            if s != u8::MAX {
-                lists[s as usize].push(m.to_bits());
-            }
-        }
-    }
-    wanted
-        .iter()
-        .map(|&(b, r)| f64::from_bits(*lists[slot[b] as usize].select_nth_unstable(r).1))
-        .collect()
-}
-
 /// The whole-step weight each weighted nearest-rank percentile `p` (integer percent) must
 /// reach among values of total weight `total`: `max(1, ceil(p total / 100))`.
 pub fn weight_target(p: u64, total: u64) -> u64 {
     ((p as u128 * total as u128).div_ceil(100) as u64).max(1)
-}
-
-/// For each wanted weight target (increasing): its bucket and the weight below that bucket.
-fn locate_weight(hist: &[u64], targets: &[u64]) -> Vec<(usize, u64)> {
-    let (mut bucket, mut below) = (0, 0u64);
-    targets
-        .iter()
-        .map(|&t| {
-            while below + hist[bucket] < t {
-                below += hist[bucket];
-                bucket += 1;
-            }
-            (bucket, below)
-        })
-        .collect()
-}
-
-/// Exact weighted nearest-rank values for the weight `targets` (increasing) of the served
-/// values `t g` with weights `w`: as [`values_at_ranks`], one pass gathers the values of the
-/// wanted buckets, and a sort inside each finds the value where the running weight reaches
-/// the target.
-fn weighted_values_at(
-    g: &[(f64, f64)],
-    w: &[u32],
-    runs: &[(usize, usize, f64)],
-    buckets: Buckets,
-    hist: &[u64],
-    targets: &[u64],
-) -> Vec<f64> {
-    let wanted = locate_weight(hist, targets);
-    let mut slot = vec![u8::MAX; Buckets::COUNT];
-    let mut lists: Vec<Vec<(f64, u32)>> = Vec::new();
-    for &(b, _) in &wanted {
-        if slot[b] == u8::MAX {
-            slot[b] = lists.len() as u8;
-            lists.push(Vec::new());
-        }
-    }
-    for &(a, b, t) in runs {
-        for (&(_, gk), &wk) in g[a..b].iter().zip(&w[a..b]) {
-            let m = t * gk;
-            let s = slot[buckets.key(m)];
-            if s != u8::MAX && wk > 0 {
-                lists[s as usize].push((m, wk));
-            }
-        }
-    }
-    for l in &mut lists {
-        l.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
-    }
-    wanted
-        .iter()
-        .zip(targets)
-        .map(|(&(b, below), &target)| {
-            let mut run = below;
-            let list = &lists[slot[b] as usize];
-            for &(m, wk) in list {
-                run += wk as u64;
-                if run >= target {
-                    return m;
-                }
-            }
-            list.last().map_or(0.0, |x| x.0)
-        })
-        .collect()
 }
 
 /// The visible depth range clipped to `[lo, hi]`, or None when nothing visible lies in it.
@@ -250,63 +152,524 @@ fn served_runs(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<(usize, 
     (runs, counts)
 }
 
+/// Receivers per bucket of a [`ScreenIndex`] (consecutive in the order of `g`).
+const BUCKET: usize = 128;
+/// Receivers per block of a [`ScreenIndex`]'s depth-order prefix sums.
+const BLOCK: usize = 64;
+/// Receivers per row of a [`ScreenIndex`]'s bucket counts (in depth order).
+const ROW: usize = 256;
+/// Binary digits of the whole numbers a view's `g` is counted in: the largest `g` of a view is
+/// below `2^(SUM_BITS - b)` units, `b` the binary digits of the view's receiver count, so any
+/// sum of them stays below `2^SUM_BITS`.
+const SUM_BITS: i32 = 126;
+/// Binary digits of a contrast weight (at most `2^24`): `w g` is counted in units `2^25`
+/// times `g`'s.
+const WEIGHT_BITS: i32 = 25;
+
+/// What every setting's statistics of one pass read, made once per pass (it depends on the
+/// view and the light only, see [`Visibility::index`]). The receivers, ranked by `g` (ties by
+/// depth), are cut into buckets of [`BUCKET`] consecutive ranks; each bucket lists its
+/// receivers in depth order, with `g` and the contrast weight. Every [`ROW`] receivers (in
+/// depth order) a row holds each bucket's count and contrast weight of the receivers before.
+/// So the receivers of a cascade (a depth range) in one bucket are a slice located by a row
+/// and at most `ROW - 1` receivers counted on, and all their values `t g` lie between `t` times
+/// the bucket's smallest and largest `g`. The sums of `g` and `w g` over depth ranges are read
+/// from prefix sums in whole units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScreenIndex {
+    /// Bucket `b`'s entries are `start[b]..start[b + 1]`.
+    start: Vec<u32>,
+    /// Per entry: its receiver (depth order), `g` and contrast weight.
+    idx: Vec<u32>,
+    g: Vec<f64>,
+    w: Vec<u32>,
+    /// Per receiver (depth order): its bucket.
+    bucket_of: Vec<u32>,
+    /// Row `j` (buckets-long): per bucket, the count and the contrast weight of its receivers
+    /// before receiver `j ROW`.
+    rows: Vec<u32>,
+    wrows: Vec<u64>,
+    /// Per bucket: its smallest and largest `g`.
+    glo: Vec<f64>,
+    ghi: Vec<f64>,
+    /// `g` counted in whole units of `2^unit` (rounded down), `w g` in units of
+    /// `2^(unit + WEIGHT_BITS)`.
+    unit: i32,
+    /// Per block of [`BLOCK`] receivers in depth order: the sums before it of `g`, `w g` (in
+    /// whole units) and `w`.
+    pg: Vec<u128>,
+    pwg: Vec<u128>,
+    pw: Vec<u64>,
+}
+
+/// `floor(x k / 2^unit)` for a finite `x >= 0` and a whole `k < 2^WEIGHT_BITS`, exact.
+#[inline]
+fn whole_units(x: f64, k: u32, unit: i32) -> u128 {
+    let bits = x.to_bits();
+    let exp = ((bits >> 52) & 0x7ff) as i32;
+    let frac = bits & ((1u64 << 52) - 1);
+    // x = mant 2^e exactly.
+    let (mant, e) = if exp == 0 {
+        (frac, -1074)
+    } else {
+        (frac | (1u64 << 52), exp - 1075)
+    };
+    let v = mant as u128 * k as u128;
+    let shift = e - unit;
+    if shift >= 0 {
+        v << shift
+    } else if shift > -128 {
+        v >> -shift
+    } else {
+        0
+    }
+}
+
+/// `x 2^e`, exact while the result is a normal number.
+fn scaled(x: f64, e: i32) -> f64 {
+    let mut x = x;
+    let mut e = e;
+    while e != 0 {
+        let step = e.clamp(-1000, 1000);
+        x *= pow2(step);
+        e -= step;
+    }
+    x
+}
+
+impl ScreenIndex {
+    /// The index of a pass.
+    pub fn of(vis: &Visibility) -> ScreenIndex {
+        let r = &vis.receivers;
+        let n = r.len();
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        order.sort_unstable_by(|&a, &b| r[a as usize].1.total_cmp(&r[b as usize].1).then(a.cmp(&b)));
+        let buckets = n.div_ceil(BUCKET);
+        let mut glo = Vec::with_capacity(buckets);
+        let mut ghi = Vec::with_capacity(buckets);
+        for chunk in order.chunks_mut(BUCKET) {
+            glo.push(r[chunk[0] as usize].1);
+            ghi.push(r[chunk[chunk.len() - 1] as usize].1);
+            chunk.sort_unstable();
+        }
+        let start = (0..=buckets).map(|b| (b * BUCKET).min(n) as u32).collect();
+        let g: Vec<f64> = order.iter().map(|&i| r[i as usize].1).collect();
+        let w: Vec<u32> = order.iter().map(|&i| vis.weights[i as usize]).collect();
+        let mut bucket_of = vec![0u32; n];
+        for (b, chunk) in order.chunks(BUCKET).enumerate() {
+            for &i in chunk {
+                bucket_of[i as usize] = b as u32;
+            }
+        }
+        let mut rows = Vec::with_capacity((n / ROW + 1) * buckets);
+        let mut wrows = Vec::with_capacity((n / ROW + 1) * buckets);
+        let (mut count, mut weight) = (vec![0u32; buckets], vec![0u64; buckets]);
+        for k in 0..=n {
+            if k % ROW == 0 {
+                rows.extend_from_slice(&count);
+                wrows.extend_from_slice(&weight);
+            }
+            if k < n {
+                count[bucket_of[k] as usize] += 1;
+                weight[bucket_of[k] as usize] += vis.weights[k] as u64;
+            }
+        }
+        // The largest g is below 2^top.
+        let g_hi = ghi.last().copied().unwrap_or(0.0);
+        let top = (((g_hi.to_bits() >> 52) & 0x7ff) as i32 - 1022).max(-1022);
+        let unit = top - SUM_BITS + (usize::BITS - n.leading_zeros()) as i32;
+        let (mut pg, mut pwg, mut pw) = (vec![0u128], vec![0u128], vec![0u64]);
+        let (mut a, mut b, mut c) = (0u128, 0u128, 0u64);
+        for (block, weights) in r.chunks(BLOCK).zip(vis.weights.chunks(BLOCK)) {
+            for (&(_, gk), &wk) in block.iter().zip(weights) {
+                a += whole_units(gk, 1, unit);
+                b += whole_units(gk, wk, unit + WEIGHT_BITS);
+                c += wk as u64;
+            }
+            pg.push(a);
+            pwg.push(b);
+            pw.push(c);
+        }
+        ScreenIndex {
+            start,
+            idx: order,
+            g,
+            w,
+            bucket_of,
+            rows,
+            wrows,
+            glo,
+            ghi,
+            unit,
+            pg,
+            pwg,
+            pw,
+        }
+    }
+
+    fn buckets(&self) -> usize {
+        self.glo.len()
+    }
+
+    /// The sums of `g`, `w g` (whole units) and `w` over the receivers before `p` (depth order).
+    fn sums_before(&self, vis: &Visibility, p: usize) -> (u128, u128, u64) {
+        let block = p / BLOCK;
+        let (mut a, mut b, mut c) = (self.pg[block], self.pwg[block], self.pw[block]);
+        for k in block * BLOCK..p {
+            let (gk, wk) = (vis.receivers[k].1, vis.weights[k]);
+            a += whole_units(gk, 1, self.unit);
+            b += whole_units(gk, wk, self.unit + WEIGHT_BITS);
+            c += wk as u64;
+        }
+        (a, b, c)
+    }
+}
+
+/// The receivers of one cascade run (a depth range, texel size `t`) in one bucket: entries
+/// `lo..hi` of the index, their values `t g` within `[vlo, vhi]`.
+#[derive(Clone, Copy)]
+struct Group {
+    lo: u32,
+    hi: u32,
+    t: f64,
+    vlo: f64,
+    vhi: f64,
+    /// The contrast weight of its receivers.
+    cw: u64,
+}
+
+/// One view's statistics at one setting, from its index: counts and sums from range lengths
+/// and prefix sums, the values grouped by bucket for the percentiles.
+struct ViewPass<'a> {
+    vis: &'a Visibility,
+    ix: &'a ScreenIndex,
+    runs: Vec<(usize, usize, f64)>,
+    counts: Vec<usize>,
+    n: usize,
+    groups: Vec<Group>,
+    /// Per run: its groups, `groups[a..b]`, in bucket order (so their bounds never decrease).
+    run_groups: Vec<(usize, usize)>,
+    /// Sums over served pixels: `t g`, `w t g`, `w`; the undersampled count; the maxima.
+    sum: f64,
+    wsum: f64,
+    wtotal: u64,
+    under: u64,
+    max: f64,
+    wmax: f64,
+    /// The smallest and largest possible served value (the bucket keys' range).
+    range: Option<(f64, f64)>,
+    /// Served values per [`octave`] (only when asked for; empty otherwise).
+    octaves: Vec<u32>,
+}
+
+impl<'a> ViewPass<'a> {
+    fn new(vis: &'a Visibility, splits: &[f64], texel: &[f64], octaves: bool) -> ViewPass<'a> {
+        let ix = vis.index();
+        let (runs, counts) = served_runs(vis, splits, texel);
+        let n: usize = counts.iter().sum();
+        let mut pass = ViewPass {
+            vis,
+            ix,
+            runs,
+            counts,
+            n,
+            groups: Vec::new(),
+            run_groups: Vec::new(),
+            sum: 0.0,
+            wsum: 0.0,
+            wtotal: 0,
+            under: 0,
+            max: 0.0,
+            wmax: 0.0,
+            range: None,
+            octaves: if octaves { vec![0; OCTAVES_COUNT] } else { Vec::new() },
+        };
+        if n == 0 {
+            return pass;
+        }
+        // The depth bounds of the runs, in increasing order, each run's two among them.
+        let mut bounds: Vec<usize> = Vec::with_capacity(2 * pass.runs.len());
+        let mut ends = Vec::with_capacity(pass.runs.len());
+        for &(a, b, _) in &pass.runs {
+            if bounds.last() != Some(&a) {
+                bounds.push(a);
+            }
+            let ja = bounds.len() - 1;
+            bounds.push(b);
+            ends.push((ja, bounds.len() - 1));
+        }
+        // Sums from the prefix sums: per run, the whole-unit sums of g and w g, scaled and
+        // multiplied by the run's texel size, added in depth order.
+        let sums: Vec<(u128, u128, u64)> = bounds.iter().map(|&p| ix.sums_before(vis, p)).collect();
+        for (&(_, _, t), &(ja, jb)) in pass.runs.iter().zip(&ends) {
+            let g = scaled((sums[jb].0 - sums[ja].0) as f64, ix.unit);
+            let wg = scaled((sums[jb].1 - sums[ja].1) as f64, ix.unit + WEIGHT_BITS);
+            pass.sum += t * g;
+            pass.wsum += t * wg;
+            pass.wtotal += sums[jb].2 - sums[ja].2;
+        }
+        // Each bucket's entries before each bound, and their contrast weight: the row at or
+        // below the bound, and the receivers from it to the bound counted on.
+        let nb = bounds.len();
+        let buckets = ix.buckets();
+        let mut cut = vec![0u32; buckets * nb];
+        let mut wcut = vec![0u64; buckets * nb];
+        for (j, &p) in bounds.iter().enumerate() {
+            let row = p / ROW;
+            let (c, w) = (
+                &ix.rows[row * buckets..][..buckets],
+                &ix.wrows[row * buckets..][..buckets],
+            );
+            for b in 0..buckets {
+                cut[b * nb + j] = ix.start[b] + c[b];
+                wcut[b * nb + j] = w[b];
+            }
+            for k in row * ROW..p {
+                let b = ix.bucket_of[k] as usize;
+                cut[b * nb + j] += 1;
+                wcut[b * nb + j] += vis.weights[k] as u64;
+            }
+        }
+        let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+        for (&(_, _, t), &(ja, jb)) in pass.runs.iter().zip(&ends) {
+            let first = pass.groups.len();
+            let mut top = None;
+            let mut wtop = None;
+            for b in 0..ix.buckets() {
+                let (glo, ghi) = (cut[b * nb + ja], cut[b * nb + jb]);
+                if glo == ghi {
+                    continue;
+                }
+                let (vlo, vhi) = (t * ix.glo[b], t * ix.ghi[b]);
+                let cw = wcut[b * nb + jb] - wcut[b * nb + ja];
+                pass.groups.push(Group {
+                    lo: glo,
+                    hi: ghi,
+                    t,
+                    vlo,
+                    vhi,
+                    cw,
+                });
+                lo = lo.min(vlo);
+                hi = hi.max(vhi);
+                top = Some(pass.groups.len() - 1);
+                if cw > 0 {
+                    wtop = Some(pass.groups.len() - 1);
+                }
+                let values = glo as usize..ghi as usize;
+                // Undersampled: m > 1.
+                if vlo > 1.0 {
+                    pass.under += (ghi - glo) as u64;
+                } else if vhi > 1.0 {
+                    pass.under += values.clone().filter(|&i| t * ix.g[i] > 1.0).count() as u64;
+                }
+                if octaves {
+                    let (a, z) = (octave(vlo), octave(vhi));
+                    if a == z {
+                        pass.octaves[a] += ghi - glo;
+                    } else {
+                        for i in values {
+                            pass.octaves[octave(t * ix.g[i])] += 1;
+                        }
+                    }
+                }
+            }
+            pass.run_groups.push((first, pass.groups.len()));
+            // The maxima: the largest g of the run's highest bucket (of weight above 0 for
+            // the visible maximum); t g never decreases with g.
+            if let Some(k) = top {
+                let gr = pass.groups[k];
+                let g = ix.g[gr.lo as usize..gr.hi as usize]
+                    .iter()
+                    .fold(0.0f64, |a, &x| a.max(x));
+                let m = t * g;
+                pass.max = if m > pass.max { m } else { pass.max };
+            }
+            if let Some(k) = wtop {
+                let gr = pass.groups[k];
+                let g = (gr.lo as usize..gr.hi as usize)
+                    .filter(|&i| ix.w[i] > 0)
+                    .fold(0.0f64, |a, i| a.max(ix.g[i]));
+                let m = t * g;
+                pass.wmax = if m > pass.wmax { m } else { pass.wmax };
+            }
+        }
+        pass.range = (lo <= hi).then_some((lo, hi));
+        pass
+    }
+}
+
+/// The nearest-rank values of a pool of views' groups, each view counting its steps: for the
+/// plain weights (each pixel its view's steps) and the contrast weights (`N · L` steps times
+/// the view's), at p50, p95 and p99, and the two total weights.
+///
+/// The groups' bounds give, per target, the bucket range that must hold the value: the first
+/// bucket where the weight of the groups starting at or below it reaches the target, and the
+/// first where that of the groups ending at or below it does. Only the groups reaching into
+/// that range are read, value by value; what lies below it is counted, and the few values in
+/// it are narrowed down and sorted ([`resolve`]).
+fn select(pools: &[(&ViewPass<'_>, u64)], buckets: Buckets, count: usize) -> ([[f64; 3]; 2], [u128; 2]) {
+    // Per kind (plain, contrast): the weight of groups by the bucket of their lowest and of
+    // their highest value.
+    let mut starts = [vec![0u128; count], vec![0u128; count]];
+    let mut ends = [vec![0u128; count], vec![0u128; count]];
+    for &(p, s) in pools {
+        let s = s as u128;
+        for gr in &p.groups {
+            let (a, z) = (buckets.key(gr.vlo), buckets.key(gr.vhi));
+            let n = (gr.hi - gr.lo) as u128 * s;
+            let c = gr.cw as u128 * s;
+            starts[0][a] += n;
+            ends[0][z] += n;
+            starts[1][a] += c;
+            ends[1][z] += c;
+        }
+    }
+    let mut out = [[0.0; 3]; 2];
+    let mut totals = [0u128; 2];
+    for kind in 0..2 {
+        let total: u128 = starts[kind].iter().sum();
+        totals[kind] = total;
+        if total == 0 {
+            continue;
+        }
+        // Running sums, kept as the targets increase.
+        let (mut lo, mut lo_cum) = (0usize, starts[kind][0]);
+        let (mut hi, mut hi_cum) = (0usize, ends[kind][0]);
+        for (slot, p) in [50u128, 95, 99].into_iter().enumerate() {
+            let target = (p * total).div_ceil(100).max(1);
+            while lo_cum < target {
+                lo += 1;
+                lo_cum += starts[kind][lo];
+            }
+            while hi_cum < target {
+                hi += 1;
+                hi_cum += ends[kind][hi];
+            }
+            // Groups ending below bucket `lo` lie wholly below the range.
+            let mut below: u128 = ends[kind][..lo].iter().sum();
+            let mut cands: Vec<(f64, u128)> = Vec::new();
+            for &(pass, s) in pools {
+                let s = s as u128;
+                let ix = pass.ix;
+                // A run's groups reaching into the range are consecutive: those after every
+                // group ending below it, before the first starting above it.
+                for &(a, z) in &pass.run_groups {
+                    let run = &pass.groups[a..z];
+                    let from = run.partition_point(|gr| buckets.key(gr.vhi) < lo);
+                    let to = from + run[from..].partition_point(|gr| buckets.key(gr.vlo) <= hi);
+                    for gr in &run[from..to] {
+                        for i in gr.lo as usize..gr.hi as usize {
+                            let w = if kind == 0 { s } else { ix.w[i] as u128 * s };
+                            if w == 0 {
+                                continue;
+                            }
+                            let m = gr.t * ix.g[i];
+                            let k = buckets.key(m);
+                            if k < lo {
+                                below += w;
+                            } else if k <= hi {
+                                cands.push((m, w));
+                            }
+                        }
+                    }
+                }
+            }
+            out[kind][slot] = resolve(cands, below, target);
+        }
+    }
+    (out, totals)
+}
+
+/// The first of the values `cands` (with their weights, above 0) at which the running weight,
+/// starting from `below`, reaches `target`: buckets narrow the values down until few are left,
+/// which are sorted.
+fn resolve(mut cands: Vec<(f64, u128)>, mut below: u128, target: u128) -> f64 {
+    const COUNT: usize = 1024;
+    while cands.len() > 64 {
+        let (lo, hi) = cands
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(l, h), x| (l.min(x.0), h.max(x.0)));
+        if lo == hi {
+            return lo;
+        }
+        let b = Buckets::new(lo, hi, COUNT);
+        let mut hist = vec![0u128; COUNT];
+        for &(m, w) in &cands {
+            hist[b.key(m)] += w;
+        }
+        let mut k = 0;
+        while below + hist[k] < target {
+            below += hist[k];
+            k += 1;
+        }
+        cands.retain(|x| b.key(x.0) == k);
+    }
+    cands.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+    let mut run = below;
+    for &(m, w) in &cands {
+        run += w;
+        if run >= target {
+            return m;
+        }
+    }
+    cands.last().map_or(0.0, |x| x.0)
+}
+
+/// `(hi + lo) / d`, rounded once in all but the rarest cases: the quotient of the leading
+/// part corrected by the remainder (exact by a fused multiply-add). So a sum and a count
+/// scaled alike (a level of identical views) give the same mean as the view alone.
+fn quotient(hi: f64, lo: f64, d: f64) -> f64 {
+    let q = hi / d;
+    let r = (-q).mul_add(d, hi) + lo;
+    q + r / d
+}
+
+/// `acc + a b` in two parts (the sum of a double-double and an exact product).
+fn add_product(acc: (f64, f64), a: f64, b: f64) -> (f64, f64) {
+    let p = a * b;
+    let pe = a.mul_add(b, -p);
+    let s = acc.0 + p;
+    let bb = s - acc.0;
+    let se = (acc.0 - (s - bb)) + (p - bb);
+    let lo = acc.1 + se + pe;
+    let hi = s + lo;
+    (hi, lo - (hi - s))
+}
+
 /// The screen metrics of a configuration with selection `splits` and texel sizes `texel`;
 /// `visible` is the visible depth range already clipped (see [`visible_range`]).
 pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f64, f64)>) -> ScreenStats {
-    let (runs, counts) = served_runs(vis, splits, texel);
-    let g = &vis.receivers;
-    let n: usize = counts.iter().sum();
-    let weights = &vis.weights;
-    let (t, p, wp) = if n == 0 {
-        (Tally::empty(), vec![0.0; 3], vec![0.0; 3])
-    } else {
-        // Every served value lies in [min t * min g, max t * max g]; rounding is monotone, so
-        // the bounds hold for the rounded products too, and the keys need no first pass.
-        let (g_lo, g_hi) = vis.factor_range.unwrap_or((0.0, 0.0));
-        let (t_lo, t_hi) = runs
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(r.2), h.max(r.2)));
-        let buckets = Buckets::new(t_lo * g_lo, t_hi * g_hi);
-        let t = tally(vis, &runs, buckets, n);
-        let wp = if t.wtotal > 0 {
-            let targets = [50, 95, 99].map(|p| weight_target(p, t.wtotal));
-            weighted_values_at(g, weights, &runs, buckets, &t.whist, &targets)
-        } else {
-            vec![0.0; 3]
-        };
-        let ranks = [50.0, 95.0, 99.0].map(|p| rank_index(p, n));
-        let p = values_at_ranks(g, &runs, buckets, &t.hist, &ranks);
-        (t, p, wp)
+    let pass = ViewPass::new(vis, splits, texel, false);
+    own_stats(&pass, visible)
+}
+
+/// A view's own statistics from its pass.
+fn own_stats(pass: &ViewPass<'_>, visible: Option<(f64, f64)>) -> ScreenStats {
+    let (plain, weighted) = match pass.range {
+        Some((lo, hi)) => {
+            let count = Buckets::count_for(pass.groups.len());
+            let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, count), count);
+            (v[0], v[1])
+        }
+        None => ([0.0; 3], [0.0; 3]),
     };
-    from_tally(vis, &counts, n, &t, [p[0], p[1], p[2]], [wp[0], wp[1], wp[2]], visible)
-}
-
-/// [`stats`] with only the per-cascade pixel shares (`cascade_pixels`) and the receiver and
-/// self-shadowed fractions measured, every statistic of `m` 0: for a camera whose screen
-/// statistics a level of views replaces, whose cascades still report their shares.
-pub fn cascade_shares_only(vis: &Visibility, splits: &[f64], texel: &[f64]) -> ScreenStats {
-    let (_, counts) = served_runs(vis, splits, texel);
-    from_tally(vis, &counts, 0, &Tally::empty(), [0.0; 3], [0.0; 3], None)
-}
-
-/// A pass's statistics from its tally: `n` served pixels, `counts` per cascade, the plain and
-/// weighted percentiles (p50, p95, p99) already selected.
-fn from_tally(
-    vis: &Visibility,
-    counts: &[usize],
-    n: usize,
-    t: &Tally,
-    plain: [f64; 3],
-    weighted: [f64; 3],
-    visible: Option<(f64, f64)>,
-) -> ScreenStats {
-    let total = vis.sample_count().max(1) as f64;
-    let receivers = vis.receivers.len();
-    let (mean, under) = if n == 0 {
+    let (mean, under) = if pass.n == 0 {
         (0.0, 0.0)
     } else {
-        (t.sum / n as f64, t.under as f64 / n as f64)
+        (
+            quotient(pass.sum, 0.0, pass.n as f64),
+            pass.under as f64 / pass.n as f64,
+        )
     };
+    let visible_mean = if pass.wtotal > 0 {
+        quotient(pass.wsum, 0.0, pass.wtotal as f64)
+    } else {
+        0.0
+    };
+    let vis = pass.vis;
+    let total = vis.sample_count().max(1) as f64;
+    let receivers = vis.receivers.len();
     let (visible_z_lo, visible_z_hi) = visible.unwrap_or((0.0, 0.0));
     ScreenStats {
         receiver_fraction: receivers as f64 / total,
@@ -315,25 +678,57 @@ fn from_tally(
         aliasing_p50: plain[0],
         aliasing_p95: plain[1],
         aliasing_p99: plain[2],
-        aliasing_max: t.max,
+        aliasing_max: pass.max,
         undersampled_fraction: under,
-        visible_mean: if t.wtotal > 0 { t.wsum / t.wtotal as f64 } else { 0.0 },
+        visible_mean,
         visible_p50: weighted[0],
         visible_p95: weighted[1],
         visible_p99: weighted[2],
-        visible_max: t.wmax,
+        visible_max: pass.wmax,
         visible_z_lo,
         visible_z_hi,
-        cascade_pixels: counts
-            .iter()
-            .map(|&c| {
-                if receivers == 0 {
-                    0.0
-                } else {
-                    c as f64 / receivers as f64
-                }
-            })
-            .collect(),
+        cascade_pixels: shares(&pass.counts, receivers),
+    }
+}
+
+/// Each cascade's served pixels as a share of the receivers.
+fn shares(counts: &[usize], receivers: usize) -> Vec<f64> {
+    counts
+        .iter()
+        .map(|&c| {
+            if receivers == 0 {
+                0.0
+            } else {
+                c as f64 / receivers as f64
+            }
+        })
+        .collect()
+}
+
+/// [`stats`] with only the per-cascade pixel shares (`cascade_pixels`) and the receiver and
+/// self-shadowed fractions measured, every statistic of `m` 0: for a camera whose screen
+/// statistics a level of views replaces, whose cascades still report their shares.
+pub fn cascade_shares_only(vis: &Visibility, splits: &[f64], texel: &[f64]) -> ScreenStats {
+    let (_, counts) = served_runs(vis, splits, texel);
+    let total = vis.sample_count().max(1) as f64;
+    let receivers = vis.receivers.len();
+    ScreenStats {
+        receiver_fraction: receivers as f64 / total,
+        self_shadowed_fraction: vis.self_shadowed as f64 / total,
+        aliasing_mean: 0.0,
+        aliasing_p50: 0.0,
+        aliasing_p95: 0.0,
+        aliasing_p99: 0.0,
+        aliasing_max: 0.0,
+        undersampled_fraction: 0.0,
+        visible_mean: 0.0,
+        visible_p50: 0.0,
+        visible_p95: 0.0,
+        visible_p99: 0.0,
+        visible_max: 0.0,
+        visible_z_lo: 0.0,
+        visible_z_hi: 0.0,
+        cascade_pixels: shares(&counts, receivers),
     }
 }
 
@@ -367,185 +762,6 @@ pub struct Pooled {
     pub views: Vec<ScreenStats>,
 }
 
-/// What one pass over served pixels accumulates: the histograms of the values and of the
-/// contrast weights, and the sums, maxima and undersampled count.
-struct Tally {
-    hist: Vec<u32>,
-    whist: Vec<u64>,
-    sum: f64,
-    max: f64,
-    under: usize,
-    wsum: f64,
-    wtotal: u64,
-    wmax: f64,
-    /// Served values per [`octave`] (only when asked for; empty otherwise).
-    octaves: Vec<u32>,
-}
-
-impl Tally {
-    /// Nothing counted (no histogram bins).
-    fn empty() -> Tally {
-        Tally {
-            hist: Vec::new(),
-            whist: Vec::new(),
-            sum: 0.0,
-            max: 0.0,
-            under: 0,
-            wsum: 0.0,
-            wtotal: 0,
-            wmax: 0.0,
-            octaves: Vec::new(),
-        }
-    }
-}
-
-/// The tally of the served `runs` of `vis` (histograms of `Buckets::COUNT` bins, or none when
-/// no pixel is served). [`stats`] and the pooled statistics both count through here, so their
-/// sums are equal bit for bit (the same operations in the same order).
-fn tally(vis: &Visibility, runs: &[(usize, usize, f64)], buckets: Buckets, served: usize) -> Tally {
-    tally_counting::<false>(vis, runs, buckets, served)
-}
-
-/// [`tally`], and with `OCTAVES` also each value's [`octave`] counted (`Tally::octaves`).
-fn tally_counting<const OCTAVES: bool>(
-    vis: &Visibility,
-    runs: &[(usize, usize, f64)],
-    buckets: Buckets,
-    served: usize,
-) -> Tally {
-    let mut t = Tally::empty();
-    if served > 0 {
-        t.hist = vec![0u32; Buckets::COUNT];
-        t.whist = vec![0u64; Buckets::COUNT];
-        if OCTAVES {
-            t.octaves = vec![0u32; OCTAVES_COUNT];
-        }
-    }
-    let g = &vis.receivers;
-    let weights = &vis.weights;
-    for &(a, b, tx) in runs {
-        for (&(_, gk), &wk) in g[a..b].iter().zip(&weights[a..b]) {
-            let m = tx * gk;
-            if OCTAVES {
-                t.octaves[octave(m)] += 1;
-            }
-            t.sum += m;
-            // A plain comparison (not f64::max, which also handles NaN): m is finite.
-            t.max = if m > t.max { m } else { t.max };
-            t.under += usize::from(m > 1.0);
-            let key = buckets.key(m);
-            t.hist[key] += 1;
-            t.whist[key] += wk as u64;
-            t.wtotal += wk as u64;
-            t.wsum += wk as f64 * m;
-            if wk > 0 && m > t.wmax {
-                t.wmax = m;
-            }
-        }
-    }
-    t
-}
-
-/// One part's first pass: its served runs and their tally.
-struct PartPass {
-    runs: Vec<(usize, usize, f64)>,
-    counts: Vec<usize>,
-    n: usize,
-    t: Tally,
-}
-
-fn first_pass<const OCTAVES: bool>(
-    part: &PoolPart<'_>,
-    runs: Vec<(usize, usize, f64)>,
-    counts: Vec<usize>,
-    buckets: Buckets,
-) -> PartPass {
-    let n = counts.iter().sum();
-    let t = tally_counting::<OCTAVES>(part.vis, &runs, buckets, n);
-    PartPass { runs, counts, n, t }
-}
-
-/// The weighted nearest-rank targets of one pool (the level, or one view alone): the pool's
-/// bucket histograms of plain weight (every served pixel carries its view's steps) and of
-/// contrast weight (`N · L` steps times the view's steps), and the six targets (p50, p95, p99
-/// of each) located in them.
-struct Targets {
-    /// (bucket, weight below the bucket, target weight): three plain, three contrast-weighted.
-    at: Vec<(usize, u128, u128)>,
-    plain_total: u128,
-    contrast_total: u128,
-}
-
-impl Targets {
-    /// The targets of histograms `hist` (plain weight) and `whist` (contrast weight), each
-    /// bucket's weight read through `as128` (the level's are 128-bit; a view's own are its
-    /// counts).
-    fn new<A: Copy, B: Copy>(hist: &[A], whist: &[B], a: impl Fn(A) -> u128, b: impl Fn(B) -> u128) -> Targets {
-        let plain_total: u128 = hist.iter().map(|&x| a(x)).sum();
-        let contrast_total: u128 = whist.iter().map(|&x| b(x)).sum();
-        let mut at = Vec::with_capacity(6);
-        for (k, total) in [plain_total, contrast_total].into_iter().enumerate() {
-            let weight = |bucket: usize| if k == 0 { a(hist[bucket]) } else { b(whist[bucket]) };
-            // The targets increase: each search goes on from where the previous one stopped.
-            let (mut bucket, mut below) = (0, 0u128);
-            for p in [50u128, 95, 99] {
-                if total == 0 {
-                    continue;
-                }
-                let target = (p * total).div_ceil(100).max(1);
-                while below + weight(bucket) < target {
-                    below += weight(bucket);
-                    bucket += 1;
-                }
-                at.push((bucket, below, target));
-            }
-        }
-        Targets {
-            at,
-            plain_total,
-            contrast_total,
-        }
-    }
-
-    /// Marks the wanted buckets in `slot` (their list index) and returns the number of lists.
-    fn mark(&self, slot: &mut [u8]) -> usize {
-        let mut lists = 0;
-        for &(b, _, _) in &self.at {
-            if slot[b] == u8::MAX {
-                slot[b] = lists as u8;
-                lists += 1;
-            }
-        }
-        lists
-    }
-
-    /// The values at the targets from the gathered lists: `(m, contrast weight, view steps)`
-    /// of every served value in the wanted buckets, sorted by value. Plain percentiles first.
-    fn resolve(&self, slot: &[u8], lists: &[Vec<(f64, u32, u64)>]) -> ([f64; 3], [f64; 3]) {
-        let mut out = [[0.0; 3]; 2];
-        let plain = usize::from(self.plain_total > 0) * 3;
-        for (k, &(b, below, target)) in self.at.iter().enumerate() {
-            let weighted = k >= plain;
-            let list = &lists[slot[b] as usize];
-            let mut run = below;
-            let mut value = 0.0;
-            for &(m, wk, s) in list {
-                let w = if weighted { wk as u128 * s as u128 } else { s as u128 };
-                if w == 0 {
-                    continue;
-                }
-                run += w;
-                value = m;
-                if run >= target {
-                    break;
-                }
-            }
-            out[usize::from(weighted)][k % 3] = value;
-        }
-        (out[0], out[1])
-    }
-}
-
 /// The screen statistics of a level of views: every served receiver pixel of every view,
 /// carrying its view's weight ([`PoolPart::steps`]), pooled into one set of statistics, and
 /// each view's own statistics beside them. With equal weights the level's percentiles are the
@@ -557,96 +773,38 @@ impl Targets {
 /// each counted with its view's weight; the maxima are over every served pixel (of contrast
 /// above 0 for `visible_max`); the visible depth range is the union of the views'.
 ///
-/// Two passes over each view's receivers, whatever the number of views: one builds every
-/// view's histograms on a bucket key common to all views, the second gathers the values of the
-/// buckets that hold a wanted rank, of the level or of the view itself.
+/// No pass over the pixels: each view's [`ScreenIndex`] gives its counts and sums from range
+/// lengths and prefix sums, its maxima from one bucket per cascade, and the percentiles from
+/// the few buckets whose values can hold them ([`select`]).
 pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
-    pool_passes::<false>(parts).0
+    pool_passes(parts, false).0
 }
 
-/// [`pool`], with each part's first pass (its served count and, with `OCTAVES`, its values per
+/// [`pool`], with each part's pass (its served count and, with `octaves`, its values per
 /// [`octave`]).
-fn pool_passes<const OCTAVES: bool>(parts: &[PoolPart<'_>]) -> (Pooled, Vec<PartPass>) {
-    // The bounds of every served value of every part, as in `stats`, for one common key.
-    let mut lo = f64::INFINITY;
-    let mut hi = 0.0f64;
-    let served: Vec<_> = parts.iter().map(|p| served_runs(p.vis, p.splits, p.texel)).collect();
-    for (p, (runs, _)) in parts.iter().zip(&served) {
-        if let (Some((g_lo, g_hi)), false) = (p.vis.factor_range, runs.is_empty()) {
-            let (t_lo, t_hi) = runs
-                .iter()
-                .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(r.2), h.max(r.2)));
-            lo = lo.min(t_lo * g_lo);
-            hi = hi.max(t_hi * g_hi);
-        }
-    }
-    let buckets = if lo <= hi {
-        Buckets::new(lo, hi)
-    } else {
-        Buckets::new(1.0, 1.0)
-    };
-    let passes: Vec<PartPass> = parts
+fn pool_passes<'a>(parts: &[PoolPart<'a>], octaves: bool) -> (Pooled, Vec<ViewPass<'a>>) {
+    let passes: Vec<ViewPass<'a>> = parts
         .iter()
-        .zip(served)
-        .map(|(p, (runs, counts))| first_pass::<OCTAVES>(p, runs, counts, buckets))
+        .map(|p| ViewPass::new(p.vis, p.splits, p.texel, octaves))
         .collect();
-
-    // The level's histograms and targets, and each part's own.
-    let mut hist = vec![0u128; Buckets::COUNT];
-    let mut whist = vec![0u128; Buckets::COUNT];
-    for (p, pass) in parts.iter().zip(&passes) {
-        for (k, (&h, &w)) in pass.t.hist.iter().zip(&pass.t.whist).enumerate() {
-            hist[k] += h as u128 * p.steps as u128;
-            whist[k] += w as u128 * p.steps as u128;
-        }
-    }
-    let level = Targets::new(&hist, &whist, |x| x, |x| x);
-    let own: Vec<Targets> = passes
-        .iter()
-        .map(|pass| Targets::new(&pass.t.hist, &pass.t.whist, |x| x as u128, |x| x as u128))
-        .collect();
-
-    // The second pass: every part's values in the level's wanted buckets or its own.
-    let mut level_slot = vec![u8::MAX; Buckets::COUNT];
-    let level_lists = level.mark(&mut level_slot);
-    let mut level_values: Vec<Vec<(f64, u32, u64)>> = vec![Vec::new(); level_lists];
-    let mut own_values: Vec<([f64; 3], [f64; 3])> = Vec::with_capacity(parts.len());
-    for ((p, pass), targets) in parts.iter().zip(&passes).zip(&own) {
-        let mut slot = vec![u8::MAX; Buckets::COUNT];
-        let mut lists: Vec<Vec<(f64, u32, u64)>> = vec![Vec::new(); targets.mark(&mut slot)];
-        let g = &p.vis.receivers;
-        let weights = &p.vis.weights;
-        for &(a, b, t) in &pass.runs {
-            for (&(_, gk), &wk) in g[a..b].iter().zip(&weights[a..b]) {
-                let m = t * gk;
-                let key = buckets.key(m);
-                let (s, l) = (slot[key], level_slot[key]);
-                if s != u8::MAX {
-                    lists[s as usize].push((m, wk, 1));
-                }
-                if l != u8::MAX {
-                    level_values[l as usize].push((m, wk, p.steps));
-                }
-            }
-        }
-        for l in &mut lists {
-            l.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
-        }
-        own_values.push(targets.resolve(&slot, &lists));
-    }
-    for l in &mut level_values {
-        l.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
-    }
-    let level_p = level.resolve(&level_slot, &level_values);
-
     let views: Vec<ScreenStats> = parts
         .iter()
         .zip(&passes)
-        .zip(&own_values)
-        .map(|((p, pass), &(plain, weighted))| {
-            from_tally(p.vis, &pass.counts, pass.n, &pass.t, plain, weighted, p.visible)
-        })
+        .map(|(p, pass)| own_stats(pass, p.visible))
         .collect();
+    // The level's percentiles on one bucket key over every part's values.
+    let range = passes
+        .iter()
+        .filter_map(|p| p.range)
+        .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)));
+    let pools: Vec<(&ViewPass<'_>, u64)> = passes.iter().zip(parts).map(|(x, p)| (x, p.steps)).collect();
+    let (level_p, totals) = match range {
+        Some((lo, hi)) => {
+            let count = Buckets::count_for(passes.iter().map(|p| p.groups.len()).sum());
+            select(&pools, Buckets::new(lo, hi, count), count)
+        }
+        None => ([[0.0; 3]; 2], [0; 2]),
+    };
 
     // The level: every count and sum weighted by its view's steps (whole numbers; the sums of
     // values are each view's own sum times its steps).
@@ -662,9 +820,13 @@ fn pool_passes<const OCTAVES: bool>(parts: &[PoolPart<'_>]) -> (Pooled, Vec<Part
         parts[k].vis.sample_count().max(1) as u128
     });
     let (shadowed, _) = weighted_ratio(&|k| parts[k].vis.self_shadowed as u128, &|_| 0);
-    let (under, served) = weighted_ratio(&|k| passes[k].t.under as u128, &|k| passes[k].n as u128);
-    let sum: f64 = parts.iter().zip(&passes).map(|(p, x)| p.steps as f64 * x.t.sum).sum();
-    let wsum: f64 = parts.iter().zip(&passes).map(|(p, x)| p.steps as f64 * x.t.wsum).sum();
+    let (under, served) = weighted_ratio(&|k| passes[k].under as u128, &|k| passes[k].n as u128);
+    // The sums as exact sums of products of a view's sum and its steps, then one quotient.
+    let (mut sum, mut wsum) = ((0.0, 0.0), (0.0, 0.0));
+    for (p, x) in parts.iter().zip(&passes) {
+        sum = add_product(sum, p.steps as f64, x.sum);
+        wsum = add_product(wsum, p.steps as f64, x.wsum);
+    }
     let cascades = passes.iter().map(|x| x.counts.len()).max().unwrap_or(0);
     let cascade_pixels = (0..cascades)
         .map(|i| {
@@ -684,26 +846,37 @@ fn pool_passes<const OCTAVES: bool>(parts: &[PoolPart<'_>]) -> (Pooled, Vec<Part
     let level = ScreenStats {
         receiver_fraction: recv / samples,
         self_shadowed_fraction: shadowed / samples,
-        aliasing_mean: if served > 0.0 { sum / served } else { 0.0 },
-        aliasing_p50: level_p.0[0],
-        aliasing_p95: level_p.0[1],
-        aliasing_p99: level_p.0[2],
-        aliasing_max: passes.iter().fold(0.0, |a, x| if x.t.max > a { x.t.max } else { a }),
-        undersampled_fraction: if served > 0.0 { under / served } else { 0.0 },
-        visible_mean: if level.contrast_total > 0 {
-            wsum / level.contrast_total as f64
+        aliasing_mean: if served > 0.0 {
+            quotient(sum.0, sum.1, served)
         } else {
             0.0
         },
-        visible_p50: level_p.1[0],
-        visible_p95: level_p.1[1],
-        visible_p99: level_p.1[2],
-        visible_max: passes.iter().fold(0.0, |a, x| if x.t.wmax > a { x.t.wmax } else { a }),
+        aliasing_p50: level_p[0][0],
+        aliasing_p95: level_p[0][1],
+        aliasing_p99: level_p[0][2],
+        aliasing_max: passes.iter().fold(0.0, |a, x| if x.max > a { x.max } else { a }),
+        undersampled_fraction: if served > 0.0 { under / served } else { 0.0 },
+        visible_mean: if totals[1] > 0 {
+            quotient(wsum.0, wsum.1, totals[1] as f64)
+        } else {
+            0.0
+        },
+        visible_p50: level_p[1][0],
+        visible_p95: level_p[1][1],
+        visible_p99: level_p[1][2],
+        visible_max: passes.iter().fold(0.0, |a, x| if x.wmax > a { x.wmax } else { a }),
         visible_z_lo,
         visible_z_hi,
         cascade_pixels,
     };
     (Pooled { level, views }, passes)
+}
+
+impl Visibility {
+    /// The pass's [`ScreenIndex`] (made once, on first use).
+    pub fn index(&self) -> &ScreenIndex {
+        self.screen_index.get_or_init(|| ScreenIndex::of(self))
+    }
 }
 
 /// Number of [`octave`]s: every finite `m >= 0` has one below it.
@@ -838,13 +1011,13 @@ pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
         .collect();
     let found = memo.entries.lock().ok().and_then(|m| m.get(&key).cloned());
     let entry = found.unwrap_or_else(|| {
-        let (pooled, passes) = pool_passes::<true>(&norm);
+        let (pooled, passes) = pool_passes(&norm, true);
         let above = passes
             .iter()
             .map(|pass| {
                 let mut list = Vec::new();
                 let mut acc = 0u64;
-                for (b, &c) in pass.t.octaves.iter().enumerate().rev() {
+                for (b, &c) in pass.octaves.iter().enumerate().rev() {
                     if c > 0 {
                         acc += c as u64;
                         list.push((b as u16, acc));
@@ -935,53 +1108,80 @@ mod tests {
         assert_eq!(percentile(&mut [], 50.0), 0.0);
     }
 
-    /// The bucketed selection equals sorting every value, on spreads from one repeated value
-    /// to many octaves, with several runs of different texel sizes.
-    #[test]
-    fn bucketed_percentiles_equal_a_full_sort() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
+    /// A pass of the given receivers (depth-sorted `(depth, g)`) and contrast weights, among
+    /// `extra` more samples.
+    fn pass_of(receivers: Vec<(f64, f64)>, weights: Vec<u32>, extra: usize) -> Visibility {
+        let mut v = synthetic(0, 1, 1.0, 0);
+        let n = receivers.len();
+        v.factor_range = receivers.iter().fold(None, |r: Option<(f64, f64)>, &(_, g)| {
+            Some(r.map_or((g, g), |(lo, hi)| (lo.min(g), hi.max(g))))
+        });
+        v.depth_range = receivers.first().map(|f| (f.0, receivers[n - 1].0));
+        v.rows = (n + extra) as u32;
+        v.samples = vec![None; n + extra];
+        v.receivers = receivers;
+        v.weights = weights;
+        v
+    }
+
+    fn xorshift(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64
-        };
-        for (n, spread) in [(1, 1.0), (7, 0.0), (20, 1.0), (1000, 0.0), (5000, 3.0), (30000, 40.0)] {
-            let g: Vec<(f64, f64)> = (0..n).map(|k| (k as f64, 0.1 * (spread * next()).exp2())).collect();
-            let cut = n / 3;
-            let runs = vec![(0, cut, 0.7), (cut, n, 1.9)];
-            let mut all: Vec<f64> = runs
-                .iter()
-                .flat_map(|&(a, b, t)| g[a..b].iter().map(move |&(_, x)| t * x))
-                .collect();
-            let (lo, hi) = all
-                .iter()
-                .fold((f64::INFINITY, 0.0f64), |(l, h), &m| (l.min(m), h.max(m)));
-            let buckets = Buckets::new(lo, hi);
-            let mut hist = vec![0u32; Buckets::COUNT];
-            all.iter().for_each(|&m| hist[buckets.key(m)] += 1);
-            let ps = [50.0, 95.0, 99.0];
-            let got = values_at_ranks(&g, &runs, buckets, &hist, &ps.map(|p| rank_index(p, n)));
-            all.sort_by(f64::total_cmp);
-            let want: Vec<f64> = ps.iter().map(|&p| all[rank_index(p, n)]).collect();
-            assert_eq!(got, want, "n = {n}, spread = {spread}");
         }
     }
 
-    /// The bucketed weighted percentiles equal a brute force: every (value, weight) pair sorted
-    /// by value, the running weight compared with ceil(p W / 100) in whole steps; zero weights
+    /// The percentiles and maxima equal sorting every value, on spreads from one repeated
+    /// value to forty octaves, with two cascades of different texel sizes; the means equal a
+    /// plain sum to 1e-13.
+    #[test]
+    fn percentiles_equal_a_full_sort() {
+        let mut next = xorshift(0x9e37_79b9_7f4a_7c15);
+        for (n, spread) in [(1, 1.0), (7, 0.0), (20, 1.0), (1000, 0.0), (5000, 3.0), (30000, 40.0)] {
+            let g: Vec<(f64, f64)> = (0..n)
+                .map(|k| (1.0 + k as f64, 0.1 * (spread * next()).exp2()))
+                .collect();
+            let cut = n / 3;
+            let vis = pass_of(g.clone(), vec![1; n], 3);
+            let splits = [0.5, cut as f64 + 0.5, n as f64 + 1.0];
+            let texel = [0.7, 1.9];
+            let st = stats(&vis, &splits, &texel, None);
+            let mut all: Vec<f64> = (0..n)
+                .map(|k| if k < cut { 0.7 * g[k].1 } else { 1.9 * g[k].1 })
+                .collect();
+            let sum: f64 = all.iter().sum();
+            all.sort_by(f64::total_cmp);
+            let want: Vec<f64> = [50.0, 95.0, 99.0].iter().map(|&p| all[rank_index(p, n)]).collect();
+            assert_eq!(
+                vec![st.aliasing_p50, st.aliasing_p95, st.aliasing_p99],
+                want,
+                "n = {n}, spread = {spread}"
+            );
+            assert_eq!(st.aliasing_max, all[n - 1]);
+            let under = all.iter().filter(|&&m| m > 1.0).count();
+            assert_eq!(st.undersampled_fraction, under as f64 / n as f64);
+            let mean = sum / n as f64;
+            assert!(
+                (st.aliasing_mean - mean).abs() <= 1e-13 * mean,
+                "{} vs {mean}",
+                st.aliasing_mean
+            );
+        }
+    }
+
+    /// The weighted percentiles equal a brute force: every (value, weight) pair sorted by
+    /// value, the running weight compared with ceil(p W / 100) in whole steps; zero weights
     /// (surfaces edge-on to the light) and one heavy pixel included.
     #[test]
     fn weighted_percentiles_equal_a_sorted_brute_force() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = xorshift(0x2545_f491_4f6c_dd1d);
         for (n, spread) in [(1, 1.0), (9, 0.0), (50, 1.0), (2000, 2.0), (30000, 30.0)] {
-            let g: Vec<(f64, f64)> = (0..n).map(|k| (k as f64, 0.1 * (spread * next()).exp2())).collect();
+            let g: Vec<(f64, f64)> = (0..n)
+                .map(|k| (1.0 + k as f64, 0.1 * (spread * next()).exp2()))
+                .collect();
             let w: Vec<u32> = (0..n)
                 .map(|k| match k % 11 {
                     0 => 0,
@@ -990,24 +1190,16 @@ mod tests {
                 })
                 .collect();
             let cut = n / 2;
-            let runs = vec![(0, cut, 1.3), (cut, n, 0.4)];
-            let mut all: Vec<(f64, u32)> = runs
-                .iter()
-                .flat_map(|&(a, b, t)| (a..b).map(move |k| (t, k)))
-                .map(|(t, k)| (t * g[k].1, w[k]))
+            let vis = pass_of(g.clone(), w.clone(), 0);
+            let st = stats(&vis, &[0.5, cut as f64 + 0.5, n as f64 + 1.0], &[1.3, 0.4], None);
+            let mut all: Vec<(f64, u32)> = (0..n)
+                .map(|k| (if k < cut { 1.3 } else { 0.4 } * g[k].1, w[k]))
                 .collect();
-            let (lo, hi) = all
-                .iter()
-                .fold((f64::INFINITY, 0.0f64), |(l, h), &(m, _)| (l.min(m), h.max(m)));
-            let buckets = Buckets::new(lo, hi);
-            let mut whist = vec![0u64; Buckets::COUNT];
-            all.iter().for_each(|&(m, x)| whist[buckets.key(m)] += x as u64);
             let total: u64 = all.iter().map(|x| x.1 as u64).sum();
             if total == 0 {
                 continue;
             }
-            let targets = [50, 95, 99].map(|p| weight_target(p, total));
-            let got = weighted_values_at(&g, &w, &runs, buckets, &whist, &targets);
+            let wsum: f64 = all.iter().map(|x| x.1 as f64 * x.0).sum();
             all.sort_by(|a, b| a.0.total_cmp(&b.0));
             let want: Vec<f64> = [50u64, 95, 99]
                 .iter()
@@ -1024,8 +1216,68 @@ mod tests {
                     unreachable!()
                 })
                 .collect();
-            assert_eq!(got, want, "n = {n}, spread = {spread}");
+            assert_eq!(
+                vec![st.visible_p50, st.visible_p95, st.visible_p99],
+                want,
+                "n = {n}, spread = {spread}"
+            );
+            let vmax = all.iter().filter(|x| x.1 > 0).map(|x| x.0).fold(0.0, f64::max);
+            assert_eq!(st.visible_max, vmax);
+            let mean = wsum / total as f64;
+            assert!(
+                (st.visible_mean - mean).abs() <= 1e-13 * mean,
+                "{} vs {mean}",
+                st.visible_mean
+            );
         }
+    }
+
+    /// The means do not depend on the order of the pixels a cascade serves: the same pixels
+    /// in another depth order (each keeping its cascade) give the same means, bit for bit,
+    /// where a plain running sum would round differently.
+    #[test]
+    fn the_means_do_not_depend_on_the_pixel_order() {
+        let mut next = xorshift(0x1234_5678_9abc_def1);
+        let n = 20000;
+        let g: Vec<f64> = (0..n).map(|_| 0.03 * (12.0 * next()).exp2()).collect();
+        let w: Vec<u32> = (0..n).map(|_| crate::visibility::contrast_weight(next())).collect();
+        // Cascade 0 serves depths below 100, cascade 1 the rest: the pixels 0..n/2 stand at
+        // depths 1..100 in one order, then in the reverse order.
+        let at = |k: usize, reverse: bool| {
+            let half = n / 2;
+            let slot = if k < half {
+                if reverse {
+                    half - 1 - k
+                } else {
+                    k
+                }
+            } else {
+                k
+            };
+            1.0 + slot as f64 * if k < half { 98.0 / half as f64 } else { 0.01 }
+        };
+        let build = |reverse: bool| {
+            let mut px: Vec<(f64, f64, u32)> = (0..n).map(|k| (at(k, reverse), g[k], w[k])).collect();
+            px.sort_by(|a, b| a.0.total_cmp(&b.0));
+            pass_of(
+                px.iter().map(|x| (x.0, x.1)).collect(),
+                px.iter().map(|x| x.2).collect(),
+                0,
+            )
+        };
+        let (a, b) = (build(false), build(true));
+        let splits = [0.5, 100.0, 1000.0];
+        let texel = [0.3, 1.7];
+        let (sa, sb) = (stats(&a, &splits, &texel, None), stats(&b, &splits, &texel, None));
+        assert_eq!(sa, sb);
+        // The plain running sums in the two orders do differ.
+        let run = |v: &Visibility| -> f64 {
+            v.receivers
+                .iter()
+                .map(|&(d, g)| if d < 100.0 { 0.3 * g } else { 1.7 * g })
+                .sum()
+        };
+        assert_ne!(run(&a), run(&b));
     }
 
     /// A synthetic pass: `n` receivers at increasing depths in [1, 200) with factors spread
@@ -1071,6 +1323,7 @@ mod tests {
             self_shadowed: extra / 2,
             depth_range: Some((1.0, 200.0)),
             factor_range,
+            screen_index: Default::default(),
         }
     }
 

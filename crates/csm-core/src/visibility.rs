@@ -327,6 +327,41 @@ pub fn contrast_weight(contrast: f64) -> u32 {
     (contrast.clamp(0.0, 1.0) * CONTRAST_STEPS).round() as u32
 }
 
+/// A value made from a pass on first use and kept with it (the screen statistics' index): a
+/// cache, so a clone starts empty and any two compare equal.
+#[derive(Default)]
+pub struct PassCache(std::sync::OnceLock<Box<dyn std::any::Any + Send + Sync>>);
+
+impl PassCache {
+    /// The value, made by `make` on first use. One cache holds one type.
+    pub fn get_or_init<T: std::any::Any + Send + Sync>(&self, make: impl FnOnce() -> T) -> &T {
+        self.0
+            .get_or_init(|| Box::new(make()))
+            .downcast_ref::<T>()
+            .expect("a pass cache holds one type")
+    }
+}
+
+impl Clone for PassCache {
+    fn clone(&self) -> Self {
+        PassCache::default()
+    }
+}
+
+impl PartialEq for PassCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl std::fmt::Debug for PassCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PassCache")
+            .field("made", &self.0.get().is_some())
+            .finish()
+    }
+}
+
 /// The result of one pass.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Visibility {
@@ -345,6 +380,9 @@ pub struct Visibility {
     pub depth_range: Option<(f64, f64)>,
     /// Smallest and largest factor `g` of the receivers, or None without receivers.
     pub factor_range: Option<(f64, f64)>,
+    /// What the screen statistics of every setting read (their index of this pass), made on
+    /// first use.
+    pub screen_index: PassCache,
 }
 
 impl Visibility {
@@ -395,6 +433,7 @@ impl Visibility {
             self_shadowed,
             depth_range,
             factor_range,
+            screen_index: Default::default(),
         }
     }
 
