@@ -616,7 +616,8 @@ pub(crate) fn each_frame_row(
                             every: &every,
                             first_frame: from,
                         };
-                        rig_path::along_path_cached(&rig, poses, &probes, cadence, snapped, sopts)
+                        let [walked] = rig_path::along_path_cached(&rig, poses, &probes, cadence, [snapped], sopts);
+                        walked
                             .frames
                             .into_iter()
                             // Frames counted from `start`, as the other walks give them.
@@ -1422,9 +1423,20 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
                 every: w.cadence,
                 first_frame: 0,
             };
-            let one = |poses, snapped| rig_path::along_path_cached(w.rig, poses, w.probes, cadence, snapped, w.sopts);
+            let one = |poses, snapped| {
+                let [r] = rig_path::along_path_cached(w.rig, poses, w.probes, cadence, [snapped], w.sopts);
+                r
+            };
             let (s, u) = if batch {
-                rig_path::along_path_both_cached(w.rig, counted(poses(), &mut counter), w.probes, cadence, w.sopts)
+                let [s, u] = rig_path::along_path_cached(
+                    w.rig,
+                    counted(poses(), &mut counter),
+                    w.probes,
+                    cadence,
+                    [true, false],
+                    w.sopts,
+                );
+                (s, u)
             } else {
                 rayon::join(
                     || one(counted(poses(), &mut counter), true),

@@ -7,6 +7,7 @@ use csm_core::cost::{self, CasterVolume, CostCounts, CostModel, ReceiverBox};
 use csm_core::fitting::Window;
 use csm_core::visibility::{SceneGeometry, Visibility};
 use glam::DVec3;
+use rayon::prelude::*;
 
 /// The default weights of the cost model: relative costs of one draw call, one triangle, one
 /// fragment and one cleared texel, of the order of nanoseconds on a desktop GPU (docs/cost.md
@@ -155,7 +156,7 @@ fn model_of(m: &CostModel, c: &CostCounts, cleared: u64) -> f64 {
 pub fn volume(config: &Config, rig: &Rig, i: usize, lp: &LightPose, w: &Window) -> CasterVolume {
     let basis = rig.basis(i, lp);
     let (scene_near, _) = cost::light_depth_extent(&basis, &config.scene);
-    let far = rig.light_depth(i, lp, w, &config.scene).far;
+    let far = rig.light_far(i, lp, w, &config.scene);
     let lo = w.min();
     let hi = lo + glam::DVec2::new(w.width(), w.height());
     CasterVolume {
@@ -244,6 +245,9 @@ pub(crate) fn means_measurable(config: &Config, rig: Option<&Rig>) -> bool {
         && rig.is_none_or(|r| r.fixed_basis())
 }
 
+/// Frames whose counts [`path_means`] holds at once (bounded memory on long paths).
+const MEANS_CHUNK: usize = 4096;
+
 /// Each cascade's means over every frame of every motion path (see [`CostMeans`]): in frame
 /// `t` of a path (counted from 0 on each path) cascade `i` is rendered when `t` is a multiple
 /// of its cadence `every[i]` (empty: every frame), with that frame's window. `cost_index_mean`
@@ -258,19 +262,39 @@ pub(crate) fn path_means(config: &Config, rig: &Rig, every: &[usize]) -> Vec<Cos
     let mut sums = vec![CostCounts::default(); m];
     let mut cleared = vec![0u64; m];
     let mut frames = 0u64;
+    // One frame's counts for the cascades it renders (None: held by the cadence).
+    let frame = |t: usize, pose: &csm_core::geometry::CameraPose| -> Vec<Option<(CostCounts, u64)>> {
+        let lp = LightPose::new(&rig.light, pose);
+        (0..m)
+            .map(|i| {
+                (t % every.get(i).copied().unwrap_or(1).max(1) == 0).then(|| {
+                    let w = rig.window(i, &lp, config.shadow.snap);
+                    let v = volume(config, rig, i, &lp, &w);
+                    let counts = scene.light_scene(&v.basis).counts_all(&scene.mesh, &v);
+                    (counts, w.resolution as u64 * w.resolution as u64)
+                })
+            })
+            .collect()
+    };
     for motion in motions {
-        for (t, pose) in csm_core::motion::poses(&setup.camera, &motion).enumerate() {
-            let pose = pose.expect("validated when the config was loaded");
-            frames += 1;
-            let lp = LightPose::new(&rig.light, &pose);
-            for i in 0..m {
-                if t % every.get(i).copied().unwrap_or(1).max(1) != 0 {
-                    continue;
+        let mut poses = csm_core::motion::poses(&setup.camera, &motion).enumerate().peekable();
+        // Frames are counted in parallel, a bounded chunk at a time, and summed in frame order:
+        // the sums (fragments are f64) are the serial ones, bit for bit, at any thread count.
+        while poses.peek().is_some() {
+            let chunk: Vec<_> = poses
+                .by_ref()
+                .take(MEANS_CHUNK)
+                .map(|(t, p)| (t, p.expect("validated when the config was loaded")))
+                .collect();
+            let counted: Vec<_> = chunk.par_iter().map(|(t, pose)| frame(*t, pose)).collect();
+            for per_cascade in counted {
+                frames += 1;
+                for (i, c) in per_cascade.into_iter().enumerate() {
+                    if let Some((counts, texels)) = c {
+                        sums[i].add(&counts);
+                        cleared[i] += texels;
+                    }
                 }
-                let w = rig.window(i, &lp, config.shadow.snap);
-                let v = volume(config, rig, i, &lp, &w);
-                sums[i].add(&scene.light_scene(&v.basis).counts_all(&scene.mesh, &v));
-                cleared[i] += w.resolution as u64 * w.resolution as u64;
             }
         }
     }

@@ -28,7 +28,8 @@ fn rig_and_poses(text: &str) -> (Rig, Vec<CameraPose>, csm_lab::Config) {
 }
 
 fn cached(rig: &Rig, poses: &[CameraPose], every: &[usize], snapped: bool) -> PathResult {
-    along_path_cached(rig, poses, &[], Cadence { every, first_frame: 0 }, snapped, OPTS)
+    let [r] = along_path_cached(rig, poses, &[], Cadence { every, first_frame: 0 }, [snapped], OPTS);
+    r
 }
 
 /// The four side margins (texels) of a window over a set of light-space corners:
@@ -220,7 +221,7 @@ fn a_tight_fit_holds_its_window_and_leaves_holes_a_per_frame_recomputation_finds
     let (rig, poses, _) = rig_and_poses(&text);
     let every = [2usize, 3, 4, 5];
     let pr = probes(&rig, &poses[0], &config(&text).scene, 50);
-    let r = along_path_cached(
+    let [r] = along_path_cached(
         &rig,
         &poses,
         &pr,
@@ -228,7 +229,7 @@ fn a_tight_fit_holds_its_window_and_leaves_holes_a_per_frame_recomputation_finds
             every: &every,
             first_frame: 0,
         },
-        true,
+        [true],
         OPTS,
     );
     let st = r.stale.as_ref().unwrap();

@@ -1665,3 +1665,27 @@ fn applying_a_preset_to_a_validated_scene_equals_loading_with_it() {
     };
     assert_eq!(b.overlap_proportion, 0.1);
 }
+
+/// `Rig::light_far` (what the per-frame cost counts use) is `Rig::light_depth`'s far plane, bit
+/// for bit, for every preset and csm-lab's own rig, on every frame of a strafe, in both snap
+/// modes: the scene rule's shortcut skips only the caster side, which the far plane never reads.
+#[test]
+fn the_light_far_shortcut_equals_the_light_depth_far_plane_for_every_preset() {
+    let own = load(&scene("path = \"strafe\"\nframes = 40\nstep = 0.05", ""));
+    let presets = csm_lab::presets::PresetName::ALL
+        .iter()
+        .map(|p| preset_config(p.as_str(), "", ""));
+    for c in std::iter::once(own).chain(presets) {
+        let rig = csm_lab::analysis::rig(&c).unwrap();
+        for pose in c.camera_path().unwrap() {
+            let lp = LightPose::new(&rig.light, &pose);
+            for i in 0..rig.cascade_count() {
+                for snap in [true, false] {
+                    let w = rig.window(i, &lp, snap);
+                    let far = rig.light_depth(i, &lp, &w, &c.scene).far;
+                    assert_eq!(rig.light_far(i, &lp, &w, &c.scene).to_bits(), far.to_bits());
+                }
+            }
+        }
+    }
+}

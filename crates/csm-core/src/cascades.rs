@@ -472,6 +472,19 @@ impl Rig {
         (near.min(far), far)
     }
 
+    /// [`Rig::light_depth`]'s `far` alone, bit for bit. Under the scene rule with a fixed basis
+    /// the far plane is where the slice leaves the scene, which does not depend on the window:
+    /// the caster side (the window's prism against the scene) is skipped. Per-frame cost
+    /// counts need only this.
+    pub fn light_far(&self, i: usize, lp: &LightPose, window: &Window, scene: &Aabb) -> f64 {
+        if self.scheme.depth == LightDepthRule::Scene && self.fixed_basis() {
+            let s = &self.slices[i];
+            let n = slice_in_scene(&self.light, &self.lens, &lp.pose, (s.near, s.far), scene);
+            return n.receivers.map_or(n.slice_hi, |(_, b)| b);
+        }
+        self.light_depth(i, lp, window, scene).far
+    }
+
     /// The light depth range cascade `i` renders under the scheme's rule, and how much of the
     /// scene falls outside it, for the camera frame `lp` and its window `window`.
     pub fn light_depth(&self, i: usize, lp: &LightPose, window: &Window, scene: &Aabb) -> LightDepth {
@@ -567,17 +580,14 @@ fn depth_needs(
     window: &Window,
     scene: &Aabb,
 ) -> DepthNeeds {
-    let slice_hex = pose.slice_hexahedron(lens, near, far);
-    let scene_hex = scene.hexahedron();
-    let slice_z = slice_hex.vertices.iter().map(|v| l.z.dot(*v));
-    let (slice_lo, slice_hi) = slice_z.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| (a.min(z), b.max(z)));
+    let slice = slice_in_scene(l, lens, pose, (near, far), scene);
     let scene_z = (0..8).map(|c| l.z.dot(scene.corner(c)));
     let (scene_lo, scene_hi) = scene_z.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| (a.min(z), b.max(z)));
     // The window's prism along the light, long enough to hold the scene and the slice.
     let lo = window.min();
     let hi = lo + DVec2::new(window.width(), window.height());
-    let z0 = scene_lo.min(slice_lo) - 1.0;
-    let z1 = scene_hi.max(slice_hi) + 1.0;
+    let z0 = scene_lo.min(slice.slice_lo) - 1.0;
+    let z1 = scene_hi.max(slice.slice_hi) + 1.0;
     let prism = Hexahedron {
         vertices: Corner::each(|c| l.x * c.x(lo.x, hi.x) + l.y * c.y(lo.y, hi.y) + l.z * c.z(z0, z1)),
         planes: [
@@ -590,10 +600,21 @@ fn depth_needs(
         ],
     };
     DepthNeeds {
+        casters_near: intersection_range(&scene.hexahedron(), &prism, l.z).map(|(a, _)| a),
+        ..slice
+    }
+}
+
+/// [`depth_needs`] without `casters_near` (which alone depends on the window).
+fn slice_in_scene(l: &LightBasis, lens: &Lens, pose: &CameraPose, (near, far): (f64, f64), scene: &Aabb) -> DepthNeeds {
+    let slice_hex = pose.slice_hexahedron(lens, near, far);
+    let slice_z = slice_hex.vertices.iter().map(|v| l.z.dot(*v));
+    let (slice_lo, slice_hi) = slice_z.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| (a.min(z), b.max(z)));
+    DepthNeeds {
         slice_lo,
         slice_hi,
-        casters_near: intersection_range(&scene_hex, &prism, l.z).map(|(a, _)| a),
-        receivers: intersection_range(&slice_hex, &scene_hex, l.z),
+        casters_near: None,
+        receivers: intersection_range(&slice_hex, &scene.hexahedron(), l.z),
     }
 }
 

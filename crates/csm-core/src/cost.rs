@@ -74,48 +74,69 @@ pub fn light_bounds_of(basis: &LightBasis, b: &Aabb) -> (DVec3, DVec3) {
 /// Whether the world box `b` intersects the volume: the exact separating-axis test of an
 /// axis-aligned box against an oriented box (closed boxes: touching counts).
 pub fn aabb_meets_volume(b: &Aabb, v: &CasterVolume) -> bool {
-    if v.is_empty() {
-        return false;
+    SeparatingAxes::new(&v.basis).meets(b, v)
+}
+
+/// One candidate separating axis of a world box against a light-space box, with what depends
+/// only on the light basis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Axis {
+    axis: DVec3,
+    /// `|axis|` per world component (the world box's radius along the axis).
+    abs: DVec3,
+    /// `|axis · b_k|` for the light axes `b_k` (the light box's radius along the axis).
+    light: [f64; 3],
+    len: f64,
+}
+
+/// The 15 separating axes of [`aabb_meets_volume`] in one light basis (the three world axes,
+/// the three light axes, their nine cross products), made once per basis: a path or sweep
+/// tests many boxes against many volumes of the same basis. The same operations in the same
+/// order as a test that derives each axis on the spot, so the same answers bit for bit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeparatingAxes {
+    axes: Vec<Axis>,
+}
+
+impl SeparatingAxes {
+    pub fn new(basis: &LightBasis) -> Self {
+        let light = [basis.x, basis.y, basis.z];
+        let world = [DVec3::X, DVec3::Y, DVec3::Z];
+        let cross = world.iter().flat_map(|a| light.iter().map(move |b| a.cross(*b)));
+        let axes = (world.into_iter().chain(light).chain(cross))
+            .map(|axis| Axis {
+                axis,
+                abs: axis.abs(),
+                light: light.map(|b| axis.dot(b).abs()),
+                len: axis.length(),
+            })
+            // A near-zero cross product (parallel edges) is not a separating direction of its
+            // own: the face axes cover that case.
+            .filter(|a| a.len >= 1e-12)
+            .collect();
+        SeparatingAxes { axes }
     }
-    let ca = 0.5 * (b.min + b.max);
-    let ea = 0.5 * (b.max - b.min);
-    let axes_b = [v.basis.x, v.basis.y, v.basis.z];
-    let cl = 0.5 * (v.lo + v.hi);
-    let eb = 0.5 * (v.hi - v.lo);
-    let cb = v.basis.world_from_light() * cl;
-    let d = cb - ca;
-    let eb_arr = [eb.x, eb.y, eb.z];
-    // Radius of box A (world axes) and box B (light axes) along `axis`.
-    let ra = |axis: DVec3| ea.x * axis.x.abs() + ea.y * axis.y.abs() + ea.z * axis.z.abs();
-    let rb = |axis: DVec3| (0..3).map(|k| eb_arr[k] * axis.dot(axes_b[k]).abs()).sum::<f64>();
-    let separated = |axis: DVec3| {
-        let len = axis.length();
-        // A near-zero cross product (parallel edges) is not a separating direction of its own:
-        // the face axes cover that case.
-        if len < 1e-12 {
+
+    /// [`aabb_meets_volume`] for a volume in this basis.
+    pub fn meets(&self, b: &Aabb, v: &CasterVolume) -> bool {
+        if v.is_empty() {
             return false;
         }
-        d.dot(axis).abs() > ra(axis) + rb(axis) + 1e-12 * (1.0 + d.length() + ea.length() + eb.length()) * len
-    };
-    let world = [DVec3::X, DVec3::Y, DVec3::Z];
-    for a in world {
-        if separated(a) {
-            return false;
-        }
+        let ca = 0.5 * (b.min + b.max);
+        let ea = 0.5 * (b.max - b.min);
+        let cl = 0.5 * (v.lo + v.hi);
+        let eb = 0.5 * (v.hi - v.lo);
+        let cb = v.basis.world_from_light() * cl;
+        let d = cb - ca;
+        let eb_arr = [eb.x, eb.y, eb.z];
+        // The tolerance's scale, the same for every axis.
+        let tol = 1e-12 * (1.0 + d.length() + ea.length() + eb.length());
+        !self.axes.iter().any(|a| {
+            let ra = ea.x * a.abs.x + ea.y * a.abs.y + ea.z * a.abs.z;
+            let rb = (0..3).map(|k| eb_arr[k] * a.light[k]).sum::<f64>();
+            d.dot(a.axis).abs() > ra + rb + tol * a.len
+        })
     }
-    for a in axes_b {
-        if separated(a) {
-            return false;
-        }
-    }
-    for a in world {
-        for b in axes_b {
-            if separated(a.cross(b)) {
-                return false;
-            }
-        }
-    }
-    true
 }
 
 /// Most vertices a clipped triangle has: 3, plus one per clipping plane.
@@ -292,6 +313,8 @@ pub struct LightScene {
     order: Vec<usize>,
     chunks: Vec<Chunk>,
     objects: Vec<LightObject>,
+    /// The separating axes of this basis, for the objects' boxes against a volume.
+    axes: SeparatingAxes,
     /// The counts of volumes already counted without culling, by the exact bits of the volume
     /// (a window a sweep meets again, e.g. a single cascade at every λ, is counted once).
     seen: std::sync::Mutex<std::collections::HashMap<[u64; 8], CostCounts>>,
@@ -393,6 +416,7 @@ impl LightScene {
             order,
             chunks,
             objects,
+            axes: SeparatingAxes::new(basis),
             seen: Default::default(),
         }
     }
@@ -477,6 +501,7 @@ impl LightScene {
     /// The counts of a volume in this basis, over the objects `keep` accepts (by index into
     /// [`Mesh::objects`]; `|_| true` without culling).
     pub fn counts(&self, mesh: &Mesh, v: &CasterVolume, keep: impl Fn(usize) -> bool) -> CostCounts {
+        debug_assert_eq!(v.basis, self.basis, "a volume of another basis");
         let mut out = CostCounts::default();
         if v.is_empty() {
             return out;
@@ -490,7 +515,7 @@ impl LightScene {
             if apart3(lo.box_lo, lo.box_hi) {
                 continue;
             }
-            if !keep(k) || !aabb_meets_volume(&o.bounds, v) {
+            if !keep(k) || !self.axes.meets(&o.bounds, v) {
                 continue;
             }
             let n = o.triangles.len() as u64;

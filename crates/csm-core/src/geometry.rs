@@ -368,15 +368,14 @@ pub fn intersection_range(a: &Hexahedron, b: &Hexahedron, dir: DVec3) -> Option<
     let eps = 1e-9 * size + 4.0 * f64::EPSILON * scale;
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
-    let mut take = |p: DVec3| {
-        let v = dir.dot(p);
-        lo = lo.min(v);
-        hi = hi.max(v);
-    };
+    // A candidate whose value already lies in [lo, hi] (or is NaN, which min/max ignore) cannot
+    // change the range: its inside tests, most of the work, are skipped. The same result.
+    let widens = |v: f64, lo: f64, hi: f64| v < lo || v > hi;
     for (s, o) in [(a, b), (b, a)] {
         for v in &s.vertices {
-            if o.contains(*v, eps) {
-                take(*v);
+            let value = dir.dot(*v);
+            if widens(value, lo, hi) && o.contains(*v, eps) {
+                (lo, hi) = (lo.min(value), hi.max(value));
             }
         }
         for &(i, j) in &HEX_EDGES {
@@ -392,8 +391,9 @@ pub fn intersection_range(a: &Hexahedron, b: &Hexahedron, dir: DVec3) -> Option<
                     continue;
                 }
                 let x = p + (q - p) * t;
-                if o.contains(x, eps) && s.contains(x, eps) {
-                    take(x);
+                let value = dir.dot(x);
+                if widens(value, lo, hi) && o.contains(x, eps) && s.contains(x, eps) {
+                    (lo, hi) = (lo.min(value), hi.max(value));
                 }
             }
         }

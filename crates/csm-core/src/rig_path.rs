@@ -98,30 +98,19 @@ pub fn along_path_lit<P: Borrow<CameraPose>>(
 }
 
 /// [`along_path`] with cached cascades (see [`Cadence`]; [`Cadence::EVERY_FRAME`] is
-/// [`along_path`], bit for bit). The held windows keep the rig's light basis, so the rig's
-/// basis must not follow the camera ([`Rig::fixed_basis`]) and the light must stand still.
-pub fn along_path_cached<P: Borrow<CameraPose>>(
+/// [`along_path`], bit for bit), one result per snap mode of `modes` in its order: `[snapped]`
+/// for one walk, `[true, false]` for both modes in one walk (as [`along_path_both`]). The held
+/// windows keep the rig's light basis, so the rig's basis must not follow the camera
+/// ([`Rig::fixed_basis`]) and the light must stand still.
+pub fn along_path_cached<P: Borrow<CameraPose>, const K: usize>(
     rig: &Rig,
     poses: impl IntoIterator<Item = P, IntoIter: ExactSizeIterator>,
     probes: &[Vec<DVec3>],
     cadence: Cadence<'_>,
-    snapped: bool,
+    modes: [bool; K],
     opts: ShimmerOptions,
-) -> PathResult {
-    let [r] = walk_cached(&mut RigPath::new(rig, probes), poses, [snapped], opts, cadence);
-    r.finish(opts)
-}
-
-/// [`along_path_both`] with cached cascades (see [`along_path_cached`]).
-pub fn along_path_both_cached<P: Borrow<CameraPose>>(
-    rig: &Rig,
-    poses: impl IntoIterator<Item = P, IntoIter: ExactSizeIterator>,
-    probes: &[Vec<DVec3>],
-    cadence: Cadence<'_>,
-    opts: ShimmerOptions,
-) -> (PathResult, PathResult) {
-    let [s, u] = walk_cached(&mut RigPath::new(rig, probes), poses, [true, false], opts, cadence);
-    (s.finish(opts), u.finish(opts))
+) -> [PathResult; K] {
+    walk_cached(&mut RigPath::new(rig, probes), poses, modes, opts, cadence).map(|r| r.finish(opts))
 }
 
 fn model<'a>(rig: &'a Rig, probes: &'a [Vec<DVec3>], light: Option<LightTrack<'a>>) -> RigPath<'a> {
@@ -195,27 +184,14 @@ fn walk_without_probes<P: Borrow<CameraPose>>(rig: &Rig, poses: impl IntoIterato
                 if !matches!(&texels, Some(ct) if ct.texel == w.texel) {
                     texels = Some(CornerTexels::new(&corners, bounds, w.texel));
                 }
-                let ct = texels.as_ref().expect("set above");
-                let o = w.origin_texels;
-                // As in `RigPath::cover`: the smallest margin from the extreme corners, and the
-                // per-corner test only when some corner can lie outside.
-                let slack = (ct.lo.x - o.x)
-                    .min(n - (ct.hi.x - o.x))
-                    .min(ct.lo.y - o.y)
-                    .min(n - (ct.hi.y - o.y));
-                tot.slack(i, slack);
-                if -slack > 1e-9 {
-                    for c in &corners {
-                        tot.corner(i, w.texel_coords(*c), n, (*c / w.texel).abs().max_element());
-                    }
-                }
+                fast_cover(tot, i, &w, texels.as_ref().expect("set above"), &corners, n);
                 let before = &mut prev[k][i];
                 if let Some(p) = before {
                     let (pt, wt) = (p.texel, w.texel);
                     // As in `walk`: an unchanged texel size has no size change and the closed
                     // form; a changed one (no probes to land) counts a pair of zero drift.
                     let (size_change, ms) = if wt == pt {
-                        (0.0, closed_form_drift(p.origin_texels, o))
+                        (0.0, closed_form_drift(p.origin_texels, w.origin_texels))
                     } else {
                         (((wt.x / pt.x - 1.0).abs()).max((wt.y / pt.y - 1.0).abs()), 0.0)
                     };
@@ -329,6 +305,27 @@ fn walk_axis_centred<P: Borrow<CameraPose>>(
         }
     }
     totals
+}
+
+/// The fast coverage test of cascade `i`'s window `w` (`n` texels a side) over its slice
+/// corners (`ct`: their texel extremes). The smallest margin over the corners comes from the
+/// extreme corners alone: `x - o` and `n - x` are monotone in x under round-to-nearest, so the
+/// extreme of the rounded margins is the rounded margin of the extreme, bit-identical to a
+/// per-corner minimum. Every corner's tolerance is at least 1e-9, so unless the worst margin
+/// is below -1e-9 no corner can count as outside and the per-corner pass is skipped.
+#[inline]
+fn fast_cover(totals: &mut PathTotals, i: usize, w: &Window, ct: &CornerTexels, corners: &[DVec2; 8], n: f64) {
+    let o = w.origin_texels;
+    let slack = (ct.lo.x - o.x)
+        .min(n - (ct.hi.x - o.x))
+        .min(ct.lo.y - o.y)
+        .min(n - (ct.hi.y - o.y));
+    totals.slack(i, slack);
+    if -slack > 1e-9 {
+        for c in corners {
+            totals.corner(i, w.texel_coords(*c), n, (*c / w.texel).abs().max_element());
+        }
+    }
 }
 
 /// The extremes of one cascade's slice corners in texel units (`corner / T`, before the
@@ -589,23 +586,7 @@ impl PathModel for RigPath<'_> {
         let ct = shared
             .texels
             .get_or_insert_with(|| CornerTexels::new(corners, bounds, w.texel));
-        let n = self.rig.resolution as f64;
-        let o = w.origin_texels;
-        // Smallest margin over the corners, from the extreme corners alone: `x - o` and
-        // `n - x` are monotone in x under round-to-nearest, so the extreme of the rounded
-        // margins is the rounded margin of the extreme: bit-identical to a per-corner minimum.
-        let slack = (ct.lo.x - o.x)
-            .min(n - (ct.hi.x - o.x))
-            .min(ct.lo.y - o.y)
-            .min(n - (ct.hi.y - o.y));
-        totals.slack(i, slack);
-        // Every corner's tolerance is at least 1e-9, so unless the worst margin is below
-        // -1e-9 no corner can count as outside and the per-corner pass is skipped.
-        if -slack > 1e-9 {
-            for c in &shared.corners {
-                totals.corner(i, w.texel_coords(*c), n, (*c / w.texel).abs().max_element());
-            }
-        }
+        fast_cover(totals, i, w, ct, &shared.corners, self.rig.resolution as f64);
     }
 
     #[inline]
