@@ -276,7 +276,7 @@ fn ground_truth(c: &mut Criterion) {
     for snapped in [true, false] {
         let every = csm_core::walk::Cadence::EVERY_FRAME;
         let f = truth::flicker_cached(
-            &scene,
+            truth::ShadowMaps::new(&scene),
             &rig,
             &rig.light,
             poses(),
@@ -299,7 +299,17 @@ fn ground_truth(c: &mut Criterion) {
     // Frame 0: one texel ray and one truth ray per receiver.
     group.throughput(criterion::Throughput::Elements(2 * points.len() as u64));
     group.bench_function("frame0_rays", |b| {
-        b.iter(|| black_box(truth::frame_zero(&scene, &rig, &rig.light, &pose, true, &points, &s)))
+        b.iter(|| {
+            black_box(truth::frame_zero(
+                truth::ShadowMaps::new(&scene),
+                &rig,
+                &rig.light,
+                &pose,
+                true,
+                &points,
+                &s,
+            ))
+        })
     });
     // One unsnapped frame after frame 0: every receiver's texel is a new ray.
     let two: Vec<_> = poses().take(2).collect();
@@ -307,7 +317,7 @@ fn ground_truth(c: &mut Criterion) {
     group.bench_function("two_unsnapped_frames_rays", |b| {
         b.iter(|| {
             black_box(truth::flicker_cached(
-                &scene,
+                truth::ShadowMaps::new(&scene),
                 &rig,
                 &rig.light,
                 two.iter().copied(),

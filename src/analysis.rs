@@ -44,6 +44,9 @@ pub struct AnalysisOptions {
     /// be measured ([`cost::means_measurable`]); a sweep asks for them with
     /// `[sweep] cost_means` or when a setting caches cascades.
     pub cost_means: bool,
+    /// The ground-truth pass's texel reads and rays (`analyze` prints them): counting the rays
+    /// keeps a set of the texels read per map grid. Without it the pass's counts are 0.
+    pub texel_counts: bool,
 }
 
 impl AnalysisOptions {
@@ -57,6 +60,7 @@ impl AnalysisOptions {
             seams: true,
             ground_truth: true,
             cost_means: true,
+            texel_counts: true,
         }
     }
 
@@ -70,6 +74,7 @@ impl AnalysisOptions {
             seams: false,
             ground_truth: false,
             cost_means: false,
+            texel_counts: false,
         }
     }
 }
@@ -1041,7 +1046,7 @@ fn analyze_camera(
         on_frames,
     );
     let truth = if config.truth.enabled && opts.ground_truth {
-        ground_truth::run(config, &rig, on_frames)
+        ground_truth::run(config, &rig, opts.texel_counts, on_frames)
     } else {
         None
     };

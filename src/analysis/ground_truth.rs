@@ -92,7 +92,8 @@ pub struct GroundTruth {
     pub unsnapped: Flicker,
     pub pictures_snapped: ModePictures,
     pub pictures_unsnapped: ModePictures,
-    /// Texel reads and rays of the whole pass.
+    /// Texel reads and rays of the whole pass (0 when the analysis did not ask for them,
+    /// [`crate::analysis::AnalysisOptions::texel_counts`]).
     pub cache: CacheStats,
     /// The receiver points (frame 0's lit-facing pixels).
     pub points: Vec<Receiver>,
@@ -207,8 +208,9 @@ pub(crate) fn cost_fits(config: &Config, source: &str) -> crate::error::Result<(
 }
 
 /// The pass for a config whose scene has geometry and cascades; None otherwise. `on_frames`
-/// hears of every frame walked (both snap modes: `2 × frames` in all).
-pub(crate) fn run(config: &Config, rig: &Rig, on_frames: &(dyn Fn(u64) + Sync)) -> Option<GroundTruth> {
+/// hears of every frame walked (both snap modes: `2 × frames` in all). The texel counts
+/// ([`GroundTruth::cache`]) are taken only when `counts` is set (0 otherwise).
+pub(crate) fn run(config: &Config, rig: &Rig, counts: bool, on_frames: &(dyn Fn(u64) + Sync)) -> Option<GroundTruth> {
     let setup = config.setup();
     let vis = setup.visibility()?;
     let scene = &setup.geometry.as_ref()?.scene;
@@ -251,6 +253,7 @@ pub(crate) fn run(config: &Config, rig: &Rig, on_frames: &(dyn Fn(u64) + Sync)) 
             .then(|| Binary32::new(rig, config.shadow.snap_space, config.scene)),
     };
     let points: Vec<Receiver> = truth::receivers(scene, &vis);
+    let maps = || truth::ShadowMaps::new(scene).counting(counts);
     let away = truth::away_pixels(&vis);
     let mut zero_stats = CacheStats::default();
     let bias: Vec<Bias> = match bias_source {
@@ -272,7 +275,7 @@ pub(crate) fn run(config: &Config, rig: &Rig, on_frames: &(dyn Fn(u64) + Sync)) 
         }
         BiasSource::Recommended => {
             // The bias needed comes from the unbiased lookups; the pass then samples with it.
-            let (zero, stats) = truth::frame_zero(scene, rig, &rig.light, &pose0, snap, &points, &unbiased);
+            let (zero, stats) = truth::frame_zero(maps(), rig, &rig.light, &pose0, snap, &points, &unbiased);
             zero_stats.add(stats);
             let needed: Vec<Option<f64>> = truth::cascade_truth(&zero, m, &unbiased)
                 .iter()
@@ -285,7 +288,7 @@ pub(crate) fn run(config: &Config, rig: &Rig, on_frames: &(dyn Fn(u64) + Sync)) 
         bias: bias.clone(),
         ..unbiased
     };
-    let (zero, stats) = truth::frame_zero(scene, rig, &rig.light, &pose0, snap, &points, &sampling);
+    let (zero, stats) = truth::frame_zero(maps(), rig, &rig.light, &pose0, snap, &points, &sampling);
     zero_stats.add(stats);
     let truly_lit: Vec<bool> = zero.iter().map(|p| p.truly_lit).collect();
     let cascades = truth::cascade_truth(&zero, m, &sampling);
@@ -301,7 +304,7 @@ pub(crate) fn run(config: &Config, rig: &Rig, on_frames: &(dyn Fn(u64) + Sync)) 
         let mut frame0 = ShadeImage::empty(cols, rows);
         let mut animation = Vec::new();
         let f = truth::flicker_cached(
-            scene,
+            maps(),
             rig,
             &rig.light,
             poses,

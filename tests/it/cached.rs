@@ -355,7 +355,7 @@ fn a_held_map_flips_no_receiver_between_its_updates() {
     };
     let run = |every: &[usize]| {
         csm_core::truth::flicker_cached(
-            scene,
+            csm_core::truth::ShadowMaps::new(scene),
             &rig,
             &rig.light,
             c.camera_path().unwrap().into_iter(),
@@ -367,7 +367,7 @@ fn a_held_map_flips_no_receiver_between_its_updates() {
         )
     };
     let plain = csm_core::truth::flicker_cached(
-        scene,
+        csm_core::truth::ShadowMaps::new(scene),
         &rig,
         &rig.light,
         c.camera_path().unwrap().into_iter(),

@@ -898,3 +898,67 @@ fn the_s5_split_equals_answering_every_frame_from_scratch() {
     assert_eq!(g.summary.flicker_acne_unsnapped, acne as f64 / steps as f64);
     assert_eq!(g.summary.flicker_unsnapped, (edge + acne) as f64 / steps as f64);
 }
+
+/// The walk answers a receiver from its triangle's plane wherever the light-space cover owns
+/// every texel it can read (`truth::PlaneLookup`), and keeps the answer of a receiver whose
+/// key did not change: every frame's answers equal answering that frame from scratch with
+/// every texel traced (fresh maps per frame), in both snap modes, on paths that strafe and
+/// turn, with the recommended, configured, engine (Godot's lateral normal offset) and no bias,
+/// PCF 1, 3 and 5, both filters and every depth format.
+#[test]
+fn every_frame_of_the_walk_equals_tracing_it_from_scratch() {
+    let cases = [
+        ("yaw", true, ""),
+        (
+            "strafe",
+            false,
+            "pcf = 3\npcf_filter = \"nearest\"\ndepth_format = \"d16\"\ndepth_bias = 0.02\nslope_bias = 1.0\nnormal_bias = 0.5",
+        ),
+        ("yaw", false, "pcf = 5\ndepth_format = \"d24\"\nbias = \"none\""),
+        ("strafe", true, "preset = \"godot\""),
+        ("dolly", false, "depth_bias = 0.004\npcf_filter = \"bilinear\""),
+    ];
+    for (path, snap, extra) in cases {
+        let text = scene_text(path, snap, "").replace("[shadow]", &format!("[shadow]\n{extra}"));
+        let (c, a) = ground_truth(&text);
+        let g = truth_of(&a);
+        let rig = a.rig().unwrap();
+        let setup = c.setup();
+        let scene = &setup.geometry.as_ref().unwrap().scene;
+        let s = Sampling {
+            bias: g.bias.clone(),
+            format: Some(c.truth.depth_format),
+            ranges: g.ranges.clone(),
+            pcf: c.truth.pcf,
+            filter: g.filter,
+            binary32: None,
+        };
+        let poses: Vec<_> = c.camera_path().unwrap();
+        for snapped in [true, false] {
+            let mut walked: Vec<Vec<Option<truth::Answer>>> = Vec::new();
+            truth::flicker_cached(
+                truth::ShadowMaps::new(scene),
+                rig,
+                &rig.light,
+                poses.iter().copied(),
+                snapped,
+                &g.points,
+                &s,
+                csm_core::walk::Cadence::EVERY_FRAME,
+                &mut |_, states| walked.push(states.to_vec()),
+            );
+            assert_eq!(walked.len(), poses.len());
+            let mut answered = 0;
+            for (t, pose) in poses.iter().enumerate() {
+                let mut maps = truth::ShadowMaps::new(scene).counting(false);
+                let (_, fresh) = truth::frame_states(&mut maps, rig, &rig.light, pose, snapped, &g.points, &s);
+                answered += fresh.iter().flatten().count();
+                assert!(
+                    walked[t] == fresh,
+                    "{path} {extra:?} snapped {snapped}: frame {t} differs"
+                );
+            }
+            assert!(answered > 1000 * poses.len(), "{path} {extra:?}: {answered} answers");
+        }
+    }
+}

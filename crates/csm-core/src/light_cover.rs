@@ -56,6 +56,22 @@ pub enum Cell {
     Unknown,
 }
 
+/// Most cells [`LightCover::region_owner`] visits before it gives up.
+pub const REGION_CELLS: usize = 64;
+
+/// A triangle's plane along the light ([`LightCover::plane`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightPlane {
+    pub k: f64,
+    pub gx: f64,
+    pub gy: f64,
+    /// `|n| / |n . z|` (`n` the triangle's edge cross product, `z` the light): the factor by
+    /// which the hit distance's rounding grows over its inputs' (1 facing the light).
+    pub cond: f64,
+    /// The largest absolute coordinate of the vertex the hit distance starts from.
+    pub reach: f64,
+}
+
 /// A triangle in light coordinates (x, y across the light, z its depth along it).
 #[derive(Debug, Clone, Copy)]
 struct LightTri {
@@ -220,15 +236,7 @@ impl LightCover {
         let mut u = u - DVec2::new(i as f64, j as f64);
         let mut level = 0;
         loop {
-            let mut class = node.class[k].load(Ordering::Relaxed);
-            if class == UNKNOWN {
-                class = match classify(&self.tris, cands, a, a + size, self.margin) {
-                    AMBIGUOUS if level < LEVELS => REFINED,
-                    c => c,
-                };
-                node.class[k].store(class, Ordering::Relaxed);
-            }
-            match class {
+            match self.class(node, k, cands, a, size, level) {
                 EMPTY => return Cell::Miss,
                 AMBIGUOUS => return Cell::Unknown,
                 REFINED => {
@@ -246,6 +254,107 @@ impl LightCover {
                 t => return Cell::Owner(t as usize),
             }
         }
+    }
+
+    /// Cell `k` of `node` (minimum corner `a`, size `size`, at refinement `level`, among the
+    /// coarse cell's candidates `cands`): its class, classified on first use.
+    #[inline]
+    fn class(&self, node: &Node, k: usize, cands: &[u32], a: DVec2, size: DVec2, level: usize) -> u32 {
+        let mut class = node.class[k].load(Ordering::Relaxed);
+        if class == UNKNOWN {
+            class = match classify(&self.tris, cands, a, a + size, self.margin) {
+                AMBIGUOUS if level < LEVELS => REFINED,
+                c => c,
+            };
+            node.class[k].store(class, Ordering::Relaxed);
+        }
+        class
+    }
+
+    /// The triangle every ray along the light through the rectangle `[lo, hi]` (light-space
+    /// x/y) meets first, when every cell the rectangle meets (at the depth [`LightCover::at`]
+    /// reaches) is owned by that one triangle: then [`LightCover::at`] names it at every point
+    /// of the rectangle, and so does the BVH (the owner test's margin). None when the
+    /// rectangle meets an empty, uncertain or differently owned cell, leaves the grid, or
+    /// meets more than [`REGION_CELLS`] cells (classifying the cells it visits on first use).
+    pub fn region_owner(&self, lo: DVec2, hi: DVec2) -> Option<usize> {
+        let u0 = (lo - self.lo) * self.inv;
+        let u1 = (hi - self.lo) * self.inv;
+        if !(u0.x >= 0.0 && u0.y >= 0.0 && u1.x < self.cols as f64 && u1.y < self.rows as f64) {
+            return None;
+        }
+        let (i0, j0, i1, j1) = (u0.x as usize, u0.y as usize, u1.x as usize, u1.y as usize);
+        let mut owner = None;
+        let mut budget = REGION_CELLS;
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let a = self.lo + self.cell * DVec2::new(i as f64, j as f64);
+                let cell = (&self.coarse, j * self.cols + i, a, self.cell, 0);
+                if !self.owns(cell, self.candidates(i, j), (lo, hi), &mut owner, &mut budget) {
+                    return None;
+                }
+            }
+        }
+        owner.map(|t| t as usize)
+    }
+
+    /// Whether every cell of `(node, k, corner, size, level)` that meets `rect` is owned by
+    /// `owner` (set by the first owner met); [`LightCover::region_owner`]'s walk.
+    fn owns(
+        &self,
+        (node, k, a, size, level): (&Node, usize, DVec2, DVec2, usize),
+        cands: &[u32],
+        rect: (DVec2, DVec2),
+        owner: &mut Option<u32>,
+        budget: &mut usize,
+    ) -> bool {
+        if *budget == 0 {
+            return false;
+        }
+        *budget -= 1;
+        match self.class(node, k, cands, a, size, level) {
+            EMPTY | AMBIGUOUS => false,
+            REFINED => {
+                let sub: &Node = node.sub[k].get_or_init(|| Box::new(Node::new(FINE * FINE)));
+                let fine = size / FINE as f64;
+                // The sub-cells the rectangle meets, one more either side of the rounding.
+                let last = (FINE - 1) as f64;
+                let v0 = ((rect.0 - a) / fine).floor().clamp(DVec2::ZERO, DVec2::splat(last));
+                let v1 = ((rect.1 - a) / fine).floor().clamp(DVec2::ZERO, DVec2::splat(last));
+                for y in v0.y as usize..=v1.y as usize {
+                    for x in v0.x as usize..=v1.x as usize {
+                        let corner = a + fine * DVec2::new(x as f64, y as f64);
+                        let cell = (sub, y * FINE + x, corner, fine, level + 1);
+                        if !self.owns(cell, cands, rect, owner, budget) {
+                            return false;
+                        }
+                    }
+                }
+                true
+            }
+            t => *owner.get_or_insert(t) == t,
+        }
+    }
+
+    /// The plane of mesh triangle `id` as a texel's ray along the light sees it: the depth
+    /// [`LightCover::hit_distance`] gives (plus the ray's start depth) for the ray through
+    /// light-space x/y `c` is, in exact arithmetic, `k - gx c.x - gy c.y` whatever the
+    /// start. None for a triangle edge-on to the light.
+    pub fn plane(&self, mesh: &Mesh, id: usize) -> Option<LightPlane> {
+        let n = self.normals[id];
+        let dir = self.basis.z + DVec3::ZERO;
+        let nd = n.dot(dir);
+        if nd == 0.0 || !nd.is_finite() {
+            return None;
+        }
+        let a = mesh.triangles[id][0];
+        Some(LightPlane {
+            k: n.dot(a) / nd,
+            gx: n.dot(self.basis.x) / nd,
+            gy: n.dot(self.basis.y) / nd,
+            cond: n.length() / nd.abs(),
+            reach: a.abs().max_element(),
+        })
     }
 
     /// The hit of the ray from `origin` along `dir` on mesh triangle `id`, as

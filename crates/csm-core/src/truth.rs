@@ -470,9 +470,14 @@ pub fn receivers(scene: &SceneGeometry, vis: &Visibility) -> Vec<Receiver> {
 /// distance along the light to the surface that blocks it. `light` is the unit direction light
 /// travels; `eps` from [`epsilon`].
 pub fn occluder(scene: &SceneGeometry, light: DVec3, r: &Receiver, eps: f64) -> Option<f64> {
+    occluder_in(scene, scene.mesh.bounds(), light, r, eps)
+}
+
+/// [`occluder`] with the scene's bounds computed once by the caller.
+fn occluder_in(scene: &SceneGeometry, bounds: Option<Aabb>, light: DVec3, r: &Receiver, eps: f64) -> Option<f64> {
     let origin = r.p + r.n * eps;
     // Every triangle is within the bounds' diagonal of any point inside them.
-    let reach = scene.mesh.bounds().map_or(0.0, |b| {
+    let reach = bounds.map_or(0.0, |b| {
         (b.max - b.min).length() + (origin - b.min).length() + (origin - b.max).length()
     });
     scene.first_hit(origin, -light, 0.0, reach).map(|h| h.t)
@@ -604,6 +609,8 @@ pub struct ShadowMaps<'a> {
     bases: Vec<LightBasis>,
     frame_bases: Vec<LightBasis>,
     count: bool,
+    /// The scene's bounds (texel rays start before them).
+    bounds: Option<Aabb>,
     pub stats: CacheStats,
 }
 
@@ -631,6 +638,7 @@ impl<'a> ShadowMaps<'a> {
             bases: Vec::new(),
             frame_bases: Vec::new(),
             count: true,
+            bounds: scene.mesh.bounds(),
             stats: CacheStats::default(),
         }
     }
@@ -717,7 +725,7 @@ impl<'a> ShadowMaps<'a> {
 
     /// Light depth where texel rays start (before every triangle) and their length.
     fn ray_span(&self, basis: &LightBasis) -> (f64, f64) {
-        let Some(b) = self.scene.mesh.bounds() else {
+        let Some(b) = self.bounds else {
             return (0.0, 0.0);
         };
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -802,21 +810,39 @@ impl<'a> ShadowMaps<'a> {
     }
 
     /// [`ShadowMaps::place_in`] reusing `memo`, the receiver's placement before the fraction
-    /// on the last f64 grid family it was placed on (filled or replaced here).
-    fn place_memo(&self, fg: &FrameGrid, r: &Receiver, bias: &Bias, memo: &mut Option<(u32, Unplaced)>) -> Placement {
+    /// on the last f64 grid family it was placed on (filled or replaced here), with the plane
+    /// every texel its lookup can read on that family holds, when the grid's cover names one
+    /// ([`PlaneLookup`]; looked for once per family, from the first grid with a cover).
+    fn place_memo(
+        &self,
+        fg: &FrameGrid,
+        r: &Receiver,
+        s: &Sampling,
+        cascade: usize,
+        memo: &mut Option<Memo>,
+    ) -> (Placement, Option<PlaneLookup>) {
         let grid = self.grids[fg.id].as_ref().expect("a grid of this frame");
+        let bias = &s.bias[cascade];
         if fg.matrix.is_some() {
-            return self.place_in(fg, r, bias);
+            return (self.place_in(fg, r, bias), None);
         }
-        let u = match memo {
-            Some((f, u)) if *f == grid.family => *u,
-            _ => {
-                let u = unplaced(grid.basis, grid.texel, r, bias);
-                *memo = Some((grid.family, u));
-                u
-            }
+        let m = match memo {
+            Some(m) if m.family == grid.family => m,
+            _ => memo.insert(Memo {
+                family: grid.family,
+                u: unplaced(grid.basis, grid.texel, r, bias),
+                plane: Lookup::Untried,
+            }),
         };
-        u.on(grid.fraction)
+        if let (Lookup::Untried, Some(cover)) = (m.plane, &grid.cover) {
+            m.plane =
+                PlaneLookup::of(self.scene, cover, grid, r, &m.u, s, cascade).map_or(Lookup::Traced, Lookup::Plane);
+        }
+        let plane = match m.plane {
+            Lookup::Plane(p) => Some(p),
+            _ => None,
+        };
+        (m.u.on(grid.fraction), plane)
     }
 
     /// The world point a held texel's depth stands for: the hit of its ray.
@@ -951,6 +977,130 @@ impl Unplaced {
             slope: self.slope,
             bias: self.bias,
         }
+    }
+}
+
+/// A receiver's work kept from frame to frame on one grid family (the walk's memo).
+#[derive(Debug, Clone, Copy)]
+struct Memo {
+    family: u32,
+    u: Unplaced,
+    plane: Lookup,
+}
+
+/// Whether a receiver's lookups on a grid family read one plane.
+#[derive(Debug, Clone, Copy)]
+enum Lookup {
+    /// Not looked for yet (no grid of the family had a cover).
+    Untried,
+    /// No single plane: its texels are traced.
+    Traced,
+    Plane(PlaneLookup),
+}
+
+/// The rounding margin of the plane's depths, relative to the magnitudes they come from
+/// (`2^-36`; the rounding of the hit distance and of the plane's depth is below `2^-45` of
+/// them, see [`PlaneLookup`]).
+const PLANE_TOL_REL: f64 = 1.0 / (1u64 << 36) as f64;
+
+/// A receiver on a grid family whose lookup can only read texels holding one triangle's plane:
+/// the cover owns every cell within `k / 2 + 1` texels of its (offset) light-space x/y with
+/// that triangle (`k` the PCF width; a tap's 2x2 texel centres lie within one texel of it, the
+/// taps within `k / 2` of the lookup), so every texel ray it reads, on any grid of the family,
+/// meets that triangle first, and its depth is the plane's depth at the texel centre
+/// ([`crate::light_cover::LightPlane`]) up to rounding. Both compares (biased and unbiased) read
+/// the depth as the format stores it, so each is decided from the plane's depth when it clears
+/// its threshold by more than that rounding (`tol`) plus the format's step (`tol_lit`,
+/// `tol_unbiased`); else the texels are traced ([`answer_at`]). Either way the answer is
+/// [`answer_at`]'s to the bit.
+///
+/// The rounding: the texel's stored depth `start + n.(a - o) / n.z` (`o` the ray's origin
+/// `x c.x + y c.y + z start`) and the plane's `k - gx c.x - gy c.y` are both within
+/// `2^-45 (1 + cond) (|a| + 2 |c| + |start| + length)` of the exact value (a handful of
+/// roundings of those magnitudes, grown by `cond = |n| / |n.z|` in the division);
+/// `tol` is `2^-36` times that sum.
+#[derive(Debug, Clone, Copy)]
+struct PlaneLookup {
+    k: f64,
+    gx: f64,
+    gy: f64,
+    /// The receiver's own light depth (the unbiased compare's).
+    own_depth: f64,
+    own_only: bool,
+    tol: f64,
+    tol_lit: f64,
+    tol_unbiased: f64,
+}
+
+impl PlaneLookup {
+    /// The plane receiver `r` (placed before the fraction at `u`) reads on `grid`'s family, if
+    /// the cover names one for its whole reach.
+    fn of(
+        scene: &SceneGeometry,
+        cover: &LightCover,
+        grid: &Grid,
+        r: &Receiver,
+        u: &Unplaced,
+        s: &Sampling,
+        cascade: usize,
+    ) -> Option<PlaneLookup> {
+        let reach = f64::from(s.pcf / 2 + 1);
+        let centre = u.q * grid.texel;
+        let half = grid.texel * reach;
+        let c = centre.abs().max_element() + half.max_element();
+        // Grown a little past the rounding of the texel centres and of the cover's cell index.
+        let grow = DVec2::splat(PLANE_TOL_REL * (1.0 + c)) + half * 1e-9;
+        let t = cover.region_owner(centre - half - grow, centre + half + grow)?;
+        let p = cover.plane(&scene.mesh, t)?;
+        let mag = p.reach + 2.0 * c + grid.start.abs() + grid.length;
+        let tol = PLANE_TOL_REL * (1.0 + p.cond) * mag;
+        let quantised = s.format.map_or(0.0, |f| {
+            let (near, far) = s.ranges[cascade];
+            f.step(far - near) + PLANE_TOL_REL * (near.abs() + far.abs())
+        });
+        let tol_lit = tol + quantised + PLANE_TOL_REL * (u.depth.abs() + u.bias.abs() + mag);
+        let own_depth = grid.basis.z.dot(r.p);
+        let tol_unbiased = tol + quantised + PLANE_TOL_REL * (own_depth.abs() + mag);
+        let all = [p.k, p.gx, p.gy, tol, tol_lit, tol_unbiased];
+        all.iter().all(|x| x.is_finite()).then(|| PlaneLookup {
+            k: p.k,
+            gx: p.gx,
+            gy: p.gy,
+            own_depth,
+            own_only: same_plane(scene, t, r),
+            tol,
+            tol_lit,
+            tol_unbiased,
+        })
+    }
+
+    /// [`answer_at`] from the plane, when every compare clears its margin (None: trace).
+    #[inline]
+    fn answer(&self, grid: &Grid, s: &Sampling, cascade: usize, pl: &Placement) -> Option<Answer> {
+        let (near, far) = s.ranges[cascade];
+        let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
+        for (g, w) in footprint(pl.at, s.pcf, s.filter) {
+            let c = grid.centre(g);
+            let d = self.k - self.gx * c.x - self.gy * c.y;
+            // The format's range clamps nothing here.
+            if s.format.is_some() && !(d >= near + self.tol && d <= far - self.tol) {
+                return None;
+            }
+            let biased = pl.depth - (d + pl.bias);
+            let unbiased = self.own_depth - d;
+            if !(biased.abs() > self.tol_lit && unbiased.abs() > self.tol_unbiased) {
+                return None;
+            }
+            if biased < 0.0 {
+                lit_w += w;
+                lit_n += 1;
+            }
+            if unbiased < 0.0 {
+                unb_w += w;
+                unb_n += 1;
+            }
+        }
+        Some(vote(s, self.own_only, (lit_w, lit_n), (unb_w, unb_n)))
     }
 }
 
@@ -1195,16 +1345,58 @@ fn answer_at(
     cascade: usize,
     pl: &Placement,
 ) -> Option<Answer> {
+    let grid = maps.grids[fg.id].as_ref()?;
+    answer_with(maps, fg, r, s, cascade, pl, &mut Traced::new(maps.scene, grid))
+}
+
+/// The texels of one grid one receiver reads, each traced once ([`trace_texel`]): a PCF
+/// kernel's taps share texels, and frame 0 reads its receiver's texels three times.
+struct Traced<'g> {
+    scene: &'g SceneGeometry,
+    grid: &'g Grid,
+    held: Vec<((i64, i64), Stored)>,
+}
+
+impl<'g> Traced<'g> {
+    fn new(scene: &'g SceneGeometry, grid: &'g Grid) -> Self {
+        Traced {
+            scene,
+            grid,
+            held: Vec::new(),
+        }
+    }
+
+    /// What texel `g` holds.
+    fn get(&mut self, g: (i64, i64)) -> Stored {
+        if let Some((_, x)) = self.held.iter().find(|(h, _)| *h == g) {
+            return *x;
+        }
+        let x = trace_texel(self.scene, self.grid, g);
+        self.held.push((g, x));
+        x
+    }
+}
+
+/// [`answer_at`] reading the texels through `texels` (of `fg`'s grid).
+fn answer_with(
+    maps: &ShadowMaps,
+    fg: &FrameGrid,
+    r: &Receiver,
+    s: &Sampling,
+    cascade: usize,
+    pl: &Placement,
+    texels: &mut Traced,
+) -> Option<Answer> {
     if !inside(fg, pl.texel) {
         return None;
     }
-    let grid = maps.grids[fg.id].as_ref().expect("a grid of this frame");
+    let grid = texels.grid;
     let (near, far) = s.ranges[cascade];
     let own_depth = grid.basis.z.dot(r.p);
     let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
     let mut own_only = true;
     for (g, w) in footprint(pl.at, s.pcf, s.filter) {
-        let held = trace_texel(maps.scene, grid, g);
+        let held = texels.get(g);
         let stored = held.depth;
         let (lit, lit_unbiased) = match &fg.matrix {
             None => {
@@ -1233,16 +1425,22 @@ fn answer_at(
         }
         own_only &= held.triangle.is_some_and(|t| same_plane(maps.scene, t, r));
     }
-    let pass = |w: f64, n: u32| match s.filter {
+    Some(vote(s, own_only, (lit_w, lit_n), (unb_w, unb_n)))
+}
+
+/// The answer from the passing weights and counts of the biased and the unbiased compares.
+#[inline]
+fn vote(s: &Sampling, own_only: bool, lit: (f64, u32), unbiased: (f64, u32)) -> Answer {
+    let pass = |(w, n): (f64, u32)| match s.filter {
         // Whole counts for the vote: no rounding of 1/k² sums.
         PcfFilter::Nearest => 2 * n >= s.pcf * s.pcf,
         PcfFilter::Bilinear => w >= 0.5,
     };
-    Some(Answer {
-        lit: pass(lit_w, lit_n),
+    Answer {
+        lit: pass(lit),
         own_only,
-        lit_unbiased: pass(unb_w, unb_n),
-    })
+        lit_unbiased: pass(unbiased),
+    }
 }
 
 /// One receiver's key in a frame: its cascade, grid and texel (its state is a function of it).
@@ -1306,6 +1504,152 @@ pub fn frame_states(
 // S5: flicker along a path
 // ---------------------------------------------------------------------------------------------
 
+/// Which cascade reads a world point in one camera frame: [`reading_cascade`] with the frame's
+/// terms taken once, and the cascade counted without branches when the splits ascend (the
+/// count of interior splits at or below the depth is then [`cascade_at`]'s partition point).
+struct Reader<'r> {
+    position: DVec3,
+    forward: DVec3,
+    right: DVec3,
+    up: DVec3,
+    tan_h: f64,
+    tan_v: f64,
+    splits: &'r [f64],
+    ascending: bool,
+}
+
+impl<'r> Reader<'r> {
+    fn new(rig: &'r Rig, pose: &CameraPose) -> Self {
+        Reader {
+            position: pose.position,
+            forward: pose.forward,
+            right: pose.right,
+            up: pose.up,
+            tan_h: rig.lens.tan_h,
+            tan_v: rig.lens.tan_v,
+            splits: &rig.splits,
+            ascending: rig.splits.windows(2).all(|w| w[0] <= w[1]),
+        }
+    }
+
+    /// [`reading_cascade`]'s answer for `p`, computed by the same operations.
+    #[inline]
+    fn cascade(&self, p: DVec3) -> Option<usize> {
+        let d = p - self.position;
+        let z = d.dot(self.forward);
+        let m = self.splits.len() - 1;
+        if !(z >= self.splits[0] && z < self.splits[m]) {
+            return None;
+        }
+        let inside = d.dot(self.right).abs() <= self.tan_h * z && d.dot(self.up).abs() <= self.tan_v * z;
+        if !inside {
+            return None;
+        }
+        Some(if self.ascending {
+            let below: usize = self.splits[1..m].iter().map(|&c| usize::from(c <= z)).sum();
+            below.min(m - 1)
+        } else {
+            cascade_at(self.splits, z)
+        })
+    }
+}
+
+/// The walk's step counts: state changes, those at shadow edges, steps, and per cascade the
+/// changes and steps at frames that cascade was rendered again.
+#[derive(Debug, Clone)]
+struct StepTotals {
+    flips: u64,
+    edge: u64,
+    total: u64,
+    update_flips: Vec<u64>,
+    update_steps: Vec<u64>,
+}
+
+impl StepTotals {
+    fn new(m: usize) -> Self {
+        StepTotals {
+            flips: 0,
+            edge: 0,
+            total: 0,
+            update_flips: vec![0; m],
+            update_steps: vec![0; m],
+        }
+    }
+
+    fn add(&mut self, o: &StepTotals) {
+        self.flips += o.flips;
+        self.edge += o.edge;
+        self.total += o.total;
+        for (a, b) in self.update_flips.iter_mut().zip(&o.update_flips) {
+            *a += b;
+        }
+        for (a, b) in self.update_steps.iter_mut().zip(&o.update_steps) {
+            *a += b;
+        }
+    }
+}
+
+/// One frame's totals over the receivers: steps, lookups (receivers with a key) and, when the
+/// maps count, the texels the changed receivers read.
+struct FrameTotals {
+    steps: StepTotals,
+    reads: u64,
+    wanted: Vec<(usize, (i64, i64))>,
+}
+
+impl FrameTotals {
+    fn new(m: usize) -> Self {
+        FrameTotals {
+            steps: StepTotals::new(m),
+            reads: 0,
+            wanted: Vec::new(),
+        }
+    }
+
+    fn merge(mut self, mut o: FrameTotals) -> Self {
+        self.steps.add(&o.steps);
+        self.reads += o.reads;
+        self.wanted.append(&mut o.wanted);
+        self
+    }
+}
+
+/// Receiver `r` (at `at`, its position)'s key in a frame of `grids` and, when the key changed
+/// from `old` (or the binary32 pipeline rebuilds every map: `rebuilt`), its answer (None: keep
+/// the last one).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn walk_step(
+    maps: &ShadowMaps,
+    grids: &[FrameGrid],
+    reader: &Reader,
+    (r, at): (&Receiver, DVec3),
+    s: &Sampling,
+    rebuilt: bool,
+    old: Key,
+    memo: &mut Option<Memo>,
+) -> (Key, Option<Option<Answer>>) {
+    let Some(i) = reader.cascade(at) else {
+        return (None, None);
+    };
+    let fg = &grids[i];
+    if let Some((oi, oid, og)) = old {
+        if oi == i && oid == fg.id && fg.matrix.is_none() {
+            return (inside(fg, og).then_some((i, fg.id, og)), None);
+        }
+    }
+    let (pl, plane) = maps.place_memo(fg, r, s, i, memo);
+    let key = inside(fg, pl.texel).then_some((i, fg.id, pl.texel));
+    if !(key.is_some() && (rebuilt || key != old)) {
+        return (key, None);
+    }
+    let grid = maps.grids[fg.id].as_ref().expect("a grid of this frame");
+    let answer = plane
+        .and_then(|p| p.answer(grid, s, i, &pl))
+        .or_else(|| answer_at(maps, fg, r, s, i, &pl));
+    (key, Some(answer))
+}
+
 /// What a walk of the path measured for one snap mode.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Flicker {
@@ -1350,9 +1694,13 @@ impl Flicker {
 /// it serves then keeps its texel and its state, and one that the held window no longer holds
 /// has no answer (its step is not counted). [`crate::walk::Cadence::EVERY_FRAME`] renders every
 /// cascade every frame.
+///
+/// The walk reads through `maps` (fresh, [`ShadowMaps::new`]); its counts are the walk's
+/// [`Flicker::stats`] (zero with [`ShadowMaps::counting`] off, which spares the walk the set
+/// of texels read per grid).
 #[allow(clippy::too_many_arguments)]
 pub fn flicker_cached(
-    scene: &SceneGeometry,
+    mut maps: ShadowMaps,
     rig: &Rig,
     light: &LightBasis,
     poses: impl Iterator<Item = CameraPose>,
@@ -1364,18 +1712,19 @@ pub fn flicker_cached(
 ) -> Flicker {
     let m = rig.cascade_count();
     let mut held: Vec<Option<(LightBasis, Window)>> = vec![None; m];
-    let mut update_flips = vec![0u64; m];
-    let mut update_steps = vec![0u64; m];
-    let mut maps = ShadowMaps::new(scene);
     let n = points.len();
+    // Per receiver, in arrays of their own (the hot ones small): its position, its key in the
+    // last frame, its memo, state, state changes and steps.
+    let at: Vec<DVec3> = points.iter().map(|r| r.p).collect();
     let mut keys: Vec<Key> = vec![None; n];
-    let mut memo: Vec<Option<(u32, Unplaced)>> = vec![None; n];
+    let mut memo: Vec<Option<Memo>> = vec![None; n];
     let mut states: Vec<Option<Answer>> = vec![None; n];
     let mut flips = vec![0u32; n];
     let mut steps = vec![0u32; n];
-    let (mut total_flips, mut edge_flips, mut total_steps) = (0u64, 0u64, 0u64);
+    let mut totals = StepTotals::new(m);
     // A bilinear tap reads 2x2 texels.
     let per_tap = if s.filter == PcfFilter::Bilinear { 4 } else { 1 };
+    let k2 = (s.pcf * s.pcf * per_tap) as u64;
     let rebuilt = s.binary32.is_some();
     let mut frames = 0;
     for (t, pose) in poses.enumerate() {
@@ -1395,79 +1744,77 @@ pub fn flicker_cached(
         } else {
             frame_grids(&mut maps, rig, light, &pose, snapped, s)
         };
-        // One parallel pass: each receiver's key, and its answer when the key changed (every
-        // receiver with the binary32 pipeline: its matrix, hence every depth, is rebuilt each
-        // frame). On the grid of its previous key (f64) a receiver keeps its texel, so only
-        // whether the window still holds it is asked.
-        let step: Vec<(Key, Option<Option<Answer>>)> = points
+        // One parallel pass, in place: each receiver's key, its answer when the key changed
+        // (every receiver with the binary32 pipeline: its matrix, hence every depth, is rebuilt
+        // each frame), and its step. On the grid of its previous key (f64) a receiver keeps its
+        // texel, so only whether the window still holds it is asked. The totals are integer
+        // sums: the same in any order.
+        let count = maps.count;
+        let reader = Reader::new(rig, &pose);
+        let frame = points
             .par_iter()
-            .zip(&keys)
+            .zip(&at)
+            .zip(keys.par_iter_mut())
             .zip(memo.par_iter_mut())
-            .map(|((r, &old), memo)| {
-                let Some(i) = reading_cascade(rig, &pose, r.p) else {
-                    return (None, None);
-                };
-                let fg = &grids[i];
-                if let Some((oi, oid, og)) = old {
-                    if oi == i && oid == fg.id && fg.matrix.is_none() {
-                        return (inside(fg, og).then_some((i, fg.id, og)), None);
-                    }
-                }
-                let pl = maps.place_memo(fg, r, &s.bias[i], memo);
-                let key = inside(fg, pl.texel).then_some((i, fg.id, pl.texel));
-                let changed = key.is_some() && (rebuilt || key != old);
-                (key, changed.then(|| answer_at(&maps, fg, r, s, i, &pl)))
-            })
-            .collect();
-        let new_keys: Vec<Key> = step.iter().map(|x| x.0).collect();
-        let k2 = (s.pcf * s.pcf * per_tap) as u64;
-        if maps.count {
-            maps.stats.reads += new_keys.iter().flatten().count() as u64 * k2;
-            // The texels a cache would fetch: those of receivers whose key changed.
-            let wanted: Vec<(usize, (i64, i64))> = step
-                .iter()
-                .enumerate()
-                .filter(|(_, x)| x.1.is_some())
-                .flat_map(|(j, x)| {
-                    let (i, _, _) = x.0.expect("changed keys are Some");
-                    texels_read(&maps, &grids[i], &points[j], s, i)
-                })
-                .collect();
-            maps.fetch(wanted);
-        }
-        let mut next = states.clone();
-        for (j, (key, answer)) in step.into_iter().enumerate() {
-            if key.is_none() {
-                next[j] = None;
-            } else if let Some(a) = answer {
-                next[j] = a;
-            }
-        }
-        if t > 0 {
-            for j in 0..n {
-                let same_cascade = matches!((keys[j], new_keys[j]), (Some(a), Some(b)) if a.0 == b.0);
-                if let (true, Some(a), Some(b)) = (same_cascade, states[j], next[j]) {
-                    steps[j] += 1;
-                    total_steps += 1;
-                    let i = new_keys[j].map_or(0, |k| k.0);
-                    let update = cadence.updates(i, t);
-                    update_steps[i] += u64::from(update);
-                    if a.lit != b.lit {
-                        update_flips[i] += u64::from(update);
-                        flips[j] += 1;
-                        total_flips += 1;
-                        if !(a.own_only && b.own_only) {
-                            edge_flips += 1;
+            .zip(states.par_iter_mut())
+            .zip(flips.par_iter_mut().zip(steps.par_iter_mut()))
+            .fold(
+                || FrameTotals::new(m),
+                |mut acc, (((((r, &p), last), memo), state), (flips, steps))| {
+                    let old = *last;
+                    let (key, answer) = walk_step(&maps, &grids, &reader, (r, p), s, rebuilt, old, memo);
+                    let next = match (key, answer) {
+                        (None, _) => None,
+                        (Some(_), Some(a)) => a,
+                        (Some(_), None) => *state,
+                    };
+                    if let (Some(k), Some(_)) = (key, answer) {
+                        if count {
+                            let (i, _, _) = k;
+                            acc.wanted.extend(texels_read(&maps, &grids[i], r, s, i));
                         }
                     }
-                }
-            }
+                    acc.reads += u64::from(key.is_some());
+                    if t > 0 {
+                        let same_cascade = matches!((old, key), (Some(a), Some(b)) if a.0 == b.0);
+                        if let (true, Some(a), Some(b)) = (same_cascade, *state, next) {
+                            *steps += 1;
+                            acc.steps.total += 1;
+                            let i = key.map_or(0, |k| k.0);
+                            let update = cadence.updates(i, t);
+                            acc.steps.update_steps[i] += u64::from(update);
+                            if a.lit != b.lit {
+                                acc.steps.update_flips[i] += u64::from(update);
+                                *flips += 1;
+                                acc.steps.flips += 1;
+                                if !(a.own_only && b.own_only) {
+                                    acc.steps.edge += 1;
+                                }
+                            }
+                        }
+                    }
+                    *state = next;
+                    *last = key;
+                    acc
+                },
+            )
+            .reduce(|| FrameTotals::new(m), FrameTotals::merge);
+        totals.add(&frame.steps);
+        if count {
+            maps.stats.reads += frame.reads * k2;
+            // The texels a cache would fetch: those of receivers whose key changed.
+            maps.fetch(frame.wanted);
         }
-        on_frame(t, &next);
-        states = next;
-        keys = new_keys;
+        on_frame(t, &states);
         maps.end_frame();
     }
+    let StepTotals {
+        flips: total_flips,
+        edge: edge_flips,
+        total: total_steps,
+        update_flips,
+        update_steps,
+    } = totals;
     let rate = |f: u64| {
         if total_steps == 0 {
             0.0
@@ -1566,8 +1913,11 @@ pub fn smallest_bias(values: &mut [f64], allowed: usize) -> f64 {
 }
 
 /// The frame-0 answers of every receiver: the configured sampling and the exact excess.
+///
+/// The pass reads through `maps` (fresh, [`ShadowMaps::new`]); the counts returned are zero
+/// with [`ShadowMaps::counting`] off.
 pub fn frame_zero(
-    scene: &SceneGeometry,
+    mut maps: ShadowMaps,
     rig: &Rig,
     light: &LightBasis,
     pose: &CameraPose,
@@ -1576,7 +1926,6 @@ pub fn frame_zero(
     s: &Sampling,
 ) -> (Vec<PointZero>, CacheStats) {
     let cascades: Vec<Option<usize>> = points.par_iter().map(|r| reading_cascade(rig, pose, r.p)).collect();
-    let mut maps = ShadowMaps::new(scene);
     let grids = frame_grids(&mut maps, rig, light, pose, snapped, s);
     frame_zero_on(maps, light, &grids, &cascades, points, s)
 }
@@ -1632,6 +1981,7 @@ fn frame_zero_on(
 ) -> (Vec<PointZero>, CacheStats) {
     let scene = maps.scene;
     let eps = epsilon(scene);
+    let bounds = scene.mesh.bounds();
     let zero: Vec<Option<Placement>> = points
         .par_iter()
         .zip(cascades)
@@ -1654,25 +2004,28 @@ fn frame_zero_on(
         .par_iter()
         .enumerate()
         .map(|(j, r)| {
-            let occ = occluder(scene, light.z, r, eps);
+            let occ = occluder_in(scene, bounds, light.z, r, eps);
             let truly_lit = occ.is_none();
             let (cascade, answer, excess, own, slope, needed) = match (cascades[j], zero[j]) {
                 (Some(i), Some(z)) if inside(&grids[i], z.texel) => {
                     let fg = &grids[i];
-                    let stored = maps.stored(fg.id, z.texel).expect("a grid of this frame");
+                    let grid = maps.grids[fg.id].as_ref().expect("a grid of this frame");
+                    let mut texels = Traced::new(scene, grid);
+                    let stored = texels.get(z.texel);
                     let own = stored.triangle.is_some_and(|t| same_plane(scene, t, r));
                     let reads: Vec<(f64, f64, bool)> = footprint(z.at, s.pcf, s.filter)
                         .map(|(g, w)| {
-                            let st = maps.stored(fg.id, g).expect("a grid of this frame");
+                            let st = texels.get(g);
                             let own = st.triangle.is_some_and(|t| same_plane(scene, t, r));
                             (z.depth - st.depth, w, own)
                         })
                         .collect();
                     let can_be_acne = truly_lit && reads.iter().all(|x| x.2);
                     let needed = can_be_acne.then(|| needed_bias(reads.iter().map(|x| (x.0, x.1)).collect(), s));
+                    let pl = maps.place_in(fg, r, &s.bias[i]);
                     (
                         Some(i),
-                        answer(&maps, fg, r, s, i),
+                        answer_with(&maps, fg, r, s, i, &pl, &mut texels),
                         z.depth - stored.depth,
                         own,
                         z.slope,
@@ -1844,7 +2197,226 @@ pub fn flip_image(cols: u32, rows: u32, points: &[Receiver], f: &Flicker) -> Fli
 
 #[cfg(test)]
 mod tests {
-    use super::floor;
+    use super::*;
+    use crate::mesh::Mesh;
+    use crate::rng::SplitMix64;
+
+    /// The default scene's ground and boxes (a tree canopy above its trunk, a low wall).
+    fn scene() -> SceneGeometry {
+        let mut mesh = Mesh::default();
+        mesh.add_ground(0.0, -200.0, 200.0, -200.0, 200.0);
+        for (min, max) in [
+            ([-40.0, 0.0, -90.0], [-20.0, 40.0, -60.0]),
+            ([15.0, 0.0, -70.0], [35.0, 25.0, -45.0]),
+            ([-12.0, 0.0, -160.0], [12.0, 30.0, -130.0]),
+            ([-7.2, 0.0, -24.2], [-6.8, 3.0, -23.8]),
+            ([-9.0, 3.0, -26.0], [-5.0, 7.0, -22.0]),
+            ([5.0, 0.0, -20.0], [25.0, 1.5, -19.5]),
+        ] {
+            mesh.add_box(&Aabb::new(DVec3::from(min), DVec3::from(max)));
+        }
+        SceneGeometry::new(mesh)
+    }
+
+    /// Receivers on the scene's surfaces that face the light: straight down onto the ground
+    /// and the boxes' tops, and onto the boxes' sides, spread and clustered at the boxes.
+    fn receivers_of(scene: &SceneGeometry, light: DVec3, rng: &mut SplitMix64, n: usize) -> Vec<Receiver> {
+        let mut out = Vec::new();
+        let mut attempt = 0usize;
+        while out.len() < n {
+            attempt += 1;
+            let (origin, dir) = if attempt % 3 == 2 {
+                // Sideways onto a box (the tower's and the office block's faces).
+                let y = rng.range(0.5, 29.0);
+                (
+                    DVec3::new(rng.range(-60.0, 60.0), y, -250.0 * rng.range(0.0, 1.0)),
+                    DVec3::X,
+                )
+            } else if out.len() % 3 == 1 {
+                (
+                    DVec3::new(rng.range(-45.0, 40.0), 60.0, rng.range(-170.0, -15.0)),
+                    DVec3::NEG_Y,
+                )
+            } else {
+                (
+                    DVec3::new(rng.range(-190.0, 190.0), 60.0, rng.range(-190.0, 190.0)),
+                    DVec3::NEG_Y,
+                )
+            };
+            let Some(h) = scene.first_hit(origin, dir, 0.0, 500.0) else {
+                continue;
+            };
+            let mut nrm = scene.triangle_normal(h.triangle);
+            if nrm.dot(-light.normalize()) < 0.0 {
+                nrm = -nrm;
+            }
+            if nrm.dot(-light.normalize()) <= 0.0 {
+                continue;
+            }
+            out.push(Receiver {
+                pixel: out.len(),
+                p: origin + dir * h.t,
+                n: nrm,
+                triangle: h.triangle,
+            });
+        }
+        out
+    }
+
+    /// The plane lookup gives [`answer_at`]'s answer (the texels traced) to the bit wherever it
+    /// decides, and decides most lookups: four lights (one straight down, where the ground's
+    /// unbiased compare is a tie at every texel), texel sizes from fine to coarse, PCF 1, 3 and
+    /// 5 with both filters, each depth format and none, and biases from none to one that
+    /// puts many compares near their threshold, with the normal offset along the normal and
+    /// laterally, at random window fractions.
+    #[test]
+    fn the_plane_lookup_equals_tracing_the_texels() {
+        let scene = scene();
+        let mut rng = SplitMix64::new(11);
+        let (mut decided, mut total) = (0usize, 0usize);
+        for light in [
+            DVec3::new(-0.4, -1.0, -0.3),
+            DVec3::new(0.3, -0.2, 0.9),
+            DVec3::new(0.0, -1.0, 0.0),
+            DVec3::new(0.7, -0.5, 0.1),
+        ] {
+            let basis = LightBasis::new(light);
+            let points = receivers_of(&scene, light, &mut rng, 300);
+            let cover = scene.light_cover(&basis, true).expect("a cover");
+            for (k, texel) in [0.003, 0.04, 0.3, 2.5].into_iter().enumerate() {
+                let (pcf, filter) = [
+                    (1, PcfFilter::Bilinear),
+                    (3, PcfFilter::Nearest),
+                    (5, PcfFilter::Bilinear),
+                    (1, PcfFilter::Nearest),
+                ][k];
+                let format = [
+                    Some(DepthFormat::D32F),
+                    Some(DepthFormat::D16),
+                    None,
+                    Some(DepthFormat::D24),
+                ][k];
+                for bias in [
+                    Bias::ZERO,
+                    Bias {
+                        depth: 0.4 * texel,
+                        slope: 1.0,
+                        normal: 0.5,
+                        ..Bias::ZERO
+                    },
+                    Bias {
+                        depth: 0.1 * texel,
+                        normal: 1.0,
+                        offset: NormalOffset::Lateral,
+                        ..Bias::ZERO
+                    },
+                ] {
+                    let s = Sampling {
+                        bias: vec![bias],
+                        format,
+                        ranges: vec![(-300.0, 300.0)],
+                        pcf,
+                        filter,
+                        binary32: None,
+                    };
+                    let mut maps = ShadowMaps::new(&scene).counting(false);
+                    for _ in 0..2 {
+                        let w = Window {
+                            texel: DVec2::splat(texel),
+                            origin_texels: DVec2::new(rng.range(-1e4, 1e4), rng.range(-1e4, 1e4)),
+                            resolution: u32::MAX,
+                        };
+                        let mut fg = maps.grid(0, &basis, &w);
+                        // Every receiver inside the window.
+                        fg.first = (-(1 << 31), -(1 << 31));
+                        let grid = maps.grids[fg.id].as_ref().expect("a grid");
+                        assert!(grid.cover.is_some());
+                        for r in &points {
+                            let u = unplaced(grid.basis, grid.texel, r, &s.bias[0]);
+                            let pl = u.on(grid.fraction);
+                            let traced = answer_at(&maps, &fg, r, &s, 0, &pl);
+                            total += 1;
+                            let Some(p) = PlaneLookup::of(&scene, &cover, grid, r, &u, &s, 0) else {
+                                continue;
+                            };
+                            if let Some(a) = p.answer(grid, &s, 0, &pl) {
+                                assert_eq!(Some(a), traced, "{light} {texel} {bias:?} at {}", r.p);
+                                decided += 1;
+                            }
+                        }
+                        maps.end_frame();
+                    }
+                }
+            }
+        }
+        assert!(decided * 2 > total, "the plane decided {decided} of {total} lookups");
+    }
+
+    /// Wherever the cover names one owner for a rectangle, it names it at every point of it
+    /// and the BVH's hit there is that triangle at the plane's depth within its rounding
+    /// margin ([`PlaneLookup`]): rectangles of many sizes over the scene's footprint and at the
+    /// boxes' edges, under four lights.
+    #[test]
+    fn a_region_owner_owns_every_point_of_its_rectangle() {
+        let scene = scene();
+        let bounds = scene.mesh.bounds().expect("bounds");
+        let mut rng = SplitMix64::new(5);
+        for light in [
+            DVec3::new(-0.4, -1.0, -0.3),
+            DVec3::new(0.3, -0.2, 0.9),
+            DVec3::new(0.0, -1.0, 0.0),
+            DVec3::new(1.0, -1e-3, 0.0),
+        ] {
+            let basis = LightBasis::new(light);
+            let cover = scene.light_cover(&basis, true).expect("a cover");
+            let (lo, hi) = (0..8).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+                let z = basis.z.dot(bounds.corner(c));
+                (lo.min(z), hi.max(z))
+            });
+            let start = lo - 1.0;
+            let (mut owned, mut n) = (0, 0);
+            for k in 0..4000 {
+                let centre = if k % 2 == 0 {
+                    basis.to_light_xy(DVec3::new(
+                        rng.range(-230.0, 230.0),
+                        rng.range(0.0, 40.0),
+                        rng.range(-230.0, 230.0),
+                    ))
+                } else {
+                    let c = scene.mesh.triangles[(rng.next_u64() % scene.mesh.triangles.len() as u64) as usize][0];
+                    basis.to_light_xy(c) + DVec2::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0))
+                };
+                let half = DVec2::new(rng.range(0.0, 1.0), rng.range(0.0, 1.0)).powf(3.0) * 20.0;
+                n += 1;
+                let Some(t) = cover.region_owner(centre - half, centre + half) else {
+                    continue;
+                };
+                owned += 1;
+                let plane = cover.plane(&scene.mesh, t).expect("an owner faces the light");
+                for _ in 0..20 {
+                    let q = centre + half * DVec2::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+                    assert_eq!(cover.at(q), Cell::Owner(t), "{light} at {q}");
+                    let origin = basis.x * q.x + basis.y * q.y + basis.z * start;
+                    let h = scene.first_hit(origin, basis.z, 0.0, hi - lo + 2.0).expect("a hit");
+                    assert_eq!(h.triangle, t, "{light} at {q}");
+                    let depth = start + h.t;
+                    let d = plane.k - plane.gx * q.x - plane.gy * q.y;
+                    let mag = plane.reach + 2.0 * q.abs().max_element() + start.abs() + (hi - lo + 2.0);
+                    let bound = (1.0 + plane.cond) * mag / (1u64 << 45) as f64;
+                    assert!(
+                        (depth - d).abs() <= bound,
+                        "{light} at {q}: {depth} against {d}, bound {bound}"
+                    );
+                }
+            }
+            // Light grazing the ground (the last) leaves few owners; the others own most.
+            assert!(
+                owned * 4 > n || light.y > -0.01,
+                "{light}: {owned} of {n} rectangles owned"
+            );
+            assert!(owned > 0, "{light}: no rectangle owned");
+        }
+    }
 
     /// The library-free floor equals `f64::floor` to the bit, at whole numbers and either side
     /// of them, at signed zeros, beyond 2^52, at the infinities and on random values.
