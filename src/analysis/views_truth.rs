@@ -160,7 +160,8 @@ pub(crate) fn apply(
             }
             None => {
                 let vc = config_for_view(config, view);
-                let pass = rig(&vc).and_then(|r| ground_truth::run(&vc, &r, on_frames));
+                // Only the pooled counts are read from a view's pass: no texel-read tally.
+                let pass = rig(&vc).and_then(|r| ground_truth::run(&vc, &r, false, on_frames));
                 if pass.is_none() {
                     // Nothing walked: the bar still moves by the view's share.
                     on_frames(per_view);

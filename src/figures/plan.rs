@@ -651,13 +651,13 @@ mod tests {
         assert_eq!(worst, Some(largest));
         assert!(own.iter().any(|&x| x != own[largest]), "{own:?}");
         let png = PlanPng.render(&a).unwrap();
-        // At scale 2 the key starts at 2 × (SIZE.0 − KEY_W) pixels.
+        // At scale 1 (the size the report shows it) the key starts at SIZE.0 − KEY_W pixels.
         let mut reader = png::Decoder::new(std::io::Cursor::new(&png)).read_info().unwrap();
         let mut buf = vec![0; reader.output_buffer_size()];
         let info = reader.next_frame(&mut buf).unwrap();
         let count = |c: RGBColor| {
             (0..info.height)
-                .flat_map(|y| (0..2 * (SIZE.0 - KEY_W)).map(move |x| ((y * info.width + x) * 3) as usize))
+                .flat_map(|y| (0..SIZE.0 - KEY_W).map(move |x| ((y * info.width + x) * 3) as usize))
                 .filter(|&o| buf[o..o + 3] == [c.0, c.1, c.2])
                 .count()
         };
