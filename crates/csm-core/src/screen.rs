@@ -156,8 +156,14 @@ fn served_runs(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<(usize, 
 const BUCKET: usize = 128;
 /// Receivers per block of a [`ScreenIndex`]'s depth-order prefix sums.
 const BLOCK: usize = 64;
-/// Receivers per row of a [`ScreenIndex`]'s bucket counts (in depth order).
+/// Receivers per row of a [`ScreenIndex`]'s bucket counts (in depth order), at least.
 const ROW: usize = 256;
+/// Rows of a [`ScreenIndex`], at most: a row holds a count per bucket (a bucket per [`BUCKET`]
+/// receivers), so rows every [`ROW`] receivers would take memory quadratic in the receivers
+/// (over 1 GB for a full-HD pass). Past `ROW × MAX_ROWS` receivers the rows are spaced
+/// further apart, which keeps the rows within `MAX_ROWS × 12 / BUCKET` bytes per receiver and
+/// costs a longer count-on from a row to a bound; the counts are the same.
+const MAX_ROWS: usize = 256;
 /// Binary digits of the whole numbers a view's `g` is counted in: the largest `g` of a view is
 /// below `2^(SUM_BITS - b)` units, `b` the binary digits of the view's receiver count, so any
 /// sum of them stays below `2^SUM_BITS`.
@@ -169,10 +175,10 @@ const WEIGHT_BITS: i32 = 25;
 /// What every setting's statistics of one pass read, made once per pass (it depends on the
 /// view and the light only, see [`Visibility::index`]). The receivers, ranked by `g` (ties by
 /// depth), are cut into buckets of [`BUCKET`] consecutive ranks; each bucket lists its
-/// receivers in depth order, with `g` and the contrast weight. Every [`ROW`] receivers (in
+/// receivers in depth order, with `g` and the contrast weight. Every [`ROW`] receivers or more (in
 /// depth order) a row holds each bucket's count and contrast weight of the receivers before.
 /// So the receivers of a cascade (a depth range) in one bucket are a slice located by a row
-/// and at most `ROW - 1` receivers counted on, and all their values `t g` lie between `t` times
+/// and fewer than a row of receivers counted on, and all their values `t g` lie between `t` times
 /// the bucket's smallest and largest `g`. The sums of `g` and `w g` over depth ranges are read
 /// from prefix sums in whole units.
 #[derive(Debug, Clone, PartialEq)]
@@ -185,8 +191,10 @@ pub struct ScreenIndex {
     w: Vec<u32>,
     /// Per receiver (depth order): its bucket.
     bucket_of: Vec<u32>,
+    /// Receivers per row: [`ROW`], or more for a pass of over `ROW × MAX_ROWS` receivers.
+    row: usize,
     /// Row `j` (buckets-long): per bucket, the count and the contrast weight of its receivers
-    /// before receiver `j ROW`.
+    /// before receiver `j row`.
     rows: Vec<u32>,
     wrows: Vec<u64>,
     /// Per bucket: its smallest and largest `g`.
@@ -261,11 +269,12 @@ impl ScreenIndex {
                 bucket_of[i as usize] = b as u32;
             }
         }
-        let mut rows = Vec::with_capacity((n / ROW + 1) * buckets);
-        let mut wrows = Vec::with_capacity((n / ROW + 1) * buckets);
+        let row = ROW.max(n.div_ceil(MAX_ROWS));
+        let mut rows = Vec::with_capacity((n / row + 1) * buckets);
+        let mut wrows = Vec::with_capacity((n / row + 1) * buckets);
         let (mut count, mut weight) = (vec![0u32; buckets], vec![0u64; buckets]);
         for k in 0..=n {
-            if k % ROW == 0 {
+            if k % row == 0 {
                 rows.extend_from_slice(&count);
                 wrows.extend_from_slice(&weight);
             }
@@ -296,6 +305,7 @@ impl ScreenIndex {
             g,
             w,
             bucket_of,
+            row,
             rows,
             wrows,
             glo,
@@ -415,7 +425,7 @@ impl<'a> ViewPass<'a> {
         let mut cut = vec![0u32; buckets * nb];
         let mut wcut = vec![0u64; buckets * nb];
         for (j, &p) in bounds.iter().enumerate() {
-            let row = p / ROW;
+            let row = p / ix.row;
             let (c, w) = (
                 &ix.rows[row * buckets..][..buckets],
                 &ix.wrows[row * buckets..][..buckets],
@@ -424,7 +434,7 @@ impl<'a> ViewPass<'a> {
                 cut[b * nb + j] = ix.start[b] + c[b];
                 wcut[b * nb + j] = w[b];
             }
-            for k in row * ROW..p {
+            for k in row * ix.row..p {
                 let b = ix.bucket_of[k] as usize;
                 cut[b * nb + j] += 1;
                 wcut[b * nb + j] += vis.weights[k] as u64;
@@ -1372,15 +1382,17 @@ mod tests {
 
     /// The level's percentiles are those of a brute-force pool of every view's served pixels,
     /// each view's own statistics are `stats` of that view alone, and the pooled fractions are
-    /// the step-weighted counts; over views of different sizes, spreads, cascade counts and
-    /// weights (1, 2.5, 0.25 and an unserved view).
+    /// the step-weighted counts; over views of different sizes (one past the receivers whose
+    /// rows are [`ROW`] apart), spreads, cascade counts and weights (1, 2.5, 0.25 and an
+    /// unserved view).
     #[test]
     fn pooled_percentiles_equal_a_brute_force_pool() {
         let vis: Vec<Visibility> = [
             (1, 3000, 4.0, 500),
             (2, 800, 10.0, 0),
             (3, 1, 1.0, 9),
-            (4, 12000, 2.0, 100),
+            // Over `ROW × MAX_ROWS` receivers: rows spaced further apart.
+            (4, 70000, 2.0, 100),
         ]
         .iter()
         .map(|&(seed, n, spread, extra)| synthetic(seed, n, spread, extra))
