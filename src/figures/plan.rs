@@ -588,12 +588,16 @@ mod tests {
         ((sx / n.max(1) as f64, sy / n.max(1) as f64), n)
     }
 
-    #[test]
-    fn views_take_the_colour_of_their_value_and_the_worst_is_ringed() {
+    /// A 100 × 100 ground around the origin.
+    fn ground() -> SceneGeometry {
         let mut m = Mesh::default();
         m.add_ground(0.0, -50.0, 50.0, -50.0, 50.0);
-        let scene = SceneGeometry::new(m);
-        let camera = |name: &str, x: f64| ViewSettings {
+        SceneGeometry::new(m)
+    }
+
+    /// A view named `name` 2 units up at x, looking down at the ground 20 units ahead.
+    fn camera(name: &str, x: f64) -> ViewSettings {
+        ViewSettings {
             name: name.to_string(),
             camera: crate::config::CameraSettings {
                 position: DVec3::new(x, 2.0, 20.0),
@@ -604,7 +608,12 @@ mod tests {
                 far: 100.0,
             },
             weight: 1.0,
-        };
+        }
+    }
+
+    #[test]
+    fn views_take_the_colour_of_their_value_and_the_worst_is_ringed() {
+        let scene = ground();
         let views = [camera("low", -30.0), camera("high", 30.0)];
         let values = [1.0, 3.0];
         let plan = Plan {
@@ -674,21 +683,7 @@ mod tests {
     /// map's low end, and the key says so; the others keep the colour map's ends.
     #[test]
     fn a_view_without_a_value_is_grey_not_the_lowest_colour() {
-        let mut m = Mesh::default();
-        m.add_ground(0.0, -50.0, 50.0, -50.0, 50.0);
-        let scene = SceneGeometry::new(m);
-        let camera = |name: &str, x: f64| ViewSettings {
-            name: name.to_string(),
-            camera: crate::config::CameraSettings {
-                position: DVec3::new(x, 2.0, 20.0),
-                target: DVec3::new(x, 0.0, 0.0),
-                up: DVec3::Y,
-                fov_y_deg: 50.0,
-                near: 0.1,
-                far: 100.0,
-            },
-            weight: 1.0,
-        };
+        let scene = ground();
         let views = [camera("low", -30.0), camera("sky", 0.0), camera("high", 30.0)];
         let rgb = |c: RGBColor| [c.0, c.1, c.2];
         let png_with = |values: &[f64]| {

@@ -324,38 +324,8 @@ impl Bvh4 {
                     let b = min((x1[i] - o[0]) * id[0], (y1[i] - o[1]) * id[1]);
                     t1[i] = min(b, min((z1[i] - o[2]) * id[2], best_t));
                 }
-                let mut mask = 0u32;
-                for i in 0..4 {
-                    mask |= u32::from(t0[i] <= t1[i]) << i;
-                }
-                if mask != 0 {
-                    let entry = |i: usize| Entry {
-                        child: n.child[i],
-                        count: n.count[i],
-                        near: t0[i],
-                    };
-                    let first = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if mask == 0 {
-                        cur = entry(first);
-                        continue;
-                    }
-                    // Several: the nearest next, the others pushed farthest first.
-                    let mut met = [entry(first); 4];
-                    let mut m = 1;
-                    while mask != 0 {
-                        let e = entry(mask.trailing_zeros() as usize);
-                        mask &= mask - 1;
-                        let mut k = m;
-                        while k > 0 && met[k - 1].near < e.near {
-                            met[k] = met[k - 1];
-                            k -= 1;
-                        }
-                        met[k] = e;
-                        m += 1;
-                    }
-                    stack.extend_from_slice(&met[..m - 1]);
-                    cur = met[m - 1];
+                if let Some(next) = descend(n, &t0, &t1, stack) {
+                    cur = next;
                     continue;
                 }
             }
@@ -376,6 +346,45 @@ impl Bvh4 {
 
 /// Most rays traced as one packet.
 pub(crate) const PACKET: usize = 64;
+
+/// The children of `node` whose box the ray (or packet) enters, `t0[i] <= t1[i]`: the nearest is
+/// returned to visit next and the others are pushed farthest first; None when it enters none.
+#[inline]
+fn descend(node: &Node4, t0: &[f32; 4], t1: &[f32; 4], stack: &mut Vec<Entry>) -> Option<Entry> {
+    let mut mask = 0u32;
+    for i in 0..4 {
+        mask |= u32::from(t0[i] <= t1[i]) << i;
+    }
+    if mask == 0 {
+        return None;
+    }
+    let entry = |i: usize| Entry {
+        child: node.child[i],
+        count: node.count[i],
+        near: t0[i],
+    };
+    let first = mask.trailing_zeros() as usize;
+    mask &= mask - 1;
+    if mask == 0 {
+        return Some(entry(first));
+    }
+    // Several: sorted by entry distance, the nearest last.
+    let mut met = [entry(first); 4];
+    let mut m = 1;
+    while mask != 0 {
+        let e = entry(mask.trailing_zeros() as usize);
+        mask &= mask - 1;
+        let mut k = m;
+        while k > 0 && met[k - 1].near < e.near {
+            met[k] = met[k - 1];
+            k -= 1;
+        }
+        met[k] = e;
+        m += 1;
+    }
+    stack.extend_from_slice(&met[..m - 1]);
+    Some(met[m - 1])
+}
 
 /// `1 / d`, or `±1e30` where `|d| <= 1e-30` (see the module documentation).
 #[inline(always)]
@@ -494,37 +503,8 @@ impl Bvh4 {
                     t0[i] = max(max(ex, ey), max(ez, tmin_lo));
                     t1[i] = min(min(lx, ly), min(lz, reach));
                 }
-                let mut mask = 0u32;
-                for i in 0..4 {
-                    mask |= u32::from(t0[i] <= t1[i]) << i;
-                }
-                if mask != 0 {
-                    let entry = |i: usize| Entry {
-                        child: nd.child[i],
-                        count: nd.count[i],
-                        near: t0[i],
-                    };
-                    let first = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if mask == 0 {
-                        cur = entry(first);
-                        continue;
-                    }
-                    let mut met = [entry(first); 4];
-                    let mut m = 1;
-                    while mask != 0 {
-                        let e = entry(mask.trailing_zeros() as usize);
-                        mask &= mask - 1;
-                        let mut k = m;
-                        while k > 0 && met[k - 1].near < e.near {
-                            met[k] = met[k - 1];
-                            k -= 1;
-                        }
-                        met[k] = e;
-                        m += 1;
-                    }
-                    stack.extend_from_slice(&met[..m - 1]);
-                    cur = met[m - 1];
+                if let Some(next) = descend(nd, &t0, &t1, stack) {
+                    cur = next;
                     continue;
                 }
             }

@@ -204,6 +204,12 @@ impl<const N: usize> Poly<N> {
 /// inside decides yes, bounds apart decide no, and otherwise its clip by the box's six planes
 /// is not empty.
 pub fn triangle_meets_box(t: &[DVec3; 3], lo: DVec3, hi: DVec3) -> bool {
+    meets_box(t, lo, hi, true)
+}
+
+/// [`triangle_meets_box`]; with `skip_within`, a plane the polygon already lies within is not
+/// clipped (the clip would return the same vertices in the same order: the same answer).
+fn meets_box(t: &[DVec3; 3], lo: DVec3, hi: DVec3, skip_within: bool) -> bool {
     if t.iter().any(|p| p.cmpge(lo).all() && p.cmple(hi).all()) {
         return true;
     }
@@ -214,7 +220,7 @@ pub fn triangle_meets_box(t: &[DVec3; 3], lo: DVec3, hi: DVec3) -> bool {
     let mut poly = Poly::of(t.map(|p| p.to_array()));
     for axis in 0..3 {
         for (bound, below) in [(lo[axis], false), (hi[axis], true)] {
-            if poly.within(axis, bound, below) {
+            if skip_within && poly.within(axis, bound, below) {
                 continue;
             }
             poly = poly.clip(axis, bound, below);
@@ -922,23 +928,7 @@ mod tests {
 
     /// A triangle's clip by the box's six planes, every plane clipped (no plane skipped).
     fn meets_plain(t: &[DVec3; 3], lo: DVec3, hi: DVec3) -> bool {
-        if t.iter().any(|p| p.cmpge(lo).all() && p.cmple(hi).all()) {
-            return true;
-        }
-        let (tlo, thi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
-        if tlo.cmpgt(hi).any() || thi.cmplt(lo).any() {
-            return false;
-        }
-        let mut poly = Poly::of(t.map(|p| p.to_array()));
-        for axis in 0..3 {
-            for (bound, below) in [(lo[axis], false), (hi[axis], true)] {
-                poly = poly.clip(axis, bound, below);
-                if poly.n == 0 {
-                    return false;
-                }
-            }
-        }
-        true
+        meets_box(t, lo, hi, false)
     }
 
     /// A triangle's projected area clipped to the rectangle, every edge clipped.

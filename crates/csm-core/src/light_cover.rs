@@ -498,15 +498,16 @@ fn plane_depth(t: &LightTri, q: DVec2) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::geometry::Aabb;
     use crate::mesh::Mesh;
     use crate::rng::SplitMix64;
     use crate::visibility::SceneGeometry;
 
-    /// The default scene's ground and boxes (a tree canopy above its trunk, a low wall).
-    fn scene() -> SceneGeometry {
+    /// The default scene's ground and boxes (a tree canopy above its trunk, a low wall); the
+    /// ground-truth tests use it too.
+    pub(crate) fn scene() -> SceneGeometry {
         let mut mesh = Mesh::default();
         mesh.add_ground(0.0, -200.0, 200.0, -200.0, 200.0);
         for (min, max) in [

@@ -1332,21 +1332,7 @@ impl Answer {
 /// The map's answer for one receiver in its cascade's grid, None when its texel is outside
 /// the window. Reads held texels only.
 fn answer(maps: &ShadowMaps, fg: &FrameGrid, r: &Receiver, s: &Sampling, cascade: usize) -> Option<Answer> {
-    answer_at(maps, fg, r, s, cascade, &maps.place_in(fg, r, &s.bias[cascade]))
-}
-
-/// [`answer`] at a placement of the receiver (from [`ShadowMaps::place_in`] with its cascade's
-/// bias).
-fn answer_at(
-    maps: &ShadowMaps,
-    fg: &FrameGrid,
-    r: &Receiver,
-    s: &Sampling,
-    cascade: usize,
-    pl: &Placement,
-) -> Option<Answer> {
-    let grid = maps.grids[fg.id].as_ref()?;
-    answer_with(maps, fg, r, s, cascade, pl, &mut Traced::new(maps.scene, grid))
+    answer_at(maps, fg, r, s, cascade, &maps.place_in(fg, r, &s.bias[cascade]), None)
 }
 
 /// The texels of one grid one receiver reads, each traced once ([`trace_texel`]): a PCF
@@ -1377,16 +1363,26 @@ impl<'g> Traced<'g> {
     }
 }
 
-/// [`answer_at`] reading the texels through `texels` (of `fg`'s grid).
-fn answer_with(
-    maps: &ShadowMaps,
+/// [`answer`] at a placement of the receiver (from [`ShadowMaps::place_in`] with its cascade's
+/// bias), reading the texels through `texels` (of `fg`'s grid), or tracing them for this
+/// answer alone when None.
+fn answer_at<'g>(
+    maps: &'g ShadowMaps<'_>,
     fg: &FrameGrid,
     r: &Receiver,
     s: &Sampling,
     cascade: usize,
     pl: &Placement,
-    texels: &mut Traced,
+    texels: Option<&mut Traced<'g>>,
 ) -> Option<Answer> {
+    let mut own;
+    let texels = match texels {
+        Some(t) => t,
+        None => {
+            own = Traced::new(maps.scene, maps.grids[fg.id].as_ref()?);
+            &mut own
+        }
+    };
     if !inside(fg, pl.texel) {
         return None;
     }
@@ -1646,7 +1642,7 @@ fn walk_step(
     let grid = maps.grids[fg.id].as_ref().expect("a grid of this frame");
     let answer = plane
         .and_then(|p| p.answer(grid, s, i, &pl))
-        .or_else(|| answer_at(maps, fg, r, s, i, &pl));
+        .or_else(|| answer_at(maps, fg, r, s, i, &pl, None));
     (key, Some(answer))
 }
 
@@ -2025,7 +2021,7 @@ fn frame_zero_on(
                     let pl = maps.place_in(fg, r, &s.bias[i]);
                     (
                         Some(i),
-                        answer_with(&maps, fg, r, s, i, &pl, &mut texels),
+                        answer_at(&maps, fg, r, s, i, &pl, Some(&mut texels)),
                         z.depth - stored.depth,
                         own,
                         z.slope,
@@ -2198,25 +2194,8 @@ pub fn flip_image(cols: u32, rows: u32, points: &[Receiver], f: &Flicker) -> Fli
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::Mesh;
+    use crate::light_cover::tests::scene;
     use crate::rng::SplitMix64;
-
-    /// The default scene's ground and boxes (a tree canopy above its trunk, a low wall).
-    fn scene() -> SceneGeometry {
-        let mut mesh = Mesh::default();
-        mesh.add_ground(0.0, -200.0, 200.0, -200.0, 200.0);
-        for (min, max) in [
-            ([-40.0, 0.0, -90.0], [-20.0, 40.0, -60.0]),
-            ([15.0, 0.0, -70.0], [35.0, 25.0, -45.0]),
-            ([-12.0, 0.0, -160.0], [12.0, 30.0, -130.0]),
-            ([-7.2, 0.0, -24.2], [-6.8, 3.0, -23.8]),
-            ([-9.0, 3.0, -26.0], [-5.0, 7.0, -22.0]),
-            ([5.0, 0.0, -20.0], [25.0, 1.5, -19.5]),
-        ] {
-            mesh.add_box(&Aabb::new(DVec3::from(min), DVec3::from(max)));
-        }
-        SceneGeometry::new(mesh)
-    }
 
     /// Receivers on the scene's surfaces that face the light: straight down onto the ground
     /// and the boxes' tops, and onto the boxes' sides, spread and clustered at the boxes.
@@ -2334,7 +2313,7 @@ mod tests {
                         for r in &points {
                             let u = unplaced(grid.basis, grid.texel, r, &s.bias[0]);
                             let pl = u.on(grid.fraction);
-                            let traced = answer_at(&maps, &fg, r, &s, 0, &pl);
+                            let traced = answer_at(&maps, &fg, r, &s, 0, &pl, None);
                             total += 1;
                             let Some(p) = PlaneLookup::of(&scene, &cover, grid, r, &u, &s, 0) else {
                                 continue;
