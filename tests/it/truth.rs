@@ -79,6 +79,18 @@ fn truth_of(a: &csm_lab::Analysis) -> &GroundTruth {
     a.ground_truth.as_ref().expect("ground truth ran")
 }
 
+/// What the pass `g` of config `c` sampled with, at PCF width `pcf` (binary64 maps).
+fn pass_sampling(c: &Config, g: &GroundTruth, pcf: u32) -> Sampling {
+    Sampling {
+        bias: g.bias.clone(),
+        format: Some(c.truth.depth_format),
+        ranges: g.ranges.clone(),
+        pcf,
+        filter: g.filter,
+        binary32: None,
+    }
+}
+
 /// The ground plane y = 0 as a mesh.
 fn ground(half: f64) -> SceneGeometry {
     let mut m = Mesh::default();
@@ -858,14 +870,7 @@ fn the_s5_split_equals_answering_every_frame_from_scratch() {
     let rig = a.rig().unwrap();
     let setup = c.setup();
     let scene = &setup.geometry.as_ref().unwrap().scene;
-    let s = Sampling {
-        bias: g.bias.clone(),
-        format: Some(c.truth.depth_format),
-        ranges: g.ranges.clone(),
-        pcf: 3,
-        filter: g.filter,
-        binary32: None,
-    };
+    let s = pass_sampling(&c, g, 3);
     let poses: Vec<_> = c.camera_path().unwrap();
     let (mut steps, mut edge, mut acne) = (0u64, 0u64, 0u64);
     type Frame = (Vec<Option<usize>>, Vec<Option<truth::Answer>>);
@@ -925,14 +930,7 @@ fn every_frame_of_the_walk_equals_tracing_it_from_scratch() {
         let rig = a.rig().unwrap();
         let setup = c.setup();
         let scene = &setup.geometry.as_ref().unwrap().scene;
-        let s = Sampling {
-            bias: g.bias.clone(),
-            format: Some(c.truth.depth_format),
-            ranges: g.ranges.clone(),
-            pcf: c.truth.pcf,
-            filter: g.filter,
-            binary32: None,
-        };
+        let s = pass_sampling(&c, g, c.truth.pcf);
         let poses: Vec<_> = c.camera_path().unwrap();
         for snapped in [true, false] {
             let mut walked: Vec<Vec<Option<truth::Answer>>> = Vec::new();

@@ -236,6 +236,12 @@ fn meets_box(t: &[DVec3; 3], lo: DVec3, hi: DVec3, skip_within: bool) -> bool {
 /// rectangle `[lo, hi]`, exactly (Sutherland-Hodgman, then the shoelace formula; a triangle
 /// inside the rectangle keeps its area, one apart from it has none).
 pub fn clipped_area(t: &[DVec3; 3], lo: DVec2, hi: DVec2) -> f64 {
+    area_in(t, lo, hi, true)
+}
+
+/// [`clipped_area`]; with `skip_within`, an edge the polygon already lies within is not
+/// clipped (the clip would return the same vertices in the same order: the same area).
+fn area_in(t: &[DVec3; 3], lo: DVec2, hi: DVec2, skip_within: bool) -> f64 {
     let (tlo, thi) = (t[0].min(t[1]).min(t[2]).truncate(), t[0].max(t[1]).max(t[2]).truncate());
     if tlo.cmpge(lo).all() && thi.cmple(hi).all() {
         return projected_area(t);
@@ -246,7 +252,7 @@ pub fn clipped_area(t: &[DVec3; 3], lo: DVec2, hi: DVec2) -> f64 {
     let mut poly = Poly::of(t.map(|p| [p.x, p.y]));
     for axis in 0..2 {
         for (bound, below) in [(lo[axis], false), (hi[axis], true)] {
-            if poly.within(axis, bound, below) {
+            if skip_within && poly.within(axis, bound, below) {
                 continue;
             }
             poly = poly.clip(axis, bound, below);
@@ -933,23 +939,7 @@ mod tests {
 
     /// A triangle's projected area clipped to the rectangle, every edge clipped.
     fn area_plain(t: &[DVec3; 3], lo: DVec2, hi: DVec2) -> f64 {
-        let (tlo, thi) = (t[0].min(t[1]).min(t[2]).truncate(), t[0].max(t[1]).max(t[2]).truncate());
-        if tlo.cmpge(lo).all() && thi.cmple(hi).all() {
-            return projected_area(t);
-        }
-        if tlo.cmpgt(hi).any() || thi.cmplt(lo).any() {
-            return 0.0;
-        }
-        let mut poly = Poly::of(t.map(|p| [p.x, p.y]));
-        for axis in 0..2 {
-            for (bound, below) in [(lo[axis], false), (hi[axis], true)] {
-                poly = poly.clip(axis, bound, below);
-                if poly.n < 3 {
-                    return 0.0;
-                }
-            }
-        }
-        polygon_area(&poly.v[..poly.n])
+        area_in(t, lo, hi, false)
     }
 
     /// The definition the walk evaluates: under node `n`, the triangles meeting the volume and

@@ -505,6 +505,15 @@ pub(crate) mod tests {
     use crate::rng::SplitMix64;
     use crate::visibility::SceneGeometry;
 
+    /// Four lights: the default one, a low one from the side, straight down and grazing; the
+    /// ground-truth tests use them too.
+    pub(crate) const LIGHTS: [DVec3; 4] = [
+        DVec3::new(-0.4, -1.0, -0.3),
+        DVec3::new(0.3, -0.2, 0.9),
+        DVec3::new(0.0, -1.0, 0.0),
+        DVec3::new(1.0, -1e-3, 0.0),
+    ];
+
     /// The default scene's ground and boxes (a tree canopy above its trunk, a low wall); the
     /// ground-truth tests use it too.
     pub(crate) fn scene() -> SceneGeometry {
@@ -531,18 +540,10 @@ pub(crate) mod tests {
     fn the_cover_agrees_with_the_bvh_wherever_it_decides() {
         let scene = scene();
         let b = scene.mesh.bounds().unwrap();
-        for light in [
-            DVec3::new(-0.4, -1.0, -0.3),
-            DVec3::new(0.3, -0.2, 0.9),
-            DVec3::new(0.0, -1.0, 0.0),
-            DVec3::new(1.0, -1e-3, 0.0),
-        ] {
+        for light in LIGHTS {
             let basis = LightBasis::new(light);
             let cover = LightCover::new(&scene.mesh, &crate::visibility::bvh_input(&scene.mesh).1, &basis);
-            let (lo, hi) = (0..8).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
-                let z = basis.z.dot(b.corner(c));
-                (lo.min(z), hi.max(z))
-            });
+            let (lo, hi) = crate::cost::light_depth_extent(&basis, &b);
             let start = lo - 1.0;
             let mut rng = SplitMix64::new(7);
             let mut decided = 0;

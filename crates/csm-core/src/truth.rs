@@ -2194,7 +2194,7 @@ pub fn flip_image(cols: u32, rows: u32, points: &[Receiver], f: &Flicker) -> Fli
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::light_cover::tests::scene;
+    use crate::light_cover::tests::{scene, LIGHTS};
     use crate::rng::SplitMix64;
 
     /// Receivers on the scene's surfaces that face the light: straight down onto the ground
@@ -2340,18 +2340,10 @@ mod tests {
         let scene = scene();
         let bounds = scene.mesh.bounds().expect("bounds");
         let mut rng = SplitMix64::new(5);
-        for light in [
-            DVec3::new(-0.4, -1.0, -0.3),
-            DVec3::new(0.3, -0.2, 0.9),
-            DVec3::new(0.0, -1.0, 0.0),
-            DVec3::new(1.0, -1e-3, 0.0),
-        ] {
+        for light in LIGHTS {
             let basis = LightBasis::new(light);
             let cover = scene.light_cover(&basis, true).expect("a cover");
-            let (lo, hi) = (0..8).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
-                let z = basis.z.dot(bounds.corner(c));
-                (lo.min(z), hi.max(z))
-            });
+            let (lo, hi) = crate::cost::light_depth_extent(&basis, &bounds);
             let start = lo - 1.0;
             let (mut owned, mut n) = (0, 0);
             for k in 0..4000 {
