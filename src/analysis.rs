@@ -1661,12 +1661,13 @@ pub(crate) fn texel_utilization(
     let mut lo = vec![DVec2::splat(f64::INFINITY); m];
     let mut hi = vec![DVec2::splat(f64::NEG_INFINITY); m];
     let (z_lo, z_hi) = (rig.splits[0], rig.splits[m]);
+    let terms = vis.view.ray_terms();
     for (k, s) in vis.samples.iter().enumerate() {
         let Some(s) = s.filter(|s| s.lit && s.depth >= z_lo && s.depth <= z_hi) else {
             continue;
         };
         let i = metrics::cascade_at(&rig.splits, s.depth);
-        let p = vis.position(k, s.depth);
+        let p = terms.point(k, s.depth);
         let q = DVec2::new(bases[i].x.dot(p), bases[i].y.dot(p));
         lo[i] = lo[i].min(q);
         hi[i] = hi[i].max(q);

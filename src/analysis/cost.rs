@@ -184,9 +184,10 @@ fn cull_padding(config: &Config, texel: f64) -> (f64, f64) {
 /// [`cost::ReceiverIndex`]).
 fn receiver_index(light: &cost::LightScene, vis: &Visibility) -> std::sync::Arc<cost::ReceiverIndex> {
     light.receiver_index(&vis.view, || {
+        let terms = vis.view.ray_terms();
         cost::ReceiverIndex::new(vis.samples.iter().enumerate().filter_map(|(k, s)| {
             let s = s.filter(|s| s.lit)?;
-            Some((s.depth, light.basis.to_light(vis.position(k, s.depth))))
+            Some((s.depth, light.basis.to_light(terms.point(k, s.depth))))
         }))
     })
 }

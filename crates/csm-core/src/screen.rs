@@ -250,25 +250,32 @@ impl ScreenIndex {
     pub fn of(vis: &Visibility) -> ScreenIndex {
         let r = &vis.receivers;
         let n = r.len();
-        let mut order: Vec<u32> = (0..n as u32).collect();
-        order.sort_unstable_by(|&a, &b| r[a as usize].1.total_cmp(&r[b as usize].1).then(a.cmp(&b)));
+        // The ranks by (g, index): a radix sort of g's order-preserving bits (no comparison
+        // sort fetching g through the receivers).
+        let order: Vec<u32> = crate::visibility::order_by_key(r.iter().map(|&(_, g)| g));
         let buckets = n.div_ceil(BUCKET);
         let mut glo = Vec::with_capacity(buckets);
         let mut ghi = Vec::with_capacity(buckets);
-        for chunk in order.chunks_mut(BUCKET) {
-            glo.push(r[chunk[0] as usize].1);
-            ghi.push(r[chunk[chunk.len() - 1] as usize].1);
-            chunk.sort_unstable();
-        }
-        let start = (0..=buckets).map(|b| (b * BUCKET).min(n) as u32).collect();
-        let g: Vec<f64> = order.iter().map(|&i| r[i as usize].1).collect();
-        let w: Vec<u32> = order.iter().map(|&i| vis.weights[i as usize]).collect();
         let mut bucket_of = vec![0u32; n];
         for (b, chunk) in order.chunks(BUCKET).enumerate() {
+            glo.push(r[chunk[0] as usize].1);
+            ghi.push(r[chunk[chunk.len() - 1] as usize].1);
             for &i in chunk {
                 bucket_of[i as usize] = b as u32;
             }
         }
+        let start: Vec<u32> = (0..=buckets).map(|b| (b * BUCKET).min(n) as u32).collect();
+        // Each bucket's receivers in depth order: the receivers visited in depth order, each
+        // put at its bucket's next place (a counting sort by bucket, stable).
+        let mut next = start.clone();
+        let mut order = order;
+        for (k, &b) in bucket_of.iter().enumerate() {
+            let at = &mut next[b as usize];
+            order[*at as usize] = k as u32;
+            *at += 1;
+        }
+        let g: Vec<f64> = order.iter().map(|&i| r[i as usize].1).collect();
+        let w: Vec<u32> = order.iter().map(|&i| vis.weights[i as usize]).collect();
         let row = ROW.max(n.div_ceil(MAX_ROWS));
         let mut rows = Vec::with_capacity((n / row + 1) * buckets);
         let mut wrows = Vec::with_capacity((n / row + 1) * buckets);

@@ -146,12 +146,13 @@ fn polygon_area(poly: &[DVec2]) -> f64 {
 /// (within `[splits[0], splits[m]]`): the receivers [`seam_crossings`] follows.
 pub fn receiver_points(vis: &Visibility, splits: &[f64]) -> Vec<DVec3> {
     let (lo, hi) = (splits[0], splits[splits.len() - 1]);
+    let terms = vis.view.ray_terms();
     vis.samples
         .iter()
         .enumerate()
         .filter_map(|(k, s)| {
             let s = (*s)?;
-            (s.lit && s.depth >= lo && s.depth <= hi).then(|| vis.position(k, s.depth))
+            (s.lit && s.depth >= lo && s.depth <= hi).then(|| terms.point(k, s.depth))
         })
         .collect()
 }

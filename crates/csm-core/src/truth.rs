@@ -1213,12 +1213,14 @@ pub fn serve_faults(rig: &Rig, vis: &Visibility, bounds: &Aabb, snapped: bool, s
             (rig.basis(i, &lp), w, (d.near, d.far))
         })
         .collect();
+    let terms = vis.view.ray_terms();
     vis.samples
-        .iter()
+        .par_iter()
         .enumerate()
+        .with_min_len(4096)
         .map(|(k, s)| {
             let s = s.filter(|s| s.lit)?;
-            let p = vis.position(k, s.depth);
+            let p = terms.point(k, s.depth);
             let i = reading_cascade(rig, &pose, p)?;
             let (basis, w, (near, far)) = &cascades[i];
             if w.outside_by_texels(basis.to_light_xy(p)) > 0.0 {

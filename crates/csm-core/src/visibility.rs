@@ -112,6 +112,7 @@ impl View {
             })
             .collect();
         RayTerms {
+            origin: self.pose.position,
             forward: self.pose.forward,
             cols: cols as usize,
             across,
@@ -131,6 +132,7 @@ impl View {
 /// [`View::ray_terms`]: a view's ray directions per sample column and row.
 #[derive(Debug, Clone)]
 pub struct RayTerms {
+    origin: DVec3,
     forward: DVec3,
     cols: usize,
     across: Vec<DVec3>,
@@ -142,6 +144,13 @@ impl RayTerms {
     #[inline]
     pub fn ray(&self, k: usize) -> DVec3 {
         self.forward + self.across[k % self.cols] + self.down[k / self.cols]
+    }
+
+    /// [`Visibility::position`] of sample `k` at view depth `depth`, bit for bit, without the
+    /// per-call sampling grid.
+    #[inline]
+    pub fn point(&self, k: usize, depth: f64) -> DVec3 {
+        self.origin + self.ray(k) * depth
     }
 }
 
@@ -253,20 +262,30 @@ impl Hits {
 /// breaking ties. O(n), where the comparison sort it replaces fetched each depth through the
 /// pixel's hit on every comparison.
 fn depth_order(hits: &[Option<Hit>]) -> Vec<u32> {
-    let key = |d: f64| {
-        let b = d.to_bits();
-        // total_cmp's order as unsigned integers: negative numbers reversed, below positive.
-        if b >> 63 == 1 {
-            !b
-        } else {
-            b | (1 << 63)
-        }
-    };
     let mut a: Vec<(u64, u32)> = hits
         .iter()
         .enumerate()
-        .filter_map(|(k, h)| h.map(|h| (key(h.depth), k as u32)))
+        .filter_map(|(k, h)| h.map(|h| (total_key(h.depth), k as u32)))
         .collect();
+    radix_sort_top44(&mut a);
+    a.into_iter().map(|(_, k)| k).collect()
+}
+
+/// `f64::total_cmp`'s order as unsigned integers: negative numbers reversed, below positive.
+#[inline]
+fn total_key(d: f64) -> u64 {
+    let b = d.to_bits();
+    if b >> 63 == 1 {
+        !b
+    } else {
+        b | (1 << 63)
+    }
+}
+
+/// The indices `0..n` of `values` ordered by `(value.total_cmp, index)`: what a comparison
+/// sort with that order gives, by the radix sort of [`depth_order`].
+pub(crate) fn order_by_key(values: impl Iterator<Item = f64>) -> Vec<u32> {
+    let mut a: Vec<(u64, u32)> = values.enumerate().map(|(k, v)| (total_key(v), k as u32)).collect();
     radix_sort_top44(&mut a);
     a.into_iter().map(|(_, k)| k).collect()
 }
@@ -441,7 +460,9 @@ impl Visibility {
         self.samples.len()
     }
 
-    /// World position of the hit of sample `k` (row-major) at view depth `depth`.
+    /// World position of the hit of sample `k` (row-major) at view depth `depth`. It computes
+    /// the sampling grid on each call: over many samples, take [`View::ray_terms`] once and
+    /// [`RayTerms::point`] (the same value).
     pub fn position(&self, k: usize, depth: f64) -> DVec3 {
         let cols = self.cols as usize;
         let (u, v) = self.view.pixel_centre((k % cols) as u32, (k / cols) as u32);
