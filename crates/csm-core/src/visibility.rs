@@ -239,12 +239,25 @@ impl Hits {
                     .map(|s| (s.depth, s.factor, contrast_weight(s.contrast)))
             })
             .collect();
+        // A run at one depth (a plane seen row by row gives runs of a whole row) is sorted as
+        // whole numbers: (factor in total_cmp's order as bits, weight), the same order as
+        // comparing the floats.
+        let mut keys: Vec<(u64, u32)> = Vec::new();
         let mut start = 0;
         while start < lit.len() {
-            let d = lit[start].0;
-            let end = start + lit[start..].iter().take_while(|r| r.0.total_cmp(&d).is_eq()).count();
+            let d = lit[start].0.to_bits();
+            let end = start + lit[start..].iter().take_while(|r| r.0.to_bits() == d).count();
             if end - start > 1 {
-                lit[start..end].sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.2.cmp(&b.2)));
+                let run = &mut lit[start..end];
+                keys.clear();
+                keys.extend(run.iter().map(|r| (total_key(r.1), r.2)));
+                if !keys.is_sorted() {
+                    keys.sort_unstable();
+                    for (r, &(k, w)) in run.iter_mut().zip(&keys) {
+                        r.1 = from_total_key(k);
+                        r.2 = w;
+                    }
+                }
             }
             start = end;
         }
@@ -280,6 +293,12 @@ fn total_key(d: f64) -> u64 {
     } else {
         b | (1 << 63)
     }
+}
+
+/// The inverse of [`total_key`].
+#[inline]
+fn from_total_key(k: u64) -> f64 {
+    f64::from_bits(if k >> 63 == 1 { k & !(1 << 63) } else { !k })
 }
 
 /// The indices `0..n` of `values` ordered by `(value.total_cmp, index)`: what a comparison
@@ -1055,6 +1074,34 @@ mod tests {
         let mut expected: Vec<u32> = (0..odd.len() as u32).collect();
         expected.sort_by(|&a, &b| odd[a as usize].total_cmp(&odd[b as usize]).then(a.cmp(&b)));
         assert_eq!(depth_order(&hits), expected);
+    }
+
+    /// The whole-number keys of the receivers' orders: integer order is `total_cmp`'s, the
+    /// inverse gives the bits back, and the key order of a list equals its comparison sort.
+    #[test]
+    fn total_keys_order_as_total_cmp_and_invert() {
+        let mut xs = vec![-2.0, 0.0, -0.0, 3.5, -1e-300, 1e300, f64::MIN_POSITIVE, 5e-324, -5e-324];
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        for _ in 0..20_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let x = f64::from_bits(state);
+            if x.is_finite() {
+                xs.push(x);
+                // Many exact ties and neighbours.
+                xs.push((state % 64) as f64 * 0.25);
+            }
+        }
+        for &a in &xs {
+            assert_eq!(from_total_key(total_key(a)).to_bits(), a.to_bits());
+        }
+        for w in xs.windows(2) {
+            assert_eq!(total_key(w[0]).cmp(&total_key(w[1])), w[0].total_cmp(&w[1]));
+        }
+        let mut expected: Vec<u32> = (0..xs.len() as u32).collect();
+        expected.sort_by(|&a, &b| xs[a as usize].total_cmp(&xs[b as usize]).then(a.cmp(&b)));
+        assert_eq!(order_by_key(xs.iter().copied()), expected);
     }
 
     /// The traversal against a brute-force nearest hit over every triangle (the same binary32
