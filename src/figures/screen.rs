@@ -14,6 +14,7 @@
 use std::fmt::Write as _;
 
 use plotters::style::RGBColor;
+use rayon::prelude::*;
 
 use super::{colormap, encode_png, series_color, svg_to_rgb, FONT};
 use crate::analysis::Analysis;
@@ -48,11 +49,11 @@ pub(crate) fn aliasing_color(m: f64) -> [u8; 3] {
 }
 
 /// What each sampled pixel shows: None (sky), or (lit, served cascade, aliasing m, whether
-/// the cascade fails to serve it).
+/// the cascade fails to serve it). 16 bytes: a full-HD picture holds two million.
 struct Pixel {
-    lit: bool,
-    cascade: Option<usize>,
     m: f64,
+    cascade: Option<u8>,
+    lit: bool,
     fault: Option<ServeFault>,
 }
 
@@ -71,14 +72,15 @@ fn pixels(a: &Analysis) -> Option<(u32, u32, Vec<Option<Pixel>>)> {
     };
     let px = vis
         .samples
-        .iter()
+        .par_iter()
         .enumerate()
+        .with_min_len(4096)
         .map(|(k, s)| {
             s.map(|s| {
                 let cascade = served(s.depth);
                 Pixel {
                     lit: s.lit,
-                    cascade,
+                    cascade: cascade.map(|i| u8::try_from(i).expect("at most 255 cascades")),
                     m: cascade.map_or(0.0, |i| a.cascades[i].texel_size * s.factor),
                     fault: faults.as_ref().and_then(|f| f[k]),
                 }
@@ -248,8 +250,8 @@ fn cascades_png_of(a: &Analysis, cols: u32, rows: u32, px: &[Option<Pixel>]) -> 
                 (None, _) => SKY,
                 (Some(_), None) => UNSERVED,
                 (Some(p), Some(_)) if fault_colour(p).is_some() => fault_colour(p).unwrap_or(SKY),
-                (Some(p), Some(k)) if !p.lit => dim(rgb(series_color(k))),
-                (Some(_), Some(k)) => rgb(series_color(k)),
+                (Some(p), Some(k)) if !p.lit => dim(rgb(series_color(k as usize))),
+                (Some(_), Some(k)) => rgb(series_color(k as usize)),
             }
         })
         .collect();

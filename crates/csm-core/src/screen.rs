@@ -280,15 +280,18 @@ impl ScreenIndex {
         let mut rows = Vec::with_capacity((n / row + 1) * buckets);
         let mut wrows = Vec::with_capacity((n / row + 1) * buckets);
         let (mut count, mut weight) = (vec![0u32; buckets], vec![0u64; buckets]);
-        for k in 0..=n {
-            if k % row == 0 {
-                rows.extend_from_slice(&count);
-                wrows.extend_from_slice(&weight);
+        // A row before every `row` receivers, and one after the last when they fill the rows.
+        for (buckets, weights) in bucket_of.chunks(row).zip(vis.weights.chunks(row)) {
+            rows.extend_from_slice(&count);
+            wrows.extend_from_slice(&weight);
+            for (&b, &wk) in buckets.iter().zip(weights) {
+                count[b as usize] += 1;
+                weight[b as usize] += wk as u64;
             }
-            if k < n {
-                count[bucket_of[k] as usize] += 1;
-                weight[bucket_of[k] as usize] += vis.weights[k] as u64;
-            }
+        }
+        if n % row == 0 {
+            rows.extend_from_slice(&count);
+            wrows.extend_from_slice(&weight);
         }
         // The largest g is below 2^top.
         let g_hi = ghi.last().copied().unwrap_or(0.0);

@@ -241,26 +241,21 @@ impl Hits {
             .collect();
         // A run at one depth (a plane seen row by row gives runs of a whole row) is sorted as
         // whole numbers: (factor in total_cmp's order as bits, weight), the same order as
-        // comparing the floats.
-        let mut keys: Vec<(u64, u32)> = Vec::new();
-        let mut start = 0;
-        while start < lit.len() {
-            let d = lit[start].0.to_bits();
-            let end = start + lit[start..].iter().take_while(|r| r.0.to_bits() == d).count();
-            if end - start > 1 {
-                let run = &mut lit[start..end];
-                keys.clear();
-                keys.extend(run.iter().map(|r| (total_key(r.1), r.2)));
+        // comparing the floats. Equal keys are equal entries, so a stable sort gives the same
+        // list as any; the stable sort merges the rising and falling stretches a row's factors
+        // come in, where a quicksort starts over. The runs are sorted on every thread.
+        lit.par_chunk_by_mut(|a, b| a.0.to_bits() == b.0.to_bits())
+            .filter(|run| run.len() > 1)
+            .for_each(|run| {
+                let mut keys: Vec<(u64, u32)> = run.iter().map(|r| (total_key(r.1), r.2)).collect();
                 if !keys.is_sorted() {
-                    keys.sort_unstable();
+                    keys.sort();
                     for (r, &(k, w)) in run.iter_mut().zip(&keys) {
                         r.1 = from_total_key(k);
                         r.2 = w;
                     }
                 }
-            }
-            start = end;
-        }
+            });
         let receivers = lit.par_iter().with_min_len(4096).map(|r| (r.0, r.1)).collect();
         let weights = lit.par_iter().with_min_len(4096).map(|r| r.2).collect();
         Visibility::of_samples(*view, self.cols, self.rows, samples, receivers, weights)
