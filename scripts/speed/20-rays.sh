@@ -55,3 +55,14 @@ emit "sweep benches/rays_one_setting_eighth.toml --no-plots (240 × 135 rays)" "
 emit "sweep benches/rays_one_setting_full_hd.toml --no-plots (1920 × 1080 rays)" "$full"
 pass=$(awk -v a="$(echo "$full" | cut -d' ' -f4)" -v b="$(echo "$eighth" | cut -d' ' -f4)" 'BEGIN { printf "%.2f", a - b }')
 speed_row "| ${SPEED_JOB} | the full-HD pass end to end (CPU difference of the two) against Embree's build + trace on the default scene ($embree_default s): **$(awk -v p="$pass" -v e="$embree_default" 'BEGIN { printf "%.2f×", p / e }')** | | $pass | | | |"
+# The same two sweeps' instructions (callgrind, whole process; load-proof), with SPEED_CALLGRIND=1.
+if [ "${SPEED_CALLGRIND:-0}" = 1 ] && command -v valgrind >/dev/null; then
+  rays_ir() {
+    valgrind --tool=callgrind --callgrind-out-file="$rays_dir/cg.$1" \
+      "$BIN" sweep "benches/rays_one_setting_$1.toml" --no-plots --quiet --out "target/speed/out/rays-cg-$1" >/dev/null 2>&1
+    callgrind_annotate "$rays_dir/cg.$1" 2>/dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1; exit }'
+  }
+  ir_full=$(rays_ir full_hd)
+  ir_eighth=$(rays_ir eighth)
+  speed_row "| ${SPEED_JOB} | instructions (callgrind): full HD $ir_full, 1/8 $ir_eighth, the full-HD pass **$(awk -v a="$ir_full" -v b="$ir_eighth" 'BEGIN { printf "%.2f G", (a - b) / 1e9 }')** | | | | | |"
+fi
