@@ -60,7 +60,9 @@ if [ "${SPEED_CALLGRIND:-0}" = 1 ] && command -v valgrind >/dev/null; then
   rays_ir() {
     valgrind --tool=callgrind --callgrind-out-file="$rays_dir/cg.$1" \
       "$BIN" sweep "benches/rays_one_setting_$1.toml" --no-plots --quiet --out "target/speed/out/rays-cg-$1" >/dev/null 2>&1
-    callgrind_annotate "$rays_dir/cg.$1" 2>/dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1; exit }'
+    # Through a file: awk's early exit would end callgrind_annotate by SIGPIPE (pipefail).
+    callgrind_annotate "$rays_dir/cg.$1" >"$rays_dir/cg.$1.txt" 2>/dev/null || true
+    awk '/PROGRAM TOTALS/ && !seen { gsub(",", "", $1); print $1; seen = 1 }' "$rays_dir/cg.$1.txt"
   }
   ir_full=$(rays_ir full_hd)
   ir_eighth=$(rays_ir eighth)
