@@ -145,18 +145,190 @@ fn usvg_options() -> resvg::usvg::Options<'static> {
 /// An SVG document parsed (text laid out into outlines), to rasterise from that tree. Parsing
 /// is a third to a half of rasterising a chart at its own size, and a figure's PNG file is also
 /// the copy a report inlines, so each figure is parsed and rasterised once.
-pub(crate) struct ParsedSvg(resvg::usvg::Tree);
+///
+/// Runs of plain filled rectangles (a heat map's cells, a colour bar) are not given to usvg:
+/// parsing one costs as much as drawing it, and they are read here from the line plotters
+/// writes ([`FilledRect::from_line`]) and filled with the same path, paint and transform resvg
+/// would use, in document order between the parsed parts, so the pixels are the same.
+pub(crate) struct ParsedSvg {
+    parts: Vec<SvgPart>,
+}
+
+/// A piece of a [`ParsedSvg`], drawn in order.
+enum SvgPart {
+    /// Elements parsed by usvg (the document's header and its own elements).
+    Tree(resvg::usvg::Tree),
+    /// A run of opaque filled rectangles, drawn directly.
+    Rects(Vec<FilledRect>),
+}
+
+/// The shortest run of rectangle lines drawn directly: a shorter run stays in the parsed part,
+/// where it costs less than splitting the document.
+const MIN_RECT_RUN: usize = 16;
+
+/// An opaque, filled, unstroked rectangle in SVG units, as plotters writes it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct FilledRect {
+    x: i32,
+    y: i32,
+    w: i32,
+    h: i32,
+    rgb: [u8; 3],
+}
+
+impl FilledRect {
+    /// The rectangle of one line of plotters' SVG, exactly
+    /// `<rect x="X" y="Y" width="W" height="H" opacity="1" fill="#RRGGBB" stroke="none"/>`
+    /// with whole numbers and a positive size; any other line is None (and left to usvg).
+    fn from_line(line: &str) -> Option<FilledRect> {
+        let rest = line.strip_prefix("<rect x=\"")?;
+        let (x, rest) = rest.split_once("\" y=\"")?;
+        let (y, rest) = rest.split_once("\" width=\"")?;
+        let (w, rest) = rest.split_once("\" height=\"")?;
+        let (h, rest) = rest.split_once("\" opacity=\"1\" fill=\"#")?;
+        let hex = rest.strip_suffix("\" stroke=\"none\"/>")?;
+        let int = |s: &str| -> Option<i32> {
+            let digits = s.strip_prefix('-').unwrap_or(s);
+            if digits.is_empty() || digits.len() > 7 || !digits.bytes().all(|b| b.is_ascii_digit()) {
+                return None;
+            }
+            s.parse().ok()
+        };
+        if hex.len() != 6 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
+            return None;
+        }
+        let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).ok();
+        let r = FilledRect {
+            x: int(x)?,
+            y: int(y)?,
+            w: int(w)?,
+            h: int(h)?,
+            rgb: [byte(0)?, byte(2)?, byte(4)?],
+        };
+        (r.w > 0 && r.h > 0).then_some(r)
+    }
+
+    /// Fills the rectangle as resvg fills usvg's path of a `<rect>` without rounded corners
+    /// (`PathBuilder::from_rect`, non-zero rule, anti-aliased, source-over, opaque colour).
+    fn fill(&self, transform: resvg::tiny_skia::Transform, pixmap: &mut resvg::tiny_skia::PixmapMut) {
+        use resvg::tiny_skia::{FillRule, Paint, PathBuilder, Rect};
+        let Some(rect) = Rect::from_xywh(self.x as f32, self.y as f32, self.w as f32, self.h as f32) else {
+            return;
+        };
+        let path = PathBuilder::from_rect(rect);
+        let mut paint = Paint::default();
+        paint.set_color_rgba8(self.rgb[0], self.rgb[1], self.rgb[2], 255);
+        paint.anti_alias = true;
+        pixmap.fill_path(&path, &paint, FillRule::Winding, transform, None);
+    }
+}
+
+/// Splits plotters' SVG into parts to parse and runs of [`FilledRect`] lines (at least
+/// [`MIN_RECT_RUN`] in a row, never inside a `<text>` element); each parsed part is the
+/// document's header, its lines and the closing tag. None when the document is not laid out as
+/// plotters writes it (header line, one element per line, closing tag), to be parsed whole.
+fn split_rect_runs(svg: &str) -> Option<Vec<std::result::Result<String, Vec<FilledRect>>>> {
+    let (header, body) = svg.split_once('\n')?;
+    if !header.starts_with("<svg ") {
+        return None;
+    }
+    let body = body.trim_end().strip_suffix("</svg>")?;
+    let mut parts = Vec::new();
+    let mut text = String::with_capacity(body.len() + header.len());
+    let mut run: Vec<FilledRect> = Vec::new();
+    let mut run_lines: Vec<&str> = Vec::new();
+    let mut in_text = false;
+    let start = |text: &mut String| {
+        text.clear();
+        text.push_str(header);
+        text.push('\n');
+    };
+    start(&mut text);
+    for line in body.lines() {
+        let rect = if in_text { None } else { FilledRect::from_line(line) };
+        if let Some(r) = rect {
+            run.push(r);
+            run_lines.push(line);
+            continue;
+        }
+        if run.len() >= MIN_RECT_RUN {
+            text.push_str("</svg>\n");
+            parts.push(Ok(std::mem::take(&mut text)));
+            parts.push(Err(std::mem::take(&mut run)));
+            start(&mut text);
+        } else {
+            for l in run_lines.iter() {
+                text.push_str(l);
+                text.push('\n');
+            }
+            run.clear();
+        }
+        run_lines.clear();
+        if line.starts_with("<text") {
+            in_text = true;
+        }
+        if in_text && line.ends_with("</text>") {
+            in_text = false;
+        }
+        text.push_str(line);
+        text.push('\n');
+    }
+    if run.len() >= MIN_RECT_RUN {
+        text.push_str("</svg>\n");
+        parts.push(Ok(std::mem::take(&mut text)));
+        parts.push(Err(run));
+    } else {
+        for l in run_lines.iter() {
+            text.push_str(l);
+            text.push('\n');
+        }
+        text.push_str("</svg>\n");
+        parts.push(Ok(text));
+    }
+    Some(parts)
+}
 
 impl ParsedSvg {
     pub(crate) fn parse(svg: &[u8]) -> Result<Self> {
-        resvg::usvg::Tree::from_data(svg, &usvg_options())
-            .map(ParsedSvg)
-            .map_err(|e| PlotError::Rasterise(e.to_string()).into())
+        let tree = |bytes: &[u8]| {
+            resvg::usvg::Tree::from_data(bytes, &usvg_options())
+                .map_err(|e| crate::error::Error::from(PlotError::Rasterise(e.to_string())))
+        };
+        let split = std::str::from_utf8(svg).ok().and_then(split_rect_runs);
+        let parts = match split {
+            Some(parts) if parts.len() > 1 => parts
+                .into_iter()
+                .map(|p| match p {
+                    Ok(text) => tree(text.as_bytes()).map(SvgPart::Tree),
+                    Err(rects) => Ok(SvgPart::Rects(rects)),
+                })
+                .collect::<Result<Vec<_>>>()?,
+            _ => vec![SvgPart::Tree(tree(svg)?)],
+        };
+        Ok(ParsedSvg { parts })
     }
 
     /// The document's size in its own units (pixels): (width, height).
     pub(crate) fn size(&self) -> (f32, f32) {
-        (self.0.size().width(), self.0.size().height())
+        match &self.parts[0] {
+            SvgPart::Tree(t) => (t.size().width(), t.size().height()),
+            SvgPart::Rects(_) => unreachable!("a parsed SVG starts with its header"),
+        }
+    }
+
+    /// Draws the document onto `pixmap` with `transform` (what `resvg::render` does with the
+    /// whole tree).
+    pub(crate) fn render(
+        &self,
+        transform: resvg::tiny_skia::Transform,
+        pixmap: &mut resvg::tiny_skia::PixmapMut,
+    ) {
+        for part in &self.parts {
+            match part {
+                SvgPart::Tree(t) => resvg::render(t, transform, pixmap),
+                SvgPart::Rects(rects) => rects.iter().for_each(|r| r.fill(transform, pixmap)),
+            }
+        }
     }
 
     /// RGB8 pixels on a white background, `scale` pixels per SVG unit: (width, height, pixels).
@@ -167,11 +339,7 @@ impl ParsedSvg {
         let mut pixmap =
             tiny_skia::Pixmap::new(w, h).ok_or_else(|| PlotError::Rasterise(format!("bad size {w}x{h}")))?;
         pixmap.fill(tiny_skia::Color::WHITE);
-        resvg::render(
-            &self.0,
-            tiny_skia::Transform::from_scale(scale, scale),
-            &mut pixmap.as_mut(),
-        );
+        self.render(tiny_skia::Transform::from_scale(scale, scale), &mut pixmap.as_mut());
         Ok((w, h, opaque_rgb(pixmap)))
     }
 
@@ -191,13 +359,22 @@ pub(crate) fn svg_to_rgb(svg: &[u8], scale: f32) -> Result<(u32, u32, Vec<u8>)> 
 /// alpha is dropped, in place: pixel i's RGB moves from 4i to 3i (never past a pixel not yet
 /// read), which saves allocating and faulting in a second image-sized buffer.
 pub(crate) fn opaque_rgb(pixmap: resvg::tiny_skia::Pixmap) -> Vec<u8> {
+    // Four pixels at a time (16 bytes read before 12 are written, never past the next four),
+    // then the rest one by one.
     let mut rgb = pixmap.take();
     let n = rgb.len() / 4;
-    for i in 0..n {
+    let blocks = n / 4;
+    for b in 0..blocks {
+        let mut px = [0u8; 16];
+        px.copy_from_slice(&rgb[16 * b..16 * b + 16]);
+        let out = &mut rgb[12 * b..12 * b + 12];
+        for p in 0..4 {
+            out[3 * p..3 * p + 3].copy_from_slice(&px[4 * p..4 * p + 3]);
+        }
+    }
+    for i in 4 * blocks..n {
         let (s, d) = (4 * i, 3 * i);
-        rgb[d] = rgb[s];
-        rgb[d + 1] = rgb[s + 1];
-        rgb[d + 2] = rgb[s + 2];
+        rgb.copy_within(s..s + 3, d);
     }
     rgb.truncate(3 * n);
     rgb

@@ -415,8 +415,7 @@ impl Plan<'_> {
                     .ok_or_else(|| PlotError::Rasterise(format!("bad size {w}x{h}")))?;
                 pixmap.fill(resvg::tiny_skia::Color::WHITE);
                 paint_heights(&mut pixmap, &hm, &colours, area, padded, scale);
-                resvg::render(
-                    &tree.0,
+                tree.render(
                     resvg::tiny_skia::Transform::from_scale(scale, scale),
                     &mut pixmap.as_mut(),
                 );
