@@ -56,7 +56,10 @@ struct Pixel {
     fault: Option<ServeFault>,
 }
 
-fn pixels(a: &Analysis) -> Option<(u32, u32, Vec<Option<Pixel>>)> {
+/// The sampled grid's pixels: (columns, rows, each pixel row by row).
+type Pixels = (u32, u32, Vec<Option<Pixel>>);
+
+fn pixels(a: &Analysis) -> Option<Pixels> {
     let setup = a.config.setup();
     let vis = setup.visibility()?;
     let rig = a.rig();
@@ -137,7 +140,12 @@ fn swatch(x: f64, c: [u8; 3], label: &str) -> String {
 
 /// `screen_aliasing.png`.
 pub(crate) fn aliasing_png(a: &Analysis) -> Result<Vec<u8>> {
-    let (cols, rows, px) = pixels(a).expect("written only with geometry");
+    aliasing_of(a, &pixels(a).expect("written only with geometry"))
+}
+
+/// `screen_aliasing.png` from the analysis' [`pixels`].
+fn aliasing_of(a: &Analysis, (cols, rows, px): &Pixels) -> Result<Vec<u8>> {
+    let (cols, rows) = (*cols, *rows);
     let colour: Vec<[u8; 3]> = px
         .iter()
         .map(|p| match p {
@@ -186,7 +194,7 @@ pub(crate) fn aliasing_png(a: &Analysis) -> Result<Vec<u8>> {
     body.push_str(&swatch(10.0, SKY, "sky"));
     body.push_str(&swatch(70.0, SELF_SHADOWED, "facing away from the light"));
     body.push_str(&swatch(290.0, UNSERVED, "outside the split range"));
-    body.push_str(&fault_swatches(&px, 480.0));
+    body.push_str(&fault_swatches(px, 480.0));
     compose(cols, rows, &colour, &legend_svg(&body))
 }
 
@@ -222,7 +230,12 @@ fn fault_swatches(px: &[Option<Pixel>], x: f64) -> String {
 
 /// `screen_cascades.png`.
 pub(crate) fn cascades_png(a: &Analysis) -> Result<Vec<u8>> {
-    let (cols, rows, px) = pixels(a).expect("written only with geometry");
+    cascades_of(a, &pixels(a).expect("written only with geometry"))
+}
+
+/// `screen_cascades.png` from the analysis' [`pixels`].
+fn cascades_of(a: &Analysis, (cols, rows, px): &Pixels) -> Result<Vec<u8>> {
+    let (cols, rows) = (*cols, *rows);
     let dim = |c: [u8; 3]| c.map(|x| (x as f64 * 0.4) as u8);
     let cascade_of = |i: usize| px[i].as_ref().and_then(|p| p.cascade);
     let colour: Vec<[u8; 3]> = (0..px.len())
@@ -258,9 +271,9 @@ pub(crate) fn cascades_png(a: &Analysis) -> Result<Vec<u8>> {
     body.push_str(&swatch(10.0, SKY, "sky"));
     body.push_str(&swatch(70.0, SPLIT_LINE, "split lines"));
     body.push_str(&swatch(180.0, UNSERVED, "outside the split range"));
-    let (missed, clipped) = fault_counts(&px);
+    let (missed, clipped) = fault_counts(px);
     if missed + clipped > 0 {
-        body.push_str(&fault_swatches(&px, 390.0));
+        body.push_str(&fault_swatches(px, 390.0));
     } else {
         body.push_str("<text x=\"390\" y=\"52\">darker: facing away from the light</text>");
     }
@@ -294,8 +307,12 @@ pub(crate) fn captioned(a: &Analysis, label: &str) -> Vec<(Vec<u8>, String)> {
     if a.config.geometry.is_none() {
         return Vec::new();
     }
+    // The pixels are worked out once for both images, which are drawn in parallel.
+    let Some(px) = pixels(a) else {
+        return Vec::new();
+    };
     // Receivers the set-up does not serve are marked, and the captions say so.
-    let (missed, clipped) = pixels(a).map_or((0, 0), |(_, _, px)| fault_counts(&px));
+    let (missed, clipped) = fault_counts(&px.2);
     let mut note = String::new();
     if missed > 0 {
         note.push_str(&format!(
@@ -308,7 +325,7 @@ pub(crate) fn captioned(a: &Analysis, label: &str) -> Vec<(Vec<u8>, String)> {
         ));
     }
     let end = if note.is_empty() { "" } else { "." };
-    match (aliasing_png(a), cascades_png(a)) {
+    match rayon::join(|| aliasing_of(a, &px), || cascades_of(a, &px)) {
         (Ok(m), Ok(c)) => vec![
             (
                 m,
