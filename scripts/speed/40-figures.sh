@@ -1,7 +1,9 @@
 # Figures against no figures: the default sweep end to end with every figure (SVG, PNG, the
 # report's inlined copies) and with --no-plots, paired; then a 6,720-setting grid (the default
 # with 40 resolutions), where the heat map draws 6 of them and no PNG passes 8 million pixels,
-# for memory (max RSS).
+# for memory (max RSS). The load-proof figure beside it (docs/speed.md) is the instruction count of
+# the same two default runs, one thread each:
+#   RAYON_NUM_THREADS=1 valgrind --tool=callgrind "$BIN" sweep configs/default.toml [--no-plots] --quiet --out DIR
 paired "sweep configs/default.toml --no-plots" "sweep configs/default.toml (every figure)" -- \
   "$BIN" sweep configs/default.toml --no-plots --quiet --out target/speed/out/figures-none -- \
   "$BIN" sweep configs/default.toml --quiet --out target/speed/out/figures

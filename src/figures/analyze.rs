@@ -5,8 +5,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    draw_legend_below, draw_message, legend_frame, legend_height, linear_axis, palette, series_color,
-    texels_per_pixel_chart, tick, Figure, Legend, PlotResult, FONT, LEGEND_FONT,
+    draw_legend_below, draw_message, house_mesh, legend_frame, legend_height, linear_axis, palette, series_color,
+    size_with_legend, texels_per_pixel_chart, Figure, Legend, PlotResult, FONT, LEGEND_FONT,
 };
 use crate::analysis::Analysis;
 use crate::error::Result;
@@ -26,7 +26,7 @@ impl DensityFigure<'_> {
 
 impl Figure for DensityFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (960, 540 + legend_height(self.legend_lines(), LEGEND_FONT))
+        size_with_legend(self.legend_lines())
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
@@ -83,7 +83,7 @@ pub(crate) struct ShimmerFigure<'a>(pub &'a Analysis);
 
 impl Figure for ShimmerFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (960, 540 + legend_height(2, LEGEND_FONT))
+        size_with_legend(2)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
@@ -117,15 +117,7 @@ impl Figure for ShimmerFigure<'_> {
         let ymax = u_pts.iter().chain(&s_pts).map(|p| p.1).fold(0.0f64, f64::max).max(0.05) * 1.15;
         let mut chart = legend_frame(root, &title, 22, 70, 2, LEGEND_FONT)
             .build_cartesian_2d(linear_axis(0.0, (frames.max(2) - 1) as f64), linear_axis(0.0, ymax))?;
-        chart
-            .configure_mesh()
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .x_desc("frame")
-            .y_desc("RMS phase drift over cascades (texels)")
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 13))
-            .draw()?;
+        house_mesh(&mut chart, "frame", "RMS phase drift over cascades (texels)").draw()?;
         let red = series_color(1);
         let blue = series_color(0);
         chart.draw_series(LineSeries::new(u_pts, red.stroke_width(2)))?;
@@ -210,13 +202,7 @@ impl Figure for CascadesFigure<'_> {
         let mut chart = legend_frame(root, &title, 20, 70, lines, LEGEND_FONT)
             .x_label_area_size(48)
             .build_cartesian_2d(linear_axis(c.x - half, c.x + half), linear_axis(c.y - half, c.y + half))?;
-        chart
-            .configure_mesh()
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .x_desc("light-space x (world units)")
-            .y_desc("light-space y (world units)")
-            .axis_desc_style((FONT, 15))
+        house_mesh(&mut chart, "light-space x (world units)", "light-space y (world units)")
             .label_style((FONT, 12))
             .draw()?;
         for (i, (corners, wlo, whi)) in items.iter().enumerate().rev() {

@@ -4,8 +4,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    draw_legend_below, legend_frame, legend_height, log_axis, log_range, series_color, tick, Figure, Legend,
-    PlotResult, FONT, LEGEND_FONT,
+    draw_legend_below, house_mesh, legend_frame, legend_height, log_axis, log_range, series_color, Figure, Legend,
+    PlotResult, LEGEND_FONT,
 };
 use crate::commands::bench::{BenchReport, BenchRow, TARGET_ERROR};
 use crate::error::Result;
@@ -54,15 +54,12 @@ impl Figure for BenchFigure<'_> {
         let lines = report.metrics.len() + 1;
         let mut chart = legend_frame(root, &title, 22, 80, lines, LEGEND_FONT)
             .build_cartesian_2d(log_axis(x0, x1), log_axis(y0, y1))?;
-        chart
-            .configure_mesh()
-            .x_desc("time per evaluation (seconds, log; best of repeated runs)")
-            .y_desc("relative error (log)")
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 13))
-            .draw()?;
+        house_mesh(
+            &mut chart,
+            "time per evaluation (seconds, log; best of repeated runs)",
+            "relative error (log)",
+        )
+        .draw()?;
         let target = BLACK.stroke_width(2);
         chart.draw_series(DashedLineSeries::new(
             vec![(x0, TARGET_ERROR), (x1, TARGET_ERROR)],

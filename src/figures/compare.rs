@@ -6,8 +6,8 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{
-    draw_legend_below, draw_message, legend_height, linear_axis, log_range, palette, preset_color, series_color, short,
-    texels_per_pixel_chart, tick, Figure, Legend, PlotResult, FONT, LEGEND_FONT,
+    draw_legend_below, draw_message, linear_axis, log_range, palette, preset_color, series_color, short,
+    size_with_legend, texels_per_pixel_chart, tick, Figure, Legend, PlotResult, FONT,
 };
 use crate::analysis::Analysis;
 use crate::commands::compare::{coverage_extremes, invalid_reason, label, Comparison};
@@ -37,7 +37,7 @@ impl DensityOverlay<'_> {
 
 impl Figure for DensityOverlay<'_> {
     fn size(&self) -> (u32, u32) {
-        (960, 540 + legend_height(self.legend_lines(), LEGEND_FONT))
+        size_with_legend(self.legend_lines())
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {

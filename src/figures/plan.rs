@@ -20,7 +20,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use rayon::prelude::*;
 
-use super::{colormap, palette, series_color, tick, DrawError, PlotResult, FONT};
+use super::{colormap, house_mesh, palette, series_color, tick, DrawError, PlotResult, FONT};
 use crate::config::{Config, ViewSettings};
 use crate::error::{PlotError, Result};
 use csm_core::geometry::{Aabb, CameraPose, Lens};
@@ -252,15 +252,9 @@ impl Plan<'_> {
         let (cx0, cx1, cz0, cz1) = padded;
         let mut chart = super::chart_frame(plot, &self.title, 20, 70)
             .build_cartesian_2d(super::linear_axis(cx0, cx1), super::linear_axis(-cz1, -cz0))?;
-        chart
-            .configure_mesh()
+        house_mesh(&mut chart, "x (world units)", "z (world units; up the page is −z)")
             .disable_mesh()
-            .x_label_formatter(&|v| tick(*v))
             .y_label_formatter(&|v| tick(-*v))
-            .x_desc("x (world units)")
-            .y_desc("z (world units; up the page is −z)")
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 13))
             .draw()?;
         let at = |p: DVec3| (p.x, -p.z);
         let n = self.views.len();
@@ -415,8 +409,7 @@ impl Plan<'_> {
                     .ok_or_else(|| PlotError::Rasterise(format!("bad size {w}x{h}")))?;
                 pixmap.fill(resvg::tiny_skia::Color::WHITE);
                 paint_heights(&mut pixmap, &hm, &colours, area, padded, scale);
-                resvg::render(
-                    &tree.0,
+                tree.render(
                     resvg::tiny_skia::Transform::from_scale(scale, scale),
                     &mut pixmap.as_mut(),
                 );
@@ -611,22 +604,27 @@ mod tests {
         }
     }
 
+    /// The plan of `views` over `scene` with their `values` (the objective) and `worst` ringed,
+    /// as a PNG at scale 1.
+    fn plan_png_of(scene: &SceneGeometry, views: &[ViewSettings], values: &[f64], worst: Option<usize>) -> Vec<u8> {
+        let plan = Plan {
+            title: "test".to_string(),
+            scene,
+            bounds: scene.mesh.bounds().unwrap(),
+            views,
+            aspect: 16.0 / 9.0,
+            values: Some(("objective", values)),
+            worst,
+            light: DVec3::new(0.3, -1.0, 0.2).normalize(),
+        };
+        plan.png(1.0).unwrap()
+    }
+
     #[test]
     fn views_take_the_colour_of_their_value_and_the_worst_is_ringed() {
         let scene = ground();
         let views = [camera("low", -30.0), camera("high", 30.0)];
-        let values = [1.0, 3.0];
-        let plan = Plan {
-            title: "test".to_string(),
-            scene: &scene,
-            bounds: scene.mesh.bounds().unwrap(),
-            views: &views,
-            aspect: 16.0 / 9.0,
-            values: Some(("objective", &values)),
-            worst: Some(1),
-            light: DVec3::new(0.3, -1.0, 0.2).normalize(),
-        };
-        let png = plan.png(1.0).unwrap();
+        let png = plan_png_of(&scene, &views, &[1.0, 3.0], Some(1));
         let rgb = |c: RGBColor| [c.0, c.1, c.2];
         // The lowest value takes the colour map's start, the highest its end, each at its eye.
         let ((lx, ly), n_low) = centroid(&png, rgb(colormap(0.0)));
@@ -686,19 +684,7 @@ mod tests {
         let scene = ground();
         let views = [camera("low", -30.0), camera("sky", 0.0), camera("high", 30.0)];
         let rgb = |c: RGBColor| [c.0, c.1, c.2];
-        let png_with = |values: &[f64]| {
-            let plan = Plan {
-                title: "test".to_string(),
-                scene: &scene,
-                bounds: scene.mesh.bounds().unwrap(),
-                views: &views,
-                aspect: 16.0 / 9.0,
-                values: Some(("objective", values)),
-                worst: None,
-                light: DVec3::new(0.3, -1.0, 0.2).normalize(),
-            };
-            plan.png(1.0).unwrap()
-        };
+        let png_with = |values: &[f64]| plan_png_of(&scene, &views, values, None);
         let png = png_with(&[1.0, f64::NAN, 3.0]);
         let ((gx, gy), n_grey) = centroid(&png, rgb(palette::NO_DATA));
         let ((lx, _), n_low) = centroid(&png, rgb(colormap(0.0)));

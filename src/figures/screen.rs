@@ -57,7 +57,10 @@ struct Pixel {
     fault: Option<ServeFault>,
 }
 
-fn pixels(a: &Analysis) -> Option<(u32, u32, Vec<Option<Pixel>>)> {
+/// The sampled grid's pixels: (columns, rows, each pixel row by row).
+type Pixels = (u32, u32, Vec<Option<Pixel>>);
+
+fn pixels(a: &Analysis) -> Option<Pixels> {
     let setup = a.config.setup();
     let vis = setup.visibility()?;
     let rig = a.rig();
@@ -139,12 +142,12 @@ fn swatch(x: f64, c: [u8; 3], label: &str) -> String {
 
 /// `screen_aliasing.png`.
 pub(crate) fn aliasing_png(a: &Analysis) -> Result<Vec<u8>> {
-    let (cols, rows, px) = pixels(a).expect("written only with geometry");
-    aliasing_png_of(a, cols, rows, &px)
+    aliasing_of(a, &pixels(a).expect("written only with geometry"))
 }
 
-/// [`aliasing_png`] from the analysis's [`pixels`].
-fn aliasing_png_of(a: &Analysis, cols: u32, rows: u32, px: &[Option<Pixel>]) -> Result<Vec<u8>> {
+/// `screen_aliasing.png` from the analysis' [`pixels`].
+fn aliasing_of(a: &Analysis, (cols, rows, px): &Pixels) -> Result<Vec<u8>> {
+    let (cols, rows) = (*cols, *rows);
     let colour: Vec<[u8; 3]> = px
         .iter()
         .map(|p| match p {
@@ -229,12 +232,12 @@ fn fault_swatches(px: &[Option<Pixel>], x: f64) -> String {
 
 /// `screen_cascades.png`.
 pub(crate) fn cascades_png(a: &Analysis) -> Result<Vec<u8>> {
-    let (cols, rows, px) = pixels(a).expect("written only with geometry");
-    cascades_png_of(a, cols, rows, &px)
+    cascades_of(a, &pixels(a).expect("written only with geometry"))
 }
 
-/// [`cascades_png`] from the analysis's [`pixels`].
-fn cascades_png_of(a: &Analysis, cols: u32, rows: u32, px: &[Option<Pixel>]) -> Result<Vec<u8>> {
+/// `screen_cascades.png` from the analysis' [`pixels`].
+fn cascades_of(a: &Analysis, (cols, rows, px): &Pixels) -> Result<Vec<u8>> {
+    let (cols, rows) = (*cols, *rows);
     let dim = |c: [u8; 3]| c.map(|x| (x as f64 * 0.4) as u8);
     let cascade_of = |i: usize| px[i].as_ref().and_then(|p| p.cascade);
     let colour: Vec<[u8; 3]> = (0..px.len())
@@ -306,12 +309,12 @@ pub(crate) fn captioned(a: &Analysis, label: &str) -> Vec<(Vec<u8>, String)> {
     if a.config.geometry.is_none() {
         return Vec::new();
     }
-    // Receivers the set-up does not serve are marked, and the captions say so. The pixels
-    // are worked out once for the counts and both images.
-    let Some((cols, rows, px)) = pixels(a) else {
+    // The pixels are worked out once for both images, which are drawn in parallel.
+    let Some(px) = pixels(a) else {
         return Vec::new();
     };
-    let (missed, clipped) = fault_counts(&px);
+    // Receivers the set-up does not serve are marked, and the captions say so.
+    let (missed, clipped) = fault_counts(&px.2);
     let mut note = String::new();
     if missed > 0 {
         note.push_str(&format!(
@@ -324,7 +327,7 @@ pub(crate) fn captioned(a: &Analysis, label: &str) -> Vec<(Vec<u8>, String)> {
         ));
     }
     let end = if note.is_empty() { "" } else { "." };
-    match (aliasing_png_of(a, cols, rows, &px), cascades_png_of(a, cols, rows, &px)) {
+    match rayon::join(|| aliasing_of(a, &px), || cascades_of(a, &px)) {
         (Ok(m), Ok(c)) => vec![
             (
                 m,

@@ -5,9 +5,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    colormap, draw_legend_below, draw_message, legend_frame, legend_height, linear_axis, log_axis, log_axis_with,
-    log_range, nice_ticks, palette, series_color, texels_per_pixel_chart, tick, ticked_axis, Figure, Legend, LogAxis,
-    PlotResult, FONT, LEGEND_FONT,
+    colormap, draw_legend_below, draw_message, house_mesh, legend_frame, legend_height, linear_axis, log_axis,
+    log_axis_with, log_range, nice_ticks, palette, series_color, size_with_legend, texels_per_pixel_chart, tick,
+    ticked_axis, DrawError, Figure, Legend, LogAxis, PlotResult, FONT, LEGEND_FONT,
 };
 use crate::analysis::{analyze, mib, Analysis, AnalysisOptions};
 use crate::commands::sweep::grid::Setting;
@@ -708,16 +708,14 @@ impl Figure for ShimmerSweepFigure<'_> {
             ticked_axis(0.0, n as f64, (0..n).map(|i| i as f64 + 0.5).collect()),
             linear_axis(0.0, ymax),
         )?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_label_formatter(&|v| counts.get(v.floor() as usize).map_or(String::new(), |c| c.to_string()))
-            .y_label_formatter(&|v| tick(*v))
-            .x_desc("cascades (each box: every λ, resolution and fit with that count)")
-            .y_desc("RMS sub-texel drift per frame (texels)")
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 13))
-            .draw()?;
+        house_mesh(
+            &mut chart,
+            "cascades (each box: every λ, resolution and fit with that count)",
+            "RMS sub-texel drift per frame (texels)",
+        )
+        .disable_x_mesh()
+        .x_label_formatter(&|v| counts.get(v.floor() as usize).map_or(String::new(), |c| c.to_string()))
+        .draw()?;
         let orange = series_color(1);
         let blue = series_color(0);
         // Unsnapped boxes left of each count's centre, snapped right of it.
@@ -787,7 +785,7 @@ pub(crate) struct ParetoFigure<'a>(pub &'a SweepResult);
 
 impl Figure for ParetoFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (960, 540 + legend_height(4, LEGEND_FONT))
+        size_with_legend(4)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
@@ -813,61 +811,38 @@ impl Figure for ParetoFigure<'_> {
         let (x0, x1) = log_range(xmin.min(r.budget_mib), xmax.max(r.budget_mib));
         let (y0, y1) = log_range(ymin, ymax);
         let lines = 3 + usize::from(focus(r).is_some());
-        let mut chart = legend_frame(root, &title, 22, 70, lines, LEGEND_FONT)
-            .build_cartesian_2d(log_axis(x0, x1), log_axis(y0, y1))?;
-        chart
-            .configure_mesh()
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .x_desc("shadow map memory (MiB, log; cascades × resolution² × 4 bytes)")
-            .y_desc(if bounds_only {
-                "mean aliasing (texel/pixel, log; lower is better)".to_string()
-            } else {
-                format!("{} (log; lower is better)", obj.name())
-            })
-            .max_light_lines(3)
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 13))
-            .draw()?;
-        draw_configurations(&mut chart, &pts, &mut legend)?;
-        let budget = palette::LIMIT.stroke_width(2);
-        chart.draw_series(DashedLineSeries::new(
-            vec![(r.budget_mib, y0), (r.budget_mib, y1)],
-            6,
-            4,
-            budget,
-        ))?;
-        legend.add(format!("memory budget {} MiB", tick(r.budget_mib)), move |(x, y)| {
-            PathElement::new(vec![(x, y), (x + 18, y)], budget)
-        });
-        let orange = series_color(1);
+        let y_desc = if bounds_only {
+            "mean aliasing (texel/pixel, log; lower is better)".to_string()
+        } else {
+            format!("{} (log; lower is better)", obj.name())
+        };
+        let x_desc = "shadow map memory (MiB, log; cascades × resolution² × 4 bytes)";
+        let mut chart = configurations_chart(
+            root,
+            &title,
+            lines,
+            (x0, x1),
+            (y0, y1),
+            (x_desc, y_desc),
+            &pts,
+            &mut legend,
+        )?;
+        let budget = format!("memory budget {} MiB", tick(r.budget_mib));
+        draw_limit(&mut chart, &mut legend, r.budget_mib, (y0, y1), budget)?;
         let front: Vec<(f64, f64)> = r
             .front
             .iter()
             .map(|&i| (mib(r.rows[i].summary.memory_bytes), obj.value(&r.rows[i].summary)))
             .collect();
-        chart.draw_series(LineSeries::new(front.clone(), orange.stroke_width(3)))?;
-        legend.add("Pareto front (nothing is both cheaper and sharper)", move |(x, y)| {
-            PathElement::new(vec![(x, y), (x + 18, y)], orange.stroke_width(3))
-        });
-        chart.draw_series(front.iter().map(|p| Circle::new(*p, 5, orange.filled())))?;
-        if let Some((rec, ok)) = focus(r) {
-            let p = (mib(rec.summary.memory_bytes), obj.value(&rec.summary));
-            let red = palette::RECOMMENDED;
-            chart.draw_series(std::iter::once(Circle::new(p, 9, red.stroke_width(3))))?;
-            legend.add(focus_word(ok), move |(x, y)| {
-                Circle::new((x + 8, y), 6, red.stroke_width(2))
-            });
-            // The label sits up and to the right of the marker, in pixels, clear of it.
-            chart.draw_series(std::iter::once(
-                EmptyElement::at(p)
-                    + Text::new(
-                        format!("{}: {}", focus_word(ok), setting_words(r, &rec.setting)),
-                        (14, -30),
-                        (FONT, 15).into_font().color(&red),
-                    ),
-            ))?;
-        }
+        let at = focus(r).map(|(rec, ok)| ((mib(rec.summary.memory_bytes), obj.value(&rec.summary)), rec, ok));
+        draw_front_and_focus(
+            &mut chart,
+            &mut legend,
+            r,
+            front,
+            "Pareto front (nothing is both cheaper and sharper)",
+            at,
+        )?;
         draw_legend_below(root, legend, lines)?;
         Ok(())
     }
@@ -903,13 +878,84 @@ fn draw_configurations<DB: DrawingBackend>(
     Ok(())
 }
 
+/// The log-log chart both Pareto figures draw on: the house frame with room for `lines` legend
+/// entries, the mesh with `desc` (x, y) and every configuration as a grey dot.
+#[allow(clippy::too_many_arguments)]
+fn configurations_chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    lines: usize,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+    (x_desc, y_desc): (&str, String),
+    pts: &[(f64, f64)],
+    legend: &mut Legend<DB>,
+) -> Result<ChartContext<'a, DB, Cartesian2d<LogAxis, LogAxis>>, DrawError> {
+    let mut chart =
+        legend_frame(root, title, 22, 70, lines, LEGEND_FONT).build_cartesian_2d(log_axis(x0, x1), log_axis(y0, y1))?;
+    house_mesh(&mut chart, x_desc, y_desc).max_light_lines(3).draw()?;
+    draw_configurations(&mut chart, pts, legend)?;
+    Ok(chart)
+}
+
+/// A dashed vertical line at `x` across `y0..y1` (a budget, or the configured setting's
+/// cost) with its legend entry `label`.
+fn draw_limit<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<LogAxis, LogAxis>>,
+    legend: &mut Legend<DB>,
+    x: f64,
+    (y0, y1): (f64, f64),
+    label: String,
+) -> PlotResult {
+    let limit = palette::LIMIT.stroke_width(2);
+    chart.draw_series(DashedLineSeries::new(vec![(x, y0), (x, y1)], 6, 4, limit))?;
+    legend.add(label, move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], limit));
+    Ok(())
+}
+
+/// The Pareto front `front` (a thick line through dots) with its legend entry `label`, then, at
+/// `focus` (its point, row and whether it is the recommendation), a ring with its legend entry
+/// and the setting's words beside it.
+fn draw_front_and_focus<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<LogAxis, LogAxis>>,
+    legend: &mut Legend<DB>,
+    r: &SweepResult,
+    front: Vec<(f64, f64)>,
+    label: &str,
+    focus: Option<((f64, f64), &Row, bool)>,
+) -> PlotResult {
+    let orange = series_color(1);
+    chart.draw_series(LineSeries::new(front.clone(), orange.stroke_width(3)))?;
+    legend.add(label, move |(x, y)| {
+        PathElement::new(vec![(x, y), (x + 18, y)], orange.stroke_width(3))
+    });
+    chart.draw_series(front.iter().map(|p| Circle::new(*p, 5, orange.filled())))?;
+    if let Some((p, rec, ok)) = focus {
+        let red = palette::RECOMMENDED;
+        chart.draw_series(std::iter::once(Circle::new(p, 9, red.stroke_width(3))))?;
+        legend.add(focus_word(ok), move |(x, y)| {
+            Circle::new((x + 8, y), 6, red.stroke_width(2))
+        });
+        // The label sits up and to the right of the marker, in pixels, clear of it.
+        chart.draw_series(std::iter::once(
+            EmptyElement::at(p)
+                + Text::new(
+                    format!("{}: {}", focus_word(ok), setting_words(r, &rec.setting)),
+                    (14, -30),
+                    (FONT, 15).into_font().color(&red),
+                ),
+        ))?;
+    }
+    Ok(())
+}
+
 /// Pareto front of the render cost (`cost_index`, the configured setting = 1) against the
 /// sweep's objective (`cost_pareto.png`; only with scene geometry, where the cost is counted).
 pub(crate) struct CostParetoFigure<'a>(pub &'a SweepResult);
 
 impl Figure for CostParetoFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (960, 540 + legend_height(4, LEGEND_FONT))
+        size_with_legend(4)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult {
@@ -932,65 +978,46 @@ impl Figure for CostParetoFigure<'_> {
         let (x0, x1) = log_range(xmin.min(budget.unwrap_or(xmin)), xmax.max(budget.unwrap_or(xmax)));
         let (y0, y1) = log_range(ymin, ymax);
         let lines = 3 + usize::from(focus(r).is_some());
-        let mut chart = legend_frame(root, &title, 22, 70, lines, LEGEND_FONT)
-            .build_cartesian_2d(log_axis(x0, x1), log_axis(y0, y1))?;
-        chart
-            .configure_mesh()
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .x_desc("cost_index (log; draws, triangles, fragments and cleared texels; configured setting = 1)")
-            .y_desc(format!("{} (log; lower is better)", obj.name()))
-            .max_light_lines(3)
-            .axis_desc_style((FONT, 15))
-            .label_style((FONT, 13))
-            .draw()?;
-        draw_configurations(&mut chart, &pts, &mut legend)?;
-        let limit = palette::LIMIT.stroke_width(2);
+        let x_desc = "cost_index (log; draws, triangles, fragments and cleared texels; configured setting = 1)";
+        let y_desc = format!("{} (log; lower is better)", obj.name());
+        let mut chart = configurations_chart(
+            root,
+            &title,
+            lines,
+            (x0, x1),
+            (y0, y1),
+            (x_desc, y_desc),
+            &pts,
+            &mut legend,
+        )?;
         match budget {
-            Some(b) => {
-                chart.draw_series(DashedLineSeries::new(vec![(b, y0), (b, y1)], 6, 4, limit))?;
-                legend.add(format!("cost budget {}", tick(b)), move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], limit)
-                });
-            }
-            None => {
-                chart.draw_series(DashedLineSeries::new(vec![(1.0, y0), (1.0, y1)], 6, 4, limit))?;
-                legend.add("the configured setting's cost (1)", move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], limit)
-                });
-            }
+            Some(b) => draw_limit(&mut chart, &mut legend, b, (y0, y1), format!("cost budget {}", tick(b)))?,
+            None => draw_limit(
+                &mut chart,
+                &mut legend,
+                1.0,
+                (y0, y1),
+                "the configured setting's cost (1)".into(),
+            )?,
         }
-        let orange = series_color(1);
         let front: Vec<(f64, f64)> = r
             .cost_front
             .iter()
             .filter_map(|&i| Some((r.rows[i].summary.cost.cost_index?, obj.value(&r.rows[i].summary))))
             .filter(|p| p.0 > 0.0 && p.1 > 0.0)
             .collect();
-        chart.draw_series(LineSeries::new(front.clone(), orange.stroke_width(3)))?;
-        legend.add(
+        let at = focus(r).and_then(|(rec, ok)| {
+            let c = rec.summary.cost.cost_index.filter(|c| *c > 0.0)?;
+            Some(((c, obj.value(&rec.summary)), rec, ok))
+        });
+        draw_front_and_focus(
+            &mut chart,
+            &mut legend,
+            r,
+            front,
             "Pareto front (nothing is both cheaper to render and sharper)",
-            move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], orange.stroke_width(3)),
-        );
-        chart.draw_series(front.iter().map(|p| Circle::new(*p, 5, orange.filled())))?;
-        if let Some((rec, ok)) = focus(r) {
-            if let Some(c) = rec.summary.cost.cost_index.filter(|c| *c > 0.0) {
-                let p = (c, obj.value(&rec.summary));
-                let red = palette::RECOMMENDED;
-                chart.draw_series(std::iter::once(Circle::new(p, 9, red.stroke_width(3))))?;
-                legend.add(focus_word(ok), move |(x, y)| {
-                    Circle::new((x + 8, y), 6, red.stroke_width(2))
-                });
-                chart.draw_series(std::iter::once(
-                    EmptyElement::at(p)
-                        + Text::new(
-                            format!("{}: {}", focus_word(ok), setting_words(r, &rec.setting)),
-                            (14, -30),
-                            (FONT, 15).into_font().color(&red),
-                        ),
-                ))?;
-            }
-        }
+            at,
+        )?;
         draw_legend_below(root, legend, lines)?;
         Ok(())
     }

@@ -35,8 +35,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{
-    colormap, draw_legend_below, draw_message, encode_png, legend_frame, legend_height, linear_axis, nice_ticks,
-    series_color, short, svg_to_rgb, tick, Figure, Legend, PlotResult, FONT, LEGEND_FONT,
+    colormap, draw_legend_below, draw_message, encode_png, house_mesh, legend_frame, legend_height, linear_axis,
+    nice_ticks, series_color, short, svg_to_rgb, tick, Figure, Legend, PlotResult, FONT, LEGEND_FONT,
 };
 use crate::error::{PlotError, Result};
 use crate::output::StreamedFile;
@@ -66,6 +66,17 @@ pub mod colours {
     /// The animation's progress bar.
     pub const PROGRESS: [u8; 3] = [213, 94, 0];
 }
+
+/// Every shadow state, in the order of the pictures' palette.
+pub const SHADES: [Shade; 7] = [
+    Shade::Empty,
+    Shade::Lit,
+    Shade::Shadowed,
+    Shade::Acne,
+    Shade::Edge,
+    Shade::Leak,
+    Shade::Away,
+];
 
 /// The colour of a state in `shadow.png` and `shadow.apng`.
 pub(crate) fn shade_colour(s: Shade) -> [u8; 3] {
@@ -635,15 +646,7 @@ fn palette_rgb() -> Vec<[u8; 3]> {
             [v, v, v]
         })
         .collect();
-    for s in [
-        Shade::Empty,
-        Shade::Lit,
-        Shade::Shadowed,
-        Shade::Acne,
-        Shade::Edge,
-        Shade::Leak,
-        Shade::Away,
-    ] {
+    for s in SHADES {
         p.push(shade_colour(s));
     }
     p.push(colours::PROGRESS);
@@ -1082,12 +1085,7 @@ impl FlickerVsShimmer<'_> {
         }
         let mut chart = legend_frame(&body, "", 1, 70, SCATTER_LEGEND_LINES, LEGEND_FONT)
             .build_cartesian_2d(linear_axis(x0, x1), linear_axis(y0, y1))?;
-        chart
-            .configure_mesh()
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .x_desc(x_desc)
-            .y_desc("S5 flicker (share of receivers flipping per frame)")
+        house_mesh(&mut chart, x_desc, "S5 flicker (share of receivers flipping per frame)")
             .max_light_lines(3)
             .axis_desc_style((FONT, 14))
             .label_style((FONT, 12))

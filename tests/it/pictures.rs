@@ -5,7 +5,7 @@
 use csm_core::shade::{FlipImage, Shade, ShadeImage};
 use csm_lab::figures::truth::{
     self, colours, fit, flicker_png, flip_scale_max, ranks, shadow_png, write_animation, AnimationPlan,
-    FlickerVsShimmer, Panel, ShimmerPoint, ANIMATION_CAPS,
+    FlickerVsShimmer, Panel, ShimmerPoint, ANIMATION_CAPS, SHADES,
 };
 use csm_lab::figures::Figure;
 use csm_lab::report::truth::{section, Animation, TruthPictures};
@@ -53,16 +53,6 @@ fn centre(i: u32, pw: u32, k: u32, c: u32, r: u32) -> (u32, u32) {
     (i * (pw + GAP) + c * k + k / 2, TITLE_H + r * k + k / 2)
 }
 
-const STATES: [Shade; 7] = [
-    Shade::Empty,
-    Shade::Lit,
-    Shade::Shadowed,
-    Shade::Acne,
-    Shade::Edge,
-    Shade::Leak,
-    Shade::Away,
-];
-
 fn state_rgb(s: Shade) -> [u8; 3] {
     match s {
         Shade::Empty => [236, 236, 236],
@@ -79,7 +69,7 @@ fn state_rgb(s: Shade) -> [u8; 3] {
 fn synthetic(shift: usize) -> ShadeImage {
     let mut im = ShadeImage::empty(8, 4);
     for (k, p) in im.pixels.iter_mut().enumerate() {
-        *p = STATES[(k * 5 + shift) % 7];
+        *p = SHADES[(k * 5 + shift) % 7];
     }
     im
 }
@@ -234,7 +224,7 @@ fn a_narrow_grid_leaves_room_for_the_legend() {
     // 10 × 100: k = min(1280 / 10, 900 / 100) = 9, a 90-pixel panel left-aligned in 960.
     let mut im = ShadeImage::empty(10, 100);
     for (k, p) in im.pixels.iter_mut().enumerate() {
-        *p = STATES[k % 6];
+        *p = SHADES[k % 6];
     }
     let img = decode(&shadow_png(&[Panel::snapped(&im)]).unwrap());
     assert_eq!(img.w, 960);
@@ -361,7 +351,7 @@ fn noise(cols: u32, rows: u32, frame: usize, salt: u64) -> ShadeImage {
         x ^= x << 13;
         x ^= x >> 7;
         x ^= x << 17;
-        *p = STATES[(x % 6) as usize];
+        *p = SHADES[(x % 6) as usize];
     }
     im
 }
