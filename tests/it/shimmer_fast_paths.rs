@@ -88,7 +88,8 @@ fn coverage_of_shrunken_windows_matches_a_per_corner_count() {
 }
 
 /// The sweep's probe-free walk of both snap modes (a still light, a fixed basis, a sphere
-/// fit, no S4 and no rows: `along_path_both` takes it) against the generic walk of each mode
+/// fit, no S4 and no rows: `along_path_both` takes it; paths of one and of several of its
+/// chunks of frames) against the generic walk of each mode
 /// (`along_path`), bit for bit, on random scenes, paths, grids, snap rules and anchors, with
 /// windows shrunk so that corners fall outside.
 mod probe_free_walk {
@@ -109,7 +110,7 @@ mod probe_free_walk {
         fn equals_the_generic_walk_bit_for_bit(
             path in prop::sample::select(vec!["strafe", "dolly", "yaw", "pitch", "orbit", "still"]),
             step in 0.001f64..2.0,
-            frames in 2usize..40,
+            frames in prop_oneof![2usize..40, 500usize..1100],
             lambda in 0.0f64..=1.0,
             cascades in 1usize..=8,
             resolution in prop::sample::select(vec![256u32, 512, 1000, 2048, 4096]),
