@@ -815,6 +815,64 @@ impl PathModel for RigPath<'_> {
         }
     }
 
+    /// S4 from the sampled texels `k = ⌊x − o⌋` (per axis, `x` a probe's coordinate in texels,
+    /// `o` the window origin) instead of their centres `(o + k + ½)·T`: a centre moves by
+    /// `(Δo + Δk)·T`, so the kernel's test `|Δcentre| / T ≥ ½` is `|Δo + Δk| ≥ ½` up to the
+    /// rounding of the centres, below 1e-7 texel while every `|x| + |o| < 2^24`. When `Δo` is
+    /// more than 1e-6 from a half-integer on both axes, exactly one whole `Δk` per axis keeps
+    /// `|Δo + Δk|` below ½ (`−round(Δo)`), every other one is more than 1e-6 above it, and the
+    /// kernel decides every probe on its sure path (more than 1e-9 from ½): a probe flips
+    /// exactly when some axis' `Δk` is not that one. The same `k` as `land_centres` (one
+    /// subtraction and the branch-free floor), kept in place of the centres; no centre, no
+    /// product. Otherwise (a texel size that is not the probes', coordinates too large, a move
+    /// near half a texel) None.
+    fn floor_flips(
+        &self,
+        i: usize,
+        p: &RigWindow,
+        w: &RigWindow,
+        held: bool,
+        floors: &mut Vec<DVec2>,
+    ) -> Option<(usize, usize)> {
+        const LIMIT: f64 = (1u64 << 24) as f64;
+        const MARGIN: f64 = 1e-6;
+        let (a, b) = (&p.window, &w.window);
+        let (texel, scaled) = self.probe_texels.get(i)?.get()?;
+        if !self.fixed || *texel != a.texel || *texel != b.texel || crate::walk::flip_divisor(b.texel).is_none() {
+            return None;
+        }
+        let (u_max, _) = *self.probe_exact[i].get_or_init(|| exact_limit(scaled));
+        let small = |o: DVec2| u_max + o.x.abs().max(o.y.abs()) < LIMIT && o.is_finite();
+        let (oa, ob) = (a.origin_texels, b.origin_texels);
+        if !(small(oa) && small(ob)) {
+            return None;
+        }
+        let d = ob - oa;
+        let stay = DVec2::new(-round_half_away(d.x), -round_half_away(d.y));
+        let r = d + stay;
+        if !(r.x.abs() < 0.5 - MARGIN && r.y.abs() < 0.5 - MARGIN) {
+            return None;
+        }
+        if !held {
+            floors.clear();
+            floors.extend(scaled.iter().map(|u| {
+                let s = *u - oa;
+                DVec2::new(floor_small(s.x), floor_small(s.y))
+            }));
+        }
+        if floors.len() != scaled.len() {
+            return None;
+        }
+        let mut flipped = 0usize;
+        for (k, u) in floors.iter_mut().zip(scaled) {
+            let s = *u - ob;
+            let kb = DVec2::new(floor_small(s.x), floor_small(s.y));
+            flipped += usize::from((kb.x != k.x + stay.x) | (kb.y != k.y + stay.y));
+            *k = kb;
+        }
+        Some((flipped, scaled.len()))
+    }
+
     /// A snapped window that moved by whole texels: every probe stays on its texel when both
     /// origins are whole numbers of texels within the limit of [`exact_limit`].
     fn unchanged_centres(&self, i: usize, p: &RigWindow, w: &RigWindow) -> Option<usize> {
