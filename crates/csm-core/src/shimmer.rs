@@ -42,8 +42,8 @@ pub fn wrap(x: f64) -> f64 {
 pub(crate) fn round_half_away(x: f64) -> f64 {
     const TWO_52: f64 = 4_503_599_627_370_496.0;
     let a = x.abs();
-    // At 2^52 and beyond every double is an integer (NaN and infinities fail the test too).
-    if !(a < TWO_52) {
+    // At 2^52 and beyond every double is an integer (and NaN/inf fall through too).
+    if a.is_nan() || a >= TWO_52 {
         return x.round();
     }
     let r = (a + TWO_52) - TWO_52;
