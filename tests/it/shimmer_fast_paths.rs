@@ -88,7 +88,8 @@ fn coverage_of_shrunken_windows_matches_a_per_corner_count() {
 }
 
 /// The sweep's probe-free walk of both snap modes (a still light, a fixed basis, a sphere
-/// fit, no S4 and no rows: `along_path_both` takes it) against the generic walk of each mode
+/// fit, no S4 and no rows: `along_path_both` takes it; paths of one and of several of its
+/// chunks of frames) against the generic walk of each mode
 /// (`along_path`), bit for bit, on random scenes, paths, grids, snap rules and anchors, with
 /// windows shrunk so that corners fall outside.
 mod probe_free_walk {
@@ -109,7 +110,7 @@ mod probe_free_walk {
         fn equals_the_generic_walk_bit_for_bit(
             path in prop::sample::select(vec!["strafe", "dolly", "yaw", "pitch", "orbit", "still"]),
             step in 0.001f64..2.0,
-            frames in 2usize..40,
+            frames in prop_oneof![2usize..40, 500usize..1100],
             lambda in 0.0f64..=1.0,
             cascades in 1usize..=8,
             resolution in prop::sample::select(vec![256u32, 512, 1000, 2048, 4096]),
@@ -119,7 +120,12 @@ mod probe_free_walk {
             anchor in (-3.0f64..3.0, -3.0f64..3.0, any::<bool>()),
             shrink in prop::collection::vec(0.5f64..1.0, 8),
         ) {
-            let step = if path == "yaw" || path == "pitch" || path == "orbit" { step.min(1.0) } else { step };
+            // (A pitch stays within 60 degrees of its start: past the vertical the path is refused.)
+            let step = match path {
+                "pitch" => step.min(60.0 / frames as f64),
+                "yaw" | "orbit" => step.min(1.0),
+                _ => step,
+            };
             let text = with(&[
                 ("camera.position", &format!("position = [{offset}, 10.0, {offset}]")),
                 ("camera.target", &format!("target = [{offset}, 0.0, {}]", offset - 50.0)),
@@ -184,6 +190,72 @@ fn every_preset_walks_both_modes_as_the_generic_walk_does_bit_for_bit() {
                 format!("{:?}", along_path(&rig, &poses, &[], false, opts)),
                 "{name} {path}"
             );
+        }
+    }
+}
+
+/// S4 when S3 has the closed form (a sphere fit: the walk counts flips from the sampled texels,
+/// or from their centres when a window moves by nearly half a texel) against S4 of the full
+/// per-probe kernel (`probe_drift`: every probe landed, its centre's move tested), frame by
+/// frame and bit for bit, on random paths, steps, offsets, lights, grids and snap rules.
+mod flips_from_texels {
+    use super::*;
+    use csm_core::snapping::{SnapMode, SnapRule};
+    use proptest::prelude::*;
+
+    fn flips(r: &csm_core::shimmer::PathResult) -> Vec<String> {
+        r.frames
+            .iter()
+            .map(|f| format!("{} {} {:?}", f.frame, f.cascade, f.cell_flips))
+            .collect()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 120, ..ProptestConfig::default() })]
+        #[test]
+        fn equal_the_per_probe_kernel_bit_for_bit(
+            path in prop::sample::select(vec!["strafe", "dolly", "yaw", "pitch", "orbit"]),
+            step in prop_oneof![0.0005f64..0.05, 0.05f64..2.0],
+            frames in 2usize..80,
+            cascades in 1usize..=6,
+            resolution in prop::sample::select(vec![256u32, 512, 1000, 2048]),
+            offset in prop::sample::select(vec![0.0f64, 1234.5, 1e5]),
+            light in (-1.0f64..1.0, -1.0f64..-0.05, -1.0f64..1.0),
+            snap in (0usize..3, prop::sample::select(vec![1u32, 2, 4])),
+        ) {
+            // (A pitch stays within 60 degrees of its start: past the vertical the path is refused.)
+            let step = match path {
+                "pitch" => step.min(60.0 / frames as f64),
+                "yaw" | "orbit" => step.min(1.0),
+                _ => step,
+            };
+            let text = with(&[
+                ("camera.position", &format!("position = [{offset}, 10.0, {offset}]")),
+                ("camera.target", &format!("target = [{offset}, 0.0, {}]", offset - 50.0)),
+                ("scene.min", &format!("min = [{}, 0.0, {}]", offset - 200.0, offset - 200.0)),
+                ("scene.max", &format!("max = [{}, 40.0, {}]", offset + 200.0, offset + 200.0)),
+                ("light.direction", &format!("direction = [{}, {}, {}]", light.0, light.1, light.2)),
+                ("shadow.cascades", &format!("cascades = {cascades}")),
+                ("shadow.resolution", &format!("resolution = {resolution}")),
+                ("motion.path", &format!("path = \"{path}\"")),
+                ("motion.step", &format!("step = {step}")),
+                ("motion.frames", &format!("frames = {frames}")),
+            ]);
+            let c = config(&text);
+            let mut rig = csm_lab::analysis::rig(&c).unwrap();
+            rig.snap_rule = SnapRule {
+                mode: [SnapMode::Round, SnapMode::Floor, SnapMode::Trunc][snap.0],
+                step_texels: snap.1,
+            };
+            let poses = c.camera_path().unwrap();
+            let pr = probes(&rig, &c.camera.pose(), &c.scene, 64);
+            let [_, texels, per_probe] = all_options();
+            for snapped in [true, false] {
+                let a = along_path(&rig, &poses, &pr, snapped, texels);
+                let b = along_path(&rig, &poses, &pr, snapped, per_probe);
+                prop_assert_eq!(flips(&a), flips(&b), "snapped {}", snapped);
+                prop_assert_eq!(format!("{:?}", a.stats.cell_flip_rate), format!("{:?}", b.stats.cell_flip_rate));
+            }
         }
     }
 }

@@ -13,7 +13,8 @@ use crate::fitting::{Fit, Window};
 use crate::geometry::{Aabb, CameraPose, LightBasis};
 use crate::light_motion::LightTrack;
 use crate::rng::halton;
-use crate::shimmer::{floor_exact, PathResult, ShimmerOptions};
+use crate::shimmer::{floor_exact, round_half_away, PathResult, ShimmerOptions};
+use crate::snapping::{SnapMode, SnapRule};
 use crate::walk::{closed_form_drift, walk, walk_cached, Cadence, Landing, PathModel, PathTotals};
 
 /// World-fixed probe points for each cascade, placed in the configured camera's slice and,
@@ -204,54 +205,48 @@ fn walk_without_probes<P: Borrow<CameraPose>>(rig: &Rig, poses: impl IntoIterato
     totals
 }
 
-/// The lower and upper light-space bounds of the 4 corners of a slice's cap at depth `z`, bit
-/// for bit the bounds of [`LightPose::point`] at `(±tanH, ±tanV, z)`: a corner is
-/// `((p + F·z) + R·(sx·z)) + U·(sy·z)` per axis, `sx·z` is `±(tanH·z)` exactly, and rounded
-/// addition is monotone in each operand, so the smallest corner adds the two negative terms
-/// and the largest the two positive ones (`x + (−y)` is `x − y` exactly).
-#[inline]
-fn cap_bounds(lp: &LightPose, th: f64, tv: f64, z: f64) -> (DVec2, DVec2) {
-    let axis = lp.position + lp.forward * z;
-    let r = (lp.right * th).abs();
-    let u = (lp.up * tv).abs();
-    (axis - r - u, axis + r + u)
-}
+/// Frames per pass of [`walk_axis_centred`] at most: their light-space camera frames and
+/// drifts are held (a few tens of KiB), so a path of any length takes the same memory.
+const AXIS_CHUNK: usize = 512;
 
 /// [`walk_without_probes`] for windows centred on the view axis (every sphere fit): each
 /// cascade's texel size is fixed, so every frame pair has the closed-form drift and no size
 /// change, the two snap modes share the window centre in texels, and the slice corners'
-/// extremes come from the two caps' bounds ([`cap_bounds`]): what [`Rig::window_in`],
+/// extremes come from the two caps' bounds (see [`AxisWalk::frames`]): what [`Rig::window_in`],
 /// [`crate::fitting::Window::centred`] and `RigPath::cover` compute, bit for bit, with
 /// every per-cascade constant (texel size, the caps' image slopes times depth, the snap
 /// anchor in texels) taken out of the frame loop.
+///
+/// The frames go in chunks (of [`AXIS_CHUNK`] at most): the light-space camera frame of each once, then
+/// cascade by cascade a tight loop over the chunk's frames (its coverage margins and both
+/// modes' drifts; every value by the operations of the frame-by-frame walk), then the drifts
+/// added to the totals in the walk's order (frame by frame, cascade by cascade), so each sum
+/// is the same sum. Minima, maxima and counts are kept per cascade in frame order, as before.
+/// When a chunk's camera axes do not change (a strafe, a dolly, a still camera: every frame
+/// the same bits) the axes' products with each cascade's depths and slopes are computed once
+/// per chunk: the same products.
 fn walk_axis_centred<P: Borrow<CameraPose>>(
     rig: &Rig,
     centre_depth: &[f64],
     poses: impl IntoIterator<Item = P>,
 ) -> [PathTotals; 2] {
-    struct Cascade {
-        texel: DVec2,
-        depth: f64,
-        near: f64,
-        far: f64,
-        /// `tanH·z` and `tanV·z` at the near and the far cap.
-        slopes: [(f64, f64); 2],
-        /// The snap anchor in texels (added to both origins) when it is not zero.
-        anchor_texels: Option<DVec2>,
-        /// Each mode's window origin in the previous frame.
-        prev: Option<[DVec2; 2]>,
-    }
     let m = rig.cascade_count();
     let n = rig.resolution as f64;
-    let half = DVec2::splat(0.5 * n);
-    let anchor = rig.scheme.snap_anchor;
-    let snap = rig.scheme.snaps.then_some(rig.snap_rule);
     let (th, tv) = (rig.lens.tan_h, rig.lens.tan_v);
-    let mut cascades: Vec<Cascade> = (0..m)
+    let anchor = rig.scheme.snap_anchor;
+    let walk = AxisWalk {
+        rig,
+        n,
+        half: DVec2::splat(0.5 * n),
+        anchored: anchor != DVec2::ZERO,
+        anchor,
+    };
+    let mut cascades: Vec<AxisCascade> = (0..m)
         .map(|i| {
             let s = &rig.slices[i];
             let texel = DVec2::splat(rig.sphere_side[i]) / n;
-            Cascade {
+            AxisCascade {
+                i,
                 texel,
                 depth: centre_depth[i],
                 near: s.near,
@@ -259,29 +254,164 @@ fn walk_axis_centred<P: Borrow<CameraPose>>(
                 slopes: [(th * s.near, tv * s.near), (th * s.far, tv * s.far)],
                 anchor_texels: (anchor != DVec2::ZERO).then(|| anchor / texel),
                 prev: None,
+                prev_whole: false,
             }
         })
         .collect();
     let mut totals = [PathTotals::new(true, m), PathTotals::new(false, m)];
-    for pose in poses {
-        let lp = LightPose::new(&rig.light, pose.borrow());
-        for (i, c) in cascades.iter_mut().enumerate() {
+    let mut poses = poses.into_iter();
+    // A short path takes one chunk of its own length.
+    let chunk = poses.size_hint().0.clamp(16, AXIS_CHUNK);
+    let mut lps: Vec<LightPose> = Vec::with_capacity(chunk);
+    // Each mode's squared drifts per cascade, in frame order (none for the path's first frame).
+    let mut drift: [Vec<Vec<f64>>; 2] = [0, 1].map(|_| (0..m).map(|_| Vec::with_capacity(chunk)).collect());
+    let mut first = true;
+    loop {
+        lps.clear();
+        lps.extend(
+            poses
+                .by_ref()
+                .take(chunk)
+                .map(|p| LightPose::new(&rig.light, p.borrow())),
+        );
+        let f = lps.len();
+        if f == 0 {
+            break;
+        }
+        let fixed = same_axes(&lps);
+        let [ds, du] = &mut drift;
+        for (c, (ds, du)) in cascades.iter_mut().zip(ds.iter_mut().zip(du.iter_mut())) {
+            ds.clear();
+            du.clear();
+            let out = [ds, du];
+            match rig.scheme.snaps.then_some(rig.snap_rule) {
+                // `SnapRule::apply` of this rule is the rounding alone (x / 1 and x · 1 are x).
+                Some(SnapRule {
+                    mode: SnapMode::Round,
+                    step_texels: 1,
+                }) => walk.frames(c, &lps, fixed, round_half_away, &mut totals, out),
+                Some(rule) => walk.frames(c, &lps, fixed, |x| rule.apply(x), &mut totals, out),
+                None => walk.frames(c, &lps, fixed, |x| x, &mut totals, out),
+            }
+        }
+        // The pairs in the frame-by-frame walk's order; the first frame of the path has none.
+        for t in 0..f - usize::from(first) {
+            for (tot, drift) in totals.iter_mut().zip(&drift) {
+                for d in drift {
+                    tot.closed_pair(0.0, d[t]);
+                }
+            }
+        }
+        first = false;
+    }
+    totals
+}
+
+/// Whether every frame of `lps` has the first one's camera axes in light space, bit for bit.
+fn same_axes(lps: &[LightPose]) -> bool {
+    let bits = |l: &LightPose| [l.forward, l.right, l.up].map(|v| [v.x.to_bits(), v.y.to_bits()]);
+    let a = bits(&lps[0]);
+    lps.iter().all(|l| bits(l) == a)
+}
+
+/// What [`walk_axis_centred`]'s cascades share.
+struct AxisWalk<'a> {
+    rig: &'a Rig,
+    n: f64,
+    half: DVec2,
+    anchored: bool,
+    anchor: DVec2,
+}
+
+/// One cascade of [`walk_axis_centred`].
+struct AxisCascade {
+    i: usize,
+    texel: DVec2,
+    depth: f64,
+    near: f64,
+    far: f64,
+    /// `tanH·z` and `tanV·z` at the near and the far cap.
+    slopes: [(f64, f64); 2],
+    /// The snap anchor in texels (added to both origins) when it is not zero.
+    anchor_texels: Option<DVec2>,
+    /// Each mode's window origin in the previous frame.
+    prev: Option<[DVec2; 2]>,
+    /// Whether the previous frame's snapped origin was a whole number below 2^51.
+    prev_whole: bool,
+}
+
+/// Window centres in texels below this snap to whole numbers whose differences are exact.
+const WHOLE_BELOW: f64 = (1u64 << 50) as f64;
+
+impl AxisWalk<'_> {
+    /// Cascade `c` over the frames `lps` (in order): each frame's coverage margins (and, when
+    /// some corner may lie outside, the per-corner test) into `totals`, and each mode's squared
+    /// drift against the frame before pushed to `drift[mode]` (none for the path's first
+    /// frame). `snap` is the snap rule's `apply`; `fixed` that every frame has the first
+    /// one's axes.
+    #[inline(always)]
+    fn frames(
+        &self,
+        c: &mut AxisCascade,
+        lps: &[LightPose],
+        fixed: bool,
+        snap: impl Fn(f64) -> f64,
+        totals: &mut [PathTotals; 2],
+        drift: [&mut Vec<f64>; 2],
+    ) {
+        let (n, half, i) = (self.n, self.half, c.i);
+        let (sn, sf) = (c.slopes[0], c.slopes[1]);
+        // The products of the axes that do not change (`fixed`): the window centre's and the
+        // caps' offsets along the view axis, and the caps' half-extents.
+        let a0 = &lps[0];
+        let hoisted = fixed.then(|| {
+            (
+                a0.forward * c.depth,
+                a0.forward * c.near,
+                a0.forward * c.far,
+                (a0.right * sn.0).abs(),
+                (a0.up * sn.1).abs(),
+                (a0.right * sf.0).abs(),
+                (a0.up * sf.1).abs(),
+            )
+        });
+        let [ds, du] = drift;
+        // Whether a snapped origin is a whole number whenever the centre in texels is below
+        // `WHOLE_BELOW`: snapping gives whole multiples of the rule's step, and half an even
+        // resolution is whole (a snap anchor is not).
+        let whole_snaps = self.rig.scheme.snaps && self.rig.resolution % 2 == 0 && c.anchor_texels.is_none();
+        for lp in lps {
+            let (fc, fnear, ffar, rn, un, rf, uf) = match hoisted {
+                Some(h) => h,
+                None => (
+                    lp.forward * c.depth,
+                    lp.forward * c.near,
+                    lp.forward * c.far,
+                    (lp.right * sn.0).abs(),
+                    (lp.up * sn.1).abs(),
+                    (lp.right * sf.0).abs(),
+                    (lp.up * sf.1).abs(),
+                ),
+            };
             // The window centre in texels (`Rig::centred`, `Window::centred`), shared by the
             // modes; snapped, it is rounded on the rule's grid.
-            let centre = lp.position + lp.forward * c.depth;
-            let centred = if anchor == DVec2::ZERO { centre } else { centre - anchor };
+            let centre = lp.position + fc;
+            let centred = if self.anchored { centre - self.anchor } else { centre };
             let ct = centred / c.texel;
-            let snapped = match snap {
-                Some(rule) => DVec2::new(rule.apply(ct.x), rule.apply(ct.y)),
-                None => ct,
-            };
+            let snapped = DVec2::new(snap(ct.x), snap(ct.y));
             let mut origins = [snapped - half, ct - half];
             if let Some(a) = c.anchor_texels {
                 origins = origins.map(|o| o + a);
             }
-            // The slice corners' extremes, in texels (`CornerTexels::new` of their bounds).
-            let (lo_n, hi_n) = cap_bounds(&lp, c.slopes[0].0, c.slopes[0].1, c.near);
-            let (lo_f, hi_f) = cap_bounds(&lp, c.slopes[1].0, c.slopes[1].1, c.far);
+            // The slice corners' extremes, in texels: the lower and upper bounds of each cap's
+            // 4 corners, bit for bit those of `LightPose::point` at `(±tanH, ±tanV, z)` (a
+            // corner is `((p + F·z) + R·(sx·z)) + U·(sy·z)` per axis, `sx·z` is `±(tanH·z)`
+            // exactly, and rounded addition is monotone in each operand, so the smallest corner
+            // adds the two negative terms and the largest the two positive ones; `x + (−y)` is
+            // `x − y` exactly), then divided as `CornerTexels::new` divides them.
+            let (axis_n, axis_f) = (lp.position + fnear, lp.position + ffar);
+            let (lo_n, hi_n) = (axis_n - rn - un, axis_n + rn + un);
+            let (lo_f, hi_f) = (axis_f - rf - uf, axis_f + rf + uf);
             let (lo, hi) = (lo_n.min(lo_f) / c.texel, hi_n.max(hi_f) / c.texel);
             for (k, o) in origins.iter().enumerate() {
                 let tot = &mut totals[k];
@@ -291,20 +421,29 @@ fn walk_axis_centred<P: Borrow<CameraPose>>(
                     let w = Window {
                         texel: c.texel,
                         origin_texels: *o,
-                        resolution: rig.resolution,
+                        resolution: self.rig.resolution,
                     };
-                    for corner in lp.corners(&rig.lens, c.near, c.far) {
+                    for corner in lp.corners(&self.rig.lens, c.near, c.far) {
                         tot.corner(i, w.texel_coords(corner), n, (corner / c.texel).abs().max_element());
                     }
                 }
-                if let Some(p) = &c.prev {
-                    tot.closed_pair(0.0, closed_form_drift(p[k], *o));
-                }
+            }
+            // Snapped origins that are whole numbers below 2^51 (rounded centres below 2^50
+            // minus an even resolution's half) differ by a whole number exactly, which wraps
+            // to +0.0: `closed_form_drift` of two such origins is +0.0.
+            let whole = whole_snaps && ct.x.abs() < WHOLE_BELOW && ct.y.abs() < WHOLE_BELOW;
+            if let Some(p) = &c.prev {
+                ds.push(if whole && c.prev_whole {
+                    0.0
+                } else {
+                    closed_form_drift(p[0], origins[0])
+                });
+                du.push(closed_form_drift(p[1], origins[1]));
             }
             c.prev = Some(origins);
+            c.prev_whole = whole;
         }
     }
-    totals
 }
 
 /// The fast coverage test of cascade `i`'s window `w` (`n` texels a side) over its slice
@@ -674,6 +813,64 @@ impl PathModel for RigPath<'_> {
                 (o + DVec2::new(floor_exact(s.x), floor_exact(s.y)) + 0.5) * t
             }));
         }
+    }
+
+    /// S4 from the sampled texels `k = ⌊x − o⌋` (per axis, `x` a probe's coordinate in texels,
+    /// `o` the window origin) instead of their centres `(o + k + ½)·T`: a centre moves by
+    /// `(Δo + Δk)·T`, so the kernel's test `|Δcentre| / T ≥ ½` is `|Δo + Δk| ≥ ½` up to the
+    /// rounding of the centres, below 1e-7 texel while every `|x| + |o| < 2^24`. When `Δo` is
+    /// more than 1e-6 from a half-integer on both axes, exactly one whole `Δk` per axis keeps
+    /// `|Δo + Δk|` below ½ (`−round(Δo)`), every other one is more than 1e-6 above it, and the
+    /// kernel decides every probe on its sure path (more than 1e-9 from ½): a probe flips
+    /// exactly when some axis' `Δk` is not that one. The same `k` as `land_centres` (one
+    /// subtraction and the branch-free floor), kept in place of the centres; no centre, no
+    /// product. Otherwise (a texel size that is not the probes', coordinates too large, a move
+    /// near half a texel) None.
+    fn floor_flips(
+        &self,
+        i: usize,
+        p: &RigWindow,
+        w: &RigWindow,
+        held: bool,
+        floors: &mut Vec<DVec2>,
+    ) -> Option<(usize, usize)> {
+        const LIMIT: f64 = (1u64 << 24) as f64;
+        const MARGIN: f64 = 1e-6;
+        let (a, b) = (&p.window, &w.window);
+        let (texel, scaled) = self.probe_texels.get(i)?.get()?;
+        if !self.fixed || *texel != a.texel || *texel != b.texel || crate::walk::flip_divisor(b.texel).is_none() {
+            return None;
+        }
+        let (u_max, _) = *self.probe_exact[i].get_or_init(|| exact_limit(scaled));
+        let small = |o: DVec2| u_max + o.x.abs().max(o.y.abs()) < LIMIT && o.is_finite();
+        let (oa, ob) = (a.origin_texels, b.origin_texels);
+        if !(small(oa) && small(ob)) {
+            return None;
+        }
+        let d = ob - oa;
+        let stay = DVec2::new(-round_half_away(d.x), -round_half_away(d.y));
+        let r = d + stay;
+        if !(r.x.abs() < 0.5 - MARGIN && r.y.abs() < 0.5 - MARGIN) {
+            return None;
+        }
+        if !held {
+            floors.clear();
+            floors.extend(scaled.iter().map(|u| {
+                let s = *u - oa;
+                DVec2::new(floor_small(s.x), floor_small(s.y))
+            }));
+        }
+        if floors.len() != scaled.len() {
+            return None;
+        }
+        let mut flipped = 0usize;
+        for (k, u) in floors.iter_mut().zip(scaled) {
+            let s = *u - ob;
+            let kb = DVec2::new(floor_small(s.x), floor_small(s.y));
+            flipped += usize::from((kb.x != k.x + stay.x) | (kb.y != k.y + stay.y));
+            *k = kb;
+        }
+        Some((flipped, scaled.len()))
     }
 
     /// A snapped window that moved by whole texels: every probe stays on its texel when both

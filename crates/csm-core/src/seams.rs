@@ -245,6 +245,9 @@ struct Group {
 struct RadixQueue {
     last: u64,
     buckets: Vec<Vec<(u64, u32)>>,
+    /// The smallest reading in each bucket (`u64::MAX` when empty): whether the lowest bucket
+    /// holds a due entry is one comparison, not a pass over the bucket every frame.
+    mins: [u64; 65],
     /// Bit b set when bucket b holds entries.
     full: u128,
 }
@@ -254,6 +257,7 @@ impl RadixQueue {
         RadixQueue {
             last: 0,
             buckets: vec![Vec::new(); 65],
+            mins: [u64::MAX; 65],
             full: 0,
         }
     }
@@ -273,6 +277,7 @@ impl RadixQueue {
         debug_assert!(reading >= self.last);
         let b = Self::bucket(self.last, reading);
         self.buckets[b].push((reading, point));
+        self.mins[b] = self.mins[b].min(reading);
         self.full |= 1 << b;
     }
 
@@ -286,10 +291,11 @@ impl RadixQueue {
                 }
                 out.extend(self.buckets[0].drain(..).map(|(_, k)| k));
                 self.full &= !1;
+                self.mins[0] = u64::MAX;
                 continue;
             }
             let b = self.full.trailing_zeros() as usize;
-            let min = self.buckets[b].iter().map(|e| e.0).min().expect("a full bucket");
+            let min = self.mins[b];
             if min > limit {
                 return;
             }
@@ -297,9 +303,11 @@ impl RadixQueue {
             self.last = min;
             let entries = std::mem::take(&mut self.buckets[b]);
             self.full &= !(1 << b);
+            self.mins[b] = u64::MAX;
             for &(r, k) in &entries {
                 let to = Self::bucket(min, r);
                 self.buckets[to].push((r, k));
+                self.mins[to] = self.mins[to].min(r);
                 self.full |= 1 << to;
             }
             // Keep the emptied bucket's allocation.

@@ -32,22 +32,24 @@ pub fn wrap(x: f64) -> f64 {
 }
 
 /// `f64::round` (ties away from zero), bit for bit, without the libm call that baseline x86-64
-/// makes for it: this sits in the innermost shimmer loops.
+/// makes for it: this sits in the innermost shimmer loops (and snaps every window).
+///
+/// For `|x| < 2^52` it needs neither a branch nor an integer conversion: adding and subtracting
+/// 2^52 rounds `|x|` to a whole number (every sum in [2^52, 2^53) is one), one less when that
+/// rounded up gives `⌊|x|⌋`; `|x| − ⌊|x|⌋` is exact, and adding 1 when it is at least ½ rounds
+/// half away from zero; the result carries the sign of x (round(−0.3) is −0.0).
 #[inline]
 pub(crate) fn round_half_away(x: f64) -> f64 {
+    const TWO_52: f64 = 4_503_599_627_370_496.0;
+    let a = x.abs();
     // At 2^52 and beyond every double is an integer (and NaN/inf fall through too).
-    if x.is_nan() || x.abs() >= 4_503_599_627_370_496.0 {
+    if a.is_nan() || a >= TWO_52 {
         return x.round();
     }
-    // The i64 conversion truncates exactly here, and `x - t` is exact (its fractional part).
-    let t = (x as i64) as f64;
-    let r = match x - t {
-        d if d >= 0.5 => t + 1.0,
-        d if d <= -0.5 => t - 1.0,
-        _ => t,
-    };
-    // round(-0.3) is -0.0: the result always carries the sign of x.
-    r.copysign(x)
+    let r = (a + TWO_52) - TWO_52;
+    let fl = if r > a { r - 1.0 } else { r };
+    let up = if a - fl >= 0.5 { 1.0 } else { 0.0 };
+    (fl + up).copysign(x)
 }
 
 /// `f64::floor`, bit for bit, without the libm call that baseline x86-64 makes for it: it

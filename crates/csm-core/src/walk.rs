@@ -117,6 +117,22 @@ pub trait PathModel {
     fn land_centres(&self, _i: usize, _w: &Self::Win, _out: &mut Vec<DVec2>) {
         unreachable!("land_centres without lands_centres")
     }
+    /// S4 of cascade `i` between `p` (the same cascade's window one frame earlier) and `w` from
+    /// the texels the probes sample, for a model that [`PathModel::lands_centres`]:
+    /// `Some((flipped, served))`, the counts [`centre_flip_kernel`] gives for the centres of
+    /// both windows, bit for bit, with `floors` then holding `w`'s sampled texels (whatever the
+    /// model keeps; `p`'s on entry when `held`). None, with `floors` untouched, when the model
+    /// cannot tell this pair's flips that way (the walk then lands the centres).
+    fn floor_flips(
+        &self,
+        _i: usize,
+        _p: &Self::Win,
+        _w: &Self::Win,
+        _held: bool,
+        _floors: &mut Vec<DVec2>,
+    ) -> Option<(usize, usize)> {
+        None
+    }
     /// When every probe of cascade `i` lands in `w` on the texel centre it landed on in `p` (the
     /// same cascade's window one frame earlier, `p` and `w` different), bit for bit: the number
     /// of probes (all served). None unless known without landing them. Called only when
@@ -488,7 +504,7 @@ fn moved_half_texel(d: DVec2, texel: DVec2, inv: Option<DVec2>) -> bool {
 /// `1 / texel` when the multiplication shortcut of [`moved_half_texel`] is exact in its
 /// decisions: positive texel sizes whose reciprocals are normal and far from overflow.
 #[inline]
-fn flip_divisor(texel: DVec2) -> Option<DVec2> {
+pub(crate) fn flip_divisor(texel: DVec2) -> Option<DVec2> {
     let inv = DVec2::ONE / texel;
     let ok = |t: f64, i: f64| t > 0.0 && (1e-300..1e300).contains(&i);
     (ok(texel.x, inv.x) && ok(texel.y, inv.y)).then_some(inv)
@@ -616,6 +632,8 @@ enum Held {
     Nothing,
     Landings,
     Centres,
+    /// What [`PathModel::floor_flips`] keeps (in `prev_centres`).
+    Floors,
 }
 
 /// The one loop along a path: for every frame (in order) and every cascade, calls
@@ -731,6 +749,8 @@ where
             let mut landed = Held::Nothing;
             // With centres: every probe's centre is unchanged (the number of probes).
             let mut unchanged = None;
+            // With centres: S4 told from the sampled texels (`PathModel::floor_flips`).
+            let mut floor_flipped = None;
             if let Some(p) = &st.prev[i] {
                 let (pt, wt) = (M::texel(p), M::texel(&w));
                 // x / x is exactly 1, so an unchanged size gives exactly 0 without the divisions.
@@ -763,6 +783,12 @@ where
                         } else {
                             Held::Nothing
                         };
+                    } else if let Some(f) =
+                        model.floor_flips(i, p, &w, st.prev_held[i] == Held::Floors, &mut st.prev_centres[i])
+                    {
+                        // The flips from the sampled texels, `w`'s kept in place.
+                        floor_flipped = Some(f);
+                        landed = Held::Floors;
                     } else {
                         if st.prev_held[i] != Held::Centres {
                             st.prev_centres[i].clear();
@@ -797,6 +823,8 @@ where
                     Some(ms) => {
                         let (flipped, served) = if let Some(n) = unchanged {
                             (0, n)
+                        } else if let Some(f) = floor_flipped {
+                            f
                         } else if landed == Held::Centres {
                             centre_flip_kernel(M::texel(&w), &st.prev_centres[i], &st.current_centres)
                         } else {
@@ -861,7 +889,7 @@ where
                         }
                         Held::Centres if unchanged.is_some() => {}
                         Held::Centres => std::mem::swap(&mut st.prev_centres[i], &mut st.current_centres),
-                        Held::Nothing => {}
+                        Held::Floors | Held::Nothing => {}
                     }
                     st.prev_held[i] = landed;
                 }
