@@ -405,6 +405,50 @@ pub fn intersection_range(a: &Hexahedron, b: &Hexahedron, dir: DVec3) -> Option<
     }
 }
 
+/// The largest value of `dir . p` over the intersection of two convex hexahedra:
+/// `intersection_range(a, b, dir).map(|(_, hi)| hi)`, bit for bit, with fewer inside tests.
+/// [`intersection_range`]'s upper end is the largest value among its candidates (vertices of
+/// one solid inside the other, edge-plane crossings inside both) that pass their inside tests,
+/// whatever the order they are met in: a passing candidate above the running maximum always
+/// widens it, and one at or below it never raises it. The same candidates in the same order
+/// and operations, but only a candidate above the running maximum is tested (there, one below
+/// the running minimum is tested too).
+pub fn intersection_max(a: &Hexahedron, b: &Hexahedron, dir: DVec3) -> Option<f64> {
+    let scale = a.scale().max(b.scale());
+    let size = a.extent().max(b.extent()).max(1e-300);
+    let eps = 1e-9 * size + 4.0 * f64::EPSILON * scale;
+    let mut hi = f64::NEG_INFINITY;
+    let mut found = false;
+    for (s, o) in [(a, b), (b, a)] {
+        for v in &s.vertices {
+            let value = dir.dot(*v);
+            if (value > hi || !found && value == hi) && o.contains(*v, eps) {
+                (hi, found) = (hi.max(value), true);
+            }
+        }
+        for &(i, j) in &HEX_EDGES {
+            let p = s.vertices[i];
+            let q = s.vertices[j];
+            for pl in &o.planes {
+                let denom = pl.normal.dot(q - p);
+                if denom.abs() <= 1e-300 {
+                    continue;
+                }
+                let t = (pl.offset - pl.normal.dot(p)) / denom;
+                if !(0.0..=1.0).contains(&t) {
+                    continue;
+                }
+                let x = p + (q - p) * t;
+                let value = dir.dot(x);
+                if (value > hi || !found && value == hi) && o.contains(x, eps) && s.contains(x, eps) {
+                    (hi, found) = (hi.max(value), true);
+                }
+            }
+        }
+    }
+    found.then_some(hi)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -457,5 +501,41 @@ mod tests {
         // Behind the camera: nothing.
         let behind = Aabb::new(DVec3::new(-1.0, -1.0, 5.0), DVec3::new(1.0, 1.0, 6.0));
         assert!(intersection_range(&frustum, &behind.hexahedron(), pose.forward).is_none());
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig { cases: 256, ..Default::default() })]
+
+        /// The upper end alone equals `intersection_range`'s, bit for bit (and both miss
+        /// together): camera slices against boxes, in both orders, along random directions,
+        /// with coordinates on a coarse grid in half the cases (features touching: ties).
+        #[test]
+        fn intersection_max_is_the_upper_end_of_intersection_range(
+            eye in proptest::array::uniform3(-20.0..20.0f64),
+            look in proptest::array::uniform3(-1.0..1.0f64),
+            fov in 10.0..120.0f64,
+            aspect in 0.5..2.5f64,
+            (near, far) in (0.05..30.0f64, 1.0..200.0f64),
+            corner in proptest::array::uniform3(-60.0..60.0f64),
+            size in proptest::array::uniform3(0.0..80.0f64),
+            dir in proptest::array::uniform3(-1.0..1.0f64),
+            grid in proptest::bool::ANY,
+        ) {
+            let snap = |x: f64| if grid { (x / 4.0).round() * 4.0 } else { x };
+            let v = |a: [f64; 3]| DVec3::new(snap(a[0]), snap(a[1]), snap(a[2]));
+            let Some(pose) = CameraPose::look_to(v(eye), DVec3::from_array(look), DVec3::Y) else {
+                return Ok(());
+            };
+            let lens = Lens::new(fov.to_radians(), aspect);
+            let slice = pose.slice_hexahedron(&lens, near, near + far);
+            let lo = v(corner);
+            let boxed = Aabb::new(lo, lo + v(size)).hexahedron();
+            let dir = DVec3::from_array(dir);
+            for (a, b) in [(&slice, &boxed), (&boxed, &slice)] {
+                let max = intersection_max(a, b, dir).map(f64::to_bits);
+                let range = intersection_range(a, b, dir).map(|(_, hi)| hi.to_bits());
+                proptest::prop_assert_eq!(max, range);
+            }
+        }
     }
 }
