@@ -529,26 +529,27 @@ fn select(
     count: usize,
     only: Option<(usize, usize)>,
 ) -> ([[f64; 3]; 2], [u128; 2]) {
+    let wanted = |kind: usize| only.is_none_or(|(k, _)| k == kind);
     // Per kind (plain, contrast): the weight of groups by the bucket of their lowest and of
-    // their highest value.
-    let mut starts = [vec![0u128; count], vec![0u128; count]];
-    let mut ends = [vec![0u128; count], vec![0u128; count]];
+    // their highest value (empty for a kind not wanted).
+    let mut starts = [0, 1].map(|k| if wanted(k) { vec![0u128; count] } else { Vec::new() });
+    let mut ends = starts.clone();
     for &(p, s) in pools {
         let s = s as u128;
         for gr in &p.groups {
             let (a, z) = (buckets.key(gr.vlo), buckets.key(gr.vhi));
-            let n = (gr.hi - gr.lo) as u128 * s;
-            let c = gr.cw as u128 * s;
-            starts[0][a] += n;
-            ends[0][z] += n;
-            starts[1][a] += c;
-            ends[1][z] += c;
+            for (kind, w) in [(gr.hi - gr.lo) as u128, gr.cw as u128].into_iter().enumerate() {
+                if let (Some(st), Some(en)) = (starts[kind].get_mut(a), ends[kind].get_mut(z)) {
+                    *st += w * s;
+                    *en += w * s;
+                }
+            }
         }
     }
     let mut out = [[0.0; 3]; 2];
     let mut totals = [0u128; 2];
     for kind in 0..2 {
-        if only.is_some_and(|(k, _)| k != kind) {
+        if !wanted(kind) {
             continue;
         }
         let total: u128 = starts[kind].iter().sum();
