@@ -525,3 +525,134 @@ fn optimize_group(base: &Config, rows: &[Row], group: &[usize], objective: Summa
         evaluations: evaluations.load(Ordering::Relaxed),
     })))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::metric::SUMMARY;
+    use proptest::prelude::*;
+    use std::sync::OnceLock;
+
+    /// The default scene at a small screen, and variants that take the walk's other ways:
+    /// without snapping, a box fit (probes), an engine preset with free splits, a moving
+    /// light, the binary32 pipeline, cached cascades, and no scene geometry (bounds only).
+    fn points() -> &'static [Config] {
+        static POINTS: OnceLock<Vec<Config>> = OnceLock::new();
+        POINTS.get_or_init(|| {
+            let base = include_str!("../../../configs/default.toml")
+                .replace("width = 1920", "width = 320")
+                .replace("height = 1080", "height = 180")
+                .replace("frames = 240", "frames = 40");
+            let variants = [
+                base.clone(),
+                base.replace("snap = true", "snap = false"),
+                base.replace("fit = \"sphere\"\n", "fit = \"aabb\"\n"),
+                base.replace("[shadow]\n", "[shadow]\npreset = \"bevy\"\n"),
+                base.replace(
+                    "step = 0.05\n",
+                    "step = 0.05\nlight_path = \"sun\"\nsun_azimuth_step_deg = 0.05\n",
+                ),
+                base.replace("[shadow]\n", "[shadow]\nprecision = \"f32\"\n"),
+                base.replace("[shadow]\n", "[shadow]\nupdate_every = [1, 2, 2, 4]\n"),
+                bounds_only(&base),
+            ];
+            variants
+                .iter()
+                .map(|t| Config::from_toml_str(t, "test.toml", None).unwrap_or_else(|e| panic!("{e}\n{t}")))
+                .collect()
+        })
+    }
+
+    /// The config without its ground and boxes: bounds only, no screen statistics.
+    fn bounds_only(text: &str) -> String {
+        let mut out = Vec::new();
+        let mut skip = 0;
+        for l in text.lines() {
+            if l.starts_with("[[scene.box]]") {
+                skip = 3;
+            }
+            if skip > 0 {
+                skip -= 1;
+                continue;
+            }
+            out.push(if l.starts_with("ground =") { "" } else { l });
+        }
+        out.join("\n")
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(40))]
+
+        /// On random split vectors of every variant, for every metric of the registry as the
+        /// objective: the lighter evaluation gives the objective, the three values the
+        /// acceptance reads, and so the search's cost, of the full analysis, bit for bit.
+        #[test]
+        fn the_search_evaluation_equals_the_full_analysis(
+            k in 0usize..8,
+            raw in prop::collection::vec(0.0005f64..0.9995, 3),
+        ) {
+            let point = &points()[k];
+            let mut fractions = raw.clone();
+            fractions.sort_by(f64::total_cmp);
+            prop_assume!(valid(&fractions));
+            let full = evaluate(point, &fractions);
+            let setting = Setting::plain(0.0, 4, 2048, point.shadow.fit);
+            let mut light: Vec<(Reads, Option<Summary>)> = Vec::new();
+            for def in SUMMARY {
+                let objective = SummaryMetric::named(def.name);
+                let r = reads(objective);
+                let at = match light.iter().position(|(x, _)| *x == r) {
+                    Some(i) => i,
+                    None => {
+                        light.push((r, evaluate_for_cost(point, &fractions, r)));
+                        light.len() - 1
+                    }
+                };
+                let (full, light) = match (&full, &light[at].1) {
+                    (Some(f), Some(l)) => (f, l),
+                    (None, None) => continue,
+                    other => panic!("valid for one and not the other: {other:?}"),
+                };
+                let name = def.name;
+                prop_assert_eq!(light.cascades_needed, full.cascades_needed, "{} {:?}", name, fractions);
+                prop_assert_eq!(light.coverage_violations, full.coverage_violations, "{}", name);
+                prop_assert_eq!(light.snapped_drift().to_bits(), full.snapped_drift().to_bits(), "{}", name);
+                prop_assert_eq!(
+                    objective.value(light).to_bits(),
+                    objective.value(full).to_bits(),
+                    "{} on variant {}: {} vs {}",
+                    name,
+                    k,
+                    objective.value(light),
+                    objective.value(full)
+                );
+                prop_assert_eq!(
+                    cost(&setting, light, objective).to_bits(),
+                    cost(&setting, full, objective).to_bits(),
+                    "{}",
+                    name
+                );
+            }
+        }
+    }
+
+    /// The lighter evaluation leaves out what the search does not read: the render-cost
+    /// counts and, for a screen objective, every other screen statistic (so a test that
+    /// compared only equal values could not pass by computing everything).
+    #[test]
+    fn the_search_evaluation_leaves_out_the_cost_counts_and_other_statistics() {
+        let point = &points()[0];
+        let fractions = [0.1, 0.3, 0.5];
+        let full = evaluate(point, &fractions).expect("valid");
+        let light = evaluate_for_cost(point, &fractions, Reads::Screen(Statistic::VisibleP95)).expect("valid");
+        assert!(full.cost.counts.is_some());
+        assert_eq!(light.cost, crate::analysis::cost::CostSummary::default());
+        let (f, l) = (full.screen.expect("geometry"), light.screen.expect("geometry"));
+        assert_eq!(l.visible_p95, f.visible_p95);
+        assert!(f.visible_p95 > 0.0 && f.aliasing_p95 > 0.0);
+        assert_eq!(l.aliasing_p95, 0.0);
+        let path = evaluate_for_cost(point, &fractions, Reads::Path).expect("valid");
+        assert!(path.screen.is_none());
+        assert_eq!(path.max_aliasing, full.max_aliasing);
+    }
+}
