@@ -18,6 +18,7 @@ use glam::DVec2;
 
 pub mod cost;
 pub mod ground_truth;
+pub(crate) mod search;
 pub(crate) mod views_truth;
 
 /// Which optional parts to compute. The summary metrics are always computed and never depend
@@ -765,7 +766,7 @@ pub(crate) fn analyze_with_progress(
     on_frames: &(dyn Fn(u64) + Sync),
 ) -> Analysis {
     let level = level_screen(config);
-    let mut a = analyze_camera(config, opts, on_frames, level.is_none());
+    let mut a = analyze_camera(config, opts, on_frames, level.is_none(), Detail::Full);
     if let Some(level) = level {
         a.summary.screen = Some(level.screen);
         a.summary.band_pixel_share = level.band_pixel_share;
@@ -967,6 +968,18 @@ pub(crate) fn warm_views(config: &Config, rays_only: bool) {
     }
 }
 
+/// How much of a setting [`analyze_camera`] measures.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Detail {
+    /// Everything `opts` asks for: what every output reads.
+    Full,
+    /// What the free-split search's cost reads ([`search`]): no render-cost counts (the
+    /// summary's `cost` is left at its default), no preset report, and of the screen statistics
+    /// only `screen` (None: no screen statistics at all). Every other summary field is
+    /// computed as for [`Detail::Full`].
+    Search { screen: Option<screen::Statistic> },
+}
+
 /// [`analyze_with_progress`] for `[camera]` alone: every metric of the camera and its path.
 /// `camera_screen`: measure `[camera]`'s screen statistics (a level of views replaces them
 /// with its pooled ones, so only the cascades' pixel shares are counted then).
@@ -975,6 +988,7 @@ fn analyze_camera(
     opts: &AnalysisOptions,
     on_frames: &(dyn Fn(u64) + Sync),
     camera_screen: bool,
+    detail: Detail,
 ) -> Analysis {
     let rig = rig(config);
     let range = analysed_range(config, rig.as_ref());
@@ -1019,7 +1033,8 @@ fn analyze_camera(
     };
     let vis = visibility.as_deref();
     // Light depth ranges: always for a preset (its report needs them), else when asked for.
-    let depths = (opts.light_depth || config.shadow.preset.is_some()).then(|| {
+    let full = detail == Detail::Full;
+    let depths = (opts.light_depth || (full && config.shadow.preset.is_some())).then(|| {
         (frame0.windows.iter().enumerate())
             .map(|(i, w)| rig.light_depth(i, &frame0.light, w, &config.scene))
             .collect::<Vec<_>>()
@@ -1031,21 +1046,33 @@ fn analyze_camera(
             .as_ref()
             .map(|t| if config.shadow.snap { &t.snapped } else { &t.unsnapped }),
     );
-    let cost_means = (opts.cost_means && cost::means_measurable(config, Some(&rig)))
-        .then(|| cost::path_means(config, &rig, &cadence(config, &rig)));
-    let (cascade_costs, cost) = cost::measure(config, &rig, &frame0.light, &frame0.windows, vis, cost_means);
+    let (cascade_costs, cost) = if full {
+        let cost_means = (opts.cost_means && cost::means_measurable(config, Some(&rig)))
+            .then(|| cost::path_means(config, &rig, &cadence(config, &rig)));
+        cost::measure(config, &rig, &frame0.light, &frame0.windows, vis, cost_means)
+    } else {
+        (
+            vec![cost::CascadeCost::default(); rig.cascade_count()],
+            cost::CostSummary::default(),
+        )
+    };
     let parts = CameraParts {
         config,
         rig: &rig,
         aggregates: &aggregates,
         walks: &walks,
-        screen: vis.map(|v| {
-            if camera_screen {
-                screen::stats(v, &rig.splits, &frame0.texel, visible)
-            } else {
-                screen::cascade_shares_only(v, &rig.splits, &frame0.texel)
-            }
-        }),
+        screen: match detail {
+            Detail::Full => vis.map(|v| {
+                if camera_screen {
+                    screen::stats(v, &rig.splits, &frame0.texel, visible)
+                } else {
+                    screen::cascade_shares_only(v, &rig.splits, &frame0.texel)
+                }
+            }),
+            Detail::Search { screen: which } => vis
+                .zip(which)
+                .map(|(v, which)| search::one_statistic(v, &rig.splits, &frame0.texel, which)),
+        },
         utilization: match (vis, opts.light_depth) {
             (Some(v), true) => texel_utilization(v, &rig, &frame0.light, &frame0.windows),
             _ => vec![0.0; rig.cascade_count()],
@@ -1062,10 +1089,8 @@ fn analyze_camera(
         .map(|(i, w)| parts.cascade(i, w))
         .collect();
     let summary = parts.summary(z_lo, z_hi, memory, cost);
-    let preset = config
-        .shadow
-        .preset
-        .as_ref()
+    let preset = (config.shadow.preset.as_ref())
+        .filter(|_| full)
         .map(|p| crate::presets::report(p, Some(&rig), depths.unwrap_or_default()));
     let Walks {
         snapped,

@@ -1,5 +1,17 @@
 # sweep --optimize-splits on the default scene (28 groups, about 9,400 analyses), paired with
 # the same sweep without the search.
+# SPEED_CALLGRIND=1 adds the instruction counts (valgrind, load-proof; slow) of both, on one
+# thread (RAYON_NUM_THREADS=1); their difference is the search's.
 paired "sweep configs/default.toml --no-plots" "sweep configs/default.toml --optimize-splits --no-plots" -- \
   "$BIN" sweep configs/default.toml --no-plots --quiet --out target/speed/out/optimize-none -- \
   "$BIN" sweep configs/default.toml --optimize-splits --no-plots --quiet --out target/speed/out/optimize
+if [ "${SPEED_CALLGRIND:-0}" = 1 ] && command -v valgrind >/dev/null; then
+  for opt_flag in none --optimize-splits; do
+    opt_args=()
+    [ "$opt_flag" = none ] || opt_args=("$opt_flag")
+    RAYON_NUM_THREADS=1 valgrind --tool=callgrind --callgrind-out-file=target/speed/out/optimize-cg.out \
+      "$BIN" sweep configs/default.toml "${opt_args[@]}" --no-plots --quiet --out target/speed/out/optimize-cg >/dev/null 2>&1
+    opt_ir=$(callgrind_annotate target/speed/out/optimize-cg.out 2>/dev/null | awk '/PROGRAM TOTALS/ { print $1; exit }')
+    speed_row "| ${SPEED_JOB:-} | instructions, sweep --no-plots ${opt_args[*]:-without the search}, one thread (callgrind): $opt_ir | | | | | |"
+  done
+fi

@@ -528,26 +528,40 @@ impl<'a> ViewPass<'a> {
 /// first where that of the groups ending at or below it does. Only the groups reaching into
 /// that range are read, value by value; what lies below it is counted, and the few values in
 /// it are narrowed down and sorted ([`resolve`]).
-fn select(pools: &[(&ViewPass<'_>, u64)], buckets: Buckets, count: usize) -> ([[f64; 3]; 2], [u128; 2]) {
+///
+/// `only`: one `(kind, slot)` (kind 0 plain, 1 contrast; slot 0, 1, 2 for p50, p95, p99) to
+/// resolve, the others left 0 (the free-split search reads one percentile); None for all six.
+/// A value does not depend on which others are resolved: each target's bucket range is found
+/// from the same running sums, which only move forward.
+fn select(
+    pools: &[(&ViewPass<'_>, u64)],
+    buckets: Buckets,
+    count: usize,
+    only: Option<(usize, usize)>,
+) -> ([[f64; 3]; 2], [u128; 2]) {
+    let wanted = |kind: usize| only.is_none_or(|(k, _)| k == kind);
     // Per kind (plain, contrast): the weight of groups by the bucket of their lowest and of
-    // their highest value.
-    let mut starts = [vec![0u128; count], vec![0u128; count]];
-    let mut ends = [vec![0u128; count], vec![0u128; count]];
+    // their highest value (empty for a kind not wanted).
+    let mut starts = [0, 1].map(|k| if wanted(k) { vec![0u128; count] } else { Vec::new() });
+    let mut ends = starts.clone();
     for &(p, s) in pools {
         let s = s as u128;
         for gr in &p.groups {
             let (a, z) = (buckets.key(gr.vlo), buckets.key(gr.vhi));
-            let n = (gr.hi - gr.lo) as u128 * s;
-            let c = gr.cw as u128 * s;
-            starts[0][a] += n;
-            ends[0][z] += n;
-            starts[1][a] += c;
-            ends[1][z] += c;
+            for (kind, w) in [(gr.hi - gr.lo) as u128, gr.cw as u128].into_iter().enumerate() {
+                if let (Some(st), Some(en)) = (starts[kind].get_mut(a), ends[kind].get_mut(z)) {
+                    *st += w * s;
+                    *en += w * s;
+                }
+            }
         }
     }
     let mut out = [[0.0; 3]; 2];
     let mut totals = [0u128; 2];
     for kind in 0..2 {
+        if !wanted(kind) {
+            continue;
+        }
         let total: u128 = starts[kind].iter().sum();
         totals[kind] = total;
         if total == 0 {
@@ -557,6 +571,9 @@ fn select(pools: &[(&ViewPass<'_>, u64)], buckets: Buckets, count: usize) -> ([[
         let (mut lo, mut lo_cum) = (0usize, starts[kind][0]);
         let (mut hi, mut hi_cum) = (0usize, ends[kind][0]);
         for (slot, p) in [50u128, 95, 99].into_iter().enumerate() {
+            if only.is_some_and(|(_, s)| s != slot) {
+                continue;
+            }
             let target = (p * total).div_ceil(100).max(1);
             while lo_cum < target {
                 lo += 1;
@@ -669,7 +686,7 @@ fn own_stats(pass: &ViewPass<'_>, visible: Option<(f64, f64)>) -> ScreenStats {
     let (plain, weighted) = match pass.range {
         Some((lo, hi)) => {
             let count = Buckets::count_for(pass.groups.len());
-            let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, count), count);
+            let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, count), count, None);
             (v[0], v[1])
         }
         None => ([0.0; 3], [0.0; 3]),
@@ -708,6 +725,96 @@ fn own_stats(pass: &ViewPass<'_>, visible: Option<(f64, f64)>) -> ScreenStats {
         visible_z_lo,
         visible_z_hi,
         cascade_pixels: shares(&pass.counts, receivers),
+    }
+}
+
+/// One statistic of per-pixel aliasing in [`ScreenStats`]: what [`statistic`] measures alone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Statistic {
+    AliasingMean,
+    AliasingP50,
+    AliasingP95,
+    AliasingP99,
+    AliasingMax,
+    UndersampledFraction,
+    VisibleMean,
+    VisibleP50,
+    VisibleP95,
+    VisibleP99,
+    VisibleMax,
+}
+
+impl Statistic {
+    /// Every statistic, in [`ScreenStats`]' order.
+    pub const ALL: [Statistic; 11] = [
+        Statistic::AliasingMean,
+        Statistic::AliasingP50,
+        Statistic::AliasingP95,
+        Statistic::AliasingP99,
+        Statistic::AliasingMax,
+        Statistic::UndersampledFraction,
+        Statistic::VisibleMean,
+        Statistic::VisibleP50,
+        Statistic::VisibleP95,
+        Statistic::VisibleP99,
+        Statistic::VisibleMax,
+    ];
+
+    /// Its field of `stats`.
+    pub fn field(self, stats: &mut ScreenStats) -> &mut f64 {
+        match self {
+            Statistic::AliasingMean => &mut stats.aliasing_mean,
+            Statistic::AliasingP50 => &mut stats.aliasing_p50,
+            Statistic::AliasingP95 => &mut stats.aliasing_p95,
+            Statistic::AliasingP99 => &mut stats.aliasing_p99,
+            Statistic::AliasingMax => &mut stats.aliasing_max,
+            Statistic::UndersampledFraction => &mut stats.undersampled_fraction,
+            Statistic::VisibleMean => &mut stats.visible_mean,
+            Statistic::VisibleP50 => &mut stats.visible_p50,
+            Statistic::VisibleP95 => &mut stats.visible_p95,
+            Statistic::VisibleP99 => &mut stats.visible_p99,
+            Statistic::VisibleMax => &mut stats.visible_max,
+        }
+    }
+
+    /// The percentile it is, as `(kind, slot)` of [`select`] (kind 0 plain, 1 contrast-weighted;
+    /// slot 0, 1, 2 for p50, p95, p99); None for a mean, maximum or fraction.
+    fn percentile(self) -> Option<(usize, usize)> {
+        match self {
+            Statistic::AliasingP50 => Some((0, 0)),
+            Statistic::AliasingP95 => Some((0, 1)),
+            Statistic::AliasingP99 => Some((0, 2)),
+            Statistic::VisibleP50 => Some((1, 0)),
+            Statistic::VisibleP95 => Some((1, 1)),
+            Statistic::VisibleP99 => Some((1, 2)),
+            _ => None,
+        }
+    }
+}
+
+/// One statistic of [`stats`] alone, bit for bit the value [`stats`] gives it: the same pass,
+/// and for a percentile only that target resolved (the free-split search reads one statistic
+/// per evaluation).
+pub fn statistic(vis: &Visibility, splits: &[f64], texel: &[f64], which: Statistic) -> f64 {
+    let pass = ViewPass::new(vis, splits, texel, false);
+    if let Some((kind, slot)) = which.percentile() {
+        return match pass.range {
+            Some((lo, hi)) => {
+                let count = Buckets::count_for(pass.groups.len());
+                let (v, _) = select(&[(&pass, 1)], Buckets::new(lo, hi, count), count, Some((kind, slot)));
+                v[kind][slot]
+            }
+            None => 0.0,
+        };
+    }
+    // The rest read the pass's sums, counts and maxima, as [`own_stats`] does.
+    match which {
+        Statistic::AliasingMean if pass.n > 0 => quotient(pass.sum, 0.0, pass.n as f64),
+        Statistic::UndersampledFraction if pass.n > 0 => pass.under as f64 / pass.n as f64,
+        Statistic::VisibleMean if pass.wtotal > 0 => quotient(pass.wsum, 0.0, pass.wtotal as f64),
+        Statistic::AliasingMax => pass.max,
+        Statistic::VisibleMax => pass.wmax,
+        _ => 0.0,
     }
 }
 
@@ -821,7 +928,7 @@ fn pool_passes<'a>(parts: &[PoolPart<'a>], octaves: bool) -> (Pooled, Vec<ViewPa
     let (level_p, totals) = match range {
         Some((lo, hi)) => {
             let count = Buckets::count_for(passes.iter().map(|p| p.groups.len()).sum());
-            select(&pools, Buckets::new(lo, hi, count), count)
+            select(&pools, Buckets::new(lo, hi, count), count, None)
         }
         None => ([[0.0; 3]; 2], [0; 2]),
     };
@@ -1189,6 +1296,68 @@ mod tests {
                 "{} vs {mean}",
                 st.aliasing_mean
             );
+        }
+    }
+
+    /// Each statistic measured alone equals the same field of the full statistics, bit for
+    /// bit, and its weighted percentiles a brute force over every (value, weight) pair: three
+    /// cascades, zero weights among the pixels, pixels before and past the splits, and a
+    /// split range that serves no pixel.
+    #[test]
+    fn one_statistic_alone_equals_the_full_statistics() {
+        let mut next = xorshift(0x6a09_e667_f3bc_c908);
+        for (n, spread) in [(1, 1.0), (40, 0.0), (3000, 4.0), (20000, 30.0)] {
+            let g: Vec<(f64, f64)> = (0..n)
+                .map(|k| (1.0 + k as f64, 0.1 * (spread * next()).exp2()))
+                .collect();
+            let weights: Vec<u32> = (0..n)
+                .map(|_| {
+                    let x = next();
+                    if x < 0.2 {
+                        0
+                    } else {
+                        (x * (1 << 24) as f64) as u32
+                    }
+                })
+                .collect();
+            let vis = pass_of(g.clone(), weights.clone(), 5);
+            let nf = n as f64;
+            for (splits, texel) in [
+                (vec![1.5, 0.3 * nf + 0.5, 0.7 * nf + 0.5, nf - 0.5], vec![0.4, 1.3, 3.1]),
+                (vec![0.5, nf + 1.0], vec![2.0]),
+                (vec![nf + 5.0, nf + 9.0], vec![1.0]),
+            ] {
+                let full = stats(&vis, &splits, &texel, None);
+                for which in Statistic::ALL {
+                    let alone = statistic(&vis, &splits, &texel, which);
+                    let mut f = full.clone();
+                    let want = *which.field(&mut f);
+                    assert_eq!(alone.to_bits(), want.to_bits(), "{which:?}, n = {n}, splits {splits:?}");
+                }
+                // The weighted p95 against sorting every served (value, weight) pair.
+                let m = texel.len();
+                let mut served: Vec<(f64, u64)> = (0..n)
+                    .filter(|&k| g[k].0 >= splits[0] && g[k].0 <= splits[m] && weights[k] > 0)
+                    .map(|k| (texel[cascade_at(&splits, g[k].0)] * g[k].1, weights[k] as u64))
+                    .collect();
+                served.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let total: u64 = served.iter().map(|x| x.1).sum();
+                let want = if total == 0 {
+                    0.0
+                } else {
+                    let target = weight_target(95, total);
+                    let mut run = 0;
+                    served
+                        .iter()
+                        .find(|x| {
+                            run += x.1;
+                            run >= target
+                        })
+                        .expect("the target is reached")
+                        .0
+                };
+                assert_eq!(statistic(&vis, &splits, &texel, Statistic::VisibleP95), want);
+            }
         }
     }
 

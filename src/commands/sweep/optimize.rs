@@ -7,7 +7,11 @@
 //! increasing). Every evaluation is the same analysis a sweep row gets (the point's config with
 //! explicit fractions, [`analyze`] with the summary only), so the numbers compare one to one;
 //! a configuration that is not acceptable for a recommendation (coverage misses, unstable when
-//! snapped) costs +∞. The best point is then printed to 4 significant digits (more when 4 lose
+//! snapped) costs +∞. The points Nelder-Mead tries only need that cost: they are analysed with
+//! [`search::summary`], which computes what the cost reads (bit for bit the full analysis'
+//! values) and leaves out the render-cost counts and the screen statistics the objective does
+//! not read; the points reported (the start, a preset's configured split, the optimum) are
+//! analysed in full. The best point is then printed to 4 significant digits (more when 4 lose
 //! more than 0.1 % or the rounded point is no longer better than the start): the reported
 //! objective is that of the printed fractions, so they paste back to the same value.
 //!
@@ -19,11 +23,13 @@ use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use rayon::prelude::*;
 
+use crate::analysis::search::{self, Reads};
 use crate::analysis::{analyze, AnalysisOptions, Summary};
 use crate::config::Config;
 use crate::error::{GridError, Result};
 use crate::metric::SummaryMetric;
 use csm_core::free_splits::{round_significant, valid, FractionSpace};
+use csm_core::screen::Statistic;
 
 use crate::commands::sweep::grid::{Grid, Setting};
 use crate::commands::sweep::rank::acceptable;
@@ -137,6 +143,67 @@ pub fn evaluate(point: &Config, fractions: &[f64]) -> Option<Summary> {
     }
     let c = with_fractions(point, fractions).ok()?;
     Some(analyze(&c, &AnalysisOptions::summary_only()).summary)
+}
+
+/// What the search's cost reads of a point's analysis with `objective` (see [`search`]): one
+/// screen statistic, the walk's and the aggregates' metrics alone, or everything (the
+/// render-cost counts, the receiver fractions, the visible depth range, and any metric not
+/// listed here).
+pub(crate) fn reads(objective: SummaryMetric) -> Reads {
+    let screen = |s| Reads::Screen(s);
+    match objective.name() {
+        "screen_aliasing_mean" => screen(Statistic::AliasingMean),
+        "screen_aliasing_p50" => screen(Statistic::AliasingP50),
+        "screen_aliasing_p95" => screen(Statistic::AliasingP95),
+        "screen_aliasing_p99" => screen(Statistic::AliasingP99),
+        "screen_aliasing_max" => screen(Statistic::AliasingMax),
+        "screen_undersampled_fraction" => screen(Statistic::UndersampledFraction),
+        "visible_aliasing_mean" => screen(Statistic::VisibleMean),
+        "visible_aliasing_p50" => screen(Statistic::VisibleP50),
+        "visible_aliasing_p95" => screen(Statistic::VisibleP95),
+        "visible_aliasing_p99" => screen(Statistic::VisibleP99),
+        "visible_aliasing_max" => screen(Statistic::VisibleMax),
+        "cascades_needed"
+        | "z_lo"
+        | "z_hi"
+        | "max_aliasing"
+        | "mean_aliasing"
+        | "mean_log_aliasing"
+        | "undersampled_fraction"
+        | "shimmer"
+        | "shimmer_snapped"
+        | "shimmer_unsnapped"
+        | "size_jitter"
+        | "coverage_violations"
+        | "memory_bytes"
+        | "lookup_error_max"
+        | "lookup_error_rms"
+        | "overlap_area_fraction"
+        | "screen_band_pixel_share"
+        | "light_crawl"
+        | "light_crawl_snapped"
+        | "light_crawl_unsnapped"
+        | "light_jump"
+        | "light_jump_snapped"
+        | "light_jump_unsnapped"
+        | "renders_per_frame"
+        | "stale_coverage_violations"
+        | "stale_coverage_fraction"
+        | "stale_margin"
+        | "stale_margin_world"
+        | "update_drift" => Reads::Path,
+        _ => Reads::Everything,
+    }
+}
+
+/// [`evaluate`] for the search's cost alone ([`search::summary`] with what `reads` names):
+/// None when the fractions are not a valid split for the point.
+pub(crate) fn evaluate_for_cost(point: &Config, fractions: &[f64], reads: Reads) -> Option<Summary> {
+    if !valid(fractions) {
+        return None;
+    }
+    let c = with_fractions(point, fractions).ok()?;
+    Some(search::summary(&c, reads))
 }
 
 /// The search's cost: the objective of an acceptable configuration, +∞ otherwise.
@@ -286,6 +353,12 @@ fn optimize_group(base: &Config, rows: &[Row], group: &[usize], objective: Summa
         evaluations.fetch_add(1, Ordering::Relaxed);
         evaluate(&point, fr)
     };
+    // A point only the cost reads: the lighter analysis (counted the same).
+    let reads = reads(objective);
+    let eval_cost = |fr: &[f64]| {
+        evaluations.fetch_add(1, Ordering::Relaxed);
+        evaluate_for_cost(&point, fr, reads)
+    };
     // The start: the best practical-λ split (acceptable first, then the objective).
     let rank = |s: &Summary| {
         let ok = acceptable(&Row {
@@ -343,10 +416,11 @@ fn optimize_group(base: &Config, rows: &[Row], group: &[usize], objective: Summa
                     label(&first)
                 )));
             };
+            // The practical splits compared by the cost's values, the best analysed in full.
             let mut best: Option<(f64, Evaluated)> = None;
             for lambda in decimal_range(0.0, 1.0, 0.05).expect("valid") {
                 let fr = space.practical(m, lambda);
-                if let Some(s) = eval(&fr) {
+                if let Some(s) = eval_cost(&fr) {
                     if best.as_ref().is_none_or(|(_, b)| better(&s, &b.summary)) {
                         best = Some((
                             lambda,
@@ -358,6 +432,16 @@ fn optimize_group(base: &Config, rows: &[Row], group: &[usize], objective: Summa
                     }
                 }
             }
+            let best = best.map(|(lambda, e)| {
+                let summary = evaluate(&point, &e.fractions).expect("a valid split, evaluated above");
+                (
+                    lambda,
+                    Evaluated {
+                        fractions: e.fractions,
+                        summary,
+                    },
+                )
+            });
             let configured = crate::presets::configured_fractions(&point, &p.knobs, m).and_then(|fr| {
                 eval(&fr).map(|s| Evaluated {
                     fractions: fr,
@@ -398,7 +482,7 @@ fn optimize_group(base: &Config, rows: &[Row], group: &[usize], objective: Summa
     };
     let f = |y: &[f64]| {
         let fr = space.from_params(y);
-        match eval(&fr) {
+        match eval_cost(&fr) {
             Some(s) => cost(&setting, &s, objective),
             None => f64::INFINITY,
         }
@@ -440,4 +524,135 @@ fn optimize_group(base: &Config, rows: &[Row], group: &[usize], objective: Summa
         best,
         evaluations: evaluations.load(Ordering::Relaxed),
     })))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::metric::SUMMARY;
+    use proptest::prelude::*;
+    use std::sync::OnceLock;
+
+    /// The default scene at a small screen, and variants that take the walk's other ways:
+    /// without snapping, a box fit (probes), an engine preset with free splits, a moving
+    /// light, the binary32 pipeline, cached cascades, and no scene geometry (bounds only).
+    fn points() -> &'static [Config] {
+        static POINTS: OnceLock<Vec<Config>> = OnceLock::new();
+        POINTS.get_or_init(|| {
+            let base = include_str!("../../../configs/default.toml")
+                .replace("width = 1920", "width = 320")
+                .replace("height = 1080", "height = 180")
+                .replace("frames = 240", "frames = 40");
+            let variants = [
+                base.clone(),
+                base.replace("snap = true", "snap = false"),
+                base.replace("fit = \"sphere\"\n", "fit = \"aabb\"\n"),
+                base.replace("[shadow]\n", "[shadow]\npreset = \"bevy\"\n"),
+                base.replace(
+                    "step = 0.05\n",
+                    "step = 0.05\nlight_path = \"sun\"\nsun_azimuth_step_deg = 0.05\n",
+                ),
+                base.replace("[shadow]\n", "[shadow]\nprecision = \"f32\"\n"),
+                base.replace("[shadow]\n", "[shadow]\nupdate_every = [1, 2, 2, 4]\n"),
+                bounds_only(&base),
+            ];
+            variants
+                .iter()
+                .map(|t| Config::from_toml_str(t, "test.toml", None).unwrap_or_else(|e| panic!("{e}\n{t}")))
+                .collect()
+        })
+    }
+
+    /// The config without its ground and boxes: bounds only, no screen statistics.
+    fn bounds_only(text: &str) -> String {
+        let mut out = Vec::new();
+        let mut skip = 0;
+        for l in text.lines() {
+            if l.starts_with("[[scene.box]]") {
+                skip = 3;
+            }
+            if skip > 0 {
+                skip -= 1;
+                continue;
+            }
+            out.push(if l.starts_with("ground =") { "" } else { l });
+        }
+        out.join("\n")
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(40))]
+
+        /// On random split vectors of every variant, for every metric of the registry as the
+        /// objective: the lighter evaluation gives the objective, the three values the
+        /// acceptance reads, and so the search's cost, of the full analysis, bit for bit.
+        #[test]
+        fn the_search_evaluation_equals_the_full_analysis(
+            k in 0usize..8,
+            raw in prop::collection::vec(0.0005f64..0.9995, 3),
+        ) {
+            let point = &points()[k];
+            let mut fractions = raw.clone();
+            fractions.sort_by(f64::total_cmp);
+            prop_assume!(valid(&fractions));
+            let full = evaluate(point, &fractions);
+            let setting = Setting::plain(0.0, 4, 2048, point.shadow.fit);
+            let mut light: Vec<(Reads, Option<Summary>)> = Vec::new();
+            for def in SUMMARY {
+                let objective = SummaryMetric::named(def.name);
+                let r = reads(objective);
+                let at = match light.iter().position(|(x, _)| *x == r) {
+                    Some(i) => i,
+                    None => {
+                        light.push((r, evaluate_for_cost(point, &fractions, r)));
+                        light.len() - 1
+                    }
+                };
+                let (full, light) = match (&full, &light[at].1) {
+                    (Some(f), Some(l)) => (f, l),
+                    (None, None) => continue,
+                    other => panic!("valid for one and not the other: {other:?}"),
+                };
+                let name = def.name;
+                prop_assert_eq!(light.cascades_needed, full.cascades_needed, "{} {:?}", name, fractions);
+                prop_assert_eq!(light.coverage_violations, full.coverage_violations, "{}", name);
+                prop_assert_eq!(light.snapped_drift().to_bits(), full.snapped_drift().to_bits(), "{}", name);
+                prop_assert_eq!(
+                    objective.value(light).to_bits(),
+                    objective.value(full).to_bits(),
+                    "{} on variant {}: {} vs {}",
+                    name,
+                    k,
+                    objective.value(light),
+                    objective.value(full)
+                );
+                prop_assert_eq!(
+                    cost(&setting, light, objective).to_bits(),
+                    cost(&setting, full, objective).to_bits(),
+                    "{}",
+                    name
+                );
+            }
+        }
+    }
+
+    /// The lighter evaluation leaves out what the search does not read: the render-cost
+    /// counts and, for a screen objective, every other screen statistic (so a test that
+    /// compared only equal values could not pass by computing everything).
+    #[test]
+    fn the_search_evaluation_leaves_out_the_cost_counts_and_other_statistics() {
+        let point = &points()[0];
+        let fractions = [0.1, 0.3, 0.5];
+        let full = evaluate(point, &fractions).expect("valid");
+        let light = evaluate_for_cost(point, &fractions, Reads::Screen(Statistic::VisibleP95)).expect("valid");
+        assert!(full.cost.counts.is_some());
+        assert_eq!(light.cost, crate::analysis::cost::CostSummary::default());
+        let (f, l) = (full.screen.expect("geometry"), light.screen.expect("geometry"));
+        assert_eq!(l.visible_p95, f.visible_p95);
+        assert!(f.visible_p95 > 0.0 && f.aliasing_p95 > 0.0);
+        assert_eq!(l.aliasing_p95, 0.0);
+        let path = evaluate_for_cost(point, &fractions, Reads::Path).expect("valid");
+        assert!(path.screen.is_none());
+        assert_eq!(path.max_aliasing, full.max_aliasing);
+    }
 }

@@ -1,0 +1,77 @@
+//! The analysis the free-split search evaluates (`sweep --optimize-splits`, docs/optimize.md):
+//! only what its cost reads of a point.
+//!
+//! The search's cost of a point reads four values of its summary: whether the scene needs
+//! cascades, the coverage misses and the snapped drift (whether the point is acceptable), and
+//! the objective. Each evaluation used to be the whole analysis a sweep row gets; most of that
+//! is read by no one during the search: the render-cost counts, the screen statistics other
+//! than the objective's, the preset's report. [`summary`] leaves them out and computes the rest
+//! exactly as [`super::analyze`] does (the same functions on the same values), so every field
+//! it computes is the full analysis' value bit for bit (`tests/it/optimize.rs` checks the
+//! objective and the acceptance on random split vectors for every metric of the registry).
+//! The points the search reports (the start, the preset's configured split, the optimum as
+//! printed) are analysed in full.
+
+use super::{analyze, analyze_camera, AnalysisOptions, Detail, Summary};
+use crate::config::Config;
+use csm_core::screen::{self, ScreenStats, Statistic};
+use csm_core::visibility::Visibility;
+
+/// What the search's objective reads of a point's analysis, beyond the walk along the camera
+/// path and the closed-form aggregates (which every evaluation computes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Reads {
+    /// One screen statistic (and nothing else of the screen).
+    Screen(Statistic),
+    /// No screen statistic and no render-cost count.
+    Path,
+    /// Anything else (render-cost counts, the receiver fractions, the visible depth range):
+    /// the full analysis.
+    Everything,
+}
+
+/// The summary of `config` with every field `reads` needs as [`analyze`] with
+/// [`AnalysisOptions::summary_only`] gives it, bit for bit: `cascades_needed`,
+/// `coverage_violations`, `shimmer_snapped` (and the moving light's crawl), the walk's and the
+/// aggregates' metrics, and per `reads` the one screen statistic. Without [`Reads::Everything`]
+/// the render-cost counts are left at their default and the other screen statistics at 0 (no
+/// screen statistics at all for [`Reads::Path`]): such a summary is for the search's cost only,
+/// never for an output. A level of views (its screen statistics pooled over the views) is
+/// analysed in full.
+pub(crate) fn summary(config: &Config, reads: Reads) -> Summary {
+    let opts = AnalysisOptions::summary_only();
+    let screen = match reads {
+        Reads::Screen(s) => Some(s),
+        Reads::Path => None,
+        Reads::Everything => return analyze(config, &opts).summary,
+    };
+    if !config.views.is_empty() {
+        return analyze(config, &opts).summary;
+    }
+    analyze_camera(config, &opts, &|_| (), true, Detail::Search { screen }).summary
+}
+
+/// Screen statistics with only `which` measured ([`screen::statistic`]), every other value 0
+/// and each cascade's pixel share 0.
+pub(super) fn one_statistic(vis: &Visibility, splits: &[f64], texel: &[f64], which: Statistic) -> ScreenStats {
+    let mut st = ScreenStats {
+        receiver_fraction: 0.0,
+        self_shadowed_fraction: 0.0,
+        aliasing_mean: 0.0,
+        aliasing_p50: 0.0,
+        aliasing_p95: 0.0,
+        aliasing_p99: 0.0,
+        aliasing_max: 0.0,
+        undersampled_fraction: 0.0,
+        visible_mean: 0.0,
+        visible_p50: 0.0,
+        visible_p95: 0.0,
+        visible_p99: 0.0,
+        visible_max: 0.0,
+        visible_z_lo: 0.0,
+        visible_z_hi: 0.0,
+        cascade_pixels: vec![0.0; texel.len()],
+    };
+    *which.field(&mut st) = screen::statistic(vis, splits, texel, which);
+    st
+}
