@@ -1079,17 +1079,17 @@ impl PlaneLookup {
     fn answer(&self, grid: &Grid, s: &Sampling, cascade: usize, pl: &Placement) -> Option<Answer> {
         let (near, far) = s.ranges[cascade];
         let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
-        for (g, w) in footprint(pl.at, s.pcf, s.filter) {
+        let clear = each_footprint(pl.at, s.pcf, s.filter, |g, w| {
             let c = grid.centre(g);
             let d = self.k - self.gx * c.x - self.gy * c.y;
             // The format's range clamps nothing here.
             if s.format.is_some() && !(d >= near + self.tol && d <= far - self.tol) {
-                return None;
+                return false;
             }
             let biased = pl.depth - (d + pl.bias);
             let unbiased = self.own_depth - d;
             if !(biased.abs() > self.tol_lit && unbiased.abs() > self.tol_unbiased) {
-                return None;
+                return false;
             }
             if biased < 0.0 {
                 lit_w += w;
@@ -1099,8 +1099,9 @@ impl PlaneLookup {
                 unb_w += w;
                 unb_n += 1;
             }
-        }
-        Some(vote(s, self.own_only, (lit_w, lit_n), (unb_w, unb_n)))
+            true
+        });
+        clear.then(|| vote(s, self.own_only, (lit_w, lit_n), (unb_w, unb_n)))
     }
 }
 
@@ -1167,6 +1168,45 @@ pub fn footprint(at: DVec2, k: u32, filter: PcfFilter) -> impl Iterator<Item = (
             }
             out.into_iter().filter(|(_, w)| *w > 0.0)
         })
+}
+
+/// [`footprint`]'s texels and weights, in its order and computed by the same operations,
+/// handed to `f` one by one until it returns false (then this returns false): the walk's
+/// lookups iterate in place instead of through nested iterator adapters.
+#[inline(always)]
+fn each_footprint(at: DVec2, k: u32, filter: PcfFilter, mut f: impl FnMut((i64, i64), f64) -> bool) -> bool {
+    let h = (k / 2) as i64;
+    let tap = 1.0 / (k * k) as f64;
+    for dy in -h..=h {
+        for dx in -h..=h {
+            let t = at + DVec2::new(dx as f64, dy as f64);
+            match filter {
+                PcfFilter::Nearest => {
+                    if tap > 0.0 && !f((floor(t.x) as i64, floor(t.y) as i64), tap) {
+                        return false;
+                    }
+                }
+                PcfFilter::Bilinear => {
+                    let b = t - DVec2::splat(0.5);
+                    let i0 = DVec2::new(floor(b.x), floor(b.y));
+                    let fr = b - i0;
+                    let (i, j) = (i0.x as i64, i0.y as i64);
+                    let out = [
+                        ((i, j), (1.0 - fr.x) * (1.0 - fr.y) * tap),
+                        ((i + 1, j), fr.x * (1.0 - fr.y) * tap),
+                        ((i, j + 1), (1.0 - fr.x) * fr.y * tap),
+                        ((i + 1, j + 1), fr.x * fr.y * tap),
+                    ];
+                    for (g, w) in out {
+                        if w > 0.0 && !f(g, w) {
+                            return false;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    true
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1336,29 +1376,50 @@ fn answer(maps: &ShadowMaps, fg: &FrameGrid, r: &Receiver, s: &Sampling, cascade
 }
 
 /// The texels of one grid one receiver reads, each traced once ([`trace_texel`]): a PCF
-/// kernel's taps share texels, and frame 0 reads its receiver's texels three times.
+/// kernel's taps share texels, and frame 0 reads its receiver's texels three times. The first
+/// [`HELD_INLINE`] are held in place (a bilinear 3x3 lookup reads 16), the rest in a vector.
 struct Traced<'g> {
     scene: &'g SceneGeometry,
     grid: &'g Grid,
-    held: Vec<((i64, i64), Stored)>,
+    inline: [((i64, i64), Stored); HELD_INLINE],
+    n: usize,
+    more: Vec<((i64, i64), Stored)>,
 }
+
+/// Texels [`Traced`] holds without allocating.
+const HELD_INLINE: usize = 16;
 
 impl<'g> Traced<'g> {
     fn new(scene: &'g SceneGeometry, grid: &'g Grid) -> Self {
+        const NONE: ((i64, i64), Stored) = (
+            (0, 0),
+            Stored {
+                depth: 0.0,
+                triangle: None,
+            },
+        );
         Traced {
             scene,
             grid,
-            held: Vec::new(),
+            inline: [NONE; HELD_INLINE],
+            n: 0,
+            more: Vec::new(),
         }
     }
 
     /// What texel `g` holds.
     fn get(&mut self, g: (i64, i64)) -> Stored {
-        if let Some((_, x)) = self.held.iter().find(|(h, _)| *h == g) {
+        let found = self.inline[..self.n].iter().chain(&self.more).find(|(h, _)| *h == g);
+        if let Some((_, x)) = found {
             return *x;
         }
         let x = trace_texel(self.scene, self.grid, g);
-        self.held.push((g, x));
+        if self.n < HELD_INLINE {
+            self.inline[self.n] = (g, x);
+            self.n += 1;
+        } else {
+            self.more.push((g, x));
+        }
         x
     }
 }
@@ -1391,7 +1452,7 @@ fn answer_at<'g>(
     let own_depth = grid.basis.z.dot(r.p);
     let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
     let mut own_only = true;
-    for (g, w) in footprint(pl.at, s.pcf, s.filter) {
+    each_footprint(pl.at, s.pcf, s.filter, |g, w| {
         let held = texels.get(g);
         let stored = held.depth;
         let (lit, lit_unbiased) = match &fg.matrix {
@@ -1419,8 +1480,10 @@ fn answer_at<'g>(
             unb_w += w;
             unb_n += 1;
         }
-        own_only &= held.triangle.is_some_and(|t| same_plane(maps.scene, t, r));
-    }
+        // `same_plane` is a pure test: once false, the rest need not ask it.
+        own_only = own_only && held.triangle.is_some_and(|t| same_plane(maps.scene, t, r));
+        true
+    });
     Some(vote(s, own_only, (lit_w, lit_n), (unb_w, unb_n)))
 }
 
@@ -1646,6 +1709,9 @@ fn walk_step(
     (key, Some(answer))
 }
 
+/// Receivers per task of the walk's parallel pass.
+const WALK_CHUNK: usize = 512;
+
 /// What a walk of the path measured for one snap mode.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Flicker {
@@ -1747,16 +1813,18 @@ pub fn flicker_cached(
         // sums: the same in any order.
         let count = maps.count;
         let reader = Reader::new(rig, &pose);
+        // In chunks of receivers, each chunk's totals in a local accumulator.
         let frame = points
-            .par_iter()
-            .zip(&at)
-            .zip(keys.par_iter_mut())
-            .zip(memo.par_iter_mut())
-            .zip(states.par_iter_mut())
-            .zip(flips.par_iter_mut().zip(steps.par_iter_mut()))
-            .fold(
-                || FrameTotals::new(m),
-                |mut acc, (((((r, &p), last), memo), state), (flips, steps))| {
+            .par_chunks(WALK_CHUNK)
+            .zip(at.par_chunks(WALK_CHUNK))
+            .zip(keys.par_chunks_mut(WALK_CHUNK))
+            .zip(memo.par_chunks_mut(WALK_CHUNK))
+            .zip(states.par_chunks_mut(WALK_CHUNK))
+            .zip(flips.par_chunks_mut(WALK_CHUNK).zip(steps.par_chunks_mut(WALK_CHUNK)))
+            .map(|(((((rs, ats), ks), ms), ss), (fs, sts))| {
+                let mut acc = FrameTotals::new(m);
+                let each = rs.iter().zip(ats).zip(ks).zip(ms).zip(ss).zip(fs.iter_mut().zip(sts));
+                for (((((r, &p), last), memo), state), (flips, steps)) in each {
                     let old = *last;
                     let (key, answer) = walk_step(&maps, &grids, &reader, (r, p), s, rebuilt, old, memo);
                     let next = match (key, answer) {
@@ -1791,9 +1859,9 @@ pub fn flicker_cached(
                     }
                     *state = next;
                     *last = key;
-                    acc
-                },
-            )
+                }
+                acc
+            })
             .reduce(|| FrameTotals::new(m), FrameTotals::merge);
         totals.add(&frame.steps);
         if count {
@@ -2391,6 +2459,41 @@ mod tests {
 
     /// The library-free floor equals `f64::floor` to the bit, at whole numbers and either side
     /// of them, at signed zeros, beyond 2^52, at the infinities and on random values.
+    /// The walk's in-place footprint hands out [`footprint`]'s texels and weights, bit for bit
+    /// and in order, for every PCF width and filter, at random points, on texel edges and
+    /// centres, and stops where its callback says.
+    #[test]
+    fn each_footprint_is_the_footprint_to_the_bit() {
+        let mut rng = SplitMix64::new(24);
+        let mut ats: Vec<DVec2> = (0..400)
+            .map(|_| DVec2::new(rng.range(-3000.0, 3000.0), rng.range(-3000.0, 3000.0)))
+            .collect();
+        for x in [-2.0, -1.5, -0.5, 0.0, 0.5, 1.0, 7.25] {
+            ats.extend([DVec2::new(x, 3.5), DVec2::new(0.5, x), DVec2::splat(x)]);
+        }
+        let bits = |v: &[((i64, i64), f64)]| v.iter().map(|(g, w)| (*g, w.to_bits())).collect::<Vec<_>>();
+        for at in ats {
+            for k in [1, 3, 5] {
+                for filter in [PcfFilter::Nearest, PcfFilter::Bilinear] {
+                    let want: Vec<_> = footprint(at, k, filter).collect();
+                    let mut got = Vec::new();
+                    assert!(each_footprint(at, k, filter, |g, w| {
+                        got.push((g, w));
+                        true
+                    }));
+                    assert_eq!(bits(&got), bits(&want), "at {at} k {k} {filter:?}");
+                    // Stopped after the second texel: two handed out, false returned.
+                    let mut seen = 0;
+                    let all = each_footprint(at, k, filter, |_, _| {
+                        seen += 1;
+                        seen < 2
+                    });
+                    assert_eq!((all, seen), (want.len() < 2, want.len().min(2)));
+                }
+            }
+        }
+    }
+
     #[test]
     fn floor_is_f64_floor_to_the_bit() {
         let mut xs = vec![
