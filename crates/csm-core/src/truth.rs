@@ -39,7 +39,7 @@ use crate::metrics::cascade_at;
 use crate::precision::{frame_anchors, EnginePipeline};
 use crate::scene::SnapSpace;
 use crate::shade::{FlipImage, Shade, ShadeImage};
-use crate::visibility::{SceneGeometry, Visibility};
+use crate::visibility::{SceneGeometry, View, Visibility};
 
 /// The truth ray's origin leaves the surface by this fraction of the scene's coordinate scale.
 pub const EPSILON_REL: f64 = 1e-5;
@@ -466,6 +466,44 @@ pub fn receivers(scene: &SceneGeometry, vis: &Visibility) -> Vec<Receiver> {
         .collect()
 }
 
+/// What the ground truth reads of a view pass besides the maps, the same for every setting
+/// that shares the pass and the light: the receivers ([`receivers`]) and each one's exact
+/// answer ([`occluder`]). A sweep's rows share it ([`exact_of`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Exact {
+    pub view: View,
+    /// The unit direction light travels.
+    pub light: DVec3,
+    pub points: Vec<Receiver>,
+    pub occluders: Vec<Option<f64>>,
+}
+
+/// [`Exact`] of pass `vis` under unit light direction `light`: made on first use and kept by
+/// the scene (the latest few views and lights), so every setting of a sweep reads the same
+/// receivers and exact answers without casting them again.
+pub fn exact_of(scene: &SceneGeometry, vis: &Visibility, light: DVec3) -> Arc<Exact> {
+    scene.exact_cached(&vis.view, light, || {
+        let points = receivers(scene, vis);
+        let occluders = occluders(scene, light, &points);
+        Exact {
+            view: vis.view,
+            light,
+            points,
+            occluders,
+        }
+    })
+}
+
+/// Every receiver's [`occluder`] along unit light direction `light`.
+pub fn occluders(scene: &SceneGeometry, light: DVec3, points: &[Receiver]) -> Vec<Option<f64>> {
+    let eps = epsilon(scene);
+    let bounds = scene.mesh.bounds();
+    points
+        .par_iter()
+        .map(|r| occluder_in(scene, bounds, light, r, eps))
+        .collect()
+}
+
 /// The exact answer at `r`: None when the ray toward the light is free (truly lit), else the
 /// distance along the light to the surface that blocks it. `light` is the unit direction light
 /// travels; `eps` from [`epsilon`].
@@ -813,6 +851,7 @@ impl<'a> ShadowMaps<'a> {
     /// on the last f64 grid family it was placed on (filled or replaced here), with the plane
     /// every texel its lookup can read on that family holds, when the grid's cover names one
     /// ([`PlaneLookup`]; looked for once per family, from the first grid with a cover).
+    #[inline(always)]
     fn place_memo(
         &self,
         fg: &FrameGrid,
@@ -1981,7 +2020,7 @@ pub fn smallest_bias(values: &mut [f64], allowed: usize) -> f64 {
 /// The pass reads through `maps` (fresh, [`ShadowMaps::new`]); the counts returned are zero
 /// with [`ShadowMaps::counting`] off.
 pub fn frame_zero(
-    mut maps: ShadowMaps,
+    maps: ShadowMaps,
     rig: &Rig,
     light: &LightBasis,
     pose: &CameraPose,
@@ -1989,9 +2028,26 @@ pub fn frame_zero(
     points: &[Receiver],
     s: &Sampling,
 ) -> (Vec<PointZero>, CacheStats) {
+    let occ = occluders(maps.scene, light.z, points);
+    frame_zero_exact(maps, rig, light, pose, snapped, points, &occ, s)
+}
+
+/// [`frame_zero`] with each receiver's exact answer given (`occluders[j]` is [`occluder`] of
+/// `points[j]` along `light.z`, as [`occluders`] or [`exact_of`] gives them).
+#[allow(clippy::too_many_arguments)]
+pub fn frame_zero_exact(
+    mut maps: ShadowMaps,
+    rig: &Rig,
+    light: &LightBasis,
+    pose: &CameraPose,
+    snapped: bool,
+    points: &[Receiver],
+    occluders: &[Option<f64>],
+    s: &Sampling,
+) -> (Vec<PointZero>, CacheStats) {
     let cascades: Vec<Option<usize>> = points.par_iter().map(|r| reading_cascade(rig, pose, r.p)).collect();
     let grids = frame_grids(&mut maps, rig, light, pose, snapped, s);
-    frame_zero_on(maps, light, &grids, &cascades, points, s)
+    frame_zero_on(maps, light, &grids, &cascades, (points, occluders), s)
 }
 
 /// The depth bias that lights a receiver whose lookup reads texels with these excesses
@@ -2030,7 +2086,8 @@ pub fn frame_zero_in(
         .enumerate()
         .map(|(i, (b, w))| maps.grid(i, b, w))
         .collect();
-    frame_zero_on(maps, light, &grids, cascades, points, s)
+    let occ = occluders(scene, light.z, points);
+    frame_zero_on(maps, light, &grids, cascades, (points, &occ), s)
 }
 
 /// [`frame_zero_in`] on a frame's grids. The bias search (`excess`, `needed`) reads exact
@@ -2040,12 +2097,10 @@ fn frame_zero_on(
     light: &LightBasis,
     grids: &[FrameGrid],
     cascades: &[Option<usize>],
-    points: &[Receiver],
+    (points, occluders): (&[Receiver], &[Option<f64>]),
     s: &Sampling,
 ) -> (Vec<PointZero>, CacheStats) {
     let scene = maps.scene;
-    let eps = epsilon(scene);
-    let bounds = scene.mesh.bounds();
     let zero: Vec<Option<Placement>> = points
         .par_iter()
         .zip(cascades)
@@ -2068,7 +2123,7 @@ fn frame_zero_on(
         .par_iter()
         .enumerate()
         .map(|(j, r)| {
-            let occ = occluder_in(scene, bounds, light.z, r, eps);
+            let occ = occluders[j];
             let truly_lit = occ.is_none();
             let (cascade, answer, excess, own, slope, needed) = match (cascades[j], zero[j]) {
                 (Some(i), Some(z)) if inside(&grids[i], z.texel) => {

@@ -618,6 +618,8 @@ pub struct SceneGeometry {
     light_cache: Mutex<Vec<Arc<crate::cost::LightScene>>>,
     /// The ground truth's light-space covers (texel rays), one per basis.
     cover_cache: Mutex<Vec<Arc<crate::light_cover::LightCover>>>,
+    /// The ground truth's receivers and exact answers, one per view and light.
+    exact_cache: Mutex<Vec<Arc<crate::truth::Exact>>>,
 }
 
 /// The view without its light: the key of the light-independent part.
@@ -686,6 +688,7 @@ impl SceneGeometry {
             capacity: std::sync::atomic::AtomicUsize::new(CACHED_PASSES),
             light_cache: Mutex::new(Vec::new()),
             cover_cache: Mutex::new(Vec::new()),
+            exact_cache: Mutex::new(Vec::new()),
         }
     }
 
@@ -717,6 +720,36 @@ impl SceneGeometry {
         }
         cache.push(c.clone());
         Some(c)
+    }
+
+    /// The ground truth's receivers and exact answers of `view` under unit light direction
+    /// `light` ([`crate::truth::exact_of`]): `make`'s, made once per view and light (the latest
+    /// [`CACHED_PASSES`] are kept; two threads asking at once may both make it, and the first
+    /// kept is returned to both).
+    pub fn exact_cached(
+        &self,
+        view: &View,
+        light: DVec3,
+        make: impl FnOnce() -> crate::truth::Exact,
+    ) -> Arc<crate::truth::Exact> {
+        let bits = |v: DVec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        let same = |e: &Arc<crate::truth::Exact>| e.view == *view && bits(e.light) == bits(light);
+        {
+            let cache = self.exact_cache.lock().unwrap_or_else(|e| e.into_inner());
+            if let Some(e) = cache.iter().find(|e| same(e)) {
+                return e.clone();
+            }
+        }
+        let e = Arc::new(make());
+        let mut cache = self.exact_cache.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(found) = cache.iter().find(|e| same(e)) {
+            return found.clone();
+        }
+        if cache.len() >= CACHED_PASSES {
+            cache.remove(0);
+        }
+        cache.push(e.clone());
+        e
     }
 
     /// The scene's triangles and objects in light basis `basis` (cost counts), made once per
