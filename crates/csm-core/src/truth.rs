@@ -482,7 +482,9 @@ pub struct Exact {
 /// the scene (the latest few views and lights), so every setting of a sweep reads the same
 /// receivers and exact answers without casting them again.
 pub fn exact_of(scene: &SceneGeometry, vis: &Visibility, light: DVec3) -> Arc<Exact> {
-    scene.exact_cached(&vis.view, light, || {
+    let bits = |v: DVec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+    let same = |e: &Exact| e.view == vis.view && bits(e.light) == bits(light);
+    scene.derived(same, || {
         let points = receivers(scene, vis);
         let occluders = occluders(scene, light, &points);
         Exact {
