@@ -252,7 +252,10 @@ pub(crate) fn run(config: &Config, rig: &Rig, counts: bool, on_frames: &(dyn Fn(
         binary32: (config.shadow.precision == Precision::F32)
             .then(|| Binary32::new(rig, config.shadow.snap_space, config.scene)),
     };
-    let points: Vec<Receiver> = truth::receivers(scene, &vis);
+    // The receivers and their exact answers: cast once per view and light, shared by a
+    // sweep's rows.
+    let exact = truth::exact_of(scene, &vis, rig.light.z);
+    let points: Vec<Receiver> = exact.points.clone();
     let maps = || truth::ShadowMaps::new(scene).counting(counts);
     let away = truth::away_pixels(&vis);
     let mut zero_stats = CacheStats::default();
@@ -275,7 +278,16 @@ pub(crate) fn run(config: &Config, rig: &Rig, counts: bool, on_frames: &(dyn Fn(
         }
         BiasSource::Recommended => {
             // The bias needed comes from the unbiased lookups; the pass then samples with it.
-            let (zero, stats) = truth::frame_zero(maps(), rig, &rig.light, &pose0, snap, &points, &unbiased);
+            let (zero, stats) = truth::frame_zero_exact(
+                maps(),
+                rig,
+                &rig.light,
+                &pose0,
+                snap,
+                &points,
+                &exact.occluders,
+                &unbiased,
+            );
             zero_stats.add(stats);
             let needed: Vec<Option<f64>> = truth::cascade_truth(&zero, m, &unbiased)
                 .iter()
@@ -288,7 +300,16 @@ pub(crate) fn run(config: &Config, rig: &Rig, counts: bool, on_frames: &(dyn Fn(
         bias: bias.clone(),
         ..unbiased
     };
-    let (zero, stats) = truth::frame_zero(maps(), rig, &rig.light, &pose0, snap, &points, &sampling);
+    let (zero, stats) = truth::frame_zero_exact(
+        maps(),
+        rig,
+        &rig.light,
+        &pose0,
+        snap,
+        &points,
+        &exact.occluders,
+        &sampling,
+    );
     zero_stats.add(stats);
     let truly_lit: Vec<bool> = zero.iter().map(|p| p.truly_lit).collect();
     let cascades = truth::cascade_truth(&zero, m, &sampling);

@@ -960,3 +960,39 @@ fn every_frame_of_the_walk_equals_tracing_it_from_scratch() {
         }
     }
 }
+
+/// The receivers and exact answers a pass reads are cast once per view and light and shared
+/// by every setting that has them (a sweep's rows): the cached copy equals casting them again,
+/// a second setting gets the same copy, and frame 0 read from it equals frame 0 casting its
+/// own exact answers.
+#[test]
+fn cached_receivers_and_exact_answers_equal_casting_them_again() {
+    let (c, a) = ground_truth(&scene_text("strafe", false, ""));
+    let g = truth_of(&a);
+    let rig = a.rig().unwrap();
+    let setup = c.setup();
+    let scene = &setup.geometry.as_ref().unwrap().scene;
+    let vis = setup.visibility().unwrap();
+    let cached = truth::exact_of(scene, &vis, rig.light.z);
+    let points = truth::receivers(scene, &vis);
+    assert!(points.len() > 1000, "{} receivers", points.len());
+    assert_eq!(cached.points, points);
+    assert_eq!(g.points, points);
+    let eps = truth::epsilon(scene);
+    let occluders: Vec<Option<f64>> = points
+        .iter()
+        .map(|r| truth::occluder(scene, rig.light.z, r, eps))
+        .collect();
+    assert!(occluders.iter().any(|o| o.is_some()) && occluders.iter().any(|o| o.is_none()));
+    assert_eq!(cached.occluders, occluders);
+    assert!(std::sync::Arc::ptr_eq(
+        &cached,
+        &truth::exact_of(scene, &vis, rig.light.z)
+    ));
+    let s = pass_sampling(&c, g, c.truth.pcf);
+    let pose0 = c.camera_path().unwrap()[0];
+    let maps = truth::ShadowMaps::new(scene);
+    let (zero, _) = truth::frame_zero(maps, rig, &rig.light, &pose0, false, &points, &s);
+    assert_eq!(zero, g.zero);
+    assert!(zero.iter().filter(|z| z.answer.is_some()).count() > 1000);
+}

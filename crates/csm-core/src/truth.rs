@@ -39,7 +39,7 @@ use crate::metrics::cascade_at;
 use crate::precision::{frame_anchors, EnginePipeline};
 use crate::scene::SnapSpace;
 use crate::shade::{FlipImage, Shade, ShadeImage};
-use crate::visibility::{SceneGeometry, Visibility};
+use crate::visibility::{SceneGeometry, View, Visibility};
 
 /// The truth ray's origin leaves the surface by this fraction of the scene's coordinate scale.
 pub const EPSILON_REL: f64 = 1e-5;
@@ -466,6 +466,46 @@ pub fn receivers(scene: &SceneGeometry, vis: &Visibility) -> Vec<Receiver> {
         .collect()
 }
 
+/// What the ground truth reads of a view pass besides the maps, the same for every setting
+/// that shares the pass and the light: the receivers ([`receivers`]) and each one's exact
+/// answer ([`occluder`]). A sweep's rows share it ([`exact_of`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Exact {
+    pub view: View,
+    /// The unit direction light travels.
+    pub light: DVec3,
+    pub points: Vec<Receiver>,
+    pub occluders: Vec<Option<f64>>,
+}
+
+/// [`Exact`] of pass `vis` under unit light direction `light`: made on first use and kept by
+/// the scene (the latest few views and lights), so every setting of a sweep reads the same
+/// receivers and exact answers without casting them again.
+pub fn exact_of(scene: &SceneGeometry, vis: &Visibility, light: DVec3) -> Arc<Exact> {
+    let bits = |v: DVec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+    let same = |e: &Exact| e.view == vis.view && bits(e.light) == bits(light);
+    scene.derived(same, || {
+        let points = receivers(scene, vis);
+        let occluders = occluders(scene, light, &points);
+        Exact {
+            view: vis.view,
+            light,
+            points,
+            occluders,
+        }
+    })
+}
+
+/// Every receiver's [`occluder`] along unit light direction `light`.
+pub fn occluders(scene: &SceneGeometry, light: DVec3, points: &[Receiver]) -> Vec<Option<f64>> {
+    let eps = epsilon(scene);
+    let bounds = scene.mesh.bounds();
+    points
+        .par_iter()
+        .map(|r| occluder_in(scene, bounds, light, r, eps))
+        .collect()
+}
+
 /// The exact answer at `r`: None when the ray toward the light is free (truly lit), else the
 /// distance along the light to the surface that blocks it. `light` is the unit direction light
 /// travels; `eps` from [`epsilon`].
@@ -813,6 +853,7 @@ impl<'a> ShadowMaps<'a> {
     /// on the last f64 grid family it was placed on (filled or replaced here), with the plane
     /// every texel its lookup can read on that family holds, when the grid's cover names one
     /// ([`PlaneLookup`]; looked for once per family, from the first grid with a cover).
+    #[inline(always)]
     fn place_memo(
         &self,
         fg: &FrameGrid,
@@ -1079,17 +1120,17 @@ impl PlaneLookup {
     fn answer(&self, grid: &Grid, s: &Sampling, cascade: usize, pl: &Placement) -> Option<Answer> {
         let (near, far) = s.ranges[cascade];
         let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
-        for (g, w) in footprint(pl.at, s.pcf, s.filter) {
+        let clear = each_footprint(pl.at, s.pcf, s.filter, |g, w| {
             let c = grid.centre(g);
             let d = self.k - self.gx * c.x - self.gy * c.y;
             // The format's range clamps nothing here.
             if s.format.is_some() && !(d >= near + self.tol && d <= far - self.tol) {
-                return None;
+                return false;
             }
             let biased = pl.depth - (d + pl.bias);
             let unbiased = self.own_depth - d;
             if !(biased.abs() > self.tol_lit && unbiased.abs() > self.tol_unbiased) {
-                return None;
+                return false;
             }
             if biased < 0.0 {
                 lit_w += w;
@@ -1099,8 +1140,9 @@ impl PlaneLookup {
                 unb_w += w;
                 unb_n += 1;
             }
-        }
-        Some(vote(s, self.own_only, (lit_w, lit_n), (unb_w, unb_n)))
+            true
+        });
+        clear.then(|| vote(s, self.own_only, (lit_w, lit_n), (unb_w, unb_n)))
     }
 }
 
@@ -1167,6 +1209,45 @@ pub fn footprint(at: DVec2, k: u32, filter: PcfFilter) -> impl Iterator<Item = (
             }
             out.into_iter().filter(|(_, w)| *w > 0.0)
         })
+}
+
+/// [`footprint`]'s texels and weights, in its order and computed by the same operations,
+/// handed to `f` one by one until it returns false (then this returns false): the walk's
+/// lookups iterate in place instead of through nested iterator adapters.
+#[inline(always)]
+fn each_footprint(at: DVec2, k: u32, filter: PcfFilter, mut f: impl FnMut((i64, i64), f64) -> bool) -> bool {
+    let h = (k / 2) as i64;
+    let tap = 1.0 / (k * k) as f64;
+    for dy in -h..=h {
+        for dx in -h..=h {
+            let t = at + DVec2::new(dx as f64, dy as f64);
+            match filter {
+                PcfFilter::Nearest => {
+                    if tap > 0.0 && !f((floor(t.x) as i64, floor(t.y) as i64), tap) {
+                        return false;
+                    }
+                }
+                PcfFilter::Bilinear => {
+                    let b = t - DVec2::splat(0.5);
+                    let i0 = DVec2::new(floor(b.x), floor(b.y));
+                    let fr = b - i0;
+                    let (i, j) = (i0.x as i64, i0.y as i64);
+                    let out = [
+                        ((i, j), (1.0 - fr.x) * (1.0 - fr.y) * tap),
+                        ((i + 1, j), fr.x * (1.0 - fr.y) * tap),
+                        ((i, j + 1), (1.0 - fr.x) * fr.y * tap),
+                        ((i + 1, j + 1), fr.x * fr.y * tap),
+                    ];
+                    for (g, w) in out {
+                        if w > 0.0 && !f(g, w) {
+                            return false;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    true
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1338,29 +1419,50 @@ fn answer(maps: &ShadowMaps, fg: &FrameGrid, r: &Receiver, s: &Sampling, cascade
 }
 
 /// The texels of one grid one receiver reads, each traced once ([`trace_texel`]): a PCF
-/// kernel's taps share texels, and frame 0 reads its receiver's texels three times.
+/// kernel's taps share texels, and frame 0 reads its receiver's texels three times. The first
+/// [`HELD_INLINE`] are held in place (a bilinear 3x3 lookup reads 16), the rest in a vector.
 struct Traced<'g> {
     scene: &'g SceneGeometry,
     grid: &'g Grid,
-    held: Vec<((i64, i64), Stored)>,
+    inline: [((i64, i64), Stored); HELD_INLINE],
+    n: usize,
+    more: Vec<((i64, i64), Stored)>,
 }
+
+/// Texels [`Traced`] holds without allocating.
+const HELD_INLINE: usize = 16;
 
 impl<'g> Traced<'g> {
     fn new(scene: &'g SceneGeometry, grid: &'g Grid) -> Self {
+        const NONE: ((i64, i64), Stored) = (
+            (0, 0),
+            Stored {
+                depth: 0.0,
+                triangle: None,
+            },
+        );
         Traced {
             scene,
             grid,
-            held: Vec::new(),
+            inline: [NONE; HELD_INLINE],
+            n: 0,
+            more: Vec::new(),
         }
     }
 
     /// What texel `g` holds.
     fn get(&mut self, g: (i64, i64)) -> Stored {
-        if let Some((_, x)) = self.held.iter().find(|(h, _)| *h == g) {
+        let found = self.inline[..self.n].iter().chain(&self.more).find(|(h, _)| *h == g);
+        if let Some((_, x)) = found {
             return *x;
         }
         let x = trace_texel(self.scene, self.grid, g);
-        self.held.push((g, x));
+        if self.n < HELD_INLINE {
+            self.inline[self.n] = (g, x);
+            self.n += 1;
+        } else {
+            self.more.push((g, x));
+        }
         x
     }
 }
@@ -1393,7 +1495,7 @@ fn answer_at<'g>(
     let own_depth = grid.basis.z.dot(r.p);
     let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
     let mut own_only = true;
-    for (g, w) in footprint(pl.at, s.pcf, s.filter) {
+    each_footprint(pl.at, s.pcf, s.filter, |g, w| {
         let held = texels.get(g);
         let stored = held.depth;
         let (lit, lit_unbiased) = match &fg.matrix {
@@ -1421,8 +1523,10 @@ fn answer_at<'g>(
             unb_w += w;
             unb_n += 1;
         }
-        own_only &= held.triangle.is_some_and(|t| same_plane(maps.scene, t, r));
-    }
+        // `same_plane` is a pure test: once false, the rest need not ask it.
+        own_only = own_only && held.triangle.is_some_and(|t| same_plane(maps.scene, t, r));
+        true
+    });
     Some(vote(s, own_only, (lit_w, lit_n), (unb_w, unb_n)))
 }
 
@@ -1648,6 +1752,9 @@ fn walk_step(
     (key, Some(answer))
 }
 
+/// Receivers per task of the walk's parallel pass.
+const WALK_CHUNK: usize = 512;
+
 /// What a walk of the path measured for one snap mode.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Flicker {
@@ -1749,16 +1856,18 @@ pub fn flicker_cached(
         // sums: the same in any order.
         let count = maps.count;
         let reader = Reader::new(rig, &pose);
+        // In chunks of receivers, each chunk's totals in a local accumulator.
         let frame = points
-            .par_iter()
-            .zip(&at)
-            .zip(keys.par_iter_mut())
-            .zip(memo.par_iter_mut())
-            .zip(states.par_iter_mut())
-            .zip(flips.par_iter_mut().zip(steps.par_iter_mut()))
-            .fold(
-                || FrameTotals::new(m),
-                |mut acc, (((((r, &p), last), memo), state), (flips, steps))| {
+            .par_chunks(WALK_CHUNK)
+            .zip(at.par_chunks(WALK_CHUNK))
+            .zip(keys.par_chunks_mut(WALK_CHUNK))
+            .zip(memo.par_chunks_mut(WALK_CHUNK))
+            .zip(states.par_chunks_mut(WALK_CHUNK))
+            .zip(flips.par_chunks_mut(WALK_CHUNK).zip(steps.par_chunks_mut(WALK_CHUNK)))
+            .map(|(((((rs, ats), ks), ms), ss), (fs, sts))| {
+                let mut acc = FrameTotals::new(m);
+                let each = rs.iter().zip(ats).zip(ks).zip(ms).zip(ss).zip(fs.iter_mut().zip(sts));
+                for (((((r, &p), last), memo), state), (flips, steps)) in each {
                     let old = *last;
                     let (key, answer) = walk_step(&maps, &grids, &reader, (r, p), s, rebuilt, old, memo);
                     let next = match (key, answer) {
@@ -1793,9 +1902,9 @@ pub fn flicker_cached(
                     }
                     *state = next;
                     *last = key;
-                    acc
-                },
-            )
+                }
+                acc
+            })
             .reduce(|| FrameTotals::new(m), FrameTotals::merge);
         totals.add(&frame.steps);
         if count {
@@ -1915,7 +2024,7 @@ pub fn smallest_bias(values: &mut [f64], allowed: usize) -> f64 {
 /// The pass reads through `maps` (fresh, [`ShadowMaps::new`]); the counts returned are zero
 /// with [`ShadowMaps::counting`] off.
 pub fn frame_zero(
-    mut maps: ShadowMaps,
+    maps: ShadowMaps,
     rig: &Rig,
     light: &LightBasis,
     pose: &CameraPose,
@@ -1923,9 +2032,26 @@ pub fn frame_zero(
     points: &[Receiver],
     s: &Sampling,
 ) -> (Vec<PointZero>, CacheStats) {
+    let occ = occluders(maps.scene, light.z, points);
+    frame_zero_exact(maps, rig, light, pose, snapped, points, &occ, s)
+}
+
+/// [`frame_zero`] with each receiver's exact answer given (`occluders[j]` is [`occluder`] of
+/// `points[j]` along `light.z`, as [`occluders`] or [`exact_of`] gives them).
+#[allow(clippy::too_many_arguments)]
+pub fn frame_zero_exact(
+    mut maps: ShadowMaps,
+    rig: &Rig,
+    light: &LightBasis,
+    pose: &CameraPose,
+    snapped: bool,
+    points: &[Receiver],
+    occluders: &[Option<f64>],
+    s: &Sampling,
+) -> (Vec<PointZero>, CacheStats) {
     let cascades: Vec<Option<usize>> = points.par_iter().map(|r| reading_cascade(rig, pose, r.p)).collect();
     let grids = frame_grids(&mut maps, rig, light, pose, snapped, s);
-    frame_zero_on(maps, light, &grids, &cascades, points, s)
+    frame_zero_on(maps, light, &grids, &cascades, (points, occluders), s)
 }
 
 /// The depth bias that lights a receiver whose lookup reads texels with these excesses
@@ -1964,7 +2090,8 @@ pub fn frame_zero_in(
         .enumerate()
         .map(|(i, (b, w))| maps.grid(i, b, w))
         .collect();
-    frame_zero_on(maps, light, &grids, cascades, points, s)
+    let occ = occluders(scene, light.z, points);
+    frame_zero_on(maps, light, &grids, cascades, (points, &occ), s)
 }
 
 /// [`frame_zero_in`] on a frame's grids. The bias search (`excess`, `needed`) reads exact
@@ -1974,12 +2101,10 @@ fn frame_zero_on(
     light: &LightBasis,
     grids: &[FrameGrid],
     cascades: &[Option<usize>],
-    points: &[Receiver],
+    (points, occluders): (&[Receiver], &[Option<f64>]),
     s: &Sampling,
 ) -> (Vec<PointZero>, CacheStats) {
     let scene = maps.scene;
-    let eps = epsilon(scene);
-    let bounds = scene.mesh.bounds();
     let zero: Vec<Option<Placement>> = points
         .par_iter()
         .zip(cascades)
@@ -2002,7 +2127,7 @@ fn frame_zero_on(
         .par_iter()
         .enumerate()
         .map(|(j, r)| {
-            let occ = occluder_in(scene, bounds, light.z, r, eps);
+            let occ = occluders[j];
             let truly_lit = occ.is_none();
             let (cascade, answer, excess, own, slope, needed) = match (cascades[j], zero[j]) {
                 (Some(i), Some(z)) if inside(&grids[i], z.texel) => {
@@ -2393,6 +2518,41 @@ mod tests {
 
     /// The library-free floor equals `f64::floor` to the bit, at whole numbers and either side
     /// of them, at signed zeros, beyond 2^52, at the infinities and on random values.
+    /// The walk's in-place footprint hands out [`footprint`]'s texels and weights, bit for bit
+    /// and in order, for every PCF width and filter, at random points, on texel edges and
+    /// centres, and stops where its callback says.
+    #[test]
+    fn each_footprint_is_the_footprint_to_the_bit() {
+        let mut rng = SplitMix64::new(24);
+        let mut ats: Vec<DVec2> = (0..400)
+            .map(|_| DVec2::new(rng.range(-3000.0, 3000.0), rng.range(-3000.0, 3000.0)))
+            .collect();
+        for x in [-2.0, -1.5, -0.5, 0.0, 0.5, 1.0, 7.25] {
+            ats.extend([DVec2::new(x, 3.5), DVec2::new(0.5, x), DVec2::splat(x)]);
+        }
+        let bits = |v: &[((i64, i64), f64)]| v.iter().map(|(g, w)| (*g, w.to_bits())).collect::<Vec<_>>();
+        for at in ats {
+            for k in [1, 3, 5] {
+                for filter in [PcfFilter::Nearest, PcfFilter::Bilinear] {
+                    let want: Vec<_> = footprint(at, k, filter).collect();
+                    let mut got = Vec::new();
+                    assert!(each_footprint(at, k, filter, |g, w| {
+                        got.push((g, w));
+                        true
+                    }));
+                    assert_eq!(bits(&got), bits(&want), "at {at} k {k} {filter:?}");
+                    // Stopped after the second texel: two handed out, false returned.
+                    let mut seen = 0;
+                    let all = each_footprint(at, k, filter, |_, _| {
+                        seen += 1;
+                        seen < 2
+                    });
+                    assert_eq!((all, seen), (want.len() < 2, want.len().min(2)));
+                }
+            }
+        }
+    }
+
     #[test]
     fn floor_is_f64_floor_to_the_bit() {
         let mut xs = vec![

@@ -653,6 +653,8 @@ pub struct SceneGeometry {
     light_cache: Mutex<Vec<Arc<crate::cost::LightScene>>>,
     /// The ground truth's light-space covers (texel rays), one per basis.
     cover_cache: Mutex<Vec<Arc<crate::light_cover::LightCover>>>,
+    /// Values other modules derive from the scene and keep with it ([`SceneGeometry::derived`]).
+    derived_cache: Mutex<Vec<Arc<dyn std::any::Any + Send + Sync>>>,
 }
 
 /// The view without its light: the key of the light-independent part.
@@ -721,6 +723,7 @@ impl SceneGeometry {
             capacity: std::sync::atomic::AtomicUsize::new(CACHED_PASSES),
             light_cache: Mutex::new(Vec::new()),
             cover_cache: Mutex::new(Vec::new()),
+            derived_cache: Mutex::new(Vec::new()),
         }
     }
 
@@ -752,6 +755,36 @@ impl SceneGeometry {
         }
         cache.push(c.clone());
         Some(c)
+    }
+
+    /// A value derived from the scene and kept with it (the ground truth's receivers and exact
+    /// answers of a view and light, `crate::truth::exact_of`): the kept `T` that `same`
+    /// accepts, else `make`'s, kept (the latest [`CACHED_PASSES`] values are kept). Two threads
+    /// asking at once may both make it; the first kept is returned to both.
+    pub fn derived<T: std::any::Any + Send + Sync>(
+        &self,
+        same: impl Fn(&T) -> bool,
+        make: impl FnOnce() -> T,
+    ) -> Arc<T> {
+        type Kept = Vec<Arc<dyn std::any::Any + Send + Sync>>;
+        let find = |cache: &Kept| {
+            cache
+                .iter()
+                .find_map(|e| e.clone().downcast::<T>().ok().filter(|t| same(t)))
+        };
+        if let Some(t) = find(&self.derived_cache.lock().unwrap_or_else(|e| e.into_inner())) {
+            return t;
+        }
+        let t = Arc::new(make());
+        let mut cache = self.derived_cache.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(found) = find(&cache) {
+            return found;
+        }
+        if cache.len() >= CACHED_PASSES {
+            cache.remove(0);
+        }
+        cache.push(t.clone());
+        t
     }
 
     /// The scene's triangles and objects in light basis `basis` (cost counts), made once per
