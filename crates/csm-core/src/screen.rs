@@ -368,12 +368,13 @@ struct ViewPass<'a> {
     wmax: f64,
     /// The smallest and largest possible served value (the bucket keys' range).
     range: Option<(f64, f64)>,
-    /// Served values per [`octave`] (only when asked for; empty otherwise).
-    octaves: Vec<u32>,
+    /// Served values per [`octave`] (only when asked for; empty otherwise): `(octave, count)`
+    /// in no order, an octave possibly more than once.
+    octaves: Vec<(u16, u32)>,
 }
 
 impl<'a> ViewPass<'a> {
-    fn new(vis: &'a Visibility, splits: &[f64], texel: &[f64], octaves: bool) -> ViewPass<'a> {
+    fn new(vis: &'a Visibility, splits: &[f64], texel: &[f64], octaves: bool, sc: &mut Scratch) -> ViewPass<'a> {
         let ix = vis.index();
         let (runs, counts) = served_runs(vis, splits, texel);
         let n: usize = counts.iter().sum();
@@ -392,7 +393,7 @@ impl<'a> ViewPass<'a> {
             max: 0.0,
             wmax: 0.0,
             range: None,
-            octaves: if octaves { vec![0; OCTAVES_COUNT] } else { Vec::new() },
+            octaves: Vec::new(),
         };
         if n == 0 {
             return pass;
@@ -422,8 +423,11 @@ impl<'a> ViewPass<'a> {
         // below the bound, and the receivers from it to the bound counted on.
         let nb = bounds.len();
         let buckets = ix.buckets();
-        let mut cut = vec![0u32; buckets * nb];
-        let mut wcut = vec![0u64; buckets * nb];
+        let (cut, wcut) = (&mut sc.cut, &mut sc.wcut);
+        cut.clear();
+        cut.resize(buckets * nb, 0);
+        wcut.clear();
+        wcut.resize(buckets * nb, 0);
         for (j, &p) in bounds.iter().enumerate() {
             let row = p / ix.row;
             let (c, w) = (
@@ -476,10 +480,10 @@ impl<'a> ViewPass<'a> {
                 if octaves {
                     let (a, z) = (octave(vlo), octave(vhi));
                     if a == z {
-                        pass.octaves[a] += ghi - glo;
+                        pass.octaves.push((a as u16, ghi - glo));
                     } else {
                         for i in values {
-                            pass.octaves[octave(t * ix.g[i])] += 1;
+                            pass.octaves.push((octave(t * ix.g[i]) as u16, 1));
                         }
                     }
                 }
@@ -509,93 +513,167 @@ impl<'a> ViewPass<'a> {
     }
 }
 
+/// Buffers reused by one pool's [`select`] calls and [`ViewPass::new`]: the histograms are kept
+/// zero between calls (each call zeroes only the entries it touched), the others are cleared
+/// or overwritten before use.
+#[derive(Default)]
+struct Scratch {
+    /// Per kind (plain, contrast): the weight of groups by the key of their lowest and of
+    /// their highest value.
+    starts: [Vec<u128>; 2],
+    ends: [Vec<u128>; 2],
+    /// Per group of the pool (in pool, run and bucket order): the keys of its bounds.
+    keys: Vec<(u32, u32)>,
+    /// Per target (plain p50, p95, p99, then contrast): the values in its bracket.
+    cands: [Vec<(f64, u128)>; 6],
+    /// [`resolve`]'s histogram.
+    fine: Vec<u128>,
+    /// [`ViewPass::new`]'s entries and contrast weights before each bound, per bucket.
+    cut: Vec<u32>,
+    wcut: Vec<u64>,
+}
+
 /// The nearest-rank values of a pool of views' groups, each view counting its steps: for the
 /// plain weights (each pixel its view's steps) and the contrast weights (`N · L` steps times
 /// the view's), at p50, p95 and p99, and the two total weights.
 ///
-/// The groups' bounds give, per target, the bucket range that must hold the value: the first
-/// bucket where the weight of the groups starting at or below it reaches the target, and the
-/// first where that of the groups ending at or below it does. Only the groups reaching into
-/// that range are read, value by value; what lies below it is counted, and the few values in
-/// it are narrowed down and sorted ([`resolve`]).
-fn select(pools: &[(&ViewPass<'_>, u64)], buckets: Buckets, count: usize) -> ([[f64; 3]; 2], [u128; 2]) {
-    // Per kind (plain, contrast): the weight of groups by the bucket of their lowest and of
-    // their highest value.
-    let mut starts = [vec![0u128; count], vec![0u128; count]];
-    let mut ends = [vec![0u128; count], vec![0u128; count]];
+/// The groups' bounds give, per target, the bucket range that must hold the value (its
+/// bracket): the first bucket where the weight of the groups starting at or below it reaches
+/// the target, and the first where that of the groups ending at or below it does. Only the
+/// groups reaching into a bracket are read, value by value, each value once for all six
+/// targets; what lies below a bracket is counted, and the few values in it are narrowed down
+/// and sorted ([`resolve`]).
+fn select(
+    pools: &[(&ViewPass<'_>, u64)],
+    buckets: Buckets,
+    count: usize,
+    sc: &mut Scratch,
+) -> ([[f64; 3]; 2], [u128; 2]) {
+    for h in sc.starts.iter_mut().chain(sc.ends.iter_mut()) {
+        if h.len() < count {
+            h.resize(count, 0);
+        }
+    }
+    sc.keys.clear();
+    let mut totals = [0u128; 2];
     for &(p, s) in pools {
         let s = s as u128;
         for gr in &p.groups {
             let (a, z) = (buckets.key(gr.vlo), buckets.key(gr.vhi));
+            sc.keys.push((a as u32, z as u32));
             let n = (gr.hi - gr.lo) as u128 * s;
             let c = gr.cw as u128 * s;
-            starts[0][a] += n;
-            ends[0][z] += n;
-            starts[1][a] += c;
-            ends[1][z] += c;
+            sc.starts[0][a] += n;
+            sc.ends[0][z] += n;
+            sc.starts[1][a] += c;
+            sc.ends[1][z] += c;
+            totals[0] += n;
+            totals[1] += c;
         }
     }
-    let mut out = [[0.0; 3]; 2];
-    let mut totals = [0u128; 2];
+    // Per target: its bracket of keys `lo..=hi`, the weight of the groups wholly below it
+    // (ending below `lo`), and the weight to reach.
+    let mut brackets = [(usize::MAX, 0usize, 0u128, 0u128); 6];
     for kind in 0..2 {
-        let total: u128 = starts[kind].iter().sum();
-        totals[kind] = total;
+        let total = totals[kind];
         if total == 0 {
             continue;
         }
+        let (starts, ends) = (&sc.starts[kind], &sc.ends[kind]);
         // Running sums, kept as the targets increase.
-        let (mut lo, mut lo_cum) = (0usize, starts[kind][0]);
-        let (mut hi, mut hi_cum) = (0usize, ends[kind][0]);
+        let (mut lo, mut lo_cum, mut below) = (0usize, starts[0], 0u128);
+        let (mut hi, mut hi_cum) = (0usize, ends[0]);
         for (slot, p) in [50u128, 95, 99].into_iter().enumerate() {
             let target = (p * total).div_ceil(100).max(1);
             while lo_cum < target {
+                below += ends[lo];
                 lo += 1;
-                lo_cum += starts[kind][lo];
+                lo_cum += starts[lo];
             }
             while hi_cum < target {
                 hi += 1;
-                hi_cum += ends[kind][hi];
+                hi_cum += ends[hi];
             }
-            // Groups ending below bucket `lo` lie wholly below the range.
-            let mut below: u128 = ends[kind][..lo].iter().sum();
-            let mut cands: Vec<(f64, u128)> = Vec::new();
-            for &(pass, s) in pools {
-                let s = s as u128;
-                let ix = pass.ix;
-                // A run's groups reaching into the range are consecutive: those after every
-                // group ending below it, before the first starting above it.
-                for &(a, z) in &pass.run_groups {
-                    let run = &pass.groups[a..z];
-                    let from = run.partition_point(|gr| buckets.key(gr.vhi) < lo);
-                    let to = from + run[from..].partition_point(|gr| buckets.key(gr.vlo) <= hi);
-                    for gr in &run[from..to] {
-                        for i in gr.lo as usize..gr.hi as usize {
-                            let w = if kind == 0 { s } else { ix.w[i] as u128 * s };
-                            if w == 0 {
-                                continue;
-                            }
-                            let m = gr.t * ix.g[i];
-                            let k = buckets.key(m);
-                            if k < lo {
-                                below += w;
-                            } else if k <= hi {
-                                cands.push((m, w));
-                            }
+            brackets[3 * kind + slot] = (lo, hi, below, target);
+        }
+    }
+    // The histograms back to zero: only the keys the groups touched.
+    for &(a, z) in &sc.keys {
+        let (a, z) = (a as usize, z as usize);
+        sc.starts[0][a] = 0;
+        sc.starts[1][a] = 0;
+        sc.ends[0][z] = 0;
+        sc.ends[1][z] = 0;
+    }
+    let mut out = [[0.0; 3]; 2];
+    let live: Vec<usize> = (0..6).filter(|&j| brackets[j].0 != usize::MAX).collect();
+    if live.is_empty() {
+        return (out, totals);
+    }
+    let union_lo = live.iter().map(|&j| brackets[j].0).min().unwrap_or(0) as u32;
+    let union_hi = live.iter().map(|&j| brackets[j].1).max().unwrap_or(0) as u32;
+    let mut below = [0u128; 6];
+    for &j in &live {
+        below[j] = brackets[j].2;
+        sc.cands[j].clear();
+    }
+    let mut first = 0;
+    for &(pass, s) in pools {
+        let s = s as u128;
+        let ix = pass.ix;
+        let keys = &sc.keys[first..first + pass.groups.len()];
+        first += pass.groups.len();
+        // A run's groups reaching into a key range are consecutive (their bounds never
+        // decrease): those after every group ending below it, before the first starting
+        // above it.
+        for &(a, z) in &pass.run_groups {
+            let (run, rk) = (&pass.groups[a..z], &keys[a..z]);
+            let from = rk.partition_point(|k| k.1 < union_lo);
+            let to = from + rk[from..].partition_point(|k| k.0 <= union_hi);
+            for (gr, &(ka, kz)) in run[from..to].iter().zip(&rk[from..to]) {
+                let (ka, kz) = (ka as usize, kz as usize);
+                let mut mask = 0u8;
+                for &j in &live {
+                    if ka <= brackets[j].1 && kz >= brackets[j].0 {
+                        mask |= 1 << j;
+                    }
+                }
+                if mask == 0 {
+                    continue;
+                }
+                for i in gr.lo as usize..gr.hi as usize {
+                    let m = gr.t * ix.g[i];
+                    let k = buckets.key(m);
+                    let cw = ix.w[i] as u128 * s;
+                    let mut bits = mask;
+                    while bits != 0 {
+                        let j = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let w = if j < 3 { s } else { cw };
+                        if w == 0 {
+                            continue;
+                        }
+                        if k < brackets[j].0 {
+                            below[j] += w;
+                        } else if k <= brackets[j].1 {
+                            sc.cands[j].push((m, w));
                         }
                     }
                 }
             }
-            out[kind][slot] = resolve(cands, below, target);
         }
+    }
+    for &j in &live {
+        out[j / 3][j % 3] = resolve(&mut sc.cands[j], below[j], brackets[j].3, &mut sc.fine);
     }
     (out, totals)
 }
 
 /// The first of the values `cands` (with their weights, above 0) at which the running weight,
 /// starting from `below`, reaches `target`: buckets narrow the values down until few are left,
-/// which are sorted.
-fn resolve(mut cands: Vec<(f64, u128)>, mut below: u128, target: u128) -> f64 {
-    const COUNT: usize = 1024;
+/// which are sorted. `hist` is a buffer (any content).
+fn resolve(cands: &mut Vec<(f64, u128)>, mut below: u128, target: u128, hist: &mut Vec<u128>) -> f64 {
+    const COUNT: usize = 256;
     while cands.len() > 64 {
         let (lo, hi) = cands
             .iter()
@@ -604,8 +682,9 @@ fn resolve(mut cands: Vec<(f64, u128)>, mut below: u128, target: u128) -> f64 {
             return lo;
         }
         let b = Buckets::new(lo, hi, COUNT);
-        let mut hist = vec![0u128; COUNT];
-        for &(m, w) in &cands {
+        hist.clear();
+        hist.resize(COUNT, 0);
+        for &(m, w) in cands.iter() {
             hist[b.key(m)] += w;
         }
         let mut k = 0;
@@ -617,7 +696,7 @@ fn resolve(mut cands: Vec<(f64, u128)>, mut below: u128, target: u128) -> f64 {
     }
     cands.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
     let mut run = below;
-    for &(m, w) in &cands {
+    for &(m, w) in cands.iter() {
         run += w;
         if run >= target {
             return m;
@@ -650,16 +729,17 @@ fn add_product(acc: (f64, f64), a: f64, b: f64) -> (f64, f64) {
 /// The screen metrics of a configuration with selection `splits` and texel sizes `texel`;
 /// `visible` is the visible depth range already clipped (see [`visible_range`]).
 pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f64, f64)>) -> ScreenStats {
-    let pass = ViewPass::new(vis, splits, texel, false);
-    own_stats(&pass, visible)
+    let mut sc = Scratch::default();
+    let pass = ViewPass::new(vis, splits, texel, false, &mut sc);
+    own_stats(&pass, visible, &mut sc)
 }
 
 /// A view's own statistics from its pass.
-fn own_stats(pass: &ViewPass<'_>, visible: Option<(f64, f64)>) -> ScreenStats {
+fn own_stats(pass: &ViewPass<'_>, visible: Option<(f64, f64)>, sc: &mut Scratch) -> ScreenStats {
     let (plain, weighted) = match pass.range {
         Some((lo, hi)) => {
             let count = Buckets::count_for(pass.groups.len());
-            let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, count), count);
+            let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, count), count, sc);
             (v[0], v[1])
         }
         None => ([0.0; 3], [0.0; 3]),
@@ -793,14 +873,15 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
 /// [`pool`], with each part's pass (its served count and, with `octaves`, its values per
 /// [`octave`]).
 fn pool_passes<'a>(parts: &[PoolPart<'a>], octaves: bool) -> (Pooled, Vec<ViewPass<'a>>) {
+    let mut sc = Scratch::default();
     let passes: Vec<ViewPass<'a>> = parts
         .iter()
-        .map(|p| ViewPass::new(p.vis, p.splits, p.texel, octaves))
+        .map(|p| ViewPass::new(p.vis, p.splits, p.texel, octaves, &mut sc))
         .collect();
     let views: Vec<ScreenStats> = parts
         .iter()
         .zip(&passes)
-        .map(|(p, pass)| own_stats(pass, p.visible))
+        .map(|(p, pass)| own_stats(pass, p.visible, &mut sc))
         .collect();
     // The level's percentiles on one bucket key over every part's values.
     let range = passes
@@ -811,7 +892,7 @@ fn pool_passes<'a>(parts: &[PoolPart<'a>], octaves: bool) -> (Pooled, Vec<ViewPa
     let (level_p, totals) = match range {
         Some((lo, hi)) => {
             let count = Buckets::count_for(passes.iter().map(|p| p.groups.len()).sum());
-            select(&pools, Buckets::new(lo, hi, count), count)
+            select(&pools, Buckets::new(lo, hi, count), count, &mut sc)
         }
         None => ([[0.0; 3]; 2], [0; 2]),
     };
@@ -888,9 +969,6 @@ impl Visibility {
         self.screen_index.get_or_init(|| ScreenIndex::of(self))
     }
 }
-
-/// Number of [`octave`]s: every finite `m >= 0` has one below it.
-const OCTAVES_COUNT: usize = 2048;
 
 /// A value's octave: `(bits(m) - 1) >> 52`, so that a normal `m` with octave `b` lies in
 /// `(2^(b - 1023), 2^(b - 1022)]` and `m > 2^j` exactly when `b >= j + 1023` (0 counts in octave 0).
@@ -1025,12 +1103,15 @@ pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
         let above = passes
             .iter()
             .map(|pass| {
-                let mut list = Vec::new();
+                let mut octaves = pass.octaves.clone();
+                octaves.sort_unstable_by(|x, y| y.0.cmp(&x.0));
+                let mut list: Vec<(u16, u64)> = Vec::new();
                 let mut acc = 0u64;
-                for (b, &c) in pass.octaves.iter().enumerate().rev() {
-                    if c > 0 {
-                        acc += c as u64;
-                        list.push((b as u16, acc));
+                for &(b, c) in &octaves {
+                    acc += c as u64;
+                    match list.last_mut() {
+                        Some(last) if last.0 == b => last.1 = acc,
+                        _ => list.push((b, acc)),
                     }
                 }
                 list.reverse();
