@@ -427,11 +427,13 @@ impl<'a> ViewPass<'a> {
         // below the bound, and the receivers from it to the bound counted on.
         let nb = bounds.len();
         let buckets = ix.buckets();
+        // Every entry is set below before it is counted on: the buffers only grow.
         let (cut, wcut) = (&mut sc.cut, &mut sc.wcut);
-        cut.clear();
-        cut.resize(buckets * nb, 0);
-        wcut.clear();
-        wcut.resize(buckets * nb, 0);
+        if cut.len() < buckets * nb {
+            cut.resize(buckets * nb, 0);
+            wcut.resize(buckets * nb, 0);
+        }
+        pass.groups.reserve((buckets * pass.runs.len()).min(n));
         for (j, &p) in bounds.iter().enumerate() {
             let row = p / ix.row;
             let (c, w) = (
@@ -596,6 +598,20 @@ impl Scratch {
             ..Scratch::default()
         }
     }
+}
+
+thread_local! {
+    /// This thread's [`Scratch`]: kept between pools, so that a sweep's settings do not each
+    /// allocate (and fault in) fresh buffers.
+    static SCRATCH: std::cell::RefCell<Option<Scratch>> = const { std::cell::RefCell::new(None) };
+}
+
+/// `f` with this thread's [`Scratch`] (a new one if it is in use).
+fn with_scratch<R>(f: impl FnOnce(&mut Scratch) -> R) -> R {
+    SCRATCH.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut slot) => f(slot.get_or_insert_with(Scratch::new)),
+        Err(_) => f(&mut Scratch::new()),
+    })
 }
 
 /// Where a percentile of a pool was found: the pixel with factor `g` that cascade `i` of the
@@ -860,9 +876,10 @@ fn add_product(acc: (f64, f64), a: f64, b: f64) -> (f64, f64) {
 /// The screen metrics of a configuration with selection `splits` and texel sizes `texel`;
 /// `visible` is the visible depth range already clipped (see [`visible_range`]).
 pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f64, f64)>) -> ScreenStats {
-    let mut sc = Scratch::new();
-    let pass = ViewPass::new(vis, splits, texel, false, &mut sc);
-    own_stats(&pass, visible, &mut sc, &mut [None; 6])
+    with_scratch(|sc| {
+        let pass = ViewPass::new(vis, splits, texel, false, sc);
+        own_stats(&pass, visible, sc, &mut [None; 6])
+    })
 }
 
 /// A view's own statistics from its pass.
@@ -1013,22 +1030,31 @@ struct PoolHints {
 /// [`pool`], with each part's pass (its served count and, with `octaves`, its values per
 /// [`octave`]); `hints` are tried first and updated ([`select`]).
 fn pool_passes<'a>(parts: &[PoolPart<'a>], octaves: bool, hints: &mut PoolHints) -> (Pooled, Vec<ViewPass<'a>>) {
+    with_scratch(|sc| pool_passes_in(parts, octaves, hints, sc))
+}
+
+/// [`pool_passes`] with the buffers `sc`.
+fn pool_passes_in<'a>(
+    parts: &[PoolPart<'a>],
+    octaves: bool,
+    hints: &mut PoolHints,
+    sc: &mut Scratch,
+) -> (Pooled, Vec<ViewPass<'a>>) {
     if hints.views.len() != parts.len() {
         *hints = PoolHints {
             level: [None; 6],
             views: vec![[None; 6]; parts.len()],
         };
     }
-    let mut sc = Scratch::new();
     let passes: Vec<ViewPass<'a>> = parts
         .iter()
-        .map(|p| ViewPass::new(p.vis, p.splits, p.texel, octaves, &mut sc))
+        .map(|p| ViewPass::new(p.vis, p.splits, p.texel, octaves, sc))
         .collect();
     let views: Vec<ScreenStats> = parts
         .iter()
         .zip(&passes)
         .zip(hints.views.iter_mut())
-        .map(|((p, pass), h)| own_stats(pass, p.visible, &mut sc, h))
+        .map(|((p, pass), h)| own_stats(pass, p.visible, sc, h))
         .collect();
     // The level's percentiles on one bucket key over every part's values.
     let range = passes
@@ -1039,7 +1065,7 @@ fn pool_passes<'a>(parts: &[PoolPart<'a>], octaves: bool, hints: &mut PoolHints)
     let (level_p, totals) = match range {
         Some((lo, hi)) => {
             let count = Buckets::count_for(passes.iter().map(|p| p.groups.len()).sum());
-            select(&pools, Buckets::new(lo, hi, count), count, &mut sc, &mut hints.level)
+            select(&pools, Buckets::new(lo, hi, count), count, sc, &mut hints.level)
         }
         None => ([[0.0; 3]; 2], [0; 2]),
     };
