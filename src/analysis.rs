@@ -173,21 +173,10 @@ pub struct CacheSummary {
     /// Cascade renders per frame on average: the sum over cascades of 1 / update_every
     /// (the cascade count without caching).
     pub renders_per_frame: f64,
-    /// Stale frames whose slice the held window does not cover, summed over cascades and paths.
-    pub stale_coverage_violations: u64,
-    /// The worst cascade's share of frames with such a hole.
-    pub stale_coverage_fraction: f64,
-    /// The largest growth, in texels per side of its own window, a cascade's held window needs
-    /// to cover every stale frame.
-    pub stale_margin: f64,
-    /// The same in world units, the largest over the cascades.
-    pub stale_margin_world: f64,
-    /// The worst cascade's RMS S3 over its update pairs (texels).
-    pub update_drift: f64,
-    /// S5 over the receiver steps at the frames their cascade was rendered again (ground truth
-    /// only).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub update_flicker: Option<f64>,
+    /// Stale-window figures over every cascade: the violations summed (over cascades and
+    /// paths), every other figure the worst cascade's.
+    #[serde(flatten)]
+    pub figures: StaleFigures,
 }
 
 /// One cascade's cached-cascade figures (see [`CacheSummary`]).
@@ -196,15 +185,27 @@ pub struct CascadeCache {
     pub update_every: u64,
     /// 1 / update_every: the share of frames that render this cascade.
     pub update_rate: f64,
+    /// This cascade's own stale-window figures.
+    #[serde(flatten)]
+    pub figures: StaleFigures,
+}
+
+/// What holding a cascade's window between its updates costs (written flat, beside the
+/// fields of [`CacheSummary`] or [`CascadeCache`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct StaleFigures {
+    /// Stale frames whose slice the held window does not cover.
     pub stale_coverage_violations: u64,
-    /// Over the frames walked.
+    /// The share of frames walked with such a hole.
     pub stale_coverage_fraction: f64,
-    /// Texels of this cascade's window, per side.
+    /// The largest growth, in texels per side of the cascade's own window, a held window
+    /// needs to cover every stale frame.
     pub stale_margin: f64,
+    /// The same in world units.
     pub stale_margin_world: f64,
-    /// RMS S3 over this cascade's update pairs (texels).
+    /// RMS S3 over the update pairs (texels).
     pub update_drift: f64,
-    /// S5 over the receiver steps this cascade served at its updates (ground truth only).
+    /// S5 over the receiver steps served at the updates (ground truth only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub update_flicker: Option<f64>,
 }
@@ -796,46 +797,12 @@ pub struct LevelScreen {
 /// views of its own (the view is its one camera; so a level's views are not copied once per
 /// view, and an analysis of it measures that view alone).
 pub(crate) fn config_for_view(config: &Config, view: &crate::config::ViewSettings) -> Config {
-    // Every field named, so a new one is not forgotten here.
-    let Config {
-        name,
-        path,
-        camera: _,
-        screen,
-        light_direction,
-        light_direction_as_written,
-        scene,
-        geometry,
-        world_offset,
-        shadow,
-        motion,
-        analysis,
-        sweep,
-        preset_input,
-        truth,
-        views: _,
-        warnings: _,
-        cost,
-    } = config;
+    // The views list is shared (an `Arc`): the clone copies no view.
     Config {
-        name: name.clone(),
-        path: path.clone(),
         camera: view.camera.clone(),
-        screen: *screen,
-        light_direction: *light_direction,
-        light_direction_as_written: *light_direction_as_written,
-        scene: *scene,
-        geometry: geometry.clone(),
-        world_offset: *world_offset,
-        shadow: shadow.clone(),
-        motion: motion.clone(),
-        analysis: analysis.clone(),
-        sweep: sweep.clone(),
-        preset_input: preset_input.clone(),
-        truth: truth.clone(),
-        views: Vec::new(),
+        views: Default::default(),
         warnings: Vec::new(),
-        cost: *cost,
+        ..config.clone()
     }
 }
 
@@ -897,7 +864,7 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
     // Each view's config is the config without its views and with the view's camera: the
     // views are left out once here, not copied for every view.
     let base = Config {
-        views: Vec::new(),
+        views: Default::default(),
         ..config.clone()
     };
     let inputs: Vec<ScreenInputs> = config
@@ -907,7 +874,7 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
         .collect::<Option<_>>()?;
     let parts: Vec<screen::PoolPart<'_>> = inputs
         .iter()
-        .zip(&config.views)
+        .zip(config.views.iter())
         .map(|(x, v)| screen::PoolPart {
             vis: &x.vis,
             splits: &x.splits,
@@ -990,7 +957,7 @@ pub(crate) fn warm_views(config: &Config, rays_only: bool) {
         return;
     };
     geometry.scene.keep_at_least(2 * config.views.len() + 8);
-    for v in &config.views {
+    for v in config.views.iter() {
         let setup = config_for_view(config, v).setup();
         if rays_only {
             let _ = setup.visibility_hits();
@@ -1621,29 +1588,33 @@ fn cache_figures(
         .map(|i| CascadeCache {
             update_every: s.every[i] as u64,
             update_rate: 1.0 / s.every[i] as f64,
-            stale_coverage_violations: s.violations[i],
-            stale_coverage_fraction: s.violations[i] as f64 / frames,
-            stale_margin: s.margin_texels[i],
-            stale_margin_world: s.margin_world[i],
-            update_drift: s.update_drift_rms[i],
-            update_flicker: flicker.and_then(|f| {
-                let n = f.update_steps.get(i).copied().unwrap_or(0);
-                (n > 0).then(|| f.update_flips[i] as f64 / n as f64)
-            }),
+            figures: StaleFigures {
+                stale_coverage_violations: s.violations[i],
+                stale_coverage_fraction: s.violations[i] as f64 / frames,
+                stale_margin: s.margin_texels[i],
+                stale_margin_world: s.margin_world[i],
+                update_drift: s.update_drift_rms[i],
+                update_flicker: flicker.and_then(|f| {
+                    let n = f.update_steps.get(i).copied().unwrap_or(0);
+                    (n > 0).then(|| f.update_flips[i] as f64 / n as f64)
+                }),
+            },
         })
         .collect();
-    let worst = |f: fn(&CascadeCache) -> f64| cascades.iter().map(f).fold(0.0, f64::max);
+    let worst = |f: fn(&StaleFigures) -> f64| cascades.iter().map(|c| f(&c.figures)).fold(0.0, f64::max);
     let summary = CacheSummary {
         renders_per_frame: cascades.iter().map(|c| c.update_rate).sum(),
-        stale_coverage_violations: s.violations.iter().sum(),
-        stale_coverage_fraction: worst(|c| c.stale_coverage_fraction),
-        stale_margin: worst(|c| c.stale_margin),
-        stale_margin_world: worst(|c| c.stale_margin_world),
-        update_drift: worst(|c| c.update_drift),
-        update_flicker: flicker.and_then(|f| {
-            let n: u64 = f.update_steps.iter().sum();
-            (n > 0).then(|| f.update_flips.iter().sum::<u64>() as f64 / n as f64)
-        }),
+        figures: StaleFigures {
+            stale_coverage_violations: s.violations.iter().sum(),
+            stale_coverage_fraction: worst(|c| c.stale_coverage_fraction),
+            stale_margin: worst(|c| c.stale_margin),
+            stale_margin_world: worst(|c| c.stale_margin_world),
+            update_drift: worst(|c| c.update_drift),
+            update_flicker: flicker.and_then(|f| {
+                let n: u64 = f.update_steps.iter().sum();
+                (n > 0).then(|| f.update_flips.iter().sum::<u64>() as f64 / n as f64)
+            }),
+        },
     };
     Some((summary, cascades))
 }

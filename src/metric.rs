@@ -409,7 +409,7 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         shown: Shown::Never,
         in_rows: true,
         screen: false,
-        value: |s| s.cache.map_or(Value::Missing, |c| Value::Count(c.stale_coverage_violations)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Count(c.figures.stale_coverage_violations)),
     },
     SummaryDef {
         name: "stale_coverage_fraction",
@@ -420,7 +420,7 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         shown: Shown::Never,
         in_rows: true,
         screen: false,
-        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.stale_coverage_fraction)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.figures.stale_coverage_fraction)),
     },
     SummaryDef {
         name: "stale_margin",
@@ -431,7 +431,7 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         shown: Shown::Fixed,
         in_rows: true,
         screen: false,
-        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.stale_margin)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.figures.stale_margin)),
     },
     SummaryDef {
         name: "stale_margin_world",
@@ -442,7 +442,7 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         shown: Shown::Fixed,
         in_rows: true,
         screen: false,
-        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.stale_margin_world)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.figures.stale_margin_world)),
     },
     SummaryDef {
         name: "update_drift",
@@ -453,7 +453,7 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         shown: Shown::Fixed,
         in_rows: true,
         screen: false,
-        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.update_drift)),
+        value: |s| s.cache.map_or(Value::Missing, |c| Value::Real(c.figures.update_drift)),
     },
     SummaryDef {
         name: "update_flicker",
@@ -464,7 +464,7 @@ pub(crate) const SUMMARY: &[SummaryDef] = &[
         shown: Shown::Fixed,
         in_rows: false,
         screen: true,
-        value: |s| Value::maybe(s.cache.and_then(|c| c.update_flicker)),
+        value: |s| Value::maybe(s.cache.and_then(|c| c.figures.update_flicker)),
     },
     SummaryDef {
         name: "acne_fraction",
@@ -1514,7 +1514,7 @@ pub(crate) const CASCADE: &[CascadeDef] = &[
         direction: Direction::HigherIsWorse,
         help: "cached cascades: frames in which this cascade kept an earlier window that does not hold the current slice, over the motion paths; only with [shadow] update_every",
         screen: false,
-        value: |c| Value::Count(c.cache.map_or(0, |x| x.stale_coverage_violations)),
+        value: |c| Value::Count(c.cache.map_or(0, |x| x.figures.stale_coverage_violations)),
     },
     CascadeDef {
         name: "stale_coverage_fraction",
@@ -1522,7 +1522,7 @@ pub(crate) const CASCADE: &[CascadeDef] = &[
         direction: Direction::HigherIsWorse,
         help: "cached cascades: stale_coverage_violations over the frames walked; only with [shadow] update_every",
         screen: false,
-        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.stale_coverage_fraction)),
+        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.figures.stale_coverage_fraction)),
     },
     CascadeDef {
         name: "stale_margin",
@@ -1530,7 +1530,7 @@ pub(crate) const CASCADE: &[CascadeDef] = &[
         direction: Direction::HigherIsWorse,
         help: "cached cascades: the smallest growth of this cascade's held window, in its texels on every side, that covers the slice in every stale frame; only with [shadow] update_every",
         screen: false,
-        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.stale_margin)),
+        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.figures.stale_margin)),
     },
     CascadeDef {
         name: "stale_margin_world",
@@ -1538,7 +1538,7 @@ pub(crate) const CASCADE: &[CascadeDef] = &[
         direction: Direction::HigherIsWorse,
         help: "cached cascades: stale_margin in world units; only with [shadow] update_every",
         screen: false,
-        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.stale_margin_world)),
+        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.figures.stale_margin_world)),
     },
     CascadeDef {
         name: "update_drift",
@@ -1546,7 +1546,7 @@ pub(crate) const CASCADE: &[CascadeDef] = &[
         direction: Direction::HigherIsWorse,
         help: "cached cascades: RMS sub-texel drift (S3) of this cascade over the frame pairs at which it is rendered again, configured snapping; only with [shadow] update_every",
         screen: false,
-        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.update_drift)),
+        value: |c| Value::Real(c.cache.map_or(0.0, |x| x.figures.update_drift)),
     },
     CascadeDef {
         name: "update_flicker",
@@ -1554,7 +1554,7 @@ pub(crate) const CASCADE: &[CascadeDef] = &[
         direction: Direction::HigherIsWorse,
         help: "cached cascades, ground truth: S5 over the receiver steps this cascade serves at its renders; n/a when it serves none; only with [shadow] update_every and ground_truth",
         screen: true,
-        value: |c| Value::maybe(c.cache.and_then(|x| x.update_flicker)),
+        value: |c| Value::maybe(c.cache.and_then(|x| x.figures.update_flicker)),
     },
     CascadeDef {
         name: "acne_fraction",

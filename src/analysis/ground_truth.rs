@@ -129,7 +129,7 @@ impl DepthFormatIndex {
 }
 
 /// Most texel reads the pass may be asked for, estimated before any work ([`cost`]): 2^30,
-/// about 17 times the default scene's estimate (62 million; it runs in about 20 s of CPU).
+/// about 17 times the default scene's estimate (62 million; docs/speed.md gives its time).
 pub const MAX_TEXEL_READS: u64 = 1 << 30;
 
 /// The pass's size, estimated before any work from the settings alone.
@@ -470,15 +470,8 @@ mod tests {
     #[test]
     fn the_pass_reports_every_frame_it_walks_to_the_progress_bar() {
         let text = r#"
-[camera]
-position = [0.0, 6.0, 12.0]
-target = [0.0, 0.0, -6.0]
-fov_y_deg = 60.0
-near = 0.1
-far = 200.0
-[screen]
-width = 160
-height = 90
+camera = { position = [0.0, 6.0, 12.0], target = [0.0, 0.0, -6.0], fov_y_deg = 60.0, near = 0.1, far = 200.0 }
+screen = { width = 160, height = 90 }
 [light]
 direction = [-0.4, -1.0, -0.3]
 [scene]

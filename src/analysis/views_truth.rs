@@ -183,15 +183,8 @@ pub(crate) fn apply(
 /// 640 × 360 screen, two cascades, and three views that each see the lit ground.
 #[cfg(test)]
 pub(crate) const TEST_LEVEL: &str = r#"
-[camera]
-position = [0.0, 10.0, 0.0]
-target = [0.0, 0.0, -50.0]
-fov_y_deg = 60.0
-near = 0.1
-far = 1000.0
-[screen]
-width = 640
-height = 360
+camera = { position = [0.0, 10.0, 0.0], target = [0.0, 0.0, -50.0], fov_y_deg = 60.0, near = 0.1, far = 1000.0 }
+screen = { width = 640, height = 360 }
 [light]
 direction = [-0.4, -1.0, -0.3]
 [scene]

@@ -585,7 +585,8 @@ pub struct Config {
     pub truth: TruthSettings,
     /// The level's views when the config names any (`[[view]]`, `[views]`); empty means
     /// `[camera]` is the one view, as before views existed. See [`Config::level_views`].
-    pub(crate) views: Vec<ViewSettings>,
+    // Shared, so a view's config (`config_for_view`) clones the rest without copying the list.
+    pub(crate) views: std::sync::Arc<Vec<ViewSettings>>,
     /// Warnings about the config that do not stop it (a view that sees no receiver, a glTF
     /// camera's aspect ratio unlike the screen's): printed on stderr when a file is loaded.
     pub(crate) warnings: Vec<String>,
@@ -638,7 +639,6 @@ impl Default for CostSettings {
 impl Config {
     /// The views the level is judged on: the configured views, or `[camera]` alone (named
     /// `camera`, weight 1) when none is configured.
-    #[allow(dead_code)] // the views pipeline (issue 22) is its caller; it lands next
     pub(crate) fn level_views(&self) -> Vec<ViewSettings> {
         if self.views.is_empty() {
             vec![ViewSettings {
@@ -647,7 +647,7 @@ impl Config {
                 weight: 1.0,
             }]
         } else {
-            self.views.clone()
+            self.views.to_vec()
         }
     }
 }

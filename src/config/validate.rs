@@ -131,7 +131,7 @@ fn validate(raw: RawConfig, v: &Validator<'_>, base_dir: Option<&Path>) -> Resul
             ..PresetInput::default()
         },
         truth,
-        views,
+        views: std::sync::Arc::new(views),
         warnings: Vec::new(),
         cost,
     };

@@ -69,7 +69,7 @@ pub(crate) fn add_views(
     };
     if raw.from_gltf == Some(true) {
         let (views, warnings) = gltf_views(config, v, gltf)?;
-        config.views.extend(views);
+        std::sync::Arc::make_mut(&mut config.views).extend(views);
         config.warnings.extend(warnings);
         keys.push((config.views.len(), "views.from_gltf"));
     }
@@ -83,7 +83,7 @@ pub(crate) fn add_views(
     }
     if let Some(from) = &raw.from_path {
         let views = path_views(config, v, base_dir, from, raw.every)?;
-        config.views.extend(views);
+        std::sync::Arc::make_mut(&mut config.views).extend(views);
         keys.push((config.views.len(), "views.from_path"));
     }
     sampled_views(config, v, raw)?;
@@ -142,7 +142,7 @@ fn gltf_views(
             ),
         ));
     }
-    let mut out: Vec<ViewSettings> = config.views.clone();
+    let mut out: Vec<ViewSettings> = config.views.to_vec();
     let first = out.len();
     let mut warnings = Vec::new();
     for cam in &g.cameras {
@@ -241,7 +241,7 @@ fn path_views(
             ),
         ));
     }
-    let mut out: Vec<ViewSettings> = config.views.clone();
+    let mut out: Vec<ViewSettings> = config.views.to_vec();
     let first = out.len();
     for (frame, (position, target)) in picked {
         if position.abs().max(target.abs()).max_element() > MAX_WORLD {
@@ -379,7 +379,7 @@ fn sampled_views(config: &mut Config, v: &Validator<'_>, raw: &RawViews) -> Resu
     for (k, s) in found.into_iter().enumerate() {
         let name = unique(&format!("sample_{k:0width$}"), &config.views);
         let camera = view_camera(&config.camera, s.eye, s.forward, DVec3::Y, config.camera.fov_y_deg);
-        config.views.push(ViewSettings {
+        std::sync::Arc::make_mut(&mut config.views).push(ViewSettings {
             name,
             camera,
             weight: 1.0,
@@ -669,7 +669,7 @@ mod tests {
         assert_ne!(a, sampled(4));
         assert_eq!(a[0].name, "sample_000");
         let b = Aabb::new(DVec3::new(-5.0, 0.0, -5.0), DVec3::new(5.0, 4.0, 5.0));
-        for v in &a {
+        for v in a.iter() {
             let p = v.camera.position;
             assert!(
                 !(p.cmpgt(b.min).all() && p.cmplt(b.max).all()),

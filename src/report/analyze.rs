@@ -314,19 +314,19 @@ fn cache_table(a: &Analysis, every: &crate::config::UpdateEvery) -> String {
             r.cascade,
             x.update_every,
             short_number(x.update_rate),
-            x.stale_coverage_violations,
-            short_number(x.stale_coverage_fraction),
-            short_number(x.stale_margin),
-            short_number(x.stale_margin_world),
-            short_number(x.update_drift)
+            x.figures.stale_coverage_violations,
+            short_number(x.figures.stale_coverage_fraction),
+            short_number(x.figures.stale_margin),
+            short_number(x.figures.stale_margin_world),
+            short_number(x.figures.update_drift)
         );
     }
     if let Some(s) = &a.summary.cache {
         let _ = writeln!(
             out,
             "  stale_coverage_violations {} (frames x cascades with a hole); worst cascade's share {}",
-            s.stale_coverage_violations,
-            short_number(s.stale_coverage_fraction)
+            s.figures.stale_coverage_violations,
+            short_number(s.figures.stale_coverage_fraction)
         );
     }
     out

@@ -451,13 +451,22 @@ fn all_ones_is_todays_analysis_and_a_cached_cascade_reports_its_cost() {
     assert_eq!(s.renders_per_frame, 2.75);
     let per: Vec<_> = a.cascades.iter().map(|c| c.cache.unwrap()).collect();
     assert_eq!(per.iter().map(|c| c.update_every).collect::<Vec<_>>(), [1, 1, 2, 4]);
-    assert_eq!(per[0].stale_coverage_violations + per[1].stale_coverage_violations, 0);
     assert_eq!(
-        s.stale_coverage_violations,
-        per.iter().map(|c| c.stale_coverage_violations).sum::<u64>()
+        per[0].figures.stale_coverage_violations + per[1].figures.stale_coverage_violations,
+        0
     );
-    assert!(s.stale_coverage_violations > 0, "a tight fit under a turn leaves holes");
-    assert_eq!(s.stale_margin, per.iter().map(|c| c.stale_margin).fold(0.0, f64::max));
+    assert_eq!(
+        s.figures.stale_coverage_violations,
+        per.iter().map(|c| c.figures.stale_coverage_violations).sum::<u64>()
+    );
+    assert!(
+        s.figures.stale_coverage_violations > 0,
+        "a tight fit under a turn leaves holes"
+    );
+    assert_eq!(
+        s.figures.stale_margin,
+        per.iter().map(|c| c.figures.stale_margin).fold(0.0, f64::max)
+    );
     let cols = csm_lab::metric::cascade_columns(false, false, false, true, false, false);
     for name in [
         "update_every",
@@ -474,7 +483,7 @@ fn all_ones_is_todays_analysis_and_a_cached_cascade_reports_its_cost() {
     assert_eq!(at("update_rate"), "0.25");
     assert_eq!(
         at("stale_coverage_violations"),
-        &per[3].stale_coverage_violations.to_string()
+        &per[3].figures.stale_coverage_violations.to_string()
     );
 }
 

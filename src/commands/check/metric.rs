@@ -134,12 +134,14 @@ mod tests {
             views: Vec::new(),
             cache: Some(crate::analysis::CacheSummary {
                 renders_per_frame: 2.75,
-                stale_coverage_violations: 13,
-                stale_coverage_fraction: 0.0625,
-                stale_margin: 14.5,
-                stale_margin_world: 15.5,
-                update_drift: 0.4375,
-                update_flicker: None,
+                figures: crate::analysis::StaleFigures {
+                    stale_coverage_violations: 13,
+                    stale_coverage_fraction: 0.0625,
+                    stale_margin: 14.5,
+                    stale_margin_world: 15.5,
+                    update_drift: 0.4375,
+                    update_flicker: None,
+                },
             }),
             cost: Default::default(),
         };
@@ -209,12 +211,14 @@ mod tests {
             cache: Some(crate::analysis::CascadeCache {
                 update_every: 4,
                 update_rate: 0.25,
-                stale_coverage_violations: 19,
-                stale_coverage_fraction: 0.0078125,
-                stale_margin: 20.5,
-                stale_margin_world: 21.5,
-                update_drift: 0.3125,
-                update_flicker: None,
+                figures: crate::analysis::StaleFigures {
+                    stale_coverage_violations: 19,
+                    stale_coverage_fraction: 0.0078125,
+                    stale_margin: 20.5,
+                    stale_margin_world: 21.5,
+                    update_drift: 0.3125,
+                    update_flicker: None,
+                },
             }),
             cost: Default::default(),
         };

@@ -12,8 +12,8 @@ use crate::commands::sweep::run::{in_pool, Row};
 use crate::config::Config;
 use crate::error::{GridError, Result};
 
-/// The most rows a sweep computes S5 for (a ground-truth pass costs about a second of one core
-/// on the default scene; see docs/ground-truth.md, "In a sweep").
+/// The most rows a sweep computes S5 for (each row is a ground-truth pass; docs/speed.md gives
+/// what a row costs on the default scene).
 pub(crate) const SAMPLE_MAX: usize = 12;
 
 /// The golden-ratio step (√5 − 1)/2 of the sample's low-discrepancy sequence.
