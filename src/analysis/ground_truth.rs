@@ -257,6 +257,9 @@ pub(crate) fn run(config: &Config, rig: &Rig, counts: bool, on_frames: &(dyn Fn(
     let exact = truth::exact_of(scene, &vis, rig.light.z);
     let points: Vec<Receiver> = exact.points.clone();
     let maps = || truth::ShadowMaps::new(scene).counting(counts);
+    // Frame 0's answers with a given sampling, from the shared exact answers.
+    let frame_zero =
+        |s: &Sampling| truth::frame_zero_exact(maps(), rig, &rig.light, &pose0, snap, &points, &exact.occluders, s);
     let away = truth::away_pixels(&vis);
     let mut zero_stats = CacheStats::default();
     let bias: Vec<Bias> = match bias_source {
@@ -278,16 +281,7 @@ pub(crate) fn run(config: &Config, rig: &Rig, counts: bool, on_frames: &(dyn Fn(
         }
         BiasSource::Recommended => {
             // The bias needed comes from the unbiased lookups; the pass then samples with it.
-            let (zero, stats) = truth::frame_zero_exact(
-                maps(),
-                rig,
-                &rig.light,
-                &pose0,
-                snap,
-                &points,
-                &exact.occluders,
-                &unbiased,
-            );
+            let (zero, stats) = frame_zero(&unbiased);
             zero_stats.add(stats);
             let needed: Vec<Option<f64>> = truth::cascade_truth(&zero, m, &unbiased)
                 .iter()
@@ -300,16 +294,7 @@ pub(crate) fn run(config: &Config, rig: &Rig, counts: bool, on_frames: &(dyn Fn(
         bias: bias.clone(),
         ..unbiased
     };
-    let (zero, stats) = truth::frame_zero_exact(
-        maps(),
-        rig,
-        &rig.light,
-        &pose0,
-        snap,
-        &points,
-        &exact.occluders,
-        &sampling,
-    );
+    let (zero, stats) = frame_zero(&sampling);
     zero_stats.add(stats);
     let truly_lit: Vec<bool> = zero.iter().map(|p| p.truly_lit).collect();
     let cascades = truth::cascade_truth(&zero, m, &sampling);

@@ -55,22 +55,8 @@ pub(crate) fn summary(config: &Config, reads: Reads) -> Summary {
 /// and each cascade's pixel share 0.
 pub(super) fn one_statistic(vis: &Visibility, splits: &[f64], texel: &[f64], which: Statistic) -> ScreenStats {
     let mut st = ScreenStats {
-        receiver_fraction: 0.0,
-        self_shadowed_fraction: 0.0,
-        aliasing_mean: 0.0,
-        aliasing_p50: 0.0,
-        aliasing_p95: 0.0,
-        aliasing_p99: 0.0,
-        aliasing_max: 0.0,
-        undersampled_fraction: 0.0,
-        visible_mean: 0.0,
-        visible_p50: 0.0,
-        visible_p95: 0.0,
-        visible_p99: 0.0,
-        visible_max: 0.0,
-        visible_z_lo: 0.0,
-        visible_z_hi: 0.0,
         cascade_pixels: vec![0.0; texel.len()],
+        ..ScreenStats::default()
     };
     *which.field(&mut st) = screen::statistic(vis, splits, texel, which);
     st

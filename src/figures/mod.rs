@@ -550,15 +550,17 @@ pub(crate) fn preset_color(i: usize) -> RGBColor {
     palette::PRESETS[i % palette::PRESETS.len()]
 }
 
+/// The colour map's stops, evenly spaced in t (viridis-like).
+const STOPS: [(f64, f64, f64); 5] = [
+    (68.0, 1.0, 84.0),
+    (59.0, 82.0, 139.0),
+    (33.0, 145.0, 140.0),
+    (94.0, 201.0, 98.0),
+    (253.0, 231.0, 37.0),
+];
+
 /// Sequential colour map (viridis-like stops), t in [0, 1].
 pub(crate) fn colormap(t: f64) -> RGBColor {
-    const STOPS: [(f64, f64, f64); 5] = [
-        (68.0, 1.0, 84.0),
-        (59.0, 82.0, 139.0),
-        (33.0, 145.0, 140.0),
-        (94.0, 201.0, 98.0),
-        (253.0, 231.0, 37.0),
-    ];
     let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
     let x = t * 4.0;
     // x is in [0, 4]: truncation is its floor (no libm call, which baseline x86-64 makes).
@@ -903,13 +905,6 @@ mod tests {
             let x = t * 4.0;
             let i = (x.floor() as usize).min(3);
             let f = x - i as f64;
-            const STOPS: [(f64, f64, f64); 5] = [
-                (68.0, 1.0, 84.0),
-                (59.0, 82.0, 139.0),
-                (33.0, 145.0, 140.0),
-                (94.0, 201.0, 98.0),
-                (253.0, 231.0, 37.0),
-            ];
             let (a, b) = (STOPS[i], STOPS[i + 1]);
             let lerp = |p: f64, q: f64| (p + (q - p) * f).round() as u8;
             let want = RGBColor(lerp(a.0, b.0), lerp(a.1, b.1), lerp(a.2, b.2));

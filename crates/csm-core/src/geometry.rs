@@ -15,6 +15,7 @@
 //!   a static point keeps its light-space coordinates in every frame.
 
 use glam::{DMat3, DVec2, DVec3};
+use std::cell::Cell;
 
 /// One of the 8 corners of a box or a frustum slice, and the single place that decodes its
 /// index: bit 0 picks the low (0) or high (1) side of the first axis (light or world x, or
@@ -361,43 +362,20 @@ impl Hexahedron {
 /// intersection, and each such vertex is a vertex of one solid inside the other, or where an
 /// edge of one solid crosses a face plane of the other.
 pub fn intersection_range(a: &Hexahedron, b: &Hexahedron, dir: DVec3) -> Option<(f64, f64)> {
-    // Tolerance for "inside": relative to the coordinates involved, so a touching contact
-    // still counts and rounding at 1e6 units does not reject real vertices.
-    let scale = a.scale().max(b.scale());
-    let size = a.extent().max(b.extent()).max(1e-300);
-    let eps = 1e-9 * size + 4.0 * f64::EPSILON * scale;
-    let mut lo = f64::INFINITY;
-    let mut hi = f64::NEG_INFINITY;
+    let (lo, hi) = (Cell::new(f64::INFINITY), Cell::new(f64::NEG_INFINITY));
     // A candidate whose value already lies in [lo, hi] (or is NaN, which min/max ignore) cannot
     // change the range: its inside tests, most of the work, are skipped. The same result.
-    let widens = |v: f64, lo: f64, hi: f64| v < lo || v > hi;
-    for (s, o) in [(a, b), (b, a)] {
-        for v in &s.vertices {
-            let value = dir.dot(*v);
-            if widens(value, lo, hi) && o.contains(*v, eps) {
-                (lo, hi) = (lo.min(value), hi.max(value));
-            }
-        }
-        for &(i, j) in &HEX_EDGES {
-            let p = s.vertices[i];
-            let q = s.vertices[j];
-            for pl in &o.planes {
-                let denom = pl.normal.dot(q - p);
-                if denom.abs() <= 1e-300 {
-                    continue;
-                }
-                let t = (pl.offset - pl.normal.dot(p)) / denom;
-                if !(0.0..=1.0).contains(&t) {
-                    continue;
-                }
-                let x = p + (q - p) * t;
-                let value = dir.dot(x);
-                if widens(value, lo, hi) && o.contains(x, eps) && s.contains(x, eps) {
-                    (lo, hi) = (lo.min(value), hi.max(value));
-                }
-            }
-        }
-    }
+    each_inside_candidate(
+        a,
+        b,
+        dir,
+        |v| v < lo.get() || v > hi.get(),
+        |v| {
+            lo.set(lo.get().min(v));
+            hi.set(hi.get().max(v));
+        },
+    );
+    let (lo, hi) = (lo.get(), hi.get());
     if lo <= hi {
         Some((lo, hi))
     } else {
@@ -414,16 +392,37 @@ pub fn intersection_range(a: &Hexahedron, b: &Hexahedron, dir: DVec3) -> Option<
 /// and operations, but only a candidate above the running maximum is tested (there, one below
 /// the running minimum is tested too).
 pub fn intersection_max(a: &Hexahedron, b: &Hexahedron, dir: DVec3) -> Option<f64> {
+    let (hi, found) = (Cell::new(f64::NEG_INFINITY), Cell::new(false));
+    each_inside_candidate(
+        a,
+        b,
+        dir,
+        |v| v > hi.get() || !found.get() && v == hi.get(),
+        |v| {
+            hi.set(hi.get().max(v));
+            found.set(true);
+        },
+    );
+    found.get().then_some(hi.get())
+}
+
+/// The candidates for the extremes of `dir . p` over the intersection of two convex
+/// hexahedra, in a fixed order: each vertex of one solid, then each crossing of its edges with
+/// the other's face planes, for (a, b) and then (b, a). A candidate whose value `wanted`
+/// accepts is tested for being inside (the vertex inside the other solid, the crossing inside
+/// both), and `take` gets the value of one that is. `wanted` is asked first because the inside
+/// tests are most of the work.
+fn each_inside_candidate(a: &Hexahedron, b: &Hexahedron, dir: DVec3, wanted: impl Fn(f64) -> bool, take: impl Fn(f64)) {
+    // Tolerance for "inside": relative to the coordinates involved, so a touching contact
+    // still counts and rounding at 1e6 units does not reject real vertices.
     let scale = a.scale().max(b.scale());
     let size = a.extent().max(b.extent()).max(1e-300);
     let eps = 1e-9 * size + 4.0 * f64::EPSILON * scale;
-    let mut hi = f64::NEG_INFINITY;
-    let mut found = false;
     for (s, o) in [(a, b), (b, a)] {
         for v in &s.vertices {
             let value = dir.dot(*v);
-            if (value > hi || !found && value == hi) && o.contains(*v, eps) {
-                (hi, found) = (hi.max(value), true);
+            if wanted(value) && o.contains(*v, eps) {
+                take(value);
             }
         }
         for &(i, j) in &HEX_EDGES {
@@ -440,13 +439,12 @@ pub fn intersection_max(a: &Hexahedron, b: &Hexahedron, dir: DVec3) -> Option<f6
                 }
                 let x = p + (q - p) * t;
                 let value = dir.dot(x);
-                if (value > hi || !found && value == hi) && o.contains(x, eps) && s.contains(x, eps) {
-                    (hi, found) = (hi.max(value), true);
+                if wanted(value) && o.contains(x, eps) && s.contains(x, eps) {
+                    take(value);
                 }
             }
         }
     }
-    found.then_some(hi)
 }
 
 #[cfg(test)]

@@ -39,7 +39,7 @@ use crate::visibility::Visibility;
 /// The screen metrics of one configuration. Fractions are of sampled pixels (receivers,
 /// self-shadowed) or of served receiver pixels (undersampled). Every value is finite; all
 /// statistics of `m` are 0 when no receiver pixel is served.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct ScreenStats {
     /// Share of sampled pixels whose nearest hit is a lit-facing receiver.
     pub receiver_fraction: f64,
@@ -1062,20 +1062,8 @@ pub fn cascade_shares_only(vis: &Visibility, splits: &[f64], texel: &[f64]) -> S
     ScreenStats {
         receiver_fraction: receivers as f64 / total,
         self_shadowed_fraction: vis.self_shadowed as f64 / total,
-        aliasing_mean: 0.0,
-        aliasing_p50: 0.0,
-        aliasing_p95: 0.0,
-        aliasing_p99: 0.0,
-        aliasing_max: 0.0,
-        undersampled_fraction: 0.0,
-        visible_mean: 0.0,
-        visible_p50: 0.0,
-        visible_p95: 0.0,
-        visible_p99: 0.0,
-        visible_max: 0.0,
-        visible_z_lo: 0.0,
-        visible_z_hi: 0.0,
         cascade_pixels: shares(&counts, receivers),
+        ..ScreenStats::default()
     }
 }
 
