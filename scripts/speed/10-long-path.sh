@@ -19,6 +19,8 @@ done
 if [ "${SPEED_CALLGRIND:-0}" = 1 ] && command -v valgrind >/dev/null; then
   valgrind --tool=callgrind --callgrind-out-file="$LONG/cg.out" \
     "$BIN" analyze "$LONG/yaw10000.toml" --quiet --out "$LONG/cg" >/dev/null 2>&1
-  long_ir=$(callgrind_annotate "$LONG/cg.out" 2>/dev/null | awk '/PROGRAM TOTALS/ { print $1; exit }')
+  # Through a file: awk's early exit would end callgrind_annotate by SIGPIPE (pipefail).
+  callgrind_annotate "$LONG/cg.out" >"$LONG/cg.txt" 2>/dev/null || true
+  long_ir=$(awk '/PROGRAM TOTALS/ { print $1; exit }' "$LONG/cg.txt")
   speed_row "| ${SPEED_JOB:-} | instructions at 10⁴ frames (callgrind): $long_ir | | | | | |"
 fi
