@@ -6,6 +6,7 @@ use common::{config, with};
 use csm_core::cascades::LightPose;
 use csm_core::rig_path::{along_path, along_path_both, probes};
 use csm_core::shimmer::ShimmerOptions;
+use csm_core::snapping::{SnapMode, SnapRule};
 
 fn all_options() -> [ShimmerOptions; 3] {
     let o = |cell_flips, probe_drift, frame_rows| ShimmerOptions {
@@ -14,6 +15,59 @@ fn all_options() -> [ShimmerOptions; 3] {
         frame_rows,
     };
     [o(false, false, false), o(true, false, true), o(true, true, true)]
+}
+
+/// The proptests' random path: the default camera and a 400-unit scene moved by `offset`, the
+/// light along `light`, `cascades` × `resolution` (and `lambda` when given), and the snap rule
+/// (mode 0 round, 1 floor, 2 trunc; step in texels). A pitch stays within 60 degrees of its
+/// start (past the vertical the path is refused) and a turn takes at most 1 degree a frame.
+#[allow(clippy::too_many_arguments)]
+fn random_path(
+    path: &str,
+    step: f64,
+    frames: usize,
+    lambda: Option<f64>,
+    (cascades, resolution): (usize, u32),
+    offset: f64,
+    light: (f64, f64, f64),
+    snap: (usize, u32),
+) -> (csm_lab::Config, csm_core::cascades::Rig) {
+    let step = match path {
+        "pitch" => step.min(60.0 / frames as f64),
+        "yaw" | "orbit" => step.min(1.0),
+        _ => step,
+    };
+    let lambda = lambda.map(|l| format!("lambda = {l}"));
+    let mut edits = vec![
+        ("camera.position", format!("position = [{offset}, 10.0, {offset}]")),
+        ("camera.target", format!("target = [{offset}, 0.0, {}]", offset - 50.0)),
+        (
+            "scene.min",
+            format!("min = [{}, 0.0, {}]", offset - 200.0, offset - 200.0),
+        ),
+        (
+            "scene.max",
+            format!("max = [{}, 40.0, {}]", offset + 200.0, offset + 200.0),
+        ),
+        (
+            "light.direction",
+            format!("direction = [{}, {}, {}]", light.0, light.1, light.2),
+        ),
+        ("shadow.cascades", format!("cascades = {cascades}")),
+        ("shadow.resolution", format!("resolution = {resolution}")),
+        ("motion.path", format!("path = \"{path}\"")),
+        ("motion.step", format!("step = {step}")),
+        ("motion.frames", format!("frames = {frames}")),
+    ];
+    edits.extend(lambda.map(|l| ("shadow.lambda", l)));
+    let edits: Vec<(&str, &str)> = edits.iter().map(|(k, v)| (*k, v.as_str())).collect();
+    let c = config(&with(&edits));
+    let mut rig = csm_lab::analysis::rig(&c).unwrap();
+    rig.snap_rule = SnapRule {
+        mode: [SnapMode::Round, SnapMode::Floor, SnapMode::Trunc][snap.0],
+        step_texels: snap.1,
+    };
+    (c, rig)
 }
 
 #[test]
@@ -94,7 +148,6 @@ fn coverage_of_shrunken_windows_matches_a_per_corner_count() {
 /// windows shrunk so that corners fall outside.
 mod probe_free_walk {
     use super::*;
-    use csm_core::snapping::{SnapMode, SnapRule};
     use glam::DVec2;
     use proptest::prelude::*;
 
@@ -120,31 +173,16 @@ mod probe_free_walk {
             anchor in (-3.0f64..3.0, -3.0f64..3.0, any::<bool>()),
             shrink in prop::collection::vec(0.5f64..1.0, 8),
         ) {
-            // (A pitch stays within 60 degrees of its start: past the vertical the path is refused.)
-            let step = match path {
-                "pitch" => step.min(60.0 / frames as f64),
-                "yaw" | "orbit" => step.min(1.0),
-                _ => step,
-            };
-            let text = with(&[
-                ("camera.position", &format!("position = [{offset}, 10.0, {offset}]")),
-                ("camera.target", &format!("target = [{offset}, 0.0, {}]", offset - 50.0)),
-                ("scene.min", &format!("min = [{}, 0.0, {}]", offset - 200.0, offset - 200.0)),
-                ("scene.max", &format!("max = [{}, 40.0, {}]", offset + 200.0, offset + 200.0)),
-                ("light.direction", &format!("direction = [{}, {}, {}]", light.0, light.1, light.2)),
-                ("shadow.lambda", &format!("lambda = {lambda}")),
-                ("shadow.cascades", &format!("cascades = {cascades}")),
-                ("shadow.resolution", &format!("resolution = {resolution}")),
-                ("motion.path", &format!("path = \"{path}\"")),
-                ("motion.step", &format!("step = {step}")),
-                ("motion.frames", &format!("frames = {frames}")),
-            ]);
-            let c = config(&text);
-            let mut rig = csm_lab::analysis::rig(&c).unwrap();
-            rig.snap_rule = SnapRule {
-                mode: [SnapMode::Round, SnapMode::Floor, SnapMode::Trunc][snap.0],
-                step_texels: snap.1,
-            };
+            let (c, mut rig) = random_path(
+                path,
+                step,
+                frames,
+                Some(lambda),
+                (cascades, resolution),
+                offset,
+                light,
+                snap,
+            );
             if anchor.2 {
                 rig.scheme.snap_anchor = DVec2::new(anchor.0, anchor.1);
             }
@@ -200,7 +238,6 @@ fn every_preset_walks_both_modes_as_the_generic_walk_does_bit_for_bit() {
 /// frame and bit for bit, on random paths, steps, offsets, lights, grids and snap rules.
 mod flips_from_texels {
     use super::*;
-    use csm_core::snapping::{SnapMode, SnapRule};
     use proptest::prelude::*;
 
     fn flips(r: &csm_core::shimmer::PathResult) -> Vec<String> {
@@ -223,30 +260,7 @@ mod flips_from_texels {
             light in (-1.0f64..1.0, -1.0f64..-0.05, -1.0f64..1.0),
             snap in (0usize..3, prop::sample::select(vec![1u32, 2, 4])),
         ) {
-            // (A pitch stays within 60 degrees of its start: past the vertical the path is refused.)
-            let step = match path {
-                "pitch" => step.min(60.0 / frames as f64),
-                "yaw" | "orbit" => step.min(1.0),
-                _ => step,
-            };
-            let text = with(&[
-                ("camera.position", &format!("position = [{offset}, 10.0, {offset}]")),
-                ("camera.target", &format!("target = [{offset}, 0.0, {}]", offset - 50.0)),
-                ("scene.min", &format!("min = [{}, 0.0, {}]", offset - 200.0, offset - 200.0)),
-                ("scene.max", &format!("max = [{}, 40.0, {}]", offset + 200.0, offset + 200.0)),
-                ("light.direction", &format!("direction = [{}, {}, {}]", light.0, light.1, light.2)),
-                ("shadow.cascades", &format!("cascades = {cascades}")),
-                ("shadow.resolution", &format!("resolution = {resolution}")),
-                ("motion.path", &format!("path = \"{path}\"")),
-                ("motion.step", &format!("step = {step}")),
-                ("motion.frames", &format!("frames = {frames}")),
-            ]);
-            let c = config(&text);
-            let mut rig = csm_lab::analysis::rig(&c).unwrap();
-            rig.snap_rule = SnapRule {
-                mode: [SnapMode::Round, SnapMode::Floor, SnapMode::Trunc][snap.0],
-                step_texels: snap.1,
-            };
+            let (c, rig) = random_path(path, step, frames, None, (cascades, resolution), offset, light, snap);
             let poses = c.camera_path().unwrap();
             let pr = probes(&rig, &c.camera.pose(), &c.scene, 64);
             let [_, texels, per_probe] = all_options();

@@ -363,36 +363,25 @@ impl AxisWalk<'_> {
         let (sn, sf) = (c.slopes[0], c.slopes[1]);
         // The products of the axes that do not change (`fixed`): the window centre's and the
         // caps' offsets along the view axis, and the caps' half-extents.
-        let a0 = &lps[0];
-        let hoisted = fixed.then(|| {
+        let products = |lp: &LightPose| {
             (
-                a0.forward * c.depth,
-                a0.forward * c.near,
-                a0.forward * c.far,
-                (a0.right * sn.0).abs(),
-                (a0.up * sn.1).abs(),
-                (a0.right * sf.0).abs(),
-                (a0.up * sf.1).abs(),
+                lp.forward * c.depth,
+                lp.forward * c.near,
+                lp.forward * c.far,
+                (lp.right * sn.0).abs(),
+                (lp.up * sn.1).abs(),
+                (lp.right * sf.0).abs(),
+                (lp.up * sf.1).abs(),
             )
-        });
+        };
+        let hoisted = fixed.then(|| products(&lps[0]));
         let [ds, du] = drift;
         // Whether a snapped origin is a whole number whenever the centre in texels is below
         // `WHOLE_BELOW`: snapping gives whole multiples of the rule's step, and half an even
         // resolution is whole (a snap anchor is not).
         let whole_snaps = self.rig.scheme.snaps && self.rig.resolution % 2 == 0 && c.anchor_texels.is_none();
         for lp in lps {
-            let (fc, fnear, ffar, rn, un, rf, uf) = match hoisted {
-                Some(h) => h,
-                None => (
-                    lp.forward * c.depth,
-                    lp.forward * c.near,
-                    lp.forward * c.far,
-                    (lp.right * sn.0).abs(),
-                    (lp.up * sn.1).abs(),
-                    (lp.right * sf.0).abs(),
-                    (lp.up * sf.1).abs(),
-                ),
-            };
+            let (fc, fnear, ffar, rn, un, rf, uf) = hoisted.unwrap_or_else(|| products(lp));
             // The window centre in texels (`Rig::centred`, `Window::centred`), shared by the
             // modes; snapped, it is rounded on the rule's grid.
             let centre = lp.position + fc;
