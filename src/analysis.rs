@@ -969,15 +969,20 @@ pub(crate) fn warm_views(config: &Config, rays_only: bool) {
 }
 
 /// How much of a setting [`analyze_camera`] measures.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Detail {
+#[derive(Clone, Copy)]
+enum Detail<'a> {
     /// Everything `opts` asks for: what every output reads.
     Full,
     /// What the free-split search's cost reads ([`search`]): no render-cost counts (the
     /// summary's `cost` is left at its default), no preset report, and of the screen statistics
     /// only `screen` (None: no screen statistics at all). Every other summary field is
-    /// computed as for [`Detail::Full`].
-    Search { screen: Option<screen::Statistic> },
+    /// computed as for [`Detail::Full`]. `shared`: what every point of the search's group has
+    /// in common, computed once for the group ([`search::Shared`]; the same values the point's
+    /// own analysis computes).
+    Search {
+        screen: Option<screen::Statistic>,
+        shared: Option<&'a search::Shared>,
+    },
 }
 
 /// [`analyze_with_progress`] for `[camera]` alone: every metric of the camera and its path.
@@ -988,17 +993,33 @@ fn analyze_camera(
     opts: &AnalysisOptions,
     on_frames: &(dyn Fn(u64) + Sync),
     camera_screen: bool,
-    detail: Detail,
+    detail: Detail<'_>,
 ) -> Analysis {
-    let rig = rig(config);
-    let range = analysed_range(config, rig.as_ref());
+    let setup = config.setup();
+    let shared = match detail {
+        Detail::Search { shared, .. } => shared,
+        Detail::Full => None,
+    };
+    let (rig, range) = match shared.and_then(|s| s.range(config)) {
+        Some(range) => (Rig::for_setup_in(&setup, range), range),
+        None => {
+            let rig = rig(config);
+            let range = analysed_range(config, rig.as_ref());
+            (rig, range)
+        }
+    };
     let memory = match &rig {
         Some(r) => memory_bytes(r.cascade_count(), r.resolution),
         None => memory_bytes(config.shadow.cascades, config.shadow.resolution),
     };
-    let setup = config.setup();
-    let visibility = setup.visibility();
-    let visible = visible_depths(&setup, visibility.as_deref());
+    let (visibility, visible) = match shared {
+        Some(s) => s.visibility(),
+        None => {
+            let visibility = setup.visibility();
+            let visible = visible_depths(&setup, visibility.as_deref());
+            (visibility, visible)
+        }
+    };
     let Some(rig) = rig else {
         return no_cascades(config, opts, range, memory, visibility.as_deref(), visible);
     };
@@ -1025,6 +1046,7 @@ fn analyze_camera(
         &frame0.pose,
         visibility.as_deref(),
         on_frames,
+        shared.and_then(|s| s.poses()),
     );
     let truth = if config.truth.enabled && opts.ground_truth {
         ground_truth::run(config, &rig, opts.texel_counts, on_frames)
@@ -1033,7 +1055,7 @@ fn analyze_camera(
     };
     let vis = visibility.as_deref();
     // Light depth ranges: always for a preset (its report needs them), else when asked for.
-    let full = detail == Detail::Full;
+    let full = matches!(detail, Detail::Full);
     let depths = (opts.light_depth || (full && config.shadow.preset.is_some())).then(|| {
         (frame0.windows.iter().enumerate())
             .map(|(i, w)| rig.light_depth(i, &frame0.light, w, &config.scene))
@@ -1069,7 +1091,7 @@ fn analyze_camera(
                     screen::cascade_shares_only(v, &rig.splits, &frame0.texel)
                 }
             }),
-            Detail::Search { screen: which } => vis
+            Detail::Search { screen: which, .. } => vis
                 .zip(which)
                 .map(|(v, which)| search::one_statistic(v, &rig.splits, &frame0.texel, which)),
         },
@@ -1178,7 +1200,10 @@ struct Walks {
     totals: PathTotals,
 }
 
-/// Walks the configured path and every extra one (`walk_path`), and totals them.
+/// Walks the configured path and every extra one (`walk_path`), and totals them. `held`: the
+/// configured path's poses when the caller holds them (a search's group walks one path for
+/// every point), else they are generated here.
+#[allow(clippy::too_many_arguments)]
 fn walk_every_path(
     config: &Config,
     opts: &AnalysisOptions,
@@ -1187,6 +1212,7 @@ fn walk_every_path(
     pose0: &CameraPose,
     vis: Option<&Visibility>,
     on_frames: &(dyn Fn(u64) + Sync),
+    held: Option<&[CameraPose]>,
 ) -> Walks {
     let sopts = ShimmerOptions {
         cell_flips: opts.cell_flips,
@@ -1209,13 +1235,13 @@ fn walk_every_path(
         seams: opts.seams,
         on_frames,
     };
-    let first = walk_path(&walker, &setup.motion);
+    let first = walk_path(&walker, &setup.motion, held);
     let mut seam_crossings = first.crossings;
     let extra: Vec<ExtraPathResult> = config
         .extra_motions()
         .into_iter()
         .map(|(name, motion)| {
-            let w = walk_path(&walker, &motion);
+            let w = walk_path(&walker, &motion, None);
             if let (Some(c), Some(x)) = (seam_crossings.as_mut(), w.crossings) {
                 *c = c.max(x);
             }
@@ -1441,18 +1467,26 @@ struct PathWalk {
 /// Walks one camera path in both snap modes. With precision = "f32" every path metric
 /// measures the emulated binary32 pipeline. The poses are generated as the walk reads them (a
 /// long path is never held), and the two snap modes walk on their own threads: each mode's
-/// totals are the same, bit for bit, as in one walk of both (`along_path_both`).
-fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
+/// totals are the same, bit for bit, as in one walk of both (`along_path_both`). `given`: the
+/// path's poses, when the caller holds them (at most [`HELD_POSES`]; see [`held_poses`]).
+fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion, given: Option<&[CameraPose]>) -> PathWalk {
     let generated =
         || csm_core::motion::poses(&w.setup.camera, motion).map(|p| p.expect("validated when the config was loaded"));
-    let frames = generated().len();
     // A path of up to HELD_POSES frames is generated once and read by both walks (a
     // sweep's paths are short: generating each pose twice cost it a sixth of its time);
     // a longer one is generated as each walk reads it, so memory stays flat.
-    let held: Vec<CameraPose> = if frames <= HELD_POSES {
-        generated().collect()
-    } else {
-        Vec::new()
+    let frames = given.map_or_else(|| generated().len(), |p| p.len());
+    let own: Vec<CameraPose>;
+    let held: &[CameraPose] = match given {
+        Some(p) => p,
+        None => {
+            own = if frames <= HELD_POSES {
+                generated().collect()
+            } else {
+                Vec::new()
+            };
+            &own
+        }
     };
     let poses = || {
         let streamed = (frames > HELD_POSES).then(generated).into_iter().flatten();
@@ -1540,6 +1574,14 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
         lookup_error: walked.2,
         crossings,
     }
+}
+
+/// A path's poses as [`walk_path`] holds them: all of them when there are at most
+/// [`HELD_POSES`], else None (generated as each walk reads them).
+pub(crate) fn held_poses(setup: &csm_core::scene::Setup, motion: &csm_core::scene::Motion) -> Option<Vec<CameraPose>> {
+    let generated =
+        || csm_core::motion::poses(&setup.camera, motion).map(|p| p.expect("validated when the config was loaded"));
+    (generated().len() <= HELD_POSES).then(|| generated().collect())
 }
 
 /// Coverage, shimmer, jitter and lookup error over every camera path.

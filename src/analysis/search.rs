@@ -12,10 +12,63 @@
 //! The points the search reports (the start, the preset's configured split, the optimum as
 //! printed) are analysed in full.
 
-use super::{analyze, analyze_camera, AnalysisOptions, Detail, Summary};
+use std::sync::Arc;
+
+use super::{analyze, analyze_camera, held_poses, visible_depths, AnalysisOptions, Detail, Summary};
 use crate::config::Config;
+use csm_core::depth_range::{self, DepthRange};
+use csm_core::geometry::CameraPose;
 use csm_core::screen::{self, ScreenStats, Statistic};
 use csm_core::visibility::Visibility;
+
+/// What every point of one group of the search has in common, computed once for the group
+/// instead of once (or, for the split range, four times) per point: the points of a group
+/// differ only in their split fractions, and none of these reads them.
+///
+/// - the split range of csm-lab's own pipeline (`depth_range::for_setup`: the camera, the
+///   shadow distance, the scene's bounds and the fit flags; a preset's range follows its own
+///   rig, so it is computed per point as before);
+/// - the visibility pass and the visible depth range within the bounds' range;
+/// - the configured camera path's poses (when [`super::walk_path`] would hold them).
+///
+/// Each is the value the point's own analysis computes from the same inputs, so a point
+/// analysed with them is bit for bit the point analysed alone (tested on random split
+/// vectors, `commands::sweep::optimize`).
+pub(crate) struct Shared {
+    range: Option<DepthRange>,
+    visibility: Option<Arc<Visibility>>,
+    visible: Option<(f64, f64)>,
+    poses: Option<Vec<CameraPose>>,
+}
+
+impl Shared {
+    /// For the points of `point`'s group (`point` with any split fractions).
+    pub(crate) fn of(point: &Config) -> Shared {
+        let setup = point.setup();
+        let visibility = setup.visibility();
+        Shared {
+            range: point.shadow.preset.is_none().then(|| depth_range::for_setup(&setup)),
+            visible: visible_depths(&setup, visibility.as_deref()),
+            visibility,
+            poses: held_poses(&setup, &setup.motion),
+        }
+    }
+
+    /// The split range of `config` (one of the group's points), when it is shared.
+    pub(super) fn range(&self, config: &Config) -> Option<DepthRange> {
+        self.range.filter(|_| config.shadow.preset.is_none())
+    }
+
+    /// The visibility pass and the visible depth range.
+    pub(super) fn visibility(&self) -> (Option<Arc<Visibility>>, Option<(f64, f64)>) {
+        (self.visibility.clone(), self.visible)
+    }
+
+    /// The configured path's poses, when held.
+    pub(super) fn poses(&self) -> Option<&[CameraPose]> {
+        self.poses.as_deref()
+    }
+}
 
 /// What the search's objective reads of a point's analysis, beyond the walk along the camera
 /// path and the closed-form aggregates (which every evaluation computes).
@@ -37,8 +90,9 @@ pub(crate) enum Reads {
 /// the render-cost counts are left at their default and the other screen statistics at 0 (no
 /// screen statistics at all for [`Reads::Path`]): such a summary is for the search's cost only,
 /// never for an output. A level of views (its screen statistics pooled over the views) is
-/// analysed in full.
-pub(crate) fn summary(config: &Config, reads: Reads) -> Summary {
+/// analysed in full. `shared`: what `config`'s search group has in common ([`Shared::of`] of
+/// any point of the group), or None to compute it here.
+pub(crate) fn summary(config: &Config, reads: Reads, shared: Option<&Shared>) -> Summary {
     let opts = AnalysisOptions::summary_only();
     let screen = match reads {
         Reads::Screen(s) => Some(s),
@@ -48,7 +102,7 @@ pub(crate) fn summary(config: &Config, reads: Reads) -> Summary {
     if !config.views.is_empty() {
         return analyze(config, &opts).summary;
     }
-    analyze_camera(config, &opts, &|_| (), true, Detail::Search { screen }).summary
+    analyze_camera(config, &opts, &|_| (), true, Detail::Search { screen, shared }).summary
 }
 
 /// Screen statistics with only `which` measured ([`screen::statistic`]), every other value 0

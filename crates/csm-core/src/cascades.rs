@@ -206,7 +206,14 @@ impl Rig {
     /// explicit `shadow.splits` fractions of it), or None when
     /// the scene needs no cascades. (Engine presets build theirs with [`Rig::with_scheme`].)
     pub fn for_setup(setup: &Setup) -> Option<Rig> {
-        let DepthRange::Range { z_lo, z_hi } = depth_range::for_setup(setup) else {
+        Rig::for_setup_in(setup, depth_range::for_setup(setup))
+    }
+
+    /// [`Rig::for_setup`] with the setup's split range already computed
+    /// ([`depth_range::for_setup`], which reads neither the split positions nor the resolution,
+    /// so a caller trying many splits of one setup computes it once).
+    pub fn for_setup_in(setup: &Setup, range: DepthRange) -> Option<Rig> {
+        let DepthRange::Range { z_lo, z_hi } = range else {
             return None;
         };
         let s = &setup.shadow;

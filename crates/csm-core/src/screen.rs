@@ -636,6 +636,9 @@ struct Hint {
     g: f64,
 }
 
+/// [`select`]'s `wanted` for all six targets (plain p50, p95, p99, then contrast).
+const ALL_TARGETS: u8 = 0b11_1111;
+
 /// The six percentiles' [`Hint`]s (plain p50, p95, p99, then contrast), none at first.
 type Hints = [Option<Hint>; 6];
 
@@ -653,12 +656,19 @@ type Hints = [Option<Hint>; 6];
 /// bracket are read, value by value, each value once for all the targets; what lies below a
 /// bracket is counted, and the few values in it are narrowed down and sorted ([`resolve`]).
 /// `hints` is updated to where each value was found.
+///
+/// Only the targets whose bit `3 kind + slot` is set in `wanted` are found ([`ALL_TARGETS`]:
+/// every one); the others are left at 0 and their hints untouched. A target's value depends
+/// on its own bracket alone (the groups wholly below it are counted, those reaching into it
+/// read), so it is the same bits whichever other targets are found with it; leaving targets
+/// out narrows the key range whose groups are read value by value.
 fn select(
     pools: &[(&ViewPass<'_>, u64)],
     buckets: Buckets,
     count: usize,
     sc: &mut Scratch,
     hints: &mut Hints,
+    wanted: u8,
 ) -> ([[f64; 3]; 2], [u128; 2]) {
     let mut totals = [0u128; 2];
     for &(p, s) in pools {
@@ -671,6 +681,9 @@ fn select(
     for j in 0..6 {
         if totals[j / 3] == 0 {
             hints[j] = None;
+            continue;
+        }
+        if wanted & (1 << j) == 0 {
             continue;
         }
         let target = target_of(j);
@@ -720,15 +733,17 @@ fn select(
     // Per target: its bracket of keys `lo..=hi`, the weight of the groups wholly below it
     // (ending below `lo`), and the weight to reach.
     let mut brackets = [(0usize, 0usize, 0u128, 0u128); 6];
-    for (kind, &total) in totals.iter().enumerate() {
-        if total == 0 {
+    for kind in 0..2 {
+        // Up to the kind's last open target (none when none is open, as with no weight at
+        // all): a bracket only a confirmed or unwanted target would read is not looked for.
+        let Some(last) = open.iter().filter(|&&j| j / 3 == kind).map(|&j| j % 3).max() else {
             continue;
-        }
+        };
         let (starts, ends) = (&sc.starts[kind], &sc.ends[kind]);
         // Running sums, kept as the targets increase.
         let (mut lo, mut lo_cum, mut below) = (0usize, starts[0], 0u128);
         let (mut hi, mut hi_cum) = (0usize, ends[0]);
-        for slot in 0..3 {
+        for slot in 0..=last {
             let j = 3 * kind + slot;
             let target = target_of(j);
             while lo_cum < target {
@@ -899,7 +914,7 @@ fn own_stats(pass: &ViewPass<'_>, visible: Option<(f64, f64)>, sc: &mut Scratch,
     let (plain, weighted) = match pass.range {
         Some((lo, hi)) => {
             let count = Buckets::count_for(pass.groups.len());
-            let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, count), count, sc, hints);
+            let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, count), count, sc, hints, ALL_TARGETS);
             (v[0], v[1])
         }
         None => ([0.0; 3], [0.0; 3]),
@@ -1006,8 +1021,9 @@ impl Statistic {
 }
 
 /// One statistic of [`stats`] alone, bit for bit the value [`stats`] gives it: the same pass,
-/// and for a percentile the same selection (the free-split search reads one statistic per
-/// evaluation, and skips the rest of [`own_stats`]).
+/// and for a percentile the same selection of its own target alone (the free-split search
+/// reads one statistic per evaluation, and skips the rest of [`own_stats`] and the other five
+/// percentiles).
 pub fn statistic(vis: &Visibility, splits: &[f64], texel: &[f64], which: Statistic) -> f64 {
     with_scratch(|sc| {
         let pass = ViewPass::new(vis, splits, texel, false, sc);
@@ -1021,7 +1037,16 @@ fn statistic_of(pass: &ViewPass<'_>, which: Statistic, sc: &mut Scratch) -> f64 
         return match pass.range {
             Some((lo, hi)) => {
                 let count = Buckets::count_for(pass.groups.len());
-                let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, count), count, sc, &mut [None; 6]);
+                // Its own target alone (the other five are not read).
+                let wanted = 1 << (3 * kind + slot);
+                let (v, _) = select(
+                    &[(pass, 1)],
+                    Buckets::new(lo, hi, count),
+                    count,
+                    sc,
+                    &mut [None; 6],
+                    wanted,
+                );
                 v[kind][slot]
             }
             None => 0.0,
@@ -1162,7 +1187,14 @@ fn pool_passes_in<'a>(
     let (level_p, totals) = match range {
         Some((lo, hi)) => {
             let count = Buckets::count_for(passes.iter().map(|p| p.groups.len()).sum());
-            select(&pools, Buckets::new(lo, hi, count), count, sc, &mut hints.level)
+            select(
+                &pools,
+                Buckets::new(lo, hi, count),
+                count,
+                sc,
+                &mut hints.level,
+                ALL_TARGETS,
+            )
         }
         None => ([[0.0; 3]; 2], [0; 2]),
     };

@@ -17,7 +17,9 @@
 //!
 //! Method, stopping rule and cost: `docs/optimize.md`.
 
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 use argmin::core::{CostFunction, Executor, State};
 use argmin::solver::neldermead::NelderMead;
@@ -197,13 +199,19 @@ pub(crate) fn reads(objective: SummaryMetric) -> Reads {
 }
 
 /// [`evaluate`] for the search's cost alone ([`search::summary`] with what `reads` names):
-/// None when the fractions are not a valid split for the point.
-pub(crate) fn evaluate_for_cost(point: &Config, fractions: &[f64], reads: Reads) -> Option<Summary> {
+/// None when the fractions are not a valid split for the point. `shared`: what the point's
+/// group has in common ([`search::Shared::of`] the point), or None to compute it per call.
+pub(crate) fn evaluate_for_cost(
+    point: &Config,
+    fractions: &[f64],
+    reads: Reads,
+    shared: Option<&search::Shared>,
+) -> Option<Summary> {
     if !valid(fractions) {
         return None;
     }
     let c = with_fractions(point, fractions).ok()?;
-    Some(search::summary(&c, reads))
+    Some(search::summary(&c, reads, shared))
 }
 
 /// The search's cost: the objective of an acceptable configuration, +∞ otherwise.
@@ -258,6 +266,35 @@ fn nelder_mead(f: &(dyn Fn(&[f64]) -> f64 + Sync), y0: &[f64], step: f64, iters:
             }
         }
         Err(_) => fallback,
+    }
+}
+
+/// The costs of the points one group's search has evaluated, by their coordinates' bits: the
+/// cost is a function of the point alone (the same analysis of the same config), so a point
+/// asked for again costs what it cost the first time, bit for bit, without its analysis.
+#[derive(Default)]
+struct PointMemo {
+    seen: Mutex<HashMap<Vec<u64>, f64>>,
+    /// Points looked up instead of analysed.
+    hits: AtomicUsize,
+}
+
+impl PointMemo {
+    /// The cost of `y`: `analyse()` when `y` is new, else the cost recorded for it (and
+    /// `analyse` is not called).
+    fn cost(&self, y: &[f64], analyse: impl FnOnce() -> f64) -> f64 {
+        let key: Vec<u64> = y.iter().map(|v| v.to_bits()).collect();
+        if let Some(&c) = self.seen.lock().expect("one search per group").get(&key) {
+            self.hits.fetch_add(1, Ordering::Relaxed);
+            return c;
+        }
+        let c = analyse();
+        self.seen.lock().expect("one search per group").insert(key, c);
+        c
+    }
+
+    fn hits(&self) -> usize {
+        self.hits.load(Ordering::Relaxed)
     }
 }
 
@@ -353,11 +390,13 @@ fn optimize_group(base: &Config, rows: &[Row], group: &[usize], objective: Summa
         evaluations.fetch_add(1, Ordering::Relaxed);
         evaluate(&point, fr)
     };
-    // A point only the cost reads: the lighter analysis (counted the same).
+    // A point only the cost reads: the lighter analysis (counted the same), with what the
+    // group's points have in common computed once.
     let reads = reads(objective);
+    let shared = search::Shared::of(&point);
     let eval_cost = |fr: &[f64]| {
         evaluations.fetch_add(1, Ordering::Relaxed);
-        evaluate_for_cost(&point, fr, reads)
+        evaluate_for_cost(&point, fr, reads, Some(&shared))
     };
     // The start: the best practical-λ split (acceptable first, then the objective).
     let rank = |s: &Summary| {
@@ -480,12 +519,18 @@ fn optimize_group(base: &Config, rows: &[Row], group: &[usize], objective: Summa
             label(&first)
         )));
     };
+    // A point asked for again (each run's start is evaluated twice, the second run starts at
+    // the first's best, a collapsed simplex repeats vertices) costs what it cost: looked up,
+    // not analysed again, and counted as an evaluation all the same (`evaluations`).
+    let memo = PointMemo::default();
     let f = |y: &[f64]| {
-        let fr = space.from_params(y);
-        match eval_cost(&fr) {
-            Some(s) => cost(&setting, &s, objective),
-            None => f64::INFINITY,
-        }
+        memo.cost(y, || {
+            let fr = space.from_params(y);
+            match eval_cost(&fr) {
+                Some(s) => cost(&setting, &s, objective),
+                None => f64::INFINITY,
+            }
+        })
     };
     let tol = RELATIVE_TOLERANCE * start_cost.abs().max(1e-300);
     let iters = ITERATIONS_PER_SPLIT * (m as u64 - 1);
@@ -522,7 +567,8 @@ fn optimize_group(base: &Config, rows: &[Row], group: &[usize], objective: Summa
         start_row,
         configured,
         best,
-        evaluations: evaluations.load(Ordering::Relaxed),
+        // A repeated point counts as the analysis it stands for.
+        evaluations: evaluations.load(Ordering::Relaxed) + memo.hits(),
     })))
 }
 
@@ -585,11 +631,14 @@ mod tests {
 
         /// On random split vectors of every variant, for every metric of the registry as the
         /// objective: the lighter evaluation gives the objective, the three values the
-        /// acceptance reads, and so the search's cost, of the full analysis, bit for bit.
+        /// acceptance reads, and so the search's cost, of the full analysis, bit for bit;
+        /// alone and with what its group shares computed once ([`search::Shared`]) for
+        /// another point of the group.
         #[test]
         fn the_search_evaluation_equals_the_full_analysis(
             k in 0usize..8,
             raw in prop::collection::vec(0.0005f64..0.9995, 3),
+            with_shared: bool,
         ) {
             let point = &points()[k];
             let mut fractions = raw.clone();
@@ -597,6 +646,7 @@ mod tests {
             prop_assume!(valid(&fractions));
             let full = evaluate(point, &fractions);
             let setting = Setting::plain(0.0, 4, 2048, point.shadow.fit);
+            let shared = with_shared.then(|| search::Shared::of(point));
             let mut light: Vec<(Reads, Option<Summary>)> = Vec::new();
             for def in SUMMARY {
                 let objective = SummaryMetric::named(def.name);
@@ -604,7 +654,7 @@ mod tests {
                 let at = match light.iter().position(|(x, _)| *x == r) {
                     Some(i) => i,
                     None => {
-                        light.push((r, evaluate_for_cost(point, &fractions, r)));
+                        light.push((r, evaluate_for_cost(point, &fractions, r, shared.as_ref())));
                         light.len() - 1
                     }
                 };
@@ -636,6 +686,48 @@ mod tests {
         }
     }
 
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        /// The memo of a group's points, as the search uses it (the lighter evaluation with
+        /// what the group shares): over a random sequence of points with repeats, every cost
+        /// it gives equals the cost of the full analysis of that point, bit for bit, for a
+        /// random objective of the registry, and each distinct point is analysed once.
+        #[test]
+        fn the_point_memo_gives_the_full_analysis_cost(
+            k in 0usize..8,
+            metric in 0usize..SUMMARY.len(),
+            ys in prop::collection::vec(prop::collection::vec(-2.0f64..2.0, 3), 1..5),
+            picks in prop::collection::vec(0usize..64, 1..12),
+        ) {
+            let point = &points()[k];
+            let objective = SummaryMetric::named(SUMMARY[metric].name);
+            let r = reads(objective);
+            let setting = Setting::plain(0.0, 4, 2048, point.shadow.fit);
+            let space = FractionSpace { lo: 0.1, hi: 150.0, start: 0.1 };
+            let shared = search::Shared::of(point);
+            let memo = PointMemo::default();
+            let analysed = AtomicUsize::new(0);
+            let mut distinct: Vec<Vec<u64>> = Vec::new();
+            for &p in &picks {
+                let y = &ys[p % ys.len()];
+                let fr = space.from_params(y);
+                let got = memo.cost(y, || {
+                    analysed.fetch_add(1, Ordering::Relaxed);
+                    evaluate_for_cost(point, &fr, r, Some(&shared)).map_or(f64::INFINITY, |s| cost(&setting, &s, objective))
+                });
+                let want = evaluate(point, &fr).map_or(f64::INFINITY, |s| cost(&setting, &s, objective));
+                prop_assert_eq!(got.to_bits(), want.to_bits(), "{} on variant {} at {:?}", SUMMARY[metric].name, k, fr);
+                let bits: Vec<u64> = y.iter().map(|v| v.to_bits()).collect();
+                if !distinct.contains(&bits) {
+                    distinct.push(bits);
+                }
+            }
+            prop_assert_eq!(analysed.load(Ordering::Relaxed), distinct.len());
+            prop_assert_eq!(memo.hits(), picks.len() - distinct.len());
+        }
+    }
+
     /// The lighter evaluation leaves out what the search does not read: the render-cost
     /// counts and, for a screen objective, every other screen statistic (so a test that
     /// compared only equal values could not pass by computing everything).
@@ -644,14 +736,14 @@ mod tests {
         let point = &points()[0];
         let fractions = [0.1, 0.3, 0.5];
         let full = evaluate(point, &fractions).expect("valid");
-        let light = evaluate_for_cost(point, &fractions, Reads::Screen(Statistic::VisibleP95)).expect("valid");
+        let light = evaluate_for_cost(point, &fractions, Reads::Screen(Statistic::VisibleP95), None).expect("valid");
         assert!(full.cost.counts.is_some());
         assert_eq!(light.cost, crate::analysis::cost::CostSummary::default());
         let (f, l) = (full.screen.expect("geometry"), light.screen.expect("geometry"));
         assert_eq!(l.visible_p95, f.visible_p95);
         assert!(f.visible_p95 > 0.0 && f.aliasing_p95 > 0.0);
         assert_eq!(l.aliasing_p95, 0.0);
-        let path = evaluate_for_cost(point, &fractions, Reads::Path).expect("valid");
+        let path = evaluate_for_cost(point, &fractions, Reads::Path, None).expect("valid");
         assert!(path.screen.is_none());
         assert_eq!(path.max_aliasing, full.max_aliasing);
     }
