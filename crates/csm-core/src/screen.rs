@@ -733,17 +733,17 @@ fn select(
     // Per target: its bracket of keys `lo..=hi`, the weight of the groups wholly below it
     // (ending below `lo`), and the weight to reach.
     let mut brackets = [(0usize, 0usize, 0u128, 0u128); 6];
-    for kind in 0..2 {
-        // Up to the kind's last open target (none when none is open, as with no weight at
-        // all): a bracket only a confirmed or unwanted target would read is not looked for.
-        let Some(last) = open.iter().filter(|&&j| j / 3 == kind).map(|&j| j % 3).max() else {
+    for (kind, &total) in totals.iter().enumerate() {
+        // A kind with no open target (each confirmed, not wanted, or no weight at all) has
+        // no bracket to find.
+        if total == 0 || !open.iter().any(|&j| j / 3 == kind) {
             continue;
-        };
+        }
         let (starts, ends) = (&sc.starts[kind], &sc.ends[kind]);
         // Running sums, kept as the targets increase.
         let (mut lo, mut lo_cum, mut below) = (0usize, starts[0], 0u128);
         let (mut hi, mut hi_cum) = (0usize, ends[0]);
-        for slot in 0..=last {
+        for slot in 0..3 {
             let j = 3 * kind + slot;
             let target = target_of(j);
             while lo_cum < target {
