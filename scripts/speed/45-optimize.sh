@@ -1,5 +1,6 @@
-# sweep --optimize-splits on the default scene (28 groups, about 9,400 analyses), paired with
-# the same sweep without the search.
+# sweep --optimize-splits on the default scene (28 groups, about 9,400 points evaluated, a
+# repeated point looked up), paired with the same sweep without the search (docs/speed.md,
+# "sweep --optimize-splits": CPU best of 3 and, with SPEED_CALLGRIND=1, the instructions).
 # SPEED_CALLGRIND=1 adds the instruction counts (valgrind, load-proof; slow) of both, on one
 # thread (RAYON_NUM_THREADS=1); their difference is the search's.
 paired "sweep configs/default.toml --no-plots" "sweep configs/default.toml --optimize-splits --no-plots" -- \
