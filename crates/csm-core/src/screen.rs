@@ -254,7 +254,7 @@ impl ScreenIndex {
         let n = r.len();
         // The ranks by (g, index): a radix sort of g's order-preserving bits (no comparison
         // sort fetching g through the receivers).
-        let order: Vec<u32> = crate::visibility::order_by_key(r.iter().map(|&(_, g)| g));
+        let order: Vec<u32> = crate::visibility::order_by_key(n, |k| r[k].1);
         let buckets = n.div_ceil(BUCKET);
         let mut glo = Vec::with_capacity(buckets);
         let mut ghi = Vec::with_capacity(buckets);
