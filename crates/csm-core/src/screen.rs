@@ -1500,7 +1500,7 @@ mod tests {
         });
         v.depth_range = receivers.first().map(|f| (f.0, receivers[n - 1].0));
         v.rows = (n + extra) as u32;
-        v.samples = vec![None; n + extra];
+        v.samples = crate::visibility::Samples::misses(&v.view, n + extra);
         v.receivers = receivers;
         v.weights = weights;
         v
@@ -1761,7 +1761,7 @@ mod tests {
             view,
             cols: 1,
             rows: (n + extra) as u32,
-            samples: vec![None; n + extra],
+            samples: crate::visibility::Samples::misses(&view, n + extra),
             receivers,
             weights,
             self_shadowed: extra / 2,

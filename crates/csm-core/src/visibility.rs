@@ -130,7 +130,7 @@ impl View {
 }
 
 /// [`View::ray_terms`]: a view's ray directions per sample column and row.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct RayTerms {
     origin: DVec3,
     forward: DVec3,
@@ -218,47 +218,67 @@ impl Hits {
     /// The pass of `view`: each hit shaded under `view.light` (the lit flag and the
     /// geometric factor), the receivers sorted by depth. The same, bit for bit, as casting
     /// the rays again for that light.
-    pub fn shade(&self, view: &View) -> Visibility {
+    pub fn shade(self: &Arc<Self>, view: &View) -> Visibility {
         let light = LightBasis::new(view.light);
         let terms = view.ray_terms();
         let derivatives = view.ray_derivatives();
         let towards_light = -view.light.normalize();
-        let samples: Vec<Option<Sample>> = self
-            .depth
+        // Per pixel: g, negated where the hit faces away from the light, and the contrast
+        // weight of a receiver (0 otherwise).
+        let (mut signed_factor, mut pixel_weight) = (Vec::new(), Vec::new());
+        self.depth
             .par_iter()
             .zip(&self.triangle)
             .enumerate()
             .with_min_len(4096)
             .map(|(k, (&depth, &id))| {
                 if id == MISS {
-                    return None;
+                    return (0.0, 0);
                 }
                 let d = terms.ray(k);
-                // The triangle's normal turned toward the camera, as the hit was found.
-                let n = self.normals[id as usize];
-                let n = if n.dot(d) > 0.0 { -n } else { n };
-                let nl = n.dot(towards_light);
-                Some(Sample {
-                    depth,
-                    lit: n.dot(-view.light) > 0.0,
-                    factor: factor_with(derivatives, &light, n, d, depth),
-                    contrast: nl.max(0.0),
-                })
+                let n = toward(self.normals[id as usize], d);
+                let g = factor_with(derivatives, &light, n, d, depth);
+                if n.dot(-view.light) > 0.0 {
+                    (g, contrast_weight(n.dot(towards_light).max(0.0)))
+                } else {
+                    (-g, 0)
+                }
             })
-            .collect();
+            .unzip_into_vecs(&mut signed_factor, &mut pixel_weight);
         // The lit samples in depth order, straight into the receivers and their weights;
         // equal depths then by factor (then weight), so the list is the one sorting every
         // (depth, factor, weight) triple would give.
-        let (mut receivers, mut weights): (Vec<(f64, f64)>, Vec<u32>) = self
+        // Each chunk of the depth order counts its receivers, then fills its own slice of
+        // the two arrays (no intermediate list).
+        const CHUNK: usize = 1 << 15;
+        let is_lit = |k: u32| signed_factor[k as usize].is_sign_positive();
+        let counts: Vec<usize> = self
             .by_depth
-            .par_iter()
-            .with_min_len(4096)
-            .filter_map(|&k| {
-                samples[k as usize]
-                    .filter(|s| s.lit)
-                    .map(|s| ((s.depth, s.factor), contrast_weight(s.contrast)))
-            })
-            .unzip();
+            .par_chunks(CHUNK)
+            .map(|ks| ks.iter().filter(|&&k| is_lit(k)).count())
+            .collect();
+        let total = counts.iter().sum();
+        let (mut receivers, mut weights) = (vec![(0.0, 0.0); total], vec![0u32; total]);
+        let mut parts = Vec::with_capacity(counts.len());
+        let (mut r, mut w) = (&mut receivers[..], &mut weights[..]);
+        for &n in &counts {
+            let (part_r, rest_r) = std::mem::take(&mut r).split_at_mut(n);
+            let (part_w, rest_w) = std::mem::take(&mut w).split_at_mut(n);
+            parts.push((part_r, part_w));
+            (r, w) = (rest_r, rest_w);
+        }
+        self.by_depth
+            .par_chunks(CHUNK)
+            .zip(parts)
+            .for_each(|(ks, (r, w))| {
+                let lit = ks.iter().filter(|&&k| is_lit(k));
+                for ((r, w), &k) in r.iter_mut().zip(w.iter_mut()).zip(lit) {
+                    let k = k as usize;
+                    *r = (self.depth[k], signed_factor[k]);
+                    *w = pixel_weight[k];
+                }
+            });
+        drop(pixel_weight);
         sort_equal_depths(&mut receivers, &mut weights);
         // Every hit is a receiver or self-shadowed; depths lie in [near, far] (positive), so
         // the first and last in depth order are the least and greatest.
@@ -268,6 +288,12 @@ impl Hits {
             .first()
             .zip(self.by_depth.last())
             .map(|(&a, &b)| (self.depth[a as usize], self.depth[b as usize]));
+        let samples = Samples {
+            hits: self.clone(),
+            terms,
+            towards_light,
+            signed_factor,
+        };
         Visibility::of_samples(
             *view,
             self.cols,
@@ -276,6 +302,88 @@ impl Hits {
             (receivers, weights),
             (self_shadowed, depth_range),
         )
+    }
+}
+
+/// Unit normal `n` turned toward the camera along ray `d` (negated when `n · d > 0`).
+#[inline]
+fn toward(n: DVec3, d: DVec3) -> DVec3 {
+    if n.dot(d) > 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
+/// Every sampled pixel's [`Sample`] (row-major; [`Samples::get`]), stored compactly: the cast
+/// rays' depths and triangles (shared with [`Hits`]) and one number per pixel, the factor `g`
+/// with its sign telling whether the hit faces the light (`g > 0`, so its sign bit is free).
+/// The contrast `N · L` is the hit normal's, worked out again when asked for (the same
+/// operations as the shading).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Samples {
+    hits: Arc<Hits>,
+    terms: RayTerms,
+    towards_light: DVec3,
+    /// Per pixel: `g`, negated where the hit faces away from the light (0 for a miss).
+    signed_factor: Vec<f64>,
+}
+
+impl Samples {
+    /// `n` samples that meet nothing, of a view (synthetic passes in tests).
+    pub fn misses(view: &View, n: usize) -> Samples {
+        let hits = Hits {
+            view: unlit(view),
+            cols: n as u32,
+            rows: 1,
+            depth: vec![0.0; n],
+            triangle: vec![MISS; n],
+            normals: Arc::new(Vec::new()),
+            by_depth: Vec::new(),
+        };
+        Samples {
+            hits: Arc::new(hits),
+            terms: view.ray_terms(),
+            towards_light: -view.light.normalize(),
+            signed_factor: vec![0.0; n],
+        }
+    }
+
+    /// Sampled pixels.
+    pub fn len(&self) -> usize {
+        self.signed_factor.len()
+    }
+
+    /// Whether no pixel is sampled.
+    pub fn is_empty(&self) -> bool {
+        self.signed_factor.is_empty()
+    }
+
+    /// What sample `k` (row-major) sees: None where its ray meets nothing between near and far.
+    #[inline]
+    pub fn get(&self, k: usize) -> Option<Sample> {
+        let id = self.hits.triangle[k];
+        if id == MISS {
+            return None;
+        }
+        let g = self.signed_factor[k];
+        let n = toward(self.hits.normals[id as usize], self.terms.ray(k));
+        Some(Sample {
+            depth: self.hits.depth[k],
+            lit: g.is_sign_positive(),
+            factor: g.abs(),
+            contrast: n.dot(self.towards_light).max(0.0),
+        })
+    }
+
+    /// Every sample, row-major.
+    pub fn iter(&self) -> impl ExactSizeIterator<Item = Option<Sample>> + '_ {
+        (0..self.len()).map(|k| self.get(k))
+    }
+
+    /// Every sample, row-major, on every thread.
+    pub fn par_iter(&self) -> impl IndexedParallelIterator<Item = Option<Sample>> + '_ {
+        (0..self.len()).into_par_iter().map(|k| self.get(k))
     }
 }
 
@@ -547,7 +655,7 @@ pub struct Visibility {
     pub cols: u32,
     pub rows: u32,
     /// Row-major, `cols x rows`; None where the ray meets nothing between near and far.
-    pub samples: Vec<Option<Sample>>,
+    pub samples: Samples,
     /// `(depth, factor)` of every lit-facing sample, sorted by depth.
     pub receivers: Vec<(f64, f64)>,
     /// The contrast weight of each receiver (same order): [`contrast_weight`] of its `N · L`.
@@ -570,7 +678,7 @@ impl Visibility {
         view: View,
         cols: u32,
         rows: u32,
-        samples: Vec<Option<Sample>>,
+        samples: Samples,
         (receivers, weights): (Vec<(f64, f64)>, Vec<u32>),
         (self_shadowed, depth_range): (usize, Option<(f64, f64)>),
     ) -> Visibility {
