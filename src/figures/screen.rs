@@ -48,10 +48,10 @@ pub(crate) fn aliasing_color(m: f64) -> [u8; 3] {
     rgb(colormap((m.log2() - LOG2_LO) / (LOG2_HI - LOG2_LO)))
 }
 
-/// What each sampled pixel shows: None (sky), or (lit, served cascade, aliasing m, whether
-/// the cascade fails to serve it). 16 bytes: a full-HD picture holds two million.
+/// What each sampled pixel shows: None (sky), or (lit, served cascade, whether the cascade
+/// fails to serve it). 4 bytes: a full-HD picture holds two million (the aliasing `m` of a
+/// served pixel is its cascade's texel size times the pass's factor, [`Pixels::m`]).
 struct Pixel {
-    m: f64,
     cascade: Option<u8>,
     lit: bool,
     fault: Option<ServeFault>,
@@ -65,6 +65,16 @@ struct Pixels {
     px: Vec<Option<Pixel>>,
     /// (missed, clipped).
     faults: (usize, usize),
+    /// The pass the pixels come from.
+    vis: std::sync::Arc<csm_core::visibility::Visibility>,
+}
+
+impl Pixels {
+    /// The aliasing `m` of pixel `k` served by cascade `i`: `T_i g`.
+    fn m(&self, a: &Analysis, k: usize, i: u8) -> f64 {
+        let g = self.vis.samples.get(k).map_or(0.0, |s| s.factor);
+        a.cascades[i as usize].texel_size * g
+    }
 }
 
 fn pixels(a: &Analysis) -> Option<Pixels> {
@@ -91,7 +101,6 @@ fn pixels(a: &Analysis) -> Option<Pixels> {
                 Pixel {
                     lit: s.lit,
                     cascade: cascade.map(|i| u8::try_from(i).expect("at most 255 cascades")),
-                    m: cascade.map_or(0.0, |i| a.cascades[i].texel_size * s.factor),
                     fault: faults.as_ref().and_then(|f| f[k]),
                 }
             })
@@ -103,6 +112,7 @@ fn pixels(a: &Analysis) -> Option<Pixels> {
         rows: vis.rows,
         px,
         faults,
+        vis,
     })
 }
 
@@ -170,11 +180,14 @@ fn aliasing_of(a: &Analysis, p: &Pixels) -> Result<Vec<u8>> {
     let (cols, rows, px) = (p.cols, p.rows, &p.px);
     let colour: Vec<[u8; 3]> = px
         .iter()
-        .map(|p| match p {
+        .enumerate()
+        .map(|(k, q)| match q {
             None => SKY,
-            Some(p) if !p.lit => SELF_SHADOWED,
-            Some(p) if p.cascade.is_none() => UNSERVED,
-            Some(p) => fault_colour(p).unwrap_or_else(|| aliasing_color(p.m)),
+            Some(q) if !q.lit => SELF_SHADOWED,
+            Some(q) => match q.cascade {
+                None => UNSERVED,
+                Some(i) => fault_colour(q).unwrap_or_else(|| aliasing_color(p.m(a, k, i))),
+            },
         })
         .collect();
     let mut body = String::new();
