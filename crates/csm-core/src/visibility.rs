@@ -263,17 +263,14 @@ impl Hits {
             parts.push((part_r, part_w));
             (r, w) = (rest_r, rest_w);
         }
-        self.by_depth
-            .par_chunks(CHUNK)
-            .zip(parts)
-            .for_each(|(ks, (r, w))| {
-                let lit = ks.iter().filter(|&&k| is_lit(k));
-                for ((r, w), &k) in r.iter_mut().zip(w.iter_mut()).zip(lit) {
-                    let k = k as usize;
-                    *r = (self.depth[k], signed_factor[k]);
-                    *w = contrast_weight(contrast[k]);
-                }
-            });
+        self.by_depth.par_chunks(CHUNK).zip(parts).for_each(|(ks, (r, w))| {
+            let lit = ks.iter().filter(|&&k| is_lit(k));
+            for ((r, w), &k) in r.iter_mut().zip(w.iter_mut()).zip(lit) {
+                let k = k as usize;
+                *r = (self.depth[k], signed_factor[k]);
+                *w = contrast_weight(contrast[k]);
+            }
+        });
         sort_equal_depths(&mut receivers, &mut weights);
         // Every hit is a receiver or self-shadowed; depths lie in [near, far] (positive), so
         // the first and last in depth order are the least and greatest.
@@ -385,7 +382,7 @@ impl Samples {
 /// merges the rising and falling stretches a row's factors come in, where a quicksort starts
 /// over. The runs are sorted on every thread.
 fn sort_equal_depths(receivers: &mut [(f64, f64)], weights: &mut [u32]) {
-    let mut runs: Vec<(&mut [(f64, f64)], &mut [u32])> = Vec::new();
+    let mut runs = Vec::new();
     let (mut r, mut w) = (receivers, weights);
     while !r.is_empty() {
         let depth = r[0].0.to_bits();
@@ -446,11 +443,9 @@ fn from_total_key(k: u64) -> f64 {
 /// The indices `0..n` ordered by `(value(index).total_cmp, index)`: what a comparison sort
 /// with that order gives, by the radix sort of [`sort_keys`].
 pub(crate) fn order_by_key(n: usize, value: impl Fn(usize) -> f64) -> Vec<u32> {
-    sort_keys(
-        (0..n).map(|k| (total_key(value(k)), k as u32)),
-        n,
-        |k| total_key(value(k as usize)),
-    )
+    sort_keys((0..n).map(|k| (total_key(value(k)), k as u32)), n, |k| {
+        total_key(value(k as usize))
+    })
 }
 
 /// Binary digits of an index packed beside its key in one 64-bit word ([`sort_keys`]).
