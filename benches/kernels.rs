@@ -235,7 +235,7 @@ fn sun_angle(c: &mut Criterion) {
     let scene = setup.geometry.as_ref().unwrap().scene.clone();
     // The rays of a fresh scene, its BVH build included (as a sweep pays it once).
     group.bench_function("visibility_cast_rays", |b| {
-        b.iter(|| black_box(SceneGeometry::new(scene.mesh.clone()).hits(&view).hits.len()))
+        b.iter(|| black_box(SceneGeometry::new(scene.mesh.clone()).hits(&view).len()))
     });
     let hits = scene.hits(&view);
     group.bench_function("visibility_shade_one_light", |b| {

@@ -48,17 +48,34 @@ pub(crate) fn aliasing_color(m: f64) -> [u8; 3] {
     rgb(colormap((m.log2() - LOG2_LO) / (LOG2_HI - LOG2_LO)))
 }
 
-/// What each sampled pixel shows: None (sky), or (lit, served cascade, aliasing m, whether
-/// the cascade fails to serve it). 16 bytes: a full-HD picture holds two million.
+/// What each sampled pixel shows: None (sky), or (lit, served cascade, whether the cascade
+/// fails to serve it). 4 bytes: a full-HD picture holds two million (the aliasing `m` of a
+/// served pixel is its cascade's texel size times the pass's factor, [`Pixels::m`]).
 struct Pixel {
-    m: f64,
     cascade: Option<u8>,
     lit: bool,
     fault: Option<ServeFault>,
 }
 
-/// The sampled grid's pixels: (columns, rows, each pixel row by row).
-type Pixels = (u32, u32, Vec<Option<Pixel>>);
+/// The sampled grid's pixels: columns, rows, each pixel row by row, and how many receiver
+/// pixels each fault marks (counted once for both pictures and their captions).
+struct Pixels {
+    cols: u32,
+    rows: u32,
+    px: Vec<Option<Pixel>>,
+    /// (missed, clipped).
+    faults: (usize, usize),
+    /// The pass the pixels come from.
+    vis: std::sync::Arc<csm_core::visibility::Visibility>,
+}
+
+impl Pixels {
+    /// The aliasing `m` of pixel `k` served by cascade `i`: `T_i g`.
+    fn m(&self, a: &Analysis, k: usize, i: u8) -> f64 {
+        let g = self.vis.samples.get(k).map_or(0.0, |s| s.factor);
+        a.cascades[i as usize].texel_size * g
+    }
+}
 
 fn pixels(a: &Analysis) -> Option<Pixels> {
     let setup = a.config.setup();
@@ -73,7 +90,7 @@ fn pixels(a: &Analysis) -> Option<Pixels> {
         let m = r.cascade_count();
         (d >= r.splits[0] && d <= r.splits[m]).then(|| cascade_at(&r.splits, d))
     };
-    let px = vis
+    let px: Vec<Option<Pixel>> = vis
         .samples
         .par_iter()
         .enumerate()
@@ -84,13 +101,19 @@ fn pixels(a: &Analysis) -> Option<Pixels> {
                 Pixel {
                     lit: s.lit,
                     cascade: cascade.map(|i| u8::try_from(i).expect("at most 255 cascades")),
-                    m: cascade.map_or(0.0, |i| a.cascades[i].texel_size * s.factor),
                     fault: faults.as_ref().and_then(|f| f[k]),
                 }
             })
         })
         .collect();
-    Some((vis.cols, vis.rows, px))
+    let faults = fault_counts(&px);
+    Some(Pixels {
+        cols: vis.cols,
+        rows: vis.rows,
+        px,
+        faults,
+        vis,
+    })
 }
 
 /// The image scaled up by a whole factor, with `legend` (SVG) below; PNG bytes.
@@ -102,13 +125,20 @@ fn compose(cols: u32, rows: u32, colour: &[[u8; 3]], legend: &str) -> Result<Vec
     let mut out = vec![255u8; (w * h * 3) as usize];
     // Each sampled row is enlarged once (every pixel k times) and copied to its k rows.
     let row = (w * 3) as usize;
-    for (y, line) in out[..row * (rows * k) as usize]
-        .chunks_exact_mut(row * k as usize)
-        .enumerate()
+    let (n, kk) = (cols as usize, k as usize);
+    for (line, sampled) in out[..row * rows as usize * kk]
+        .chunks_exact_mut(row * kk)
+        .zip(colour.chunks_exact(n))
     {
         let (first, rest) = line.split_at_mut(row);
-        for (x, px) in first.chunks_exact_mut(3).enumerate() {
-            px.copy_from_slice(&colour[y * cols as usize + x / k as usize]);
+        if kk == 1 {
+            first.copy_from_slice(sampled.as_flattened());
+        } else {
+            for (px, c) in first.chunks_exact_mut(3 * kk).zip(sampled) {
+                for p in px.chunks_exact_mut(3) {
+                    p.copy_from_slice(c);
+                }
+            }
         }
         for copy in rest.chunks_exact_mut(row) {
             copy.copy_from_slice(first);
@@ -146,15 +176,18 @@ pub(crate) fn aliasing_png(a: &Analysis) -> Result<Vec<u8>> {
 }
 
 /// `screen_aliasing.png` from the analysis' [`pixels`].
-fn aliasing_of(a: &Analysis, (cols, rows, px): &Pixels) -> Result<Vec<u8>> {
-    let (cols, rows) = (*cols, *rows);
+fn aliasing_of(a: &Analysis, p: &Pixels) -> Result<Vec<u8>> {
+    let (cols, rows, px) = (p.cols, p.rows, &p.px);
     let colour: Vec<[u8; 3]> = px
         .iter()
-        .map(|p| match p {
+        .enumerate()
+        .map(|(k, q)| match q {
             None => SKY,
-            Some(p) if !p.lit => SELF_SHADOWED,
-            Some(p) if p.cascade.is_none() => UNSERVED,
-            Some(p) => fault_colour(p).unwrap_or_else(|| aliasing_color(p.m)),
+            Some(q) if !q.lit => SELF_SHADOWED,
+            Some(q) => match q.cascade {
+                None => UNSERVED,
+                Some(i) => fault_colour(q).unwrap_or_else(|| aliasing_color(p.m(a, k, i))),
+            },
         })
         .collect();
     let mut body = String::new();
@@ -196,7 +229,7 @@ fn aliasing_of(a: &Analysis, (cols, rows, px): &Pixels) -> Result<Vec<u8>> {
     body.push_str(&swatch(10.0, SKY, "sky"));
     body.push_str(&swatch(70.0, SELF_SHADOWED, "facing away from the light"));
     body.push_str(&swatch(290.0, UNSERVED, "outside the split range"));
-    body.push_str(&fault_swatches(px, 480.0));
+    body.push_str(&fault_swatches(p.faults, 480.0));
     compose(cols, rows, &colour, &legend_svg(&body))
 }
 
@@ -214,9 +247,9 @@ fn fault_counts(px: &[Option<Pixel>]) -> (usize, usize) {
     (n(ServeFault::Missed), n(ServeFault::Clipped))
 }
 
-/// The legend's warning swatches from `x` on, for the faults the picture has (none: empty).
-fn fault_swatches(px: &[Option<Pixel>], x: f64) -> String {
-    let (missed, clipped) = fault_counts(px);
+/// The legend's warning swatches from `x` on, for the faults the picture has (`(missed,
+/// clipped)` receiver pixels; none: empty).
+fn fault_swatches((missed, clipped): (usize, usize), x: f64) -> String {
     let mut out = String::new();
     let mut x = x;
     if missed > 0 {
@@ -236,10 +269,12 @@ pub(crate) fn cascades_png(a: &Analysis) -> Result<Vec<u8>> {
 }
 
 /// `screen_cascades.png` from the analysis' [`pixels`].
-fn cascades_of(a: &Analysis, (cols, rows, px): &Pixels) -> Result<Vec<u8>> {
-    let (cols, rows) = (*cols, *rows);
+fn cascades_of(a: &Analysis, p: &Pixels) -> Result<Vec<u8>> {
+    let (cols, rows, px) = (p.cols, p.rows, &p.px);
     let dim = |c: [u8; 3]| c.map(|x| (x as f64 * 0.4) as u8);
-    let cascade_of = |i: usize| px[i].as_ref().and_then(|p| p.cascade);
+    // Each pixel's cascade, two bytes apiece: the split-line test reads three per pixel.
+    let cascades: Vec<Option<u8>> = px.iter().map(|p| p.as_ref().and_then(|p| p.cascade)).collect();
+    let cascade_of = |i: usize| cascades[i];
     let colour: Vec<[u8; 3]> = (0..px.len())
         .map(|i| {
             let (x, y) = (i as u32 % cols, i as u32 / cols);
@@ -273,9 +308,9 @@ fn cascades_of(a: &Analysis, (cols, rows, px): &Pixels) -> Result<Vec<u8>> {
     body.push_str(&swatch(10.0, SKY, "sky"));
     body.push_str(&swatch(70.0, SPLIT_LINE, "split lines"));
     body.push_str(&swatch(180.0, UNSERVED, "outside the split range"));
-    let (missed, clipped) = fault_counts(px);
+    let (missed, clipped) = p.faults;
     if missed + clipped > 0 {
-        body.push_str(&fault_swatches(px, 390.0));
+        body.push_str(&fault_swatches(p.faults, 390.0));
     } else {
         body.push_str("<text x=\"390\" y=\"52\">darker: facing away from the light</text>");
     }
@@ -314,7 +349,7 @@ pub(crate) fn captioned(a: &Analysis, label: &str) -> Vec<(Vec<u8>, String)> {
         return Vec::new();
     };
     // Receivers the set-up does not serve are marked, and the captions say so.
-    let (missed, clipped) = fault_counts(&px.2);
+    let (missed, clipped) = px.faults;
     let mut note = String::new();
     if missed > 0 {
         note.push_str(&format!(

@@ -60,7 +60,7 @@ fn ground_plane_aliasing_equals_the_closed_form_at_every_sampled_pixel() {
     let mut checked = 0;
     for row in 0..vis.rows {
         for col in 0..vis.cols {
-            let Some(s) = vis.samples[(row * vis.cols + col) as usize] else {
+            let Some(s) = vis.samples.get((row * vis.cols + col) as usize) else {
                 continue;
             };
             let (u, v) = vis.view.pixel_centre(col, row);

@@ -191,7 +191,7 @@ fn faces_turned_from_the_light_are_drawn_as_away_not_as_sky() {
     let away = csm_core::truth::away_pixels(&vis);
     // Independently: every hit whose surface faces away from the light.
     let want: Vec<usize> = (0..vis.samples.len())
-        .filter(|&i| vis.samples[i].is_some_and(|s| !s.lit))
+        .filter(|&i| vis.samples.get(i).is_some_and(|s| !s.lit))
         .collect();
     assert_eq!(away, want);
     assert_eq!(away.len(), vis.self_shadowed);

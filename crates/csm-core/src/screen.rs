@@ -254,7 +254,7 @@ impl ScreenIndex {
         let n = r.len();
         // The ranks by (g, index): a radix sort of g's order-preserving bits (no comparison
         // sort fetching g through the receivers).
-        let order: Vec<u32> = crate::visibility::order_by_key(r.iter().map(|&(_, g)| g));
+        let order: Vec<u32> = crate::visibility::order_by_key(n, |k| r[k].1);
         let buckets = n.div_ceil(BUCKET);
         let mut glo = Vec::with_capacity(buckets);
         let mut ghi = Vec::with_capacity(buckets);
@@ -1532,7 +1532,7 @@ mod tests {
         });
         v.depth_range = receivers.first().map(|f| (f.0, receivers[n - 1].0));
         v.rows = (n + extra) as u32;
-        v.samples = vec![None; n + extra];
+        v.samples = crate::visibility::Samples::misses(&v.view, n + extra);
         v.receivers = receivers;
         v.weights = weights;
         v
@@ -1793,7 +1793,7 @@ mod tests {
             view,
             cols: 1,
             rows: (n + extra) as u32,
-            samples: vec![None; n + extra],
+            samples: crate::visibility::Samples::misses(&view, n + extra),
             receivers,
             weights,
             self_shadowed: extra / 2,

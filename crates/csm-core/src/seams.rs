@@ -151,7 +151,7 @@ pub fn receiver_points(vis: &Visibility, splits: &[f64]) -> Vec<DVec3> {
         .iter()
         .enumerate()
         .filter_map(|(k, s)| {
-            let s = (*s)?;
+            let s = s?;
             (s.lit && s.depth >= lo && s.depth <= hi).then(|| terms.point(k, s.depth))
         })
         .collect()

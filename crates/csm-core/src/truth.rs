@@ -441,7 +441,7 @@ pub fn receivers(scene: &SceneGeometry, vis: &Visibility) -> Vec<Receiver> {
         .par_iter()
         .enumerate()
         .filter_map(|(k, s)| {
-            let s = (*s).filter(|s| s.lit)?;
+            let s = s.filter(|s| s.lit)?;
             let cols = vis.cols as usize;
             let (u, v) = view.pixel_centre((k % cols) as u32, (k / cols) as u32);
             let d = view.ray(u, v);

@@ -168,115 +168,259 @@ pub struct Sample {
     pub contrast: f64,
 }
 
-/// What one sampled pixel's ray hits, whatever the light: the view depth and the unit normal
-/// turned toward the camera.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Hit {
-    pub depth: f64,
-    pub normal: DVec3,
-}
+/// [`Hits::triangle`] of a sample whose ray meets nothing between near and far.
+pub const MISS: u32 = u32::MAX;
 
-/// The light-independent part of a pass: every sampled pixel's hit.
+/// The light-independent part of a pass: every sampled pixel's hit, as two arrays (12 bytes a
+/// pixel; the normal is the hit triangle's, turned toward the camera when shaded).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Hits {
     /// The view the rays were cast for; its `light` is unused (zero).
     pub view: View,
     pub cols: u32,
     pub rows: u32,
-    /// Row-major, `cols x rows`; None where the ray meets nothing between near and far.
-    pub hits: Vec<Option<Hit>>,
+    /// Row-major, `cols x rows`: the view depth of each sample's hit (0 for a miss).
+    pub depth: Vec<f64>,
+    /// Row-major: the mesh index of the triangle each sample's ray meets first, or [`MISS`]
+    /// where it meets nothing between near and far.
+    pub triangle: Vec<u32>,
+    /// The unit normal of every mesh triangle (winding order), shared with the scene.
+    normals: Arc<Vec<DVec3>>,
     /// The indices of the hits in increasing depth (ties in index order): the receivers of any
     /// light come out of it sorted by depth, without a sort per light.
     pub by_depth: Vec<u32>,
 }
 
 impl Hits {
-    fn new(view: View, cols: u32, rows: u32, hits: Vec<Option<Hit>>) -> Hits {
-        let by_depth = depth_order(&hits);
+    fn new(view: View, cols: u32, rows: u32, depth: Vec<f64>, triangle: Vec<u32>, normals: Arc<Vec<DVec3>>) -> Hits {
+        let by_depth = depth_order(&depth, &triangle);
         Hits {
             view,
             cols,
             rows,
-            hits,
+            depth,
+            triangle,
+            normals,
             by_depth,
         }
+    }
+
+    /// Sampled pixels (hits and misses).
+    pub fn len(&self) -> usize {
+        self.depth.len()
+    }
+
+    /// Whether no pixel is sampled (never for a view's grid).
+    pub fn is_empty(&self) -> bool {
+        self.depth.is_empty()
     }
 
     /// The pass of `view`: each hit shaded under `view.light` (the lit flag and the
     /// geometric factor), the receivers sorted by depth. The same, bit for bit, as casting
     /// the rays again for that light.
-    pub fn shade(&self, view: &View) -> Visibility {
+    pub fn shade(self: &Arc<Self>, view: &View) -> Visibility {
         let light = LightBasis::new(view.light);
         let terms = view.ray_terms();
         let derivatives = view.ray_derivatives();
         let towards_light = -view.light.normalize();
-        let samples: Vec<Option<Sample>> = self
-            .hits
+        // Per pixel: g, negated where the hit faces away from the light, and the contrast.
+        let (mut signed_factor, mut contrast): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
+        self.depth
             .par_iter()
+            .zip(&self.triangle)
             .enumerate()
             .with_min_len(4096)
-            .map(|(k, h)| {
-                let h = h.as_ref()?;
-                let d = terms.ray(k);
-                let nl = h.normal.dot(towards_light);
-                Some(Sample {
-                    depth: h.depth,
-                    lit: h.normal.dot(-view.light) > 0.0,
-                    factor: factor_with(derivatives, &light, h.normal, d, h.depth),
-                    contrast: nl.max(0.0),
-                })
-            })
-            .collect();
-        // The lit samples in depth order; equal depths then by factor (then weight), so the
-        // list is the one sorting every (depth, factor, weight) triple would give.
-        let mut lit: Vec<(f64, f64, u32)> = self
-            .by_depth
-            .par_iter()
-            .with_min_len(4096)
-            .filter_map(|&k| {
-                samples[k as usize]
-                    .filter(|s| s.lit)
-                    .map(|s| (s.depth, s.factor, contrast_weight(s.contrast)))
-            })
-            .collect();
-        // A run at one depth (a plane seen row by row gives runs of a whole row) is sorted as
-        // whole numbers: (factor in total_cmp's order as bits, weight), the same order as
-        // comparing the floats. Equal keys are equal entries, so a stable sort gives the same
-        // list as any; the stable sort merges the rising and falling stretches a row's factors
-        // come in, where a quicksort starts over. The runs are sorted on every thread.
-        lit.par_chunk_by_mut(|a, b| a.0.to_bits() == b.0.to_bits())
-            .filter(|run| run.len() > 1)
-            .for_each(|run| {
-                let mut keys: Vec<(u64, u32)> = run.iter().map(|r| (total_key(r.1), r.2)).collect();
-                if !keys.is_sorted() {
-                    keys.sort();
-                    for (r, &(k, w)) in run.iter_mut().zip(&keys) {
-                        r.1 = from_total_key(k);
-                        r.2 = w;
-                    }
+            .map(|(k, (&depth, &id))| {
+                if id == MISS {
+                    return (0.0, 0.0);
                 }
-            });
-        let receivers = lit.par_iter().with_min_len(4096).map(|r| (r.0, r.1)).collect();
-        let weights = lit.par_iter().with_min_len(4096).map(|r| r.2).collect();
-        Visibility::of_samples(*view, self.cols, self.rows, samples, receivers, weights)
+                let d = terms.ray(k);
+                let n = toward(self.normals[id as usize], d);
+                let g = factor_with(derivatives, &light, n, d, depth);
+                let lit = n.dot(-view.light) > 0.0;
+                (if lit { g } else { -g }, n.dot(towards_light).max(0.0))
+            })
+            .unzip_into_vecs(&mut signed_factor, &mut contrast);
+        // The lit samples in depth order, straight into the receivers and their weights;
+        // equal depths then by factor (then weight), so the list is the one sorting every
+        // (depth, factor, weight) triple would give.
+        // Each chunk of the depth order counts its receivers, then fills its own slice of
+        // the two arrays (no intermediate list).
+        const CHUNK: usize = 1 << 15;
+        let is_lit = |k: u32| signed_factor[k as usize].is_sign_positive();
+        let counts: Vec<usize> = self
+            .by_depth
+            .par_chunks(CHUNK)
+            .map(|ks| ks.iter().filter(|&&k| is_lit(k)).count())
+            .collect();
+        let total = counts.iter().sum();
+        let (mut receivers, mut weights) = (vec![(0.0, 0.0); total], vec![0u32; total]);
+        let mut parts = Vec::with_capacity(counts.len());
+        let (mut r, mut w) = (&mut receivers[..], &mut weights[..]);
+        for &n in &counts {
+            let (part_r, rest_r) = std::mem::take(&mut r).split_at_mut(n);
+            let (part_w, rest_w) = std::mem::take(&mut w).split_at_mut(n);
+            parts.push((part_r, part_w));
+            (r, w) = (rest_r, rest_w);
+        }
+        self.by_depth.par_chunks(CHUNK).zip(parts).for_each(|(ks, (r, w))| {
+            let lit = ks.iter().filter(|&&k| is_lit(k));
+            for ((r, w), &k) in r.iter_mut().zip(w.iter_mut()).zip(lit) {
+                let k = k as usize;
+                *r = (self.depth[k], signed_factor[k]);
+                *w = contrast_weight(contrast[k]);
+            }
+        });
+        sort_equal_depths(&mut receivers, &mut weights);
+        // Every hit is a receiver or self-shadowed; depths lie in [near, far] (positive), so
+        // the first and last in depth order are the least and greatest.
+        let self_shadowed = self.by_depth.len() - receivers.len();
+        let depth_range = self
+            .by_depth
+            .first()
+            .zip(self.by_depth.last())
+            .map(|(&a, &b)| (self.depth[a as usize], self.depth[b as usize]));
+        let samples = Samples {
+            hits: self.clone(),
+            signed_factor,
+            contrast,
+        };
+        Visibility::of_samples(
+            *view,
+            self.cols,
+            self.rows,
+            samples,
+            (receivers, weights),
+            (self_shadowed, depth_range),
+        )
     }
 }
 
-/// The indices of the hit samples in increasing depth, ties in index order: what sorting by
-/// `(depth.total_cmp, index)` gives, by a stable least-significant-digit radix sort of the
-/// depths' order-preserving 64-bit keys (the map behind `f64::total_cmp`). Only the top 44
-/// bits are radix-sorted (four passes of 11 bits, a pass skipped when every key shares its
-/// digit); runs of keys equal in those bits are then sorted by the whole key, the index
-/// breaking ties. O(n), where the comparison sort it replaces fetched each depth through the
+/// Unit normal `n` turned toward the camera along ray `d` (negated when `n · d > 0`).
+#[inline]
+fn toward(n: DVec3, d: DVec3) -> DVec3 {
+    if n.dot(d) > 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
+/// Every sampled pixel's [`Sample`] (row-major; [`Samples::get`]), stored compactly: the cast
+/// rays' depths and triangles (shared with [`Hits`]) and two numbers per pixel, the factor `g`
+/// with its sign telling whether the hit faces the light (`g > 0`, so its sign bit is free)
+/// and the contrast `N · L` (16 bytes a pixel, where a list of samples took 32).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Samples {
+    hits: Arc<Hits>,
+    /// Per pixel: `g`, negated where the hit faces away from the light (0 for a miss).
+    signed_factor: Vec<f64>,
+    /// Per pixel: the contrast `N · L` (0 for a miss).
+    contrast: Vec<f64>,
+}
+
+impl Samples {
+    /// `n` samples that meet nothing, of a view (synthetic passes in tests).
+    pub fn misses(view: &View, n: usize) -> Samples {
+        let hits = Hits {
+            view: unlit(view),
+            cols: n as u32,
+            rows: 1,
+            depth: vec![0.0; n],
+            triangle: vec![MISS; n],
+            normals: Arc::new(Vec::new()),
+            by_depth: Vec::new(),
+        };
+        Samples {
+            hits: Arc::new(hits),
+            signed_factor: vec![0.0; n],
+            contrast: vec![0.0; n],
+        }
+    }
+
+    /// Sampled pixels.
+    pub fn len(&self) -> usize {
+        self.signed_factor.len()
+    }
+
+    /// Whether no pixel is sampled.
+    pub fn is_empty(&self) -> bool {
+        self.signed_factor.is_empty()
+    }
+
+    /// What sample `k` (row-major) sees: None where its ray meets nothing between near and far.
+    #[inline]
+    pub fn get(&self, k: usize) -> Option<Sample> {
+        let id = self.hits.triangle[k];
+        if id == MISS {
+            return None;
+        }
+        let g = self.signed_factor[k];
+        Some(Sample {
+            depth: self.hits.depth[k],
+            lit: g.is_sign_positive(),
+            factor: g.abs(),
+            contrast: self.contrast[k],
+        })
+    }
+
+    /// Every sample, row-major.
+    pub fn iter(&self) -> impl ExactSizeIterator<Item = Option<Sample>> + '_ {
+        (0..self.len()).map(|k| self.get(k))
+    }
+
+    /// Every sample, row-major, on every thread.
+    pub fn par_iter(&self) -> impl IndexedParallelIterator<Item = Option<Sample>> + '_ {
+        (0..self.len()).into_par_iter().map(|k| self.get(k))
+    }
+}
+
+/// Sorts each run of receivers at one depth (a plane seen row by row gives runs of a whole
+/// row) by (factor, weight), moving the weights along. A run is sorted as whole numbers:
+/// (factor in `total_cmp`'s order as bits, weight), the same order as comparing the floats.
+/// Equal keys are equal entries, so a stable sort gives the same list as any; the stable sort
+/// merges the rising and falling stretches a row's factors come in, where a quicksort starts
+/// over. The runs are sorted on every thread.
+fn sort_equal_depths(receivers: &mut [(f64, f64)], weights: &mut [u32]) {
+    let mut runs = Vec::new();
+    let (mut r, mut w) = (receivers, weights);
+    while !r.is_empty() {
+        let depth = r[0].0.to_bits();
+        let len = 1 + r[1..].iter().take_while(|x| x.0.to_bits() == depth).count();
+        let (run_r, rest_r) = std::mem::take(&mut r).split_at_mut(len);
+        let (run_w, rest_w) = std::mem::take(&mut w).split_at_mut(len);
+        if len > 1 {
+            runs.push((run_r, run_w));
+        }
+        (r, w) = (rest_r, rest_w);
+    }
+    runs.into_par_iter().for_each(|(r, w)| {
+        let mut keys: Vec<(u64, u32)> = r.iter().zip(w.iter()).map(|(r, &w)| (total_key(r.1), w)).collect();
+        if !keys.is_sorted() {
+            keys.sort();
+            for ((r, w), &(k, wk)) in r.iter_mut().zip(w.iter_mut()).zip(&keys) {
+                r.1 = from_total_key(k);
+                *w = wk;
+            }
+        }
+    });
+}
+
+/// The indices `k` with `depth[k]` a hit (`hit[k] != MISS`) in increasing depth, ties in
+/// index order: what sorting by `(depth.total_cmp, index)` gives, by the radix sort of
+/// [`sort_keys`]. O(n), where the comparison sort it replaces fetched each depth through the
 /// pixel's hit on every comparison.
-fn depth_order(hits: &[Option<Hit>]) -> Vec<u32> {
-    let mut a: Vec<(u64, u32)> = hits
-        .iter()
-        .enumerate()
-        .filter_map(|(k, h)| h.map(|h| (total_key(h.depth), k as u32)))
-        .collect();
-    radix_sort_top44(&mut a);
-    a.into_iter().map(|(_, k)| k).collect()
+fn depth_order(depth: &[f64], hit: &[u32]) -> Vec<u32> {
+    sort_keys(
+        depth
+            .iter()
+            .zip(hit)
+            .enumerate()
+            .filter(|(_, (_, &h))| h != MISS)
+            .map(|(k, (&d, _))| (total_key(d), k as u32)),
+        depth.len(),
+        |k| total_key(depth[k as usize]),
+    )
 }
 
 /// `f64::total_cmp`'s order as unsigned integers: negative numbers reversed, below positive.
@@ -296,16 +440,111 @@ fn from_total_key(k: u64) -> f64 {
     f64::from_bits(if k >> 63 == 1 { k & !(1 << 63) } else { !k })
 }
 
-/// The indices `0..n` of `values` ordered by `(value.total_cmp, index)`: what a comparison
-/// sort with that order gives, by the radix sort of [`depth_order`].
-pub(crate) fn order_by_key(values: impl Iterator<Item = f64>) -> Vec<u32> {
-    let mut a: Vec<(u64, u32)> = values.enumerate().map(|(k, v)| (total_key(v), k as u32)).collect();
-    radix_sort_top44(&mut a);
-    a.into_iter().map(|(_, k)| k).collect()
+/// The indices `0..n` ordered by `(value(index).total_cmp, index)`: what a comparison sort
+/// with that order gives, by the radix sort of [`sort_keys`].
+pub(crate) fn order_by_key(n: usize, value: impl Fn(usize) -> f64) -> Vec<u32> {
+    sort_keys((0..n).map(|k| (total_key(value(k)), k as u32)), n, |k| {
+        total_key(value(k as usize))
+    })
 }
 
-/// Sorts `(key, index)` pairs given in increasing index order by `(key, index)`: see
-/// [`depth_order`].
+/// Binary digits of an index packed beside its key in one 64-bit word ([`sort_keys`]).
+const INDEX_BITS: u32 = 21;
+
+/// The indices of `pairs` (`(key, index)` in increasing index order, every index below
+/// `bound`) ordered by `(key, index)`; `key_of(index)` is the key of an index.
+///
+/// When every key has the same top bit (all positive or all negative numbers, the usual case)
+/// and every index fits in [`INDEX_BITS`], each pair is packed into one word: the key's bits
+/// 20..62 above the index. A stable least-significant-digit radix sort of those 43 bits
+/// (four passes of 11 bits, a pass skipped when every word shares its digit) orders the
+/// pairs by the key's top 44 bits, ties in index order, moving 8 bytes a pair instead of 16;
+/// otherwise [`radix_sort_top44`] sorts the pairs themselves. Either way, runs equal in the
+/// top 44 bits are then sorted by the whole key, the index breaking ties.
+fn sort_keys(pairs: impl Iterator<Item = (u64, u32)>, bound: usize, key_of: impl Fn(u32) -> u64) -> Vec<u32> {
+    if bound > 1 << INDEX_BITS {
+        let mut a: Vec<(u64, u32)> = pairs.collect();
+        radix_sort_top44(&mut a);
+        return a.into_iter().map(|(_, k)| k).collect();
+    }
+    let (mut all, mut any) = (u64::MAX, 0u64);
+    let mut a: Vec<u64> = pairs
+        .map(|(key, k)| {
+            all &= key;
+            any |= key;
+            ((key << 1) & !((1u64 << INDEX_BITS) - 1)) | k as u64
+        })
+        .collect();
+    if (all ^ any) >> 63 == 1 {
+        // Keys of both signs: the pairs themselves.
+        let mut pairs: Vec<(u64, u32)> = a
+            .iter()
+            .map(|&p| {
+                let k = (p & ((1u64 << INDEX_BITS) - 1)) as u32;
+                (key_of(k), k)
+            })
+            .collect();
+        radix_sort_top44(&mut pairs);
+        return pairs.into_iter().map(|(_, k)| k).collect();
+    }
+    const BITS: u32 = 11;
+    const PASSES: usize = 4;
+    let buckets = 1usize << BITS;
+    let digit = |x: u64, p: usize| ((x >> (INDEX_BITS + BITS * p as u32)) as usize) & (buckets - 1);
+    let mut counts = vec![0usize; buckets * PASSES];
+    for &x in a.iter() {
+        for p in 0..PASSES {
+            counts[p * buckets + digit(x, p)] += 1;
+        }
+    }
+    let mut b: Vec<u64> = vec![0; a.len()];
+    for p in 0..PASSES {
+        let c = &mut counts[p * buckets..(p + 1) * buckets];
+        if c.contains(&a.len()) {
+            continue;
+        }
+        let mut sum = 0;
+        for n in c.iter_mut() {
+            let here = *n;
+            *n = sum;
+            sum += here;
+        }
+        for &x in a.iter() {
+            let d = digit(x, p);
+            b[c[d]] = x;
+            c[d] += 1;
+        }
+        std::mem::swap(&mut a, &mut b);
+    }
+    drop(b);
+    // Equal top bits: in index order (the passes are stable); order them by the whole key.
+    let index = |x: u64| (x & ((1u64 << INDEX_BITS) - 1)) as u32;
+    let mut out: Vec<u32> = a.iter().map(|&x| index(x)).collect();
+    let mut run: Vec<(u64, u32)> = Vec::new();
+    let mut start = 0;
+    while start < a.len() {
+        let t = a[start] >> INDEX_BITS;
+        let end = start + a[start..].iter().take_while(|&&x| x >> INDEX_BITS == t).count();
+        if end - start > 1 {
+            run.clear();
+            run.extend(out[start..end].iter().map(|&k| (key_of(k), k)));
+            if !run.is_sorted() {
+                run.sort_unstable();
+                for (o, &(_, k)) in out[start..end].iter_mut().zip(&run) {
+                    *o = k;
+                }
+            }
+        }
+        start = end;
+    }
+    out
+}
+
+/// Sorts `(key, index)` pairs given in increasing index order by `(key, index)`: a stable
+/// least-significant-digit radix sort of the keys' top 44 bits (four passes of 11 bits, a
+/// pass skipped when every key shares its digit), then runs of keys equal in those bits
+/// sorted by the whole key, the index breaking ties ([`sort_keys`] when the pairs cannot be
+/// packed into one word).
 fn radix_sort_top44(a: &mut Vec<(u64, u32)>) {
     const BITS: u32 = 11;
     const LOW: u32 = 20;
@@ -402,7 +641,7 @@ pub struct Visibility {
     pub cols: u32,
     pub rows: u32,
     /// Row-major, `cols x rows`; None where the ray meets nothing between near and far.
-    pub samples: Vec<Option<Sample>>,
+    pub samples: Samples,
     /// `(depth, factor)` of every lit-facing sample, sorted by depth.
     pub receivers: Vec<(f64, f64)>,
     /// The contrast weight of each receiver (same order): [`contrast_weight`] of its `N · L`.
@@ -419,40 +658,16 @@ pub struct Visibility {
 }
 
 impl Visibility {
-    /// The pass from its samples and sorted receivers: the self-shadowed count and the ranges.
+    /// The pass from its samples, sorted receivers with their weights, the self-shadowed
+    /// count and the depth range of the hits: the factor range.
     fn of_samples(
         view: View,
         cols: u32,
         rows: u32,
-        samples: Vec<Option<Sample>>,
-        receivers: Vec<(f64, f64)>,
-        weights: Vec<u32>,
+        samples: Samples,
+        (receivers, weights): (Vec<(f64, f64)>, Vec<u32>),
+        (self_shadowed, depth_range): (usize, Option<(f64, f64)>),
     ) -> Visibility {
-        // One pass over the samples for the count and the depth extent (min and max are
-        // exact, so any order gives the same extent).
-        let (self_shadowed, depth_range) = samples
-            .par_iter()
-            .with_min_len(4096)
-            .fold(
-                || (0usize, None::<(f64, f64)>),
-                |(n, r), s| match s {
-                    None => (n, r),
-                    Some(s) => (
-                        n + usize::from(!s.lit),
-                        Some(r.map_or((s.depth, s.depth), |(lo, hi)| (lo.min(s.depth), hi.max(s.depth)))),
-                    ),
-                },
-            )
-            .reduce(
-                || (0, None),
-                |(n, a), (m, b)| {
-                    let r = match (a, b) {
-                        (Some((l0, h0)), Some((l1, h1))) => Some((l0.min(l1), h0.max(h1))),
-                        (x, None) | (None, x) => x,
-                    };
-                    (n + m, r)
-                },
-            );
         let factor_range = receivers.iter().fold(None, |r: Option<(f64, f64)>, &(_, g)| {
             Some(r.map_or((g, g), |(lo, hi)| (lo.min(g), hi.max(g))))
         });
@@ -642,6 +857,8 @@ pub fn primary_rays(view: &View) -> Vec<Ray> {
 pub struct SceneGeometry {
     pub mesh: Mesh,
     tracer: OnceLock<Tracer>,
+    /// The unit normal of every mesh triangle (winding order), made with the first pass.
+    normals: OnceLock<Arc<Vec<DVec3>>>,
     /// Shaded passes, one per view (camera, screen and light).
     cache: Mutex<Vec<Arc<Visibility>>>,
     /// Cast rays, one per view without its light.
@@ -669,45 +886,50 @@ fn unlit(view: &View) -> View {
 const TILE: usize = 8;
 const _: () = assert!(TILE * TILE <= PACKET);
 
-/// `f(k, id)` of every sample `k` of a `cols x rows` grid, row-major, where `id` is the
-/// nearest BVH triangle along `ray(k)` (an index into [`bvh_input`]'s triangles, or
-/// `u32::MAX`). The grid goes in bands of [`TILE`] rows (in parallel) and a band in
+/// `f(k, id)` of every sample `k` of a `cols x rows` grid, row-major, as two arrays, where
+/// `id` is the nearest BVH triangle along `ray(k)` (an index into [`bvh_input`]'s triangles,
+/// or `u32::MAX`). The grid goes in bands of [`TILE`] rows (in parallel) and a band in
 /// `TILE x TILE` tiles, each tile's rays traced as one packet ([`Bvh4::nearest_packet`]: each
 /// ray's answer is its own). The order changes no value.
-fn tiled<T: Send + Clone + Default>(
+fn tiled<A: Send + Clone + Default, B: Send + Clone + Default>(
     tracer: &Tracer,
     cols: usize,
     rows: usize,
     ray: impl Fn(usize) -> Ray + Sync,
-    f: impl Fn(usize, u32) -> T + Sync,
-) -> Vec<T> {
-    let mut out: Vec<T> = vec![T::default(); cols * rows];
-    out.par_chunks_mut(cols * TILE).enumerate().for_each(|(band, out)| {
-        let band_rows = out.len() / cols;
-        let mut stack = tracer.bvh.as_ref().map_or_else(Vec::new, Bvh4::stack);
-        let mut rays = Vec::with_capacity(TILE * TILE);
-        let mut at = Vec::with_capacity(TILE * TILE);
-        let mut ids = [u32::MAX; TILE * TILE];
-        for x0 in (0..cols).step_by(TILE) {
-            rays.clear();
-            at.clear();
-            for y in 0..band_rows {
-                for x in x0..(x0 + TILE).min(cols) {
-                    at.push(y * cols + x);
-                    rays.push(ray((band * TILE + y) * cols + x));
+    f: impl Fn(usize, u32) -> (A, B) + Sync,
+) -> (Vec<A>, Vec<B>) {
+    let mut out_a: Vec<A> = vec![A::default(); cols * rows];
+    let mut out_b: Vec<B> = vec![B::default(); cols * rows];
+    out_a
+        .par_chunks_mut(cols * TILE)
+        .zip(out_b.par_chunks_mut(cols * TILE))
+        .enumerate()
+        .for_each(|(band, (out_a, out_b))| {
+            let band_rows = out_a.len() / cols;
+            let mut stack = tracer.bvh.as_ref().map_or_else(Vec::new, Bvh4::stack);
+            let mut rays = Vec::with_capacity(TILE * TILE);
+            let mut at = Vec::with_capacity(TILE * TILE);
+            let mut ids = [u32::MAX; TILE * TILE];
+            for x0 in (0..cols).step_by(TILE) {
+                rays.clear();
+                at.clear();
+                for y in 0..band_rows {
+                    for x in x0..(x0 + TILE).min(cols) {
+                        at.push(y * cols + x);
+                        rays.push(ray((band * TILE + y) * cols + x));
+                    }
+                }
+                let ids = &mut ids[..rays.len()];
+                match &tracer.bvh {
+                    Some(bvh) => bvh.nearest_packet(&rays, ids, &mut stack),
+                    None => ids.fill(u32::MAX),
+                }
+                for (&i, &id) in at.iter().zip(ids.iter()) {
+                    (out_a[i], out_b[i]) = f(band * TILE * cols + i, id);
                 }
             }
-            let ids = &mut ids[..rays.len()];
-            match &tracer.bvh {
-                Some(bvh) => bvh.nearest_packet(&rays, ids, &mut stack),
-                None => ids.fill(u32::MAX),
-            }
-            for (&i, &id) in at.iter().zip(ids.iter()) {
-                out[i] = f(band * TILE * cols + i, id);
-            }
-        }
-    });
-    out
+        });
+    (out_a, out_b)
 }
 
 /// Passes (and cast rays) a scene keeps: the latest ones.
@@ -718,6 +940,7 @@ impl SceneGeometry {
         SceneGeometry {
             mesh,
             tracer: OnceLock::new(),
+            normals: OnceLock::new(),
             cache: Mutex::new(Vec::new()),
             hits_cache: Mutex::new(Vec::new()),
             capacity: std::sync::atomic::AtomicUsize::new(CACHED_PASSES),
@@ -873,41 +1096,54 @@ impl SceneGeometry {
     /// Casts the rays of a view: every sampled pixel's hit.
     fn cast_rays(&self, view: &View) -> Hits {
         let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
+        let normals = self.normals.get_or_init(|| {
+            Arc::new(
+                self.mesh
+                    .triangles
+                    .par_iter()
+                    .with_min_len(4096)
+                    .map(|&[a, b, c]| (b - a).cross(c - a).normalize())
+                    .collect(),
+            )
+        });
         let (cols, rows) = view.grid();
         let terms = view.ray_terms();
-        let hits = tiled(
+        let (depth, triangle) = tiled(
             tracer,
             cols as usize,
             rows as usize,
             |k| traced_ray(view, terms.ray(k)),
-            |k, id| self.hit(tracer, view, terms.ray(k), id),
+            |k, id| self.hit(tracer, normals, view, terms.ray(k), id),
         );
-        Hits::new(*view, cols, rows, hits)
+        Hits::new(*view, cols, rows, depth, triangle, normals.clone())
     }
 
-    /// The hit of the sample whose ray direction is `d`, given the BVH triangle its binary32
-    /// ray meets first (`u32::MAX` for none).
-    fn hit(&self, tracer: &Tracer, view: &View, d: DVec3, bvh_id: u32) -> Option<Hit> {
+    /// The view depth and mesh triangle of the hit of the sample whose ray direction is `d`,
+    /// given the BVH triangle its binary32 ray meets first (`u32::MAX` for none); `(0, MISS)`
+    /// for none.
+    fn hit(&self, tracer: &Tracer, normals: &[DVec3], view: &View, d: DVec3, bvh_id: u32) -> (f64, u32) {
+        const NONE: (f64, u32) = (0.0, MISS);
         let origin = view.pose.position;
         if bvh_id == u32::MAX {
-            return None;
+            return NONE;
         }
-        let id = tracer.mesh_index[bvh_id as usize] as usize;
-        let [a, b, c] = self.mesh.triangles[id];
-        let mut n = (b - a).cross(c - a).normalize();
+        let id = tracer.mesh_index[bvh_id as usize];
+        let a = self.mesh.triangles[id as usize][0];
+        // The unit normal turned toward the camera.
+        let mut n = normals[id as usize];
         let mut nd = n.dot(d);
         if nd > 0.0 {
             n = -n;
             nd = -nd;
         }
         if nd == 0.0 {
-            return None;
+            return NONE;
         }
         let t = n.dot(a - origin) / nd;
         if !(t >= view.near && t <= view.far) {
-            return None;
+            return NONE;
         }
-        Some(Hit { depth: t, normal: n })
+        (t, id)
     }
 }
 
@@ -955,8 +1191,9 @@ impl SceneGeometry {
             cols as usize,
             rows as usize,
             |k| traced_ray(view, terms.ray(k)),
-            |_, id| id,
+            |_, id| (id, ()),
         )
+        .0
     }
 
     /// Unit normal of triangle `id` (winding order; not oriented).
@@ -1071,7 +1308,7 @@ mod tests {
             state ^= state << 17;
             state
         };
-        let mut hits = Vec::new();
+        let (mut depths, mut hit) = (Vec::new(), Vec::new());
         for k in 0..50_000u32 {
             let r = next();
             let depth = match r % 5 {
@@ -1081,27 +1318,24 @@ mod tests {
                 3 => (r >> 11) as f64 / (1u64 << 53) as f64 * 999.0 + 0.1,
                 _ => -1.0,
             };
-            let normal = DVec3::Y;
-            hits.push((depth > 0.0).then_some(Hit { depth, normal }));
+            // A miss keeps a depth that would sort first: it must be left out.
+            depths.push(depth);
+            hit.push(if depth > 0.0 { k % 7 } else { MISS });
         }
-        let mut expected: Vec<u32> = (0..hits.len() as u32).filter(|&k| hits[k as usize].is_some()).collect();
-        let depth = |k: u32| hits[k as usize].unwrap().depth;
+        let mut expected: Vec<u32> = (0..depths.len() as u32).filter(|&k| hit[k as usize] != MISS).collect();
+        let depth = |k: u32| depths[k as usize];
         expected.sort_by(|&a, &b| depth(a).total_cmp(&depth(b)).then(a.cmp(&b)));
-        assert_eq!(depth_order(&hits), expected);
-        // Negative and signed-zero keys order as total_cmp orders them.
-        let odd = [-2.0, 0.0, -0.0, 3.5, -1e-300, 1e300, -0.0];
-        let hits: Vec<Option<Hit>> = odd
-            .iter()
-            .map(|&depth| {
-                Some(Hit {
-                    depth,
-                    normal: DVec3::Y,
-                })
-            })
-            .collect();
-        let mut expected: Vec<u32> = (0..odd.len() as u32).collect();
-        expected.sort_by(|&a, &b| odd[a as usize].total_cmp(&odd[b as usize]).then(a.cmp(&b)));
-        assert_eq!(depth_order(&hits), expected);
+        assert_eq!(depth_order(&depths, &hit), expected);
+        // Negative and signed-zero keys (keys of both signs: the pairs are not packed) order
+        // as total_cmp orders them; so do all-negative keys (packed).
+        let odd: [f64; 7] = [-2.0, 0.0, -0.0, 3.5, -1e-300, 1e300, -0.0];
+        let negative: [f64; 7] = [-2.0, -0.0, -1e-300, -7.5, -0.0, -2.0, -1e300];
+        for depths in [&odd[..], &negative[..]] {
+            let hit = vec![0; depths.len()];
+            let mut expected: Vec<u32> = (0..depths.len() as u32).collect();
+            expected.sort_by(|&a, &b| depths[a as usize].total_cmp(&depths[b as usize]).then(a.cmp(&b)));
+            assert_eq!(depth_order(depths, &hit), expected);
+        }
     }
 
     /// The whole-number keys of the receivers' orders: integer order is `total_cmp`'s, the
@@ -1129,7 +1363,12 @@ mod tests {
         }
         let mut expected: Vec<u32> = (0..xs.len() as u32).collect();
         expected.sort_by(|&a, &b| xs[a as usize].total_cmp(&xs[b as usize]).then(a.cmp(&b)));
-        assert_eq!(order_by_key(xs.iter().copied()), expected);
+        assert_eq!(order_by_key(xs.len(), |k| xs[k]), expected);
+        // Positive values alone: keys and indices packed into one word.
+        let pos: Vec<f64> = xs.iter().copied().filter(|x| x.is_sign_positive()).collect();
+        let mut expected: Vec<u32> = (0..pos.len() as u32).collect();
+        expected.sort_by(|&a, &b| pos[a as usize].total_cmp(&pos[b as usize]).then(a.cmp(&b)));
+        assert_eq!(order_by_key(pos.len(), |k| pos[k]), expected);
     }
 
     /// The traversal against a brute-force nearest hit over every triangle (the same binary32
