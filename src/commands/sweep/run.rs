@@ -74,24 +74,60 @@ pub(crate) fn run_settings(
             warmed_views = Some(s.sun);
         }
     }
+    // The settings that differ in resolution alone are evaluated together, one after the
+    // other on one thread: their cascades serve the same pixels (the splits do not depend on
+    // the resolution), which each thread keeps for the next (csm_core::screen). The rows are
+    // placed back by index, so they come out in grid order whatever the grouping.
+    let groups = resolution_groups(settings);
     let work = || {
-        settings
+        let done = groups
             .par_iter()
-            .map(|s| {
-                let opts = AnalysisOptions {
-                    cost_means,
-                    ..AnalysisOptions::summary_only()
-                };
-                let a = analyze(&point(s)?, &opts);
-                on_done();
-                Ok(Row {
-                    setting: *s,
-                    summary: a.summary,
-                })
+            .map(|group| {
+                group
+                    .iter()
+                    .map(|&k| {
+                        let s = &settings[k];
+                        let opts = AnalysisOptions {
+                            cost_means,
+                            ..AnalysisOptions::summary_only()
+                        };
+                        let a = analyze(&point(s)?, &opts);
+                        on_done();
+                        Ok((
+                            k,
+                            Row {
+                                setting: *s,
+                                summary: a.summary,
+                            },
+                        ))
+                    })
+                    .collect::<Result<Vec<_>>>()
             })
-            .collect::<Result<Vec<_>>>()
+            .collect::<Result<Vec<_>>>()?;
+        let mut rows: Vec<Option<Row>> = vec![None; settings.len()];
+        for (k, row) in done.into_iter().flatten() {
+            rows[k] = Some(row);
+        }
+        Ok(rows.into_iter().flatten().collect())
     };
     in_pool(threads, work)
+}
+
+/// The indices of `settings` grouped by every axis but the resolution: the groups in the order
+/// of their first setting, each group's settings in their order.
+fn resolution_groups(settings: &[Setting]) -> Vec<Vec<usize>> {
+    let mut at: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (k, s) in settings.iter().enumerate() {
+        // Debug prints every float so that it reads back exactly: equal keys, equal settings.
+        let key = format!("{:?}", Setting { resolution: 0, ..*s });
+        let g = *at.entry(key).or_insert_with(|| {
+            groups.push(Vec::new());
+            groups.len() - 1
+        });
+        groups[g].push(k);
+    }
+    groups
 }
 
 /// Runs `work` in a pool of `threads` threads (`--threads`), or in rayon's default pool. The
