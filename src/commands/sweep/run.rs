@@ -148,3 +148,49 @@ pub(crate) fn in_pool<T: Send>(threads: Option<usize>, work: impl FnOnce() -> Re
         None => work(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Fit;
+
+    /// The groups are a partition of the settings: each setting once, a group's settings equal
+    /// but for the resolution and in their order, no two groups equal but for the resolution,
+    /// and the groups in the order of their first settings; over a grid with resolution
+    /// between other axes and a value repeated.
+    #[test]
+    fn resolution_groups_partition_the_settings_by_every_other_axis() {
+        let mut settings = Vec::new();
+        for fit in [Fit::Sphere, Fit::Aabb] {
+            for res in [512, 1024, 2048] {
+                for cascades in [1, 3] {
+                    for lambda in [0.1, 0.5, 0.1 + 0.2] {
+                        settings.push(Setting::plain(lambda, cascades, res, fit));
+                    }
+                }
+            }
+        }
+        settings.push(Setting::plain(0.5, 3, 4096, Fit::Sphere));
+        let groups = resolution_groups(&settings);
+        let mut seen = vec![0; settings.len()];
+        let strip = |s: &Setting| Setting { resolution: 0, ..*s };
+        for g in &groups {
+            assert!(g.windows(2).all(|w| w[0] < w[1]), "{g:?}");
+            for &k in g {
+                seen[k] += 1;
+                assert_eq!(strip(&settings[k]), strip(&settings[g[0]]));
+            }
+        }
+        assert!(seen.iter().all(|&n| n == 1), "{seen:?}");
+        for (a, ga) in groups.iter().enumerate() {
+            for gb in &groups[a + 1..] {
+                assert_ne!(strip(&settings[ga[0]]), strip(&settings[gb[0]]));
+                assert!(ga[0] < gb[0]);
+            }
+        }
+        // 2 fits x 2 cascade counts x 3 λ; the one 4096 setting joins its 512..2048 group.
+        assert_eq!(groups.len(), 12);
+        let with_4096 = groups.iter().find(|g| g.contains(&(settings.len() - 1))).unwrap();
+        assert_eq!(with_4096.len(), 4);
+    }
+}
