@@ -500,24 +500,28 @@ impl Served {
         sv
     }
 
-    /// Its size in groups, for [`ServedCache`]'s bound (runs and sums are few).
-    fn weight(&self) -> usize {
-        self.groups.len() + self.runs.len() + 1
+    /// The bytes it holds, for [`ServedCache`]'s bound.
+    fn bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.groups.capacity() * size_of::<Group>()
+            + self.cum.capacity() * size_of::<(u64, u64)>()
+            + self.runs.capacity() * (size_of::<Run>() + size_of::<(usize, usize)>() + 48)
+            + size_of::<Served>()
     }
 }
 
 /// Each thread's recent [`Served`], by the pass's index ([`ScreenIndex::id`]) and the splits:
 /// a sweep evaluates a split set's resolutions one after the other on one thread, and they
-/// read the same. Bounded by [`SERVED_GROUPS`] groups (then it starts again).
+/// read the same. Bounded by [`SERVED_BYTES`] (then it starts again).
 #[derive(Default)]
 struct ServedCache {
     map: std::collections::HashMap<(u64, Vec<u64>), std::rc::Rc<Served>>,
-    groups: usize,
+    bytes: usize,
 }
 
-/// Groups a thread's [`ServedCache`] holds at most (24 bytes each): 2^19, 12 MB, the groups
-/// of a hundred views of 8 cascades at the default screen scale.
-const SERVED_GROUPS: usize = 1 << 19;
+/// Bytes a thread's [`ServedCache`] holds at most: 16 MB, a split set of a hundred views of 8
+/// cascades at the default screen scale.
+const SERVED_BYTES: usize = 16 << 20;
 
 thread_local! {
     static SERVED: std::cell::RefCell<ServedCache> = std::cell::RefCell::new(ServedCache::default());
@@ -537,11 +541,11 @@ fn served_of(vis: &Visibility, ix: &ScreenIndex, splits: &[f64], m: usize, sc: &
     let sv = std::rc::Rc::new(Served::new(vis, ix, splits, m, sc));
     SERVED.with(|c| {
         let mut c = c.borrow_mut();
-        if c.groups + sv.weight() > SERVED_GROUPS {
+        if c.bytes + sv.bytes() > SERVED_BYTES {
             c.map.clear();
-            c.groups = 0;
+            c.bytes = 0;
         }
-        c.groups += sv.weight();
+        c.bytes += sv.bytes();
         c.map.insert(key, sv.clone());
     });
     sv
@@ -2209,7 +2213,7 @@ mod tests {
                     .enumerate()
                     .map(|(k, v)| PoolPart {
                         vis: v,
-                        splits: &splits,
+                        splits,
                         texel,
                         visible: Some((1.0, 200.0)),
                         steps: view_weight_steps(weights[k]),
