@@ -126,13 +126,13 @@ pub fn visible_range(vis: &Visibility, lo: f64, hi: f64) -> Option<(f64, f64)> {
     (a <= b).then_some((a, b))
 }
 
-/// A run of depth-sorted receivers one cascade serves: `(start, end, texel size, cascade)`.
-type Run = (usize, usize, f64, usize);
+/// A run of depth-sorted receivers one cascade serves: `(start, end, cascade)`.
+type Run = (usize, usize, usize);
 
-/// The runs each cascade serves, in depth order, and the number of pixels each cascade serves.
-fn served_runs(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<Run>, Vec<usize>) {
+/// The runs each cascade of `m` serves, in depth order, and the number of pixels each cascade
+/// serves.
+fn served_runs(vis: &Visibility, splits: &[f64], m: usize) -> (Vec<Run>, Vec<usize>) {
     let r = &vis.receivers;
-    let m = texel.len();
     let mut runs = Vec::with_capacity(m);
     let mut counts = vec![0; m];
     let start = r.partition_point(|&(d, _)| d < splits[0]);
@@ -147,7 +147,7 @@ fn served_runs(vis: &Visibility, splits: &[f64], texel: &[f64]) -> (Vec<Run>, Ve
         } else {
             k + r[k..end].partition_point(|&(d, _)| d < splits[i + 1])
         };
-        runs.push((k, run_end, texel[i], i));
+        runs.push((k, run_end, i));
         counts[i] += run_end - k;
         k = run_end.max(k + 1);
     }
@@ -185,6 +185,9 @@ const WEIGHT_BITS: i32 = 25;
 /// from prefix sums in whole units.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ScreenIndex {
+    /// A number no other index of this process has: what a thread's cache of [`Served`]
+    /// knows the index by (a pass's address may be reused once it is dropped).
+    id: u64,
     /// Bucket `b`'s entries are `start[b]..start[b + 1]`.
     start: Vec<u32>,
     /// Per entry: its receiver (depth order), `g` and contrast weight.
@@ -311,7 +314,9 @@ impl ScreenIndex {
             pwg.push(b);
             pw.push(c);
         }
+        static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
         ScreenIndex {
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             start,
             idx: order,
             g,
@@ -347,25 +352,24 @@ impl ScreenIndex {
     }
 }
 
-/// The receivers of one cascade run (a depth range, texel size `t`) in one bucket: entries
-/// `lo..hi` of the index, their values `t g` within `[vlo, vhi]`.
+/// The receivers of one cascade run (a depth range) in one bucket `b`: entries `lo..hi` of
+/// the index. At texel size `t` their values `t g` lie within `[t glo[b], t ghi[b]]`.
 #[derive(Clone, Copy)]
 struct Group {
     lo: u32,
     hi: u32,
-    t: f64,
-    vlo: f64,
-    vhi: f64,
+    b: u32,
     /// The contrast weight of its receivers.
     cw: u64,
 }
 
-/// One view's statistics at one setting, from its index: counts and sums from range lengths
-/// and prefix sums, the values grouped by bucket for the percentiles.
-struct ViewPass<'a> {
-    vis: &'a Visibility,
-    ix: &'a ScreenIndex,
-    runs: Vec<Run>,
+/// What one view's statistics at a setting read that depends on the splits only, not on the
+/// texel sizes: the served runs, their groups per bucket and the groups' prefix counts, each
+/// run's sums of `g`, `w g` and `w`, and the largest `g` of its highest groups. A sweep's
+/// resolutions change the texel sizes alone, so they share it ([`served_of`]).
+struct Served {
+    /// Per run: its receivers `start..end` (depth order) and its cascade.
+    runs: Vec<(usize, usize, usize)>,
     counts: Vec<usize>,
     n: usize,
     groups: Vec<Group>,
@@ -374,6 +378,189 @@ struct ViewPass<'a> {
     /// Per group: the count and the contrast weight of the groups before it (and a last entry
     /// for all of them).
     cum: Vec<(u64, u64)>,
+    /// Per run: the sums of `g` and `w g` (rounded once from whole units) and of `w`.
+    sums: Vec<(f64, f64, u64)>,
+    /// Per run: the largest `g` of its highest group, and the largest `g` of weight above 0 of
+    /// its highest group with weight (None without such a group).
+    gmax: Vec<(Option<f64>, Option<f64>)>,
+}
+
+impl Served {
+    fn new(vis: &Visibility, ix: &ScreenIndex, splits: &[f64], m: usize, sc: &mut Scratch) -> Served {
+        let (runs, counts) = served_runs(vis, splits, m);
+        let n: usize = counts.iter().sum();
+        let mut sv = Served {
+            runs,
+            counts,
+            n,
+            groups: Vec::new(),
+            run_groups: Vec::new(),
+            cum: Vec::new(),
+            sums: Vec::new(),
+            gmax: Vec::new(),
+        };
+        if n == 0 {
+            return sv;
+        }
+        // The depth bounds of the runs, in increasing order, each run's two among them.
+        let mut bounds: Vec<usize> = Vec::with_capacity(2 * sv.runs.len());
+        let mut ends = Vec::with_capacity(sv.runs.len());
+        for &(a, b, _) in &sv.runs {
+            if bounds.last() != Some(&a) {
+                bounds.push(a);
+            }
+            let ja = bounds.len() - 1;
+            bounds.push(b);
+            ends.push((ja, bounds.len() - 1));
+        }
+        // Sums from the prefix sums: per run, the whole-unit sums of g and w g, scaled.
+        let sums: Vec<(u128, u128, u64)> = bounds.iter().map(|&p| ix.sums_before(vis, p)).collect();
+        sv.sums = ends
+            .iter()
+            .map(|&(ja, jb)| {
+                (
+                    scaled((sums[jb].0 - sums[ja].0) as f64, ix.unit),
+                    scaled((sums[jb].1 - sums[ja].1) as f64, ix.unit + WEIGHT_BITS),
+                    sums[jb].2 - sums[ja].2,
+                )
+            })
+            .collect();
+        // Each bucket's entries before each bound, and their contrast weight: the row at or
+        // below the bound, and the receivers from it to the bound counted on.
+        let nb = bounds.len();
+        let buckets = ix.buckets();
+        // Every entry is set below before it is counted on: the buffers only grow.
+        let (cut, wcut) = (&mut sc.cut, &mut sc.wcut);
+        if cut.len() < buckets * nb {
+            cut.resize(buckets * nb, 0);
+            wcut.resize(buckets * nb, 0);
+        }
+        sv.groups.reserve((buckets * sv.runs.len()).min(n));
+        for (j, &p) in bounds.iter().enumerate() {
+            let row = p / ix.row;
+            let (c, w) = (
+                &ix.rows[row * buckets..][..buckets],
+                &ix.wrows[row * buckets..][..buckets],
+            );
+            for b in 0..buckets {
+                cut[b * nb + j] = ix.start[b] + c[b];
+                wcut[b * nb + j] = w[b];
+            }
+            for k in row * ix.row..p {
+                let b = ix.bucket_of[k] as usize;
+                cut[b * nb + j] += 1;
+                wcut[b * nb + j] += vis.weights[k] as u64;
+            }
+        }
+        for &(ja, jb) in &ends {
+            let first = sv.groups.len();
+            let mut top = None;
+            let mut wtop = None;
+            for b in 0..buckets {
+                let (glo, ghi) = (cut[b * nb + ja], cut[b * nb + jb]);
+                if glo == ghi {
+                    continue;
+                }
+                let cw = wcut[b * nb + jb] - wcut[b * nb + ja];
+                sv.groups.push(Group {
+                    lo: glo,
+                    hi: ghi,
+                    b: b as u32,
+                    cw,
+                });
+                top = Some(sv.groups.len() - 1);
+                if cw > 0 {
+                    wtop = Some(sv.groups.len() - 1);
+                }
+            }
+            sv.run_groups.push((first, sv.groups.len()));
+            // The maxima's factors: the largest g of the run's highest bucket (of weight
+            // above 0 for the visible maximum); t g never decreases with g.
+            let gmax = top.map(|k| {
+                let gr = sv.groups[k];
+                ix.g[gr.lo as usize..gr.hi as usize]
+                    .iter()
+                    .fold(0.0f64, |a, &x| a.max(x))
+            });
+            let wgmax = wtop.map(|k| {
+                let gr = sv.groups[k];
+                (gr.lo as usize..gr.hi as usize)
+                    .filter(|&i| ix.w[i] > 0)
+                    .fold(0.0f64, |a, i| a.max(ix.g[i]))
+            });
+            sv.gmax.push((gmax, wgmax));
+        }
+        let mut acc = (0u64, 0u64);
+        sv.cum.reserve(sv.groups.len() + 1);
+        for gr in &sv.groups {
+            sv.cum.push(acc);
+            acc = (acc.0 + (gr.hi - gr.lo) as u64, acc.1 + gr.cw);
+        }
+        sv.cum.push(acc);
+        sv
+    }
+
+    /// The bytes it holds, for [`ServedCache`]'s bound.
+    fn bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.groups.capacity() * size_of::<Group>()
+            + self.cum.capacity() * size_of::<(u64, u64)>()
+            + self.runs.capacity() * (size_of::<Run>() + size_of::<(usize, usize)>() + 48)
+            + size_of::<Served>()
+    }
+}
+
+/// Each thread's recent [`Served`], by the pass's index ([`ScreenIndex::id`]) and the splits:
+/// a sweep evaluates a split set's resolutions one after the other on one thread, and they
+/// read the same. Bounded by [`SERVED_BYTES`] (then it starts again).
+#[derive(Default)]
+struct ServedCache {
+    map: std::collections::HashMap<(u64, Vec<u64>), std::rc::Rc<Served>>,
+    bytes: usize,
+}
+
+/// Bytes a thread's [`ServedCache`] holds at most: 16 MB, a split set of a hundred views of 8
+/// cascades at the default screen scale.
+const SERVED_BYTES: usize = 16 << 20;
+
+thread_local! {
+    static SERVED: std::cell::RefCell<ServedCache> = std::cell::RefCell::new(ServedCache::default());
+}
+
+/// The [`Served`] of a pass at `splits` (`m` cascades), from this thread's cache or made.
+fn served_of(vis: &Visibility, ix: &ScreenIndex, splits: &[f64], m: usize, sc: &mut Scratch) -> std::rc::Rc<Served> {
+    let key = (
+        ix.id,
+        std::iter::once(m as u64)
+            .chain(splits.iter().map(|x| x.to_bits()))
+            .collect::<Vec<u64>>(),
+    );
+    if let Some(found) = SERVED.with(|c| c.borrow().map.get(&key).cloned()) {
+        return found;
+    }
+    let sv = std::rc::Rc::new(Served::new(vis, ix, splits, m, sc));
+    SERVED.with(|c| {
+        let mut c = c.borrow_mut();
+        if c.bytes + sv.bytes() > SERVED_BYTES {
+            c.map.clear();
+            c.bytes = 0;
+        }
+        c.bytes += sv.bytes();
+        c.map.insert(key, sv.clone());
+    });
+    sv
+}
+
+/// One view's statistics at one setting, from its index: counts and sums from range lengths
+/// and prefix sums (its [`Served`], shared by every texel size of the same splits), the values
+/// grouped by bucket for the percentiles.
+struct ViewPass<'a> {
+    vis: &'a Visibility,
+    ix: &'a ScreenIndex,
+    sv: std::rc::Rc<Served>,
+    /// Per run: its cascade's texel size.
+    t: Vec<f64>,
+    n: usize,
     /// Sums over served pixels: `t g`, `w t g`, `w`; the undersampled count; the maxima.
     sum: f64,
     wsum: f64,
@@ -391,17 +578,13 @@ struct ViewPass<'a> {
 impl<'a> ViewPass<'a> {
     fn new(vis: &'a Visibility, splits: &[f64], texel: &[f64], octaves: bool, sc: &mut Scratch) -> ViewPass<'a> {
         let ix = vis.index();
-        let (runs, counts) = served_runs(vis, splits, texel);
-        let n: usize = counts.iter().sum();
+        let sv = served_of(vis, ix, splits, texel.len(), sc);
+        let t: Vec<f64> = sv.runs.iter().map(|r| texel[r.2]).collect();
         let mut pass = ViewPass {
             vis,
             ix,
-            runs,
-            counts,
-            n,
-            groups: Vec::new(),
-            run_groups: Vec::new(),
-            cum: Vec::new(),
+            n: sv.n,
+            t,
             sum: 0.0,
             wsum: 0.0,
             wtotal: 0,
@@ -410,121 +593,71 @@ impl<'a> ViewPass<'a> {
             wmax: 0.0,
             range: None,
             octaves: Vec::new(),
+            sv,
         };
-        if n == 0 {
+        if pass.n == 0 {
             return pass;
         }
-        // The depth bounds of the runs, in increasing order, each run's two among them.
-        let mut bounds: Vec<usize> = Vec::with_capacity(2 * pass.runs.len());
-        let mut ends = Vec::with_capacity(pass.runs.len());
-        for &(a, b, _, _) in &pass.runs {
-            if bounds.last() != Some(&a) {
-                bounds.push(a);
-            }
-            let ja = bounds.len() - 1;
-            bounds.push(b);
-            ends.push((ja, bounds.len() - 1));
-        }
-        // Sums from the prefix sums: per run, the whole-unit sums of g and w g, scaled and
-        // multiplied by the run's texel size, added in depth order.
-        let sums: Vec<(u128, u128, u64)> = bounds.iter().map(|&p| ix.sums_before(vis, p)).collect();
-        for (&(_, _, t, _), &(ja, jb)) in pass.runs.iter().zip(&ends) {
-            let g = scaled((sums[jb].0 - sums[ja].0) as f64, ix.unit);
-            let wg = scaled((sums[jb].1 - sums[ja].1) as f64, ix.unit + WEIGHT_BITS);
+        let sv = &*pass.sv;
+        // The sums: each run's, multiplied by its texel size, added in depth order.
+        for (&t, &(g, wg, w)) in pass.t.iter().zip(&sv.sums) {
             pass.sum += t * g;
             pass.wsum += t * wg;
-            pass.wtotal += sums[jb].2 - sums[ja].2;
-        }
-        // Each bucket's entries before each bound, and their contrast weight: the row at or
-        // below the bound, and the receivers from it to the bound counted on.
-        let nb = bounds.len();
-        let buckets = ix.buckets();
-        // Every entry is set below before it is counted on: the buffers only grow.
-        let (cut, wcut) = (&mut sc.cut, &mut sc.wcut);
-        if cut.len() < buckets * nb {
-            cut.resize(buckets * nb, 0);
-            wcut.resize(buckets * nb, 0);
-        }
-        pass.groups.reserve((buckets * pass.runs.len()).min(n));
-        for (j, &p) in bounds.iter().enumerate() {
-            let row = p / ix.row;
-            let (c, w) = (
-                &ix.rows[row * buckets..][..buckets],
-                &ix.wrows[row * buckets..][..buckets],
-            );
-            for b in 0..buckets {
-                cut[b * nb + j] = ix.start[b] + c[b];
-                wcut[b * nb + j] = w[b];
-            }
-            for k in row * ix.row..p {
-                let b = ix.bucket_of[k] as usize;
-                cut[b * nb + j] += 1;
-                wcut[b * nb + j] += vis.weights[k] as u64;
-            }
+            pass.wtotal += w;
         }
         let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
         let (mut oct_lo, mut oct_hi) = (usize::MAX, 0usize);
-        for (&(_, _, t, _), &(ja, jb)) in pass.runs.iter().zip(&ends) {
-            let first = pass.groups.len();
-            let mut top = None;
-            let mut wtop = None;
-            for b in 0..ix.buckets() {
-                let (glo, ghi) = (cut[b * nb + ja], cut[b * nb + jb]);
-                if glo == ghi {
-                    continue;
-                }
-                let (vlo, vhi) = (t * ix.glo[b], t * ix.ghi[b]);
-                let cw = wcut[b * nb + jb] - wcut[b * nb + ja];
-                pass.groups.push(Group {
-                    lo: glo,
-                    hi: ghi,
-                    t,
-                    vlo,
-                    vhi,
-                    cw,
-                });
-                lo = lo.min(vlo);
-                hi = hi.max(vhi);
-                top = Some(pass.groups.len() - 1);
-                if cw > 0 {
-                    wtop = Some(pass.groups.len() - 1);
-                }
-                let values = glo as usize..ghi as usize;
-                // Undersampled: m > 1.
-                if vlo > 1.0 {
-                    pass.under += (ghi - glo) as u64;
-                } else if vhi > 1.0 {
-                    pass.under += values.clone().filter(|&i| t * ix.g[i] > 1.0).count() as u64;
-                }
-                if octaves {
-                    let (a, z) = (octave(vlo), octave(vhi));
-                    oct_lo = oct_lo.min(a);
-                    oct_hi = oct_hi.max(z);
-                    if a == z {
-                        sc.oct[a] += ghi - glo;
-                    } else {
-                        for i in values {
-                            sc.oct[octave(t * ix.g[i])] += 1;
-                        }
+        for (k, (&t, &(a, z))) in pass.t.iter().zip(&sv.run_groups).enumerate() {
+            if a == z {
+                continue;
+            }
+            let run = &sv.groups[a..z];
+            // A run's bounds never decrease: its lowest value is its first group's, its
+            // highest its last's.
+            lo = lo.min(t * ix.glo[run[0].b as usize]);
+            hi = hi.max(t * ix.ghi[run[z - a - 1].b as usize]);
+            // Undersampled (m > 1): the groups wholly above 1 are those after the first whose
+            // lowest value is above 1; before them, those reaching above 1 are read.
+            let from = run.partition_point(|gr| t * ix.ghi[gr.b as usize] <= 1.0);
+            let whole = from + run[from..].partition_point(|gr| t * ix.glo[gr.b as usize] <= 1.0);
+            pass.under += sv.cum[z].0 - sv.cum[a + whole].0;
+            for gr in &run[from..whole] {
+                pass.under += ix.g[gr.lo as usize..gr.hi as usize]
+                    .iter()
+                    .filter(|&&g| t * g > 1.0)
+                    .count() as u64;
+            }
+            if octaves {
+                // The run's values per octave: the count of those up to each octave's top, from
+                // the groups wholly below it (a prefix, counted) and the few straddling it (read
+                // value by value); a value's octave never decreases with its g.
+                let first = octave(t * ix.glo[run[0].b as usize]);
+                let last = octave(t * ix.ghi[run[z - a - 1].b as usize]);
+                oct_lo = oct_lo.min(first);
+                oct_hi = oct_hi.max(last);
+                let mut before = 0u64;
+                for o in first..=last {
+                    let whole = run.partition_point(|gr| octave(t * ix.ghi[gr.b as usize]) <= o);
+                    let mut upto = sv.cum[a + whole].0 - sv.cum[a].0;
+                    for gr in run[whole..]
+                        .iter()
+                        .take_while(|gr| octave(t * ix.glo[gr.b as usize]) <= o)
+                    {
+                        upto += ix.g[gr.lo as usize..gr.hi as usize]
+                            .iter()
+                            .filter(|&&g| octave(t * g) <= o)
+                            .count() as u64;
                     }
+                    sc.oct[o] += (upto - before) as u32;
+                    before = upto;
                 }
             }
-            pass.run_groups.push((first, pass.groups.len()));
-            // The maxima: the largest g of the run's highest bucket (of weight above 0 for
-            // the visible maximum); t g never decreases with g.
-            if let Some(k) = top {
-                let gr = pass.groups[k];
-                let g = ix.g[gr.lo as usize..gr.hi as usize]
-                    .iter()
-                    .fold(0.0f64, |a, &x| a.max(x));
+            let (gmax, wgmax) = sv.gmax[k];
+            if let Some(g) = gmax {
                 let m = t * g;
                 pass.max = if m > pass.max { m } else { pass.max };
             }
-            if let Some(k) = wtop {
-                let gr = pass.groups[k];
-                let g = (gr.lo as usize..gr.hi as usize)
-                    .filter(|&i| ix.w[i] > 0)
-                    .fold(0.0f64, |a, i| a.max(ix.g[i]));
+            if let Some(g) = wgmax {
                 let m = t * g;
                 pass.wmax = if m > pass.wmax { m } else { pass.wmax };
             }
@@ -538,36 +671,38 @@ impl<'a> ViewPass<'a> {
                 }
             }
         }
-        let mut acc = (0u64, 0u64);
-        pass.cum.reserve(pass.groups.len() + 1);
-        for gr in &pass.groups {
-            pass.cum.push(acc);
-            acc = (acc.0 + (gr.hi - gr.lo) as u64, acc.1 + gr.cw);
-        }
-        pass.cum.push(acc);
         pass
+    }
+
+    /// The groups of the pool, in run and bucket order.
+    fn groups(&self) -> &[Group] {
+        &self.sv.groups
     }
 
     /// The weights (each pixel `s`, or its contrast weight times `s`) of the served values
     /// below `v` and at or below `v`.
     fn weights_around(&self, v: f64, s: u128, contrast: bool) -> (u128, u128) {
         let ix = self.ix;
+        let sv = &*self.sv;
         let (mut lt, mut le) = (0u128, 0u128);
-        for &(a, z) in &self.run_groups {
-            let run = &self.groups[a..z];
+        for (&t, &(a, z)) in self.t.iter().zip(&sv.run_groups) {
+            let run = &sv.groups[a..z];
             // Groups ending below v lie wholly below it; those starting above it, above.
-            let from = a + run.partition_point(|gr| gr.vhi < v);
+            let from = a + run.partition_point(|gr| t * ix.ghi[gr.b as usize] < v);
             let below = if contrast {
-                self.cum[from].1 - self.cum[a].1
+                sv.cum[from].1 - sv.cum[a].1
             } else {
-                self.cum[from].0 - self.cum[a].0
+                sv.cum[from].0 - sv.cum[a].0
             } as u128;
             lt += below;
             le += below;
-            for gr in self.groups[from..z].iter().take_while(|gr| gr.vlo <= v) {
+            for gr in sv.groups[from..z]
+                .iter()
+                .take_while(|gr| t * ix.glo[gr.b as usize] <= v)
+            {
                 for i in gr.lo as usize..gr.hi as usize {
                     let w = if contrast { ix.w[i] as u128 } else { 1 };
-                    let m = gr.t * ix.g[i];
+                    let m = t * ix.g[i];
                     if m < v {
                         lt += w;
                         le += w;
@@ -689,8 +824,8 @@ fn select(
         let target = target_of(j);
         let confirmed = hints[j].and_then(|h| {
             let (pass, _) = pools.get(h.k as usize)?;
-            let &(_, _, t, _) = pass.runs.iter().find(|r| r.3 == h.i as usize)?;
-            let v = t * h.g;
+            let run = pass.sv.runs.iter().position(|r| r.2 == h.i as usize)?;
+            let v = pass.t[run] * h.g;
             let (mut lt, mut le) = (0u128, 0u128);
             for &(p, s) in pools {
                 let (a, b) = p.weights_around(v, s as u128, j >= 3);
@@ -719,15 +854,19 @@ fn select(
     sc.keys.clear();
     for &(p, s) in pools {
         let s = s as u128;
-        for gr in &p.groups {
-            let (a, z) = (buckets.key(gr.vlo), buckets.key(gr.vhi));
-            sc.keys.push((a as u32, z as u32));
-            let n = (gr.hi - gr.lo) as u128 * s;
-            let c = gr.cw as u128 * s;
-            sc.starts[0][a] += n;
-            sc.ends[0][z] += n;
-            sc.starts[1][a] += c;
-            sc.ends[1][z] += c;
+        let (ix, sv) = (p.ix, &*p.sv);
+        for (&t, &(a, z)) in p.t.iter().zip(&sv.run_groups) {
+            for gr in &sv.groups[a..z] {
+                let b = gr.b as usize;
+                let (a, z) = (buckets.key(t * ix.glo[b]), buckets.key(t * ix.ghi[b]));
+                sc.keys.push((a as u32, z as u32));
+                let n = (gr.hi - gr.lo) as u128 * s;
+                let c = gr.cw as u128 * s;
+                sc.starts[0][a] += n;
+                sc.ends[0][z] += n;
+                sc.starts[1][a] += c;
+                sc.ends[1][z] += c;
+            }
         }
     }
     // Per target: its bracket of keys `lo..=hi`, the weight of the groups wholly below it
@@ -777,14 +916,15 @@ fn select(
     for (pk, &(pass, s)) in pools.iter().enumerate() {
         let s = s as u128;
         let ix = pass.ix;
-        let keys = &sc.keys[first..first + pass.groups.len()];
-        first += pass.groups.len();
+        let sv = &*pass.sv;
+        let keys = &sc.keys[first..first + sv.groups.len()];
+        first += sv.groups.len();
         // A run's groups reaching into a key range are consecutive (their bounds never
         // decrease): those after every group ending below it, before the first starting
         // above it.
-        for (&(a, z), run_of) in pass.run_groups.iter().zip(&pass.runs) {
-            let tag = (pk as u64) << 32 | run_of.3 as u64;
-            let (run, rk) = (&pass.groups[a..z], &keys[a..z]);
+        for ((&(a, z), run_of), &t) in sv.run_groups.iter().zip(&sv.runs).zip(&pass.t) {
+            let tag = (pk as u64) << 32 | run_of.2 as u64;
+            let (run, rk) = (&sv.groups[a..z], &keys[a..z]);
             let from = rk.partition_point(|k| k.1 < union_lo);
             let to = from + rk[from..].partition_point(|k| k.0 <= union_hi);
             for (gr, &(ka, kz)) in run[from..to].iter().zip(&rk[from..to]) {
@@ -800,7 +940,7 @@ fn select(
                 }
                 for i in gr.lo as usize..gr.hi as usize {
                     let g = ix.g[i];
-                    let m = gr.t * g;
+                    let m = t * g;
                     let k = buckets.key(m);
                     let cw = ix.w[i] as u128 * s;
                     let mut bits = mask;
@@ -913,7 +1053,7 @@ pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f
 fn own_stats(pass: &ViewPass<'_>, visible: Option<(f64, f64)>, sc: &mut Scratch, hints: &mut Hints) -> ScreenStats {
     let (plain, weighted) = match pass.range {
         Some((lo, hi)) => {
-            let count = Buckets::count_for(pass.groups.len());
+            let count = Buckets::count_for(pass.groups().len());
             let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, count), count, sc, hints, ALL_TARGETS);
             (v[0], v[1])
         }
@@ -952,7 +1092,7 @@ fn own_stats(pass: &ViewPass<'_>, visible: Option<(f64, f64)>, sc: &mut Scratch,
         visible_max: pass.wmax,
         visible_z_lo,
         visible_z_hi,
-        cascade_pixels: shares(&pass.counts, receivers),
+        cascade_pixels: shares(&pass.sv.counts, receivers),
     }
 }
 
@@ -1036,7 +1176,7 @@ fn statistic_of(pass: &ViewPass<'_>, which: Statistic, sc: &mut Scratch) -> f64 
     if let Some((kind, slot)) = which.percentile() {
         return match pass.range {
             Some((lo, hi)) => {
-                let count = Buckets::count_for(pass.groups.len());
+                let count = Buckets::count_for(pass.groups().len());
                 // Its own target alone (the other five are not read).
                 let wanted = 1 << (3 * kind + slot);
                 let (v, _) = select(
@@ -1081,7 +1221,7 @@ fn shares(counts: &[usize], receivers: usize) -> Vec<f64> {
 /// self-shadowed fractions measured, every statistic of `m` 0: for a camera whose screen
 /// statistics a level of views replaces, whose cascades still report their shares.
 pub fn cascade_shares_only(vis: &Visibility, splits: &[f64], texel: &[f64]) -> ScreenStats {
-    let (_, counts) = served_runs(vis, splits, texel);
+    let (_, counts) = served_runs(vis, splits, texel.len());
     let total = vis.sample_count().max(1) as f64;
     let receivers = vis.receivers.len();
     ScreenStats {
@@ -1186,7 +1326,7 @@ fn pool_passes_in<'a>(
     let pools: Vec<(&ViewPass<'_>, u64)> = passes.iter().zip(parts).map(|(x, p)| (x, p.steps)).collect();
     let (level_p, totals) = match range {
         Some((lo, hi)) => {
-            let count = Buckets::count_for(passes.iter().map(|p| p.groups.len()).sum());
+            let count = Buckets::count_for(passes.iter().map(|p| p.groups().len()).sum());
             select(
                 &pools,
                 Buckets::new(lo, hi, count),
@@ -1220,10 +1360,10 @@ fn pool_passes_in<'a>(
         sum = add_product(sum, p.steps as f64, x.sum);
         wsum = add_product(wsum, p.steps as f64, x.wsum);
     }
-    let cascades = passes.iter().map(|x| x.counts.len()).max().unwrap_or(0);
+    let cascades = passes.iter().map(|x| x.sv.counts.len()).max().unwrap_or(0);
     let cascade_pixels = (0..cascades)
         .map(|i| {
-            let (c, _) = weighted_ratio(&|k| passes[k].counts.get(i).copied().unwrap_or(0) as u128, &|_| 0);
+            let (c, _) = weighted_ratio(&|k| passes[k].sv.counts.get(i).copied().unwrap_or(0) as u128, &|_| 0);
             if recv > 0.0 {
                 c / recv
             } else {
@@ -2071,6 +2211,78 @@ mod tests {
                     proptest::prop_assert_eq!([v.aliasing_p50, v.aliasing_p95, v.aliasing_p99], p);
                     proptest::prop_assert_eq!([v.visible_p50, v.visible_p95, v.visible_p99], vp);
                 }
+            }
+        }
+    }
+
+    /// Empties this thread's cache of [`Served`], so that the next pass makes its own.
+    fn forget_served() {
+        SERVED.with(|c| *c.borrow_mut() = ServedCache::default());
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(32))]
+        /// A split set's statistics at several texel sizes, evaluated one after the other (the
+        /// served runs and groups made once, at the first, and reused), equal bit for bit those
+        /// of each setting evaluated alone (made afresh): the pool, each view's own statistics
+        /// and each statistic alone, over views with tied factors, zero contrast weights and
+        /// values straddling m = 1.
+        #[test]
+        fn a_split_sets_texel_sizes_together_equal_each_alone(
+            seeds in proptest::collection::vec((0u64..1_000_000, 1usize..3000, 1.0f64..12.0, 0u32..40), 1..4),
+            cuts in proptest::collection::vec(0.02f64..0.98, 0..5),
+            scales in proptest::collection::vec(0.05f64..20.0, 2..5),
+            weights in proptest::collection::vec(0.25f64..4.0, 3),
+        ) {
+            let vis: Vec<Visibility> = seeds.iter().map(|&(seed, n, spread, levels)| tied(seed, n, spread, levels)).collect();
+            let mut cuts = cuts;
+            cuts.sort_by(f64::total_cmp);
+            let splits: Vec<f64> = std::iter::once(0.5).chain(cuts.iter().map(|c| 1.0 + 199.0 * c)).chain([220.0]).collect();
+            let base: Vec<f64> = (0..splits.len() - 1).map(|i| 0.3 * 1.7f64.powi(i as i32)).collect();
+            let texels: Vec<Vec<f64>> = scales.iter().map(|&f| base.iter().map(|t| t * f).collect()).collect();
+            fn parts_at<'a>(vis: &'a [Visibility], splits: &'a [f64], texel: &'a [f64], weights: &[f64]) -> Vec<PoolPart<'a>> {
+                vis.iter()
+                    .enumerate()
+                    .map(|(k, v)| PoolPart {
+                        vis: v,
+                        splits,
+                        texel,
+                        visible: Some((1.0, 200.0)),
+                        steps: view_weight_steps(weights[k]),
+                    })
+                    .collect()
+            }
+            // Together: one cache for every texel size.
+            forget_served();
+            let together: Vec<_> = texels
+                .iter()
+                .map(|t| {
+                    let parts = parts_at(&vis, &splits, t, &weights);
+                    let own: Vec<_> = vis.iter().map(|v| stats(v, &splits, t, None)).collect();
+                    let one: Vec<_> = Statistic::ALL.iter().map(|&w| statistic(&vis[0], &splits, t, w)).collect();
+                    (pool(&parts), own, one)
+                })
+                .collect();
+            // Alone: each afresh.
+            for (t, want) in texels.iter().zip(&together) {
+                forget_served();
+                let parts = parts_at(&vis, &splits, t, &weights);
+                proptest::prop_assert_eq!(&pool(&parts), &want.0);
+                for (k, v) in vis.iter().enumerate() {
+                    forget_served();
+                    proptest::prop_assert_eq!(&stats(v, &splits, t, None), &want.1[k]);
+                }
+                for (j, &w) in Statistic::ALL.iter().enumerate() {
+                    forget_served();
+                    let got = statistic(&vis[0], &splits, t, w);
+                    proptest::prop_assert_eq!(got.to_bits(), want.2[j].to_bits());
+                }
+                // And a brute force of the pool's percentiles.
+                let (p, vp, max, vmax, _) = brute_percentiles(&parts);
+                let l = &want.0.level;
+                proptest::prop_assert_eq!([l.aliasing_p50, l.aliasing_p95, l.aliasing_p99], p);
+                proptest::prop_assert_eq!([l.visible_p50, l.visible_p95, l.visible_p99], vp);
+                proptest::prop_assert_eq!((l.aliasing_max, l.visible_max), (max, vmax));
             }
         }
     }

@@ -74,24 +74,60 @@ pub(crate) fn run_settings(
             warmed_views = Some(s.sun);
         }
     }
+    // The settings that differ in resolution alone are evaluated together, one after the
+    // other on one thread: their cascades serve the same pixels (the splits do not depend on
+    // the resolution), which each thread keeps for the next (csm_core::screen). The rows are
+    // placed back by index, so they come out in grid order whatever the grouping.
+    let groups = resolution_groups(settings);
     let work = || {
-        settings
+        let done = groups
             .par_iter()
-            .map(|s| {
-                let opts = AnalysisOptions {
-                    cost_means,
-                    ..AnalysisOptions::summary_only()
-                };
-                let a = analyze(&point(s)?, &opts);
-                on_done();
-                Ok(Row {
-                    setting: *s,
-                    summary: a.summary,
-                })
+            .map(|group| {
+                group
+                    .iter()
+                    .map(|&k| {
+                        let s = &settings[k];
+                        let opts = AnalysisOptions {
+                            cost_means,
+                            ..AnalysisOptions::summary_only()
+                        };
+                        let a = analyze(&point(s)?, &opts);
+                        on_done();
+                        Ok((
+                            k,
+                            Row {
+                                setting: *s,
+                                summary: a.summary,
+                            },
+                        ))
+                    })
+                    .collect::<Result<Vec<_>>>()
             })
-            .collect::<Result<Vec<_>>>()
+            .collect::<Result<Vec<_>>>()?;
+        let mut rows: Vec<Option<Row>> = vec![None; settings.len()];
+        for (k, row) in done.into_iter().flatten() {
+            rows[k] = Some(row);
+        }
+        Ok(rows.into_iter().flatten().collect())
     };
     in_pool(threads, work)
+}
+
+/// The indices of `settings` grouped by every axis but the resolution: the groups in the order
+/// of their first setting, each group's settings in their order.
+fn resolution_groups(settings: &[Setting]) -> Vec<Vec<usize>> {
+    let mut at: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (k, s) in settings.iter().enumerate() {
+        // Debug prints every float so that it reads back exactly: equal keys, equal settings.
+        let key = format!("{:?}", Setting { resolution: 0, ..*s });
+        let g = *at.entry(key).or_insert_with(|| {
+            groups.push(Vec::new());
+            groups.len() - 1
+        });
+        groups[g].push(k);
+    }
+    groups
 }
 
 /// Runs `work` in a pool of `threads` threads (`--threads`), or in rayon's default pool. The
@@ -110,5 +146,51 @@ pub(crate) fn in_pool<T: Send>(threads: Option<usize>, work: impl FnOnce() -> Re
             })?
             .install(work),
         None => work(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Fit;
+
+    /// The groups are a partition of the settings: each setting once, a group's settings equal
+    /// but for the resolution and in their order, no two groups equal but for the resolution,
+    /// and the groups in the order of their first settings; over a grid with resolution
+    /// between other axes and a value repeated.
+    #[test]
+    fn resolution_groups_partition_the_settings_by_every_other_axis() {
+        let mut settings = Vec::new();
+        for fit in [Fit::Sphere, Fit::Aabb] {
+            for res in [512, 1024, 2048] {
+                for cascades in [1, 3] {
+                    for lambda in [0.1, 0.5, 0.1 + 0.2] {
+                        settings.push(Setting::plain(lambda, cascades, res, fit));
+                    }
+                }
+            }
+        }
+        settings.push(Setting::plain(0.5, 3, 4096, Fit::Sphere));
+        let groups = resolution_groups(&settings);
+        let mut seen = vec![0; settings.len()];
+        let strip = |s: &Setting| Setting { resolution: 0, ..*s };
+        for g in &groups {
+            assert!(g.windows(2).all(|w| w[0] < w[1]), "{g:?}");
+            for &k in g {
+                seen[k] += 1;
+                assert_eq!(strip(&settings[k]), strip(&settings[g[0]]));
+            }
+        }
+        assert!(seen.iter().all(|&n| n == 1), "{seen:?}");
+        for (a, ga) in groups.iter().enumerate() {
+            for gb in &groups[a + 1..] {
+                assert_ne!(strip(&settings[ga[0]]), strip(&settings[gb[0]]));
+                assert!(ga[0] < gb[0]);
+            }
+        }
+        // 2 fits x 2 cascade counts x 3 λ; the one 4096 setting joins its 512..2048 group.
+        assert_eq!(groups.len(), 12);
+        let with_4096 = groups.iter().find(|g| g.contains(&(settings.len() - 1))).unwrap();
+        assert_eq!(with_4096.len(), 4);
     }
 }
