@@ -1449,11 +1449,31 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
     // A path of up to HELD_POSES frames is generated once and read by both walks (a
     // sweep's paths are short: generating each pose twice cost it a sixth of its time);
     // a longer one is generated as each walk reads it, so memory stays flat.
-    let held: Vec<CameraPose> = if frames <= HELD_POSES {
-        generated().collect()
+    // The held poses are the same for every setting of a sweep (its axes change neither the
+    // camera nor the path): each thread keeps the last path it generated and reuses it while
+    // the camera and the path are equal.
+    let held: std::sync::Arc<[CameraPose]> = if frames <= HELD_POSES {
+        held_poses(&w.setup.camera, motion, generated)
     } else {
-        Vec::new()
+        std::sync::Arc::new([])
     };
+    let batch = rayon::current_thread_index().is_some();
+    if batch && !w.seams && frames <= HELD_POSES && w.cadence.is_empty() && w.config.shadow.precision == Precision::F64 {
+        // A batch row (a sweep's) without a seam count: the walk reads the held poses as they
+        // are, and the progress is told the frames it would have been told pose by pose.
+        let light = light_track(w.config, 0);
+        let (snapped, unsnapped) = rig_path::along_path_both_lit(w.rig, held.iter(), w.probes, light, w.sopts);
+        for _ in 0..frames / PROGRESS_FRAMES {
+            (w.on_frames)(PROGRESS_FRAMES as u64);
+        }
+        (w.on_frames)(2 * (frames % PROGRESS_FRAMES) as u64);
+        return PathWalk {
+            snapped,
+            unsnapped,
+            lookup_error: None,
+            crossings: None,
+        };
+    }
     let poses = || {
         let streamed = (frames > HELD_POSES).then(generated).into_iter().flatten();
         let all = held.iter().copied().chain(streamed).enumerate().map(|(t, p)| {
@@ -1473,7 +1493,6 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
     // Inside a parallel batch (a sweep, a comparison) every core is busy already: one walk
     // of both snap modes computes the values they share once per frame. Alone, the two
     // modes walk on two threads. Either way the totals are the same, bit for bit.
-    let batch = rayon::current_thread_index().is_some();
     let walked = match w.config.shadow.precision {
         Precision::F64 if !w.cadence.is_empty() => {
             // Cached cascades (refused at load with a moving light or a basis that follows
@@ -1540,6 +1559,31 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
         lookup_error: walked.2,
         crossings,
     }
+}
+
+thread_local! {
+    /// The last held path this thread generated, with the camera and the path it is of.
+    static HELD: std::cell::RefCell<Option<(csm_core::scene::Camera, csm_core::scene::Motion, std::sync::Arc<[CameraPose]>)>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+/// The poses `generated` yields for `camera` along `motion`: the thread's last held path when
+/// it is of the same camera and path (equal values: the same poses), else generated and kept.
+fn held_poses<I: Iterator<Item = CameraPose>>(
+    camera: &csm_core::scene::Camera,
+    motion: &csm_core::scene::Motion,
+    generated: impl Fn() -> I,
+) -> std::sync::Arc<[CameraPose]> {
+    HELD.with_borrow_mut(|held| {
+        if let Some((c, m, poses)) = held.as_ref() {
+            if c == camera && m == motion {
+                return poses.clone();
+            }
+        }
+        let poses: std::sync::Arc<[CameraPose]> = generated().collect();
+        *held = Some((camera.clone(), motion.clone(), poses.clone()));
+        poses
+    })
 }
 
 /// Coverage, shimmer, jitter and lookup error over every camera path.

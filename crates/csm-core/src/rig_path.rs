@@ -268,37 +268,49 @@ fn walk_axis_centred<P: Borrow<CameraPose>>(
     let mut drift: [Vec<Vec<f64>>; 2] = [0, 1].map(|_| (0..m).map(|_| Vec::with_capacity(chunk)).collect());
     let mut first = true;
     let mut scratch = Arrays::default();
+    let mut chunk_poses: Vec<CameraPose> = Vec::with_capacity(chunk);
+    // The array walk's snap: rounding to whole texels (`SnapRule::apply` of this rule is the
+    // rounding alone: x / 1 and x · 1 are x) or none; other rules and a snap anchor walk frame
+    // by frame.
+    let arrays_snap = match rig.scheme.snaps.then_some(rig.snap_rule) {
+        _ if !arrays || walk.anchored => None,
+        Some(SnapRule {
+            mode: SnapMode::Round,
+            step_texels: 1,
+        }) => Some(true),
+        None => Some(false),
+        Some(_) => None,
+    };
     loop {
-        lps.clear();
-        lps.extend(
-            poses
-                .by_ref()
-                .take(chunk)
-                .map(|p| LightPose::new(&rig.light, p.borrow())),
-        );
-        let f = lps.len();
+        chunk_poses.clear();
+        chunk_poses.extend(poses.by_ref().take(chunk).map(|p| *p.borrow()));
+        let f = chunk_poses.len();
         if f == 0 {
             break;
         }
-        let fixed = same_axes(&lps);
-        // The arrays of the chunk's positions for the array walk (fixed axes, no anchor,
-        // rounding to whole texels or no snapping).
-        let soa = (arrays && fixed && !walk.anchored)
-            .then(|| match rig.scheme.snaps.then_some(rig.snap_rule) {
-                Some(SnapRule {
-                    mode: SnapMode::Round,
-                    step_texels: 1,
-                }) => Some(true),
-                None => Some(false),
-                Some(_) => None,
-            })
-            .flatten();
-        if soa.is_some() {
-            for (a, p) in scratch.p.iter_mut().enumerate() {
-                p.clear();
-                p.extend(lps.iter().map(|l| if a == 0 { l.position.x } else { l.position.y }));
+        // Camera axes equal in the world, bit for bit, are equal in light space (the same
+        // operations): then only the positions are read per frame (the array walk), and
+        // the frame-by-frame walk's light-space frames are made only if a cascade needs them.
+        let soa = arrays_snap.filter(|_| same_world_axes(&chunk_poses));
+        lps.clear();
+        let fixed = match soa {
+            Some(_) => {
+                lps.push(LightPose::new(&rig.light, &chunk_poses[0]));
+                let [px, py] = &mut scratch.p;
+                px.clear();
+                py.clear();
+                for q in &chunk_poses {
+                    let p = rig.light.to_light_xy(q.position);
+                    px.push(p.x);
+                    py.push(p.y);
+                }
+                true
             }
-        }
+            None => {
+                lps.extend(chunk_poses.iter().map(|q| LightPose::new(&rig.light, q)));
+                same_axes(&lps)
+            }
+        };
         let [ds, du] = &mut drift;
         for (c, (ds, du)) in cascades.iter_mut().zip(ds.iter_mut().zip(du.iter_mut())) {
             ds.clear();
@@ -310,6 +322,10 @@ fn walk_axis_centred<P: Borrow<CameraPose>>(
             };
             if done {
                 continue;
+            }
+            if lps.len() < f {
+                lps.clear();
+                lps.extend(chunk_poses.iter().map(|q| LightPose::new(&rig.light, q)));
             }
             let out = [ds, du];
             match rig.scheme.snaps.then_some(rig.snap_rule) {
@@ -329,6 +345,13 @@ fn walk_axis_centred<P: Borrow<CameraPose>>(
         first = false;
     }
     totals
+}
+
+/// Whether every pose of `poses` has the first one's axes, bit for bit.
+fn same_world_axes(poses: &[CameraPose]) -> bool {
+    let bits = |p: &CameraPose| [p.forward, p.right, p.up].map(|v| v.to_array().map(f64::to_bits));
+    let a = bits(&poses[0]);
+    poses.iter().all(|p| bits(p) == a)
 }
 
 /// Whether every frame of `lps` has the first one's camera axes in light space, bit for bit.
