@@ -1458,7 +1458,8 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
         std::sync::Arc::new([])
     };
     let batch = rayon::current_thread_index().is_some();
-    if batch && !w.seams && frames <= HELD_POSES && w.cadence.is_empty() && w.config.shadow.precision == Precision::F64 {
+    if batch && !w.seams && frames <= HELD_POSES && w.cadence.is_empty() && w.config.shadow.precision == Precision::F64
+    {
         // A batch row (a sweep's) without a seam count: the walk reads the held poses as they
         // are, and the progress is told the frames it would have been told pose by pose.
         let light = light_track(w.config, 0);

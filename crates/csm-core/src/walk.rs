@@ -436,7 +436,9 @@ impl PathTotals {
         }
         self.jitter = self.jitter.max(0.0);
         self.pairs += frames * drifts.len();
-        let zeros = drifts.iter().all(|d| d[..frames].iter().fold(0u64, |a, x| a | x.to_bits()) == 0);
+        let zeros = drifts
+            .iter()
+            .all(|d| d[..frames].iter().fold(0u64, |a, x| a | x.to_bits()) == 0);
         if zeros && self.sum_ms.to_bits() != (-0.0f64).to_bits() {
             self.max_drift_sq = self.max_drift_sq.max(0.0);
             return;

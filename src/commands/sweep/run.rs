@@ -57,7 +57,11 @@ pub(crate) fn run_settings(
         })
     };
     let mut warmed_views = None;
-    for s in settings {
+    // Without scene geometry and views there is nothing to warm: the points are built once,
+    // in the parallel part, whose first refused point in grid order is the error (the same
+    // error this loop would stop at).
+    let warm = base.geometry.is_some() || !base.views.is_empty();
+    for s in settings.iter().filter(|_| warm) {
         // The visibility pass is made once, before the parallel part, and shared by every row.
         // Under swept sun angles only its rays are: each angle shades them in the parallel
         // part (the rows of one angle are consecutive and share that shading).
@@ -89,6 +93,8 @@ pub(crate) fn run_settings(
                     summary: a.summary,
                 })
             })
+            .collect::<Vec<Result<Row>>>()
+            .into_iter()
             .collect::<Result<Vec<_>>>()
     };
     in_pool(threads, work)
