@@ -1562,10 +1562,16 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
     }
 }
 
+/// A held path: the camera and the path it is of, and its poses.
+type HeldPath = (
+    csm_core::scene::Camera,
+    csm_core::scene::Motion,
+    std::sync::Arc<[CameraPose]>,
+);
+
 thread_local! {
-    /// The last held path this thread generated, with the camera and the path it is of.
-    static HELD: std::cell::RefCell<Option<(csm_core::scene::Camera, csm_core::scene::Motion, std::sync::Arc<[CameraPose]>)>> =
-        const { std::cell::RefCell::new(None) };
+    /// The last held path this thread generated.
+    static HELD: std::cell::RefCell<Option<HeldPath>> = const { std::cell::RefCell::new(None) };
 }
 
 /// The poses `generated` yields for `camera` along `motion`: the thread's last held path when

@@ -568,8 +568,7 @@ impl AxisWalk<'_> {
             }
             let (os1, ou1) = (&mut os[1..=f], &mut ou[1..=f]);
             let (ms, mu, act) = (&mut ms[..f], &mut mu[..f], &mut act[..f]);
-            for t in 0..f {
-                let pt = p[t];
+            for (t, &pt) in p.iter().enumerate() {
                 let ct = (pt + fc) / texel;
                 let (o_s, o_u) = (snap(ct) - half, ct - half);
                 let (axis_n, axis_f) = (pt + fnear, pt + ffar);
@@ -602,8 +601,8 @@ impl AxisWalk<'_> {
             let mut acc = [f64::INFINITY; 4];
             let mut t = 0;
             while t + 4 <= f {
-                for l in 0..4 {
-                    acc[l] = acc[l].min(x[t + l].min(y[t + l]));
+                for (l, a) in acc.iter_mut().enumerate() {
+                    *a = a.min(x[t + l].min(y[t + l]));
                 }
                 t += 4;
             }
