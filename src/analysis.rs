@@ -1562,33 +1562,62 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
     }
 }
 
-/// A held path: the camera and the path it is of, and its poses.
-type HeldPath = (
-    csm_core::scene::Camera,
-    csm_core::scene::Motion,
-    std::sync::Arc<[CameraPose]>,
-);
+/// What the poses of a generated path depend on, bit for bit: the camera's position, target
+/// and up, the path's kind, step and frame count (None for a path file: its rows are read).
+type PathKey = [u64; 12];
+
+fn path_key(camera: &csm_core::scene::Camera, motion: &csm_core::scene::Motion) -> Option<PathKey> {
+    use csm_core::scene::MotionPath;
+    let kind = match motion.path {
+        MotionPath::Strafe => 0,
+        MotionPath::Dolly => 1,
+        MotionPath::Yaw => 2,
+        MotionPath::Pitch => 3,
+        MotionPath::Orbit => 4,
+        MotionPath::Still => 5,
+        MotionPath::File { .. } => return None,
+    };
+    let [p, t, u] = [camera.position, camera.target, camera.up].map(|v| v.to_array().map(f64::to_bits));
+    Some([
+        p[0],
+        p[1],
+        p[2],
+        t[0],
+        t[1],
+        t[2],
+        u[0],
+        u[1],
+        u[2],
+        motion.step.to_bits(),
+        motion.frames as u64,
+        kind,
+    ])
+}
 
 thread_local! {
-    /// The last held path this thread generated.
-    static HELD: std::cell::RefCell<Option<HeldPath>> = const { std::cell::RefCell::new(None) };
+    /// The last held path this thread generated, with its [`PathKey`].
+    static HELD: std::cell::RefCell<Option<(PathKey, std::sync::Arc<[CameraPose]>)>> =
+        const { std::cell::RefCell::new(None) };
 }
 
 /// The poses `generated` yields for `camera` along `motion`: the thread's last held path when
-/// it is of the same camera and path (equal values: the same poses), else generated and kept.
+/// it has the same [`PathKey`] (the same poses), else generated (and kept, but a path file's).
 fn held_poses<I: Iterator<Item = CameraPose>>(
     camera: &csm_core::scene::Camera,
     motion: &csm_core::scene::Motion,
     generated: impl Fn() -> I,
 ) -> std::sync::Arc<[CameraPose]> {
+    let Some(key) = path_key(camera, motion) else {
+        return generated().collect();
+    };
     HELD.with_borrow_mut(|held| {
-        if let Some((c, m, poses)) = held.as_ref() {
-            if c == camera && m == motion {
+        if let Some((k, poses)) = held.as_ref() {
+            if *k == key {
                 return poses.clone();
             }
         }
         let poses: std::sync::Arc<[CameraPose]> = generated().collect();
-        *held = Some((camera.clone(), motion.clone(), poses.clone()));
+        *held = Some((key, poses.clone()));
         poses
     })
 }
