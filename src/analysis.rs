@@ -1475,19 +1475,40 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion, given: Option<&[C
     // A path of up to HELD_POSES frames is generated once and read by both walks (a
     // sweep's paths are short: generating each pose twice cost it a sixth of its time);
     // a longer one is generated as each walk reads it, so memory stays flat.
+    // The held poses are the same for every setting of a sweep (its axes change neither the
+    // camera nor the path): each thread keeps the last path it generated and reuses it while
+    // the camera and the path are equal.
     let frames = given.map_or_else(|| generated().len(), |p| p.len());
-    let own: Vec<CameraPose>;
+    let kept: std::sync::Arc<[CameraPose]>;
     let held: &[CameraPose] = match given {
         Some(p) => p,
         None => {
-            own = if frames <= HELD_POSES {
-                generated().collect()
+            kept = if frames <= HELD_POSES {
+                thread_held_poses(&w.setup.camera, motion, generated)
             } else {
-                Vec::new()
+                std::sync::Arc::new([])
             };
-            &own
+            &kept
         }
     };
+    let batch = rayon::current_thread_index().is_some();
+    if batch && !w.seams && frames <= HELD_POSES && w.cadence.is_empty() && w.config.shadow.precision == Precision::F64
+    {
+        // A batch row (a sweep's) without a seam count: the walk reads the held poses as they
+        // are, and the progress is told the frames it would have been told pose by pose.
+        let light = light_track(w.config, 0);
+        let (snapped, unsnapped) = rig_path::along_path_both_lit(w.rig, held.iter(), w.probes, light, w.sopts);
+        for _ in 0..frames / PROGRESS_FRAMES {
+            (w.on_frames)(PROGRESS_FRAMES as u64);
+        }
+        (w.on_frames)(2 * (frames % PROGRESS_FRAMES) as u64);
+        return PathWalk {
+            snapped,
+            unsnapped,
+            lookup_error: None,
+            crossings: None,
+        };
+    }
     let poses = || {
         let streamed = (frames > HELD_POSES).then(generated).into_iter().flatten();
         let all = held.iter().copied().chain(streamed).enumerate().map(|(t, p)| {
@@ -1507,7 +1528,6 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion, given: Option<&[C
     // Inside a parallel batch (a sweep, a comparison) every core is busy already: one walk
     // of both snap modes computes the values they share once per frame. Alone, the two
     // modes walk on two threads. Either way the totals are the same, bit for bit.
-    let batch = rayon::current_thread_index().is_some();
     let walked = match w.config.shadow.precision {
         Precision::F64 if !w.cadence.is_empty() => {
             // Cached cascades (refused at load with a moving light or a basis that follows
@@ -1582,6 +1602,66 @@ pub(crate) fn held_poses(setup: &csm_core::scene::Setup, motion: &csm_core::scen
     let generated =
         || csm_core::motion::poses(&setup.camera, motion).map(|p| p.expect("validated when the config was loaded"));
     (generated().len() <= HELD_POSES).then(|| generated().collect())
+}
+
+/// What the poses of a generated path depend on, bit for bit: the camera's position, target
+/// and up, the path's kind, step and frame count (None for a path file: its rows are read).
+type PathKey = [u64; 12];
+
+fn path_key(camera: &csm_core::scene::Camera, motion: &csm_core::scene::Motion) -> Option<PathKey> {
+    use csm_core::scene::MotionPath;
+    let kind = match motion.path {
+        MotionPath::Strafe => 0,
+        MotionPath::Dolly => 1,
+        MotionPath::Yaw => 2,
+        MotionPath::Pitch => 3,
+        MotionPath::Orbit => 4,
+        MotionPath::Still => 5,
+        MotionPath::File { .. } => return None,
+    };
+    let [p, t, u] = [camera.position, camera.target, camera.up].map(|v| v.to_array().map(f64::to_bits));
+    Some([
+        p[0],
+        p[1],
+        p[2],
+        t[0],
+        t[1],
+        t[2],
+        u[0],
+        u[1],
+        u[2],
+        motion.step.to_bits(),
+        motion.frames as u64,
+        kind,
+    ])
+}
+
+thread_local! {
+    /// The last held path this thread generated, with its [`PathKey`].
+    static HELD: std::cell::RefCell<Option<(PathKey, std::sync::Arc<[CameraPose]>)>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+/// The poses `generated` yields for `camera` along `motion`: the thread's last held path when
+/// it has the same [`PathKey`] (the same poses), else generated (and kept, but a path file's).
+fn thread_held_poses<I: Iterator<Item = CameraPose>>(
+    camera: &csm_core::scene::Camera,
+    motion: &csm_core::scene::Motion,
+    generated: impl Fn() -> I,
+) -> std::sync::Arc<[CameraPose]> {
+    let Some(key) = path_key(camera, motion) else {
+        return generated().collect();
+    };
+    HELD.with_borrow_mut(|held| {
+        if let Some((k, poses)) = held.as_ref() {
+            if *k == key {
+                return poses.clone();
+            }
+        }
+        let poses: std::sync::Arc<[CameraPose]> = generated().collect();
+        *held = Some((key, poses.clone()));
+        poses
+    })
 }
 
 /// Coverage, shimmer, jitter and lookup error over every camera path.

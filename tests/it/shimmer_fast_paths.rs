@@ -200,6 +200,61 @@ mod probe_free_walk {
     }
 }
 
+/// The probe-free walk over arrays of frames (`rig_path`'s array walk: camera axes that do not
+/// change, rounding to whole texels or no snapping, no anchor) against the generic walk of
+/// each mode, bit for bit: strafes, dollies and still cameras of one and several chunks,
+/// even and odd resolutions, offsets up to the loader's limit, texels so small that the centres
+/// in texels pass 2^50 (the walk then goes frame by frame), windows shrunk until corners fall
+/// outside (the same).
+mod array_walk {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 160, ..ProptestConfig::default() })]
+        #[test]
+        fn equals_the_generic_walk_bit_for_bit(
+            path in prop::sample::select(vec!["strafe", "dolly", "still"]),
+            step in prop_oneof![0.0001f64..0.05, 0.05f64..3.0, -3.0f64..-0.05],
+            frames in prop_oneof![2usize..40, 500usize..1100],
+            lambda in 0.0f64..=1.0,
+            cascades in 1usize..=8,
+            resolution in prop::sample::select(vec![255u32, 512, 999, 1000, 2048, 4096]),
+            offset in prop::sample::select(vec![0.0f64, 1234.5, 1e5, 9.99e8]),
+            light in (-1.0f64..1.0, -1.0f64..-0.05, -1.0f64..1.0),
+            snaps in any::<bool>(),
+            shrink in prop::collection::vec(0.5f64..1.0, 8),
+            tiny in any::<bool>(),
+        ) {
+            let (c, mut rig) = random_path(
+                path,
+                step,
+                frames,
+                Some(lambda),
+                (cascades, resolution),
+                offset,
+                light,
+                (0, 1),
+            );
+            rig.scheme.snaps = snaps;
+            for (side, k) in rig.sphere_side.iter_mut().zip(&shrink) {
+                if *k < 0.7 {
+                    *side *= *k;
+                }
+            }
+            if tiny {
+                // Texels so small that the centres in texels pass 2^50 far from the origin.
+                rig.sphere_side[0] *= 1e-9;
+            }
+            let poses = c.camera_path().unwrap();
+            let opts = all_options()[0];
+            let (s, u) = along_path_both(&rig, &poses, &[], opts);
+            prop_assert_eq!(format!("{s:?}"), format!("{:?}", along_path(&rig, &poses, &[], true, opts)));
+            prop_assert_eq!(format!("{u:?}"), format!("{:?}", along_path(&rig, &poses, &[], false, opts)));
+        }
+    }
+}
+
 /// Every engine preset's rig (axis-centred, box-centred and tight windows, snap anchors,
 /// selection intervals): `along_path_both` (the probe-free walk wherever it applies) against the
 /// generic walk of each mode, bit for bit, on a strafe, a dolly and a yaw.

@@ -55,7 +55,7 @@ impl Poses<'_> {
         let (cam, up) = (self.cam, self.cam.up);
         let pose0 = self
             .pose0
-            .ok_or((0, "camera.up is parallel to the view direction".to_string()))?;
+            .ok_or_else(|| (0, "camera.up is parallel to the view direction".to_string()))?;
         let dir0 = cam.target - cam.position;
         let bad = |t: usize| (t, "the view direction becomes parallel to camera.up".to_string());
         let path = &self.motion.path;

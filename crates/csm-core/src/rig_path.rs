@@ -166,7 +166,7 @@ fn walk_without_probes<P: Borrow<CameraPose>>(rig: &Rig, poses: impl IntoIterato
     if let WindowRule::AxisCentred { centre_depth } = &rig.scheme.window {
         let n = rig.resolution as f64;
         if rig.sphere_side.iter().all(|&side| side / n > 0.0) {
-            return walk_axis_centred(rig, centre_depth, poses);
+            return walk_axis_centred(rig, centre_depth, poses, true);
         }
     }
     let m = rig.cascade_count();
@@ -229,6 +229,7 @@ fn walk_axis_centred<P: Borrow<CameraPose>>(
     rig: &Rig,
     centre_depth: &[f64],
     poses: impl IntoIterator<Item = P>,
+    arrays: bool,
 ) -> [PathTotals; 2] {
     let m = rig.cascade_count();
     let n = rig.resolution as f64;
@@ -266,23 +267,66 @@ fn walk_axis_centred<P: Borrow<CameraPose>>(
     // Each mode's squared drifts per cascade, in frame order (none for the path's first frame).
     let mut drift: [Vec<Vec<f64>>; 2] = [0, 1].map(|_| (0..m).map(|_| Vec::with_capacity(chunk)).collect());
     let mut first = true;
+    let mut scratch = Arrays::default();
+    let mut chunk_poses: Vec<CameraPose> = Vec::with_capacity(chunk);
+    // The array walk's snap: rounding to whole texels (`SnapRule::apply` of this rule is the
+    // rounding alone: x / 1 and x · 1 are x) or none; other rules and a snap anchor walk frame
+    // by frame.
+    let arrays_snap = match rig.scheme.snaps.then_some(rig.snap_rule) {
+        _ if !arrays || walk.anchored => None,
+        Some(SnapRule {
+            mode: SnapMode::Round,
+            step_texels: 1,
+        }) => Some(true),
+        None => Some(false),
+        Some(_) => None,
+    };
     loop {
-        lps.clear();
-        lps.extend(
-            poses
-                .by_ref()
-                .take(chunk)
-                .map(|p| LightPose::new(&rig.light, p.borrow())),
-        );
-        let f = lps.len();
+        chunk_poses.clear();
+        chunk_poses.extend(poses.by_ref().take(chunk).map(|p| *p.borrow()));
+        let f = chunk_poses.len();
         if f == 0 {
             break;
         }
-        let fixed = same_axes(&lps);
+        // Camera axes equal in the world, bit for bit, are equal in light space (the same
+        // operations): then only the positions are read per frame (the array walk), and
+        // the frame-by-frame walk's light-space frames are made only if a cascade needs them.
+        let soa = arrays_snap.filter(|_| same_world_axes(&chunk_poses));
+        lps.clear();
+        let fixed = match soa {
+            Some(_) => {
+                lps.push(LightPose::new(&rig.light, &chunk_poses[0]));
+                let [px, py] = &mut scratch.p;
+                px.clear();
+                py.clear();
+                for q in &chunk_poses {
+                    let p = rig.light.to_light_xy(q.position);
+                    px.push(p.x);
+                    py.push(p.y);
+                }
+                true
+            }
+            None => {
+                lps.extend(chunk_poses.iter().map(|q| LightPose::new(&rig.light, q)));
+                same_axes(&lps)
+            }
+        };
         let [ds, du] = &mut drift;
         for (c, (ds, du)) in cascades.iter_mut().zip(ds.iter_mut().zip(du.iter_mut())) {
             ds.clear();
             du.clear();
+            let done = match soa {
+                Some(true) => walk.frames_arrays(c, &lps[0], round_to_whole, &mut scratch, &mut totals, [ds, du]),
+                Some(false) => walk.frames_arrays(c, &lps[0], |x| x, &mut scratch, &mut totals, [ds, du]),
+                None => false,
+            };
+            if done {
+                continue;
+            }
+            if lps.len() < f {
+                lps.clear();
+                lps.extend(chunk_poses.iter().map(|q| LightPose::new(&rig.light, q)));
+            }
             let out = [ds, du];
             match rig.scheme.snaps.then_some(rig.snap_rule) {
                 // `SnapRule::apply` of this rule is the rounding alone (x / 1 and x · 1 are x).
@@ -295,16 +339,19 @@ fn walk_axis_centred<P: Borrow<CameraPose>>(
             }
         }
         // The pairs in the frame-by-frame walk's order; the first frame of the path has none.
-        for t in 0..f - usize::from(first) {
-            for (tot, drift) in totals.iter_mut().zip(&drift) {
-                for d in drift {
-                    tot.closed_pair(0.0, d[t]);
-                }
-            }
+        for (tot, drift) in totals.iter_mut().zip(&drift) {
+            tot.closed_pairs_in_order(f - usize::from(first), drift);
         }
         first = false;
     }
     totals
+}
+
+/// Whether every pose of `poses` has the first one's axes, bit for bit.
+fn same_world_axes(poses: &[CameraPose]) -> bool {
+    let bits = |p: &CameraPose| [p.forward, p.right, p.up].map(|v| v.to_array().map(f64::to_bits));
+    let a = bits(&poses[0]);
+    poses.iter().all(|p| bits(p) == a)
 }
 
 /// Whether every frame of `lps` has the first one's camera axes in light space, bit for bit.
@@ -360,28 +407,16 @@ impl AxisWalk<'_> {
         drift: [&mut Vec<f64>; 2],
     ) {
         let (n, half, i) = (self.n, self.half, c.i);
-        let (sn, sf) = (c.slopes[0], c.slopes[1]);
         // The products of the axes that do not change (`fixed`): the window centre's and the
         // caps' offsets along the view axis, and the caps' half-extents.
-        let products = |lp: &LightPose| {
-            (
-                lp.forward * c.depth,
-                lp.forward * c.near,
-                lp.forward * c.far,
-                (lp.right * sn.0).abs(),
-                (lp.up * sn.1).abs(),
-                (lp.right * sf.0).abs(),
-                (lp.up * sf.1).abs(),
-            )
-        };
-        let hoisted = fixed.then(|| products(&lps[0]));
+        let hoisted = fixed.then(|| c.products(&lps[0]));
         let [ds, du] = drift;
         // Whether a snapped origin is a whole number whenever the centre in texels is below
         // `WHOLE_BELOW`: snapping gives whole multiples of the rule's step, and half an even
         // resolution is whole (a snap anchor is not).
         let whole_snaps = self.rig.scheme.snaps && self.rig.resolution % 2 == 0 && c.anchor_texels.is_none();
         for lp in lps {
-            let (fc, fnear, ffar, rn, un, rf, uf) = hoisted.unwrap_or_else(|| products(lp));
+            let [fc, fnear, ffar, rn, un, rf, uf] = hoisted.unwrap_or_else(|| c.products(lp));
             // The window centre in texels (`Rig::centred`, `Window::centred`), shared by the
             // modes; snapped, it is rounded on the rule's grid.
             let centre = lp.position + fc;
@@ -432,6 +467,190 @@ impl AxisWalk<'_> {
             c.prev = Some(origins);
             c.prev_whole = whole;
         }
+    }
+}
+
+/// `round_half_away` for `|x| < 2^52` (and no NaN), without its guard: the same operations,
+/// so the same bits there, and a loop over frames of it vectorises. Callers check the range.
+#[inline(always)]
+fn round_to_whole(x: f64) -> f64 {
+    const TWO_52: f64 = 4_503_599_627_370_496.0;
+    let a = x.abs();
+    let r = (a + TWO_52) - TWO_52;
+    let fl = if r > a { r - 1.0 } else { r };
+    let up = if a - fl >= 0.5 { 1.0 } else { 0.0 };
+    (fl + up).copysign(x)
+}
+
+/// The scratch arrays of [`AxisWalk::frames_arrays`] (one chunk's frames, one array per axis
+/// and quantity), reused across cascades and chunks.
+#[derive(Default)]
+struct Arrays {
+    /// The chunk's light-space camera positions, x and y.
+    p: [Vec<f64>; 2],
+    /// Each mode's window origin (snapped, unsnapped) per axis; index 0 is the frame before
+    /// the chunk's first, index `t + 1` frame `t`.
+    os: [Vec<f64>; 2],
+    ou: [Vec<f64>; 2],
+    /// Each mode's smaller coverage margin on each axis.
+    ms: [Vec<f64>; 2],
+    mu: [Vec<f64>; 2],
+    /// `|centre in texels|` per axis.
+    act: [Vec<f64>; 2],
+}
+
+impl AxisCascade {
+    /// The products of the camera axes with this cascade's depths and slopes: the window
+    /// centre's and the caps' offsets along the view axis, and the caps' half-extents.
+    #[inline(always)]
+    fn products(&self, lp: &LightPose) -> [DVec2; 7] {
+        let (sn, sf) = (self.slopes[0], self.slopes[1]);
+        [
+            lp.forward * self.depth,
+            lp.forward * self.near,
+            lp.forward * self.far,
+            (lp.right * sn.0).abs(),
+            (lp.up * sn.1).abs(),
+            (lp.right * sf.0).abs(),
+            (lp.up * sf.1).abs(),
+        ]
+    }
+}
+
+impl AxisWalk<'_> {
+    /// [`AxisWalk::frames`] of a chunk whose frames all have the camera axes of `lp0` (a strafe,
+    /// a dolly, a still camera), without a snap anchor, `snap` rounding to whole texels or
+    /// nothing: the same operations on each frame's values, per axis over arrays of the
+    /// chunk's frames (`arrays.p`: its positions) so the loops run several frames per
+    /// instruction. Returns false, having changed nothing, when the chunk needs the
+    /// frame-by-frame walk: a centre in texels of 2^50 or more (or NaN), a previous origin
+    /// of 2^51 or more, a frame whose window may miss a corner (the per-corner test), or a
+    /// smallest margin of zero (whose sign the order of the minima decides).
+    ///
+    /// Why the same bits: every per-frame value is computed by the operations of `frames` in
+    /// the same order; the rounding without its guard is `round_half_away` in the range
+    /// checked; the minimum over frames of a margin is the same value in any order unless it
+    /// is zero (±0 differ only in sign; NaN is skipped by `f64::min` in any order); with
+    /// every centre below 2^50 every snapped origin is whole, as `frames` tests per frame.
+    #[inline(always)]
+    fn frames_arrays(
+        &self,
+        c: &mut AxisCascade,
+        lp0: &LightPose,
+        snap: impl Fn(f64) -> f64,
+        arrays: &mut Arrays,
+        totals: &mut [PathTotals; 2],
+        drift: [&mut Vec<f64>; 2],
+    ) -> bool {
+        const PREV_BELOW: f64 = (1u64 << 51) as f64;
+        let f = arrays.p[0].len();
+        let n = self.n;
+        let [fc, fnear, ffar, rn, un, rf, uf] = c.products(lp0);
+        let prev = c.prev;
+        if prev.is_some_and(|p| !p.iter().all(|o| o.x.abs() < PREV_BELOW && o.y.abs() < PREV_BELOW)) {
+            return false;
+        }
+        let mut in_range = true;
+        let Arrays { p, os, ou, ms, mu, act } = arrays;
+        for a in 0..2 {
+            let pick = |v: DVec2| if a == 0 { v.x } else { v.y };
+            let (fc, fnear, ffar) = (pick(fc), pick(fnear), pick(ffar));
+            let (rn, un, rf, uf) = (pick(rn), pick(un), pick(rf), pick(uf));
+            let (texel, half) = (pick(c.texel), pick(self.half));
+            let (p, os, ou, ms, mu, act) = (&p[a][..f], &mut os[a], &mut ou[a], &mut ms[a], &mut mu[a], &mut act[a]);
+            for v in [&mut *os, &mut *ou] {
+                v.clear();
+                v.resize(f + 1, 0.0);
+            }
+            for v in [&mut *ms, &mut *mu, &mut *act] {
+                v.clear();
+                v.resize(f, 0.0);
+            }
+            let (os1, ou1) = (&mut os[1..=f], &mut ou[1..=f]);
+            let (ms, mu, act) = (&mut ms[..f], &mut mu[..f], &mut act[..f]);
+            for (t, &pt) in p.iter().enumerate() {
+                let ct = (pt + fc) / texel;
+                let (o_s, o_u) = (snap(ct) - half, ct - half);
+                let (axis_n, axis_f) = (pt + fnear, pt + ffar);
+                let (lo_n, hi_n) = ((axis_n - rn) - un, (axis_n + rn) + un);
+                let (lo_f, hi_f) = ((axis_f - rf) - uf, (axis_f + rf) + uf);
+                // `DVec2::min` and `DVec2::max`, per axis.
+                let lo = (if lo_n < lo_f { lo_n } else { lo_f }) / texel;
+                let hi = (if hi_n > hi_f { hi_n } else { hi_f }) / texel;
+                ms[t] = (lo - o_s).min(n - (hi - o_s));
+                mu[t] = (lo - o_u).min(n - (hi - o_u));
+                os1[t] = o_s;
+                ou1[t] = o_u;
+                act[t] = ct.abs();
+            }
+            in_range &= act.iter().fold(true, |ok, &x| ok & (x < WHOLE_BELOW));
+            let (ps, pu) = match prev {
+                Some(q) => (pick(q[0]), pick(q[1])),
+                None => (os[1], ou[1]),
+            };
+            os[0] = ps;
+            ou[0] = pu;
+        }
+        if !in_range {
+            return false;
+        }
+        // The smallest margin of each mode over the chunk: per frame the smaller of the two
+        // axes' (the walk's four-way minimum, up to the sign of a zero), then over frames.
+        let least = |m: &[Vec<f64>; 2]| {
+            let (x, y) = (&m[0][..f], &m[1][..f]);
+            let mut acc = [f64::INFINITY; 4];
+            let mut t = 0;
+            while t + 4 <= f {
+                for (l, a) in acc.iter_mut().enumerate() {
+                    *a = a.min(x[t + l].min(y[t + l]));
+                }
+                t += 4;
+            }
+            while t < f {
+                acc[0] = acc[0].min(x[t].min(y[t]));
+                t += 1;
+            }
+            acc[0].min(acc[1]).min(acc[2].min(acc[3]))
+        };
+        let least = [least(ms), least(mu)];
+        if least.iter().any(|&s| s == 0.0 || -s > 1e-9) {
+            return false;
+        }
+        // Drifts: as `frames` computes them, `closed_form_drift(previous, this)`.
+        let whole_snaps = self.rig.scheme.snaps && self.rig.resolution % 2 == 0 && c.anchor_texels.is_none();
+        let start = usize::from(prev.is_none());
+        let [ds, du] = drift;
+        let drifts = |o: &[Vec<f64>; 2], out: &mut Vec<f64>| {
+            let (x, y) = (&o[0][..=f], &o[1][..=f]);
+            out.clear();
+            out.resize(f - start, 0.0);
+            for (k, d) in out.iter_mut().enumerate() {
+                let t = k + start;
+                let dx = x[t] - x[t + 1];
+                let dy = y[t] - y[t + 1];
+                let (wx, wy) = (dx - round_to_whole(dx), dy - round_to_whole(dy));
+                *d = wx * wx + wy * wy;
+            }
+        };
+        drifts(ou, du);
+        if whole_snaps {
+            // Every snapped origin of the chunk is whole (centres below 2^50): each pair's
+            // drift is +0.0, and the pair into the chunk's first frame too when the
+            // previous frame's origin was whole.
+            ds.clear();
+            ds.resize(f - start, 0.0);
+            if start == 0 && !c.prev_whole {
+                ds[0] = closed_form_drift(DVec2::new(os[0][0], os[1][0]), DVec2::new(os[0][1], os[1][1]));
+            }
+        } else {
+            drifts(os, ds);
+        }
+        for (tot, s) in totals.iter_mut().zip(least) {
+            tot.slack(c.i, s);
+        }
+        c.prev = Some([DVec2::new(os[0][f], os[1][f]), DVec2::new(ou[0][f], ou[1][f])]);
+        c.prev_whole = whole_snaps;
+        true
     }
 }
 

@@ -424,6 +424,34 @@ impl PathTotals {
         self.max_drift_sq = self.max_drift_sq.max(ms);
     }
 
+    /// [`PathTotals::closed_pair`] of pairs without a size change, frame by frame (`frames`
+    /// of them) and within a frame cascade by cascade: `drifts[c][t]` is cascade `c`'s squared
+    /// drift at the chunk's pair `t`. The same totals, bit for bit: the jitter's `max` with 0
+    /// is idempotent, the sum is added in that order, and a chunk whose drifts are all +0.0
+    /// leaves a sum that is not −0.0 as it is (the largest drift is then taken in the same
+    /// order as well).
+    pub(crate) fn closed_pairs_in_order(&mut self, frames: usize, drifts: &[Vec<f64>]) {
+        if frames == 0 || drifts.is_empty() {
+            return;
+        }
+        self.jitter = self.jitter.max(0.0);
+        self.pairs += frames * drifts.len();
+        let zeros = drifts
+            .iter()
+            .all(|d| d[..frames].iter().fold(0u64, |a, x| a | x.to_bits()) == 0);
+        if zeros && self.sum_ms.to_bits() != (-0.0f64).to_bits() {
+            self.max_drift_sq = self.max_drift_sq.max(0.0);
+            return;
+        }
+        for t in 0..frames {
+            for d in drifts {
+                let ms = d[t];
+                self.sum_ms += ms;
+                self.max_drift_sq = self.max_drift_sq.max(ms);
+            }
+        }
+    }
+
     pub fn finish(mut self, opts: ShimmerOptions) -> PathResult {
         for s in &mut self.coverage.min_slack_texels {
             if !s.is_finite() {

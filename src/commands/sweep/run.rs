@@ -57,7 +57,11 @@ pub(crate) fn run_settings(
         })
     };
     let mut warmed_views = None;
-    for s in settings {
+    // Without scene geometry and views there is nothing to warm: the points are built once,
+    // in the parallel part, whose first refused point in grid order is the error (the same
+    // error this loop would stop at).
+    let warm = base.geometry.is_some() || !base.views.is_empty();
+    for s in settings.iter().filter(|_| warm) {
         // The visibility pass is made once, before the parallel part, and shared by every row.
         // Under swept sun angles only its rays are: each angle shades them in the parallel
         // part (the rows of one angle are consecutive and share that shading).
@@ -91,24 +95,22 @@ pub(crate) fn run_settings(
                             cost_means,
                             ..AnalysisOptions::summary_only()
                         };
-                        let a = analyze(&point(s)?, &opts);
+                        let row = point(s).map(|config| Row {
+                            setting: *s,
+                            summary: analyze(&config, &opts).summary,
+                        });
                         on_done();
-                        Ok((
-                            k,
-                            Row {
-                                setting: *s,
-                                summary: a.summary,
-                            },
-                        ))
+                        (k, row)
                     })
-                    .collect::<Result<Vec<_>>>()
+                    .collect::<Vec<_>>()
             })
-            .collect::<Result<Vec<_>>>()?;
-        let mut rows: Vec<Option<Row>> = vec![None; settings.len()];
+            .collect::<Vec<_>>();
+        // Every row is placed at its index; the first refused point in grid order is the error.
+        let mut rows: Vec<Option<Result<Row>>> = (0..settings.len()).map(|_| None).collect();
         for (k, row) in done.into_iter().flatten() {
             rows[k] = Some(row);
         }
-        Ok(rows.into_iter().flatten().collect())
+        rows.into_iter().flatten().collect::<Result<Vec<_>>>()
     };
     in_pool(threads, work)
 }
