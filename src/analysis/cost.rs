@@ -352,7 +352,12 @@ pub(crate) fn path_means(config: &Config, rig: &Rig, every: &[usize]) -> Vec<Cos
                 .collect();
             let volumes: Vec<_> = runs.into_iter().flatten().collect();
             // The light scene of the path's basis (a fixed basis: `means_measurable`).
-            let Some(light) = volumes.iter().flatten().flatten().next().map(|(v, _)| scene.light_scene(&v.basis))
+            let Some(light) = volumes
+                .iter()
+                .flatten()
+                .flatten()
+                .next()
+                .map(|(v, _)| scene.light_scene(&v.basis))
             else {
                 frames += volumes.len() as u64;
                 continue;
@@ -522,4 +527,74 @@ pub(crate) fn configured_model(config: &Config) -> Option<f64> {
         .collect();
     let vis = config.setup().visibility();
     measure(config, &rig, &lp0, &windows0, vis.as_deref(), None).1.model()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The means by the plain definition: every frame of every path, each cascade it renders
+    /// counted on its own ([`cost::LightScene::counts_all`] of the frame's volume, its light far
+    /// computed afresh), summed in frame order.
+    fn direct_means(config: &Config, rig: &Rig, every: &[usize]) -> Vec<(CostCounts, u64)> {
+        assert!(config.extra_motions().is_empty(), "one motion path");
+        let scene = counted(config).expect("a scene with geometry");
+        let setup = config.setup();
+        let m = rig.cascade_count();
+        let mut sums = vec![(CostCounts::default(), 0u64); m];
+        for (t, pose) in csm_core::motion::poses(&setup.camera, &setup.motion).enumerate() {
+            let lp = LightPose::new(&rig.light, &pose.unwrap());
+            for (i, sum) in sums.iter_mut().enumerate() {
+                if t % every.get(i).copied().unwrap_or(1) == 0 {
+                    let w = rig.window(i, &lp, config.shadow.snap);
+                    let v = volume(config, rig, i, &lp, &w);
+                    sum.0.add(&scene.light_scene(&v.basis).counts_all(&scene.mesh, &v));
+                    sum.1 += w.resolution as u64 * w.resolution as u64;
+                }
+            }
+        }
+        sums
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+
+        /// [`path_means`] (rectangle parts met once, light fars from the frame before's
+        /// candidate, runs of frames in parallel) equals the plain definition bit for bit on
+        /// random paths: every motion, steps, lengths across the runs' and chunks' ends, lights,
+        /// fits, snapping and cadences.
+        #[test]
+        fn the_path_means_equal_a_direct_count_of_every_frame(
+            path in prop::sample::select(vec!["strafe", "dolly", "yaw", "pitch", "orbit", "still"]),
+            step in 0.002..0.4f64,
+            frames in 1usize..700,
+            light in (-1.0..1.0f64, -1.0..-0.3f64, -1.0..1.0f64),
+            sphere in any::<bool>(),
+            snap in any::<bool>(),
+            every in prop::collection::vec(1usize..4, 4),
+        ) {
+            let text = include_str!("../../configs/default.toml")
+                .replace("direction = [-0.4, -1.0, -0.3]", &format!("direction = [{}, {}, {}]", light.0, light.1, light.2))
+                .replace("fit = \"sphere\"", if sphere { "fit = \"sphere\"" } else { "fit = \"aabb\"" })
+                .replace("snap = true", &format!("snap = {snap}"))
+                .replace("path = \"strafe\"\nframes = 240\nstep = 0.05", &format!("path = \"{path}\"\nframes = {frames}\nstep = {step}"));
+            let wanted = format!("path = \"{path}\"\nframes = {frames}\n");
+            prop_assert!(text.contains(&wanted));
+            let config = Config::from_toml_str(&text, "t.toml", None).unwrap();
+            let rig = crate::analysis::rig(&config).unwrap();
+            prop_assert!(means_measurable(&config, Some(&rig)));
+            let direct = direct_means(&config, &rig, &every);
+            let fast = path_means(&config, &rig, &every);
+            let f = frames as f64;
+            for (d, x) in direct.iter().zip(&fast) {
+                prop_assert_eq!(x.caster_objects_mean.to_bits(), (d.0.caster_objects as f64 / f).to_bits());
+                prop_assert_eq!(x.caster_triangles_mean.to_bits(), (d.0.caster_triangles as f64 / f).to_bits());
+                prop_assert_eq!(x.caster_triangles_inside_mean.to_bits(), (d.0.caster_triangles_inside as f64 / f).to_bits());
+                prop_assert_eq!(x.raster_fragments_mean.to_bits(), (d.0.raster_fragments / f).to_bits());
+                prop_assert_eq!(x.texels_cleared_mean.to_bits(), (d.1 as f64 / f).to_bits());
+            }
+            prop_assert!(direct.iter().any(|d| d.0.caster_triangles_inside > 0));
+        }
+    }
 }

@@ -23,8 +23,8 @@ use glam::{DVec2, DVec3};
 use crate::depth_range::{self, DepthRange};
 use crate::fitting::{minimal_sphere, Fit, Sphere, Window};
 use crate::geometry::{
-    intersection_max_from, intersection_range, Aabb, CameraPose, Corner, Hexahedron, Lens, LightBasis,
-    MaxCandidate, Plane,
+    intersection_max_from, intersection_range, Aabb, CameraPose, Corner, Hexahedron, Lens, LightBasis, MaxCandidate,
+    Plane,
 };
 use crate::scene::Setup;
 use crate::snapping::SnapRule;

@@ -842,9 +842,7 @@ pub struct RectPart {
 impl RectPart {
     /// Bytes it holds (for a caller bounding a cache of them).
     pub fn bytes(&self) -> usize {
-        std::mem::size_of::<Self>()
-            + self.objects.len() * std::mem::size_of::<RectObject>()
-            + self.thresholds.len() * 8
+        std::mem::size_of::<Self>() + self.objects.len() * std::mem::size_of::<RectObject>() + self.thresholds.len() * 8
     }
 }
 
@@ -867,7 +865,13 @@ fn meet_threshold(t: &[DVec3; 3], lo: DVec3, hi: DVec2) -> f64 {
         return z_vertex;
     }
     let mut poly = Poly::of(t.map(|p| p.to_array()));
-    for (axis, bound, below) in [(0, lo.x, false), (0, hi.x, true), (1, lo.y, false), (1, hi.y, true), (2, lo.z, false)] {
+    for (axis, bound, below) in [
+        (0, lo.x, false),
+        (0, hi.x, true),
+        (1, lo.y, false),
+        (1, hi.y, true),
+        (2, lo.z, false),
+    ] {
         if poly.within(axis, bound, below) {
             continue;
         }

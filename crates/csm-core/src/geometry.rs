@@ -409,7 +409,12 @@ pub enum MaxCandidate {
 /// candidate that gives this maximum. A hint that still passes its inside tests sets the
 /// running maximum before the rest are met, so that nearly no other candidate is tested; the
 /// maximum is that of every candidate whatever the hint.
-pub fn intersection_max_from(a: &Hexahedron, b: &Hexahedron, dir: DVec3, hint: &mut Option<MaxCandidate>) -> Option<f64> {
+pub fn intersection_max_from(
+    a: &Hexahedron,
+    b: &Hexahedron,
+    dir: DVec3,
+    hint: &mut Option<MaxCandidate>,
+) -> Option<f64> {
     let scale = a.scale().max(b.scale());
     let size = a.extent().max(b.extent()).max(1e-300);
     let eps = 1e-9 * size + 4.0 * f64::EPSILON * scale;
@@ -444,7 +449,9 @@ pub fn intersection_max_from(a: &Hexahedron, b: &Hexahedron, dir: DVec3, hint: &
         let any = |v: f64| !v.is_nan();
         let value = match h {
             MaxCandidate::Vertex { side, vertex: k } => vertex(side as usize, k as usize, &any),
-            MaxCandidate::Crossing { side, edge, plane } => crossing(side as usize, edge as usize, plane as usize, &any),
+            MaxCandidate::Crossing { side, edge, plane } => {
+                crossing(side as usize, edge as usize, plane as usize, &any)
+            }
         };
         if let Some(v) = value {
             (hi, found, best) = (v, true, Some(h));
