@@ -595,7 +595,7 @@ mod tests {
         #![proptest_config(proptest::prelude::ProptestConfig { cases: 256, ..Default::default() })]
 
         /// The upper end alone equals `intersection_range`'s, bit for bit (and both miss
-        /// together): camera slices against boxes, in both orders, along random directions,
+        /// together), from no hint and from every candidate as the hint: camera slices against boxes, in both orders, along random directions,
         /// with coordinates on a coarse grid in half the cases (features touching: ties).
         #[test]
         fn intersection_max_is_the_upper_end_of_intersection_range(
@@ -619,10 +619,26 @@ mod tests {
             let lo = v(corner);
             let boxed = Aabb::new(lo, lo + v(size)).hexahedron();
             let dir = DVec3::from_array(dir);
+            // Every candidate as a hint (the one a nearby frame might leave), and no hint.
+            let hints = (0..2u8)
+                .flat_map(|side| (0..8u8).map(move |vertex| MaxCandidate::Vertex { side, vertex }))
+                .chain((0..2u8).flat_map(|side| {
+                    (0..12u8).flat_map(move |edge| (0..6u8).map(move |plane| MaxCandidate::Crossing { side, edge, plane }))
+                }));
             for (a, b) in [(&slice, &boxed), (&boxed, &slice)] {
                 let max = intersection_max(a, b, dir).map(f64::to_bits);
                 let range = intersection_range(a, b, dir).map(|(_, hi)| hi.to_bits());
                 proptest::prop_assert_eq!(max, range);
+                // The candidate it leaves gives the maximum again from itself.
+                let mut left = None;
+                intersection_max_from(a, b, dir, &mut left);
+                let mut again = left;
+                proptest::prop_assert_eq!(intersection_max_from(a, b, dir, &mut again).map(f64::to_bits), range);
+                proptest::prop_assert_eq!(again, left);
+                for h in hints.clone() {
+                    let mut hint = Some(h);
+                    proptest::prop_assert_eq!(intersection_max_from(a, b, dir, &mut hint).map(f64::to_bits), range);
+                }
             }
         }
     }
