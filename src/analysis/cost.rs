@@ -377,9 +377,6 @@ pub(crate) fn path_means(config: &Config, rig: &Rig, every: &[usize]) -> Vec<Cos
             }
             let made: Vec<_> = new.par_iter().map(|v| (rect_key(v), light.rect_part(v))).collect();
             parts_bytes += made.iter().map(|(_, p)| p.bytes()).sum::<usize>();
-            if std::env::var_os("CSM_DEBUG_RECTS").is_some() {
-                eprintln!("rects new {} held {} bytes {}", made.len(), parts.len(), parts_bytes);
-            }
             parts.extend(made);
             let counted: Vec<Vec<Option<(CostCounts, u64)>>> = volumes
                 .par_iter()
