@@ -153,9 +153,22 @@ fn model_of(m: &CostModel, c: &CostCounts, cleared: u64) -> f64 {
 
 /// Cascade `i`'s caster volume for the frame of `lp` and its window `w`.
 pub fn volume(config: &Config, rig: &Rig, i: usize, lp: &LightPose, w: &Window) -> CasterVolume {
+    volume_from(config, rig, i, lp, w, &mut None)
+}
+
+/// [`volume`], bit for bit, with a hint for the light far ([`Rig::light_far_from`]: the same
+/// variable for cascade `i` along a path).
+fn volume_from(
+    config: &Config,
+    rig: &Rig,
+    i: usize,
+    lp: &LightPose,
+    w: &Window,
+    hint: &mut Option<csm_core::geometry::MaxCandidate>,
+) -> CasterVolume {
     let basis = rig.basis(i, lp);
     let (scene_near, _) = cost::light_depth_extent(&basis, &config.scene);
-    let far = rig.light_far(i, lp, w, &config.scene);
+    let far = rig.light_far_from(i, lp, w, &config.scene, hint);
     let lo = w.min();
     let hi = lo + glam::DVec2::new(w.width(), w.height());
     CasterVolume {
@@ -245,10 +258,54 @@ pub(crate) fn means_measurable(config: &Config, rig: Option<&Rig>) -> bool {
 /// Frames whose counts [`path_means`] holds at once (bounded memory on long paths).
 const MEANS_CHUNK: usize = 4096;
 
+/// Bytes of rectangle parts [`path_means`] keeps at most (it forgets them all past this).
+const RECT_PARTS_BYTES: usize = 16 << 20;
+
+/// Consecutive frames [`path_means`] gives one thread, so that each frame's light far starts
+/// from the candidate of the frame before.
+const FAR_RUN: usize = 256;
+
+/// A hasher for [`rect_key`]s (five words of float bits; no adversary): a multiply-rotate
+/// mix per word and a final fold of the high bits, in place of the default SipHash.
+#[derive(Default, Clone, Copy)]
+struct KeyHasher(u64);
+
+impl std::hash::Hasher for KeyHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for c in bytes.chunks(8) {
+            let mut w = [0u8; 8];
+            w[..c.len()].copy_from_slice(c);
+            self.write_u64(u64::from_le_bytes(w));
+        }
+    }
+
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+
+    fn finish(&self) -> u64 {
+        // The high bits folded down: the table indexes by the low ones.
+        let x = (self.0 ^ (self.0 >> 33)).wrapping_mul(0xff51_afd7_ed55_8ccd);
+        x ^ (x >> 29)
+    }
+}
+
+type KeyHash = std::hash::BuildHasherDefault<KeyHasher>;
+
+/// The key of a volume's rectangle and light near: what [`cost::LightScene::rect_part`] reads.
+fn rect_key(v: &CasterVolume) -> [u64; 5] {
+    [v.lo.x, v.lo.y, v.lo.z, v.hi.x, v.hi.y].map(f64::to_bits)
+}
+
 /// Each cascade's means over every frame of every motion path (see [`CostMeans`]): in frame
 /// `t` of a path (counted from 0 on each path) cascade `i` is rendered when `t` is a multiple
 /// of its cadence `every[i]` (empty: every frame), with that frame's window. `cost_index_mean`
 /// and `shadow_ms_mean` are left to [`CostMeans::finish`].
+///
+/// Each frame's counts are [`cost::LightScene::counts_all`]'s, bit for bit, made in two
+/// parts: what depends only on a window's rectangle ([`cost::LightScene::rect_part`]) once
+/// per rectangle met (a snapped window's rectangle recurs along a path, the light far does
+/// not), then per frame the part that reads the far ([`cost::LightScene::counts_in`]).
 pub(crate) fn path_means(config: &Config, rig: &Rig, every: &[usize]) -> Vec<CostMeans> {
     let m = rig.cascade_count();
     let Some(scene) = counted(config) else {
@@ -259,20 +316,22 @@ pub(crate) fn path_means(config: &Config, rig: &Rig, every: &[usize]) -> Vec<Cos
     let mut sums = vec![CostCounts::default(); m];
     let mut cleared = vec![0u64; m];
     let mut frames = 0u64;
-    // One frame's counts for the cascades it renders (None: held by the cadence).
-    let frame = |t: usize, pose: &csm_core::geometry::CameraPose| -> Vec<Option<(CostCounts, u64)>> {
+    // One frame's volumes for the cascades it renders (None: held by the cadence); `hints`
+    // carries each cascade's light-far candidate from the frame before.
+    let frame = |t: usize, pose: &csm_core::geometry::CameraPose, hints: &mut [Option<_>]| {
         let lp = LightPose::new(&rig.light, pose);
         (0..m)
             .map(|i| {
                 (t % every.get(i).copied().unwrap_or(1).max(1) == 0).then(|| {
                     let w = rig.window(i, &lp, config.shadow.snap);
-                    let v = volume(config, rig, i, &lp, &w);
-                    let counts = scene.light_scene(&v.basis).counts_all(&scene.mesh, &v);
-                    (counts, w.resolution as u64 * w.resolution as u64)
+                    let v = volume_from(config, rig, i, &lp, &w, &mut hints[i]);
+                    (v, w.resolution as u64 * w.resolution as u64)
                 })
             })
-            .collect()
+            .collect::<Vec<Option<(CasterVolume, u64)>>>()
     };
+    let mut parts: std::collections::HashMap<[u64; 5], cost::RectPart, KeyHash> = Default::default();
+    let mut parts_bytes = 0;
     for motion in motions {
         let mut poses = csm_core::motion::poses(&setup.camera, &motion).enumerate().peekable();
         // Frames are counted in parallel, a bounded chunk at a time, and summed in frame order:
@@ -283,7 +342,59 @@ pub(crate) fn path_means(config: &Config, rig: &Rig, every: &[usize]) -> Vec<Cos
                 .take(MEANS_CHUNK)
                 .map(|(t, p)| (t, p.expect("validated when the config was loaded")))
                 .collect();
-            let counted: Vec<_> = chunk.par_iter().map(|(t, pose)| frame(*t, pose)).collect();
+            // Runs of consecutive frames in parallel, each run in order (its hints follow it).
+            let runs: Vec<Vec<_>> = chunk
+                .par_chunks(FAR_RUN)
+                .map(|run| {
+                    let mut hints = vec![None; m];
+                    run.iter().map(|(t, pose)| frame(*t, pose, &mut hints)).collect()
+                })
+                .collect();
+            let volumes: Vec<_> = runs.into_iter().flatten().collect();
+            // The light scene of the path's basis (a fixed basis: `means_measurable`).
+            let Some(light) = volumes
+                .iter()
+                .flatten()
+                .flatten()
+                .next()
+                .map(|(v, _)| scene.light_scene(&v.basis))
+            else {
+                frames += volumes.len() as u64;
+                continue;
+            };
+            if parts_bytes > RECT_PARTS_BYTES {
+                parts.clear();
+                parts_bytes = 0;
+            }
+            // The rectangles not met before, each once, made in parallel.
+            let mut new: Vec<&CasterVolume> = Vec::new();
+            let mut asked: std::collections::HashSet<_, KeyHash> = Default::default();
+            for (v, _) in volumes.iter().flatten().flatten() {
+                let key = rect_key(v);
+                if v.basis == light.basis && !parts.contains_key(&key) && asked.insert(key) {
+                    new.push(v);
+                }
+            }
+            let made: Vec<_> = new.par_iter().map(|v| (rect_key(v), light.rect_part(v))).collect();
+            parts_bytes += made.iter().map(|(_, p)| p.bytes()).sum::<usize>();
+            parts.extend(made);
+            let counted: Vec<Vec<Option<(CostCounts, u64)>>> = volumes
+                .par_iter()
+                .map(|per_cascade| {
+                    per_cascade
+                        .iter()
+                        .map(|c| {
+                            c.as_ref().map(|(v, texels)| {
+                                let counts = match parts.get(&rect_key(v)) {
+                                    Some(part) if v.basis == light.basis => light.counts_in(&scene.mesh, v, part),
+                                    _ => scene.light_scene(&v.basis).counts_all(&scene.mesh, v),
+                                };
+                                (counts, *texels)
+                            })
+                        })
+                        .collect()
+                })
+                .collect();
             for per_cascade in counted {
                 frames += 1;
                 for (i, c) in per_cascade.into_iter().enumerate() {
@@ -413,4 +524,74 @@ pub(crate) fn configured_model(config: &Config) -> Option<f64> {
         .collect();
     let vis = config.setup().visibility();
     measure(config, &rig, &lp0, &windows0, vis.as_deref(), None).1.model()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The means by the plain definition: every frame of every path, each cascade it renders
+    /// counted on its own ([`cost::LightScene::counts_all`] of the frame's volume, its light far
+    /// computed afresh), summed in frame order.
+    fn direct_means(config: &Config, rig: &Rig, every: &[usize]) -> Vec<(CostCounts, u64)> {
+        assert!(config.extra_motions().is_empty(), "one motion path");
+        let scene = counted(config).expect("a scene with geometry");
+        let setup = config.setup();
+        let m = rig.cascade_count();
+        let mut sums = vec![(CostCounts::default(), 0u64); m];
+        for (t, pose) in csm_core::motion::poses(&setup.camera, &setup.motion).enumerate() {
+            let lp = LightPose::new(&rig.light, &pose.unwrap());
+            for (i, sum) in sums.iter_mut().enumerate() {
+                if t % every.get(i).copied().unwrap_or(1) == 0 {
+                    let w = rig.window(i, &lp, config.shadow.snap);
+                    let v = volume(config, rig, i, &lp, &w);
+                    sum.0.add(&scene.light_scene(&v.basis).counts_all(&scene.mesh, &v));
+                    sum.1 += w.resolution as u64 * w.resolution as u64;
+                }
+            }
+        }
+        sums
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+
+        /// [`path_means`] (rectangle parts met once, light fars from the frame before's
+        /// candidate, runs of frames in parallel) equals the plain definition bit for bit on
+        /// random paths: every motion, steps, lengths across the runs' and chunks' ends, lights,
+        /// fits, snapping and cadences.
+        #[test]
+        fn the_path_means_equal_a_direct_count_of_every_frame(
+            path in prop::sample::select(vec!["strafe", "dolly", "yaw", "pitch", "orbit", "still"]),
+            step in 0.002..0.4f64,
+            frames in 1usize..700,
+            light in (-1.0..1.0f64, -1.0..-0.3f64, -1.0..1.0f64),
+            sphere in any::<bool>(),
+            snap in any::<bool>(),
+            every in prop::collection::vec(1usize..4, 4),
+        ) {
+            let text = include_str!("../../configs/default.toml")
+                .replace("direction = [-0.4, -1.0, -0.3]", &format!("direction = [{}, {}, {}]", light.0, light.1, light.2))
+                .replace("fit = \"sphere\"", if sphere { "fit = \"sphere\"" } else { "fit = \"aabb\"" })
+                .replace("snap = true", &format!("snap = {snap}"))
+                .replace("path = \"strafe\"\nframes = 240\nstep = 0.05", &format!("path = \"{path}\"\nframes = {frames}\nstep = {step}"));
+            let wanted = format!("path = \"{path}\"\nframes = {frames}\n");
+            prop_assert!(text.contains(&wanted));
+            let config = Config::from_toml_str(&text, "t.toml", None).unwrap();
+            let rig = crate::analysis::rig(&config).unwrap();
+            prop_assert!(means_measurable(&config, Some(&rig)));
+            let direct = direct_means(&config, &rig, &every);
+            let fast = path_means(&config, &rig, &every);
+            let f = frames as f64;
+            for (d, x) in direct.iter().zip(&fast) {
+                prop_assert_eq!(x.caster_objects_mean.to_bits(), (d.0.caster_objects as f64 / f).to_bits());
+                prop_assert_eq!(x.caster_triangles_mean.to_bits(), (d.0.caster_triangles as f64 / f).to_bits());
+                prop_assert_eq!(x.caster_triangles_inside_mean.to_bits(), (d.0.caster_triangles_inside as f64 / f).to_bits());
+                prop_assert_eq!(x.raster_fragments_mean.to_bits(), (d.0.raster_fragments / f).to_bits());
+                prop_assert_eq!(x.texels_cleared_mean.to_bits(), (d.1 as f64 / f).to_bits());
+            }
+            prop_assert!(direct.iter().any(|d| d.0.caster_triangles_inside > 0));
+        }
+    }
 }

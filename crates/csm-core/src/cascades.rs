@@ -23,7 +23,8 @@ use glam::{DVec2, DVec3};
 use crate::depth_range::{self, DepthRange};
 use crate::fitting::{minimal_sphere, Fit, Sphere, Window};
 use crate::geometry::{
-    intersection_max, intersection_range, Aabb, CameraPose, Corner, Hexahedron, Lens, LightBasis, Plane,
+    intersection_max_from, intersection_range, Aabb, CameraPose, Corner, Hexahedron, Lens, LightBasis, MaxCandidate,
+    Plane,
 };
 use crate::scene::Setup;
 use crate::snapping::SnapRule;
@@ -486,9 +487,23 @@ impl Rig {
     /// the caster side (the window's prism against the scene) is skipped. Per-frame cost
     /// counts need only this.
     pub fn light_far(&self, i: usize, lp: &LightPose, window: &Window, scene: &Aabb) -> f64 {
+        self.light_far_from(i, lp, window, scene, &mut None)
+    }
+
+    /// [`Rig::light_far`], bit for bit, with a hint for the convex intersection's maximum
+    /// ([`intersection_max_from`]): the same variable passed for cascade `i` frame after frame
+    /// lets each frame start from the candidate that gave the previous frame's far.
+    pub fn light_far_from(
+        &self,
+        i: usize,
+        lp: &LightPose,
+        window: &Window,
+        scene: &Aabb,
+        hint: &mut Option<MaxCandidate>,
+    ) -> f64 {
         if self.scheme.depth == LightDepthRule::Scene && self.fixed_basis() {
             let s = &self.slices[i];
-            return slice_far_in_scene(&self.light, &self.lens, &lp.pose, (s.near, s.far), scene);
+            return slice_far_in_scene(&self.light, &self.lens, &lp.pose, (s.near, s.far), scene, hint);
         }
         self.light_depth(i, lp, window, scene).far
     }
@@ -628,11 +643,18 @@ fn slice_in_scene(l: &LightBasis, lens: &Lens, pose: &CameraPose, (near, far): (
 
 /// The far end of [`slice_in_scene`]'s light depths, bit for bit: the receivers' largest light
 /// depth, or the slice's when the slice misses the scene. Only the upper end of the
-/// intersection is needed, and [`intersection_max`] finds it with fewer inside tests
+/// intersection is needed, and [`intersection_max_from`] finds it with fewer inside tests
 /// (a per-frame cost, e.g. the cost counts' means over a long path).
-fn slice_far_in_scene(l: &LightBasis, lens: &Lens, pose: &CameraPose, (near, far): (f64, f64), scene: &Aabb) -> f64 {
+fn slice_far_in_scene(
+    l: &LightBasis,
+    lens: &Lens,
+    pose: &CameraPose,
+    (near, far): (f64, f64),
+    scene: &Aabb,
+    hint: &mut Option<MaxCandidate>,
+) -> f64 {
     let slice_hex = pose.slice_hexahedron(lens, near, far);
-    intersection_max(&slice_hex, &scene.hexahedron(), l.z).unwrap_or_else(|| {
+    intersection_max_from(&slice_hex, &scene.hexahedron(), l.z, hint).unwrap_or_else(|| {
         slice_hex
             .vertices
             .iter()

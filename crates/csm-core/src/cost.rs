@@ -739,10 +739,149 @@ impl LightScene {
         out
     }
 
+    /// What the counts of volumes with `v`'s rectangle and light near need that does not
+    /// depend on the light far: per object, whether its box misses them at any far, its
+    /// clipped area, and for a small object the far beyond which each of its triangles meets
+    /// the volume ([`meet_threshold`]), sorted. Volumes sharing a rectangle then cost
+    /// [`LightScene::counts_in`]: the box tests and a binary search per object.
+    pub fn rect_part(&self, v: &CasterVolume) -> RectPart {
+        let mut thresholds = Vec::new();
+        let objects = self
+            .objects
+            .iter()
+            .map(|o| {
+                // `counts`' first test but for `box_lo.z > far`, the one part that needs the far.
+                let (lo, hi) = (v.lo, v.hi);
+                if o.box_lo.x > hi.x || o.box_lo.y > hi.y || o.box_hi.cmplt(lo).any() {
+                    return RectObject::Apart;
+                }
+                let root = &self.chunks[o.root];
+                if root.end - root.start > SMALL_OBJECT {
+                    return RectObject::Large;
+                }
+                let start = thresholds.len();
+                thresholds.extend(
+                    self.triangles[root.tris()]
+                        .iter()
+                        .map(|t| meet_threshold(t, lo, hi.truncate()))
+                        .filter(|z| *z < f64::INFINITY),
+                );
+                thresholds[start..].sort_unstable_by(f64::total_cmp);
+                RectObject::Small {
+                    area: self.walk(o.root, v, false, true).1,
+                    start: start as u32,
+                    end: thresholds.len() as u32,
+                }
+            })
+            .collect();
+        RectPart { objects, thresholds }
+    }
+
+    /// [`LightScene::counts`] without culling, for a volume with the rectangle and light near
+    /// of the one `part` was made for ([`LightScene::rect_part`]): the same counts, bit for bit.
+    /// The area of an object is a function of the rectangle alone (the walk's area, whatever
+    /// it settles where), and a triangle meets the volume exactly when the far is at least its
+    /// threshold.
+    pub fn counts_in(&self, mesh: &Mesh, v: &CasterVolume, part: &RectPart) -> CostCounts {
+        debug_assert_eq!(v.basis, self.basis, "a volume of another basis");
+        let mut out = CostCounts::default();
+        if v.is_empty() {
+            return out;
+        }
+        let texel_area = v.texel.x * v.texel.y;
+        let mut area = 0.0;
+        for ((o, lo), p) in mesh.objects.iter().zip(&self.objects).zip(&part.objects) {
+            if matches!(p, RectObject::Apart) || lo.box_lo.z > v.hi.z || !self.axes.meets(&o.bounds, v) {
+                continue;
+            }
+            out.caster_objects += 1;
+            out.caster_triangles += o.triangles.len() as u64;
+            let (inside, a) = match *p {
+                RectObject::Small { area, start, end } => {
+                    let t = &part.thresholds[start as usize..end as usize];
+                    (t.partition_point(|&z| z <= v.hi.z) as u64, area)
+                }
+                _ => self.walk(lo.root, v, true, true),
+            };
+            out.caster_triangles_inside += inside;
+            area += a;
+        }
+        out.raster_fragments = area / texel_area;
+        out
+    }
+
     /// The light-space bounds of object `k`'s world bounding box.
     pub fn object_box(&self, k: usize) -> (DVec3, DVec3) {
         (self.objects[k].box_lo, self.objects[k].box_hi)
     }
+}
+
+/// Triangles an object may have for [`LightScene::rect_part`] to keep its thresholds; a
+/// larger one is walked per volume (its tree settles whole nodes).
+const SMALL_OBJECT: u32 = 256;
+
+/// One object's part of a [`RectPart`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum RectObject {
+    /// Its box misses every volume of the rectangle and light near.
+    Apart,
+    /// Its clipped area and its triangles' thresholds, `thresholds[start..end]` (sorted).
+    Small { area: f64, start: u32, end: u32 },
+    /// Walked per volume.
+    Large,
+}
+
+/// What the counts of one rectangle (and light near) need whatever the light far:
+/// [`LightScene::rect_part`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RectPart {
+    objects: Vec<RectObject>,
+    thresholds: Vec<f64>,
+}
+
+impl RectPart {
+    /// Bytes it holds (for a caller bounding a cache of them).
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of::<Self>() + self.objects.len() * std::mem::size_of::<RectObject>() + self.thresholds.len() * 8
+    }
+}
+
+/// The smallest light far at which the triangle `t` meets the box `[lo, (hi, far)]`
+/// ([`triangle_meets_box`]) and every larger one: `+inf` when none. Follows that test's steps
+/// with the far left open: a vertex inside the box (its other five planes, and `z <= far`);
+/// the bounds not apart (the far-free tests, and the lowest vertex `<= far`); the clip by the
+/// five far-free planes not empty, and a vertex of it `<= far` (the last plane's clip is empty
+/// exactly when no vertex lies on its inner side). Each is "far at least some value", so the
+/// test is `far >= min(z_vertex, max(z_bounds, z_clip))`, with no rounding of its own.
+fn meet_threshold(t: &[DVec3; 3], lo: DVec3, hi: DVec2) -> f64 {
+    let inside = |p: &DVec3| p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= hi.x && p.y <= hi.y;
+    let (tlo, thi) = (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]));
+    if t.iter().all(inside) {
+        // Every vertex inside the five planes: the lowest decides (the rest is no lower).
+        return tlo.z;
+    }
+    let z_vertex = t.iter().filter(|p| inside(p)).fold(f64::INFINITY, |z, p| z.min(p.z));
+    if tlo.x > hi.x || tlo.y > hi.y || thi.cmplt(lo).any() {
+        return z_vertex;
+    }
+    let mut poly = Poly::of(t.map(|p| p.to_array()));
+    for (axis, bound, below) in [
+        (0, lo.x, false),
+        (0, hi.x, true),
+        (1, lo.y, false),
+        (1, hi.y, true),
+        (2, lo.z, false),
+    ] {
+        if poly.within(axis, bound, below) {
+            continue;
+        }
+        poly = poly.clip(axis, bound, below);
+        if poly.n == 0 {
+            return z_vertex;
+        }
+    }
+    let z_clip = poly.v[..poly.n].iter().fold(f64::INFINITY, |z, p| z.min(p[2]));
+    z_vertex.min(tlo.z.max(z_clip))
 }
 
 /// The light-space box of one cascade's visible receivers, padded: the receiver-aware culling
@@ -1026,6 +1165,15 @@ mod tests {
         mesh.add_object(ObjectKind::Primitive, tris.collect::<Vec<_>>());
     }
 
+    /// The next float above (`up`) or below a finite `z`.
+    fn ulp(z: f64, up: bool) -> f64 {
+        if z == 0.0 {
+            return if up { f64::from_bits(1) } else { -f64::from_bits(1) };
+        }
+        let bits = z.to_bits();
+        f64::from_bits(if (z > 0.0) == up { bits + 1 } else { bits - 1 })
+    }
+
     fn scene() -> impl Strategy<Value = Mesh> {
         (
             prop::collection::vec((2usize..40, 5.0..40.0f64, 0.1..3.0f64), 1..3),
@@ -1092,6 +1240,40 @@ mod tests {
                 prop_assert_eq!(c.0.raster_fragments.to_bits(), c.1.raster_fragments.to_bits());
             }
             prop_assert_eq!(light.counts_all(&m, &v), counts_plain(&light, &m, &v, |_| true));
+        }
+
+        /// The counts of a rectangle's part ([`LightScene::rect_part`]) at any light far equal
+        /// the direct counts bit for bit: fars at random, at the scene's vertices' light depths,
+        /// at every threshold and one ulp either side of it (where a triangle starts meeting
+        /// the volume), below the light near (empty), on terrains and boxes (small objects)
+        /// and on a terrain of more than `SMALL_OBJECT` triangles (walked).
+        #[test]
+        fn a_rectangles_part_counts_as_the_direct_count_at_every_far(
+            m in scene(),
+            d in (-1.0..1.0f64, -1.0..-0.2f64, -1.0..1.0f64),
+            r in prop::array::uniform6(0.0..1.0f64),
+            snap in prop::option::of(prop::array::uniform4(0usize..100_000)),
+            fars in prop::collection::vec(0.0..1.0f64, 4),
+            picks in prop::collection::vec(0usize..100_000, 8),
+        ) {
+            let v = volume(&m, DVec3::new(d.0, d.1, d.2), r, snap);
+            let light = LightScene::new(&m, &v.basis);
+            let part = light.rect_part(&v);
+            let (zlo, zhi) = light.objects.iter().fold((v.lo.z, v.hi.z), |(a, b), o| (a.min(o.lo.z), b.max(o.hi.z)));
+            let mut all: Vec<f64> = fars.iter().map(|f| zlo - 1.0 + f * (zhi - zlo + 2.0)).collect();
+            all.extend(picks.iter().map(|&k| v.basis.to_light(m.triangles[k / 3 % m.triangles.len()][k % 3]).z));
+            for &z in part.thresholds.iter().step_by(1 + part.thresholds.len() / 16) {
+                all.extend([z, ulp(z, false), ulp(z, true)]);
+            }
+            all.push(ulp(v.lo.z, false));
+            for far in all {
+                let w = CasterVolume { hi: DVec3::new(v.hi.x, v.hi.y, far), ..v };
+                let (fast, direct) = (light.counts_in(&m, &w, &part), light.counts(&m, &w, |_| true));
+                prop_assert_eq!(fast.caster_objects, direct.caster_objects);
+                prop_assert_eq!(fast.caster_triangles, direct.caster_triangles);
+                prop_assert_eq!(fast.caster_triangles_inside, direct.caster_triangles_inside);
+                prop_assert_eq!(fast.raster_fragments.to_bits(), direct.raster_fragments.to_bits());
+            }
         }
 
         /// A window over a whole terrain with its far plane through it (nodes inside the

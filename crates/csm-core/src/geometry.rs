@@ -388,22 +388,112 @@ pub fn intersection_range(a: &Hexahedron, b: &Hexahedron, dir: DVec3) -> Option<
 /// [`intersection_range`]'s upper end is the largest value among its candidates (vertices of
 /// one solid inside the other, edge-plane crossings inside both) that pass their inside tests,
 /// whatever the order they are met in: a passing candidate above the running maximum always
-/// widens it, and one at or below it never raises it. The same candidates in the same order
-/// and operations, but only a candidate above the running maximum is tested (there, one below
-/// the running minimum is tested too).
+/// widens it, and one at or below it never raises it. The same candidates with the same
+/// operations (so the same values), but only one above the running maximum is tested, every
+/// vertex first, and an edge whose two ends lie below the running maximum by more than
+/// rounding is skipped (its crossings lie below it too).
 pub fn intersection_max(a: &Hexahedron, b: &Hexahedron, dir: DVec3) -> Option<f64> {
-    let (hi, found) = (Cell::new(f64::NEG_INFINITY), Cell::new(false));
-    each_inside_candidate(
-        a,
-        b,
-        dir,
-        |v| v > hi.get() || !found.get() && v == hi.get(),
-        |v| {
-            hi.set(hi.get().max(v));
-            found.set(true);
-        },
-    );
-    found.get().then_some(hi.get())
+    intersection_max_from(a, b, dir, &mut None)
+}
+
+/// One candidate of [`intersection_max`]: a vertex of one solid (`side` 0: of `a`, 1: of `b`),
+/// or the crossing of one of its edges ([`HEX_EDGES`]) with a face plane of the other.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MaxCandidate {
+    Vertex { side: u8, vertex: u8 },
+    Crossing { side: u8, edge: u8, plane: u8 },
+}
+
+/// [`intersection_max`], bit for bit, starting from the candidate `hint` (the one that gave
+/// the maximum of a nearby pair of solids: the previous frame's), which is left holding the
+/// candidate that gives this maximum. A hint that still passes its inside tests sets the
+/// running maximum before the rest are met, so that nearly no other candidate is tested; the
+/// maximum is that of every candidate whatever the hint.
+pub fn intersection_max_from(
+    a: &Hexahedron,
+    b: &Hexahedron,
+    dir: DVec3,
+    hint: &mut Option<MaxCandidate>,
+) -> Option<f64> {
+    let scale = a.scale().max(b.scale());
+    let size = a.extent().max(b.extent()).max(1e-300);
+    let eps = 1e-9 * size + 4.0 * f64::EPSILON * scale;
+    let solids = [(a, b), (b, a)];
+    let values = solids.map(|(s, _)| s.vertices.map(|v| dir.dot(v)));
+    // A candidate's value when it passes its inside tests (the same operations wherever it is
+    // met); `wanted` is asked before the inside tests, the most of the work.
+    let vertex = |side: usize, k: usize, wanted: &dyn Fn(f64) -> bool| {
+        let (s, o) = solids[side];
+        let value = values[side][k];
+        (wanted(value) && o.contains(s.vertices[k], eps)).then_some(value)
+    };
+    let crossing = |side: usize, e: usize, plane: usize, wanted: &dyn Fn(f64) -> bool| {
+        let (s, o) = solids[side];
+        let (i, j) = HEX_EDGES[e];
+        let (p, q) = (s.vertices[i], s.vertices[j]);
+        let pl = &o.planes[plane];
+        let denom = pl.normal.dot(q - p);
+        if denom.abs() <= 1e-300 {
+            return None;
+        }
+        let t = (pl.offset - pl.normal.dot(p)) / denom;
+        if !(0.0..=1.0).contains(&t) {
+            return None;
+        }
+        let x = p + (q - p) * t;
+        let value = dir.dot(x);
+        (wanted(value) && o.contains(x, eps) && s.contains(x, eps)).then_some(value)
+    };
+    let (mut hi, mut found, mut best) = (f64::NEG_INFINITY, false, None);
+    if let Some(h) = *hint {
+        let any = |v: f64| !v.is_nan();
+        let value = match h {
+            MaxCandidate::Vertex { side, vertex: k } => vertex(side as usize, k as usize, &any),
+            MaxCandidate::Crossing { side, edge, plane } => {
+                crossing(side as usize, edge as usize, plane as usize, &any)
+            }
+        };
+        if let Some(v) = value {
+            (hi, found, best) = (v, true, Some(h));
+        }
+    }
+    // Every vertex, then every edge-plane crossing (the order does not change the maximum).
+    for side in 0..2 {
+        for k in 0..8 {
+            let wanted = |v: f64| v > hi || !found && v == hi;
+            if let Some(v) = vertex(side, k, &wanted) {
+                (hi, found) = (hi.max(v), true);
+                best = Some(MaxCandidate::Vertex {
+                    side: side as u8,
+                    vertex: k as u8,
+                });
+            }
+        }
+    }
+    // A crossing lies on its edge, so its value is at most the larger of the ends' values plus
+    // rounding: a few ulps of |dir|_1 x scale, far below `slack`. An edge whose ends lie below
+    // the running maximum by more than `slack` has no crossing worth computing.
+    let slack = 1e-12 * (1.0 + (dir.x.abs() + dir.y.abs() + dir.z.abs()) * scale);
+    for side in 0..2 {
+        for (e, &(i, j)) in HEX_EDGES.iter().enumerate() {
+            if found && values[side][i].max(values[side][j]) + slack < hi {
+                continue;
+            }
+            for plane in 0..solids[side].1.planes.len() {
+                let wanted = |v: f64| v > hi || !found && v == hi;
+                if let Some(v) = crossing(side, e, plane, &wanted) {
+                    (hi, found) = (hi.max(v), true);
+                    best = Some(MaxCandidate::Crossing {
+                        side: side as u8,
+                        edge: e as u8,
+                        plane: plane as u8,
+                    });
+                }
+            }
+        }
+    }
+    *hint = best;
+    found.then_some(hi)
 }
 
 /// The candidates for the extremes of `dir . p` over the intersection of two convex
@@ -505,7 +595,7 @@ mod tests {
         #![proptest_config(proptest::prelude::ProptestConfig { cases: 256, ..Default::default() })]
 
         /// The upper end alone equals `intersection_range`'s, bit for bit (and both miss
-        /// together): camera slices against boxes, in both orders, along random directions,
+        /// together), from no hint and from every candidate as the hint: camera slices against boxes, in both orders, along random directions,
         /// with coordinates on a coarse grid in half the cases (features touching: ties).
         #[test]
         fn intersection_max_is_the_upper_end_of_intersection_range(
@@ -529,10 +619,26 @@ mod tests {
             let lo = v(corner);
             let boxed = Aabb::new(lo, lo + v(size)).hexahedron();
             let dir = DVec3::from_array(dir);
+            // Every candidate as a hint (the one a nearby frame might leave), and no hint.
+            let hints = (0..2u8)
+                .flat_map(|side| (0..8u8).map(move |vertex| MaxCandidate::Vertex { side, vertex }))
+                .chain((0..2u8).flat_map(|side| {
+                    (0..12u8).flat_map(move |edge| (0..6u8).map(move |plane| MaxCandidate::Crossing { side, edge, plane }))
+                }));
             for (a, b) in [(&slice, &boxed), (&boxed, &slice)] {
                 let max = intersection_max(a, b, dir).map(f64::to_bits);
                 let range = intersection_range(a, b, dir).map(|(_, hi)| hi.to_bits());
                 proptest::prop_assert_eq!(max, range);
+                // The candidate it leaves gives the maximum again from itself.
+                let mut left = None;
+                intersection_max_from(a, b, dir, &mut left);
+                let mut again = left;
+                proptest::prop_assert_eq!(intersection_max_from(a, b, dir, &mut again).map(f64::to_bits), range);
+                proptest::prop_assert_eq!(again, left);
+                for h in hints.clone() {
+                    let mut hint = Some(h);
+                    proptest::prop_assert_eq!(intersection_max_from(a, b, dir, &mut hint).map(f64::to_bits), range);
+                }
             }
         }
     }
