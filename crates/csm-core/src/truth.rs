@@ -895,19 +895,26 @@ impl<'a> ShadowMaps<'a> {
 }
 
 /// The ray of texel `g`: from its centre, before every triangle, along the light. Its first
-/// hit is the triangle the cover names for the cell (the distance computed as the BVH's hit
-/// computes it), or the BVH's where the cover is not certain.
+/// hit is the triangle the cover names for the cell, or where the cover is not certain the
+/// one the BVH names (found by testing the cell's candidates as the BVH does,
+/// [`LightCover::nearest`], or by the BVH itself); the distance is computed as the BVH's hit
+/// computes it.
 fn trace_texel(scene: &SceneGeometry, grid: &Grid, g: (i64, i64)) -> Stored {
     let c = grid.centre(g);
     let b = &grid.basis;
     let origin = b.x * c.x + b.y * c.y + b.z * grid.start;
+    let on = |cover: &LightCover, t: usize| crate::visibility::TriangleHit {
+        t: cover.hit_distance(&scene.mesh, t, origin, b.z, 0.0),
+        triangle: t,
+    };
     let hit = match grid.cover.as_deref().map(|cover| (cover, cover.at(c))) {
         Some((_, Cell::Miss)) => None,
-        Some((cover, Cell::Owner(t))) => Some(crate::visibility::TriangleHit {
-            t: cover.hit_distance(&scene.mesh, t, origin, b.z, 0.0),
-            triangle: t,
-        }),
-        _ => scene.first_hit(origin, b.z, 0.0, grid.length),
+        Some((cover, Cell::Owner(t))) => Some(on(cover, t)),
+        Some((cover, Cell::Unknown)) => match cover.nearest(c, origin, b.z, 0.0, grid.length) {
+            Ok(t) => t.map(|t| on(cover, t)),
+            Err(()) => scene.first_hit(origin, b.z, 0.0, grid.length),
+        },
+        None => scene.first_hit(origin, b.z, 0.0, grid.length),
     };
     match hit {
         Some(h) => Stored {
