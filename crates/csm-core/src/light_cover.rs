@@ -456,21 +456,21 @@ impl LightCover {
     /// from `origin` along `dir` over `[tmin, tmax]`, which runs along the light through
     /// light-space x/y `q` (None: it misses): each candidate of `q`'s coarse cell whose box
     /// grown by `2δ` holds `q` tested as the BVH's leaves test it, with its rule (least binary32 distance, ties to the least index;
-    /// the candidates are in index order). `Err(())` when `q` is off the grid (or not a
-    /// number) or its coarse cell has more than [`TESTED_MAX`] candidates: ask the BVH.
+    /// the candidates are in index order). None when `q` is off the grid (or not a number) or
+    /// its coarse cell has more than [`TESTED_MAX`] candidates: ask the BVH.
     ///
     /// Any triangle the binary32 ray meets lies within the rounding of the ray's origin and
     /// direction (and of the test) of `q` in light space, orders of magnitude inside the `2δ`
     /// by which a candidate's box is grown: the candidates whose grown box holds `q` hold it.
     #[inline]
-    pub fn nearest(&self, q: DVec2, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Result<Option<usize>, ()> {
+    pub fn nearest(&self, q: DVec2, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Option<Option<usize>> {
         let u = (q - self.lo) * self.inv;
         if !(u.x >= 0.0 && u.y >= 0.0 && u.x < self.cols as f64 && u.y < self.rows as f64) {
-            return Err(());
+            return None;
         }
         let cands = self.candidates(u.x as usize, u.y as usize);
         if cands.len() > TESTED_MAX {
-            return Err(());
+            return None;
         }
         // The binary32 ray as `first_hit` builds it (a -0 component of the direction made +0).
         let dir = dir + DVec3::ZERO;
@@ -489,7 +489,7 @@ impl LightCover {
                 best = (t, Some(k));
             }
         }
-        Ok(best.1.map(|k| self.tris[k as usize].mesh as usize))
+        Some(best.1.map(|k| self.tris[k as usize].mesh as usize))
     }
 
     fn candidates(&self, i: usize, j: usize) -> &[u32] {
@@ -715,11 +715,19 @@ pub(crate) mod tests {
             };
             ties.push([c, a(k), a(k + 1)]);
         }
-        let [p, q, r] = [DVec3::new(-8.0, 1.0, 8.0), DVec3::new(-2.0, 1.0, 8.0), DVec3::new(-5.0, 1.0, 2.0)];
+        let [p, q, r] = [
+            DVec3::new(-8.0, 1.0, 8.0),
+            DVec3::new(-2.0, 1.0, 8.0),
+            DVec3::new(-5.0, 1.0, 2.0),
+        ];
         ties.push([p, q, r]);
         ties.push([q, r, p]);
         ties.push([p, (p + q) * 0.5, r]);
-        ties.push([DVec3::new(-9.0, 1.0, 9.0), DVec3::new(-1.0, 1.0, 9.0), DVec3::new(-5.0, 1.0, 4.0)]);
+        ties.push([
+            DVec3::new(-9.0, 1.0, 9.0),
+            DVec3::new(-1.0, 1.0, 9.0),
+            DVec3::new(-5.0, 1.0, 4.0),
+        ]);
         for (n, scene) in [scene(), SceneGeometry::new(ties)].into_iter().enumerate() {
             let b = scene.mesh.bounds().unwrap();
             let (mut asked, mut unknown, mut tied) = (0, 0, 0);
@@ -739,7 +747,7 @@ pub(crate) mod tests {
                             let by = [0.0, 1e-7, 1e-5, 1e-3, 1e-2][k % 5] * rng.range(-1.0, 1.0);
                             let q = a + (z - a) * along + across * by;
                             let origin = basis.x * q.x + basis.y * q.y + basis.z * start;
-                            let Ok(got) = cover.nearest(q, origin, basis.z, 0.0, length) else {
+                            let Some(got) = cover.nearest(q, origin, basis.z, 0.0, length) else {
                                 continue;
                             };
                             let bvh = scene.first_hit(origin, basis.z, 0.0, length);
@@ -752,7 +760,8 @@ pub(crate) mod tests {
                             unknown += usize::from(cover.at(q) == Cell::Unknown);
                             // Rays that two triangles meet at the same binary32 distance.
                             let (o, d) = (origin.as_vec3().to_array(), basis.z.as_vec3().to_array());
-                            let mut ts: Vec<f32> = cover.tris32.iter().map(|t| t.hit(o, d, 0.0, length as f32)).collect();
+                            let mut ts: Vec<f32> =
+                                cover.tris32.iter().map(|t| t.hit(o, d, 0.0, length as f32)).collect();
                             ts.sort_by(f32::total_cmp);
                             tied += usize::from(ts[0].is_finite() && ts[0] == ts[1]);
                         }
