@@ -305,43 +305,45 @@ pub(crate) fn run(config: &Config, rig: &Rig, counts: bool, on_frames: &(dyn Fn(
     // Cached cascades hold their maps between updates (empty: every frame).
     let every_cascade = crate::analysis::cadence(config, rig);
     let (cols, rows) = (vis.cols, vis.rows);
-    let walk = |snapped: bool| {
-        let poses = csm_core::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
-        let mut frame0 = ShadeImage::empty(cols, rows);
-        let mut animation = Vec::new();
-        let f = truth::flicker_cached(
-            maps(),
-            rig,
-            &rig.light,
-            poses,
-            snapped,
-            &points,
-            &sampling,
-            csm_core::walk::Cadence {
-                every: &every_cascade,
-                first_frame: 0,
-            },
-            &mut |k, states| {
-                on_frames(1);
-                if k == 0 {
-                    frame0 = truth::shade_image(cols, rows, &away, &points, &truly_lit, states);
-                }
-                if k % every == 0 {
-                    animation.push((k, truth::shade_image(cols, rows, &away, &points, &truly_lit, states)));
-                }
-            },
-        );
-        let flips = truth::flip_image(cols, rows, &points, &f);
-        (
-            f,
-            ModePictures {
-                frame0,
-                flips,
-                animation,
-            },
-        )
+    // Both snap modes in one pass over the receivers per frame (they share each receiver's
+    // cascade); each mode's pictures from its own states.
+    let poses = csm_core::motion::poses(&setup.camera, &setup.motion).map_while(|p| p.ok());
+    let mut frame0 = [ShadeImage::empty(cols, rows), ShadeImage::empty(cols, rows)];
+    let mut animation: [Vec<_>; 2] = [Vec::new(), Vec::new()];
+    let mut walked = truth::flicker_walks(
+        vec![(maps(), true), (maps(), false)],
+        rig,
+        &rig.light,
+        poses,
+        &points,
+        &sampling,
+        csm_core::walk::Cadence {
+            every: &every_cascade,
+            first_frame: 0,
+        },
+        &mut |w, k, states| {
+            on_frames(1);
+            if k == 0 {
+                frame0[w] = truth::shade_image(cols, rows, &away, &points, &truly_lit, states);
+            }
+            if k % every == 0 {
+                animation[w].push((k, truth::shade_image(cols, rows, &away, &points, &truly_lit, states)));
+            }
+        },
+    );
+    let (unsnapped, snapped) = (walked.pop().expect("two walks"), walked.pop().expect("two walks"));
+    let [frame0_snapped, frame0_unsnapped] = frame0;
+    let [animation_snapped, animation_unsnapped] = animation;
+    let pictures_snapped = ModePictures {
+        frame0: frame0_snapped,
+        flips: truth::flip_image(cols, rows, &points, &snapped),
+        animation: animation_snapped,
     };
-    let ((snapped, pictures_snapped), (unsnapped, pictures_unsnapped)) = rayon::join(|| walk(true), || walk(false));
+    let pictures_unsnapped = ModePictures {
+        frame0: frame0_unsnapped,
+        flips: truth::flip_image(cols, rows, &points, &unsnapped),
+        animation: animation_unsnapped,
+    };
     let mut cache = zero_stats;
     cache.add(snapped.stats);
     cache.add(unsnapped.stats);

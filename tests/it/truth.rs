@@ -932,9 +932,51 @@ fn every_frame_of_the_walk_equals_tracing_it_from_scratch() {
         let scene = &setup.geometry.as_ref().unwrap().scene;
         let s = pass_sampling(&c, g, c.truth.pcf);
         let poses: Vec<_> = c.camera_path().unwrap();
-        for snapped in [true, false] {
-            let mut walked: Vec<Vec<Option<truth::Answer>>> = Vec::new();
-            truth::flicker_cached(
+        // Both snap modes walked in one pass (as the pass walks them), each frame of each
+        // compared with tracing it from scratch.
+        let mut walked: [Vec<Vec<Option<truth::Answer>>>; 2] = [Vec::new(), Vec::new()];
+        let flicker = truth::flicker_walks(
+            vec![
+                (truth::ShadowMaps::new(scene), true),
+                (truth::ShadowMaps::new(scene), false),
+            ],
+            rig,
+            &rig.light,
+            poses.iter().copied(),
+            &g.points,
+            &s,
+            csm_core::walk::Cadence::EVERY_FRAME,
+            &mut |w, _, states| walked[w].push(states.to_vec()),
+        );
+        for (w, snapped) in [true, false].into_iter().enumerate() {
+            assert_eq!(walked[w].len(), poses.len());
+            let mut answered = 0;
+            let mut prev: Option<Vec<Option<usize>>> = None;
+            let mut steps = 0u64;
+            for (t, pose) in poses.iter().enumerate() {
+                let mut maps = truth::ShadowMaps::new(scene).counting(false);
+                let (cascades, fresh) = truth::frame_states(&mut maps, rig, &rig.light, pose, snapped, &g.points, &s);
+                answered += fresh.iter().flatten().count();
+                assert!(
+                    walked[w][t] == fresh,
+                    "{path} {extra:?} snapped {snapped}: frame {t} differs"
+                );
+                if let Some(pc) = &prev {
+                    let pa = &walked[w][t - 1];
+                    steps += (0..g.points.len())
+                        .filter(|&j| pc[j].is_some() && pc[j] == cascades[j] && pa[j].is_some() && fresh[j].is_some())
+                        .count() as u64;
+                }
+                prev = Some(cascades);
+            }
+            assert!(answered > 1000 * poses.len(), "{path} {extra:?}: {answered} answers");
+            assert_eq!(
+                flicker[w].steps.iter().map(|&x| x as u64).sum::<u64>(),
+                steps,
+                "{path} {extra:?}"
+            );
+            // One walk alone gives the same.
+            let alone = truth::flicker_cached(
                 truth::ShadowMaps::new(scene),
                 rig,
                 &rig.light,
@@ -943,20 +985,9 @@ fn every_frame_of_the_walk_equals_tracing_it_from_scratch() {
                 &g.points,
                 &s,
                 csm_core::walk::Cadence::EVERY_FRAME,
-                &mut |_, states| walked.push(states.to_vec()),
+                &mut |_, _| {},
             );
-            assert_eq!(walked.len(), poses.len());
-            let mut answered = 0;
-            for (t, pose) in poses.iter().enumerate() {
-                let mut maps = truth::ShadowMaps::new(scene).counting(false);
-                let (_, fresh) = truth::frame_states(&mut maps, rig, &rig.light, pose, snapped, &g.points, &s);
-                answered += fresh.iter().flatten().count();
-                assert!(
-                    walked[t] == fresh,
-                    "{path} {extra:?} snapped {snapped}: frame {t} differs"
-                );
-            }
-            assert!(answered > 1000 * poses.len(), "{path} {extra:?}: {answered} answers");
+            assert_eq!(alone, flicker[w], "{path} {extra:?} snapped {snapped}");
         }
     }
 }

@@ -20,6 +20,13 @@
 //! leaves them out). A coarse cell that is unknown is split into [`FINE`]² fine cells,
 //! classified the same way. The hit distance is then computed from the triangle exactly as
 //! [`SceneGeometry::first_hit`] computes it, so a texel's stored depth is the same to the bit.
+//!
+//! A ray through a cell still unknown after the refinements is answered by
+//! [`LightCover::nearest`]: the BVH's own binary32 triangle test on each of the coarse cell's
+//! candidates (the triangles whose bounding box, grown by `2δ`, meets the cell), with the BVH's
+//! rule (least hit distance, ties to the least index). That rule is what the BVH answers
+//! whatever its tree (its boxes are conservative, [`crate::bvh4`]), and the candidates hold
+//! every triangle the ray can meet, so the answer is the BVH's without traversing it.
 
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::OnceLock;
@@ -56,6 +63,9 @@ pub enum Cell {
     Unknown,
 }
 
+/// Most candidates [`LightCover::nearest`] tests; a coarse cell with more is left to the BVH.
+pub const TESTED_MAX: usize = 64;
+
 /// Most cells [`LightCover::region_owner`] visits before it gives up.
 pub const REGION_CELLS: usize = 64;
 
@@ -70,6 +80,69 @@ pub struct LightPlane {
     pub cond: f64,
     /// The largest absolute coordinate of the vertex the hit distance starts from.
     pub reach: f64,
+}
+
+/// A triangle as the BVH's leaf test holds it (`crate::bvh4`'s `Tri4`, one lane): its binary32
+/// vertex `v0`, `e1 = v0 - v1`, `e2 = v2 - v0` and `n = e1 x e2`, computed by the same
+/// operations from the same binary32 triangle ([`crate::visibility::bvh_input`]'s); and its
+/// light-space x/y box grown by `2δ` (`lo`, `hi`), outside which no ray along the light meets it.
+#[derive(Debug, Clone, Copy)]
+struct Tri32 {
+    lo: DVec2,
+    hi: DVec2,
+    v0: [f32; 3],
+    e1: [f32; 3],
+    e2: [f32; 3],
+    n: [f32; 3],
+}
+
+impl Tri32 {
+    fn new(t: &[DVec3; 3], light: &LightTri, margin: f64) -> Self {
+        let (mut lo, mut hi) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
+        for p in light.p {
+            lo = lo.min(p.truncate());
+            hi = hi.max(p.truncate());
+        }
+        let v = |p: DVec3| glam_bvh::Vec3A::new(p.x as f32, p.y as f32, p.z as f32);
+        let (v0, v1, v2) = (v(t[0]), v(t[1]), v(t[2]));
+        let e1 = v0 - v1;
+        let e2 = v2 - v0;
+        let n = e1.cross(e2);
+        let a = |x: glam_bvh::Vec3A| [x.x, x.y, x.z];
+        Tri32 {
+            lo: lo - DVec2::splat(2.0 * margin),
+            hi: hi + DVec2::splat(2.0 * margin),
+            v0: a(v0),
+            e1: a(e1),
+            e2: a(e2),
+            n: a(n),
+        }
+    }
+
+    /// The BVH leaf test's distance for the binary32 ray `o + t d` (its lane's operations in
+    /// the same order, hence the same value to the bit): `t` in `[tmin, tmax]`, else infinity.
+    #[inline]
+    fn hit(&self, o: [f32; 3], d: [f32; 3], tmin: f32, tmax: f32) -> f32 {
+        let (v0, n, e1, e2) = (&self.v0, &self.n, &self.e1, &self.e2);
+        let c0 = v0[0] - o[0];
+        let c1 = v0[1] - o[1];
+        let c2 = v0[2] - o[2];
+        let r0 = d[1] * c2 - d[2] * c1;
+        let r1 = d[2] * c0 - d[0] * c2;
+        let r2 = d[0] * c1 - d[1] * c0;
+        let inv_det = 1.0 / (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]);
+        let u = (r0 * e2[0] + r1 * e2[1] + r2 * e2[2]) * inv_det;
+        let v = (r0 * e1[0] + r1 * e1[1] + r2 * e1[2]) * inv_det;
+        let w = 1.0 - u - v;
+        let inside = (u.to_bits() | v.to_bits() | w.to_bits()) & 0x8000_0000 == 0;
+        let t = (n[0] * c0 + n[1] * c1 + n[2] * c2) * inv_det;
+        let ok = inv_det != 0.0 && inside && t >= tmin && t <= tmax;
+        if ok {
+            t
+        } else {
+            f32::INFINITY
+        }
+    }
 }
 
 /// A triangle in light coordinates (x, y across the light, z its depth along it).
@@ -97,6 +170,8 @@ pub struct LightCover {
     margin: f64,
     /// The triangles' edge vectors' cross products, as `first_hit` computes them.
     normals: Vec<DVec3>,
+    /// Per triangle of `tris`, what the BVH's leaf test holds ([`LightCover::nearest`]).
+    tris32: Vec<Tri32>,
 }
 
 /// A block of cells: per cell its class (`UNKNOWN` until classified, `EMPTY`, `AMBIGUOUS`,
@@ -146,6 +221,10 @@ impl LightCover {
             .triangles
             .iter()
             .map(|[a, b, c]| (*b - *a).cross(*c - *a))
+            .collect();
+        let tris32 = tris
+            .iter()
+            .map(|t| Tri32::new(&mesh.triangles[t.mesh as usize], t, margin))
             .collect();
         let (mut lo, mut hi) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
         for t in &tris {
@@ -214,6 +293,7 @@ impl LightCover {
             cand,
             margin,
             normals,
+            tris32,
         }
     }
 
@@ -370,6 +450,46 @@ impl LightCover {
         } else {
             tmin
         }
+    }
+
+    /// The mesh index of the triangle [`SceneGeometry::first_hit`]'s BVH names for the ray
+    /// from `origin` along `dir` over `[tmin, tmax]`, which runs along the light through
+    /// light-space x/y `q` (None: it misses): each candidate of `q`'s coarse cell whose box
+    /// grown by `2δ` holds `q` tested as the BVH's leaves test it, with its rule (least binary32 distance, ties to the least index;
+    /// the candidates are in index order). None when `q` is off the grid (or not a number) or
+    /// its coarse cell has more than [`TESTED_MAX`] candidates: ask the BVH.
+    ///
+    /// Any triangle the binary32 ray meets lies within the rounding of the ray's origin and
+    /// direction (and of the test) of `q` in light space, orders of magnitude inside the `2δ`
+    /// by which a candidate's box is grown: the candidates whose grown box holds `q` hold it.
+    #[inline]
+    pub fn nearest(&self, q: DVec2, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Option<Option<usize>> {
+        let u = (q - self.lo) * self.inv;
+        if !(u.x >= 0.0 && u.y >= 0.0 && u.x < self.cols as f64 && u.y < self.rows as f64) {
+            return None;
+        }
+        let cands = self.candidates(u.x as usize, u.y as usize);
+        if cands.len() > TESTED_MAX {
+            return None;
+        }
+        // The binary32 ray as `first_hit` builds it (a -0 component of the direction made +0).
+        let dir = dir + DVec3::ZERO;
+        let o = [origin.x as f32, origin.y as f32, origin.z as f32];
+        let d = [dir.x as f32, dir.y as f32, dir.z as f32];
+        let (tmin, tmax) = (tmin as f32, tmax as f32);
+        let mut best = (tmax, None);
+        for &k in cands {
+            let tri = &self.tris32[k as usize];
+            // Off its grown box the ray cannot meet it (the candidates' own rule, per ray).
+            if !(q.x >= tri.lo.x && q.x <= tri.hi.x && q.y >= tri.lo.y && q.y <= tri.hi.y) {
+                continue;
+            }
+            let t = tri.hit(o, d, tmin, tmax);
+            if t < best.0 {
+                best = (t, Some(k));
+            }
+        }
+        Some(best.1.map(|k| self.tris[k as usize].mesh as usize))
     }
 
     fn candidates(&self, i: usize, j: usize) -> &[u32] {
@@ -574,6 +694,82 @@ pub(crate) mod tests {
                 decided += 1;
             }
             assert!(decided > n * 7 / 10, "{light}: the cover decided {decided} of {n} rays");
+        }
+    }
+
+    /// [`LightCover::nearest`] names the BVH's triangle for every ray it answers, ties on
+    /// shared edges included, and the hit distance from it is the BVH's to the bit: rays along
+    /// the light through the triangles' projected vertices and through points of their edges
+    /// moved across by 0 to 1 % of a unit (most of them inside the band `δ` where the cover
+    /// leaves cells unknown), under the four lights, on the default scene and on a mesh of
+    /// fans (shared edges), a copy and overlapping coplanar triangles (equal distances).
+    #[test]
+    fn nearest_is_the_bvh_s_answer_on_edges_and_ties() {
+        let mut ties = Mesh::default();
+        ties.add_ground(0.0, -20.0, 20.0, -20.0, 20.0);
+        let c = DVec3::new(1.0, 2.0, -3.0);
+        for k in 0..7 {
+            let a = |k: i32| {
+                let f = f64::from(k) * std::f64::consts::TAU / 7.0;
+                c + DVec3::new(5.0 * f.cos(), 0.5 * f.sin(), 5.0 * f.sin())
+            };
+            ties.push([c, a(k), a(k + 1)]);
+        }
+        let [p, q, r] = [
+            DVec3::new(-8.0, 1.0, 8.0),
+            DVec3::new(-2.0, 1.0, 8.0),
+            DVec3::new(-5.0, 1.0, 2.0),
+        ];
+        ties.push([p, q, r]);
+        ties.push([q, r, p]);
+        ties.push([p, (p + q) * 0.5, r]);
+        ties.push([
+            DVec3::new(-9.0, 1.0, 9.0),
+            DVec3::new(-1.0, 1.0, 9.0),
+            DVec3::new(-5.0, 1.0, 4.0),
+        ]);
+        for (n, scene) in [scene(), SceneGeometry::new(ties)].into_iter().enumerate() {
+            let b = scene.mesh.bounds().unwrap();
+            let (mut asked, mut unknown, mut tied) = (0, 0, 0);
+            for light in LIGHTS {
+                let basis = LightBasis::new(light);
+                let cover = LightCover::new(&scene.mesh, &crate::visibility::bvh_input(&scene.mesh).1, &basis);
+                let (lo, hi) = crate::cost::light_depth_extent(&basis, &b);
+                let (start, length) = (lo - 1.0, hi - lo + 2.0);
+                let mut rng = SplitMix64::new(11);
+                for t in &scene.mesh.triangles {
+                    let p = t.map(|v| basis.to_light_xy(v));
+                    for e in 0..3 {
+                        let (a, z) = (p[e], p[(e + 1) % 3]);
+                        let across = (z - a).perp().normalize_or_zero();
+                        for k in 0..24 {
+                            let along = if k == 0 { 0.0 } else { rng.range(0.0, 1.0) };
+                            let by = [0.0, 1e-7, 1e-5, 1e-3, 1e-2][k % 5] * rng.range(-1.0, 1.0);
+                            let q = a + (z - a) * along + across * by;
+                            let origin = basis.x * q.x + basis.y * q.y + basis.z * start;
+                            let Some(got) = cover.nearest(q, origin, basis.z, 0.0, length) else {
+                                continue;
+                            };
+                            let bvh = scene.first_hit(origin, basis.z, 0.0, length);
+                            assert_eq!(got, bvh.map(|h| h.triangle), "{light} at {q}");
+                            if let (Some(t), Some(h)) = (got, bvh) {
+                                let d = cover.hit_distance(&scene.mesh, t, origin, basis.z, 0.0);
+                                assert_eq!(d.to_bits(), h.t.to_bits(), "{light} at {q}");
+                            }
+                            asked += 1;
+                            unknown += usize::from(cover.at(q) == Cell::Unknown);
+                            // Rays that two triangles meet at the same binary32 distance.
+                            let (o, d) = (origin.as_vec3().to_array(), basis.z.as_vec3().to_array());
+                            let mut ts: Vec<f32> =
+                                cover.tris32.iter().map(|t| t.hit(o, d, 0.0, length as f32)).collect();
+                            ts.sort_by(f32::total_cmp);
+                            tied += usize::from(ts[0].is_finite() && ts[0] == ts[1]);
+                        }
+                    }
+                }
+            }
+            assert!(unknown > asked / 4, "{unknown} of {asked} rays in unknown cells");
+            assert!(n == 0 || tied > 100, "{tied} of {asked} rays tied");
         }
     }
 }

@@ -895,19 +895,26 @@ impl<'a> ShadowMaps<'a> {
 }
 
 /// The ray of texel `g`: from its centre, before every triangle, along the light. Its first
-/// hit is the triangle the cover names for the cell (the distance computed as the BVH's hit
-/// computes it), or the BVH's where the cover is not certain.
+/// hit is the triangle the cover names for the cell, or where the cover is not certain the
+/// one the BVH names (found by testing the cell's candidates as the BVH does,
+/// [`LightCover::nearest`], or by the BVH itself); the distance is computed as the BVH's hit
+/// computes it.
 fn trace_texel(scene: &SceneGeometry, grid: &Grid, g: (i64, i64)) -> Stored {
     let c = grid.centre(g);
     let b = &grid.basis;
     let origin = b.x * c.x + b.y * c.y + b.z * grid.start;
+    let on = |cover: &LightCover, t: usize| crate::visibility::TriangleHit {
+        t: cover.hit_distance(&scene.mesh, t, origin, b.z, 0.0),
+        triangle: t,
+    };
     let hit = match grid.cover.as_deref().map(|cover| (cover, cover.at(c))) {
         Some((_, Cell::Miss)) => None,
-        Some((cover, Cell::Owner(t))) => Some(crate::visibility::TriangleHit {
-            t: cover.hit_distance(&scene.mesh, t, origin, b.z, 0.0),
-            triangle: t,
-        }),
-        _ => scene.first_hit(origin, b.z, 0.0, grid.length),
+        Some((cover, Cell::Owner(t))) => Some(on(cover, t)),
+        Some((cover, Cell::Unknown)) => match cover.nearest(c, origin, b.z, 0.0, grid.length) {
+            Some(t) => t.map(|t| on(cover, t)),
+            None => scene.first_hit(origin, b.z, 0.0, grid.length),
+        },
+        None => scene.first_hit(origin, b.z, 0.0, grid.length),
     };
     match hit {
         Some(h) => Stored {
@@ -1716,7 +1723,8 @@ impl FrameTotals {
     }
 }
 
-/// Receiver `r` (at `at`, its position)'s key in a frame of `grids` and, when the key changed
+/// Receiver `r`'s key in a frame of `grids`, given the cascade that reads it in that frame
+/// (`cascade`, [`Reader::cascade`]: the same in every snap mode) and, when the key changed
 /// from `old` (or the binary32 pipeline rebuilds every map: `rebuilt`), its answer (None: keep
 /// the last one).
 #[allow(clippy::too_many_arguments)]
@@ -1724,14 +1732,14 @@ impl FrameTotals {
 fn walk_step(
     maps: &ShadowMaps,
     grids: &[FrameGrid],
-    reader: &Reader,
-    (r, at): (&Receiver, DVec3),
+    cascade: Option<usize>,
+    r: &Receiver,
     s: &Sampling,
     rebuilt: bool,
     old: Key,
     memo: &mut Option<Memo>,
 ) -> (Key, Option<Option<Answer>>) {
-    let Some(i) = reader.cascade(at) else {
+    let Some(i) = cascade else {
         return (None, None);
     };
     let fg = &grids[i];
@@ -1750,6 +1758,17 @@ fn walk_step(
         .and_then(|p| p.answer(grid, s, i, &pl))
         .or_else(|| answer_at(maps, fg, r, s, i, &pl, None));
     (key, Some(answer))
+}
+
+/// One receiver in one walk (snap mode): its key in the last frame, its memo, state, state
+/// changes and steps counted.
+#[derive(Debug, Clone, Copy, Default)]
+struct Lane {
+    key: Key,
+    memo: Option<Memo>,
+    state: Option<Answer>,
+    flips: u32,
+    steps: u32,
 }
 
 /// Receivers per task of the walk's parallel pass.
@@ -1802,10 +1821,10 @@ impl Flicker {
 ///
 /// The walk reads through `maps` (fresh, [`ShadowMaps::new`]); its counts are the walk's
 /// [`Flicker::stats`] (zero with [`ShadowMaps::counting`] off, which spares the walk the set
-/// of texels read per grid).
+/// of texels read per grid). [`flicker_walks`] walks several snap modes in one pass.
 #[allow(clippy::too_many_arguments)]
 pub fn flicker_cached(
-    mut maps: ShadowMaps,
+    maps: ShadowMaps,
     rig: &Rig,
     light: &LightBasis,
     poses: impl Iterator<Item = CameraPose>,
@@ -1815,18 +1834,40 @@ pub fn flicker_cached(
     cadence: crate::walk::Cadence<'_>,
     on_frame: &mut dyn FnMut(usize, &[Option<Answer>]),
 ) -> Flicker {
+    let walks = vec![(maps, snapped)];
+    let mut on = |_: usize, t: usize, states: &[Option<Answer>]| on_frame(t, states);
+    let mut f = flicker_walks(walks, rig, light, poses, points, s, cadence, &mut on);
+    f.pop().expect("one walk")
+}
+
+/// What [`flicker_walks`] shows each frame of each walk: `(walk, frame, states)`.
+pub type OnWalkFrame<'a> = dyn FnMut(usize, usize, &[Option<Answer>]) + 'a;
+
+/// [`flicker_cached`] for several snap modes at once (`walks`: each one's maps and snap mode),
+/// in one pass over the receivers per frame: each receiver's cascade, which depends on the
+/// camera alone, is found once per frame for every walk. Each walk's result is
+/// [`flicker_cached`]'s for it alone; `on_frame(w, t, states)` sees walk `w`'s states of
+/// frame `t` (the walks in order, frame by frame).
+#[allow(clippy::too_many_arguments)]
+pub fn flicker_walks(
+    mut walks: Vec<(ShadowMaps, bool)>,
+    rig: &Rig,
+    light: &LightBasis,
+    poses: impl Iterator<Item = CameraPose>,
+    points: &[Receiver],
+    s: &Sampling,
+    cadence: crate::walk::Cadence<'_>,
+    on_frame: &mut OnWalkFrame<'_>,
+) -> Vec<Flicker> {
     let m = rig.cascade_count();
-    let mut held: Vec<Option<(LightBasis, Window)>> = vec![None; m];
+    let w = walks.len();
+    let mut held: Vec<Vec<Option<(LightBasis, Window)>>> = vec![vec![None; m]; w];
     let n = points.len();
-    // Per receiver, in arrays of their own (the hot ones small): its position, its key in the
-    // last frame, its memo, state, state changes and steps.
+    // Per receiver its position, and per receiver and walk (receiver-major) its lane.
     let at: Vec<DVec3> = points.iter().map(|r| r.p).collect();
-    let mut keys: Vec<Key> = vec![None; n];
-    let mut memo: Vec<Option<Memo>> = vec![None; n];
+    let mut lanes: Vec<Lane> = vec![Lane::default(); n * w];
     let mut states: Vec<Option<Answer>> = vec![None; n];
-    let mut flips = vec![0u32; n];
-    let mut steps = vec![0u32; n];
-    let mut totals = StepTotals::new(m);
+    let mut totals: Vec<StepTotals> = (0..w).map(|_| StepTotals::new(m)).collect();
     // A bilinear tap reads 2x2 texels.
     let per_tap = if s.filter == PcfFilter::Bilinear { 4 } else { 1 };
     let k2 = (s.pcf * s.pcf * per_tap) as u64;
@@ -1834,112 +1875,133 @@ pub fn flicker_cached(
     let mut frames = 0;
     for (t, pose) in poses.enumerate() {
         frames += 1;
-        let grids = if cadence.caches() {
-            let lp = LightPose::new(light, &pose);
-            (0..m)
-                .map(|i| {
-                    let (basis, w) = match held[i] {
-                        Some(h) if !cadence.updates(i, t) => h,
-                        _ => (rig.basis(i, &lp), rig.window(i, &lp, snapped)),
-                    };
-                    held[i] = Some((basis, w));
-                    maps.grid(i, &basis, &w)
-                })
-                .collect()
-        } else {
-            frame_grids(&mut maps, rig, light, &pose, snapped, s)
-        };
-        // One parallel pass, in place: each receiver's key, its answer when the key changed
-        // (every receiver with the binary32 pipeline: its matrix, hence every depth, is rebuilt
-        // each frame), and its step. On the grid of its previous key (f64) a receiver keeps its
-        // texel, so only whether the window still holds it is asked. The totals are integer
-        // sums: the same in any order.
-        let count = maps.count;
+        let grids: Vec<Vec<FrameGrid>> = walks
+            .iter_mut()
+            .zip(held.iter_mut())
+            .map(|((maps, snapped), held)| {
+                if cadence.caches() {
+                    let lp = LightPose::new(light, &pose);
+                    (0..m)
+                        .map(|i| {
+                            let (basis, win) = match held[i] {
+                                Some(h) if !cadence.updates(i, t) => h,
+                                _ => (rig.basis(i, &lp), rig.window(i, &lp, *snapped)),
+                            };
+                            held[i] = Some((basis, win));
+                            maps.grid(i, &basis, &win)
+                        })
+                        .collect()
+                } else {
+                    frame_grids(maps, rig, light, &pose, *snapped, s)
+                }
+            })
+            .collect();
+        // One parallel pass, in place: each receiver's cascade (the same in every walk), then
+        // per walk its key, its answer when the key changed (every receiver with the binary32
+        // pipeline: its matrix, hence every depth, is rebuilt each frame), and its step. On the
+        // grid of its previous key (f64) a receiver keeps its texel, so only whether the window
+        // still holds it is asked. The totals are integer sums: the same in any order.
         let reader = Reader::new(rig, &pose);
+        let maps: Vec<&ShadowMaps> = walks.iter().map(|(maps, _)| maps).collect();
         // In chunks of receivers, each chunk's totals in a local accumulator.
         let frame = points
             .par_chunks(WALK_CHUNK)
             .zip(at.par_chunks(WALK_CHUNK))
-            .zip(keys.par_chunks_mut(WALK_CHUNK))
-            .zip(memo.par_chunks_mut(WALK_CHUNK))
-            .zip(states.par_chunks_mut(WALK_CHUNK))
-            .zip(flips.par_chunks_mut(WALK_CHUNK).zip(steps.par_chunks_mut(WALK_CHUNK)))
-            .map(|(((((rs, ats), ks), ms), ss), (fs, sts))| {
-                let mut acc = FrameTotals::new(m);
-                let each = rs.iter().zip(ats).zip(ks).zip(ms).zip(ss).zip(fs.iter_mut().zip(sts));
-                for (((((r, &p), last), memo), state), (flips, steps)) in each {
-                    let old = *last;
-                    let (key, answer) = walk_step(&maps, &grids, &reader, (r, p), s, rebuilt, old, memo);
-                    let next = match (key, answer) {
-                        (None, _) => None,
-                        (Some(_), Some(a)) => a,
-                        (Some(_), None) => *state,
-                    };
-                    if let (Some(k), Some(_)) = (key, answer) {
-                        if count {
-                            let (i, _, _) = k;
-                            acc.wanted.extend(texels_read(&maps, &grids[i], r, s, i));
+            .zip(lanes.par_chunks_mut(WALK_CHUNK * w))
+            .map(|((rs, ats), ls)| {
+                let mut acc: Vec<FrameTotals> = (0..w).map(|_| FrameTotals::new(m)).collect();
+                for ((r, &p), ls) in rs.iter().zip(ats).zip(ls.chunks_exact_mut(w)) {
+                    let cascade = reader.cascade(p);
+                    for (k, lane) in ls.iter_mut().enumerate() {
+                        let (maps, grids, acc) = (maps[k], &grids[k], &mut acc[k]);
+                        let old = lane.key;
+                        let (key, answer) = walk_step(maps, grids, cascade, r, s, rebuilt, old, &mut lane.memo);
+                        let next = match (key, answer) {
+                            (None, _) => None,
+                            (Some(_), Some(a)) => a,
+                            (Some(_), None) => lane.state,
+                        };
+                        if let (Some(k), Some(_)) = (key, answer) {
+                            if maps.count {
+                                let (i, _, _) = k;
+                                acc.wanted.extend(texels_read(maps, &grids[i], r, s, i));
+                            }
                         }
-                    }
-                    acc.reads += u64::from(key.is_some());
-                    if t > 0 {
-                        let same_cascade = matches!((old, key), (Some(a), Some(b)) if a.0 == b.0);
-                        if let (true, Some(a), Some(b)) = (same_cascade, *state, next) {
-                            *steps += 1;
-                            acc.steps.total += 1;
-                            let i = key.map_or(0, |k| k.0);
-                            let update = cadence.updates(i, t);
-                            acc.steps.update_steps[i] += u64::from(update);
-                            if a.lit != b.lit {
-                                acc.steps.update_flips[i] += u64::from(update);
-                                *flips += 1;
-                                acc.steps.flips += 1;
-                                if !(a.own_only && b.own_only) {
-                                    acc.steps.edge += 1;
+                        acc.reads += u64::from(key.is_some());
+                        if t > 0 {
+                            let same_cascade = matches!((old, key), (Some(a), Some(b)) if a.0 == b.0);
+                            if let (true, Some(a), Some(b)) = (same_cascade, lane.state, next) {
+                                lane.steps += 1;
+                                acc.steps.total += 1;
+                                let i = key.map_or(0, |k| k.0);
+                                let update = cadence.updates(i, t);
+                                acc.steps.update_steps[i] += u64::from(update);
+                                if a.lit != b.lit {
+                                    acc.steps.update_flips[i] += u64::from(update);
+                                    lane.flips += 1;
+                                    acc.steps.flips += 1;
+                                    if !(a.own_only && b.own_only) {
+                                        acc.steps.edge += 1;
+                                    }
                                 }
                             }
                         }
+                        lane.state = next;
+                        lane.key = key;
                     }
-                    *state = next;
-                    *last = key;
                 }
                 acc
             })
-            .reduce(|| FrameTotals::new(m), FrameTotals::merge);
-        totals.add(&frame.steps);
-        if count {
-            maps.stats.reads += frame.reads * k2;
-            // The texels a cache would fetch: those of receivers whose key changed.
-            maps.fetch(frame.wanted);
+            .reduce(
+                || (0..w).map(|_| FrameTotals::new(m)).collect(),
+                |a, b| a.into_iter().zip(b).map(|(a, b)| a.merge(b)).collect(),
+            );
+        for (k, (f, (maps, _))) in frame.into_iter().zip(walks.iter_mut()).enumerate() {
+            totals[k].add(&f.steps);
+            if maps.count {
+                maps.stats.reads += f.reads * k2;
+                // The texels a cache would fetch: those of receivers whose key changed.
+                maps.fetch(f.wanted);
+            }
+            for (state, ls) in states.iter_mut().zip(lanes.chunks_exact(w)) {
+                *state = ls[k].state;
+            }
+            on_frame(k, t, &states);
+            maps.end_frame();
         }
-        on_frame(t, &states);
-        maps.end_frame();
     }
-    let StepTotals {
-        flips: total_flips,
-        edge: edge_flips,
-        total: total_steps,
-        update_flips,
-        update_steps,
-    } = totals;
-    let rate = |f: u64| {
-        if total_steps == 0 {
-            0.0
-        } else {
-            f as f64 / total_steps as f64
-        }
-    };
-    Flicker {
-        s5: rate(total_flips),
-        s5_edge: rate(edge_flips),
-        s5_acne: rate(total_flips - edge_flips),
-        flips,
-        steps,
-        frames,
-        stats: maps.stats,
-        update_flips,
-        update_steps,
-    }
+    walks
+        .into_iter()
+        .zip(totals)
+        .enumerate()
+        .map(|(k, ((maps, _), totals))| {
+            let StepTotals {
+                flips: total_flips,
+                edge: edge_flips,
+                total: total_steps,
+                update_flips,
+                update_steps,
+            } = totals;
+            let rate = |f: u64| {
+                if total_steps == 0 {
+                    0.0
+                } else {
+                    f as f64 / total_steps as f64
+                }
+            };
+            Flicker {
+                s5: rate(total_flips),
+                s5_edge: rate(edge_flips),
+                s5_acne: rate(total_flips - edge_flips),
+                flips: lanes.iter().skip(k).step_by(w).map(|l| l.flips).collect(),
+                steps: lanes.iter().skip(k).step_by(w).map(|l| l.steps).collect(),
+                frames,
+                stats: maps.stats,
+                update_flips,
+                update_steps,
+            }
+        })
+        .collect()
 }
 
 // ---------------------------------------------------------------------------------------------
