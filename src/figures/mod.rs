@@ -12,6 +12,7 @@ pub(crate) mod plan;
 pub(crate) mod screen;
 pub(crate) mod sun;
 pub(crate) mod sweep;
+pub(crate) mod text;
 pub mod truth;
 pub(crate) mod views;
 
@@ -160,6 +161,8 @@ enum SvgPart {
     Tree(Box<resvg::usvg::Tree>),
     /// A run of opaque filled rectangles, drawn directly.
     Rects(Vec<FilledRect>),
+    /// A run of texts, drawn from glyphs rasterised once ([`text`]).
+    Texts(Vec<text::TextLine>),
 }
 
 /// The shortest run of rectangle lines drawn directly: a shorter run stays in the parsed part,
@@ -234,68 +237,119 @@ impl FilledRect {
     }
 }
 
-/// Splits plotters' SVG into parts to parse and runs of [`FilledRect`] lines (at least
-/// [`MIN_RECT_RUN`] in a row, never inside a `<text>` element); each parsed part is the
-/// document's header, its lines and the closing tag. None when the document is not laid out as
-/// plotters writes it (header line, one element per line, closing tag), to be parsed whole.
-fn split_rect_runs(svg: &str) -> Option<Vec<std::result::Result<String, Vec<FilledRect>>>> {
+/// A piece of plotters' SVG in document order: lines to parse, a run of [`FilledRect`]
+/// lines, or texts ([`text::TextLine`]).
+enum Piece {
+    Svg(String),
+    Rects(Vec<FilledRect>),
+    Texts(Vec<text::TextLine>),
+}
+
+/// Splits plotters' SVG into lines to parse, runs of [`FilledRect`] lines (at least
+/// [`MIN_RECT_RUN`] in a row, never inside a `<text>` element) and runs of texts plotters wrote
+/// ([`text::TextLine::from_lines`]); each part to parse is the document's header, its lines and
+/// the closing tag, and the first part is always one (the header gives the size). None when
+/// the document is not laid out as plotters writes it (header line, one element per line,
+/// closing tag), to be parsed whole.
+fn split_parts(svg: &str) -> Option<Vec<Piece>> {
     let (header, body) = svg.split_once('\n')?;
     if !header.starts_with("<svg ") {
         return None;
     }
     let body = body.trim_end().strip_suffix("</svg>")?;
-    let mut parts = Vec::new();
-    let mut text = String::with_capacity(body.len() + header.len());
-    let mut run: Vec<FilledRect> = Vec::new();
-    let mut run_lines: Vec<&str> = Vec::new();
+    let lines: Vec<&str> = body.lines().collect();
+    /// One element (or line of one) in document order.
+    enum Item<'a> {
+        Line(&'a str),
+        Rect(FilledRect, &'a str),
+        Text(text::TextLine),
+    }
+    let mut items = Vec::with_capacity(lines.len());
+    let mut i = 0;
     let mut in_text = false;
-    let start = |text: &mut String| {
-        text.clear();
-        text.push_str(header);
-        text.push('\n');
-    };
-    start(&mut text);
-    for line in body.lines() {
-        let rect = if in_text { None } else { FilledRect::from_line(line) };
-        if let Some(r) = rect {
-            run.push(r);
-            run_lines.push(line);
-            continue;
-        }
-        if run.len() >= MIN_RECT_RUN {
-            text.push_str("</svg>\n");
-            parts.push(Ok(std::mem::take(&mut text)));
-            parts.push(Err(std::mem::take(&mut run)));
-            start(&mut text);
-        } else {
-            for l in run_lines.iter() {
-                text.push_str(l);
-                text.push('\n');
+    while i < lines.len() {
+        let line = lines[i];
+        if in_text {
+            in_text = !line.ends_with("</text>");
+            items.push(Item::Line(line));
+            i += 1;
+        } else if line.starts_with("<text") {
+            let read = (i + 2 < lines.len())
+                .then(|| text::TextLine::from_lines(line, lines[i + 1], lines[i + 2]))
+                .flatten();
+            if let Some(t) = read {
+                items.push(Item::Text(t));
+                i += 3;
+            } else {
+                in_text = !line.ends_with("</text>");
+                items.push(Item::Line(line));
+                i += 1;
             }
-            run.clear();
+        } else {
+            items.push(match FilledRect::from_line(line) {
+                Some(r) => Item::Rect(r, line),
+                None => Item::Line(line),
+            });
+            i += 1;
         }
-        run_lines.clear();
-        if line.starts_with("<text") {
-            in_text = true;
-        }
-        if in_text && line.ends_with("</text>") {
-            in_text = false;
-        }
-        text.push_str(line);
-        text.push('\n');
     }
-    if run.len() >= MIN_RECT_RUN {
-        text.push_str("</svg>\n");
-        parts.push(Ok(std::mem::take(&mut text)));
-        parts.push(Err(run));
-    } else {
-        for l in run_lines.iter() {
-            text.push_str(l);
-            text.push('\n');
+    let mut parts = Vec::new();
+    let mut doc = String::with_capacity(body.len() + header.len());
+    let mut doc_lines = 0usize;
+    let start = |doc: &mut String| {
+        doc.clear();
+        doc.push_str(header);
+        doc.push('\n');
+    };
+    start(&mut doc);
+    // Ends the document being gathered (the first one always, later ones when not empty).
+    let flush = |doc: &mut String, doc_lines: &mut usize, parts: &mut Vec<Piece>| {
+        if *doc_lines > 0 || parts.is_empty() {
+            doc.push_str("</svg>\n");
+            parts.push(Piece::Svg(std::mem::take(doc)));
         }
-        text.push_str("</svg>\n");
-        parts.push(Ok(text));
+        start(doc);
+        *doc_lines = 0;
+    };
+    let mut it = items.into_iter().peekable();
+    while let Some(item) = it.next() {
+        match item {
+            Item::Line(l) => {
+                doc.push_str(l);
+                doc.push('\n');
+                doc_lines += 1;
+            }
+            Item::Text(t) => {
+                let mut texts = vec![t];
+                while let Some(Item::Text(_)) = it.peek() {
+                    if let Some(Item::Text(t)) = it.next() {
+                        texts.push(t);
+                    }
+                }
+                flush(&mut doc, &mut doc_lines, &mut parts);
+                parts.push(Piece::Texts(texts));
+            }
+            Item::Rect(r, l) => {
+                let mut run = vec![(r, l)];
+                while let Some(Item::Rect(..)) = it.peek() {
+                    if let Some(Item::Rect(r, l)) = it.next() {
+                        run.push((r, l));
+                    }
+                }
+                if run.len() >= MIN_RECT_RUN {
+                    flush(&mut doc, &mut doc_lines, &mut parts);
+                    parts.push(Piece::Rects(run.into_iter().map(|(r, _)| r).collect()));
+                } else {
+                    for (_, l) in run {
+                        doc.push_str(l);
+                        doc.push('\n');
+                        doc_lines += 1;
+                    }
+                }
+            }
+        }
     }
+    flush(&mut doc, &mut doc_lines, &mut parts);
     Some(parts)
 }
 
@@ -305,13 +359,14 @@ impl ParsedSvg {
             resvg::usvg::Tree::from_data(bytes, &usvg_options())
                 .map_err(|e| crate::error::Error::from(PlotError::Rasterise(e.to_string())))
         };
-        let split = std::str::from_utf8(svg).ok().and_then(split_rect_runs);
+        let split = std::str::from_utf8(svg).ok().and_then(split_parts);
         let parts = match split {
             Some(parts) if parts.len() > 1 => parts
                 .into_iter()
                 .map(|p| match p {
-                    Ok(text) => tree(text.as_bytes()).map(|t| SvgPart::Tree(Box::new(t))),
-                    Err(rects) => Ok(SvgPart::Rects(rects)),
+                    Piece::Svg(text) => tree(text.as_bytes()).map(|t| SvgPart::Tree(Box::new(t))),
+                    Piece::Rects(rects) => Ok(SvgPart::Rects(rects)),
+                    Piece::Texts(texts) => Ok(SvgPart::Texts(texts)),
                 })
                 .collect::<Result<Vec<_>>>()?,
             _ => vec![SvgPart::Tree(Box::new(tree(svg)?))],
@@ -323,17 +378,18 @@ impl ParsedSvg {
     pub(crate) fn size(&self) -> (f32, f32) {
         match &self.parts[0] {
             SvgPart::Tree(t) => (t.size().width(), t.size().height()),
-            SvgPart::Rects(_) => unreachable!("a parsed SVG starts with its header"),
+            SvgPart::Rects(_) | SvgPart::Texts(_) => unreachable!("a parsed SVG starts with its header"),
         }
     }
 
-    /// Draws the document onto `pixmap` with `transform` (what `resvg::render` does with the
-    /// whole tree).
+    /// Draws the document onto `pixmap` with `transform`, a scale equal on both axes (what
+    /// `resvg::render` does with the whole tree, but for the texts, [`text`]).
     pub(crate) fn render(&self, transform: resvg::tiny_skia::Transform, pixmap: &mut resvg::tiny_skia::PixmapMut) {
         for part in &self.parts {
             match part {
                 SvgPart::Tree(t) => resvg::render(t, transform, pixmap),
                 SvgPart::Rects(rects) => rects.iter().for_each(|r| r.fill(transform, pixmap)),
+                SvgPart::Texts(texts) => texts.iter().for_each(|t| t.draw(transform, pixmap)),
             }
         }
     }
