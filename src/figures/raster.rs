@@ -14,9 +14,9 @@
 
 use std::sync::{Arc, OnceLock};
 
-use resvg::tiny_skia::{FillRule, Mask, Paint, Path, PathBuilder, PixmapMut, Rect, Stroke, Transform};
+use resvg::tiny_skia::{FillRule, Mask, Path, PathBuilder, PixmapMut, Rect, Stroke, Transform};
 
-use super::text::{memo, split_phase, Coverage, Memo, TextLine, PHASES};
+use super::text::{colour, memo, number, split_phase, Coverage, Memo, Rgba, TextLine, PHASES};
 
 /// One element of plotters' SVG, in SVG units.
 #[derive(Debug, Clone)]
@@ -31,23 +31,6 @@ pub(crate) enum Shape {
     Stroke { path: Path, width: f32, paint: Rgba },
     /// A text.
     Text(TextLine),
-}
-
-/// A colour and its opacity.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Rgba {
-    pub(crate) rgb: [u8; 3],
-    pub(crate) opacity: f32,
-}
-
-impl Rgba {
-    fn paint(self) -> Paint<'static> {
-        let mut paint = Paint::default();
-        let a = (self.opacity * 255.0).round() as u8;
-        paint.set_color_rgba8(self.rgb[0], self.rgb[1], self.rgb[2], a);
-        paint.anti_alias = true;
-        paint
-    }
 }
 
 /// A line's tag and its attributes in order: `<tag a="v" b="v"/>`.
@@ -78,33 +61,6 @@ fn exactly<'a, const N: usize>(attrs: &[(&str, &'a str)], names: [&str; N]) -> O
         *o = v;
     }
     Some(out)
-}
-
-/// A finite number as plotters writes one: an integer (a pixel position; read directly) or a
-/// decimal.
-pub(crate) fn number(s: &str) -> Option<f32> {
-    let digits = s.strip_prefix('-').unwrap_or(s);
-    if !digits.is_empty() && digits.len() <= 7 && digits.bytes().all(|b| b.is_ascii_digit()) {
-        let v = digits.bytes().fold(0i32, |v, b| 10 * v + i32::from(b - b'0'));
-        return Some(if digits.len() < s.len() { -v } else { v } as f32);
-    }
-    let ok = !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit() || b == b'.' || b == b'-');
-    let v: f64 = if ok { s.parse().ok()? } else { return None };
-    (v.is_finite() && v.abs() < 1e7).then_some(v as f32)
-}
-
-/// `#RRGGBB` and an opacity in [0, 1].
-pub(crate) fn colour(hex: &str, opacity: &str) -> Option<Rgba> {
-    let hex = hex.strip_prefix('#')?;
-    if hex.len() != 6 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
-        return None;
-    }
-    let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).ok();
-    let opacity = number(opacity)?;
-    (0.0..=1.0).contains(&opacity).then_some(Rgba {
-        rgb: [byte(0)?, byte(2)?, byte(4)?],
-        opacity,
-    })
 }
 
 /// `x,y x,y …` as an open path (None for fewer than two points, which usvg does not draw).

@@ -12,15 +12,15 @@
 //! coverages are blended one after the other instead of filled as one path.
 //!
 //! Only the lines plotters writes for a text are read ([`TextLine::from_lines`], a strict
-//! reader); any other `<text>` element is left to usvg.
+//! reader); any other `<text>` element is left to usvg. The readers of plotters' numbers and
+//! colours live here too, for [`super::raster`]'s shapes (which draw texts through this module,
+//! never the other way round).
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use resvg::tiny_skia::{FillRule, Mask, PathBuilder, PixmapMut, Transform};
+use resvg::tiny_skia::{FillRule, Mask, Paint, PathBuilder, PixmapMut, Transform};
 use rustybuzz::ttf_parser::{GlyphId, OutlineBuilder};
-
-use super::raster::{colour, number, Rgba};
 
 /// Sub-pixel positions a glyph is rasterised at, per pixel and axis.
 pub(crate) const PHASES: f32 = 4.0;
@@ -76,6 +76,50 @@ pub(crate) struct TextLine {
 fn attr<'a>(s: &'a str, name: &str) -> Option<(&'a str, &'a str)> {
     let rest = s.strip_prefix(' ')?.strip_prefix(name)?.strip_prefix("=\"")?;
     rest.split_once('"')
+}
+
+/// A colour and its opacity.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Rgba {
+    pub(crate) rgb: [u8; 3],
+    pub(crate) opacity: f32,
+}
+
+impl Rgba {
+    fn paint(self) -> Paint<'static> {
+        let mut paint = Paint::default();
+        let a = (self.opacity * 255.0).round() as u8;
+        paint.set_color_rgba8(self.rgb[0], self.rgb[1], self.rgb[2], a);
+        paint.anti_alias = true;
+        paint
+    }
+}
+
+/// A finite number as plotters writes one: an integer (a pixel position; read directly) or a
+/// decimal.
+pub(crate) fn number(s: &str) -> Option<f32> {
+    let digits = s.strip_prefix('-').unwrap_or(s);
+    if !digits.is_empty() && digits.len() <= 7 && digits.bytes().all(|b| b.is_ascii_digit()) {
+        let v = digits.bytes().fold(0i32, |v, b| 10 * v + i32::from(b - b'0'));
+        return Some(if digits.len() < s.len() { -v } else { v } as f32);
+    }
+    let ok = !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit() || b == b'.' || b == b'-');
+    let v: f64 = if ok { s.parse().ok()? } else { return None };
+    (v.is_finite() && v.abs() < 1e7).then_some(v as f32)
+}
+
+/// `#RRGGBB` and an opacity in [0, 1].
+pub(crate) fn colour(hex: &str, opacity: &str) -> Option<Rgba> {
+    let hex = hex.strip_prefix('#')?;
+    if hex.len() != 6 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
+        return None;
+    }
+    let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).ok();
+    let opacity = number(opacity)?;
+    (0.0..=1.0).contains(&opacity).then_some(Rgba {
+        rgb: [byte(0)?, byte(2)?, byte(4)?],
+        opacity,
+    })
 }
 
 /// XML text with plotters' five escapes undone; None for any other `&` form.
