@@ -86,7 +86,7 @@ pub(crate) struct Rgba {
 }
 
 impl Rgba {
-    fn paint(self) -> Paint<'static> {
+    pub(crate) fn paint(self) -> Paint<'static> {
         let mut paint = Paint::default();
         let a = (self.opacity * 255.0).round() as u8;
         paint.set_color_rgba8(self.rgb[0], self.rgb[1], self.rgb[2], a);
