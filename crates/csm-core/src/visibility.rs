@@ -487,36 +487,9 @@ fn sort_keys(pairs: impl Iterator<Item = (u64, u32)>, bound: usize, key_of: impl
         radix_sort_top44(&mut pairs);
         return pairs.into_iter().map(|(_, k)| k).collect();
     }
-    const BITS: u32 = 11;
-    const PASSES: usize = 4;
-    let buckets = 1usize << BITS;
-    let digit = |x: u64, p: usize| ((x >> (INDEX_BITS + BITS * p as u32)) as usize) & (buckets - 1);
-    let mut counts = vec![0usize; buckets * PASSES];
-    for &x in a.iter() {
-        for p in 0..PASSES {
-            counts[p * buckets + digit(x, p)] += 1;
-        }
-    }
-    let mut b: Vec<u64> = vec![0; a.len()];
-    for p in 0..PASSES {
-        let c = &mut counts[p * buckets..(p + 1) * buckets];
-        if c.contains(&a.len()) {
-            continue;
-        }
-        let mut sum = 0;
-        for n in c.iter_mut() {
-            let here = *n;
-            *n = sum;
-            sum += here;
-        }
-        for &x in a.iter() {
-            let d = digit(x, p);
-            b[c[d]] = x;
-            c[d] += 1;
-        }
-        std::mem::swap(&mut a, &mut b);
-    }
-    drop(b);
+    radix_passes(&mut a, |x, p| {
+        ((x >> (INDEX_BITS + RADIX_BITS * p as u32)) as usize) & (RADIX_BUCKETS - 1)
+    });
     // Equal top bits: in index order (the passes are stable); order them by the whole key.
     let index = |x: u64| (x & ((1u64 << INDEX_BITS) - 1)) as u32;
     let mut out: Vec<u32> = a.iter().map(|&x| index(x)).collect();
@@ -540,29 +513,28 @@ fn sort_keys(pairs: impl Iterator<Item = (u64, u32)>, bound: usize, key_of: impl
     out
 }
 
-/// Sorts `(key, index)` pairs given in increasing index order by `(key, index)`: a stable
-/// least-significant-digit radix sort of the keys' top 44 bits (four passes of 11 bits, a
-/// pass skipped when every key shares its digit), then runs of keys equal in those bits
-/// sorted by the whole key, the index breaking ties ([`sort_keys`] when the pairs cannot be
-/// packed into one word).
-fn radix_sort_top44(a: &mut Vec<(u64, u32)>) {
-    const BITS: u32 = 11;
-    const LOW: u32 = 20;
-    const PASSES: usize = 4;
-    let buckets = 1usize << BITS;
-    let digit = |k: u64, p: usize| ((k >> (LOW + BITS * p as u32)) as usize) & (buckets - 1);
-    let mut counts = vec![0usize; buckets * PASSES];
-    for &(k, _) in a.iter() {
-        for p in 0..PASSES {
-            counts[p * buckets + digit(k, p)] += 1;
+/// Digit width and count of the radix sorts' passes: four passes of 11 bits (44 key bits).
+const RADIX_BITS: u32 = 11;
+const RADIX_PASSES: usize = 4;
+const RADIX_BUCKETS: usize = 1 << RADIX_BITS;
+
+/// The stable least-significant-digit passes of the radix sorts: pass `p` orders `a` by
+/// `digit(x, p)` (in `0..RADIX_BUCKETS`), keeping the order of equal digits. A pass whose
+/// digit every element shares is skipped (it would not move anything).
+fn radix_passes<T: Copy + Default>(a: &mut Vec<T>, digit: impl Fn(T, usize) -> usize) {
+    let mut counts = vec![0usize; RADIX_BUCKETS * RADIX_PASSES];
+    for &x in a.iter() {
+        for p in 0..RADIX_PASSES {
+            counts[p * RADIX_BUCKETS + digit(x, p)] += 1;
         }
     }
-    let mut b: Vec<(u64, u32)> = vec![(0, 0); a.len()];
-    for p in 0..PASSES {
-        let c = &mut counts[p * buckets..(p + 1) * buckets];
+    let mut b: Vec<T> = vec![T::default(); a.len()];
+    for p in 0..RADIX_PASSES {
+        let c = &mut counts[p * RADIX_BUCKETS..(p + 1) * RADIX_BUCKETS];
         if c.contains(&a.len()) {
             continue;
         }
+        // Exclusive prefix sums: each digit's first slot.
         let mut sum = 0;
         for n in c.iter_mut() {
             let here = *n;
@@ -570,12 +542,24 @@ fn radix_sort_top44(a: &mut Vec<(u64, u32)>) {
             sum += here;
         }
         for &x in a.iter() {
-            let d = digit(x.0, p);
+            let d = digit(x, p);
             b[c[d]] = x;
             c[d] += 1;
         }
         std::mem::swap(a, &mut b);
     }
+}
+
+/// Sorts `(key, index)` pairs given in increasing index order by `(key, index)`: a stable
+/// least-significant-digit radix sort of the keys' top 44 bits (four passes of 11 bits, a
+/// pass skipped when every key shares its digit), then runs of keys equal in those bits
+/// sorted by the whole key, the index breaking ties ([`sort_keys`] when the pairs cannot be
+/// packed into one word).
+fn radix_sort_top44(a: &mut Vec<(u64, u32)>) {
+    const LOW: u32 = 20;
+    radix_passes(a, |x: (u64, u32), p| {
+        ((x.0 >> (LOW + RADIX_BITS * p as u32)) as usize) & (RADIX_BUCKETS - 1)
+    });
     // Equal top bits: in index order (the passes are stable); order them by the whole key.
     let top = |k: u64| k >> LOW;
     let mut start = 0;
