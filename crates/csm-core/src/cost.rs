@@ -265,6 +265,36 @@ fn area_in(t: &[DVec3; 3], lo: DVec2, hi: DVec2, skip_within: bool) -> f64 {
     polygon_area(&poly.v[..poly.n])
 }
 
+/// [`clipped_area`] of a triangle that lies within every edge of the rectangle but one, the
+/// edge `(axis, bound, below)`, and has one or two vertices on that edge's inner side (as
+/// [`on_side`] decides): the same value bit for bit, without the general clip. The general
+/// path skips the other three edges (the triangle lies within them) and clips by this one:
+/// Sutherland-Hodgman keeps each inner vertex and adds the edge's crossing after it, in
+/// vertex order, with the same arithmetic as [`Poly::clip`]; the three or four vertices it
+/// gives are summed by the shoelace formula in the same order as [`polygon_area`].
+fn one_edge_area(t: &[DVec3; 3], axis: usize, bound: f64, below: bool) -> f64 {
+    let v = t.map(|p| [p.x, p.y]);
+    let mut out = [[0.0; 2]; 4];
+    let mut n = 0;
+    for i in 0..3 {
+        let a = v[i];
+        let b = v[if i == 2 { 0 } else { i + 1 }];
+        let (ia, ib) = (on_side(a[axis], bound, below), on_side(b[axis], bound, below));
+        if ia {
+            out[n] = a;
+            n += 1;
+        }
+        if ia != ib {
+            let s = (bound - a[axis]) / (b[axis] - a[axis]);
+            let mut p: [f64; 2] = std::array::from_fn(|k| a[k] + s * (b[k] - a[k]));
+            p[axis] = bound;
+            out[n] = p;
+            n += 1;
+        }
+    }
+    polygon_area(&out[..n])
+}
+
 /// The (unsigned) area of a simple polygon.
 fn polygon_area(poly: &[[f64; 2]]) -> f64 {
     let n = poly.len();
@@ -624,7 +654,7 @@ impl LightScene {
             None => {
                 if count && area {
                     if let Some(plane) = single_crossing(c.lo, c.hi, v.lo, v.hi, 3).filter(|p| p.0 < 2) {
-                        let (k1, a1) = self.leaf_both(c, v, plane);
+                        let (k1, a1) = self.leaf_both(c, plane);
                         return (k + k1, a + a1);
                     }
                 }
@@ -643,9 +673,9 @@ impl LightScene {
     /// triangles, for a leaf whose bounds cross one plane of the volume only, a window edge:
     /// that edge is then also the one edge of the rectangle the leaf crosses, and a triangle
     /// with a vertex on its inner side both meets the volume and has its area (whole, or
-    /// clipped when a vertex lies beyond), in the same order as `leaf_area` adds them.
-    fn leaf_both(&self, c: &Chunk, v: &CasterVolume, (axis, bound, below): (usize, f64, bool)) -> (u64, f64) {
-        let (rlo, rhi) = (v.lo.truncate(), v.hi.truncate());
+    /// clipped by that edge alone, [`one_edge_area`], when a vertex lies beyond), in the same
+    /// order as `leaf_area` adds them.
+    fn leaf_both(&self, c: &Chunk, (axis, bound, below): (usize, f64, bool)) -> (u64, f64) {
         let (mut k, mut a) = (0, 0.0);
         for t in &self.triangles[c.tris()] {
             match t.iter().filter(|p| on_side(p[axis], bound, below)).count() {
@@ -656,7 +686,7 @@ impl LightScene {
                 }
                 _ => {
                     k += 1;
-                    a += clipped_area(t, rlo, rhi);
+                    a += one_edge_area(t, axis, bound, below);
                 }
             }
         }
@@ -683,7 +713,7 @@ impl LightScene {
     /// bounds cross one edge of the rectangle only, a triangle with every vertex on the inner
     /// side of that edge is inside the rectangle (its projected area, as `clipped_area` gives
     /// it), one with every vertex beyond it is apart (0, nothing added), and only the others
-    /// are clipped.
+    /// are clipped, by that edge alone ([`one_edge_area`]).
     fn leaf_area(&self, c: &Chunk, v: &CasterVolume) -> f64 {
         let (rlo, rhi) = (v.lo.truncate(), v.hi.truncate());
         let tris = &self.triangles[c.tris()];
@@ -695,7 +725,7 @@ impl LightScene {
                     if inner == 3 {
                         a += projected_area(t);
                     } else if inner > 0 {
-                        a += clipped_area(t, rlo, rhi);
+                        a += one_edge_area(t, axis, bound, below);
                     }
                 }
             }
@@ -1328,6 +1358,43 @@ mod tests {
                 clipped_area(&t, lo.truncate(), hi.truncate()).to_bits(),
                 area_plain(&t, lo.truncate(), hi.truncate()).to_bits()
             );
+        }
+
+        /// A triangle within three edges of a rectangle and crossing the fourth: its area
+        /// clipped by that edge alone ([`one_edge_area`]) equals [`clipped_area`] (and the
+        /// plain clip by all four edges) bit for bit, on random triangles and rectangles, with
+        /// the edge through a vertex (ties) or strictly between them.
+        #[test]
+        fn one_edge_area_equals_the_clipped_area_bit_for_bit(
+            t in prop::array::uniform3((-10.0..10.0f64, -10.0..10.0f64, -1.0..1.0f64)),
+            margins in prop::array::uniform4(0.0..3.0f64),
+            edge in 0usize..4,
+            cut in 0.0..1.0f64,
+            on_vertex in prop::option::of(0usize..3),
+        ) {
+            let t: [DVec3; 3] = t.map(|(x, y, z)| DVec3::new(x, y, z));
+            let (tlo, thi) = (t[0].min(t[1]).min(t[2]).truncate(), t[0].max(t[1]).max(t[2]).truncate());
+            // The triangle's bounds padded (every vertex within every edge), then one edge
+            // moved into the triangle's extent on its axis.
+            let mut lo = tlo - DVec2::new(margins[0], margins[1]);
+            let mut hi = thi + DVec2::new(margins[2], margins[3]);
+            let (axis, below) = (edge % 2, edge >= 2);
+            let bound = match on_vertex {
+                Some(k) => t[k][axis],
+                None => tlo[axis] + cut * (thi[axis] - tlo[axis]),
+            };
+            if below { hi[axis] = bound } else { lo[axis] = bound }
+            let inner = t.iter().filter(|p| on_side(p[axis], bound, below)).count();
+            prop_assume!(inner == 1 || inner == 2);
+            let fast = one_edge_area(&t, axis, bound, below);
+            prop_assert_eq!(fast.to_bits(), clipped_area(&t, lo, hi).to_bits());
+            prop_assert_eq!(fast.to_bits(), area_plain(&t, lo, hi).to_bits());
+            // Independently: the parts on either side of the edge make up the whole triangle
+            // (its closed-form area), within rounding.
+            let (mut olo, mut ohi) = (tlo - DVec2::ONE, thi + DVec2::ONE);
+            if below { olo[axis] = bound } else { ohi[axis] = bound }
+            let (whole, beyond) = (projected_area(&t), clipped_area(&t, olo, ohi));
+            prop_assert!((fast + beyond - whole).abs() <= 1e-9 * (1.0 + whole), "{} + {} != {}", fast, beyond, whole);
         }
 
         /// The bounds of the receivers in view-depth intervals equal a scan of every receiver
