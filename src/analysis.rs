@@ -1046,7 +1046,6 @@ fn analyze_camera(
         &frame0.pose,
         visibility.as_deref(),
         on_frames,
-        shared.and_then(|s| s.poses()),
     );
     let truth = if config.truth.enabled && opts.ground_truth {
         ground_truth::run(config, &rig, opts.texel_counts, on_frames)
@@ -1200,10 +1199,7 @@ struct Walks {
     totals: PathTotals,
 }
 
-/// Walks the configured path and every extra one (`walk_path`), and totals them. `held`: the
-/// configured path's poses when the caller holds them (a search's group walks one path for
-/// every point), else they are generated here.
-#[allow(clippy::too_many_arguments)]
+/// Walks the configured path and every extra one (`walk_path`), and totals them.
 fn walk_every_path(
     config: &Config,
     opts: &AnalysisOptions,
@@ -1212,7 +1208,6 @@ fn walk_every_path(
     pose0: &CameraPose,
     vis: Option<&Visibility>,
     on_frames: &(dyn Fn(u64) + Sync),
-    held: Option<&[CameraPose]>,
 ) -> Walks {
     let sopts = ShimmerOptions {
         cell_flips: opts.cell_flips,
@@ -1235,13 +1230,13 @@ fn walk_every_path(
         seams: opts.seams,
         on_frames,
     };
-    let first = walk_path(&walker, &setup.motion, held);
+    let first = walk_path(&walker, &setup.motion);
     let mut seam_crossings = first.crossings;
     let extra: Vec<ExtraPathResult> = config
         .extra_motions()
         .into_iter()
         .map(|(name, motion)| {
-            let w = walk_path(&walker, &motion, None);
+            let w = walk_path(&walker, &motion);
             if let (Some(c), Some(x)) = (seam_crossings.as_mut(), w.crossings) {
                 *c = c.max(x);
             }
@@ -1467,9 +1462,8 @@ struct PathWalk {
 /// Walks one camera path in both snap modes. With precision = "f32" every path metric
 /// measures the emulated binary32 pipeline. The poses are generated as the walk reads them (a
 /// long path is never held), and the two snap modes walk on their own threads: each mode's
-/// totals are the same, bit for bit, as in one walk of both (`along_path_both`). `given`: the
-/// path's poses, when the caller holds them (at most [`HELD_POSES`]; see [`held_poses`]).
-fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion, given: Option<&[CameraPose]>) -> PathWalk {
+/// totals are the same, bit for bit, as in one walk of both (`along_path_both`).
+fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion) -> PathWalk {
     let generated =
         || csm_core::motion::poses(&w.setup.camera, motion).map(|p| p.expect("validated when the config was loaded"));
     // A path of up to HELD_POSES frames is generated once and read by both walks (a
@@ -1478,18 +1472,11 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion, given: Option<&[C
     // The held poses are the same for every setting of a sweep (its axes change neither the
     // camera nor the path): each thread keeps the last path it generated and reuses it while
     // the camera and the path are equal.
-    let frames = given.map_or_else(|| generated().len(), |p| p.len());
-    let kept: std::sync::Arc<[CameraPose]>;
-    let held: &[CameraPose] = match given {
-        Some(p) => p,
-        None => {
-            kept = if frames <= HELD_POSES {
-                thread_held_poses(&w.setup.camera, motion, generated)
-            } else {
-                std::sync::Arc::new([])
-            };
-            &kept
-        }
+    let frames = generated().len();
+    let held: std::sync::Arc<[CameraPose]> = if frames <= HELD_POSES {
+        thread_held_poses(&w.setup.camera, motion, generated)
+    } else {
+        std::sync::Arc::new([])
     };
     let batch = rayon::current_thread_index().is_some();
     if batch && !w.seams && frames <= HELD_POSES && w.cadence.is_empty() && w.config.shadow.precision == Precision::F64
@@ -1594,14 +1581,6 @@ fn walk_path(w: &Walker<'_>, motion: &csm_core::scene::Motion, given: Option<&[C
         lookup_error: walked.2,
         crossings,
     }
-}
-
-/// A path's poses as [`walk_path`] holds them: all of them when there are at most
-/// [`HELD_POSES`], else None (generated as each walk reads them).
-pub(crate) fn held_poses(setup: &csm_core::scene::Setup, motion: &csm_core::scene::Motion) -> Option<Vec<CameraPose>> {
-    let generated =
-        || csm_core::motion::poses(&setup.camera, motion).map(|p| p.expect("validated when the config was loaded"));
-    (generated().len() <= HELD_POSES).then(|| generated().collect())
 }
 
 /// What the poses of a generated path depend on, bit for bit: the camera's position, target

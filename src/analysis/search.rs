@@ -14,10 +14,9 @@
 
 use std::sync::Arc;
 
-use super::{analyze, analyze_camera, held_poses, visible_depths, AnalysisOptions, Detail, Summary};
+use super::{analyze, analyze_camera, visible_depths, AnalysisOptions, Detail, Summary};
 use crate::config::Config;
 use csm_core::depth_range::{self, DepthRange};
-use csm_core::geometry::CameraPose;
 use csm_core::screen::{self, ScreenStats, Statistic};
 use csm_core::visibility::Visibility;
 
@@ -28,8 +27,9 @@ use csm_core::visibility::Visibility;
 /// - the split range of csm-lab's own pipeline (`depth_range::for_setup`: the camera, the
 ///   shadow distance, the scene's bounds and the fit flags; a preset's range follows its own
 ///   rig, so it is computed per point as before);
-/// - the visibility pass and the visible depth range within the bounds' range;
-/// - the configured camera path's poses (when [`super::walk_path`] would hold them).
+/// - the visibility pass and the visible depth range within the bounds' range.
+///
+/// (The camera path's poses are shared too, by `walk_path`'s per-thread held path.)
 ///
 /// Each is the value the point's own analysis computes from the same inputs, so a point
 /// analysed with them is bit for bit the point analysed alone (tested on random split
@@ -38,7 +38,6 @@ pub(crate) struct Shared {
     range: Option<DepthRange>,
     visibility: Option<Arc<Visibility>>,
     visible: Option<(f64, f64)>,
-    poses: Option<Vec<CameraPose>>,
 }
 
 impl Shared {
@@ -50,7 +49,6 @@ impl Shared {
             range: point.shadow.preset.is_none().then(|| depth_range::for_setup(&setup)),
             visible: visible_depths(&setup, visibility.as_deref()),
             visibility,
-            poses: held_poses(&setup, &setup.motion),
         }
     }
 
@@ -62,11 +60,6 @@ impl Shared {
     /// The visibility pass and the visible depth range.
     pub(super) fn visibility(&self) -> (Option<Arc<Visibility>>, Option<(f64, f64)>) {
         (self.visibility.clone(), self.visible)
-    }
-
-    /// The configured path's poses, when held.
-    pub(super) fn poses(&self) -> Option<&[CameraPose]> {
-        self.poses.as_deref()
     }
 }
 
