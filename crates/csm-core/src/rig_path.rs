@@ -710,6 +710,36 @@ fn floor_small(x: f64) -> f64 {
     r.copysign(x)
 }
 
+/// `f64::floor` up to the sign of a zero (`floor(−0.0)` is +0.0 here), for `|x| < 2^51`:
+/// [`floor_small`] without its `copysign`, so every value compares equal (`==`) to
+/// `f64::floor`'s. For a loop that only compares texels.
+#[inline(always)]
+fn floor_unsigned(x: f64) -> f64 {
+    const C: f64 = 6_755_399_441_055_744.0;
+    let r = (x + C) - C;
+    r - if r > x { 1.0 } else { 0.0 }
+}
+
+/// The flip count of [`PathModel::floor_flips`] over the probes' coordinates per axis (`xs`,
+/// `ys`) and the kept texels `kx`, `ky` of the previous window: a probe flips when some
+/// axis' new texel `⌊x − o⌋` is not the kept one plus `stay`; the new texels replace the
+/// kept ones. The same comparisons, probe for probe, as a pass over `DVec2`s; one array per
+/// axis and no branch, so the loop runs two probes per SSE2 instruction.
+#[inline(always)]
+fn flips_soa(xs: &[f64], ys: &[f64], kx: &mut [f64], ky: &mut [f64], o: DVec2, stay: DVec2) -> usize {
+    let n = xs.len().min(ys.len()).min(kx.len()).min(ky.len());
+    let (xs, ys, kx, ky) = (&xs[..n], &ys[..n], &mut kx[..n], &mut ky[..n]);
+    let mut flipped = 0u64;
+    for j in 0..n {
+        let a = floor_unsigned(xs[j] - o.x);
+        let b = floor_unsigned(ys[j] - o.y);
+        flipped += u64::from((a != kx[j] + stay.x) | (b != ky[j] + stay.y));
+        kx[j] = a;
+        ky[j] = b;
+    }
+    flipped as usize
+}
+
 /// For probes at texel coordinates `scaled` (x/y divided by the texel size, before the window
 /// origin is subtracted): `(u, limit)` with `u` the largest coordinate magnitude and `limit` a
 /// power of two such that for every whole number `o` with `|o| + u < limit`, each coordinate
@@ -757,6 +787,9 @@ pub struct RigPath<'a> {
     /// origin `o` with `|o| + u < limit` a probe lands on the texel `floor(x/y / texel)`
     /// whatever `o` (0: never known).
     probe_exact: Vec<std::cell::OnceCell<(f64, f64)>>,
+    /// Fixed basis: per cascade, the x and the y of `probe_texels`' coordinates, one array
+    /// each (what [`PathModel::floor_flips`] reads).
+    probe_axes: Vec<std::cell::OnceCell<[Vec<f64>; 2]>>,
     fixed: bool,
     /// Fixed basis and selection inside the fitted slices: coverage from the slice corners'
     /// extremes, shared by the snap modes.
@@ -800,6 +833,7 @@ impl<'a> RigPath<'a> {
             probe_xy: rig.fixed_probe_xy(probes),
             probe_texels: (0..rig.cascade_count()).map(|_| std::cell::OnceCell::new()).collect(),
             probe_exact: (0..rig.cascade_count()).map(|_| std::cell::OnceCell::new()).collect(),
+            probe_axes: (0..rig.cascade_count()).map(|_| std::cell::OnceCell::new()).collect(),
             fixed: rig.fixed_basis(),
             fast: fast_walk_applies(rig),
             lp: None,
@@ -1040,7 +1074,7 @@ impl PathModel for RigPath<'_> {
         p: &RigWindow,
         w: &RigWindow,
         held: bool,
-        floors: &mut Vec<DVec2>,
+        floors: &mut Vec<f64>,
     ) -> Option<(usize, usize)> {
         const LIMIT: f64 = (1u64 << 24) as f64;
         const MARGIN: f64 = 1e-6;
@@ -1061,24 +1095,32 @@ impl PathModel for RigPath<'_> {
         if !(r.x.abs() < 0.5 - MARGIN && r.y.abs() < 0.5 - MARGIN) {
             return None;
         }
+        // The probes' coordinates one array per axis, and the kept texels `[kx…, ky…]`: the
+        // loops below run two probes per instruction.
+        let [xs, ys] = self.probe_axes[i].get_or_init(|| {
+            [
+                scaled.iter().map(|u| u.x).collect(),
+                scaled.iter().map(|u| u.y).collect(),
+            ]
+        });
+        let n = xs.len();
         if !held {
             floors.clear();
-            floors.extend(scaled.iter().map(|u| {
-                let s = *u - oa;
-                DVec2::new(floor_small(s.x), floor_small(s.y))
-            }));
+            floors.resize(2 * n, 0.0);
+            let (kx, ky) = floors.split_at_mut(n);
+            for (k, &x) in kx.iter_mut().zip(xs) {
+                *k = floor_unsigned(x - oa.x);
+            }
+            for (k, &y) in ky.iter_mut().zip(ys) {
+                *k = floor_unsigned(y - oa.y);
+            }
         }
-        if floors.len() != scaled.len() {
+        if floors.len() != 2 * n {
             return None;
         }
-        let mut flipped = 0usize;
-        for (k, u) in floors.iter_mut().zip(scaled) {
-            let s = *u - ob;
-            let kb = DVec2::new(floor_small(s.x), floor_small(s.y));
-            flipped += usize::from((kb.x != k.x + stay.x) | (kb.y != k.y + stay.y));
-            *k = kb;
-        }
-        Some((flipped, scaled.len()))
+        let (kx, ky) = floors.split_at_mut(n);
+        let flipped = flips_soa(xs, ys, kx, ky, ob, stay);
+        Some((flipped, n))
     }
 
     /// A snapped window that moved by whole texels: every probe stays on its texel when both
@@ -1159,6 +1201,9 @@ mod tests {
         }
         for x in cases.into_iter().filter(|x| x.abs() < top) {
             assert_eq!(floor_small(x).to_bits(), x.floor().to_bits(), "{x:e}");
+            // Equal as numbers (the sign of a zero aside), which is all the flip count reads.
+            assert!(floor_unsigned(x) == x.floor(), "{x:e}");
+            assert!(floor_unsigned(x) != 0.0 || x.floor() == 0.0, "{x:e}");
         }
     }
 }

@@ -189,133 +189,61 @@ const KAPPA: f64 = 1e-14;
 /// the few operations that compute them (each a few units in the 16th digit).
 const ROUNDING: f64 = 1e-12;
 
-/// Groups of points by their distance from the origin: a point's bound uses its group's
-/// largest distance, at most √2 times its own (or 2^-20 of the largest distance of all).
-const GROUPS: usize = 41;
+/// Distance levels per octave: a group's points are within a factor `2^(1/LEVELS_PER_OCTAVE)`
+/// of each other's distance from the origin (or closer than 2^-20 of the largest distance).
+const LEVELS_PER_OCTAVE: f64 = 4.0;
+
+/// Distance levels in all (20 octaves).
+const LEVELS: f64 = 80.0;
+
+/// Direction cells per side of each of the 6 faces of a cube around the origin: a group's
+/// points also share the cell of their direction from the origin.
+const FACE_CELLS: f64 = 8.0;
 
 /// Counts the frames in which each of a set of world-fixed points changes cascade, frame by
 /// frame as the camera moves, without computing every point's depth in every frame.
 ///
 /// Between frames `u` and `u + 1` a point `p`'s view depth `(p − c)·f` changes by
 /// `(p − c_u)·(f_{u+1} − f_u) − (c_{u+1} − c_u)·f_{u+1}`, so by at most
-/// `(|p − o| + |o − c_u|)·|Δf| + |Δc|·|f_{u+1}|` for any fixed point `o` (frame 0's camera
-/// position), plus the rounding of the two computed depths. Its cascade can change only when
-/// its depth reaches a split value, so after computing a point's depth and cascade the counter
-/// sets it aside until the sum of these bounds since then could reach its distance to the
-/// nearest split value (its slack). The sums run as integer odometers (bounds rounded up,
-/// slacks rounded down, in units of a power of two), one per group of points of similar
-/// distance from `o`, with a monotone queue (a radix heap) of the odometer readings at which each point is due. A
-/// point set aside kept its cascade in every frame in between, so each change is counted in
-/// the frame it happens: the counts equal a computation of every point in every frame, exactly.
-/// A point whose slack is not finite or below the bound of one frame is computed every frame.
+/// `|(p − o)·Δf| + |o − c_u|·|Δf| + |Δc|·|f_{u+1}|` for any fixed point `o` (frame 0's camera
+/// position), plus the rounding of the two computed depths. The points are grouped by their
+/// distance and direction from `o` (a small cell of space around `q`, the mean of its points,
+/// and `ρ`, their largest distance from it): for every point of a group
+/// `|(p − o)·Δf| ≤ min(R·|Δf|, |(q − o)·Δf| + ρ·|Δf|)`, `R` the group's largest distance from
+/// `o`. The second form is what makes the bound tight: while the camera turns, a group's
+/// depths change at about the rate of its centre's, not of its distance. A point's cascade can
+/// change only when its depth reaches a split value, so after computing a point's depth and
+/// cascade the counter sets it aside until the sum of its group's bounds since then could
+/// reach its distance to the nearest split value (its slack). The sums run as integer
+/// odometers (bounds rounded up, slacks rounded down, in units of a power of two), one per
+/// group, with each point's due reading and each group's smallest. A point set aside kept its
+/// cascade in every frame in between, so each change is counted in the frame it happens: the
+/// counts equal a computation of every point in every frame, exactly. A point whose slack is
+/// not finite or below the bound of one frame is computed every frame.
 pub struct SeamCounter<'a> {
     splits: &'a [f64],
     points: &'a [DVec3],
-    /// Each point's cascade as last computed (unchanged since).
-    cascade: Vec<usize>,
-    /// Frame 0's camera position: distances are measured from it.
+    /// Frame 0's camera position: distances and directions are measured from it.
     origin: DVec3,
-    groups: Vec<Group>,
-    /// Which group each point is in.
-    group: Vec<u8>,
+    /// The points, group by group (`starts[g]..starts[g + 1]`).
+    order: Vec<DVec3>,
+    starts: Vec<usize>,
+    /// Each point (in `order`) as last computed: its cascade, and the reading of its group's
+    /// odometer at which it must be computed again.
+    cascade: Vec<usize>,
+    reading: Vec<u64>,
+    /// Per group: `q − o`, `R`, `ρ + KAPPA·|q − o|`, the odometer and its smallest due reading.
+    centre: Vec<DVec3>,
+    radius: Vec<f64>,
+    spread: Vec<f64>,
+    odometer: Vec<u64>,
+    next_due: Vec<u64>,
     /// Odometer units per world unit (a power of two).
     scale: f64,
     prev: Option<CameraPose>,
-    /// Points due this frame (reused).
-    due: Vec<u32>,
     changed: u64,
     steps: u64,
     evaluated: u64,
-}
-
-/// Points of similar distance from the origin, with their odometer.
-struct Group {
-    /// The largest distance of a point of the group from the origin.
-    radius: f64,
-    /// The sum, since frame 0, of the group's bound on a depth change per frame, rounded up.
-    odometer: u64,
-    /// `(reading, point)`: the point is computed again when the odometer reaches the reading.
-    due: RadixQueue,
-}
-
-/// A monotone min-queue of `(reading, point)` (a radix heap): every reading pushed is at least
-/// the last one taken out, so an entry sits in the bucket of the highest bit in which its
-/// reading differs from that one, and moves only to lower buckets. Taking out every entry up to
-/// a reading costs a few operations per entry, not a heap's sift through log n levels.
-struct RadixQueue {
-    last: u64,
-    buckets: Vec<Vec<(u64, u32)>>,
-    /// The smallest reading in each bucket (`u64::MAX` when empty): whether the lowest bucket
-    /// holds a due entry is one comparison, not a pass over the bucket every frame.
-    mins: [u64; 65],
-    /// Bit b set when bucket b holds entries.
-    full: u128,
-}
-
-impl RadixQueue {
-    fn new() -> Self {
-        RadixQueue {
-            last: 0,
-            buckets: vec![Vec::new(); 65],
-            mins: [u64::MAX; 65],
-            full: 0,
-        }
-    }
-
-    fn is_empty(&self) -> bool {
-        self.full == 0
-    }
-
-    #[inline]
-    fn bucket(last: u64, reading: u64) -> usize {
-        (u64::BITS - (reading ^ last).leading_zeros()) as usize
-    }
-
-    /// Adds an entry; `reading` is at least every reading taken out so far.
-    #[inline]
-    fn push(&mut self, reading: u64, point: u32) {
-        debug_assert!(reading >= self.last);
-        let b = Self::bucket(self.last, reading);
-        self.buckets[b].push((reading, point));
-        self.mins[b] = self.mins[b].min(reading);
-        self.full |= 1 << b;
-    }
-
-    /// Takes out every entry whose reading is at most `limit`, into `out` (in no set order).
-    fn take_upto(&mut self, limit: u64, out: &mut Vec<u32>) {
-        while self.full != 0 {
-            if self.full & 1 != 0 {
-                // Bucket 0 holds readings equal to `last`.
-                if self.last > limit {
-                    return;
-                }
-                out.extend(self.buckets[0].drain(..).map(|(_, k)| k));
-                self.full &= !1;
-                self.mins[0] = u64::MAX;
-                continue;
-            }
-            let b = self.full.trailing_zeros() as usize;
-            let min = self.mins[b];
-            if min > limit {
-                return;
-            }
-            // Every entry of bucket b differs from `min` below bit b: they spread to lower buckets.
-            self.last = min;
-            let entries = std::mem::take(&mut self.buckets[b]);
-            self.full &= !(1 << b);
-            self.mins[b] = u64::MAX;
-            for &(r, k) in &entries {
-                let to = Self::bucket(min, r);
-                self.buckets[to].push((r, k));
-                self.mins[to] = self.mins[to].min(r);
-                self.full |= 1 << to;
-            }
-            // Keep the emptied bucket's allocation.
-            let mut entries = entries;
-            entries.clear();
-            self.buckets[b] = entries;
-        }
-    }
 }
 
 impl<'a> SeamCounter<'a> {
@@ -324,13 +252,18 @@ impl<'a> SeamCounter<'a> {
         SeamCounter {
             splits,
             points,
-            cascade: Vec::new(),
             origin: DVec3::ZERO,
-            groups: Vec::new(),
-            group: Vec::new(),
+            order: Vec::new(),
+            starts: Vec::new(),
+            cascade: Vec::new(),
+            reading: Vec::new(),
+            centre: Vec::new(),
+            radius: Vec::new(),
+            spread: Vec::new(),
+            odometer: Vec::new(),
+            next_due: Vec::new(),
             scale: 1.0,
             prev: None,
-            due: Vec::new(),
             changed: 0,
             steps: 0,
             evaluated: 0,
@@ -364,6 +297,11 @@ impl<'a> SeamCounter<'a> {
         self.evaluated
     }
 
+    /// Groups of points the counter keeps an odometer for (0 before the first frame).
+    pub fn groups(&self) -> usize {
+        self.odometer.len()
+    }
+
     /// Changes per point and step: [`seam_crossings`]. 0 with no step or no point.
     pub fn rate(&self) -> f64 {
         if self.steps == 0 || self.points.is_empty() {
@@ -373,47 +311,81 @@ impl<'a> SeamCounter<'a> {
         }
     }
 
-    /// Frame 0: every point's cascade, its group and its first due reading.
+    /// Frame 0: the groups, every point's cascade and its first due reading.
     fn first(&mut self, pose: &CameraPose) {
         let o = pose.position;
         self.origin = o;
-        let dist: Vec<f64> = self.points.iter().map(|p| (*p - o).length()).collect();
+        let rel: Vec<DVec3> = self.points.iter().map(|p| *p - o).collect();
+        let dist: Vec<f64> = rel.iter().map(|v| v.length()).collect();
         let far = dist.iter().copied().fold(0.0, f64::max);
-        // Group by the binary exponent of the distance relative to the farthest; a group's
-        // radius is the largest distance actually in it, so a misplaced point costs time only.
-        self.group = dist
-            .iter()
-            .map(|&r| {
-                let level = (2.0 * (r / far).log2()).floor();
-                let level = if level.is_nan() {
-                    0.0
-                } else {
-                    level.clamp(-(GROUPS as f64 - 1.0), 0.0)
-                };
-                (level + (GROUPS as f64 - 1.0)) as u8
-            })
-            .collect();
-        self.groups = (0..GROUPS)
-            .map(|_| Group {
-                radius: 0.0,
-                odometer: 0,
-                due: RadixQueue::new(),
-            })
-            .collect();
-        for (&g, &r) in self.group.iter().zip(&dist) {
-            let radius = &mut self.groups[g as usize].radius;
-            *radius = radius.max(r);
+        // A group is a distance level and a direction cell (a cell of a cube's face); a
+        // misplaced point (NaN, or at the origin) only costs time: the bounds hold for any
+        // grouping.
+        let key = |v: DVec3, r: f64| -> u64 {
+            let level = (LEVELS_PER_OCTAVE * (r / far).log2()).floor();
+            let level = if level.is_nan() {
+                0.0
+            } else {
+                level.clamp(-(LEVELS - 1.0), 0.0)
+            };
+            let a = v.abs();
+            let (face, s, t) = if a.x >= a.y && a.x >= a.z {
+                (u64::from(v.x < 0.0), v.y / a.x, v.z / a.x)
+            } else if a.y >= a.z {
+                (2 + u64::from(v.y < 0.0), v.x / a.y, v.z / a.y)
+            } else {
+                (4 + u64::from(v.z < 0.0), v.x / a.z, v.y / a.z)
+            };
+            // `as` saturates (NaN to 0).
+            let cell = |c: f64| (((c + 1.0) * 0.5 * FACE_CELLS) as u64).min(FACE_CELLS as u64 - 1);
+            ((((level + LEVELS) as u64) * 6 + face) * 64 + cell(s)) * 64 + cell(t)
+        };
+        let keys: Vec<u64> = rel.iter().zip(&dist).map(|(v, &r)| key(*v, r)).collect();
+        let mut idx: Vec<u32> = (0..self.points.len() as u32).collect();
+        idx.sort_by_key(|&k| (keys[k as usize], k));
+        self.order = idx.iter().map(|&k| self.points[k as usize]).collect();
+        self.starts.clear();
+        for (n, &k) in idx.iter().enumerate() {
+            if n == 0 || keys[k as usize] != keys[idx[n - 1] as usize] {
+                self.starts.push(n);
+            }
+        }
+        self.starts.push(idx.len());
+        let groups = self.starts.len() - 1;
+        self.centre = Vec::with_capacity(groups);
+        self.radius = Vec::with_capacity(groups);
+        self.spread = Vec::with_capacity(groups);
+        for g in 0..groups {
+            let members = &idx[self.starts[g]..self.starts[g + 1]];
+            let sum = members.iter().fold(DVec3::ZERO, |s, &k| s + rel[k as usize]);
+            let q = sum / members.len() as f64;
+            let radius = members.iter().fold(0.0f64, |m, &k| m.max(dist[k as usize]));
+            // |p − q| for the real values, within the rounding of `p − o` (relative to
+            // |p − o|), of the subtraction of `q` and of the length: covered by KAPPA.
+            let rho = members.iter().fold(0.0f64, |m, &k| {
+                let v = rel[k as usize];
+                m.max((v - q).length() + KAPPA * (v.length() + q.length()))
+            });
+            self.centre.push(q);
+            self.radius.push(radius);
+            self.spread.push(rho + KAPPA * q.length());
         }
         // Units: 2^-32 of the extent of the points and the origin (a power of two, so the
         // conversions to units are exact); 10^6 frames of the largest turns stay below 2^53.
         let extent = far.max(o.length()).max(f64::MIN_POSITIVE);
         let k = (extent.log2().ceil() as i32).clamp(-960, 960);
         self.scale = 2f64.powi(32 - k);
+        self.odometer = vec![0; groups];
+        self.next_due = vec![u64::MAX; groups];
         self.cascade = vec![0; self.points.len()];
-        for k in 0..self.points.len() {
-            let (cascade, reading) = self.compute(k, pose);
-            self.cascade[k] = cascade;
-            self.groups[self.group[k] as usize].due.push(reading, k as u32);
+        self.reading = vec![0; self.points.len()];
+        for g in 0..groups {
+            for k in self.starts[g]..self.starts[g + 1] {
+                let (cascade, reading) = self.compute(k, g, pose);
+                self.cascade[k] = cascade;
+                self.reading[k] = reading;
+                self.next_due[g] = self.next_due[g].min(reading);
+            }
         }
     }
 
@@ -421,45 +393,54 @@ impl<'a> SeamCounter<'a> {
     fn next(&mut self, prev: &CameraPose, pose: &CameraPose) {
         self.steps += 1;
         let (fq, ft) = (prev.forward.length(), pose.forward.length());
-        let turn = (pose.forward - prev.forward).length();
+        let df = pose.forward - prev.forward;
+        let turn = df.length();
         let o = self.origin;
-        // The bound of a point at distance r from the origin: r · per_unit + base.
-        let per_unit = turn + KAPPA * (fq + ft);
+        // The bound of a point of group g: min(R·turn, |(q − o)·Δf| + spread·turn) + R·kappa
+        // + base (the rounding of `Δf`, of its length and of the dot product: relative,
+        // covered by ROUNDING; the dot product's cancellation: KAPPA·|q − o| in the spread).
+        let kappa = KAPPA * (fq + ft);
         let base = (o - prev.position).length() * turn
             + (pose.position - prev.position).length() * ft
             + KAPPA * ((o.length() + prev.position.length()) * fq + (o.length() + pose.position.length()) * ft);
-        self.due.clear();
-        for g in &mut self.groups {
-            if g.due.is_empty() {
-                continue;
-            }
-            let bound = (g.radius * per_unit + base) * (1.0 + ROUNDING) * self.scale;
+        let groups = self.odometer.len();
+        for g in 0..groups {
+            let r = self.radius[g];
+            let lateral = self.centre[g].dot(df).abs() + self.spread[g] * turn;
+            let bound = ((r * turn).min(lateral) + r * kappa + base) * (1.0 + ROUNDING) * self.scale;
             // Truncated plus one: at least the bound (a saturated odometer computes every
             // point every frame).
             let step = if bound < 1e18 { bound as u64 + 1 } else { u64::MAX };
-            g.odometer = g.odometer.saturating_add(step);
-            g.due.take_upto(g.odometer, &mut self.due);
-        }
-        for n in 0..self.due.len() {
-            let k = self.due[n] as usize;
-            let (cascade, reading) = self.compute(k, pose);
-            self.changed += u64::from(cascade != self.cascade[k]);
-            self.cascade[k] = cascade;
-            self.groups[self.group[k] as usize].due.push(reading, k as u32);
+            let odometer = self.odometer[g].saturating_add(step);
+            self.odometer[g] = odometer;
+            if odometer < self.next_due[g] {
+                continue;
+            }
+            let mut due = u64::MAX;
+            for k in self.starts[g]..self.starts[g + 1] {
+                if self.reading[k] <= odometer {
+                    let (cascade, reading) = self.compute(k, g, pose);
+                    self.changed += u64::from(cascade != self.cascade[k]);
+                    self.cascade[k] = cascade;
+                    self.reading[k] = reading;
+                }
+                due = due.min(self.reading[k]);
+            }
+            self.next_due[g] = due;
         }
     }
 
-    /// Point `k`'s cascade in the frame of `pose`, and the odometer reading (of its group, as
-    /// it stands) at which it must be computed again.
-    fn compute(&mut self, k: usize, pose: &CameraPose) -> (usize, u64) {
+    /// Point `k`'s (in group order) cascade in the frame of `pose`, and the reading of its
+    /// group `g`'s odometer (as it stands) at which it must be computed again.
+    #[inline]
+    fn compute(&mut self, k: usize, g: usize, pose: &CameraPose) -> (usize, u64) {
         self.evaluated += 1;
-        let d = (self.points[k] - pose.position).dot(pose.forward);
+        let d = (self.order[k] - pose.position).dot(pose.forward);
         let slack = self.splits.iter().map(|&s| (d - s).abs()).fold(f64::INFINITY, f64::min);
         let units = slack * (1.0 - ROUNDING) * self.scale;
         // Truncated (the floor of a non-negative number); not finite (or NaN): computed
         // again next frame.
         let units = if units.is_finite() { units as u64 } else { 0 };
-        let odometer = self.groups[self.group[k] as usize].odometer;
-        (index(self.splits, d), odometer.saturating_add(units))
+        (index(self.splits, d), self.odometer[g].saturating_add(units))
     }
 }

@@ -129,7 +129,7 @@ pub trait PathModel {
         _p: &Self::Win,
         _w: &Self::Win,
         _held: bool,
-        _floors: &mut Vec<DVec2>,
+        _floors: &mut Vec<f64>,
     ) -> Option<(usize, usize)> {
         None
     }
@@ -651,6 +651,8 @@ struct ModeState<M: PathModel> {
     /// landings, its centres or neither), the centres, and this frame's.
     prev_held: Vec<Held>,
     prev_centres: Vec<Vec<DVec2>>,
+    /// What [`PathModel::floor_flips`] keeps for each cascade's previous window.
+    prev_floors: Vec<Vec<f64>>,
     current_centres: Vec<DVec2>,
 }
 
@@ -660,7 +662,7 @@ enum Held {
     Nothing,
     Landings,
     Centres,
-    /// What [`PathModel::floor_flips`] keeps (in `prev_centres`).
+    /// What [`PathModel::floor_flips`] keeps (in `prev_floors`).
     Floors,
 }
 
@@ -740,6 +742,7 @@ where
         prev_served: vec![None; m],
         prev_held: vec![Held::Nothing; m],
         prev_centres: vec![Vec::new(); m],
+        prev_floors: vec![Vec::new(); m],
         current_centres: Vec::new(),
     });
     // A model that lands centres lands nothing up front: each frame pair lands what it needs
@@ -812,7 +815,7 @@ where
                             Held::Nothing
                         };
                     } else if let Some(f) =
-                        model.floor_flips(i, p, &w, st.prev_held[i] == Held::Floors, &mut st.prev_centres[i])
+                        model.floor_flips(i, p, &w, st.prev_held[i] == Held::Floors, &mut st.prev_floors[i])
                     {
                         // The flips from the sampled texels, `w`'s kept in place.
                         floor_flipped = Some(f);
