@@ -183,67 +183,71 @@ pub fn seam_crossings(splits: &[f64], points: &[DVec3], poses: impl IntoIterator
 
 /// Relative bound on the rounding of a computed view depth `(p − c)·f`: at most
 /// `KAPPA · (|p| + |c|) · |f|` (the true bound is about 4 units in the last place, 9e-16).
+/// Also covers the rounding of a difference of computed vectors relative to their lengths.
 const KAPPA: f64 = 1e-14;
 
-/// Inflation of each frame's depth bound and deflation of each slack, covering the rounding of
-/// the few operations that compute them (each a few units in the 16th digit).
+/// Inflation of each bound and deflation of each gap, covering the rounding of the few
+/// operations that compute them (each a few units in the 16th digit).
 const ROUNDING: f64 = 1e-12;
 
-/// Distance levels per octave: a group's points are within a factor `2^(1/LEVELS_PER_OCTAVE)`
-/// of each other's distance from the origin (or closer than 2^-20 of the largest distance).
-const LEVELS_PER_OCTAVE: f64 = 4.0;
+/// Slots of the calendar of due frames (a power of two).
+const SLOTS: usize = 1024;
 
-/// Distance levels in all (20 octaves).
-const LEVELS: f64 = 80.0;
-
-/// Direction cells per side of each of the 6 faces of a cube around the origin: a group's
-/// points also share the cell of their direction from the origin.
-const FACE_CELLS: f64 = 8.0;
+/// Frames a point is set aside at most (its due frame stays far below 2^63).
+const MAX_AHEAD: f64 = (1u64 << 40) as f64;
 
 /// Counts the frames in which each of a set of world-fixed points changes cascade, frame by
 /// frame as the camera moves, without computing every point's depth in every frame.
 ///
-/// Between frames `u` and `u + 1` a point `p`'s view depth `(p − c)·f` changes by
-/// `(p − c_u)·(f_{u+1} − f_u) − (c_{u+1} − c_u)·f_{u+1}`, so by at most
-/// `|(p − o)·Δf| + |o − c_u|·|Δf| + |Δc|·|f_{u+1}|` for any fixed point `o` (frame 0's camera
-/// position), plus the rounding of the two computed depths. The points are grouped by their
-/// distance and direction from `o` (a small cell of space around `q`, the mean of its points,
-/// and `ρ`, their largest distance from it): for every point of a group
-/// `|(p − o)·Δf| ≤ min(R·|Δf|, |(q − o)·Δf| + ρ·|Δf|)`, `R` the group's largest distance from
-/// `o`. The second form is what makes the bound tight: while the camera turns, a group's
-/// depths change at about the rate of its centre's, not of its distance. A point's cascade can
-/// change only when its depth reaches a split value, so after computing a point's depth and
-/// cascade the counter sets it aside until the sum of its group's bounds since then could
-/// reach its distance to the nearest split value (its slack). The sums run as integer
-/// odometers (bounds rounded up, slacks rounded down, in units of a power of two), one per
-/// group, with each point's due reading and each group's smallest. A point set aside kept its
-/// cascade in every frame in between, so each change is counted in the frame it happens: the
-/// counts equal a computation of every point in every frame, exactly. A point whose slack is
-/// not finite or below the bound of one frame is computed every frame.
+/// A point's view depth is `D_t = (p − c_t)·f_t`. With `g_t = f_{t+1} − f_t` and
+/// `h_t = c_{t+1} − c_t`, its change per frame is `e_t = (p − c_t)·g_t − h_t·f_{t+1}`, and
+/// that change's own change is
+/// `e_t − e_{t−1} = (p − c_t)·(g_t − g_{t−1}) − h_{t−1}·(g_{t−1} + g_t) − (h_t − h_{t−1})·f_{t+1}`,
+/// so at most `w_t(r) = (r + |o − c_t|)·|Δg_t| + |h_{t−1}|·|g_{t−1} + g_t| + |Δh_t|·|f_{t+1}|`
+/// for a point at distance `r` from a fixed point `o` (frame 0's camera position): the path's
+/// curvature, not its speed (a steady turn or a steady move has a small one). When a point is
+/// computed in frame `u` (its depth there and in frame `u − 1`, so its last change `v`), its
+/// depth `n` frames later is within `n·v ± (n·η + w·n(n+1)/2 + 2ε)` of `D_u` while every
+/// frame's `w_t(r)` stays below `w` (`η` and `ε` the rounding of the computed depths, at most
+/// `KAPPA·(|p| + |c|)·|f|` each). Its cascade can change only when its depth reaches a split
+/// value, so the point is set aside until the first `n` at which that interval could reach the
+/// split value below or above its depth: a quadratic's root, checked by evaluating it. The
+/// bounds assumed (`w` per unit distance and absolute, the largest `|c|` and `|f|`) are the
+/// counter's: checked every frame against the path's, lowered when the path's fall well below
+/// them, and when the path exceeds one every point is computed again (a jump, a new turn) and
+/// the bounds raised. A point set aside kept its cascade in every frame in between, so each
+/// change is counted in the frame it happens: the counts equal a computation of every point in
+/// every frame, exactly. A point whose depth is not finite or on a split value is computed in
+/// the next frame.
 pub struct SeamCounter<'a> {
     splits: &'a [f64],
     points: &'a [DVec3],
-    /// Frame 0's camera position: distances and directions are measured from it.
+    /// Frame 0's camera position: distances are measured from it.
     origin: DVec3,
-    /// The points, group by group (`starts[g]..starts[g + 1]`).
-    order: Vec<DVec3>,
-    starts: Vec<usize>,
-    /// Each point (in `order`) as last computed: its cascade, and the reading of its group's
-    /// odometer at which it must be computed again.
+    /// Each point's cascade as last computed (unchanged since), its distance `|p − o|` and
+    /// magnitude `|p|`, and the frame it must be computed again.
     cascade: Vec<usize>,
-    reading: Vec<u64>,
-    /// Per group: `q − o`, `R`, `ρ + KAPPA·|q − o|`, the odometer and its smallest due reading.
-    centre: Vec<DVec3>,
-    radius: Vec<f64>,
-    spread: Vec<f64>,
-    odometer: Vec<u64>,
-    next_due: Vec<u64>,
-    /// Odometer units per world unit (a power of two).
-    scale: f64,
-    prev: Option<CameraPose>,
+    dist: Vec<f64>,
+    size: Vec<f64>,
+    due: Vec<u64>,
+    /// Points by due frame modulo SLOTS (each point once, in the slot of its due frame).
+    calendar: Vec<Vec<u32>>,
+    /// The bounds assumed since the last time every point was computed: `w = r·curve + bend`,
+    /// `|c| ≤ reach`, `|f| ≤ length`. None before the third frame.
+    assumed: Option<Assumed>,
+    frame: u64,
+    poses: [Option<CameraPose>; 2],
     changed: u64,
     steps: u64,
     evaluated: u64,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Assumed {
+    curve: f64,
+    bend: f64,
+    reach: f64,
+    length: f64,
 }
 
 impl<'a> SeamCounter<'a> {
@@ -253,17 +257,14 @@ impl<'a> SeamCounter<'a> {
             splits,
             points,
             origin: DVec3::ZERO,
-            order: Vec::new(),
-            starts: Vec::new(),
             cascade: Vec::new(),
-            reading: Vec::new(),
-            centre: Vec::new(),
-            radius: Vec::new(),
-            spread: Vec::new(),
-            odometer: Vec::new(),
-            next_due: Vec::new(),
-            scale: 1.0,
-            prev: None,
+            dist: Vec::new(),
+            size: Vec::new(),
+            due: Vec::new(),
+            calendar: Vec::new(),
+            assumed: None,
+            frame: 0,
+            poses: [None, None],
             changed: 0,
             steps: 0,
             evaluated: 0,
@@ -275,11 +276,12 @@ impl<'a> SeamCounter<'a> {
         if self.points.is_empty() {
             return;
         }
-        match self.prev {
-            None => self.first(pose),
-            Some(prev) => self.next(&prev, pose),
+        match self.poses {
+            [None, _] => self.first(pose),
+            [Some(prev), before] => self.next(&prev, before.as_ref(), pose),
         }
-        self.prev = Some(*pose);
+        self.poses = [Some(*pose), self.poses[0]];
+        self.frame += 1;
     }
 
     /// Changes counted so far (a point changing cascade between two consecutive frames).
@@ -292,14 +294,10 @@ impl<'a> SeamCounter<'a> {
         self.steps
     }
 
-    /// Depths computed so far (points × frames for the brute-force count).
+    /// Depths computed so far (points × frames for the brute-force count; a point computed
+    /// in a frame counts once though its depth in the frame before is computed too).
     pub fn evaluations(&self) -> u64 {
         self.evaluated
-    }
-
-    /// Groups of points the counter keeps an odometer for (0 before the first frame).
-    pub fn groups(&self) -> usize {
-        self.odometer.len()
     }
 
     /// Changes per point and step: [`seam_crossings`]. 0 with no step or no point.
@@ -311,136 +309,169 @@ impl<'a> SeamCounter<'a> {
         }
     }
 
-    /// Frame 0: the groups, every point's cascade and its first due reading.
+    /// Frame 0: every point's cascade; every point is due in frame 1.
     fn first(&mut self, pose: &CameraPose) {
         let o = pose.position;
         self.origin = o;
-        let rel: Vec<DVec3> = self.points.iter().map(|p| *p - o).collect();
-        let dist: Vec<f64> = rel.iter().map(|v| v.length()).collect();
-        let far = dist.iter().copied().fold(0.0, f64::max);
-        // A group is a distance level and a direction cell (a cell of a cube's face); a
-        // misplaced point (NaN, or at the origin) only costs time: the bounds hold for any
-        // grouping.
-        let key = |v: DVec3, r: f64| -> u64 {
-            let level = (LEVELS_PER_OCTAVE * (r / far).log2()).floor();
-            let level = if level.is_nan() {
-                0.0
-            } else {
-                level.clamp(-(LEVELS - 1.0), 0.0)
-            };
-            let a = v.abs();
-            let (face, s, t) = if a.x >= a.y && a.x >= a.z {
-                (u64::from(v.x < 0.0), v.y / a.x, v.z / a.x)
-            } else if a.y >= a.z {
-                (2 + u64::from(v.y < 0.0), v.x / a.y, v.z / a.y)
-            } else {
-                (4 + u64::from(v.z < 0.0), v.x / a.z, v.y / a.z)
-            };
-            // `as` saturates (NaN to 0).
-            let cell = |c: f64| (((c + 1.0) * 0.5 * FACE_CELLS) as u64).min(FACE_CELLS as u64 - 1);
-            ((((level + LEVELS) as u64) * 6 + face) * 64 + cell(s)) * 64 + cell(t)
-        };
-        let keys: Vec<u64> = rel.iter().zip(&dist).map(|(v, &r)| key(*v, r)).collect();
-        let mut idx: Vec<u32> = (0..self.points.len() as u32).collect();
-        idx.sort_by_key(|&k| (keys[k as usize], k));
-        self.order = idx.iter().map(|&k| self.points[k as usize]).collect();
-        self.starts.clear();
-        for (n, &k) in idx.iter().enumerate() {
-            if n == 0 || keys[k as usize] != keys[idx[n - 1] as usize] {
-                self.starts.push(n);
-            }
-        }
-        self.starts.push(idx.len());
-        let groups = self.starts.len() - 1;
-        self.centre = Vec::with_capacity(groups);
-        self.radius = Vec::with_capacity(groups);
-        self.spread = Vec::with_capacity(groups);
-        for g in 0..groups {
-            let members = &idx[self.starts[g]..self.starts[g + 1]];
-            let sum = members.iter().fold(DVec3::ZERO, |s, &k| s + rel[k as usize]);
-            let q = sum / members.len() as f64;
-            let radius = members.iter().fold(0.0f64, |m, &k| m.max(dist[k as usize]));
-            // |p − q| for the real values, within the rounding of `p − o` (relative to
-            // |p − o|), of the subtraction of `q` and of the length: covered by KAPPA.
-            let rho = members.iter().fold(0.0f64, |m, &k| {
-                let v = rel[k as usize];
-                m.max((v - q).length() + KAPPA * (v.length() + q.length()))
-            });
-            self.centre.push(q);
-            self.radius.push(radius);
-            self.spread.push(rho + KAPPA * q.length());
-        }
-        // Units: 2^-32 of the extent of the points and the origin (a power of two, so the
-        // conversions to units are exact); 10^6 frames of the largest turns stay below 2^53.
-        let extent = far.max(o.length()).max(f64::MIN_POSITIVE);
-        let k = (extent.log2().ceil() as i32).clamp(-960, 960);
-        self.scale = 2f64.powi(32 - k);
-        self.odometer = vec![0; groups];
-        self.next_due = vec![u64::MAX; groups];
-        self.cascade = vec![0; self.points.len()];
-        self.reading = vec![0; self.points.len()];
-        for g in 0..groups {
-            for k in self.starts[g]..self.starts[g + 1] {
-                let (cascade, reading) = self.compute(k, g, pose);
-                self.cascade[k] = cascade;
-                self.reading[k] = reading;
-                self.next_due[g] = self.next_due[g].min(reading);
-            }
-        }
+        self.dist = self.points.iter().map(|p| (*p - o).length()).collect();
+        self.size = self.points.iter().map(|p| p.length()).collect();
+        self.cascade = self
+            .points
+            .iter()
+            .map(|p| index(self.splits, (*p - pose.position).dot(pose.forward)))
+            .collect();
+        self.evaluated += self.points.len() as u64;
+        self.due = vec![1; self.points.len()];
+        self.calendar = vec![Vec::new(); SLOTS];
+        self.calendar[1] = (0..self.points.len() as u32).collect();
     }
 
-    /// A frame after the first: advance the odometers, compute the points that are due.
-    fn next(&mut self, prev: &CameraPose, pose: &CameraPose) {
+    /// A frame after the first: check the assumed bounds against the path's, then compute
+    /// the points that are due (every point when a bound was exceeded).
+    fn next(&mut self, prev: &CameraPose, before: Option<&CameraPose>, pose: &CameraPose) {
         self.steps += 1;
-        let (fq, ft) = (prev.forward.length(), pose.forward.length());
-        let df = pose.forward - prev.forward;
-        let turn = df.length();
-        let o = self.origin;
-        // The bound of a point of group g: min(R·turn, |(q − o)·Δf| + spread·turn) + R·kappa
-        // + base (the rounding of `Δf`, of its length and of the dot product: relative,
-        // covered by ROUNDING; the dot product's cancellation: KAPPA·|q − o| in the spread).
-        let kappa = KAPPA * (fq + ft);
-        let base = (o - prev.position).length() * turn
-            + (pose.position - prev.position).length() * ft
-            + KAPPA * ((o.length() + prev.position.length()) * fq + (o.length() + pose.position.length()) * ft);
-        let groups = self.odometer.len();
-        for g in 0..groups {
-            let r = self.radius[g];
-            let lateral = self.centre[g].dot(df).abs() + self.spread[g] * turn;
-            let bound = ((r * turn).min(lateral) + r * kappa + base) * (1.0 + ROUNDING) * self.scale;
-            // Truncated plus one: at least the bound (a saturated odometer computes every
-            // point every frame).
-            let step = if bound < 1e18 { bound as u64 + 1 } else { u64::MAX };
-            let odometer = self.odometer[g].saturating_add(step);
-            self.odometer[g] = odometer;
-            if odometer < self.next_due[g] {
-                continue;
-            }
-            let mut due = u64::MAX;
-            for k in self.starts[g]..self.starts[g + 1] {
-                if self.reading[k] <= odometer {
-                    let (cascade, reading) = self.compute(k, g, pose);
-                    self.changed += u64::from(cascade != self.cascade[k]);
-                    self.cascade[k] = cascade;
-                    self.reading[k] = reading;
+        let t = self.frame;
+        let mut all = false;
+        if let Some(b) = before {
+            // The curvature of frame t − 1 (poses t − 2, t − 1, t): `w_{t−1}(r) = r·curve + bend`.
+            let o = self.origin;
+            let (g0, g1) = (prev.forward - b.forward, pose.forward - prev.forward);
+            let (h0, h1) = (prev.position - b.position, pose.position - prev.position);
+            let dg = (g1 - g0).length() + KAPPA * (g0.length() + g1.length());
+            let dh = (h1 - h0).length() + KAPPA * (h0.length() + h1.length());
+            let up = 1.0 + ROUNDING;
+            let curve = dg * up;
+            let bend = ((o - prev.position).length() * dg
+                + h0.length() * ((g0 + g1).length() + KAPPA * (g0.length() + g1.length()))
+                + dh * pose.forward.length())
+                * up;
+            let reach = pose.position.length().max(prev.position.length());
+            let length = pose.forward.length().max(prev.forward.length());
+            let fits = |a: &Assumed| curve <= a.curve && bend <= a.bend && reach <= a.reach && length <= a.length;
+            match &mut self.assumed {
+                Some(a) if fits(a) => {
+                    // Lowering a bound keeps every prediction made under the higher one.
+                    if 4.0 * curve < a.curve {
+                        a.curve = 2.0 * curve;
+                    }
+                    if 4.0 * bend < a.bend {
+                        a.bend = 2.0 * bend;
+                    }
                 }
-                due = due.min(self.reading[k]);
+                _ => {
+                    all = true;
+                    // Room for the path to vary before every point is computed again.
+                    self.assumed = Some(Assumed {
+                        curve: 2.0 * curve,
+                        bend: 2.0 * bend,
+                        reach: 2.0 * reach + o.length(),
+                        length: 2.0 * length,
+                    });
+                }
             }
-            self.next_due[g] = due;
         }
+        if all {
+            for slot in &mut self.calendar {
+                slot.clear();
+            }
+            for k in 0..self.points.len() {
+                self.compute(k, t, prev, pose);
+            }
+            return;
+        }
+        let slot = t as usize % SLOTS;
+        let entries = std::mem::take(&mut self.calendar[slot]);
+        let mut kept = Vec::new();
+        for &k in &entries {
+            if self.due[k as usize] <= t {
+                self.compute(k as usize, t, prev, pose);
+            } else {
+                kept.push(k);
+            }
+        }
+        // Entries due in a later turn of the calendar stay; computed points were pushed to
+        // the slots of their new due frames (this slot's included).
+        let mut entries = entries;
+        entries.clear();
+        entries.extend(kept);
+        entries.append(&mut self.calendar[slot]);
+        self.calendar[slot] = entries;
     }
 
-    /// Point `k`'s (in group order) cascade in the frame of `pose`, and the reading of its
-    /// group `g`'s odometer (as it stands) at which it must be computed again.
-    #[inline]
-    fn compute(&mut self, k: usize, g: usize, pose: &CameraPose) -> (usize, u64) {
+    /// Point `k`'s cascade in frame `t` (pose `pose`, after `prev`): counts a change, and sets
+    /// the frame it must be computed again.
+    fn compute(&mut self, k: usize, t: u64, prev: &CameraPose, pose: &CameraPose) {
         self.evaluated += 1;
-        let d = (self.order[k] - pose.position).dot(pose.forward);
-        let slack = self.splits.iter().map(|&s| (d - s).abs()).fold(f64::INFINITY, f64::min);
-        let units = slack * (1.0 - ROUNDING) * self.scale;
-        // Truncated (the floor of a non-negative number); not finite (or NaN): computed
-        // again next frame.
-        let units = if units.is_finite() { units as u64 } else { 0 };
-        (index(self.splits, d), self.odometer[g].saturating_add(units))
+        let p = self.points[k];
+        let d = (p - pose.position).dot(pose.forward);
+        let cascade = index(self.splits, d);
+        self.changed += u64::from(cascade != self.cascade[k]);
+        self.cascade[k] = cascade;
+        let ahead = match &self.assumed {
+            Some(a) => self.frames_ahead(k, d, (p - prev.position).dot(prev.forward), a),
+            None => 0,
+        };
+        let due = t + 1 + ahead;
+        self.due[k] = due;
+        self.calendar[due as usize % SLOTS].push(k as u32);
+    }
+
+    /// How many frames after this one point `k` keeps its cascade for sure: its depth `d` here
+    /// and `d0` one frame before, under the bounds `a`.
+    fn frames_ahead(&self, k: usize, d: f64, d0: f64, a: &Assumed) -> u64 {
+        if !(d.is_finite() && d0.is_finite()) {
+            return 0;
+        }
+        // The nearest split values below and above `d` (the cascade is constant between them).
+        let mut below = f64::NEG_INFINITY;
+        let mut above = f64::INFINITY;
+        for &s in self.splits {
+            if s < d {
+                below = below.max(s);
+            } else if s > d {
+                above = above.min(s);
+            } else {
+                return 0;
+            }
+        }
+        let up = 1.0 + ROUNDING;
+        // The rounding of one computed depth in any frame of the assumed bounds.
+        let eps = KAPPA * (self.size[k] + a.reach) * a.length * up;
+        let v = d - d0;
+        // The computed change `v` against the true one: two depths' rounding and its own.
+        let eta = (2.0 * eps + v.abs() * 2.5e-16) * up;
+        let w = (self.dist[k] * up * a.curve + a.bend) * up;
+        let half = 0.5 * w;
+        // Side above: half·n² + (v + eta + half)·n < gap − 2·eps; below: with −v.
+        let side = |slope: f64, gap: f64| -> f64 {
+            if gap == f64::INFINITY {
+                // No split value on this side.
+                return MAX_AHEAD;
+            }
+            let c = gap * (1.0 - ROUNDING) - 2.0 * eps * up;
+            if !(c > 0.0) {
+                return 0.0;
+            }
+            let b = slope + eta + half;
+            let root = if b >= 0.0 {
+                2.0 * c / (b + (b * b + 4.0 * half * c).sqrt())
+            } else {
+                (-b + (b * b + 4.0 * half * c).sqrt()) / (2.0 * half)
+            };
+            // NaN (0/0) gives 0; infinity the cap.
+            let n = (root * (1.0 - 1e-9)).floor().clamp(0.0, MAX_AHEAD);
+            let n = if n.is_nan() { 0.0 } else { n };
+            // Checked: the quadratic below zero at n (so on 0..=n, being convex and below zero
+            // at 0), with room for the rounding of this check.
+            let lhs = (half * n + b) * n;
+            let room = 1e-12 * ((half * n + slope.abs() + eta + half) * n);
+            if lhs + room < c * (1.0 - ROUNDING) {
+                n
+            } else {
+                0.0
+            }
+        };
+        let n = side(v, above - d).min(side(-v, d - below));
+        n as u64
     }
 }
