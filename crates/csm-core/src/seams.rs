@@ -449,7 +449,7 @@ impl<'a> SeamCounter<'a> {
                 return MAX_AHEAD;
             }
             let c = gap * (1.0 - ROUNDING) - 2.0 * eps * up;
-            if !(c > 0.0) {
+            if c.is_nan() || c <= 0.0 {
                 return 0.0;
             }
             let b = slope + eta + half;
