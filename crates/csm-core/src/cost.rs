@@ -273,26 +273,46 @@ fn area_in(t: &[DVec3; 3], lo: DVec2, hi: DVec2, skip_within: bool) -> f64 {
 /// vertex order, with the same arithmetic as [`Poly::clip`]; the three or four vertices it
 /// gives are summed by the shoelace formula in the same order as [`polygon_area`].
 fn one_edge_area(t: &[DVec3; 3], axis: usize, bound: f64, below: bool) -> f64 {
+    match (axis, below) {
+        (0, false) => one_edge_area_at::<0, false>(t, bound),
+        (0, true) => one_edge_area_at::<0, true>(t, bound),
+        (_, false) => one_edge_area_at::<1, false>(t, bound),
+        (_, true) => one_edge_area_at::<1, true>(t, bound),
+    }
+}
+
+/// [`one_edge_area`] with the edge's axis and side fixed (no branch on them per vertex): the
+/// same vertices in the same order, and the shoelace terms of [`polygon_area`] added in its
+/// order from -0 (the start of a float `sum`; a sum of 0 either way loses its sign to `abs`).
+fn one_edge_area_at<const AXIS: usize, const BELOW: bool>(t: &[DVec3; 3], bound: f64) -> f64 {
     let v = t.map(|p| [p.x, p.y]);
+    let side = |x: f64| if BELOW { x <= bound } else { x >= bound };
+    let inner = [side(v[0][AXIS]), side(v[1][AXIS]), side(v[2][AXIS])];
     let mut out = [[0.0; 2]; 4];
     let mut n = 0;
     for i in 0..3 {
-        let a = v[i];
-        let b = v[if i == 2 { 0 } else { i + 1 }];
-        let (ia, ib) = (on_side(a[axis], bound, below), on_side(b[axis], bound, below));
-        if ia {
+        let j = if i == 2 { 0 } else { i + 1 };
+        let (a, b) = (v[i], v[j]);
+        if inner[i] {
             out[n] = a;
             n += 1;
         }
-        if ia != ib {
-            let s = (bound - a[axis]) / (b[axis] - a[axis]);
-            let mut p: [f64; 2] = std::array::from_fn(|k| a[k] + s * (b[k] - a[k]));
-            p[axis] = bound;
+        if inner[i] != inner[j] {
+            let s = (bound - a[AXIS]) / (b[AXIS] - a[AXIS]);
+            let mut p = [0.0; 2];
+            p[1 - AXIS] = a[1 - AXIS] + s * (b[1 - AXIS] - a[1 - AXIS]);
+            p[AXIS] = bound;
             out[n] = p;
             n += 1;
         }
     }
-    polygon_area(&out[..n])
+    let term = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - b[0] * a[1];
+    let twice = if n == 3 {
+        -0.0 + term(out[0], out[1]) + term(out[1], out[2]) + term(out[2], out[0])
+    } else {
+        -0.0 + term(out[0], out[1]) + term(out[1], out[2]) + term(out[2], out[3]) + term(out[3], out[0])
+    };
+    0.5 * twice.abs()
 }
 
 /// The (unsigned) area of a simple polygon.
