@@ -7,7 +7,7 @@
 # With BIN_BEFORE=path (an older release binary) each sweep row is also paired before → after:
 # the same config and command with BIN_BEFORE and with BIN. With CALLGRIND=1 each sweep's
 # instructions are counted too (valgrind --tool=callgrind, one run each: the figure that does
-# not depend on the machine's load), as rows "instructions ...".
+# not depend on the machine's load; one thread, RAYON_NUM_THREADS=1), as rows "instructions ...".
 COST_DIR=$SPEED_ROOT/target/speed/cost
 mkdir -p "$COST_DIR"
 if [ ! -s "$COST_DIR/big.gltf" ]; then
@@ -29,7 +29,7 @@ instructions() {
   local label=$1; shift
   local out
   out=$(mktemp)
-  valgrind --tool=callgrind --callgrind-out-file="$out" "$@" >/dev/null 2>&1
+  RAYON_NUM_THREADS=1 valgrind --tool=callgrind --callgrind-out-file="$out" "$@" >/dev/null 2>&1
   speed_row "| ${SPEED_JOB:-} | instructions: $label | | $(callgrind_annotate "$out" 2>/dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); printf "%.3f G", $1 / 1e9 }') | | | | |"
   rm -f "$out"
 }

@@ -444,7 +444,7 @@ pub(crate) fn measure(
                 let kept = vis.and_then(|vis| kept_objects(config, rig, i, &v, scene, vis));
                 match kept {
                     Some(kept) => light.counts(&scene.mesh, &v, |k| kept[k]),
-                    None => light.counts_all(&scene.mesh, &v),
+                    None => together(&v).unwrap_or_else(|| light.counts_all(&scene.mesh, &v)),
                 }
             });
             CascadeCost {
@@ -494,6 +494,77 @@ pub(crate) fn measure(
         }
     }
     (cascades, total)
+}
+
+/// The key of a volume among the counts made together: its basis and its exact bits.
+type TogetherKey = [u64; 17];
+
+fn together_key(v: &CasterVolume) -> TogetherKey {
+    let b = &v.basis;
+    [
+        b.x.x, b.x.y, b.x.z, b.y.x, b.y.y, b.y.z, b.z.x, b.z.y, b.z.z, v.lo.x, v.lo.y, v.lo.z, v.hi.x, v.hi.y, v.hi.z,
+        v.texel.x, v.texel.y,
+    ]
+    .map(f64::to_bits)
+}
+
+thread_local! {
+    /// The frame-0 counts [`count_together`] made for the settings this thread evaluates next.
+    static TOGETHER: std::cell::RefCell<std::collections::HashMap<TogetherKey, CostCounts>> =
+        std::cell::RefCell::new(std::collections::HashMap::new());
+}
+
+/// The counts [`count_together`] made for the volume `v` on this thread, if any: the same as
+/// [`cost::LightScene::counts_all`]'s, bit for bit.
+fn together(v: &CasterVolume) -> Option<CostCounts> {
+    TOGETHER.with_borrow(|t| t.get(&together_key(v)).copied())
+}
+
+/// Counts, together, the frame-0 caster volumes of `configs` (settings that differ in
+/// resolution alone, evaluated next on this thread), for [`measure`] to read: cascade `i` of
+/// each setting has the same slice and light depth range, and windows that differ by a
+/// sub-texel shift, so one walk of each object's tree serves them all
+/// ([`cost::LightScene::counts_all_many`]). Forgets what it made for the previous settings.
+/// Nothing is made without counts, with culling (counted per setting against its receivers)
+/// or for a single setting.
+pub(crate) fn count_together(configs: &[&Config]) {
+    TOGETHER.with_borrow_mut(|t| t.clear());
+    let Some(first) = configs.first() else {
+        return;
+    };
+    let Some(scene) = counted(first).filter(|_| configs.len() > 1 && first.cost.cull == CostCull::None) else {
+        return;
+    };
+    // Per setting, its frame-0 volumes (as `analyze` makes them), nearest cascade first.
+    let volumes: Vec<Vec<CasterVolume>> = configs
+        .iter()
+        .map(|config| {
+            let Some(rig) = super::rig(config) else {
+                return Vec::new();
+            };
+            let pose0 = config.camera.pose();
+            let lp0 = LightPose::new(&rig.light, &pose0);
+            (0..rig.cascade_count())
+                .map(|i| volume(config, &rig, i, &lp0, &rig.window(i, &lp0, config.shadow.snap)))
+                .collect()
+        })
+        .collect();
+    // Cascade i of every setting in a row, so that one cascade's volumes are walked together.
+    let deepest = volumes.iter().map(Vec::len).max().unwrap_or(0);
+    let mut ordered: Vec<CasterVolume> = Vec::new();
+    for i in 0..deepest {
+        ordered.extend(volumes.iter().filter_map(|v| v.get(i).copied()));
+    }
+    let mut made = std::collections::HashMap::new();
+    // One light scene per basis (a preset's basis may differ per cascade).
+    let mut left = ordered;
+    while let Some(basis) = left.first().map(|v| v.basis) {
+        let (same, rest): (Vec<_>, Vec<_>) = left.into_iter().partition(|v| v.basis == basis);
+        let counts = scene.light_scene(&basis).counts_all_many(&scene.mesh, &same);
+        made.extend(same.iter().map(together_key).zip(counts));
+        left = rest;
+    }
+    TOGETHER.with_borrow_mut(|t| *t = made);
 }
 
 /// The cost of a setting that needs no cascade: nothing is rendered (in any frame, when the

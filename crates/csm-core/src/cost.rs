@@ -273,26 +273,46 @@ fn area_in(t: &[DVec3; 3], lo: DVec2, hi: DVec2, skip_within: bool) -> f64 {
 /// vertex order, with the same arithmetic as [`Poly::clip`]; the three or four vertices it
 /// gives are summed by the shoelace formula in the same order as [`polygon_area`].
 fn one_edge_area(t: &[DVec3; 3], axis: usize, bound: f64, below: bool) -> f64 {
+    match (axis, below) {
+        (0, false) => one_edge_area_at::<0, false>(t, bound),
+        (0, true) => one_edge_area_at::<0, true>(t, bound),
+        (_, false) => one_edge_area_at::<1, false>(t, bound),
+        (_, true) => one_edge_area_at::<1, true>(t, bound),
+    }
+}
+
+/// [`one_edge_area`] with the edge's axis and side fixed (no branch on them per vertex): the
+/// same vertices in the same order, and the shoelace terms of [`polygon_area`] added in its
+/// order from -0 (the start of a float `sum`; a sum of 0 either way loses its sign to `abs`).
+fn one_edge_area_at<const AXIS: usize, const BELOW: bool>(t: &[DVec3; 3], bound: f64) -> f64 {
     let v = t.map(|p| [p.x, p.y]);
+    let side = |x: f64| if BELOW { x <= bound } else { x >= bound };
+    let inner = [side(v[0][AXIS]), side(v[1][AXIS]), side(v[2][AXIS])];
     let mut out = [[0.0; 2]; 4];
     let mut n = 0;
     for i in 0..3 {
-        let a = v[i];
-        let b = v[if i == 2 { 0 } else { i + 1 }];
-        let (ia, ib) = (on_side(a[axis], bound, below), on_side(b[axis], bound, below));
-        if ia {
+        let j = if i == 2 { 0 } else { i + 1 };
+        let (a, b) = (v[i], v[j]);
+        if inner[i] {
             out[n] = a;
             n += 1;
         }
-        if ia != ib {
-            let s = (bound - a[axis]) / (b[axis] - a[axis]);
-            let mut p: [f64; 2] = std::array::from_fn(|k| a[k] + s * (b[k] - a[k]));
-            p[axis] = bound;
+        if inner[i] != inner[j] {
+            let s = (bound - a[AXIS]) / (b[AXIS] - a[AXIS]);
+            let mut p = [0.0; 2];
+            p[1 - AXIS] = a[1 - AXIS] + s * (b[1 - AXIS] - a[1 - AXIS]);
+            p[AXIS] = bound;
             out[n] = p;
             n += 1;
         }
     }
-    polygon_area(&out[..n])
+    let term = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - b[0] * a[1];
+    let twice = if n == 3 {
+        -0.0 + term(out[0], out[1]) + term(out[1], out[2]) + term(out[2], out[0])
+    } else {
+        -0.0 + term(out[0], out[1]) + term(out[1], out[2]) + term(out[2], out[3]) + term(out[3], out[0])
+    };
+    0.5 * twice.abs()
 }
 
 /// The (unsigned) area of a simple polygon.
@@ -365,6 +385,9 @@ impl CostCounts {
 /// Triangles per leaf of an object's tree.
 const LEAF: usize = 8;
 
+/// Volumes a joint walk ([`LightScene::walk_lanes`]) follows at most.
+const LANES: usize = 4;
+
 /// A node of an object's tree: a run of its triangles (spatially close: the object's
 /// triangles are in a Morton order of their world centroids) with its light-space bounds and
 /// projected area; an inner node has two children halving the run.
@@ -393,6 +416,112 @@ impl Chunk {
     /// Its two children (it is node `me`); None for a leaf.
     fn children(&self, me: usize) -> Option<(usize, usize)> {
         (self.right != 0).then(|| (me + 1, self.right as usize))
+    }
+}
+
+/// How a node's bounds lie against every lane of a [`Lanes`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Class {
+    /// Inside every lane's box.
+    Inside,
+    /// Apart from every lane's box.
+    Apart,
+    /// Crossing every lane's box (neither inside nor apart from any).
+    Crossing,
+    /// Not decided by the common box and the hull: each lane is tested.
+    Mixed,
+}
+
+/// Up to [`LANES`] volumes walked together ([`LightScene::walk_lanes`]), with their common
+/// box (`ilo..ihi`: inside it, inside each) and their hull (`ulo..uhi`: apart from it, apart
+/// from each).
+struct Lanes<'a> {
+    v: &'a [CasterVolume],
+    ilo: DVec3,
+    ihi: DVec3,
+    ulo: DVec3,
+    uhi: DVec3,
+    /// Every lane has the same depth range.
+    same_z: bool,
+}
+
+impl<'a> Lanes<'a> {
+    fn new(v: &'a [CasterVolume]) -> Self {
+        assert!(!v.is_empty() && v.len() <= LANES, "1 to {LANES} lanes");
+        let (mut ilo, mut ihi, mut ulo, mut uhi) = (v[0].lo, v[0].hi, v[0].lo, v[0].hi);
+        for x in &v[1..] {
+            (ilo, ihi) = (ilo.max(x.lo), ihi.min(x.hi));
+            (ulo, uhi) = (ulo.min(x.lo), uhi.max(x.hi));
+        }
+        let same_z = v.iter().all(|x| x.lo.z == v[0].lo.z && x.hi.z == v[0].hi.z);
+        Lanes {
+            v,
+            ilo,
+            ihi,
+            ulo,
+            uhi,
+            same_z,
+        }
+    }
+
+    /// The bounds `[lo, hi]` against every lane's box.
+    fn class3(&self, lo: DVec3, hi: DVec3) -> Class {
+        if lo.cmpge(self.ilo).all() && hi.cmple(self.ihi).all() {
+            Class::Inside
+        } else if lo.cmpgt(self.uhi).any() || hi.cmplt(self.ulo).any() {
+            Class::Apart
+        } else if !(lo.cmpgt(self.ihi).any() || hi.cmplt(self.ilo).any())
+            && (lo.cmplt(self.ulo).any() || hi.cmpgt(self.uhi).any())
+        {
+            // Meeting the common box (so each lane's) and reaching beyond the hull (so beyond
+            // each lane's box).
+            Class::Crossing
+        } else {
+            Class::Mixed
+        }
+    }
+
+    /// [`Lanes::class3`] of the rectangles (light x and y).
+    fn class2(&self, lo: DVec2, hi: DVec2) -> Class {
+        let (ilo, ihi, ulo, uhi) = (
+            self.ilo.truncate(),
+            self.ihi.truncate(),
+            self.ulo.truncate(),
+            self.uhi.truncate(),
+        );
+        if lo.cmpge(ilo).all() && hi.cmple(ihi).all() {
+            Class::Inside
+        } else if lo.cmpgt(uhi).any() || hi.cmplt(ulo).any() {
+            Class::Apart
+        } else if !(lo.cmpgt(ihi).any() || hi.cmplt(ilo).any()) && (lo.cmplt(ulo).any() || hi.cmpgt(uhi).any()) {
+            Class::Crossing
+        } else {
+            Class::Mixed
+        }
+    }
+
+    /// The one window edge `(axis, below)` that bounds `[lo, hi]` cross for every lane while
+    /// lying within every lane's three other edges (beyond the hull on that side, within the
+    /// common box on the others): [`single_crossing`] of each lane's rectangle is then that
+    /// edge at the lane's bound. None otherwise.
+    fn one_edge(&self, lo: DVec3, hi: DVec3) -> Option<(usize, bool)> {
+        let mut found = None;
+        for axis in 0..2 {
+            for (beyond, within, below) in [
+                (lo[axis] < self.ulo[axis], lo[axis] >= self.ilo[axis], false),
+                (hi[axis] > self.uhi[axis], hi[axis] <= self.ihi[axis], true),
+            ] {
+                if beyond {
+                    if found.is_some() {
+                        return None;
+                    }
+                    found = Some((axis, below));
+                } else if !within {
+                    return None;
+                }
+            }
+        }
+        found
     }
 }
 
@@ -439,6 +568,11 @@ const KEPT_INDICES: usize = 8;
 
 /// Volumes a [`LightScene`] remembers the counts of, at most.
 const REMEMBERED: usize = 1 << 14;
+
+/// The key of a volume in [`LightScene`]'s memory of counts: its exact bits.
+fn volume_key(v: &CasterVolume) -> [u64; 8] {
+    [v.lo.x, v.lo.y, v.lo.z, v.hi.x, v.hi.y, v.hi.z, v.texel.x, v.texel.y].map(f64::to_bits)
+}
 
 /// Bounds of a set of light-space triangles.
 fn bounds_of<'a>(tris: impl Iterator<Item = &'a [DVec3; 3]>) -> (DVec3, DVec3) {
@@ -591,25 +725,89 @@ impl LightScene {
     /// [`LightScene::counts`] without culling, remembered per volume: a volume counted before
     /// (bit for bit the same window, depth range and texel) is not counted again.
     pub fn counts_all(&self, mesh: &Mesh, v: &CasterVolume) -> CostCounts {
-        let key = [
-            v.lo.x.to_bits(),
-            v.lo.y.to_bits(),
-            v.lo.z.to_bits(),
-            v.hi.x.to_bits(),
-            v.hi.y.to_bits(),
-            v.hi.z.to_bits(),
-            v.texel.x.to_bits(),
-            v.texel.y.to_bits(),
-        ];
+        let key = volume_key(v);
         if let Some(c) = self.seen.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
             return *c;
         }
         let c = self.counts(mesh, v, |_| true);
+        self.remember(key, c);
+        c
+    }
+
+    fn remember(&self, key: [u64; 8], c: CostCounts) {
         let mut seen = self.seen.lock().unwrap_or_else(|e| e.into_inner());
         if seen.len() < REMEMBERED {
             seen.insert(key, c);
         }
-        c
+    }
+
+    /// [`LightScene::counts_all`] of each volume of `vs`, bit for bit, with the tree walked
+    /// once for up to [`LANES`] volumes at a time ([`LightScene::walk_lanes`]): consecutive
+    /// volumes with the same depth range (one cascade of settings that differ in resolution
+    /// alone: their windows differ by a sub-texel shift) share the nodes and triangles they
+    /// read.
+    pub fn counts_all_many(&self, mesh: &Mesh, vs: &[CasterVolume]) -> Vec<CostCounts> {
+        let mut out: Vec<Option<CostCounts>> = {
+            let seen = self.seen.lock().unwrap_or_else(|e| e.into_inner());
+            vs.iter()
+                .map(|v| {
+                    debug_assert_eq!(v.basis, self.basis, "a volume of another basis");
+                    if v.is_empty() {
+                        Some(CostCounts::default())
+                    } else {
+                        seen.get(&volume_key(v)).copied()
+                    }
+                })
+                .collect()
+        };
+        // The volumes to count, in runs of at most LANES with one depth range.
+        let todo: Vec<usize> = (0..vs.len()).filter(|&i| out[i].is_none()).collect();
+        let mut runs: Vec<Vec<usize>> = Vec::new();
+        for i in todo {
+            let joins = runs.last().is_some_and(|r: &Vec<usize>| {
+                let f = &vs[r[0]];
+                r.len() < LANES && f.lo.z == vs[i].lo.z && f.hi.z == vs[i].hi.z
+            });
+            if joins {
+                runs.last_mut().expect("a run").push(i);
+            } else {
+                runs.push(vec![i]);
+            }
+        }
+        for run in runs {
+            let lane_vs: Vec<CasterVolume> = run.iter().map(|&i| vs[i]).collect();
+            let lanes = Lanes::new(&lane_vs);
+            let mut counts = vec![CostCounts::default(); run.len()];
+            let mut area = vec![0.0f64; run.len()];
+            for (o, lo) in mesh.objects.iter().zip(&self.objects) {
+                // `counts`' tests, per lane.
+                let mut meet = 0u8;
+                for (l, v) in lane_vs.iter().enumerate() {
+                    if !(lo.box_lo.cmpgt(v.hi).any() || lo.box_hi.cmplt(v.lo).any()) && self.axes.meets(&o.bounds, v) {
+                        meet |= 1 << l;
+                    }
+                }
+                if meet == 0 {
+                    continue;
+                }
+                let (k, a) = self.walk_lanes(lo.root, &lanes, meet, meet);
+                for l in 0..run.len() {
+                    if meet & (1 << l) != 0 {
+                        counts[l].caster_objects += 1;
+                        counts[l].caster_triangles += o.triangles.len() as u64;
+                        counts[l].caster_triangles_inside += k[l];
+                        area[l] += a[l];
+                    }
+                }
+            }
+            for (l, &i) in run.iter().enumerate() {
+                let v = &vs[i];
+                counts[l].raster_fragments = area[l] / (v.texel.x * v.texel.y);
+                self.remember(volume_key(v), counts[l]);
+                out[i] = Some(counts[l]);
+            }
+        }
+        out.into_iter().map(|c| c.expect("every volume counted")).collect()
     }
 
     /// The triangles of a chunk.
@@ -667,6 +865,201 @@ impl LightScene {
                 (k, a)
             }
         }
+    }
+
+    /// [`LightScene::walk`] for up to [`LANES`] volumes at once, lane `l` counting
+    /// `lanes.v[l]` where the bits `l` of `count` and `area` ask: each lane's result is the one
+    /// `walk` gives for its volume, bit for bit (both are the tree's plain sums, whatever is
+    /// settled where). A node is classified once against the lanes' common box and their hull
+    /// when that decides every lane, and per lane otherwise.
+    fn walk_lanes(&self, n: usize, lanes: &Lanes, mut count: u8, mut area: u8) -> ([u64; LANES], [f64; LANES]) {
+        let c = &self.chunks[n];
+        let mut k = [0u64; LANES];
+        let mut a = [0.0f64; LANES];
+        if count != 0 {
+            match lanes.class3(c.lo, c.hi) {
+                Class::Inside => {
+                    for (l, k) in k.iter_mut().enumerate() {
+                        if count & (1 << l) != 0 {
+                            *k = (c.end - c.start) as u64;
+                        }
+                    }
+                    count = 0;
+                }
+                Class::Apart => count = 0,
+                Class::Crossing => {}
+                Class::Mixed => {
+                    for (l, v) in lanes.v.iter().enumerate() {
+                        let bit = 1u8 << l;
+                        if count & bit != 0 {
+                            if c.lo.cmpge(v.lo).all() && c.hi.cmple(v.hi).all() {
+                                k[l] = (c.end - c.start) as u64;
+                                count &= !bit;
+                            } else if c.lo.cmpgt(v.hi).any() || c.hi.cmplt(v.lo).any() {
+                                count &= !bit;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        if area != 0 {
+            let (lo, hi) = (c.lo.truncate(), c.hi.truncate());
+            match lanes.class2(lo, hi) {
+                Class::Inside => {
+                    for (l, a) in a.iter_mut().enumerate() {
+                        if area & (1 << l) != 0 {
+                            *a = c.area;
+                        }
+                    }
+                    area = 0;
+                }
+                Class::Apart => area = 0,
+                Class::Crossing => {}
+                Class::Mixed => {
+                    for (l, v) in lanes.v.iter().enumerate() {
+                        let bit = 1u8 << l;
+                        if area & bit != 0 {
+                            let (rlo, rhi) = (v.lo.truncate(), v.hi.truncate());
+                            if lo.cmpge(rlo).all() && hi.cmple(rhi).all() {
+                                a[l] = c.area;
+                                area &= !bit;
+                            } else if lo.cmpgt(rhi).any() || hi.cmplt(rlo).any() {
+                                area &= !bit;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        if count | area == 0 {
+            return (k, a);
+        }
+        match c.children(n) {
+            Some((x, y)) => {
+                let (k1, a1) = self.walk_lanes(x, lanes, count, area);
+                let (k2, a2) = self.walk_lanes(y, lanes, count, area);
+                for l in 0..LANES {
+                    k[l] += k1[l] + k2[l];
+                    a[l] = a[l] + a1[l] + a2[l];
+                }
+                (k, a)
+            }
+            None => {
+                let (k1, a1) = self.leaf_lanes(c, lanes, count, area);
+                for l in 0..LANES {
+                    k[l] += k1[l];
+                    a[l] += a1[l];
+                }
+                (k, a)
+            }
+        }
+    }
+
+    /// The leaf `c`'s part of [`LightScene::walk_lanes`]: per lane asked, the number of its
+    /// triangles meeting the lane's volume (`count`) and the sum of their [`clipped_area`]s in
+    /// order from 0 (`area`), as [`LightScene::leaf_meeting`] and [`LightScene::leaf_area`]
+    /// give them. When the leaf crosses one window edge of every lane and lies within the
+    /// lanes' other edges, each triangle's extent along that edge's axis is found once and
+    /// compared with each lane's edge (all of it on the inner side: its whole area, read once;
+    /// none: nothing; else clipped by that edge, [`one_edge_area`]); when it lies within every
+    /// lane's rectangle and the lanes share their depth range, one count serves them all.
+    fn leaf_lanes(&self, c: &Chunk, lanes: &Lanes, count: u8, area: u8) -> ([u64; LANES], [f64; LANES]) {
+        let mut k = [0u64; LANES];
+        let mut a = [0.0f64; LANES];
+        let tris = &self.triangles[c.tris()];
+        let edge = lanes.one_edge(c.lo, c.hi);
+        let z_within = c.lo.z >= lanes.ilo.z && c.hi.z <= lanes.ihi.z;
+        let joint_area = if edge.is_some() { area } else { 0 };
+        let joint_count = if edge.is_some() && z_within { count } else { 0 };
+        if let Some((axis, below)) = edge.filter(|_| joint_area | joint_count != 0) {
+            let joint = joint_area | joint_count;
+            let bound: [f64; LANES] = std::array::from_fn(|l| {
+                let v = &lanes.v[l.min(lanes.v.len() - 1)];
+                if below {
+                    v.hi[axis]
+                } else {
+                    v.lo[axis]
+                }
+            });
+            // The band of the lanes' edges: a triangle on the inner side of all of them has
+            // its whole area in every lane, one beyond all of them none.
+            let (mut bmin, mut bmax) = (f64::INFINITY, f64::NEG_INFINITY);
+            for (l, b) in bound.iter().enumerate() {
+                if joint & (1 << l) != 0 {
+                    (bmin, bmax) = (bmin.min(*b), bmax.max(*b));
+                }
+            }
+            let kj: [u64; LANES] = std::array::from_fn(|l| u64::from(joint_count & (1 << l) != 0));
+            let aj: [bool; LANES] = std::array::from_fn(|l| joint_area & (1 << l) != 0);
+            for t in tris {
+                let (x0, x1, x2) = (t[0][axis], t[1][axis], t[2][axis]);
+                let (tmin, tmax) = (x0.min(x1).min(x2), x0.max(x1).max(x2));
+                let (all_in, all_out) = if below {
+                    (tmax <= bmin, tmin > bmax)
+                } else {
+                    (tmin >= bmax, tmax < bmin)
+                };
+                if all_out {
+                    continue;
+                }
+                if all_in {
+                    // Adding 0 to a lane that does not take the area changes nothing: every
+                    // lane's sum is a sum of areas, never -0.
+                    let w = projected_area(t);
+                    for l in 0..LANES {
+                        k[l] += kj[l];
+                        a[l] += if aj[l] { w } else { 0.0 };
+                    }
+                    continue;
+                }
+                let mut whole = None;
+                for l in 0..lanes.v.len() {
+                    if joint & (1 << l) == 0 {
+                        continue;
+                    }
+                    let b = bound[l];
+                    let (all, none) = if below {
+                        (tmax <= b, tmin > b)
+                    } else {
+                        (tmin >= b, tmax < b)
+                    };
+                    if none {
+                        continue;
+                    }
+                    k[l] += kj[l];
+                    if aj[l] {
+                        a[l] += if all {
+                            *whole.get_or_insert_with(|| projected_area(t))
+                        } else {
+                            one_edge_area(t, axis, b, below)
+                        };
+                    }
+                }
+            }
+        }
+        let (count, area) = (count & !joint_count, area & !joint_area);
+        // One count for every lane when the leaf lies within each lane's rectangle and the
+        // lanes' depth ranges are the same: the triangles meeting each volume are then the same.
+        let shared = count != 0 && lanes.same_z && {
+            let (lo, hi) = (c.lo.truncate(), c.hi.truncate());
+            lo.cmpge(lanes.ilo.truncate()).all() && hi.cmple(lanes.ihi.truncate()).all()
+        };
+        let mut once = None;
+        for (l, v) in lanes.v.iter().enumerate() {
+            let bit = 1u8 << l;
+            if count & bit != 0 {
+                k[l] += if shared {
+                    *once.get_or_insert_with(|| self.leaf_meeting(c, v))
+                } else {
+                    self.leaf_meeting(c, v)
+                };
+            }
+            if area & bit != 0 {
+                a[l] += self.leaf_area(c, v);
+            }
+        }
+        (k, a)
     }
 
     /// [`LightScene::leaf_meeting`] and [`LightScene::leaf_area`] in one pass over the
@@ -1395,6 +1788,70 @@ mod tests {
             if below { olo[axis] = bound } else { ohi[axis] = bound }
             let (whole, beyond) = (projected_area(&t), clipped_area(&t, olo, ohi));
             prop_assert!((fast + beyond - whole).abs() <= 1e-9 * (1.0 + whole), "{} + {} != {}", fast, beyond, whole);
+        }
+
+        /// Volumes counted together ([`LightScene::counts_all_many`]: lanes of one depth range
+        /// walked at once, nodes and leaves classified against the lanes' common box and hull)
+        /// give each volume's direct count ([`LightScene::counts`]) bit for bit: runs of a
+        /// volume shifted by sub-texel amounts (one cascade at several resolutions), with edges
+        /// through scene vertices and lanes' edges equal, mixed with volumes of other depth
+        /// ranges and empty ones, asked twice (the second time from memory).
+        #[test]
+        fn volumes_counted_together_equal_the_direct_counts_bit_for_bit(
+            m in scene(),
+            d in (-1.0..1.0f64, -1.0..-0.2f64, -1.0..1.0f64),
+            r in prop::array::uniform6(0.0..1.0f64),
+            snap in prop::option::of(prop::array::uniform4(0usize..10_000)),
+            shifts in prop::collection::vec((prop::array::uniform4(-1.0..1.0f64), 0u8..4), 1..7),
+            scale in prop::sample::select(vec![0.0, 1e-9, 0.01, 0.3, 3.0]),
+            other in prop::collection::vec(prop::array::uniform6(0.0..1.0f64), 0..3),
+        ) {
+            let base = volume(&m, DVec3::new(d.0, d.1, d.2), r, snap);
+            let light = LightScene::new(&m, &base.basis);
+            let mut vs = Vec::new();
+            for (k, (s, kind)) in shifts.iter().enumerate() {
+                let mut v = base;
+                match kind {
+                    // The same volume again.
+                    0 => {}
+                    // One edge moved (the others shared with the base).
+                    1 => v.lo.x += scale * s[0],
+                    // Every edge moved: a sub-texel shift and a slightly other size.
+                    2 => {
+                        v.lo += DVec3::new(scale * s[0], scale * s[1], 0.0);
+                        v.hi += DVec3::new(scale * s[2], scale * s[3], 0.0);
+                    }
+                    // An edge through a scene vertex.
+                    _ => {
+                        let p = light.basis.to_light(m.triangles[k * 7919 % m.triangles.len()][k % 3]);
+                        if s[0] < 0.0 { v.hi.y = p.y } else { v.lo.x = p.x }
+                    }
+                }
+                v.texel = DVec2::new(0.25, 0.5) * (1.0 + k as f64);
+                vs.push(v);
+            }
+            // Volumes of other depth ranges (and maybe empty) between the runs.
+            for (k, o) in other.iter().enumerate() {
+                let v = volume(&m, DVec3::new(d.0, d.1, d.2), *o, None);
+                vs.insert((k * 3) % (vs.len() + 1), v);
+            }
+            let direct: Vec<CostCounts> = vs.iter().map(|v| light.counts(&m, v, |_| true)).collect();
+            for _ in 0..2 {
+                let together = light.counts_all_many(&m, &vs);
+                prop_assert_eq!(together.len(), vs.len());
+                for (t, c) in together.iter().zip(&direct) {
+                    prop_assert_eq!(t.caster_objects, c.caster_objects);
+                    prop_assert_eq!(t.caster_triangles, c.caster_triangles);
+                    prop_assert_eq!(t.caster_triangles_inside, c.caster_triangles_inside);
+                    prop_assert_eq!(t.raster_fragments.to_bits(), c.raster_fragments.to_bits());
+                }
+            }
+            // And each against the plain definition (no node settled, every plane clipped).
+            for (v, c) in vs.iter().zip(&direct) {
+                let plain = counts_plain(&light, &m, v, |_| true);
+                prop_assert_eq!(plain.caster_triangles_inside, c.caster_triangles_inside);
+                prop_assert_eq!(plain.raster_fragments.to_bits(), c.raster_fragments.to_bits());
+            }
         }
 
         /// The bounds of the receivers in view-depth intervals equal a scan of every receiver

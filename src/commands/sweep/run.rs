@@ -87,22 +87,28 @@ pub(crate) fn run_settings(
         let done = groups
             .par_iter()
             .map(|group| {
-                group
+                let configs: Vec<_> = group.iter().map(|&k| point(&settings[k])).collect();
+                // Their frame-0 render-cost counts in one walk per cascade (docs/cost.md).
+                crate::analysis::cost::count_together(&configs.iter().flatten().collect::<Vec<_>>());
+                let rows = group
                     .iter()
-                    .map(|&k| {
+                    .zip(configs)
+                    .map(|(&k, config)| {
                         let s = &settings[k];
                         let opts = AnalysisOptions {
                             cost_means,
                             ..AnalysisOptions::summary_only()
                         };
-                        let row = point(s).map(|config| Row {
+                        let row = config.map(|config| Row {
                             setting: *s,
                             summary: analyze(&config, &opts).summary,
                         });
                         on_done();
                         (k, row)
                     })
-                    .collect::<Vec<_>>()
+                    .collect::<Vec<_>>();
+                crate::analysis::cost::count_together(&[]);
+                rows
             })
             .collect::<Vec<_>>();
         // Every row is placed at its index; the first refused point in grid order is the error.
