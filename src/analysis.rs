@@ -1884,10 +1884,18 @@ mod split_range_tests {
         for field in 0..12 {
             let s = changed(b.clone(), field, 0.5);
             let alone = depth_range::for_setup(&s);
-            assert_ne!(bits(alone), bits(depth_range::for_setup(&b)), "field {field} moves the range");
+            assert_ne!(
+                bits(alone),
+                bits(depth_range::for_setup(&b)),
+                "field {field} moves the range"
+            );
             assert_eq!(bits(split_range(&b)), bits(depth_range::for_setup(&b)));
             assert_eq!(bits(split_range(&s)), bits(alone), "field {field}");
-            assert_eq!(bits(split_range(&b)), bits(depth_range::for_setup(&b)), "field {field}, back");
+            assert_eq!(
+                bits(split_range(&b)),
+                bits(depth_range::for_setup(&b)),
+                "field {field}, back"
+            );
         }
     }
 

@@ -120,9 +120,19 @@ pub(crate) fn run_settings(
 fn resolution_groups(settings: &[Setting]) -> Vec<Vec<usize>> {
     let mut at: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
+    let strip = |s: &Setting| Setting { resolution: 0, ..*s };
     for (k, s) in settings.iter().enumerate() {
+        // A setting equal to the one before but for the resolution joins its group without a
+        // key (a grid's resolution axis is innermost unless reordered: most settings do).
+        if k > 0 && strip(s) == strip(&settings[k - 1]) {
+            let g = groups.len() - 1;
+            if groups[g].last() == Some(&(k - 1)) {
+                groups[g].push(k);
+                continue;
+            }
+        }
         // Debug prints every float so that it reads back exactly: equal keys, equal settings.
-        let key = format!("{:?}", Setting { resolution: 0, ..*s });
+        let key = format!("{:?}", strip(s));
         let g = *at.entry(key).or_insert_with(|| {
             groups.push(Vec::new());
             groups.len() - 1
