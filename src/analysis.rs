@@ -1842,13 +1842,13 @@ mod split_range_tests {
     use glam::DVec3;
     use proptest::prelude::*;
 
-    /// The bounds-only sweep's set-up, with bounds that the view frustum clips on both ends
-    /// (so each input of the range moves it).
+    /// The bounds-only sweep's set-up, with bounds to the right of the view axis that the view
+    /// frustum clips on both ends (so each input of the range moves it).
     fn base() -> Setup {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/default_bounds_only.toml");
         let mut setup = Config::load(&path).expect("the bundled config loads").setup();
-        setup.bounds.min = DVec3::new(-50.0, 0.0, -120.0);
-        setup.bounds.max = DVec3::new(50.0, 40.0, -20.0);
+        setup.bounds.min = DVec3::new(20.0, 0.0, -120.0);
+        setup.bounds.max = DVec3::new(60.0, 40.0, -20.0);
         setup
     }
 
@@ -1865,9 +1865,9 @@ mod split_range_tests {
             3 => s.camera.up.x += by,
             4 => s.camera.fov_y *= 1.0 + by / 20.0,
             5 => s.camera.aspect *= 1.0 + by / 10.0,
-            6 => s.camera.near *= 1.0 + by.abs() * 100.0,
-            7 => s.camera.far = s.shadow.max_distance - 1.0 - by.abs() * 10.0,
-            8 => s.shadow.max_distance -= 1.0 + by.abs() * 10.0,
+            6 => s.camera.near = 30.0 + by.abs(),
+            7 => s.camera.far = 100.0 - by.abs() * 10.0,
+            8 => s.shadow.max_distance -= 60.0 + by.abs() * 10.0,
             9 => s.bounds.min.z -= 1.0 + by.abs(),
             10 => s.bounds.max.z += 1.0 + by.abs(),
             _ => s.shadow.fit_depth_to_scene = !s.shadow.fit_depth_to_scene,
