@@ -120,19 +120,9 @@ pub(crate) fn run_settings(
 fn resolution_groups(settings: &[Setting]) -> Vec<Vec<usize>> {
     let mut at: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
-    let strip = |s: &Setting| Setting { resolution: 0, ..*s };
     for (k, s) in settings.iter().enumerate() {
-        // A setting equal to the one before but for the resolution joins its group without a
-        // key (a grid's resolution axis is innermost unless reordered: most settings do).
-        if k > 0 && strip(s) == strip(&settings[k - 1]) {
-            let g = groups.len() - 1;
-            if groups[g].last() == Some(&(k - 1)) {
-                groups[g].push(k);
-                continue;
-            }
-        }
         // Debug prints every float so that it reads back exactly: equal keys, equal settings.
-        let key = format!("{:?}", strip(s));
+        let key = format!("{:?}", Setting { resolution: 0, ..*s });
         let g = *at.entry(key).or_insert_with(|| {
             groups.push(Vec::new());
             groups.len() - 1
@@ -183,31 +173,7 @@ mod tests {
             }
         }
         settings.push(Setting::plain(0.5, 3, 4096, Fit::Sphere));
-        let groups = partition(&settings);
-        // 2 fits x 2 cascade counts x 3 λ; the one 4096 setting joins its 512..2048 group.
-        assert_eq!(groups.len(), 12);
-        let with_4096 = groups.iter().find(|g| g.contains(&(settings.len() - 1))).unwrap();
-        assert_eq!(with_4096.len(), 4);
-        // The resolution innermost (a sweep's own order: runs of equal neighbours), a group
-        // interrupted and taken up again, and its first setting repeated at the end.
-        let mut settings = Vec::new();
-        for lambda in [0.1, 0.5, 0.1 + 0.2, 0.1] {
-            for cascades in [1, 3] {
-                for res in [512, 1024, 2048] {
-                    settings.push(Setting::plain(lambda, cascades, res, Fit::Sphere));
-                }
-            }
-        }
-        settings.push(Setting::plain(0.1, 1, 4096, Fit::Sphere));
-        let groups = partition(&settings);
-        assert_eq!(groups.len(), 6);
-        assert_eq!(groups[0], vec![0, 1, 2, 18, 19, 20, 24]);
-        assert_eq!(groups[1], vec![3, 4, 5, 21, 22, 23]);
-    }
-
-    /// The groups of `settings`, checked to be a partition as the test above states it.
-    fn partition(settings: &[Setting]) -> Vec<Vec<usize>> {
-        let groups = resolution_groups(settings);
+        let groups = resolution_groups(&settings);
         let mut seen = vec![0; settings.len()];
         let strip = |s: &Setting| Setting { resolution: 0, ..*s };
         for g in &groups {
@@ -224,6 +190,9 @@ mod tests {
                 assert!(ga[0] < gb[0]);
             }
         }
-        groups
+        // 2 fits x 2 cascade counts x 3 λ; the one 4096 setting joins its 512..2048 group.
+        assert_eq!(groups.len(), 12);
+        let with_4096 = groups.iter().find(|g| g.contains(&(settings.len() - 1))).unwrap();
+        assert_eq!(with_4096.len(), 4);
     }
 }
