@@ -541,7 +541,10 @@ pub(crate) fn f64_window_problem(config: &Config, all_frames: bool) -> Option<St
 pub fn rig(config: &Config) -> Option<Rig> {
     match &config.shadow.preset {
         Some(preset) => crate::presets::rig(config, preset),
-        None => Rig::for_setup(&config.setup()),
+        None => {
+            let setup = config.setup();
+            Rig::for_setup_in(&setup, split_range(&setup))
+        }
     }
 }
 
@@ -1143,7 +1146,7 @@ fn analyze_camera(
 /// clipping).
 fn analysed_range(config: &Config, rig: Option<&Rig>) -> DepthRange {
     match (&config.shadow.preset, rig) {
-        (None, _) => depth_range::for_setup(&config.setup()),
+        (None, _) => split_range(&config.setup()),
         (Some(_), Some(r)) => DepthRange::Range {
             z_lo: r.splits[0],
             z_hi: r.splits[r.cascade_count()],
@@ -1643,6 +1646,53 @@ fn thread_held_poses<I: Iterator<Item = CameraPose>>(
     })
 }
 
+/// What the split range of a set-up fitted to its bounds (not to visible geometry) depends
+/// on, bit for bit: the camera's position, target and up, its field of view, aspect and near
+/// plane, the shadow's far end (`min(camera far, max_distance)`), the scene bounds and
+/// whether the range is fitted to them ([`depth_range::receiver_range`]'s inputs).
+type RangeKey = [u64; 20];
+
+fn range_key(setup: &csm_core::scene::Setup) -> RangeKey {
+    let c = &setup.camera;
+    let b = &setup.bounds;
+    let v = [c.position, c.target, c.up, b.min, b.max].map(|v| v.to_array().map(f64::to_bits));
+    let mut key = [0u64; 20];
+    for (k, x) in key.iter_mut().zip(v.iter().flatten()) {
+        *k = *x;
+    }
+    key[15] = c.fov_y.to_bits();
+    key[16] = c.aspect.to_bits();
+    key[17] = c.near.to_bits();
+    key[18] = setup.shadow_far().to_bits();
+    key[19] = u64::from(setup.shadow.fit_depth_to_scene);
+    key
+}
+
+thread_local! {
+    /// The last split range this thread computed, with its [`RangeKey`].
+    static RANGE: std::cell::Cell<Option<(RangeKey, DepthRange)>> = const { std::cell::Cell::new(None) };
+}
+
+/// [`depth_range::for_setup`] of `setup`: the thread's last range when it has the same
+/// [`RangeKey`] (the same inputs, so the same range), else computed (and kept). A sweep's
+/// settings share the camera, the shadow distance and the scene, so each thread computes the
+/// range once instead of three times per setting. A range fitted to visible geometry reads the
+/// visibility pass and is always computed.
+pub(crate) fn split_range(setup: &csm_core::scene::Setup) -> DepthRange {
+    if setup.shadow.fit_depth_to_visible {
+        return depth_range::for_setup(setup);
+    }
+    let key = range_key(setup);
+    RANGE.with(|held| match held.get() {
+        Some((k, range)) if k == key => range,
+        _ => {
+            let range = depth_range::for_setup(setup);
+            held.set(Some((key, range)));
+            range
+        }
+    })
+}
+
 /// Coverage, shimmer, jitter and lookup error over every camera path.
 struct PathTotals {
     coverage: csm_core::shimmer::Coverage,
@@ -1783,4 +1833,86 @@ pub(crate) fn texel_utilization(
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod split_range_tests {
+    use super::*;
+    use csm_core::scene::Setup;
+    use glam::DVec3;
+    use proptest::prelude::*;
+
+    /// The bounds-only sweep's set-up, with bounds to the right of the view axis that the view
+    /// frustum clips on both ends (so each input of the range moves it).
+    fn base() -> Setup {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/default_bounds_only.toml");
+        let mut setup = Config::load(&path).expect("the bundled config loads").setup();
+        setup.bounds.min = DVec3::new(20.0, 0.0, -120.0);
+        setup.bounds.max = DVec3::new(60.0, 40.0, -20.0);
+        setup
+    }
+
+    fn bits(r: DepthRange) -> Option<(u64, u64)> {
+        r.bounds().map(|(lo, hi)| (lo.to_bits(), hi.to_bits()))
+    }
+
+    /// Input `field` of the split range changed by `by` (a toggle for the fit switch).
+    fn changed(mut s: Setup, field: usize, by: f64) -> Setup {
+        match field {
+            0 => s.camera.position.x += by,
+            1 => s.camera.position.y += by,
+            2 => s.camera.target.z += by,
+            3 => s.camera.up.x += by,
+            4 => s.camera.fov_y *= 1.0 + by / 20.0,
+            5 => s.camera.aspect *= 1.0 + by / 10.0,
+            6 => s.camera.near = 30.0 + by.abs(),
+            7 => s.camera.far = 100.0 - by.abs() * 10.0,
+            8 => s.shadow.max_distance -= 60.0 + by.abs() * 10.0,
+            9 => s.bounds.min.z -= 1.0 + by.abs(),
+            10 => s.bounds.max.z += 1.0 + by.abs(),
+            _ => s.shadow.fit_depth_to_scene = !s.shadow.fit_depth_to_scene,
+        }
+        s
+    }
+
+    /// Each input the range reads moves it, and the thread's held range follows: a key that
+    /// missed an input would return the range before the change.
+    #[test]
+    fn every_input_moves_the_range_and_the_held_one() {
+        let b = base();
+        assert!(bits(depth_range::for_setup(&b)).is_some());
+        for field in 0..12 {
+            let s = changed(b.clone(), field, 0.5);
+            let alone = depth_range::for_setup(&s);
+            assert_ne!(
+                bits(alone),
+                bits(depth_range::for_setup(&b)),
+                "field {field} moves the range"
+            );
+            assert_eq!(bits(split_range(&b)), bits(depth_range::for_setup(&b)));
+            assert_eq!(bits(split_range(&s)), bits(alone), "field {field}");
+            assert_eq!(
+                bits(split_range(&b)),
+                bits(depth_range::for_setup(&b)),
+                "field {field}, back"
+            );
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+        /// Along any sequence of set-ups (each the one before, or it with one input changed),
+        /// the held range equals the range computed alone, bit for bit.
+        #[test]
+        fn held_range_equals_computed_alone(steps in prop::collection::vec((0usize..14, -3.0f64..3.0), 1..24)) {
+            let mut s = base();
+            for (field, by) in steps {
+                if field < 12 {
+                    s = changed(s, field, by);
+                }
+                prop_assert_eq!(bits(split_range(&s)), bits(depth_range::for_setup(&s)));
+            }
+        }
+    }
 }
