@@ -961,6 +961,11 @@ fn select(
         below[j] = brackets[j].2;
         sc.cands[j].clear();
     }
+    // Per target: the lowest value of its bracket's keys, and the lowest of the key after them.
+    let mut thresholds = [(0.0f64, 0.0f64); 6];
+    for &j in &open {
+        thresholds[j] = (buckets.floor_of(brackets[j].0), buckets.floor_of(brackets[j].1 + 1));
+    }
     let mut first = 0;
     let mut first_run = 0u64;
     for &(pass, s) in pools {
@@ -990,23 +995,35 @@ fn select(
                 if mask == 0 {
                     continue;
                 }
-                for i in gr.lo as usize..gr.hi as usize {
-                    let g = ix.g[i];
-                    let m = t * g;
-                    let k = buckets.key(m);
-                    let cw = ix.w[i] as u128 * s;
-                    let mut bits = mask;
-                    while bits != 0 {
-                        let j = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        let w = if j < 3 { s } else { cw };
-                        if w == 0 {
-                            continue;
+                let span = gr.lo as usize..gr.hi as usize;
+                let (gs, ws) = (&ix.g[span.clone()], &ix.w[span]);
+                let mut bits = mask;
+                while bits != 0 {
+                    let j = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    // A value's key is below the bracket exactly when the value is below the
+                    // bracket's lowest value, and within it when also below the value of the
+                    // key after it (keys never decrease with the value).
+                    let (lo_v, hi_v) = thresholds[j];
+                    let contrast = j >= 3;
+                    if ka < brackets[j].0 {
+                        // The values below the bracket: counted without a branch per value, and
+                        // their contrast weight, then weighted by the view's steps once.
+                        let (mut n, mut wsum) = (0u64, 0u64);
+                        for (&g, &w) in gs.iter().zip(ws) {
+                            let under = (t * g < lo_v) as u64;
+                            n += under;
+                            wsum += under * w as u64;
                         }
-                        if k < brackets[j].0 {
-                            below[j] += w;
-                        } else if k <= brackets[j].1 {
-                            sc.cands[j].push(Cand { m, w, g, tag });
+                        below[j] += if contrast { wsum as u128 * s } else { n as u128 * s };
+                    }
+                    for (&g, &w) in gs.iter().zip(ws) {
+                        let m = t * g;
+                        if m >= lo_v && m < hi_v {
+                            let w = if contrast { w as u128 * s } else { s };
+                            if w != 0 {
+                                sc.cands[j].push(Cand { m, w, g, tag });
+                            }
                         }
                     }
                 }
@@ -1019,9 +1036,7 @@ fn select(
         }
     }
     for &j in &open {
-        let (lo, hi) = (brackets[j].0, brackets[j].1);
-        let bounds = (buckets.floor_of(lo), buckets.floor_of(hi + 1));
-        let found = resolve(&mut sc.cands[j], below[j], brackets[j].3, &mut sc.fine, bounds);
+        let found = resolve(&mut sc.cands[j], below[j], brackets[j].3, &mut sc.fine, thresholds[j]);
         out[j / 3][j % 3] = found.map_or(0.0, |f| f.0.m);
         hints[j] = found.map(|(_, below, (lo, hi))| {
             let cands = &sc.cands[j];
