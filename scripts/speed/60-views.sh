@@ -8,3 +8,18 @@ measure "sweep benches/default_100_sampled_views.toml --no-plots" -- \
   "$BIN" sweep benches/default_100_sampled_views.toml --no-plots --quiet --out target/speed/out/views-100
 measure "analyze benches/default_100_sampled_views.toml" -- \
   "$BIN" analyze benches/default_100_sampled_views.toml --quiet --out target/speed/out/views-100-analyze
+# SPEED_CALLGRIND=1 adds the instruction counts of the two paired sweeps at --threads 1 and
+# their ratio (valgrind, load-proof; slow: about a minute for the 20 views).
+if [ "${SPEED_CALLGRIND:-0}" = 1 ] && command -v valgrind >/dev/null; then
+  views_dir=$SPEED_ROOT/target/speed/views-cg
+  mkdir -p "$views_dir"
+  views_ir=()
+  for views_cfg in configs/default.toml benches/default_20_views.toml; do
+    valgrind --tool=callgrind --callgrind-out-file="$views_dir/cg.out" \
+      "$BIN" sweep "$views_cfg" --no-plots --quiet --threads 1 --out "$views_dir/out" >/dev/null 2>&1
+    # Through a file: awk's early exit would end callgrind_annotate by SIGPIPE (pipefail).
+    callgrind_annotate "$views_dir/cg.out" >"$views_dir/cg.txt" 2>/dev/null || true
+    views_ir+=("$(awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1; exit }' "$views_dir/cg.txt")")
+  done
+  speed_row "| ${SPEED_JOB:-} | instructions (callgrind, --threads 1), 1 view / 20 views: ${views_ir[0]} / ${views_ir[1]} ($(awk -v a="${views_ir[0]}" -v b="${views_ir[1]}" 'BEGIN { printf "%.2f", b / a }') ×) | | | | | |"
+fi

@@ -111,6 +111,17 @@ impl Buckets {
     fn key(self, m: f64) -> usize {
         ((m.to_bits() - self.base) >> self.shift) as usize
     }
+
+    /// The smallest value of key `k` or above (every value of a lower key lies below it):
+    /// infinity when none is finite.
+    fn floor_of(self, k: usize) -> f64 {
+        (k as u64)
+            .checked_shl(self.shift)
+            .filter(|&d| d >> self.shift == k as u64)
+            .and_then(|d| self.base.checked_add(d))
+            .filter(|&bits| bits < f64::INFINITY.to_bits())
+            .map_or(f64::INFINITY, f64::from_bits)
+    }
 }
 
 /// The whole-step weight each weighted nearest-rank percentile `p` (integer percent) must
@@ -678,42 +689,6 @@ impl<'a> ViewPass<'a> {
     fn groups(&self) -> &[Group] {
         &self.sv.groups
     }
-
-    /// The weights (each pixel `s`, or its contrast weight times `s`) of the served values
-    /// below `v` and at or below `v`.
-    fn weights_around(&self, v: f64, s: u128, contrast: bool) -> (u128, u128) {
-        let ix = self.ix;
-        let sv = &*self.sv;
-        let (mut lt, mut le) = (0u128, 0u128);
-        for (&t, &(a, z)) in self.t.iter().zip(&sv.run_groups) {
-            let run = &sv.groups[a..z];
-            // Groups ending below v lie wholly below it; those starting above it, above.
-            let from = a + run.partition_point(|gr| t * ix.ghi[gr.b as usize] < v);
-            let below = if contrast {
-                sv.cum[from].1 - sv.cum[a].1
-            } else {
-                sv.cum[from].0 - sv.cum[a].0
-            } as u128;
-            lt += below;
-            le += below;
-            for gr in sv.groups[from..z]
-                .iter()
-                .take_while(|gr| t * ix.glo[gr.b as usize] <= v)
-            {
-                for i in gr.lo as usize..gr.hi as usize {
-                    let w = if contrast { ix.w[i] as u128 } else { 1 };
-                    let m = t * ix.g[i];
-                    if m < v {
-                        lt += w;
-                        le += w;
-                    } else if m == v {
-                        le += w;
-                    }
-                }
-            }
-        }
-        (lt * s, le * s)
-    }
 }
 
 /// Buffers reused by one pool's [`select`] calls and [`ViewPass::new`]: the histograms are kept
@@ -731,6 +706,8 @@ struct Scratch {
     cands: [Vec<Cand>; 6],
     /// [`resolve`]'s histogram.
     fine: Vec<u128>,
+    /// [`from_window`]'s values.
+    window: Vec<(f64, u128)>,
     /// [`ViewPass::new`]'s entries and contrast weights before each bound, per bucket.
     cut: Vec<u32>,
     wcut: Vec<u64>,
@@ -761,36 +738,110 @@ fn with_scratch<R>(f: impl FnOnce(&mut Scratch) -> R) -> R {
     })
 }
 
-/// Where a percentile of a pool was found: the pixel with factor `g` that cascade `i` of the
-/// pool's part `k` serves. At other texel sizes of the same splits (another resolution) the
-/// same pixel usually holds the percentile again, which costs a count to confirm.
-#[derive(Clone, Copy, Debug)]
-struct Hint {
-    k: u32,
-    i: u32,
-    g: f64,
+/// Where a percentile of a pool was found, kept for the same splits at other texel sizes
+/// (another resolution): the *window* of values the selection ended on, sorted there, each by
+/// its pixel (its run, flattened over the pool's parts, its factor `g` and its weight), with the
+/// weight of the pool's values below the window, and bounds at the texel sizes `t0` it was found
+/// at: every value below the window was below `lo`, every value above it at or above `hi`.
+///
+/// At texel sizes `t` every value `fl(t g)` of a run lies within a few rounding errors of
+/// `(t / t0) fl(t0 g)`, so with `a` and `A` the smallest and largest ratio `t / t0` over the
+/// pool's runs, a value below `lo` at `t0` stays below `A lo (1 + 2^-48)` (plus the smallest
+/// normal number) and a window value `y0` stays at or above `a y0 (1 - 2^-48)`. When those
+/// bounds keep the window's values apart from the values below and above it (at both ends),
+/// the window's values at `t`, sorted, hold the target exactly where it was: the running
+/// weight from `below` reaches the target within them ([`from_window`]). A resolution of a
+/// sweep scales every texel size by about one factor, so the bounds nearly always hold, and
+/// the percentile costs a sort of the window's few values instead of a selection.
+#[derive(Clone, Debug)]
+struct Win {
+    target: u128,
+    below: u128,
+    lo: f64,
+    hi: f64,
+    /// The window's smallest and largest value at `t0`.
+    vlo: f64,
+    vhi: f64,
+    /// The texel size of every run of the pool (part by part) it was found at.
+    t0: Vec<f64>,
+    /// Per value: its run (flattened), `g` and weight.
+    cands: Vec<(u32, f64, u128)>,
 }
 
 /// [`select`]'s `wanted` for all six targets (plain p50, p95, p99, then contrast).
 const ALL_TARGETS: u8 = 0b11_1111;
 
-/// The six percentiles' [`Hint`]s (plain p50, p95, p99, then contrast), none at first.
-type Hints = [Option<Hint>; 6];
+/// The six percentiles' windows ([`Win`]; plain p50, p95, p99, then contrast), none at first.
+type Hints = [Option<Win>; 6];
+
+/// No hints.
+fn no_hints() -> Hints {
+    Default::default()
+}
+
+/// The slack of [`from_window`]'s bounds: `2^-48`, far above the few rounding errors (each at
+/// most `2^-53` relative) between `fl(t g)` and `(t / t0) fl(t0 g)` and in the bounds' own
+/// products.
+const WINDOW_SLACK: f64 = 1.0 / (1u64 << 48) as f64;
+
+/// The value of a window's target at the texel sizes `t` (its pool's runs, flattened), or None
+/// when the bounds do not prove that no value crossed into or out of the window ([`Win`]).
+/// `buf` is a buffer (any content).
+fn from_window(win: &Win, t: &[f64], target: u128, buf: &mut Vec<(f64, u128)>) -> Option<f64> {
+    if win.target != target || win.t0.len() != t.len() || win.cands.is_empty() {
+        return None;
+    }
+    let (mut amin, mut amax) = (f64::INFINITY, 0.0f64);
+    for (&a, &b) in t.iter().zip(&win.t0) {
+        if b > 0.0 && b.is_normal() && a.is_normal() {
+            let r = a / b;
+            amin = amin.min(r);
+            amax = amax.max(r);
+        } else if a.to_bits() != b.to_bits() {
+            return None;
+        }
+    }
+    if !(amin > 0.0 && amax.is_finite()) {
+        return None;
+    }
+    let tiny = f64::MIN_POSITIVE;
+    let (up, down) = (1.0 + WINDOW_SLACK, 1.0 - WINDOW_SLACK);
+    // Below the window: each value under lo at t0 stays under this at t.
+    let below_max = amax * win.lo * up + tiny;
+    // The window's values stay within [amin vlo down - tiny, amax vhi up + tiny].
+    let win_min = amin * win.vlo * down - tiny;
+    let win_max = amax * win.vhi * up + tiny;
+    // Above the window: each value at or above hi at t0 stays at or above this at t.
+    let above_min = amin * win.hi * down - tiny;
+    if !(below_max < win_min && win_max < above_min) {
+        return None;
+    }
+    buf.clear();
+    buf.extend(win.cands.iter().map(|&(i, g, w)| (t[i as usize] * g, w)));
+    buf.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+    let mut run = win.below;
+    for &(m, w) in buf.iter() {
+        run += w;
+        if run >= target {
+            return Some(m);
+        }
+    }
+    None
+}
 
 /// The nearest-rank values of a pool of views' groups, each view counting its steps: for the
 /// plain weights (each pixel its view's steps) and the contrast weights (`N · L` steps times
 /// the view's), at p50, p95 and p99, and the two total weights.
 ///
-/// A target with a hint is first confirmed: the hinted value `v` (the pixel's factor times its
-/// cascade's texel size here) is the target's value exactly when the weight of the values
-/// below `v` falls short of the target and that of the values at or below `v` reaches it
-/// (counted from the groups' prefix sums and the few groups around `v`). For the others, the
+/// A target with a window ([`Win`], where it was found at other texel sizes of the same
+/// splits) is first read from it: when its bounds prove that no value crossed into or out of
+/// the window, the window's few values at these texel sizes, sorted, hold it. For the others, the
 /// groups' bounds give the bucket range that must hold the value (its bracket): the first
 /// bucket where the weight of the groups starting at or below it reaches the target, and the
 /// first where that of the groups ending at or below it does. Only the groups reaching into a
 /// bracket are read, value by value, each value once for all the targets; what lies below a
 /// bracket is counted, and the few values in it are narrowed down and sorted ([`resolve`]).
-/// `hints` is updated to where each value was found.
+/// `hints` is updated to the window each selected value was found in.
 ///
 /// Only the targets whose bit `3 kind + slot` is set in `wanted` are found ([`ALL_TARGETS`]:
 /// every one); the others are left at 0 and their hints untouched. A target's value depends
@@ -813,6 +864,8 @@ fn select(
     let target_of = |j: usize| ([50u128, 95, 99][j % 3] * totals[j / 3]).div_ceil(100).max(1);
     let mut out = [[0.0; 3]; 2];
     let mut open = Vec::with_capacity(6);
+    // The texel size of every run of the pool, part by part (made when a window is tried).
+    let mut flat: Vec<f64> = Vec::new();
     for j in 0..6 {
         if totals[j / 3] == 0 {
             hints[j] = None;
@@ -822,17 +875,13 @@ fn select(
             continue;
         }
         let target = target_of(j);
-        let confirmed = hints[j].and_then(|h| {
-            let (pass, _) = pools.get(h.k as usize)?;
-            let run = pass.sv.runs.iter().position(|r| r.2 == h.i as usize)?;
-            let v = pass.t[run] * h.g;
-            let (mut lt, mut le) = (0u128, 0u128);
-            for &(p, s) in pools {
-                let (a, b) = p.weights_around(v, s as u128, j >= 3);
-                lt += a;
-                le += b;
+        let confirmed = hints[j].as_ref().and_then(|win| {
+            if flat.is_empty() {
+                for &(p, _) in pools {
+                    flat.extend_from_slice(&p.t);
+                }
             }
-            (lt < target && target <= le).then_some(v)
+            from_window(win, &flat, target, &mut sc.window)
         });
         match confirmed {
             Some(v) => {
@@ -912,18 +961,26 @@ fn select(
         below[j] = brackets[j].2;
         sc.cands[j].clear();
     }
+    // Per target: the lowest value of its bracket's keys, and the lowest of the key after them.
+    let mut thresholds = [(0.0f64, 0.0f64); 6];
+    for &j in &open {
+        thresholds[j] = (buckets.floor_of(brackets[j].0), buckets.floor_of(brackets[j].1 + 1));
+    }
     let mut first = 0;
-    for (pk, &(pass, s)) in pools.iter().enumerate() {
+    let mut first_run = 0u64;
+    for &(pass, s) in pools {
         let s = s as u128;
         let ix = pass.ix;
         let sv = &*pass.sv;
         let keys = &sc.keys[first..first + sv.groups.len()];
         first += sv.groups.len();
+        let runs_before = first_run;
+        first_run += sv.runs.len() as u64;
         // A run's groups reaching into a key range are consecutive (their bounds never
         // decrease): those after every group ending below it, before the first starting
         // above it.
-        for ((&(a, z), run_of), &t) in sv.run_groups.iter().zip(&sv.runs).zip(&pass.t) {
-            let tag = (pk as u64) << 32 | run_of.2 as u64;
+        for (rk_, (&(a, z), &t)) in sv.run_groups.iter().zip(&pass.t).enumerate() {
+            let tag = runs_before + rk_ as u64;
             let (run, rk) = (&sv.groups[a..z], &keys[a..z]);
             let from = rk.partition_point(|k| k.1 < union_lo);
             let to = from + rk[from..].partition_point(|k| k.0 <= union_hi);
@@ -938,43 +995,68 @@ fn select(
                 if mask == 0 {
                     continue;
                 }
-                for i in gr.lo as usize..gr.hi as usize {
-                    let g = ix.g[i];
-                    let m = t * g;
-                    let k = buckets.key(m);
-                    let cw = ix.w[i] as u128 * s;
-                    let mut bits = mask;
-                    while bits != 0 {
-                        let j = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        let w = if j < 3 { s } else { cw };
-                        if w == 0 {
-                            continue;
+                let span = gr.lo as usize..gr.hi as usize;
+                let (gs, ws) = (&ix.g[span.clone()], &ix.w[span]);
+                let mut bits = mask;
+                while bits != 0 {
+                    let j = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    // A value's key is below the bracket exactly when the value is below the
+                    // bracket's lowest value, and within it when also below the value of the
+                    // key after it (keys never decrease with the value).
+                    let (lo_v, hi_v) = thresholds[j];
+                    let contrast = j >= 3;
+                    if ka < brackets[j].0 {
+                        // The values below the bracket: counted without a branch per value, and
+                        // their contrast weight, then weighted by the view's steps once.
+                        let (mut n, mut wsum) = (0u64, 0u64);
+                        for (&g, &w) in gs.iter().zip(ws) {
+                            let under = (t * g < lo_v) as u64;
+                            n += under;
+                            wsum += under * w as u64;
                         }
-                        if k < brackets[j].0 {
-                            below[j] += w;
-                        } else if k <= brackets[j].1 {
-                            sc.cands[j].push(Cand { m, w, g, tag });
+                        below[j] += if contrast { wsum as u128 * s } else { n as u128 * s };
+                    }
+                    for (&g, &w) in gs.iter().zip(ws) {
+                        let m = t * g;
+                        if m >= lo_v && m < hi_v {
+                            let w = if contrast { w as u128 * s } else { s };
+                            if w != 0 {
+                                sc.cands[j].push(Cand { m, w, g, tag });
+                            }
                         }
                     }
                 }
             }
         }
     }
+    if flat.is_empty() {
+        for &(p, _) in pools {
+            flat.extend_from_slice(&p.t);
+        }
+    }
     for &j in &open {
-        let found = resolve(&mut sc.cands[j], below[j], brackets[j].3, &mut sc.fine);
-        out[j / 3][j % 3] = found.map_or(0.0, |c| c.m);
-        hints[j] = found.map(|c| Hint {
-            k: (c.tag >> 32) as u32,
-            i: c.tag as u32,
-            g: c.g,
+        let found = resolve(&mut sc.cands[j], below[j], brackets[j].3, &mut sc.fine, thresholds[j]);
+        out[j / 3][j % 3] = found.map_or(0.0, |f| f.0.m);
+        hints[j] = found.map(|(_, below, (lo, hi))| {
+            let cands = &sc.cands[j];
+            Win {
+                target: brackets[j].3,
+                below,
+                lo,
+                hi,
+                vlo: cands.iter().fold(f64::INFINITY, |a, c| a.min(c.m)),
+                vhi: cands.iter().fold(0.0f64, |a, c| a.max(c.m)),
+                t0: flat.clone(),
+                cands: cands.iter().map(|c| (c.tag as u32, c.g, c.w)).collect(),
+            }
         });
     }
     (out, totals)
 }
 
-/// A value in a percentile's bracket: `m = t g`, its weight, and its pool part and cascade
-/// (`part << 32 | cascade`).
+/// A value in a percentile's bracket: `m = t g`, its weight, and its run in the pool (the
+/// runs of every part flattened, part by part).
 #[derive(Clone, Copy)]
 struct Cand {
     m: f64,
@@ -985,15 +1067,25 @@ struct Cand {
 
 /// The first of the values `cands` (with their weights, above 0) at which the running weight,
 /// starting from `below`, reaches `target`: buckets narrow the values down until few are left,
-/// which are sorted. `hist` is a buffer (any content).
-fn resolve(cands: &mut Vec<Cand>, mut below: u128, target: u128, hist: &mut Vec<u128>) -> Option<Cand> {
+/// which are sorted. `hist` is a buffer (any content). `bounds` are such that every value of the
+/// pool counted in `below` lies below `bounds.0` and every value of the pool neither counted
+/// nor among `cands` at or above `bounds.1`. Returns the value, and (for a [`Win`]) with
+/// `cands` left holding the final few values sorted, their `below` and bounds.
+fn resolve(
+    cands: &mut Vec<Cand>,
+    mut below: u128,
+    target: u128,
+    hist: &mut Vec<u128>,
+    bounds: (f64, f64),
+) -> Option<(Cand, u128, (f64, f64))> {
     const COUNT: usize = 256;
+    let (mut lo_bound, mut hi_bound) = bounds;
     while cands.len() > 64 {
         let (lo, hi) = cands
             .iter()
             .fold((f64::INFINITY, 0.0f64), |(l, h), x| (l.min(x.m), h.max(x.m)));
         if lo == hi {
-            return cands.first().copied();
+            return cands.first().map(|c| (*c, below, (lo_bound, hi_bound)));
         }
         let b = Buckets::new(lo, hi, COUNT);
         hist.clear();
@@ -1007,16 +1099,18 @@ fn resolve(cands: &mut Vec<Cand>, mut below: u128, target: u128, hist: &mut Vec<
             k += 1;
         }
         cands.retain(|x| b.key(x.m) == k);
+        lo_bound = lo_bound.max(b.floor_of(k));
+        hi_bound = hi_bound.min(b.floor_of(k + 1));
     }
     cands.sort_unstable_by(|x, y| x.m.total_cmp(&y.m));
     let mut run = below;
     for c in cands.iter() {
         run += c.w;
         if run >= target {
-            return Some(*c);
+            return Some((*c, below, (lo_bound, hi_bound)));
         }
     }
-    cands.last().copied()
+    cands.last().map(|c| (*c, below, (lo_bound, hi_bound)))
 }
 
 /// `(hi + lo) / d`, rounded once in all but the rarest cases: the quotient of the leading
@@ -1045,7 +1139,7 @@ fn add_product(acc: (f64, f64), a: f64, b: f64) -> (f64, f64) {
 pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f64, f64)>) -> ScreenStats {
     with_scratch(|sc| {
         let pass = ViewPass::new(vis, splits, texel, false, sc);
-        own_stats(&pass, visible, sc, &mut [None; 6])
+        own_stats(&pass, visible, sc, &mut no_hints())
     })
 }
 
@@ -1184,7 +1278,7 @@ fn statistic_of(pass: &ViewPass<'_>, which: Statistic, sc: &mut Scratch) -> f64 
                     Buckets::new(lo, hi, count),
                     count,
                     sc,
-                    &mut [None; 6],
+                    &mut no_hints(),
                     wanted,
                 );
                 v[kind][slot]
@@ -1282,7 +1376,7 @@ pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
 
 /// [`pool`], with each part's pass (its served count and, with `octaves`, its values per
 /// [`octave`]).
-/// Where a pool's percentiles were found ([`Hint`]): the level's, and each view's own.
+/// Where a pool's percentiles were found ([`Win`]): the level's, and each view's own.
 #[derive(Clone, Default)]
 struct PoolHints {
     level: Hints,
@@ -1304,8 +1398,8 @@ fn pool_passes_in<'a>(
 ) -> (Pooled, Vec<ViewPass<'a>>) {
     if hints.views.len() != parts.len() {
         *hints = PoolHints {
-            level: [None; 6],
-            views: vec![[None; 6]; parts.len()],
+            level: no_hints(),
+            views: vec![no_hints(); parts.len()],
         };
     }
     let passes: Vec<ViewPass<'a>> = parts
@@ -2210,6 +2304,76 @@ mod tests {
                     let v = &got.views[k];
                     proptest::prop_assert_eq!([v.aliasing_p50, v.aliasing_p95, v.aliasing_p99], p);
                     proptest::prop_assert_eq!([v.visible_p50, v.visible_p95, v.visible_p99], vp);
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+        /// The windows a pool keeps per view and splits ([`Win`]) give, at texel sizes that
+        /// all change by about one factor (each cascade's then moved by a few units in the
+        /// last place, as a resolution's rounding does, or by up to 0.3 %, which
+        /// reorders close values across cascades), the percentiles of a sort of the scaled
+        /// values, for the level and each view alone; views with tied factors and zero
+        /// contrast weights. And where every texel size changes by exactly one factor, the
+        /// windows answer (at least the level's six and each view's six percentiles).
+        #[test]
+        fn windowed_percentiles_equal_a_sort_of_the_scaled_values(
+            seeds in proptest::collection::vec((0u64..1_000_000, 50usize..2500, 1.0f64..12.0, 0u32..40), 1..4),
+            cuts in proptest::collection::vec(0.02f64..0.98, 1..5),
+            scales in proptest::collection::vec((0.3f64..3.0, proptest::collection::vec(-3i64..=3, 6), 0u32..3), 2..6),
+            weights in proptest::collection::vec(0.25f64..4.0, 3),
+        ) {
+            let vis: Vec<Visibility> = seeds.iter().map(|&(seed, n, spread, levels)| tied(seed, n, spread, levels)).collect();
+            let mut cuts = cuts;
+            cuts.sort_by(f64::total_cmp);
+            let splits: Vec<f64> = std::iter::once(0.5).chain(cuts.iter().map(|c| 1.0 + 199.0 * c)).chain([220.0]).collect();
+            let base: Vec<f64> = (0..splits.len() - 1).map(|i| 0.3 * 1.7f64.powi(i as i32)).collect();
+            let memo = PoolMemo::default();
+            for (round, (scale, nudges, how)) in scales.iter().enumerate() {
+                let texel: Vec<f64> = base
+                    .iter()
+                    .zip(nudges)
+                    .map(|(t, &d)| {
+                        let t = t * scale;
+                        match how {
+                            0 => t,
+                            1 => f64::from_bits((t.to_bits() as i64 + d) as u64),
+                            _ => t * (1.0 + 1e-3 * d as f64),
+                        }
+                    })
+                    .collect();
+                let parts: Vec<PoolPart<'_>> = vis
+                    .iter()
+                    .enumerate()
+                    .map(|(k, v)| PoolPart {
+                        vis: v,
+                        splits: &splits,
+                        texel: &texel,
+                        visible: Some((1.0, 200.0)),
+                        steps: view_weight_steps(weights[k]),
+                    })
+                    .collect();
+                let before = CONFIRMED.with(|c| c.get());
+                let got = pool_memo(&parts, &memo);
+                let confirmed = CONFIRMED.with(|c| c.get()) - before;
+                let (p, vp, _, _, _) = brute_percentiles(&parts);
+                let l = &got.level;
+                proptest::prop_assert_eq!([l.aliasing_p50, l.aliasing_p95, l.aliasing_p99], p);
+                proptest::prop_assert_eq!([l.visible_p50, l.visible_p95, l.visible_p99], vp);
+                for (k, part) in parts.iter().enumerate() {
+                    let (p, vp, _, _, _) = brute_percentiles(std::slice::from_ref(part));
+                    let v = &got.views[k];
+                    proptest::prop_assert_eq!([v.aliasing_p50, v.aliasing_p95, v.aliasing_p99], p);
+                    proptest::prop_assert_eq!([v.visible_p50, v.visible_p95, v.visible_p99], vp);
+                }
+                // Every texel size by one factor (not a power of two, which the memo answers
+                // whole), after a first round that found the windows.
+                let exact = *how == 0 && scales[..round].iter().all(|x| x.2 == 0);
+                let pow2 = scales[..round].iter().any(|x| (scale / x.0).log2().fract() == 0.0);
+                if round > 0 && exact && !pow2 {
+                    proptest::prop_assert!(confirmed >= 6 * (1 + vis.len()) - 6, "{confirmed}");
                 }
             }
         }
