@@ -195,6 +195,7 @@ struct Pixels {
 
 impl Pixels {
     /// The aliasing `m` of pixel `k` served by cascade `i`: `T_i g`.
+    #[inline]
     fn m(&self, a: &Analysis, k: usize, i: u8) -> f64 {
         let g = self.vis.samples.get(k).map_or(0.0, |s| s.factor);
         a.cascades[i as usize].texel_size * g
@@ -230,7 +231,8 @@ fn pixels(a: &Analysis) -> Option<Pixels> {
             })
         })
         .collect();
-    let faults = fault_counts(&px);
+    // Only a receiver (a sample) has a fault, so the counts are those of the faults' list.
+    let faults = faults.as_deref().map_or((0, 0), fault_counts);
     Some(Pixels {
         cols: vis.cols,
         rows: vis.rows,
@@ -365,10 +367,13 @@ fn fault_colour(p: &Pixel) -> Option<[u8; 3]> {
     })
 }
 
-/// How many receiver pixels each fault marks: (missed, clipped).
-fn fault_counts(px: &[Option<Pixel>]) -> (usize, usize) {
-    let n = |f: ServeFault| px.iter().flatten().filter(|p| p.fault == Some(f)).count();
-    (n(ServeFault::Missed), n(ServeFault::Clipped))
+/// How many receiver pixels each fault marks: (missed, clipped), in one pass.
+fn fault_counts(faults: &[Option<ServeFault>]) -> (usize, usize) {
+    faults.iter().fold((0, 0), |(m, c), f| match f {
+        Some(ServeFault::Missed) => (m + 1, c),
+        Some(ServeFault::Clipped) => (m, c + 1),
+        None => (m, c),
+    })
 }
 
 /// The legend's warning swatches from `x` on, for the faults the picture has (`(missed,
