@@ -43,9 +43,133 @@ fn hex(c: [u8; 3]) -> String {
     format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
 }
 
-/// Colour of aliasing `m` on the log scale.
+/// Colour of aliasing `m` on the log scale: [`colour_of_log2`] of `log2 m`, read from
+/// [`ColourTable`] where the table holds it (the same bytes).
 pub(crate) fn aliasing_color(m: f64) -> [u8; 3] {
-    rgb(colormap((m.log2() - LOG2_LO) / (LOG2_HI - LOG2_LO)))
+    static TABLE: std::sync::OnceLock<ColourTable> = std::sync::OnceLock::new();
+    TABLE.get_or_init(ColourTable::new).colour(m.log2())
+}
+
+/// The colour of `l = log2 m` on the aliasing scale: the plain formula.
+fn colour_of_log2(l: f64) -> [u8; 3] {
+    rgb(colormap((l - LOG2_LO) / (LOG2_HI - LOG2_LO)))
+}
+
+/// Which stop interval of the colour map [`colour_of_log2`] interpolates in at `l`, and the
+/// colour: the key that is constant between two equal ends (see [`ColourTable`]).
+fn colour_key(l: f64) -> (usize, [u8; 3]) {
+    let t = ((l - LOG2_LO) / (LOG2_HI - LOG2_LO)).clamp(0.0, 1.0);
+    (((t * 4.0) as usize).min(3), colour_of_log2(l))
+}
+
+/// `f64`'s order as unsigned integers (negative numbers reversed, below positive), and back.
+fn ordered(x: f64) -> u64 {
+    let b = x.to_bits();
+    if b >> 63 == 1 {
+        !b
+    } else {
+        b | (1 << 63)
+    }
+}
+
+fn from_ordered(k: u64) -> f64 {
+    f64::from_bits(if k >> 63 == 1 { k & !(1 << 63) } else { !k })
+}
+
+/// [`colour_of_log2`] as a table over `l` in `[LOG2_LO, LOG2_HI]`, exact to the byte.
+///
+/// Between two values of `l` in one interval of the colour map's stops, each channel is a
+/// monotone function of `l`: `t = (l - lo) / (hi - lo)`, the clamp, `x = 4 t`, `f = x - i`,
+/// `p + (q - p) f` and the rounding are each monotone under IEEE rounding (a constant added,
+/// a positive constant divided by, a fixed factor multiplied by, its sign fixing the
+/// direction), and the interval `i = min(trunc x, 3)` never decreases with `l`. So where the
+/// interval and the colour are equal at both ends of a range of `l`, they are the same at every
+/// `l` between. The range is cut into [`CELLS`] cells; a cell whose ends have one key holds that
+/// colour; a cell holding one change holds the first `l` (as found by bisection over the
+/// values between, in their order) with the upper end's key, checked by the same argument on
+/// both sides of it. Any other `l` (outside the range, or a cell with more than one change)
+/// is coloured by the formula. The call to `log2` stays: only the map after it is read.
+struct ColourTable {
+    cells: Vec<Cell>,
+}
+
+/// Cells of [`ColourTable`]: at about 700 colour changes over the range, few cells hold two.
+const CELLS: usize = 4096;
+
+/// A cell of [`ColourTable`]: `l` in `[lo, hi]` is `below` under `at`, `above` from it on;
+/// `lo` NaN for a cell the table does not answer.
+#[derive(Clone, Copy)]
+struct Cell {
+    lo: f64,
+    at: f64,
+    hi: f64,
+    below: [u8; 3],
+    above: [u8; 3],
+}
+
+impl ColourTable {
+    fn new() -> ColourTable {
+        let width = (LOG2_HI - LOG2_LO) / CELLS as f64;
+        let cells = (0..CELLS)
+            .map(|j| {
+                let lo = LOG2_LO + j as f64 * width;
+                let hi = if j + 1 == CELLS {
+                    LOG2_HI
+                } else {
+                    LOG2_LO + (j + 1) as f64 * width
+                };
+                Self::cell(lo, hi)
+            })
+            .collect();
+        ColourTable { cells }
+    }
+
+    /// The cell for `[lo, hi]`: uniform, one change, or unanswered.
+    fn cell(lo: f64, hi: f64) -> Cell {
+        let (a, b) = (colour_key(lo), colour_key(hi));
+        if a == b {
+            return Cell {
+                lo,
+                at: hi,
+                hi,
+                below: a.1,
+                above: a.1,
+            };
+        }
+        // The first value with the upper end's key: keys before it differ from b's.
+        let (mut below, mut above) = (ordered(lo), ordered(hi));
+        while above - below > 1 {
+            let mid = below + (above - below) / 2;
+            if colour_key(from_ordered(mid)) == b {
+                above = mid;
+            } else {
+                below = mid;
+            }
+        }
+        // One change: the values up to `below` have a's key (equal ends), and from `above`
+        // on b's (equal ends).
+        let one_change = colour_key(from_ordered(below)) == a;
+        Cell {
+            lo: if one_change { lo } else { f64::NAN },
+            at: from_ordered(above),
+            hi,
+            below: a.1,
+            above: b.1,
+        }
+    }
+
+    /// [`colour_of_log2`] of `l`.
+    #[inline]
+    fn colour(&self, l: f64) -> [u8; 3] {
+        let j = ((l - LOG2_LO) * (CELLS as f64 / (LOG2_HI - LOG2_LO))) as usize;
+        if let Some(c) = self.cells.get(j) {
+            // NaN bounds (an unanswered cell, or l itself) fail both tests.
+            if c.lo <= l && l <= c.hi {
+                return if l < c.at { c.below } else { c.above };
+            }
+        }
+        colour_of_log2(l)
+    }
 }
 
 /// What each sampled pixel shows: None (sky), or (lit, served cascade, whether the cascade
@@ -71,6 +195,7 @@ struct Pixels {
 
 impl Pixels {
     /// The aliasing `m` of pixel `k` served by cascade `i`: `T_i g`.
+    #[inline]
     fn m(&self, a: &Analysis, k: usize, i: u8) -> f64 {
         let g = self.vis.samples.get(k).map_or(0.0, |s| s.factor);
         a.cascades[i as usize].texel_size * g
@@ -106,7 +231,8 @@ fn pixels(a: &Analysis) -> Option<Pixels> {
             })
         })
         .collect();
-    let faults = fault_counts(&px);
+    // Only a receiver (a sample) has a fault, so the counts are those of the faults' list.
+    let faults = faults.as_deref().map_or((0, 0), fault_counts);
     Some(Pixels {
         cols: vis.cols,
         rows: vis.rows,
@@ -241,10 +367,13 @@ fn fault_colour(p: &Pixel) -> Option<[u8; 3]> {
     })
 }
 
-/// How many receiver pixels each fault marks: (missed, clipped).
-fn fault_counts(px: &[Option<Pixel>]) -> (usize, usize) {
-    let n = |f: ServeFault| px.iter().flatten().filter(|p| p.fault == Some(f)).count();
-    (n(ServeFault::Missed), n(ServeFault::Clipped))
+/// How many receiver pixels each fault marks: (missed, clipped), in one pass.
+fn fault_counts(faults: &[Option<ServeFault>]) -> (usize, usize) {
+    faults.iter().fold((0, 0), |(m, c), f| match f {
+        Some(ServeFault::Missed) => (m + 1, c),
+        Some(ServeFault::Clipped) => (m, c + 1),
+        None => (m, c),
+    })
 }
 
 /// The legend's warning swatches from `x` on, for the faults the picture has (`(missed,
@@ -274,25 +403,41 @@ fn cascades_of(a: &Analysis, p: &Pixels) -> Result<Vec<u8>> {
     let dim = |c: [u8; 3]| c.map(|x| (x as f64 * 0.4) as u8);
     // Each pixel's cascade, two bytes apiece: the split-line test reads three per pixel.
     let cascades: Vec<Option<u8>> = px.iter().map(|p| p.as_ref().and_then(|p| p.cascade)).collect();
-    let cascade_of = |i: usize| cascades[i];
-    let colour: Vec<[u8; 3]> = (0..px.len())
-        .map(|i| {
-            let (x, y) = (i as u32 % cols, i as u32 / cols);
-            let c = cascade_of(i);
-            // A split line where the right or lower neighbour is served by another cascade.
-            let differs = |j: usize| c.is_some() && cascade_of(j).is_some() && cascade_of(j) != c;
-            if (x + 1 < cols && differs(i + 1)) || (y + 1 < rows && differs(i + cols as usize)) {
-                return SPLIT_LINE;
-            }
-            match (&px[i], c) {
-                (None, _) => SKY,
-                (Some(_), None) => UNSERVED,
-                (Some(p), Some(_)) if fault_colour(p).is_some() => fault_colour(p).unwrap_or(SKY),
-                (Some(p), Some(k)) if !p.lit => dim(rgb(series_color(k as usize))),
-                (Some(_), Some(k)) => rgb(series_color(k as usize)),
-            }
+    // Every cascade's colour, lit and dimmed, once (not per pixel).
+    let shades: Vec<([u8; 3], [u8; 3])> = (0..=u8::MAX as usize)
+        .map(|k| {
+            let c = rgb(series_color(k));
+            (c, dim(c))
         })
         .collect();
+    let n = cols as usize;
+    let mut colour: Vec<[u8; 3]> = vec![SKY; px.len()];
+    // Row by row: a split line where the right or lower neighbour is served by another
+    // cascade (the last column has no right neighbour, the last row no lower one).
+    for (y, (out, (here, this_px))) in colour
+        .chunks_exact_mut(n)
+        .zip(cascades.chunks_exact(n).zip(px.chunks_exact(n)))
+        .enumerate()
+    {
+        let below = cascades.get((y + 1) * n..(y + 2) * n);
+        for x in 0..n {
+            let c = here[x];
+            let differs = |o: Option<u8>| c.is_some() && o.is_some() && o != c;
+            if (x + 1 < n && differs(here[x + 1])) || below.is_some_and(|b| differs(b[x])) {
+                out[x] = SPLIT_LINE;
+                continue;
+            }
+            out[x] = match (&this_px[x], c) {
+                (None, _) => SKY,
+                (Some(_), None) => UNSERVED,
+                (Some(p), Some(k)) => match fault_colour(p) {
+                    Some(f) => f,
+                    None if !p.lit => shades[k as usize].1,
+                    None => shades[k as usize].0,
+                },
+            };
+        }
+    }
     let mut body = String::new();
     let mut x = 10.0;
     for c in &a.cascades {
@@ -374,5 +519,40 @@ pub(crate) fn captioned(a: &Analysis, label: &str) -> Vec<(Vec<u8>, String)> {
             ),
         ],
         _ => Vec::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The table gives the formula's colour at every value around each change it holds, at
+    /// the cells' ends, and at random values of `m` and `log2 m` over and beyond the scale.
+    #[test]
+    fn the_colour_table_is_the_formula_to_the_byte() {
+        let table = ColourTable::new();
+        let mut ls = vec![f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -0.0, 0.0, LOG2_LO, LOG2_HI];
+        let mut answered = 0;
+        for c in &table.cells {
+            for x in [c.lo, c.at, c.hi] {
+                if x.is_finite() {
+                    ls.extend([x, x.next_up(), x.next_down()]);
+                }
+            }
+            answered += usize::from(!c.lo.is_nan());
+        }
+        // Nearly every cell answers (at most one change in it).
+        assert!(answered > CELLS * 9 / 10, "{answered} of {CELLS} cells answer");
+        let mut rng = csm_core::rng::SplitMix64::new(5);
+        ls.extend((0..200_000).map(|_| LOG2_LO - 1.0 + rng.unit() * (LOG2_HI - LOG2_LO + 2.0)));
+        for l in ls {
+            assert_eq!(table.colour(l), colour_of_log2(l), "log2 m = {l:e}");
+        }
+        // Through log2, as the pictures call it.
+        let mut ms = vec![0.0, f64::MIN_POSITIVE, 1.0 / 8.0, 1.0, 64.0, 1e300, f64::INFINITY];
+        ms.extend((0..200_000).map(|_| (2f64).powf(-4.0 + 11.0 * rng.unit())));
+        for m in ms {
+            assert_eq!(aliasing_color(m), colour_of_log2(m.log2()), "m = {m:e}");
+        }
     }
 }

@@ -580,7 +580,12 @@ pub const CONTRAST_STEPS: f64 = (1u32 << 24) as f64;
 /// A receiver's contrast weight: its direct-light contrast `N · L` in [0, 1], rounded to a
 /// whole number of [`CONTRAST_STEPS`].
 pub fn contrast_weight(contrast: f64) -> u32 {
-    (contrast.clamp(0.0, 1.0) * CONTRAST_STEPS).round() as u32
+    // `v.round() as u32` for v in [0, 2^24] (NaN gives 0 both ways), without the libm call
+    // baseline x86-64 makes: the whole part, plus one when the rest is at least 1/2 (half away
+    // from zero, as `f64::round`); the rest `v - trunc(v)` is exact below 2^52.
+    let v = contrast.clamp(0.0, 1.0) * CONTRAST_STEPS;
+    let whole = v as u32;
+    whole + u32::from(v - whole as f64 >= 0.5)
 }
 
 /// A value made from a pass on first use and kept with it (the screen statistics' index): a
@@ -1202,6 +1207,26 @@ impl PartialEq for SceneGeometry {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn contrast_weight_is_the_rounded_steps_of_f64_round() {
+        // The plain definition: clamp, scale, f64::round (libm), as u32.
+        let plain = |c: f64| (c.clamp(0.0, 1.0) * CONTRAST_STEPS).round() as u32;
+        let mut cs = vec![f64::NAN, -1.0, -0.0, 0.0, 1.0, 2.0, f64::INFINITY, f64::NEG_INFINITY];
+        // Every step's half and its neighbours near both ends and in the middle.
+        for k in (0..4096)
+            .chain((1 << 23) - 2048..(1 << 23) + 2048)
+            .chain((1 << 24) - 4096..=1 << 24)
+        {
+            let h = (k as f64 + 0.5) / CONTRAST_STEPS;
+            cs.extend([h, h.next_up(), h.next_down(), k as f64 / CONTRAST_STEPS]);
+        }
+        let mut rng = crate::rng::SplitMix64::new(11);
+        cs.extend((0..200_000).map(|_| rng.unit()));
+        for c in cs {
+            assert_eq!(contrast_weight(c), plain(c), "{c:e}");
+        }
+    }
 
     /// A ground plane y = 0 and a box on it, seen by a camera looking down the −Z axis.
     fn scene_and_view(light: DVec3) -> (Mesh, View) {
