@@ -114,18 +114,21 @@ fn heights(scene: &SceneGeometry, rect: (f64, f64, f64, f64), top: f64, bottom: 
     let cols = ((ex / cell).round() as usize).clamp(1, GRID);
     let rows = ((ez / cell).round() as usize).clamp(1, GRID);
     let reach = top - bottom + 2.0;
-    let h = (0..cols * rows)
-        .into_par_iter()
-        .map(|k| {
-            let (i, j) = (k % cols, k / cols);
-            // Off the cell centres by unequal fractions, so no ray runs down the shared edge of
-            // two triangles (a square ground's diagonal at x = z), where the binary32 BVH may
-            // find neither.
-            let x = x0 + (i as f64 + 0.5 + JITTER.0) * ex / cols as f64;
-            let z = z0 + (j as f64 + 0.5 + JITTER.1) * ez / rows as f64;
-            let o = DVec3::new(x, top + 1.0, z);
-            scene.first_hit(o, DVec3::NEG_Y, 0.0, reach).map(|hit| o.y - hit.t)
-        })
+    // Off the cell centres by unequal fractions, so no ray runs down the shared edge of two
+    // triangles (a square ground's diagonal at x = z), where the binary32 BVH may find
+    // neither. Every ray goes straight down from above the scene: the scene answers them all
+    // at once, each the hit its own ray would find.
+    let xs: Vec<f64> = (0..cols)
+        .map(|i| x0 + (i as f64 + 0.5 + JITTER.0) * ex / cols as f64)
+        .collect();
+    let zs: Vec<f64> = (0..rows)
+        .map(|j| z0 + (j as f64 + 0.5 + JITTER.1) * ez / rows as f64)
+        .collect();
+    let y = top + 1.0;
+    let h = scene
+        .first_hits_down(&xs, &zs, y, 0.0, reach)
+        .into_iter()
+        .map(|hit| hit.map(|hit| y - hit.t))
         .collect();
     Heights { cols, rows, rect, h }
 }
@@ -413,7 +416,7 @@ impl Plan<'_> {
                     resvg::tiny_skia::Transform::from_scale(scale, scale),
                     &mut pixmap.as_mut(),
                 );
-                super::encode_figure_png(w, h, &super::opaque_rgb(pixmap))
+                super::encode_figure_pixmap(&pixmap)
             })
             .collect()
     }

@@ -33,15 +33,50 @@ pub(crate) enum Shape {
     Text(TextLine),
 }
 
-/// A line's tag and its attributes in order: `<tag a="v" b="v"/>`.
-fn element(line: &str) -> Option<(&str, Vec<(&str, &str)>)> {
+/// The most attributes a line read by [`Shape::from_lines`] has (a circle's seven); a line with
+/// more is none of its forms.
+const MOST_ATTRS: usize = 8;
+
+/// A line's attributes in order (at most [`MOST_ATTRS`]), without allocating.
+struct Attrs<'a> {
+    n: usize,
+    at: [(&'a str, &'a str); MOST_ATTRS],
+}
+
+impl<'a> std::ops::Deref for Attrs<'a> {
+    type Target = [(&'a str, &'a str)];
+    fn deref(&self) -> &Self::Target {
+        &self.at[..self.n]
+    }
+}
+
+/// A line's tag and its attributes in order: `<tag a="v" b="v"/>`; None for any other line,
+/// or one of more than [`MOST_ATTRS`] attributes.
+fn element(line: &str) -> Option<(&str, Attrs<'_>)> {
     let body = line.strip_prefix('<')?.strip_suffix("/>")?;
     let (tag, mut rest) = body.split_once(' ')?;
-    let mut attrs = Vec::with_capacity(8);
+    let mut attrs = Attrs {
+        n: 0,
+        at: [("", ""); MOST_ATTRS],
+    };
     while !rest.is_empty() {
-        let (name, r) = rest.split_once("=\"")?;
+        // The first `="` (a byte search: a name holds no quote).
+        let b = rest.as_bytes();
+        let mut eq = 0;
+        loop {
+            eq += b[eq..].iter().position(|&c| c == b'=')?;
+            if b.get(eq + 1) == Some(&b'"') {
+                break;
+            }
+            eq += 1;
+        }
+        let (name, r) = (&rest[..eq], &rest[eq + 2..]);
         let (value, r) = r.split_once('"')?;
-        attrs.push((name, value));
+        if attrs.n == MOST_ATTRS {
+            return None;
+        }
+        attrs.at[attrs.n] = (name, value);
+        attrs.n += 1;
         rest = match r.strip_prefix(' ') {
             Some(r) => r,
             None if r.is_empty() => r,
@@ -263,13 +298,29 @@ fn fill_rect(rect: Rect, paint: Rgba, pixmap: &mut PixmapMut) {
     let solid = [cr, cg, cb, 255];
     // Each column's covered fraction; the rows' below.
     let cols: Vec<f32> = (x0..x1).map(|x| r.min(x as f32 + 1.0) - l.max(x as f32)).collect();
+    // The run of whole columns from each column on (the same on every row).
+    let mut whole = vec![0usize; cols.len() + 1];
+    for i in (0..cols.len()).rev() {
+        whole[i] = if cols[i] >= 1.0 { whole[i + 1] + 1 } else { 0 };
+    }
     let span: Vec<u8> = solid.repeat(x1 - x0);
     let w = pixmap.width() as usize;
     let data = pixmap.data_mut();
-    let blend = |px: &mut [u8], a: u32| {
+    // The last pixel blended and what it became at that alpha: a translucent rectangle mostly
+    // lies over runs of one colour.
+    let mut last: Option<(u32, [u8; 4], [u8; 4])> = None;
+    let mut blend = |px: &mut [u8], a: u32| {
+        let before: [u8; 4] = [px[0], px[1], px[2], px[3]];
+        if let Some((la, lb, after)) = last {
+            if la == a && lb == before {
+                px.copy_from_slice(&after);
+                return;
+            }
+        }
         for (d, s) in px.iter_mut().zip(solid) {
             *d = super::text::div255(u32::from(s) * a + u32::from(*d) * (255 - a)) as u8;
         }
+        last = Some((a, before, [px[0], px[1], px[2], px[3]]));
     };
     for y in y0..y1 {
         let cy = b.min(y as f32 + 1.0) - t.max(y as f32);
@@ -277,7 +328,7 @@ fn fill_rect(rect: Rect, paint: Rgba, pixmap: &mut PixmapMut) {
         let mut i = 0;
         while i < cols.len() {
             // A run of whole columns: one alpha for the run.
-            let run = cols[i..].iter().take_while(|c| **c >= 1.0).count();
+            let run = whole[i];
             if run > 0 {
                 let a = (cy * opacity).round() as u32;
                 let px = &mut row[4 * i..4 * (i + run)];

@@ -1380,9 +1380,9 @@ pub(crate) fn render_all_but_csv(r: &SweepResult, plots: bool) -> Result<crate::
                 .par_iter()
                 .map(|(_, _, svg)| {
                     let tree = crate::figures::ParsedSvg::parse(svg)?;
-                    let (w, h, rgb) = tree.rgb(crate::figures::png_scale(tree.size()))?;
-                    let file = crate::figures::encode_figure_png(w, h, &rgb)?;
-                    let inline = html::inline_png(svg, &file, w);
+                    let pixmap = tree.pixmap(crate::figures::png_scale(tree.size()))?;
+                    let file = crate::figures::encode_figure_pixmap(&pixmap)?;
+                    let inline = html::inline_png(svg, &file, pixmap.width());
                     Ok((file, inline))
                 })
                 .collect::<Result<Vec<_>>>()

@@ -344,6 +344,51 @@ impl Bvh4 {
     }
 }
 
+impl Bvh4 {
+    /// [`Bvh4::nearest`] of every ray straight down (direction (0, −1, 0), `tmin..tmax`) from
+    /// the points `(xs[i], y, zs[j])`, row-major (row `j` holds `xs.len()` answers): the same
+    /// answers, without a traversal per ray. `xs` and `zs` must be in increasing order.
+    ///
+    /// Each leaf's triangles are tested (by the same four-lane test) only by the rays whose
+    /// origin passes the leaf box's x and z slab tests as a traversal computes them (necessary
+    /// for the traversal to reach the leaf, so a superset of the rays it lets in), and each
+    /// ray keeps the least distance, ties to the least index, as testing every triangle does.
+    /// The traversal's answer is that brute force's (the module's tests), and its triangle lies
+    /// in a leaf the ray reaches, so it is among those tested: the answers are equal.
+    pub(crate) fn nearest_down(&self, xs: &[f32], zs: &[f32], y: f32, tmin: f32, tmax: f32) -> Vec<u32> {
+        let d = [0.0f32, -1.0, 0.0];
+        // The traversal's inverse of a zero direction component.
+        let inv = inverse(0.0);
+        let cols = xs.len();
+        let mut best_t = vec![tmax; cols * zs.len()];
+        let mut best = vec![NONE; cols * zs.len()];
+        // The range of origins whose slab on one axis can admit the ray: the entry distance
+        // `(lo - o) inv` at most `tmax` and the exit distance `(hi - o) inv` at least `tmin`
+        // (both decrease as `o` grows, so the range is contiguous).
+        let range = |v: &[f32], lo: f32, hi: f32| {
+            let first = v.partition_point(|&o| (lo - o) * inv > tmax);
+            let end = v.partition_point(|&o| (hi - o) * inv >= tmin);
+            first..end.max(first)
+        };
+        for ((tri, ids), b) in self.leaves.iter().zip(&self.ids).zip(&self.leaf_box) {
+            let (ri, rj) = (range(xs, b[0], b[1]), range(zs, b[4], b[5]));
+            for j in rj {
+                for i in ri.clone() {
+                    let k = j * cols + i;
+                    let ts = tri.intersect([xs[i], y, zs[j]], d, tmin, tmax);
+                    for (&t, &id) in ts.iter().zip(ids) {
+                        if id != NONE && (t < best_t[k] || (t == best_t[k] && best[k] != NONE && id < best[k])) {
+                            best_t[k] = t;
+                            best[k] = id;
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
 /// Most rays traced as one packet.
 pub(crate) const PACKET: usize = 64;
 
@@ -705,6 +750,43 @@ mod tests {
             bvh.nearest_packet(&rays, &mut out, &mut stack);
             for (r, &got) in rays.iter().zip(&out) {
                 prop_assert_eq!(got, nearest_brute_force(&tris, r).unwrap_or(NONE), "{:?}", r);
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// A grid of rays straight down answered leaf by leaf: each answer is the ray's own
+        /// traversal's and the brute force's, on random terrains with loose triangles, grids
+        /// on the terrain's shared edges and vertices (ties) or off them, with origins inside
+        /// and outside the scene, above it and within it (hits behind the origin miss).
+        #[test]
+        fn straight_down_grids_equal_each_rays_own_traversal(
+            n in 1usize..10,
+            heights in prop::collection::vec(-2.0f32..2.0, 1..40),
+            loose in prop::collection::vec(prop::array::uniform9(-15.0f32..15.0), 0..20),
+            x0 in -14.0f32..4.0,
+            z0 in -14.0f32..4.0,
+            step in prop::sample::select(vec![0.5f32, 1.0, 0.37, 0.113]),
+            (cols, rows) in (1usize..40, 1usize..40),
+            y in prop::sample::select(vec![20.0f32, 1.0, -0.5]),
+            tmin in prop::sample::select(vec![0.0f32, 0.5]),
+            tmax in prop::sample::select(vec![100.0f32, 3.0]),
+        ) {
+            let tris = scene(n, &heights, &loose);
+            let bvh = Bvh4::new(&tris);
+            let mut stack = bvh.stack();
+            // On the half-unit lattice when `step` is a multiple of it: the terrain's edges.
+            let (x0, z0) = if step == 0.5 || step == 1.0 { (x0.round(), z0.round()) } else { (x0, z0) };
+            let xs: Vec<f32> = (0..cols).map(|i| x0 + i as f32 * step).collect();
+            let zs: Vec<f32> = (0..rows).map(|j| z0 + j as f32 * step).collect();
+            let got = bvh.nearest_down(&xs, &zs, y, tmin, tmax);
+            for (k, &g) in got.iter().enumerate() {
+                let r = Ray::new(v([xs[k % cols], y, zs[k / cols]]), Vec3A::NEG_Y, tmin, tmax);
+                let want = bvh.nearest(&r, &mut stack);
+                prop_assert_eq!(want, nearest_brute_force(&tris, &r));
+                prop_assert_eq!(g, want.unwrap_or(NONE), "{:?}", r);
             }
         }
     }

@@ -1155,11 +1155,41 @@ impl SceneGeometry {
         // traversal miss every node: adding +0 turns -0 into +0 and changes nothing else.
         let dir = dir + DVec3::ZERO;
         let id = tracer.nearest(origin, dir, tmin, tmax)?;
+        Some(self.hit_on(id, origin, dir, tmin))
+    }
+
+    /// The f64 ray distance to mesh triangle `id`'s plane along `origin + t dir` (`tmin` when
+    /// the ray runs along it).
+    fn hit_on(&self, id: usize, origin: DVec3, dir: DVec3, tmin: f64) -> TriangleHit {
         let [a, b, c] = self.mesh.triangles[id];
         let n = (b - a).cross(c - a);
         let nd = n.dot(dir);
         let t = if nd != 0.0 { n.dot(a - origin) / nd } else { tmin };
-        Some(TriangleHit { t, triangle: id })
+        TriangleHit { t, triangle: id }
+    }
+
+    /// [`Self::first_hit`] of every ray straight down (`-Y`) from `(xs[i], y, zs[j])`,
+    /// row-major (row `j` holds `xs.len()` hits), each the same hit to the bit: a plan's
+    /// height image. Every leaf of the BVH is tested by the rays under its box instead of each
+    /// ray traversing the tree ([`Bvh4::nearest_down`]). `xs` and `zs` must increase.
+    pub fn first_hits_down(&self, xs: &[f64], zs: &[f64], y: f64, tmin: f64, tmax: f64) -> Vec<Option<TriangleHit>> {
+        let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
+        let dir = DVec3::NEG_Y + DVec3::ZERO;
+        let Some(bvh) = &tracer.bvh else {
+            return vec![None; xs.len() * zs.len()];
+        };
+        // The binary32 rays [`Tracer::nearest`] makes of these.
+        let f = |v: &[f64]| v.iter().map(|&v| v as f32).collect::<Vec<f32>>();
+        let ids = bvh.nearest_down(&f(xs), &f(zs), y as f32, tmin as f32, tmax as f32);
+        ids.iter()
+            .enumerate()
+            .map(|(k, &b)| {
+                (b != u32::MAX).then(|| {
+                    let origin = DVec3::new(xs[k % xs.len()], y, zs[k / xs.len()]);
+                    self.hit_on(tracer.mesh_index[b as usize] as usize, origin, dir, tmin)
+                })
+            })
+            .collect()
     }
 
     /// The triangles the BVH is built over ([`bvh_input`]), building it if needed.
