@@ -1213,7 +1213,9 @@ impl PlaneLookup {
                 let c = grid.centre(g);
                 let d = self.k - self.gx * c.x - self.gy * c.y;
                 let unbiased = self.own_depth - d;
-                if !(unbiased.abs() > self.tol_unbiased) {
+                // False for NaN too: then the lookup is traced.
+                let clear = unbiased.abs() > self.tol_unbiased;
+                if !clear {
                     return false;
                 }
                 if lit {
