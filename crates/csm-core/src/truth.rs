@@ -854,36 +854,37 @@ impl<'a> ShadowMaps<'a> {
     /// every texel its lookup can read on that family holds, when the grid's cover names one
     /// ([`PlaneLookup`]; looked for once per family, from the first grid with a cover).
     #[inline(always)]
-    fn place_memo(
-        &self,
+    fn place_memo<'s, 'm>(
+        &'s self,
         fg: &FrameGrid,
         r: &Receiver,
         s: &Sampling,
         cascade: usize,
-        memo: &mut Option<Memo>,
-    ) -> (Placement, Option<PlaneLookup>) {
+        memo: &'m mut Option<Memo>,
+    ) -> (Placement, Option<&'m PlaneLookup>, &'s Grid) {
         let grid = self.grids[fg.id].as_ref().expect("a grid of this frame");
         let bias = &s.bias[cascade];
         if fg.matrix.is_some() {
-            return (self.place_in(fg, r, bias), None);
+            return (self.place_in(fg, r, bias), None, grid);
         }
-        let m = match memo {
-            Some(m) if m.family == grid.family => m,
-            _ => memo.insert(Memo {
-                family: grid.family,
-                u: unplaced(grid.basis, grid.texel, r, bias),
-                plane: Lookup::Untried,
-            }),
-        };
+        if memo.as_ref().is_some_and(|m| m.family != grid.family) {
+            *memo = None;
+        }
+        let m = memo.get_or_insert_with(|| Memo {
+            family: grid.family,
+            u: unplaced(grid.basis, grid.texel, r, bias),
+            plane: Lookup::Untried,
+        });
         if let (Lookup::Untried, Some(cover)) = (m.plane, &grid.cover) {
             m.plane =
                 PlaneLookup::of(self.scene, cover, grid, r, &m.u, s, cascade).map_or(Lookup::Traced, Lookup::Plane);
         }
-        let plane = match m.plane {
+        let placement = m.u.on(grid.fraction);
+        let plane = match &m.plane {
             Lookup::Plane(p) => Some(p),
             _ => None,
         };
-        (m.u.on(grid.fraction), plane)
+        (placement, plane, grid)
     }
 
     /// The world point a held texel's depth stands for: the hit of its ray.
@@ -1078,6 +1079,14 @@ struct PlaneLookup {
     tol: f64,
     tol_lit: f64,
     tol_unbiased: f64,
+    /// Whether the biased compare passes (Some(true)) or fails (Some(false)) at every texel any
+    /// lookup of the family reads, clearing its margin, with the depth inside the format's
+    /// range ([`PlaneLookup::fixed_answer`]): [`PlaneLookup::answer`] then computes only the
+    /// unbiased compares.
+    lit_fixed: Option<bool>,
+    /// The answer on every grid of the family, when the unbiased compare is fixed too: the
+    /// walk then reads no texel.
+    fixed: Option<Answer>,
 }
 
 impl PlaneLookup {
@@ -1110,7 +1119,10 @@ impl PlaneLookup {
         let own_depth = grid.basis.z.dot(r.p);
         let tol_unbiased = tol + quantised + PLANE_TOL_REL * (own_depth.abs() + mag);
         let all = [p.k, p.gx, p.gy, tol, tol_lit, tol_unbiased];
-        all.iter().all(|x| x.is_finite()).then(|| PlaneLookup {
+        if !all.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        let mut out = PlaneLookup {
             k: p.k,
             gx: p.gx,
             gy: p.gy,
@@ -1119,14 +1131,106 @@ impl PlaneLookup {
             tol,
             tol_lit,
             tol_unbiased,
-        })
+            lit_fixed: None,
+            fixed: None,
+        };
+        (out.lit_fixed, out.fixed) = out.fixed_answer(centre, half + grow, u, s.format.map(|_| s.ranges[cascade]));
+        Some(out)
+    }
+
+    /// [`PlaneLookup::answer`]'s answer at every placement of the family, when it is the same
+    /// at all of them: the texel centres any lookup of the family reads lie in the rectangle
+    /// `centre ± half` ([`PlaneLookup::of`]'s, grown past the rounding of the centres), over
+    /// which the plane's depth `k − g_x c_x − g_y c_y` lies in `[d₀ − e, d₀ + e]`
+    /// (`d₀` at the centre, `e = |g_x| half_x + |g_y| half_y`). When the biased compare
+    /// (`depth − (d + bias)`) and the unbiased one (`own_depth − d`) clear their margins
+    /// (`tol_lit`, `tol_unbiased`) with one sign over that whole interval, and the depth stays
+    /// `tol` inside the format's range, every compare of every lookup of the family is decided
+    /// from the plane with that sign: all texels pass (a weighted share of about 1, at least
+    /// ½) or none does (0). `slack` (`2⁻⁴⁰` times the magnitudes involved) covers the
+    /// rounding of the interval's ends and of each per-texel compare (a few ulps, below
+    /// `2⁻⁵⁰` of them). Returns the biased compare's fixed result (None: it depends on the
+    /// placement) and, when the unbiased one is fixed too, the answer.
+    fn fixed_answer(
+        &self,
+        centre: DVec2,
+        half: DVec2,
+        u: &Unplaced,
+        range: Option<(f64, f64)>,
+    ) -> (Option<bool>, Option<Answer>) {
+        let d0 = self.k - self.gx * centre.x - self.gy * centre.y;
+        let spread = self.gx.abs() * half.x + self.gy.abs() * half.y;
+        let (lo, hi) = (d0 - spread, d0 + spread);
+        let c = centre.abs().max_element() + half.max_element();
+        let mut mag =
+            self.k.abs() + (self.gx.abs() + self.gy.abs()) * c + u.depth.abs() + u.bias.abs() + self.own_depth.abs();
+        if let Some((near, far)) = range {
+            mag += near.abs() + far.abs();
+        }
+        let slack = mag / (1u64 << 40) as f64;
+        if !([lo, hi, slack].iter().all(|x| x.is_finite())) {
+            return (None, None);
+        }
+        if let Some((near, far)) = range {
+            if !(lo - slack >= near + self.tol + slack && hi + slack <= far - self.tol - slack) {
+                return (None, None);
+            }
+        }
+        // Biased: the largest and least of depth − (d + bias) over the interval.
+        let (b_hi, b_lo) = (u.depth - (lo + u.bias), u.depth - (hi + u.bias));
+        let lit = if b_hi < -(self.tol_lit + slack) {
+            true
+        } else if b_lo > self.tol_lit + slack {
+            false
+        } else {
+            return (None, None);
+        };
+        let (n_hi, n_lo) = (self.own_depth - lo, self.own_depth - hi);
+        let lit_unbiased = if n_hi < -(self.tol_unbiased + slack) {
+            true
+        } else if n_lo > self.tol_unbiased + slack {
+            false
+        } else {
+            return (Some(lit), None);
+        };
+        let answer = Answer {
+            lit,
+            own_only: self.own_only,
+            lit_unbiased,
+        };
+        (Some(lit), Some(answer))
     }
 
     /// [`answer_at`] from the plane, when every compare clears its margin (None: trace).
     #[inline]
     fn answer(&self, grid: &Grid, s: &Sampling, cascade: usize, pl: &Placement) -> Option<Answer> {
-        let (near, far) = s.ranges[cascade];
         let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
+        if let Some(lit) = self.lit_fixed {
+            // The format's range and the biased compare are decided over the whole reach (with
+            // this sign at every texel): only the unbiased compares are made, by the same
+            // operations as below.
+            let clear = each_footprint(pl.at, s.pcf, s.filter, |g, w| {
+                let c = grid.centre(g);
+                let d = self.k - self.gx * c.x - self.gy * c.y;
+                let unbiased = self.own_depth - d;
+                // False for NaN too: then the lookup is traced.
+                let clear = unbiased.abs() > self.tol_unbiased;
+                if !clear {
+                    return false;
+                }
+                if lit {
+                    lit_w += w;
+                    lit_n += 1;
+                }
+                if unbiased < 0.0 {
+                    unb_w += w;
+                    unb_n += 1;
+                }
+                true
+            });
+            return clear.then(|| vote(s, self.own_only, (lit_w, lit_n), (unb_w, unb_n)));
+        }
+        let (near, far) = s.ranges[cascade];
         let clear = each_footprint(pl.at, s.pcf, s.filter, |g, w| {
             let c = grid.centre(g);
             let d = self.k - self.gx * c.x - self.gy * c.y;
@@ -1748,12 +1852,14 @@ fn walk_step(
             return (inside(fg, og).then_some((i, fg.id, og)), None);
         }
     }
-    let (pl, plane) = maps.place_memo(fg, r, s, i, memo);
+    let (pl, plane, grid) = maps.place_memo(fg, r, s, i, memo);
     let key = inside(fg, pl.texel).then_some((i, fg.id, pl.texel));
     if !(key.is_some() && (rebuilt || key != old)) {
         return (key, None);
     }
-    let grid = maps.grids[fg.id].as_ref().expect("a grid of this frame");
+    if let Some(a) = plane.and_then(|p| p.fixed) {
+        return (key, Some(Some(a)));
+    }
     let answer = plane
         .and_then(|p| p.answer(grid, s, i, &pl))
         .or_else(|| answer_at(maps, fg, r, s, i, &pl, None));
@@ -2441,7 +2547,7 @@ mod tests {
     fn the_plane_lookup_equals_tracing_the_texels() {
         let scene = scene();
         let mut rng = SplitMix64::new(11);
-        let (mut decided, mut total) = (0usize, 0usize);
+        let (mut decided, mut total, mut fixed, mut lit_fixed) = (0usize, 0usize, 0usize, 0usize);
         for light in [
             DVec3::new(-0.4, -1.0, -0.3),
             DVec3::new(0.3, -0.2, 0.9),
@@ -2511,6 +2617,37 @@ mod tests {
                                 assert_eq!(Some(a), traced, "{light} {texel} {bias:?} at {}", r.p);
                                 decided += 1;
                             }
+                            // With the biased compare fixed, the unbiased compares alone give
+                            // what every compare gives.
+                            let all = PlaneLookup {
+                                lit_fixed: None,
+                                fixed: None,
+                                ..p
+                            };
+                            assert_eq!(p.answer(grid, &s, 0, &pl), all.answer(grid, &s, 0, &pl));
+                            lit_fixed += usize::from(p.lit_fixed.is_some());
+                            // A fixed answer is the traced one here, and the plane's at
+                            // every other fraction of the family (the texels traced too).
+                            if let Some(a) = p.fixed {
+                                fixed += 1;
+                                assert_eq!(Some(a), traced, "fixed: {light} {texel} {bias:?} at {}", r.p);
+                                for _ in 0..3 {
+                                    let f = DVec2::new(rng.range(0.0, 1.0), rng.range(0.0, 1.0));
+                                    let f = (f * FRACTION_STEPS).floor() / FRACTION_STEPS;
+                                    let other = Grid {
+                                        fraction: f,
+                                        seen: Fast::default(),
+                                        cover: grid.cover.clone(),
+                                        ..*grid
+                                    };
+                                    let pl = u.on(f);
+                                    assert_eq!(p.answer(&other, &s, 0, &pl), Some(a), "fraction {f}");
+                                    assert_eq!(all.answer(&other, &s, 0, &pl), Some(a), "fraction {f}");
+                                    let mut texels = Traced::new(&scene, &other);
+                                    let got = answer_at(&maps, &fg, r, &s, 0, &pl, Some(&mut texels));
+                                    assert_eq!(got, Some(a), "fixed, traced at fraction {f}: {light} {texel}");
+                                }
+                            }
                         }
                         maps.end_frame();
                     }
@@ -2518,6 +2655,11 @@ mod tests {
             }
         }
         assert!(decided * 2 > total, "the plane decided {decided} of {total} lookups");
+        assert!(fixed * 25 > total, "a fixed answer for {fixed} of {total} lookups");
+        assert!(
+            lit_fixed * 4 > total,
+            "the biased compare fixed for {lit_fixed} of {total} lookups"
+        );
     }
 
     /// Wherever the cover names one owner for a rectangle, it names it at every point of it
