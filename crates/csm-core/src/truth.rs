@@ -1205,45 +1205,35 @@ impl PlaneLookup {
     #[inline]
     fn answer(&self, grid: &Grid, s: &Sampling, cascade: usize, pl: &Placement) -> Option<Answer> {
         let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
-        if let Some(lit) = self.lit_fixed {
-            // The format's range and the biased compare are decided over the whole reach (with
-            // this sign at every texel): only the unbiased compares are made, by the same
-            // operations as below.
-            let clear = each_footprint(pl.at, s.pcf, s.filter, |g, w| {
-                let c = grid.centre(g);
-                let d = self.k - self.gx * c.x - self.gy * c.y;
-                let unbiased = self.own_depth - d;
-                // False for NaN too: then the lookup is traced.
-                let clear = unbiased.abs() > self.tol_unbiased;
-                if !clear {
-                    return false;
-                }
-                if lit {
-                    lit_w += w;
-                    lit_n += 1;
-                }
-                if unbiased < 0.0 {
-                    unb_w += w;
-                    unb_n += 1;
-                }
-                true
-            });
-            return clear.then(|| vote(s, self.own_only, (lit_w, lit_n), (unb_w, unb_n)));
-        }
         let (near, far) = s.ranges[cascade];
         let clear = each_footprint(pl.at, s.pcf, s.filter, |g, w| {
             let c = grid.centre(g);
             let d = self.k - self.gx * c.x - self.gy * c.y;
-            // The format's range clamps nothing here.
-            if s.format.is_some() && !(d >= near + self.tol && d <= far - self.tol) {
-                return false;
-            }
-            let biased = pl.depth - (d + pl.bias);
             let unbiased = self.own_depth - d;
-            if !(biased.abs() > self.tol_lit && unbiased.abs() > self.tol_unbiased) {
-                return false;
-            }
-            if biased < 0.0 {
+            let lit = match self.lit_fixed {
+                // The format's range and the biased compare are decided over the whole reach
+                // (with this sign at every texel): only the unbiased compare is made.
+                // False for NaN too: then the lookup is traced.
+                Some(lit) => {
+                    let clear = unbiased.abs() > self.tol_unbiased;
+                    if !clear {
+                        return false;
+                    }
+                    lit
+                }
+                None => {
+                    // The format's range clamps nothing here.
+                    if s.format.is_some() && !(d >= near + self.tol && d <= far - self.tol) {
+                        return false;
+                    }
+                    let biased = pl.depth - (d + pl.bias);
+                    if !(biased.abs() > self.tol_lit && unbiased.abs() > self.tol_unbiased) {
+                        return false;
+                    }
+                    biased < 0.0
+                }
+            };
+            if lit {
                 lit_w += w;
                 lit_n += 1;
             }
