@@ -90,11 +90,13 @@ struct Buckets {
 }
 
 impl Buckets {
-    /// Most buckets of a pool.
+    /// Most buckets of a pool ([`Brackets::Keys`], in tests).
+    #[cfg(test)]
     const COUNT: usize = 4096;
 
     /// The bucket count for a pool of `groups` groups: a power of two, about four buckets per
     /// group, from 256 to [`Self::COUNT`].
+    #[cfg(test)]
     fn count_for(groups: usize) -> usize {
         (4 * groups).next_power_of_two().clamp(256, Self::COUNT)
     }
@@ -372,6 +374,10 @@ struct Group {
     b: u32,
     /// The contrast weight of its receivers.
     cw: u64,
+    /// Its bucket's smallest and largest `g` (copied here so that a selection's binary searches
+    /// over a run's groups read one array).
+    glo: f64,
+    ghi: f64,
 }
 
 /// What one view's statistics at a setting read that depends on the splits only, not on the
@@ -478,6 +484,8 @@ impl Served {
                     hi: ghi,
                     b: b as u32,
                     cw,
+                    glo: ix.glo[b],
+                    ghi: ix.ghi[b],
                 });
                 top = Some(sv.groups.len() - 1);
                 if cw > 0 {
@@ -686,6 +694,7 @@ impl<'a> ViewPass<'a> {
     }
 
     /// The groups of the pool, in run and bucket order.
+    #[cfg(test)]
     fn groups(&self) -> &[Group] {
         &self.sv.groups
     }
@@ -696,12 +705,10 @@ impl<'a> ViewPass<'a> {
 /// or overwritten before use.
 #[derive(Default)]
 struct Scratch {
-    /// Per kind (plain, contrast): the weight of groups by the key of their lowest and of
-    /// their highest value.
-    starts: [Vec<u128>; 2],
-    ends: [Vec<u128>; 2],
-    /// Per group of the pool (in pool, run and bucket order): the keys of its bounds.
-    keys: Vec<(u32, u32)>,
+    /// [`first_reaching`]'s bounds per run of the pool.
+    lo: Vec<usize>,
+    hi: Vec<usize>,
+    at: Vec<usize>,
     /// Per target (plain p50, p95, p99, then contrast): the values in its bracket.
     cands: [Vec<Cand>; 6],
     /// [`resolve`]'s histogram.
@@ -829,29 +836,223 @@ fn from_window(win: &Win, t: &[f64], target: u128, buf: &mut Vec<(f64, u128)>) -
     None
 }
 
+/// How [`select`] finds each target's bracket (the value range that must hold it).
+#[derive(Clone, Copy)]
+enum Brackets {
+    /// Binary searches on the value over each run's groups ([`value_brackets`]).
+    Values,
+    /// A histogram of the groups' bounds on these bucket keys, `count` of them
+    /// ([`key_brackets`]): the selection before the binary searches, kept to check them.
+    #[cfg(test)]
+    Keys(Buckets, usize),
+}
+
+/// One run of a pool, as [`select`]'s bracket searches read it: its texel size, its groups (in
+/// bucket order, so their bounds `t glo` and `t ghi` never decrease), their running counts and
+/// contrast weights (`cum`, one longer than `groups`) and its view's steps.
+#[derive(Clone, Copy)]
+struct PoolRun<'a> {
+    t: f64,
+    groups: &'a [Group],
+    cum: &'a [(u64, u64)],
+    s: u128,
+}
+
+impl PoolRun<'_> {
+    /// The lowest (`end` false) or highest (`end` true) possible value of group `i`.
+    #[inline]
+    fn bound(&self, i: usize, end: bool) -> f64 {
+        let gr = &self.groups[i];
+        self.t * if end { gr.ghi } else { gr.glo }
+    }
+
+    /// The weight (plain or contrast, times the view's steps) of the groups before `i`.
+    #[inline]
+    fn weight(&self, i: usize, contrast: bool) -> u128 {
+        let (a, b) = (self.cum[i], self.cum[0]);
+        (if contrast { a.1 - b.1 } else { a.0 - b.0 }) as u128 * self.s
+    }
+
+    /// How many of groups `a..z` (from the first) have a bound below `p`, or at most `p` with
+    /// `at`, for groups `a..z` holding the only bounds that can lie on either side.
+    #[inline]
+    fn count(&self, a: usize, z: usize, end: bool, p: f64, at: bool) -> usize {
+        let t = self.t;
+        a + if end {
+            self.groups[a..z].partition_point(|gr| if at { t * gr.ghi <= p } else { t * gr.ghi < p })
+        } else {
+            self.groups[a..z].partition_point(|gr| if at { t * gr.glo <= p } else { t * gr.glo < p })
+        }
+    }
+}
+
+/// The smallest group bound (lowest values with `end` false, highest with `end` true) at which
+/// the weight of the groups whose bound is at or below it reaches `target` (at most the runs'
+/// total weight): a weighted selection over the runs' sorted bounds, by binary searches on the
+/// value. Each round takes the middle bound of the run with the most bounds left, counts the
+/// weight at or below it in every run (a binary search within each run's bounds left), and keeps
+/// the side that holds the answer (the bound itself is kept as the best when its weight reaches
+/// the target); every round drops at least the bound it took. `lo`, `hi` and `at` are buffers.
+fn first_reaching(
+    runs: &[PoolRun<'_>],
+    end: bool,
+    contrast: bool,
+    target: u128,
+    lo: &mut Vec<usize>,
+    hi: &mut Vec<usize>,
+    at: &mut Vec<usize>,
+) -> f64 {
+    lo.clear();
+    lo.resize(runs.len(), 0);
+    hi.clear();
+    hi.extend(runs.iter().map(|r| r.groups.len()));
+    at.clear();
+    at.resize(runs.len(), 0);
+    // Every bound before lo[r] is below the answer; every bound from hi[r] on is at or above
+    // `best`, which the weight reaches.
+    let mut best = f64::INFINITY;
+    loop {
+        let (mut pick, mut span) = (0, 0);
+        for (k, (&a, &z)) in lo.iter().zip(hi.iter()).enumerate() {
+            if z - a > span {
+                span = z - a;
+                pick = k;
+            }
+        }
+        if span == 0 {
+            return best;
+        }
+        let p = runs[pick].bound(lo[pick] + span / 2, end);
+        let mut reached = 0u128;
+        for (r, run) in runs.iter().enumerate() {
+            at[r] = run.count(lo[r], hi[r], end, p, true);
+            reached += run.weight(at[r], contrast);
+        }
+        if reached >= target {
+            best = p;
+            for (r, run) in runs.iter().enumerate() {
+                hi[r] = run.count(lo[r], at[r], end, p, false);
+            }
+        } else {
+            lo.copy_from_slice(at);
+        }
+    }
+}
+
+/// Each open target's bracket `[lo, hi)` of values and the weight of the pool's values below
+/// `lo`, by binary searches on the value over each run's groups: `lo` is the smallest lowest
+/// bound of a group at which the weight of the groups starting at or below it reaches the target
+/// (the value cannot lie lower: each value at or below it belongs to such a group), the value
+/// at most the smallest highest bound at which the weight of the groups ending at or below it
+/// does (`hi` is the next number above it), and the weight below is that of the groups ending
+/// below `lo`.
+fn value_brackets(
+    runs: &[PoolRun<'_>],
+    open: &[usize],
+    target_of: &dyn Fn(usize) -> u128,
+    sc: &mut Scratch,
+) -> [(f64, f64, u128, u128); 6] {
+    let mut brackets = [(0.0, 0.0, 0u128, 0u128); 6];
+    let (lo, hi, at) = (&mut sc.lo, &mut sc.hi, &mut sc.at);
+    for &j in open {
+        let (contrast, target) = (j >= 3, target_of(j));
+        let start = first_reaching(runs, false, contrast, target, lo, hi, at);
+        let last = first_reaching(runs, true, contrast, target, lo, hi, at);
+        let below = runs
+            .iter()
+            .map(|run| run.weight(run.count(0, run.groups.len(), true, start, false), contrast))
+            .sum();
+        brackets[j] = (start, f64::from_bits(last.to_bits() + 1), below, target);
+    }
+    brackets
+}
+
+/// [`value_brackets`] from a histogram of the groups' bounds on `buckets` keys (`count` of
+/// them): the first key where the weight of the groups starting at or below it reaches the
+/// target, and the first where that of the groups ending at or below it does, as values (the
+/// lowest value of the first key and of the key after the second).
+#[cfg(test)]
+fn key_brackets(
+    runs: &[PoolRun<'_>],
+    open: &[usize],
+    target_of: &dyn Fn(usize) -> u128,
+    totals: [u128; 2],
+    buckets: Buckets,
+    count: usize,
+) -> [(f64, f64, u128, u128); 6] {
+    let mut starts = [vec![0u128; count], vec![0u128; count]];
+    let mut ends = [vec![0u128; count], vec![0u128; count]];
+    for run in runs {
+        for (k, gr) in run.groups.iter().enumerate() {
+            let (a, z) = (buckets.key(run.bound(k, false)), buckets.key(run.bound(k, true)));
+            let n = (gr.hi - gr.lo) as u128 * run.s;
+            let c = gr.cw as u128 * run.s;
+            starts[0][a] += n;
+            ends[0][z] += n;
+            starts[1][a] += c;
+            ends[1][z] += c;
+        }
+    }
+    let mut brackets = [(0.0, 0.0, 0u128, 0u128); 6];
+    for (kind, &total) in totals.iter().enumerate() {
+        if total == 0 || !open.iter().any(|&j| j / 3 == kind) {
+            continue;
+        }
+        let (starts, ends) = (&starts[kind], &ends[kind]);
+        let (mut lo, mut lo_cum, mut below) = (0usize, starts[0], 0u128);
+        let (mut hi, mut hi_cum) = (0usize, ends[0]);
+        for slot in 0..3 {
+            let j = 3 * kind + slot;
+            let target = target_of(j);
+            while lo_cum < target {
+                below += ends[lo];
+                lo += 1;
+                lo_cum += starts[lo];
+            }
+            while hi_cum < target {
+                hi += 1;
+                hi_cum += ends[hi];
+            }
+            brackets[j] = (buckets.floor_of(lo), buckets.floor_of(hi + 1), below, target);
+        }
+    }
+    brackets
+}
+
+/// How [`select`] finds the brackets of `pools`, whose values lie in `range`: by binary searches
+/// on the value; in tests, by the histogram of bucket keys instead while [`tests::BY_KEYS`] is
+/// set (to check that both give the same bits).
+#[cfg_attr(not(test), allow(unused_variables))]
+fn brackets_for(pools: &[(&ViewPass<'_>, u64)], range: (f64, f64)) -> Brackets {
+    #[cfg(test)]
+    if tests::BY_KEYS.with(|k| k.get()) {
+        let count = Buckets::count_for(pools.iter().map(|(p, _)| p.groups().len()).sum());
+        return Brackets::Keys(Buckets::new(range.0, range.1, count), count);
+    }
+    Brackets::Values
+}
+
 /// The nearest-rank values of a pool of views' groups, each view counting its steps: for the
 /// plain weights (each pixel its view's steps) and the contrast weights (`N · L` steps times
 /// the view's), at p50, p95 and p99, and the two total weights.
 ///
 /// A target with a window ([`Win`], where it was found at other texel sizes of the same
 /// splits) is first read from it: when its bounds prove that no value crossed into or out of
-/// the window, the window's few values at these texel sizes, sorted, hold it. For the others, the
-/// groups' bounds give the bucket range that must hold the value (its bracket): the first
-/// bucket where the weight of the groups starting at or below it reaches the target, and the
-/// first where that of the groups ending at or below it does. Only the groups reaching into a
-/// bracket are read, value by value, each value once for all the targets; what lies below a
-/// bracket is counted, and the few values in it are narrowed down and sorted ([`resolve`]).
-/// `hints` is updated to the window each selected value was found in.
+/// the window, the window's few values at these texel sizes, sorted, hold it. For the others,
+/// the groups' bounds give the range of values that must hold it (its bracket,
+/// [`value_brackets`]). Only the groups reaching into a bracket are read, value by value, each
+/// value once for all the targets; what lies below a bracket is counted, and the few values in
+/// it are narrowed down and sorted ([`resolve`]). `hints` is updated to the window each selected
+/// value was found in.
 ///
 /// Only the targets whose bit `3 kind + slot` is set in `wanted` are found ([`ALL_TARGETS`]:
 /// every one); the others are left at 0 and their hints untouched. A target's value depends
 /// on its own bracket alone (the groups wholly below it are counted, those reaching into it
 /// read), so it is the same bits whichever other targets are found with it; leaving targets
-/// out narrows the key range whose groups are read value by value.
+/// out narrows the range whose groups are read value by value.
 fn select(
     pools: &[(&ViewPass<'_>, u64)],
-    buckets: Buckets,
-    count: usize,
+    how: Brackets,
     sc: &mut Scratch,
     hints: &mut Hints,
     wanted: u8,
@@ -895,100 +1096,52 @@ fn select(
     if open.is_empty() {
         return (out, totals);
     }
-    for h in sc.starts.iter_mut().chain(sc.ends.iter_mut()) {
-        if h.len() < count {
-            h.resize(count, 0);
-        }
-    }
-    sc.keys.clear();
+    // The pool's runs, part by part (the order of `flat` and of the windows' tags).
+    let mut runs: Vec<PoolRun<'_>> = Vec::new();
     for &(p, s) in pools {
-        let s = s as u128;
-        let (ix, sv) = (p.ix, &*p.sv);
+        let sv = &*p.sv;
         for (&t, &(a, z)) in p.t.iter().zip(&sv.run_groups) {
-            for gr in &sv.groups[a..z] {
-                let b = gr.b as usize;
-                let (a, z) = (buckets.key(t * ix.glo[b]), buckets.key(t * ix.ghi[b]));
-                sc.keys.push((a as u32, z as u32));
-                let n = (gr.hi - gr.lo) as u128 * s;
-                let c = gr.cw as u128 * s;
-                sc.starts[0][a] += n;
-                sc.ends[0][z] += n;
-                sc.starts[1][a] += c;
-                sc.ends[1][z] += c;
-            }
+            runs.push(PoolRun {
+                t,
+                groups: &sv.groups[a..z],
+                cum: &sv.cum[a..=z],
+                s: s as u128,
+            });
         }
     }
-    // Per target: its bracket of keys `lo..=hi`, the weight of the groups wholly below it
-    // (ending below `lo`), and the weight to reach.
-    let mut brackets = [(0usize, 0usize, 0u128, 0u128); 6];
-    for (kind, &total) in totals.iter().enumerate() {
-        // A kind with no open target (each confirmed, not wanted, or no weight at all) has
-        // no bracket to find.
-        if total == 0 || !open.iter().any(|&j| j / 3 == kind) {
-            continue;
-        }
-        let (starts, ends) = (&sc.starts[kind], &sc.ends[kind]);
-        // Running sums, kept as the targets increase.
-        let (mut lo, mut lo_cum, mut below) = (0usize, starts[0], 0u128);
-        let (mut hi, mut hi_cum) = (0usize, ends[0]);
-        for slot in 0..3 {
-            let j = 3 * kind + slot;
-            let target = target_of(j);
-            while lo_cum < target {
-                below += ends[lo];
-                lo += 1;
-                lo_cum += starts[lo];
-            }
-            while hi_cum < target {
-                hi += 1;
-                hi_cum += ends[hi];
-            }
-            brackets[j] = (lo, hi, below, target);
-        }
-    }
-    // The histograms back to zero: only the keys the groups touched.
-    for &(a, z) in &sc.keys {
-        let (a, z) = (a as usize, z as usize);
-        sc.starts[0][a] = 0;
-        sc.starts[1][a] = 0;
-        sc.ends[0][z] = 0;
-        sc.ends[1][z] = 0;
-    }
-    let union_lo = open.iter().map(|&j| brackets[j].0).min().unwrap_or(0) as u32;
-    let union_hi = open.iter().map(|&j| brackets[j].1).max().unwrap_or(0) as u32;
+    // Per target: its bracket `[lo, hi)` of values, the weight of the values below it, and the
+    // weight to reach.
+    let brackets = match how {
+        Brackets::Values => value_brackets(&runs, &open, &target_of, sc),
+        #[cfg(test)]
+        Brackets::Keys(buckets, count) => key_brackets(&runs, &open, &target_of, totals, buckets, count),
+    };
+    let union_lo = open.iter().map(|&j| brackets[j].0).fold(f64::INFINITY, f64::min);
+    let union_hi = open.iter().map(|&j| brackets[j].1).fold(0.0, f64::max);
     let mut below = [0u128; 6];
     for &j in &open {
         below[j] = brackets[j].2;
         sc.cands[j].clear();
     }
-    // Per target: the lowest value of its bracket's keys, and the lowest of the key after them.
-    let mut thresholds = [(0.0f64, 0.0f64); 6];
-    for &j in &open {
-        thresholds[j] = (buckets.floor_of(brackets[j].0), buckets.floor_of(brackets[j].1 + 1));
-    }
-    let mut first = 0;
-    let mut first_run = 0u64;
+    let mut run_of = 0usize;
     for &(pass, s) in pools {
         let s = s as u128;
         let ix = pass.ix;
-        let sv = &*pass.sv;
-        let keys = &sc.keys[first..first + sv.groups.len()];
-        first += sv.groups.len();
-        let runs_before = first_run;
-        first_run += sv.runs.len() as u64;
-        // A run's groups reaching into a key range are consecutive (their bounds never
-        // decrease): those after every group ending below it, before the first starting
-        // above it.
-        for (rk_, (&(a, z), &t)) in sv.run_groups.iter().zip(&pass.t).enumerate() {
-            let tag = runs_before + rk_ as u64;
-            let (run, rk) = (&sv.groups[a..z], &keys[a..z]);
-            let from = rk.partition_point(|k| k.1 < union_lo);
-            let to = from + rk[from..].partition_point(|k| k.0 <= union_hi);
-            for (gr, &(ka, kz)) in run[from..to].iter().zip(&rk[from..to]) {
-                let (ka, kz) = (ka as usize, kz as usize);
+        for _ in 0..pass.sv.runs.len() {
+            let run = &runs[run_of];
+            let tag = run_of as u64;
+            run_of += 1;
+            let t = run.t;
+            // A run's groups reaching into a range are consecutive (their bounds never
+            // decrease): those after every group ending below it, before the first starting
+            // at or above its end.
+            let from = run.count(0, run.groups.len(), true, union_lo, false);
+            let to = run.count(from, run.groups.len(), false, union_hi, false);
+            for gr in &run.groups[from..to] {
+                let (ga, gz) = (t * gr.glo, t * gr.ghi);
                 let mut mask = 0u8;
                 for &j in &open {
-                    if ka <= brackets[j].1 && kz >= brackets[j].0 {
+                    if ga < brackets[j].1 && gz >= brackets[j].0 {
                         mask |= 1 << j;
                     }
                 }
@@ -1001,12 +1154,9 @@ fn select(
                 while bits != 0 {
                     let j = bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    // A value's key is below the bracket exactly when the value is below the
-                    // bracket's lowest value, and within it when also below the value of the
-                    // key after it (keys never decrease with the value).
-                    let (lo_v, hi_v) = thresholds[j];
+                    let (lo_v, hi_v) = (brackets[j].0, brackets[j].1);
                     let contrast = j >= 3;
-                    if ka < brackets[j].0 {
+                    if ga < lo_v {
                         // The values below the bracket: counted without a branch per value, and
                         // their contrast weight, then weighted by the view's steps once.
                         let (mut n, mut wsum) = (0u64, 0u64);
@@ -1036,7 +1186,8 @@ fn select(
         }
     }
     for &j in &open {
-        let found = resolve(&mut sc.cands[j], below[j], brackets[j].3, &mut sc.fine, thresholds[j]);
+        let thresholds = (brackets[j].0, brackets[j].1);
+        let found = resolve(&mut sc.cands[j], below[j], brackets[j].3, &mut sc.fine, thresholds);
         out[j / 3][j % 3] = found.map_or(0.0, |f| f.0.m);
         hints[j] = found.map(|(_, below, (lo, hi))| {
             let cands = &sc.cands[j];
@@ -1147,8 +1298,8 @@ pub fn stats(vis: &Visibility, splits: &[f64], texel: &[f64], visible: Option<(f
 fn own_stats(pass: &ViewPass<'_>, visible: Option<(f64, f64)>, sc: &mut Scratch, hints: &mut Hints) -> ScreenStats {
     let (plain, weighted) = match pass.range {
         Some((lo, hi)) => {
-            let count = Buckets::count_for(pass.groups().len());
-            let (v, _) = select(&[(pass, 1)], Buckets::new(lo, hi, count), count, sc, hints, ALL_TARGETS);
+            let pools = [(pass, 1)];
+            let (v, _) = select(&pools, brackets_for(&pools, (lo, hi)), sc, hints, ALL_TARGETS);
             (v[0], v[1])
         }
         None => ([0.0; 3], [0.0; 3]),
@@ -1270,17 +1421,11 @@ fn statistic_of(pass: &ViewPass<'_>, which: Statistic, sc: &mut Scratch) -> f64 
     if let Some((kind, slot)) = which.percentile() {
         return match pass.range {
             Some((lo, hi)) => {
-                let count = Buckets::count_for(pass.groups().len());
                 // Its own target alone (the other five are not read).
                 let wanted = 1 << (3 * kind + slot);
-                let (v, _) = select(
-                    &[(pass, 1)],
-                    Buckets::new(lo, hi, count),
-                    count,
-                    sc,
-                    &mut no_hints(),
-                    wanted,
-                );
+                let pools = [(pass, 1)];
+                let how = brackets_for(&pools, (lo, hi));
+                let (v, _) = select(&pools, how, sc, &mut no_hints(), wanted);
                 v[kind][slot]
             }
             None => 0.0,
@@ -1420,15 +1565,8 @@ fn pool_passes_in<'a>(
     let pools: Vec<(&ViewPass<'_>, u64)> = passes.iter().zip(parts).map(|(x, p)| (x, p.steps)).collect();
     let (level_p, totals) = match range {
         Some((lo, hi)) => {
-            let count = Buckets::count_for(passes.iter().map(|p| p.groups().len()).sum());
-            select(
-                &pools,
-                Buckets::new(lo, hi, count),
-                count,
-                sc,
-                &mut hints.level,
-                ALL_TARGETS,
-            )
+            let how = brackets_for(&pools, (lo, hi));
+            select(&pools, how, sc, &mut hints.level, ALL_TARGETS)
         }
         None => ([[0.0; 3]; 2], [0; 2]),
     };
@@ -2228,6 +2366,9 @@ mod tests {
     thread_local! {
         /// Percentiles this thread's [`select`] calls took from a confirmed hint.
         pub(super) static CONFIRMED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+        /// Whether [`select`] finds its brackets by the histogram of bucket keys
+        /// ([`Brackets::Keys`]) rather than by binary searches on the value.
+        pub(super) static BY_KEYS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
     }
 
     /// A view of `n` receivers with factors `g` drawn over `spread` octaves, rounded to
@@ -2434,6 +2575,64 @@ mod tests {
                 proptest::prop_assert_eq!([l.aliasing_p50, l.aliasing_p95, l.aliasing_p99], p);
                 proptest::prop_assert_eq!([l.visible_p50, l.visible_p95, l.visible_p99], vp);
                 proptest::prop_assert_eq!((l.aliasing_max, l.visible_max), (max, vmax));
+            }
+        }
+    }
+
+    /// Runs `f` with [`select`]'s brackets found by the histogram of bucket keys (the selection
+    /// before the binary searches on the value).
+    fn by_keys<R>(f: impl FnOnce() -> R) -> R {
+        BY_KEYS.with(|k| k.set(true));
+        let r = f();
+        BY_KEYS.with(|k| k.set(false));
+        r
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+        /// The brackets found by binary searches on the value over each run's groups give the
+        /// same bits as those of the histogram of bucket keys: the pool (and each view's own
+        /// statistics in it), each view alone, each statistic alone, and the pool remembered
+        /// across texel sizes (its windows made by either), over views with tied factors, zero
+        /// contrast weights, uneven view weights and values straddling m = 1; and the level's
+        /// percentiles equal a brute-force pool.
+        #[test]
+        fn value_brackets_equal_key_brackets(
+            seeds in proptest::collection::vec((0u64..1_000_000, 1usize..3000, 1.0f64..12.0, 0u32..40), 1..5),
+            cuts in proptest::collection::vec(0.02f64..0.98, 0..5),
+            scales in proptest::collection::vec(0.05f64..20.0, 1..4),
+            weights in proptest::collection::vec(0.25f64..4.0, 4),
+        ) {
+            let vis: Vec<Visibility> = seeds.iter().map(|&(seed, n, spread, levels)| tied(seed, n, spread, levels)).collect();
+            let mut cuts = cuts;
+            cuts.sort_by(f64::total_cmp);
+            let splits: Vec<f64> = std::iter::once(0.5).chain(cuts.iter().map(|c| 1.0 + 199.0 * c)).chain([220.0]).collect();
+            let base: Vec<f64> = (0..splits.len() - 1).map(|i| 0.3 * 1.7f64.powi(i as i32)).collect();
+            let texels: Vec<Vec<f64>> = scales.iter().map(|&f| base.iter().map(|t| t * f).collect()).collect();
+            let all = |memo: &PoolMemo| -> Vec<(Pooled, Pooled, Vec<ScreenStats>, Vec<u64>)> {
+                texels
+                    .iter()
+                    .map(|t| {
+                        let parts = parts_at(&vis, &splits, t, &weights);
+                        let own = vis.iter().map(|v| stats(v, &splits, t, None)).collect();
+                        let one = Statistic::ALL.iter().map(|&w| statistic(&vis[0], &splits, t, w).to_bits()).collect();
+                        (pool(&parts), pool_memo(&parts, memo), own, one)
+                    })
+                    .collect()
+            };
+            let values = all(&PoolMemo::default());
+            let keys = by_keys(|| all(&PoolMemo::default()));
+            for ((t, v), k) in texels.iter().zip(&values).zip(&keys) {
+                proptest::prop_assert_eq!(&v.0, &k.0);
+                proptest::prop_assert_eq!(&v.1, &k.1);
+                proptest::prop_assert_eq!(&v.0, &v.1);
+                proptest::prop_assert_eq!(&v.2, &k.2);
+                proptest::prop_assert_eq!(&v.3, &k.3);
+                let parts = parts_at(&vis, &splits, t, &weights);
+                let (p, vp, _, _, _) = brute_percentiles(&parts);
+                let l = &v.0.level;
+                proptest::prop_assert_eq!([l.aliasing_p50, l.aliasing_p95, l.aliasing_p99], p);
+                proptest::prop_assert_eq!([l.visible_p50, l.visible_p95, l.visible_p99], vp);
             }
         }
     }
