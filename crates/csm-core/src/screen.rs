@@ -371,7 +371,6 @@ impl ScreenIndex {
 struct Group {
     lo: u32,
     hi: u32,
-    b: u32,
     /// The contrast weight of its receivers.
     cw: u64,
     /// Its bucket's smallest and largest `g` (copied here so that a selection's binary searches
@@ -482,7 +481,6 @@ impl Served {
                 sv.groups.push(Group {
                     lo: glo,
                     hi: ghi,
-                    b: b as u32,
                     cw,
                     glo: ix.glo[b],
                     ghi: ix.ghi[b],
@@ -633,12 +631,12 @@ impl<'a> ViewPass<'a> {
             let run = &sv.groups[a..z];
             // A run's bounds never decrease: its lowest value is its first group's, its
             // highest its last's.
-            lo = lo.min(t * ix.glo[run[0].b as usize]);
-            hi = hi.max(t * ix.ghi[run[z - a - 1].b as usize]);
+            lo = lo.min(t * run[0].glo);
+            hi = hi.max(t * run[z - a - 1].ghi);
             // Undersampled (m > 1): the groups wholly above 1 are those after the first whose
             // lowest value is above 1; before them, those reaching above 1 are read.
-            let from = run.partition_point(|gr| t * ix.ghi[gr.b as usize] <= 1.0);
-            let whole = from + run[from..].partition_point(|gr| t * ix.glo[gr.b as usize] <= 1.0);
+            let from = run.partition_point(|gr| t * gr.ghi <= 1.0);
+            let whole = from + run[from..].partition_point(|gr| t * gr.glo <= 1.0);
             pass.under += sv.cum[z].0 - sv.cum[a + whole].0;
             for gr in &run[from..whole] {
                 pass.under += ix.g[gr.lo as usize..gr.hi as usize]
@@ -647,28 +645,28 @@ impl<'a> ViewPass<'a> {
                     .count() as u64;
             }
             if octaves {
-                // The run's values per octave: the count of those up to each octave's top, from
-                // the groups wholly below it (a prefix, counted) and the few straddling it (read
-                // value by value); a value's octave never decreases with its g.
-                let first = octave(t * ix.glo[run[0].b as usize]);
-                let last = octave(t * ix.ghi[run[z - a - 1].b as usize]);
+                // The run's values per octave, its groups taken in order (a value's octave never
+                // decreases with its g): a stretch of groups wholly within one octave is counted
+                // at once (a binary search for its end), and a group straddling octaves is read
+                // value by value, once.
+                let first = octave(t * run[0].glo);
+                let last = octave(t * run[z - a - 1].ghi);
                 oct_lo = oct_lo.min(first);
                 oct_hi = oct_hi.max(last);
-                let mut before = 0u64;
-                for o in first..=last {
-                    let whole = run.partition_point(|gr| octave(t * ix.ghi[gr.b as usize]) <= o);
-                    let mut upto = sv.cum[a + whole].0 - sv.cum[a].0;
-                    for gr in run[whole..]
-                        .iter()
-                        .take_while(|gr| octave(t * ix.glo[gr.b as usize]) <= o)
-                    {
-                        upto += ix.g[gr.lo as usize..gr.hi as usize]
-                            .iter()
-                            .filter(|&&g| octave(t * g) <= o)
-                            .count() as u64;
+                let mut k = 0;
+                while k < run.len() {
+                    let o = octave(t * run[k].glo);
+                    let end = k + run[k..].partition_point(|gr| octave(t * gr.ghi) <= o);
+                    if end > k {
+                        sc.oct[o] += (sv.cum[a + end].0 - sv.cum[a + k].0) as u32;
+                        k = end;
+                    } else {
+                        let gr = run[k];
+                        for &g in &ix.g[gr.lo as usize..gr.hi as usize] {
+                            sc.oct[octave(t * g)] += 1;
+                        }
+                        k += 1;
                     }
-                    sc.oct[o] += (upto - before) as u32;
-                    before = upto;
                 }
             }
             let (gmax, wgmax) = sv.gmax[k];
@@ -711,7 +709,7 @@ struct Scratch {
     at: Vec<usize>,
     /// Per target (plain p50, p95, p99, then contrast): the values in its bracket.
     cands: [Vec<Cand>; 6],
-    /// [`resolve`]'s histogram.
+    /// [`resolve`]'s histogram (zero between calls).
     fine: Vec<u128>,
     /// [`from_window`]'s values.
     window: Vec<(f64, u128)>,
@@ -825,7 +823,7 @@ fn from_window(win: &Win, t: &[f64], target: u128, buf: &mut Vec<(f64, u128)>) -
     }
     buf.clear();
     buf.extend(win.cands.iter().map(|&(i, g, w)| (t[i as usize] * g, w)));
-    buf.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+    sort_nearly_sorted(buf);
     let mut run = win.below;
     for &(m, w) in buf.iter() {
         run += w;
@@ -834,6 +832,26 @@ fn from_window(win: &Win, t: &[f64], target: u128, buf: &mut Vec<(f64, u128)>) -
         }
     }
     None
+}
+
+/// Sorts the values ascending. A window's values are kept sorted at the texel sizes they were
+/// found at, and at another resolution's (every texel size scaled by about one factor) they are
+/// nearly sorted still: an insertion sort then moves few of them. Past 64 values (a window of
+/// tied values) a general sort.
+fn sort_nearly_sorted(buf: &mut [(f64, u128)]) {
+    if buf.len() > 64 {
+        buf.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+        return;
+    }
+    for i in 1..buf.len() {
+        let x = buf[i];
+        let mut k = i;
+        while k > 0 && buf[k - 1].0.total_cmp(&x.0).is_gt() {
+            buf[k] = buf[k - 1];
+            k -= 1;
+        }
+        buf[k] = x;
+    }
 }
 
 /// How [`select`] finds each target's bracket (the value range that must hold it).
@@ -1116,8 +1134,6 @@ fn select(
         #[cfg(test)]
         Brackets::Keys(buckets, count) => key_brackets(&runs, &open, &target_of, totals, buckets, count),
     };
-    let union_lo = open.iter().map(|&j| brackets[j].0).fold(f64::INFINITY, f64::min);
-    let union_hi = open.iter().map(|&j| brackets[j].1).fold(0.0, f64::max);
     let mut below = [0u128; 6];
     for &j in &open {
         below[j] = brackets[j].2;
@@ -1132,31 +1148,18 @@ fn select(
             let tag = run_of as u64;
             run_of += 1;
             let t = run.t;
-            // A run's groups reaching into a range are consecutive (their bounds never
-            // decrease): those after every group ending below it, before the first starting
-            // at or above its end.
-            let from = run.count(0, run.groups.len(), true, union_lo, false);
-            let to = run.count(from, run.groups.len(), false, union_hi, false);
-            for gr in &run.groups[from..to] {
-                let (ga, gz) = (t * gr.glo, t * gr.ghi);
-                let mut mask = 0u8;
-                for &j in &open {
-                    if ga < brackets[j].1 && gz >= brackets[j].0 {
-                        mask |= 1 << j;
-                    }
-                }
-                if mask == 0 {
-                    continue;
-                }
-                let span = gr.lo as usize..gr.hi as usize;
-                let (gs, ws) = (&ix.g[span.clone()], &ix.w[span]);
-                let mut bits = mask;
-                while bits != 0 {
-                    let j = bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    let (lo_v, hi_v) = (brackets[j].0, brackets[j].1);
-                    let contrast = j >= 3;
-                    if ga < lo_v {
+            for &j in &open {
+                let (lo_v, hi_v) = (brackets[j].0, brackets[j].1);
+                let contrast = j >= 3;
+                // The run's groups reaching into the bracket are consecutive (their bounds never
+                // decrease): those after every group ending below it, before the first starting
+                // at or above its end.
+                let from = run.count(0, run.groups.len(), true, lo_v, false);
+                let to = run.count(from, run.groups.len(), false, hi_v, false);
+                for gr in &run.groups[from..to] {
+                    let span = gr.lo as usize..gr.hi as usize;
+                    let (gs, ws) = (&ix.g[span.clone()], &ix.w[span]);
+                    if t * gr.glo < lo_v {
                         // The values below the bracket: counted without a branch per value, and
                         // their contrast weight, then weighted by the view's steps once.
                         let (mut n, mut wsum) = (0u64, 0u64);
@@ -1218,9 +1221,10 @@ struct Cand {
 
 /// The first of the values `cands` (with their weights, above 0) at which the running weight,
 /// starting from `below`, reaches `target`: buckets narrow the values down until few are left,
-/// which are sorted. `hist` is a buffer (any content). `bounds` are such that every value of the
-/// pool counted in `below` lies below `bounds.0` and every value of the pool neither counted
-/// nor among `cands` at or above `bounds.1`. Returns the value, and (for a [`Win`]) with
+/// which are sorted. `hist` is a buffer, empty or all zero (and left so: each round resets the
+/// entries it touched). `bounds` are such that every value of the pool counted in `below` lies
+/// below `bounds.0` and every value of the pool neither counted nor among `cands` at or above
+/// `bounds.1`. Returns the value, and (for a [`Win`]) with
 /// `cands` left holding the final few values sorted, their `below` and bounds.
 fn resolve(
     cands: &mut Vec<Cand>,
@@ -1239,8 +1243,11 @@ fn resolve(
             return cands.first().map(|c| (*c, below, (lo_bound, hi_bound)));
         }
         let b = Buckets::new(lo, hi, COUNT);
-        hist.clear();
-        hist.resize(COUNT, 0);
+        // The histogram is zero between rounds (and calls): only the keys touched are reset.
+        if hist.len() < COUNT {
+            hist.clear();
+            hist.resize(COUNT, 0);
+        }
         for c in cands.iter() {
             hist[b.key(c.m)] += c.w;
         }
@@ -1248,6 +1255,13 @@ fn resolve(
         while below + hist[k] < target {
             below += hist[k];
             k += 1;
+        }
+        if cands.len() < COUNT {
+            for c in cands.iter() {
+                hist[b.key(c.m)] = 0;
+            }
+        } else {
+            hist.fill(0);
         }
         cands.retain(|x| b.key(x.m) == k);
         lo_bound = lo_bound.max(b.floor_of(k));
