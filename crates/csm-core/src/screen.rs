@@ -90,13 +90,11 @@ struct Buckets {
 }
 
 impl Buckets {
-    /// Most buckets of a pool ([`Brackets::Keys`], in tests).
-    #[cfg(test)]
+    /// Most buckets of a pool ([`Brackets::Keys`]).
     const COUNT: usize = 4096;
 
     /// The bucket count for a pool of `groups` groups: a power of two, about four buckets per
     /// group, from 256 to [`Self::COUNT`].
-    #[cfg(test)]
     fn count_for(groups: usize) -> usize {
         (4 * groups).next_power_of_two().clamp(256, Self::COUNT)
     }
@@ -692,7 +690,6 @@ impl<'a> ViewPass<'a> {
     }
 
     /// The groups of the pool, in run and bucket order.
-    #[cfg(test)]
     fn groups(&self) -> &[Group] {
         &self.sv.groups
     }
@@ -703,6 +700,12 @@ impl<'a> ViewPass<'a> {
 /// or overwritten before use.
 #[derive(Default)]
 struct Scratch {
+    /// Per kind (plain, contrast): the weight of groups by the key of their lowest and of
+    /// their highest value ([`key_brackets`]; zero between calls).
+    starts: [Vec<u128>; 2],
+    ends: [Vec<u128>; 2],
+    /// Per group of the pool (in pool, run and bucket order): the keys of its bounds.
+    keys: Vec<(u32, u32)>,
     /// [`first_reaching`]'s bounds per run of the pool.
     lo: Vec<usize>,
     hi: Vec<usize>,
@@ -860,8 +863,8 @@ enum Brackets {
     /// Binary searches on the value over each run's groups ([`value_brackets`]).
     Values,
     /// A histogram of the groups' bounds on these bucket keys, `count` of them
-    /// ([`key_brackets`]): the selection before the binary searches, kept to check them.
-    #[cfg(test)]
+    /// ([`key_brackets`]): cheaper than the binary searches for a pool of many runs (a level's),
+    /// whose every search probes each run.
     Keys(Buckets, usize),
 }
 
@@ -988,8 +991,11 @@ fn value_brackets(
 /// [`value_brackets`] from a histogram of the groups' bounds on `buckets` keys (`count` of
 /// them): the first key where the weight of the groups starting at or below it reaches the
 /// target, and the first where that of the groups ending at or below it does, as values (the
-/// lowest value of the first key and of the key after the second).
-#[cfg(test)]
+/// lowest value of the first key and of the key after the second; a value's key is below a
+/// key exactly when the value is below that key's lowest value). The weight below is that of
+/// the groups whose highest key is below the first, that is whose highest bound is below its
+/// lowest value. The histograms in `sc` are zero between calls (only the keys touched are reset).
+#[allow(clippy::too_many_arguments)]
 fn key_brackets(
     runs: &[PoolRun<'_>],
     open: &[usize],
@@ -997,18 +1003,24 @@ fn key_brackets(
     totals: [u128; 2],
     buckets: Buckets,
     count: usize,
+    sc: &mut Scratch,
 ) -> [(f64, f64, u128, u128); 6] {
-    let mut starts = [vec![0u128; count], vec![0u128; count]];
-    let mut ends = [vec![0u128; count], vec![0u128; count]];
+    for h in sc.starts.iter_mut().chain(sc.ends.iter_mut()) {
+        if h.len() < count {
+            h.resize(count, 0);
+        }
+    }
+    sc.keys.clear();
     for run in runs {
         for (k, gr) in run.groups.iter().enumerate() {
             let (a, z) = (buckets.key(run.bound(k, false)), buckets.key(run.bound(k, true)));
+            sc.keys.push((a as u32, z as u32));
             let n = (gr.hi - gr.lo) as u128 * run.s;
             let c = gr.cw as u128 * run.s;
-            starts[0][a] += n;
-            ends[0][z] += n;
-            starts[1][a] += c;
-            ends[1][z] += c;
+            sc.starts[0][a] += n;
+            sc.ends[0][z] += n;
+            sc.starts[1][a] += c;
+            sc.ends[1][z] += c;
         }
     }
     let mut brackets = [(0.0, 0.0, 0u128, 0u128); 6];
@@ -1016,7 +1028,8 @@ fn key_brackets(
         if total == 0 || !open.iter().any(|&j| j / 3 == kind) {
             continue;
         }
-        let (starts, ends) = (&starts[kind], &ends[kind]);
+        let (starts, ends) = (&sc.starts[kind], &sc.ends[kind]);
+        // Running sums, kept as the targets increase.
         let (mut lo, mut lo_cum, mut below) = (0usize, starts[0], 0u128);
         let (mut hi, mut hi_cum) = (0usize, ends[0]);
         for slot in 0..3 {
@@ -1034,21 +1047,40 @@ fn key_brackets(
             brackets[j] = (buckets.floor_of(lo), buckets.floor_of(hi + 1), below, target);
         }
     }
+    for &(a, z) in &sc.keys {
+        let (a, z) = (a as usize, z as usize);
+        sc.starts[0][a] = 0;
+        sc.starts[1][a] = 0;
+        sc.ends[0][z] = 0;
+        sc.ends[1][z] = 0;
+    }
     brackets
 }
 
 /// How [`select`] finds the brackets of `pools`, whose values lie in `range`: by binary searches
-/// on the value; in tests, by the histogram of bucket keys instead while [`tests::BY_KEYS`] is
-/// set (to check that both give the same bits).
-#[cfg_attr(not(test), allow(unused_variables))]
+/// on the value for a pool of at most [`SEARCHED_RUNS`] runs (a view's own), by the histogram of
+/// bucket keys for more (a level's); in tests, by the histogram for every pool while
+/// [`tests::BY_KEYS`] is set (to check that both give the same bits).
 fn brackets_for(pools: &[(&ViewPass<'_>, u64)], range: (f64, f64)) -> Brackets {
+    let runs: usize = pools.iter().map(|(p, _)| p.t.len()).sum();
     #[cfg(test)]
-    if tests::BY_KEYS.with(|k| k.get()) {
-        let count = Buckets::count_for(pools.iter().map(|(p, _)| p.groups().len()).sum());
-        return Brackets::Keys(Buckets::new(range.0, range.1, count), count);
+    let runs = if tests::BY_KEYS.with(|k| k.get()) {
+        usize::MAX
+    } else {
+        runs
+    };
+    if runs <= SEARCHED_RUNS {
+        return Brackets::Values;
     }
-    Brackets::Values
+    let count = Buckets::count_for(pools.iter().map(|(p, _)| p.groups().len()).sum());
+    Brackets::Keys(Buckets::new(range.0, range.1, count), count)
 }
+
+/// Runs of a pool, at most, whose brackets [`select`] finds by binary searches on the value:
+/// each search probes every run, while the histogram reads every group once for all targets.
+/// Measured on the 20-view sweep: a view's own pool (up to 8 runs) is cheaper searched, the
+/// level's (20 views, up to 80 runs) cheaper by the histogram.
+const SEARCHED_RUNS: usize = 16;
 
 /// The nearest-rank values of a pool of views' groups, each view counting its steps: for the
 /// plain weights (each pixel its view's steps) and the contrast weights (`N · L` steps times
@@ -1131,8 +1163,7 @@ fn select(
     // weight to reach.
     let brackets = match how {
         Brackets::Values => value_brackets(&runs, &open, &target_of, sc),
-        #[cfg(test)]
-        Brackets::Keys(buckets, count) => key_brackets(&runs, &open, &target_of, totals, buckets, count),
+        Brackets::Keys(buckets, count) => key_brackets(&runs, &open, &target_of, totals, buckets, count, sc),
     };
     let mut below = [0u128; 6];
     for &j in &open {
