@@ -1059,15 +1059,15 @@ fn key_brackets(
 
 /// How [`select`] finds the brackets of `pools`, whose values lie in `range`: by binary searches
 /// on the value for a pool of at most [`SEARCHED_RUNS`] runs (a view's own), by the histogram of
-/// bucket keys for more (a level's); in tests, by the histogram for every pool while
-/// [`tests::BY_KEYS`] is set (to check that both give the same bits).
+/// bucket keys for more (a level's); in tests, [`tests::BY_KEYS`] can choose either for every
+/// pool (to check that both give the same bits).
 fn brackets_for(pools: &[(&ViewPass<'_>, u64)], range: (f64, f64)) -> Brackets {
     let runs: usize = pools.iter().map(|(p, _)| p.t.len()).sum();
     #[cfg(test)]
-    let runs = if tests::BY_KEYS.with(|k| k.get()) {
-        usize::MAX
-    } else {
-        runs
+    let runs = match tests::BY_KEYS.with(|k| k.get()) {
+        Some(true) => usize::MAX,
+        Some(false) => 0,
+        None => runs,
     };
     if runs <= SEARCHED_RUNS {
         return Brackets::Values;
@@ -2411,9 +2411,10 @@ mod tests {
     thread_local! {
         /// Percentiles this thread's [`select`] calls took from a confirmed hint.
         pub(super) static CONFIRMED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
-        /// Whether [`select`] finds its brackets by the histogram of bucket keys
-        /// ([`Brackets::Keys`]) rather than by binary searches on the value.
-        pub(super) static BY_KEYS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+        /// Whether [`select`] finds every pool's brackets by the histogram of bucket keys
+        /// ([`Brackets::Keys`], `Some(true)`) or by binary searches on the value (`Some(false)`),
+        /// rather than by the pool's size (`None`).
+        pub(super) static BY_KEYS: std::cell::Cell<Option<bool>> = const { std::cell::Cell::new(None) };
     }
 
     /// A view of `n` receivers with factors `g` drawn over `spread` octaves, rounded to
@@ -2624,12 +2625,12 @@ mod tests {
         }
     }
 
-    /// Runs `f` with [`select`]'s brackets found by the histogram of bucket keys (the selection
-    /// before the binary searches on the value).
-    fn by_keys<R>(f: impl FnOnce() -> R) -> R {
-        BY_KEYS.with(|k| k.set(true));
+    /// Runs `f` with every pool's brackets found by the histogram of bucket keys (`keys`) or by
+    /// binary searches on the value.
+    fn brackets_by<R>(keys: bool, f: impl FnOnce() -> R) -> R {
+        BY_KEYS.with(|k| k.set(Some(keys)));
         let r = f();
-        BY_KEYS.with(|k| k.set(false));
+        BY_KEYS.with(|k| k.set(None));
         r
     }
 
@@ -2665,9 +2666,14 @@ mod tests {
                     })
                     .collect()
             };
-            let values = all(&PoolMemo::default());
-            let keys = by_keys(|| all(&PoolMemo::default()));
-            for ((t, v), k) in texels.iter().zip(&values).zip(&keys) {
+            let values = brackets_by(false, || all(&PoolMemo::default()));
+            let keys = brackets_by(true, || all(&PoolMemo::default()));
+            // And as chosen by the pool's size (a view's own pool searched, a large level's by the
+            // histogram).
+            let chosen = all(&PoolMemo::default());
+            for (((t, v), k), c) in texels.iter().zip(&values).zip(&keys).zip(&chosen) {
+                proptest::prop_assert_eq!(&v.0, &c.0);
+                proptest::prop_assert_eq!(&v.1, &c.1);
                 proptest::prop_assert_eq!(&v.0, &k.0);
                 proptest::prop_assert_eq!(&v.1, &k.1);
                 proptest::prop_assert_eq!(&v.0, &v.1);
