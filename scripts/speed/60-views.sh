@@ -23,3 +23,17 @@ if [ "${SPEED_CALLGRIND:-0}" = 1 ] && command -v valgrind >/dev/null; then
   done
   speed_row "| ${SPEED_JOB:-} | instructions (callgrind, --threads 1), 1 view / 20 views: ${views_ir[0]} / ${views_ir[1]} ($(awk -v a="${views_ir[0]}" -v b="${views_ir[1]}" 'BEGIN { printf "%.2f", b / a }') ×) | | | | | |"
 fi
+# SPEED_CACHEGRIND=1 adds the simulated first-level data misses (D1, reads + writes) of the same
+# two sweeps at --threads 1 (valgrind --tool=cachegrind --cache-sim=yes; this machine's
+# virtualised CPU gives perf no hardware counters).
+if [ "${SPEED_CACHEGRIND:-0}" = 1 ] && command -v valgrind >/dev/null; then
+  views_dir=$SPEED_ROOT/target/speed/views-cg
+  mkdir -p "$views_dir"
+  views_d1=()
+  for views_cfg in configs/default.toml benches/default_20_views.toml; do
+    valgrind --tool=cachegrind --cache-sim=yes --cachegrind-out-file="$views_dir/cachegrind.out" \
+      "$BIN" sweep "$views_cfg" --no-plots --quiet --threads 1 --out "$views_dir/out" >/dev/null 2>"$views_dir/cachegrind.txt" || true
+    views_d1+=("$(awk '/D1  misses:/ { gsub(",", "", $4); print $4; exit }' "$views_dir/cachegrind.txt")")
+  done
+  speed_row "| ${SPEED_JOB:-} | D1 misses (cachegrind, --threads 1), 1 view / 20 views: ${views_d1[0]} / ${views_d1[1]} ($(awk -v a="${views_d1[0]}" -v b="${views_d1[1]}" 'BEGIN { printf "%.2f", b / a }') ×) | | | | | |"
+fi
