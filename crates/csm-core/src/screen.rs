@@ -1089,17 +1089,18 @@ const SEARCHED_RUNS: usize = 16;
 /// A target with a window ([`Win`], where it was found at other texel sizes of the same
 /// splits) is first read from it: when its bounds prove that no value crossed into or out of
 /// the window, the window's few values at these texel sizes, sorted, hold it. For the others,
-/// the groups' bounds give the range of values that must hold it (its bracket,
-/// [`value_brackets`]). Only the groups reaching into a bracket are read, value by value, each
-/// value once for all the targets; what lies below a bracket is counted, and the few values in
-/// it are narrowed down and sorted ([`resolve`]). `hints` is updated to the window each selected
-/// value was found in.
+/// the groups' bounds give the range of values that must hold it (its bracket, found as `how`
+/// says: [`value_brackets`] or [`key_brackets`], either holds the same value). Only the groups
+/// reaching into a bracket are read (per bracket, those of each run found by two binary
+/// searches), value by value; what lies below a bracket is counted, and the few values in it are
+/// narrowed down and sorted ([`resolve`]). `hints` is updated to the window each selected value
+/// was found in.
 ///
 /// Only the targets whose bit `3 kind + slot` is set in `wanted` are found ([`ALL_TARGETS`]:
 /// every one); the others are left at 0 and their hints untouched. A target's value depends
 /// on its own bracket alone (the groups wholly below it are counted, those reaching into it
-/// read), so it is the same bits whichever other targets are found with it; leaving targets
-/// out narrows the range whose groups are read value by value.
+/// read), so it is the same bits whichever other targets are found with it; a target left out
+/// is neither bracketed nor read.
 fn select(
     pools: &[(&ViewPass<'_>, u64)],
     how: Brackets,
