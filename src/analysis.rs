@@ -956,6 +956,36 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
     })
 }
 
+/// Tells the level's pools that the sweep has evaluated every resolution of `config`'s split
+/// set (its settings that differ in resolution alone): what they kept for the other
+/// resolutions (each percentile's window, each view's served parts) is dropped
+/// ([`screen::split_set_done`]). Memory only; nothing without views or geometry.
+pub(crate) fn split_set_done(config: &Config) {
+    let Some(geometry) = config.geometry.as_ref().filter(|_| !config.views.is_empty()) else {
+        return;
+    };
+    let Some(inputs) = config
+        .views
+        .iter()
+        .map(|v| view_screen_inputs(config, v))
+        .collect::<Option<Vec<ScreenInputs>>>()
+    else {
+        return;
+    };
+    let parts: Vec<screen::PoolPart<'_>> = inputs
+        .iter()
+        .zip(config.views.iter())
+        .map(|(x, v)| screen::PoolPart {
+            vis: &x.vis,
+            splits: &x.splits,
+            texel: &x.texel,
+            visible: x.visible,
+            steps: screen::view_weight_steps(v.weight),
+        })
+        .collect();
+    screen::split_set_done(&parts, &geometry.pool_memo);
+}
+
 /// One sampled pixel of a view's picture: None (nothing hit), or (lit-facing, the aliasing `m`
 /// where a cascade serves it).
 pub(crate) type ViewPixel = Option<(bool, Option<f64>)>;
@@ -2072,6 +2102,62 @@ mod view_inputs_tests {
                     .collect();
                 assert_eq!(a.band_counts, counted, "{}", v.name);
                 assert_eq!(bits(&a.band_shares()), bits(&seams::band_shares(&a.vis, &a.bands)));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod split_set_done_tests {
+    use super::*;
+
+    /// A level's pooled statistics, computed through the scene's memo while split sets are
+    /// declared done between them (their windows and served parts dropped), equal the pool
+    /// of the same parts computed directly (`screen::pool`, no memo, no hints), bit for bit:
+    /// at each resolution of a split set, after it is done, and when it comes back.
+    #[test]
+    fn pools_around_a_split_set_done_equal_the_direct_pool() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/default_20_views.toml");
+        let base = Config::load(&path).expect("the bench config loads");
+        let at = |lambda: f64, cascades: usize, resolution: u32| {
+            crate::commands::sweep::grid::Setting::plain(lambda, cascades, resolution, base.shadow.fit)
+                .apply(&base)
+                .expect("a valid point")
+        };
+        let direct = |c: &Config| {
+            let inputs: Vec<ScreenInputs> = c.views.iter().map(|v| view_screen_inputs(c, v).unwrap()).collect();
+            let parts: Vec<screen::PoolPart<'_>> = inputs
+                .iter()
+                .zip(c.views.iter())
+                .map(|(x, v)| screen::PoolPart {
+                    vis: &x.vis,
+                    splits: &x.splits,
+                    texel: &x.texel,
+                    visible: x.visible,
+                    steps: screen::view_weight_steps(v.weight),
+                })
+                .collect();
+            screen::pool(&parts)
+        };
+        let order = [
+            (0.5, 4, 512),
+            (0.5, 4, 1024),
+            (0.5, 4, 2048),
+            (0.2, 3, 1024),
+            (0.2, 3, 4096),
+            (0.5, 4, 4096),
+            (0.5, 4, 512),
+        ];
+        for (i, &(lambda, cascades, resolution)) in order.iter().enumerate() {
+            let c = at(lambda, cascades, resolution);
+            let level = level_screen(&c).expect("views and geometry");
+            let pooled = direct(&c);
+            assert_eq!(level.screen, pooled.level, "step {i}");
+            for (v, p) in level.views.iter().zip(&pooled.views) {
+                assert_eq!(v.screen, *p, "step {i}, {}", v.name);
+            }
+            if i % 2 == 0 {
+                split_set_done(&c);
             }
         }
     }
