@@ -949,11 +949,18 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
             truth: None,
         })
         .collect();
+    LAST_LEVEL.with(|l| *l.borrow_mut() = Some(inputs));
     Some(LevelScreen {
         screen: pooled.level,
         band_pixel_share,
         views,
     })
+}
+
+thread_local! {
+    /// The views' screen inputs of the last level this thread pooled ([`level_screen`]), for
+    /// [`split_set_done`].
+    static LAST_LEVEL: std::cell::RefCell<Option<Vec<ScreenInputs>>> = const { std::cell::RefCell::new(None) };
 }
 
 /// Tells the level's pools that the sweep has evaluated every resolution of `config`'s split
@@ -964,13 +971,22 @@ pub(crate) fn split_set_done(config: &Config) {
     let Some(geometry) = config.geometry.as_ref().filter(|_| !config.views.is_empty()) else {
         return;
     };
-    let Some(inputs) = config
-        .views
-        .iter()
-        .map(|v| view_screen_inputs(config, v))
-        .collect::<Option<Vec<ScreenInputs>>>()
-    else {
-        return;
+    // The inputs this thread's last level read (the split set's last resolution, evaluated
+    // just before on this thread), else made again. Should a pool of another split set have
+    // run on this thread in between (rayon runs another job while one waits), its windows
+    // go instead: memory and time only, never a result.
+    let held = LAST_LEVEL.with(|l| l.borrow_mut().take());
+    let inputs = match held {
+        Some(inputs) if inputs.len() == config.views.len() => inputs,
+        _ => match config
+            .views
+            .iter()
+            .map(|v| view_screen_inputs(config, v))
+            .collect::<Option<Vec<ScreenInputs>>>()
+        {
+            Some(inputs) => inputs,
+            None => return,
+        },
     };
     let parts: Vec<screen::PoolPart<'_>> = inputs
         .iter()
@@ -1745,7 +1761,7 @@ impl std::hash::Hasher for WordHasher {
     }
 
     fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7cc1_b727_220a_95);
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
     }
 
     fn finish(&self) -> u64 {
@@ -2114,7 +2130,8 @@ mod split_set_done_tests {
     /// A level's pooled statistics, computed through the scene's memo while split sets are
     /// declared done between them (their windows and served parts dropped), equal the pool
     /// of the same parts computed directly (`screen::pool`, no memo, no hints), bit for bit:
-    /// at each resolution of a split set, after it is done, and when it comes back.
+    /// at each resolution of a split set, after it is done (from the level held, or made
+    /// again), and when it comes back.
     #[test]
     fn pools_around_a_split_set_done_equal_the_direct_pool() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/default_20_views.toml");
@@ -2157,6 +2174,10 @@ mod split_set_done_tests {
                 assert_eq!(v.screen, *p, "step {i}, {}", v.name);
             }
             if i % 2 == 0 {
+                split_set_done(&c);
+            }
+            if i == 2 {
+                // Again, with no level held: the inputs are made afresh.
                 split_set_done(&c);
             }
         }

@@ -96,11 +96,11 @@ fn without_views(summary: &Summary) -> Summary {
         band_pixel_share: *band_pixel_share,
         seam_crossings: *seam_crossings,
         screen: screen.clone(),
-        light: light.clone(),
-        truth: truth.clone(),
+        light: *light,
+        truth: *truth,
         views: Vec::new(),
-        cache: cache.clone(),
-        cost: cost.clone(),
+        cache: *cache,
+        cost: *cost,
     }
 }
 
