@@ -811,31 +811,62 @@ pub(crate) fn config_for_view(config: &Config, view: &crate::config::ViewSetting
 }
 
 /// What one view's screen statistics read: its pass, and the selection splits, texel sizes
-/// and blend bands of the cascades the setting builds for that view's pose (frame 0).
+/// and blend bands of the cascades the setting builds for that view's pose (frame 0), with the
+/// count of the pass's receivers in each band.
 struct ScreenInputs {
     vis: std::sync::Arc<Visibility>,
     splits: Vec<f64>,
     texel: Vec<f64>,
     visible: Option<(f64, f64)>,
     bands: Vec<(f64, f64)>,
+    band_counts: Vec<u64>,
+}
+
+impl ScreenInputs {
+    /// Each band's share of the pass's receivers: [`seams::band_shares`] from the counts.
+    fn band_shares(&self) -> Vec<f64> {
+        let n = self.vis.receivers.len();
+        if n == 0 {
+            return vec![0.0; self.bands.len()];
+        }
+        self.band_counts.iter().map(|&c| c as f64 / n as f64).collect()
+    }
 }
 
 /// A config's screen inputs, computed as [`analyze`] computes them for `[camera]` (the same
-/// rig, windows and visible range); None without scene geometry.
+/// rig, windows and visible range); None without scene geometry. The direct form the views'
+/// inputs are checked against.
+#[cfg(test)]
 fn screen_inputs(config: &Config) -> Option<ScreenInputs> {
-    let setup = config.setup();
+    screen_inputs_seen_by(config, &config.camera, || rig(config))
+}
+
+/// [`screen_inputs`] of the config as `view` sees it (`config_for_view`), without copying the
+/// config: the set-up is built with the view's camera, and so is the rig (an engine preset's
+/// reads a whole config: that one is built from the view's config).
+fn view_screen_inputs(config: &Config, view: &crate::config::ViewSettings) -> Option<ScreenInputs> {
+    screen_inputs_seen_by(config, &view.camera, || match &config.shadow.preset {
+        Some(_) => rig(&config_for_view(config, view)),
+        None => {
+            let setup = config.setup_seen_by(&view.camera);
+            Rig::for_setup_in(&setup, split_range(&setup))
+        }
+    })
+}
+
+/// The screen inputs of `config` seen from `camera`, whose rig `rig` builds.
+fn screen_inputs_seen_by(
+    config: &Config,
+    camera: &crate::config::CameraSettings,
+    rig: impl FnOnce() -> Option<Rig>,
+) -> Option<ScreenInputs> {
+    let setup = config.setup_seen_by(camera);
     let vis = setup.visibility()?;
-    let visible = {
-        let mut bounds_only = setup.clone();
-        bounds_only.shadow.fit_depth_to_visible = false;
-        depth_range::for_setup(&bounds_only)
-            .bounds()
-            .and_then(|(lo, hi)| screen::visible_range(&vis, lo, hi))
-    };
-    let (splits, texel, bands) = match rig(config) {
+    let visible = visible_depths(&setup, Some(&vis));
+    let (splits, texel, bands) = match rig() {
         None => (vec![0.0, 0.0], vec![0.0], Vec::new()),
         Some(rig) => {
-            let pose0 = config.camera.pose();
+            let pose0 = camera.pose();
             let lp0 = LightPose::new(&rig.light, &pose0);
             let texel = (0..rig.cascade_count())
                 .map(|i| rig.window(i, &lp0, config.shadow.snap).texel_size())
@@ -844,12 +875,20 @@ fn screen_inputs(config: &Config) -> Option<ScreenInputs> {
             (rig.splits.clone(), texel, bands)
         }
     };
+    // Each band's receivers (depth-ordered): the level's pooled band share and the view's own
+    // read the same counts.
+    let r = &vis.receivers;
+    let band_counts = bands
+        .iter()
+        .map(|&(lo, hi)| (r.partition_point(|&(d, _)| d < hi) - r.partition_point(|&(d, _)| d < lo)) as u64)
+        .collect();
     Some(ScreenInputs {
         vis,
         splits,
         texel,
         visible,
         bands,
+        band_counts,
     })
 }
 
@@ -865,16 +904,11 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
     let geometry = config.geometry.as_ref()?;
     // One pass per view, shared by every setting of a sweep: none may be evicted.
     geometry.scene.keep_at_least(2 * config.views.len() + 8);
-    // Each view's config is the config without its views and with the view's camera: the
-    // views are left out once here, not copied for every view.
-    let base = Config {
-        views: Default::default(),
-        ..config.clone()
-    };
+    // Each view's inputs are the config's seen by the view's camera (no config is copied).
     let inputs: Vec<ScreenInputs> = config
         .views
         .iter()
-        .map(|v| screen_inputs(&config_for_view(&base, v)))
+        .map(|v| view_screen_inputs(config, v))
         .collect::<Option<_>>()?;
     let parts: Vec<screen::PoolPart<'_>> = inputs
         .iter()
@@ -889,12 +923,7 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
         .collect();
     let pooled = screen::pool_memo(&parts, &geometry.pool_memo);
     // Band k's receivers of each view, pooled band by band (a view without that band has none).
-    let band_count = |x: &ScreenInputs, k: usize| -> u64 {
-        x.bands.get(k).map_or(0, |&(lo, hi)| {
-            let r = &x.vis.receivers;
-            (r.partition_point(|&(d, _)| d < hi) - r.partition_point(|&(d, _)| d < lo)) as u64
-        })
-    };
+    let band_count = |x: &ScreenInputs, k: usize| -> u64 { x.band_counts.get(k).copied().unwrap_or(0) };
     let bands = inputs.iter().map(|x| x.bands.len()).max().unwrap_or(0);
     let band_pixel_share = (0..bands)
         .map(|k| {
@@ -915,16 +944,62 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
             name: v.name.clone(),
             weight: v.weight,
             screen: st,
-            band_pixel_share: seams::band_shares(&x.vis, &x.bands).iter().sum(),
+            band_pixel_share: x.band_shares().iter().sum(),
             judged: false,
             truth: None,
         })
         .collect();
+    LAST_LEVEL.with(|l| *l.borrow_mut() = Some(inputs));
     Some(LevelScreen {
         screen: pooled.level,
         band_pixel_share,
         views,
     })
+}
+
+thread_local! {
+    /// The views' screen inputs of the last level this thread pooled ([`level_screen`]), for
+    /// [`split_set_done`].
+    static LAST_LEVEL: std::cell::RefCell<Option<Vec<ScreenInputs>>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Tells the level's pools that the sweep has evaluated every resolution of `config`'s split
+/// set (its settings that differ in resolution alone): what they kept for the other
+/// resolutions (each percentile's window, each view's served parts) is dropped
+/// ([`screen::split_set_done`]). Memory only; nothing without views or geometry.
+pub(crate) fn split_set_done(config: &Config) {
+    let Some(geometry) = config.geometry.as_ref().filter(|_| !config.views.is_empty()) else {
+        return;
+    };
+    // The inputs this thread's last level read (the split set's last resolution, evaluated
+    // just before on this thread), else made again. Should a pool of another split set have
+    // run on this thread in between (rayon runs another job while one waits), its windows
+    // go instead: memory and time only, never a result.
+    let held = LAST_LEVEL.with(|l| l.borrow_mut().take());
+    let inputs = match held {
+        Some(inputs) if inputs.len() == config.views.len() => inputs,
+        _ => match config
+            .views
+            .iter()
+            .map(|v| view_screen_inputs(config, v))
+            .collect::<Option<Vec<ScreenInputs>>>()
+        {
+            Some(inputs) => inputs,
+            None => return,
+        },
+    };
+    let parts: Vec<screen::PoolPart<'_>> = inputs
+        .iter()
+        .zip(config.views.iter())
+        .map(|(x, v)| screen::PoolPart {
+            vis: &x.vis,
+            splits: &x.splits,
+            texel: &x.texel,
+            visible: x.visible,
+            steps: screen::view_weight_steps(v.weight),
+        })
+        .collect();
+    screen::split_set_done(&parts, &geometry.pool_memo);
 }
 
 /// One sampled pixel of a view's picture: None (nothing hit), or (lit-facing, the aliasing `m`
@@ -935,7 +1010,7 @@ pub(crate) type ViewPixel = Option<(bool, Option<f64>)>;
 /// (nothing hit), or (lit-facing, the aliasing `m` where a cascade serves it); with the
 /// sampled grid's columns and rows. None without geometry or such a view.
 pub(crate) fn view_pixels(config: &Config, k: usize) -> Option<(u32, u32, Vec<ViewPixel>)> {
-    let x = screen_inputs(&config_for_view(config, config.views.get(k)?))?;
+    let x = view_screen_inputs(config, config.views.get(k)?)?;
     let m = x.texel.len();
     let px = x
         .vis
@@ -962,7 +1037,7 @@ pub(crate) fn warm_views(config: &Config, rays_only: bool) {
     };
     geometry.scene.keep_at_least(2 * config.views.len() + 8);
     for v in config.views.iter() {
-        let setup = config_for_view(config, v).setup();
+        let setup = config.setup_seen_by(&v.camera);
         if rays_only {
             let _ = setup.visibility_hits();
         } else {
@@ -1159,9 +1234,7 @@ fn analysed_range(config: &Config, rig: Option<&Rig>) -> DepthRange {
 /// splits to them).
 fn visible_depths(setup: &csm_core::scene::Setup, vis: Option<&Visibility>) -> Option<(f64, f64)> {
     let vis = vis?;
-    let mut bounds_only = setup.clone();
-    bounds_only.shadow.fit_depth_to_visible = false;
-    let (lo, hi) = depth_range::for_setup(&bounds_only).bounds()?;
+    let (lo, hi) = bounds_range(setup).bounds()?;
     screen::visible_range(vis, lo, hi)
 }
 
@@ -1668,29 +1741,76 @@ fn range_key(setup: &csm_core::scene::Setup) -> RangeKey {
     key
 }
 
-thread_local! {
-    /// The last split range this thread computed, with its [`RangeKey`].
-    static RANGE: std::cell::Cell<Option<(RangeKey, DepthRange)>> = const { std::cell::Cell::new(None) };
+/// Split ranges a thread keeps at most (then it starts again): one per camera a sweep reads,
+/// `[camera]` and each view of a level (160 bytes of key each).
+const HELD_RANGES: usize = 4096;
+
+/// A hasher for keys of whole words ([`RangeKey`]): a multiply and a rotate per word, where
+/// the standard SipHash costs more than the look-up it serves. A cache's hash: a poor one costs
+/// time, never a wrong range (the map compares whole keys).
+#[derive(Default, Clone, Copy)]
+struct WordHasher(u64);
+
+impl std::hash::Hasher for WordHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+
+    fn finish(&self) -> u64 {
+        self.0
+    }
 }
 
-/// [`depth_range::for_setup`] of `setup`: the thread's last range when it has the same
-/// [`RangeKey`] (the same inputs, so the same range), else computed (and kept). A sweep's
+type WordMap<K, V> = std::collections::HashMap<K, V, std::hash::BuildHasherDefault<WordHasher>>;
+
+thread_local! {
+    /// The split ranges this thread computed, by their [`RangeKey`].
+    static RANGES: std::cell::RefCell<WordMap<RangeKey, DepthRange>> = std::cell::RefCell::new(WordMap::default());
+}
+
+/// [`depth_range::for_setup`] of `setup`: the thread's range of the same [`RangeKey`] (the
+/// same inputs, so the same range) when it holds one, else computed (and kept). A sweep's
 /// settings share the camera, the shadow distance and the scene, so each thread computes the
-/// range once instead of three times per setting. A range fitted to visible geometry reads the
-/// visibility pass and is always computed.
+/// range once per camera (`[camera]` and each view of a level) instead of three times per
+/// setting and view. A range fitted to visible geometry reads the visibility pass and is always
+/// computed.
 pub(crate) fn split_range(setup: &csm_core::scene::Setup) -> DepthRange {
     if setup.shadow.fit_depth_to_visible {
         return depth_range::for_setup(setup);
     }
     let key = range_key(setup);
-    RANGE.with(|held| match held.get() {
-        Some((k, range)) if k == key => range,
-        _ => {
-            let range = depth_range::for_setup(setup);
-            held.set(Some((key, range)));
-            range
+    if let Some(&range) = RANGES.with(|held| held.borrow().get(&key).copied()).as_ref() {
+        return range;
+    }
+    let range = depth_range::for_setup(setup);
+    RANGES.with(|held| {
+        let mut held = held.borrow_mut();
+        if held.len() >= HELD_RANGES {
+            held.clear();
         }
-    })
+        held.insert(key, range);
+    });
+    range
+}
+
+/// The split range of `setup` fitted to its bounds, whether or not its splits are fitted to
+/// visible geometry: the range the visible depths are clipped to ([`split_range`] of the
+/// bounds-only set-up, held the same way).
+fn bounds_range(setup: &csm_core::scene::Setup) -> DepthRange {
+    if !setup.shadow.fit_depth_to_visible {
+        return split_range(setup);
+    }
+    let mut bounds_only = setup.clone();
+    bounds_only.shadow.fit_depth_to_visible = false;
+    split_range(&bounds_only)
 }
 
 /// Coverage, shimmer, jitter and lookup error over every camera path.
@@ -1912,6 +2032,153 @@ mod split_range_tests {
                     s = changed(s, field, by);
                 }
                 prop_assert_eq!(bits(split_range(&s)), bits(depth_range::for_setup(&s)));
+            }
+        }
+
+        /// Several cameras read in turn (a level's views, setting after setting), each now and
+        /// then changed: every held range equals the range computed alone, bit for bit, and
+        /// the bounds' range of a set-up fitted to visible geometry is its bounds-only range.
+        #[test]
+        fn held_ranges_of_cameras_in_turn_equal_computed_alone(
+            steps in prop::collection::vec((0usize..5, 0usize..16, -3.0f64..3.0, any::<bool>()), 1..48),
+        ) {
+            let mut cams: Vec<Setup> = (0..5).map(|k| changed(base(), k % 4, k as f64 * 0.7)).collect();
+            for (cam, field, by, visible) in steps {
+                if field < 12 {
+                    cams[cam] = changed(cams[cam].clone(), field, by);
+                }
+                let s = &cams[cam];
+                prop_assert_eq!(bits(split_range(s)), bits(depth_range::for_setup(s)));
+                let mut fitted = s.clone();
+                fitted.shadow.fit_depth_to_visible = visible;
+                prop_assert_eq!(bits(bounds_range(&fitted)), bits(depth_range::for_setup(s)));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod view_inputs_tests {
+    use super::*;
+
+    /// The 20-view bench level with its `[shadow]` table replaced by `shadow`.
+    fn level(shadow: &str) -> Config {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/default_20_views.toml");
+        let text = std::fs::read_to_string(&path).expect("the bench config reads");
+        let start = text.find("[shadow]").expect("a [shadow] table");
+        let end = start + text[start..].find("\n\n").expect("a blank line after it");
+        let text = format!("{}{shadow}{}", &text[..start], &text[end..]);
+        Config::from_toml_str(&text, "level.toml", None).unwrap_or_else(|e| panic!("{e}\n{shadow}"))
+    }
+
+    fn bits(x: &[f64]) -> Vec<u64> {
+        x.iter().map(|v| v.to_bits()).collect()
+    }
+
+    /// Each view's screen inputs made without copying the config equal those of the view's own
+    /// config (`config_for_view`, the direct form), bit for bit: the same pass, splits, texel
+    /// sizes, visible range, bands, and band counts equal to counting the receivers in each
+    /// band one by one; for csm-lab's own rig (fitted to the bounds and to visible geometry)
+    /// and an engine preset's.
+    #[test]
+    fn view_inputs_equal_those_of_the_views_own_config() {
+        let shadows = [
+            "[shadow]\nmax_distance = 150.0\ncascades = 4\nlambda = 0.75\nresolution = 2048\nfit = \"sphere\"\nsnap = true\nfit_depth_to_scene = true",
+            "[shadow]\nmax_distance = 90.0\ncascades = 3\nlambda = 0.4\nresolution = 1024\nfit = \"aabb\"\nsnap = false\nfit_depth_to_visible = true",
+            "[shadow]\npreset = \"unity\"\nmax_distance = 120.0",
+        ];
+        for shadow in shadows {
+            let config = level(shadow);
+            assert_eq!(config.views.len(), 20);
+            for v in config.views.iter() {
+                let own = config_for_view(&config, v);
+                assert_eq!(
+                    format!("{:?}", config.setup_seen_by(&v.camera)),
+                    format!("{:?}", own.setup())
+                );
+                let a = view_screen_inputs(&config, v).expect("geometry");
+                let b = screen_inputs(&own).expect("geometry");
+                assert!(std::sync::Arc::ptr_eq(&a.vis, &b.vis), "{}", v.name);
+                assert_eq!(bits(&a.splits), bits(&b.splits), "{}", v.name);
+                assert_eq!(bits(&a.texel), bits(&b.texel), "{}", v.name);
+                assert_eq!(
+                    a.visible.map(|(l, h)| (l.to_bits(), h.to_bits())),
+                    b.visible.map(|(l, h)| (l.to_bits(), h.to_bits()))
+                );
+                let flat = |x: &[(f64, f64)]| {
+                    x.iter()
+                        .flat_map(|&(l, h)| [l.to_bits(), h.to_bits()])
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(flat(&a.bands), flat(&b.bands));
+                let counted: Vec<u64> = a
+                    .bands
+                    .iter()
+                    .map(|&(lo, hi)| a.vis.receivers.iter().filter(|&&(d, _)| d >= lo && d < hi).count() as u64)
+                    .collect();
+                assert_eq!(a.band_counts, counted, "{}", v.name);
+                assert_eq!(bits(&a.band_shares()), bits(&seams::band_shares(&a.vis, &a.bands)));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod split_set_done_tests {
+    use super::*;
+
+    /// A level's pooled statistics, computed through the scene's memo while split sets are
+    /// declared done between them (their windows and served parts dropped), equal the pool
+    /// of the same parts computed directly (`screen::pool`, no memo, no hints), bit for bit:
+    /// at each resolution of a split set, after it is done (from the level held, or made
+    /// again), and when it comes back.
+    #[test]
+    fn pools_around_a_split_set_done_equal_the_direct_pool() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/default_20_views.toml");
+        let base = Config::load(&path).expect("the bench config loads");
+        let at = |lambda: f64, cascades: usize, resolution: u32| {
+            crate::commands::sweep::grid::Setting::plain(lambda, cascades, resolution, base.shadow.fit)
+                .apply(&base)
+                .expect("a valid point")
+        };
+        let direct = |c: &Config| {
+            let inputs: Vec<ScreenInputs> = c.views.iter().map(|v| view_screen_inputs(c, v).unwrap()).collect();
+            let parts: Vec<screen::PoolPart<'_>> = inputs
+                .iter()
+                .zip(c.views.iter())
+                .map(|(x, v)| screen::PoolPart {
+                    vis: &x.vis,
+                    splits: &x.splits,
+                    texel: &x.texel,
+                    visible: x.visible,
+                    steps: screen::view_weight_steps(v.weight),
+                })
+                .collect();
+            screen::pool(&parts)
+        };
+        let order = [
+            (0.5, 4, 512),
+            (0.5, 4, 1024),
+            (0.5, 4, 2048),
+            (0.2, 3, 1024),
+            (0.2, 3, 4096),
+            (0.5, 4, 4096),
+            (0.5, 4, 512),
+        ];
+        for (i, &(lambda, cascades, resolution)) in order.iter().enumerate() {
+            let c = at(lambda, cascades, resolution);
+            let level = level_screen(&c).expect("views and geometry");
+            let pooled = direct(&c);
+            assert_eq!(level.screen, pooled.level, "step {i}");
+            for (v, p) in level.views.iter().zip(&pooled.views) {
+                assert_eq!(v.screen, *p, "step {i}, {}", v.name);
+            }
+            if i % 2 == 0 {
+                split_set_done(&c);
+            }
+            if i == 2 {
+                // Again, with no level held: the inputs are made afresh.
+                split_set_done(&c);
             }
         }
     }

@@ -845,17 +845,23 @@ impl Config {
     /// The validated settings as the core's plain domain values (radians, unit light
     /// direction, world offset already applied).
     pub fn setup(&self) -> csm_core::scene::Setup {
+        self.setup_seen_by(&self.camera)
+    }
+
+    /// [`Config::setup`] with `camera` in place of `[camera]`: the set-up of the config as a
+    /// view sees it (`analysis::config_for_view`), without copying the config.
+    pub(crate) fn setup_seen_by(&self, camera: &CameraSettings) -> csm_core::scene::Setup {
         use csm_core::scene::{Camera, Geometry, Motion, Setup};
         let s = &self.shadow;
         Setup {
             camera: Camera {
-                position: self.camera.position,
-                target: self.camera.target,
-                up: self.camera.up,
-                fov_y: self.camera.fov_y(),
+                position: camera.position,
+                target: camera.target,
+                up: camera.up,
+                fov_y: camera.fov_y(),
                 aspect: self.screen.aspect(),
-                near: self.camera.near,
-                far: self.camera.far,
+                near: camera.near,
+                far: camera.far,
                 screen_height: self.screen.height,
             },
             light_direction: self.light_direction,

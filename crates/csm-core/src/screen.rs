@@ -1911,6 +1911,18 @@ pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
     }
 }
 
+/// Forgets what the pools of one split set keep for its other texel sizes, once a sweep has
+/// evaluated all of them (its resolutions): the memo's windows of `parts` (by their passes,
+/// weights, poses, visible ranges and splits; the texel sizes are not read) and this thread's
+/// served parts. Memory only: a later pool of the same splits makes them again, and every
+/// result is the same bit for bit with or without them.
+pub fn split_set_done(parts: &[PoolPart<'_>], memo: &PoolMemo) {
+    SERVED.with(|c| *c.borrow_mut() = ServedCache::default());
+    if let Ok(mut m) = memo.hints.lock() {
+        m.remove(&key_of(parts, false));
+    }
+}
+
 /// A share pooled over views: `Σ s_k a_k / Σ s_k b_k` for each view's count `a_k` out of
 /// `b_k` and its weight steps `s_k`; 0 when the weighted denominator is 0.
 pub fn pooled_share(parts: &[(u64, u64, u64)]) -> f64 {

@@ -41,13 +41,75 @@ pub struct LevelChoice {
 
 /// `summary` with view `k`'s own screen metrics in place of the level's pooled ones.
 pub(crate) fn view_summary(summary: &Summary, k: usize) -> Summary {
-    let v = &summary.views[k];
+    let mut own = without_views(summary);
+    put_view(&mut own, summary, k);
+    own
+}
+
+/// `summary` with no views (`views` empty), made without copying its views' metrics (a
+/// clone would copy every view's, only to drop them).
+fn without_views(summary: &Summary) -> Summary {
+    // Every field named, so that a field added to `Summary` is added here too.
+    let Summary {
+        cascades_needed,
+        z_lo,
+        z_hi,
+        max_aliasing,
+        mean_aliasing,
+        mean_log_aliasing,
+        undersampled_fraction,
+        shimmer,
+        shimmer_snapped,
+        shimmer_unsnapped,
+        size_jitter,
+        coverage_violations,
+        memory_bytes,
+        lookup_error_max,
+        lookup_error_rms,
+        overlap_area_fraction,
+        band_pixel_share,
+        seam_crossings,
+        screen,
+        light,
+        truth,
+        views: _,
+        cache,
+        cost,
+    } = summary;
     Summary {
-        screen: Some(v.screen.clone()),
-        band_pixel_share: v.band_pixel_share,
+        cascades_needed: *cascades_needed,
+        z_lo: *z_lo,
+        z_hi: *z_hi,
+        max_aliasing: *max_aliasing,
+        mean_aliasing: *mean_aliasing,
+        mean_log_aliasing: *mean_log_aliasing,
+        undersampled_fraction: *undersampled_fraction,
+        shimmer: *shimmer,
+        shimmer_snapped: *shimmer_snapped,
+        shimmer_unsnapped: *shimmer_unsnapped,
+        size_jitter: *size_jitter,
+        coverage_violations: *coverage_violations,
+        memory_bytes: *memory_bytes,
+        lookup_error_max: *lookup_error_max,
+        lookup_error_rms: *lookup_error_rms,
+        overlap_area_fraction: *overlap_area_fraction,
+        band_pixel_share: *band_pixel_share,
+        seam_crossings: *seam_crossings,
+        screen: screen.clone(),
+        light: *light,
+        truth: *truth,
         views: Vec::new(),
-        ..summary.clone()
+        cache: *cache,
+        cost: *cost,
     }
+}
+
+/// Puts view `k`'s own screen metrics of `level` (a row's summary) into `own`, a summary
+/// without views of the same row: `own` becomes [`view_summary`]`(level, k)`, in place.
+fn put_view(own: &mut Summary, level: &Summary, k: usize) {
+    let v = &level.views[k];
+    own.screen = Some(v.screen.clone());
+    own.band_pixel_share = v.band_pixel_share;
 }
 
 /// Whether view `k` of a summary sees any lit-facing receiver (its own screen statistics
@@ -90,15 +152,20 @@ pub(crate) fn choose(
         return None;
     }
     let at = rec.map(|r| r.index).or(configured).unwrap_or(0);
+    // A view's rows: the level's, without views, each given the view's own screen metrics in
+    // turn (made once, filled per view: no row is copied per view).
+    let mut own: Vec<Row> = rows
+        .iter()
+        .map(|r| Row {
+            setting: r.setting,
+            summary: without_views(&r.summary),
+        })
+        .collect();
     let views: Vec<ViewChoice> = (0..count)
         .map(|k| {
-            let own: Vec<Row> = rows
-                .iter()
-                .map(|r| Row {
-                    setting: r.setting,
-                    summary: view_summary(&r.summary, k),
-                })
-                .collect();
+            for (o, r) in own.iter_mut().zip(rows) {
+                put_view(&mut o.summary, &r.summary, k);
+            }
             // Views exist only with geometry: the worst case is on screen. A view that sees no
             // receiver has no statistics to choose by.
             let seen = sees_receivers(&rows[at].summary, k);
@@ -130,4 +197,132 @@ pub(crate) fn choose(
         worst: worst_of(&values, &seen, objective),
         views,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::ViewScreen;
+    use crate::commands::sweep::grid::Setting;
+    use crate::config::Fit;
+    use csm_core::screen::ScreenStats;
+
+    /// The direct form: the whole summary cloned, its views dropped.
+    fn cloned_view_summary(summary: &Summary, k: usize) -> Summary {
+        let v = &summary.views[k];
+        Summary {
+            screen: Some(v.screen.clone()),
+            band_pixel_share: v.band_pixel_share,
+            views: Vec::new(),
+            ..summary.clone()
+        }
+    }
+
+    fn stats(rng: &mut csm_core::rng::SplitMix64, cascades: usize) -> ScreenStats {
+        let mut x = || (rng.unit() * 16.0).round() / 4.0;
+        ScreenStats {
+            receiver_fraction: if x() > 0.5 { x() } else { 0.0 },
+            aliasing_mean: x(),
+            aliasing_p50: x(),
+            aliasing_p95: x(),
+            aliasing_p99: x(),
+            aliasing_max: x(),
+            visible_p95: x(),
+            visible_z_hi: x(),
+            cascade_pixels: (0..cascades).map(|_| x()).collect(),
+            ..ScreenStats::default()
+        }
+    }
+
+    /// Random rows of a level of `views` views: settings, memory, the level's and each view's
+    /// screen metrics (ties likely: values on a grid of quarters).
+    fn rows(seed: u64, n: usize, views: usize) -> Vec<Row> {
+        let mut rng = csm_core::rng::SplitMix64::new(seed);
+        (0..n)
+            .map(|i| {
+                let cascades = 1 + i % 4;
+                let level = stats(&mut rng, cascades);
+                let views = (0..views)
+                    .map(|k| ViewScreen {
+                        name: format!("view {k}"),
+                        weight: 1.0 + k as f64,
+                        screen: stats(&mut rng, cascades),
+                        band_pixel_share: rng.unit(),
+                        judged: k % 2 == 0,
+                        truth: None,
+                    })
+                    .collect();
+                let memory = 1 + (rng.unit() * 8.0) as u64;
+                Row {
+                    setting: Setting::plain(0.25 * (1 + i % 3) as f64, cascades, 512 << (i % 3), Fit::Sphere),
+                    summary: Summary {
+                        cascades_needed: rng.unit() > 0.1,
+                        z_lo: 1.0,
+                        z_hi: 2.0 + rng.unit(),
+                        max_aliasing: rng.unit() * 4.0,
+                        mean_aliasing: rng.unit(),
+                        shimmer_unsnapped: rng.unit(),
+                        band_pixel_share: rng.unit(),
+                        screen: Some(level),
+                        views,
+                        ..Summary::nothing_needed(memory << 20)
+                    },
+                }
+            })
+            .collect()
+    }
+
+    /// A view's summary made without copying the views equals the whole summary cloned with
+    /// the view's metrics put in, field for field.
+    #[test]
+    fn a_views_summary_equals_the_cloned_one() {
+        for seed in 0..20 {
+            for r in rows(seed, 8, 5) {
+                for k in 0..5 {
+                    assert_eq!(view_summary(&r.summary, k), cloned_view_summary(&r.summary, k));
+                }
+            }
+        }
+    }
+
+    /// Each view's choice, made over rows filled in place view after view, equals the choice
+    /// over that view's rows each cloned afresh (the direct form), for random levels, budgets
+    /// and objectives.
+    #[test]
+    fn choices_over_rows_filled_in_place_equal_those_over_cloned_rows() {
+        let objectives = [
+            "screen_aliasing_p95",
+            "screen_aliasing_mean",
+            "screen_receiver_fraction",
+        ];
+        for seed in 0..40 {
+            let views = 1 + (seed as usize % 6);
+            let rows = rows(seed, 24, views);
+            let objective = SummaryMetric::named(objectives[seed as usize % 3]);
+            let budget = 2.0 + (seed % 7) as f64;
+            let rec = rank::recommend_by(&rows, budget, objective, crate::metric::worst_aliasing(true));
+            let got = choose(&rows, rec.as_ref(), Some(3), budget, objective).unwrap();
+            let at = rec.as_ref().map_or(3, |r| r.index);
+            assert_eq!(got.at, at);
+            assert_eq!(got.views.len(), views);
+            for (k, v) in got.views.iter().enumerate() {
+                let own: Vec<Row> = rows
+                    .iter()
+                    .map(|r| Row {
+                        setting: r.setting,
+                        summary: cloned_view_summary(&r.summary, k),
+                    })
+                    .collect();
+                let seen = sees_receivers(&rows[at].summary, k);
+                let alone = rank::recommend_by(&own, budget, objective, crate::metric::worst_aliasing(true))
+                    .map(|r| r.index)
+                    .filter(|_| seen);
+                assert_eq!(v.seen, seen);
+                assert_eq!(v.alone, alone, "seed {seed} view {k}");
+                assert_eq!(v.objective_alone, alone.map(|i| objective.value(&own[i].summary)));
+                assert_eq!(v.objective_at_level, objective.value(&own[at].summary));
+                assert_eq!(v.name, format!("view {k}"));
+            }
+        }
+    }
 }

@@ -90,6 +90,7 @@ pub(crate) fn run_settings(
                 let configs: Vec<_> = group.iter().map(|&k| point(&settings[k])).collect();
                 // Their frame-0 render-cost counts in one walk per cascade (docs/cost.md).
                 crate::analysis::cost::count_together(&configs.iter().flatten().collect::<Vec<_>>());
+                let mut last = None;
                 let rows = group
                     .iter()
                     .zip(configs)
@@ -99,15 +100,23 @@ pub(crate) fn run_settings(
                             cost_means,
                             ..AnalysisOptions::summary_only()
                         };
-                        let row = config.map(|config| Row {
-                            setting: *s,
-                            summary: analyze(&config, &opts).summary,
+                        let row = config.map(|config| {
+                            let row = Row {
+                                setting: *s,
+                                summary: analyze(&config, &opts).summary,
+                            };
+                            last = Some(config);
+                            row
                         });
                         on_done();
                         (k, row)
                     })
                     .collect::<Vec<_>>();
                 crate::analysis::cost::count_together(&[]);
+                // The split set is done: what its pools kept for its other resolutions goes.
+                if let Some(config) = last {
+                    crate::analysis::split_set_done(&config);
+                }
                 rows
             })
             .collect::<Vec<_>>();
