@@ -1245,33 +1245,15 @@ impl PlaneLookup {
     }
 
     /// [`PlaneLookup::answer_any`] for one bilinear tap (PCF 1, the default): the same texels,
-    /// weights, compares and sums in the same order (the footprint's, [`each_footprint`]),
-    /// written out for the 2x2 texels, with the texel centres' whole parts converted once.
+    /// weights, compares and sums in the same order ([`bilinear_tap`]), written out for the
+    /// 2x2 texels.
     #[inline]
     fn answer_bilinear(&self, grid: &Grid, s: &Sampling, cascade: usize, pl: &Placement) -> Option<Answer> {
         let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
-        // `each_footprint` with k = 1: one tap at `at`, weight 1/k² = 1.
-        let tap = 1.0;
-        let b = (pl.at + DVec2::ZERO) - DVec2::splat(0.5);
-        let i0 = DVec2::new(floor(b.x), floor(b.y));
-        let fr = b - i0;
-        let (i, j) = (i0.x as i64, i0.y as i64);
-        // `Grid::centre` of each texel: ((index + fraction) + 0.5) * texel.
-        let (f, t) = (grid.fraction, grid.texel);
-        let cx = [((i as f64 + f.x) + 0.5) * t.x, (((i + 1) as f64 + f.x) + 0.5) * t.x];
-        let cy = [((j as f64 + f.y) + 0.5) * t.y, (((j + 1) as f64 + f.y) + 0.5) * t.y];
-        let texels = [
-            (0, 0, (1.0 - fr.x) * (1.0 - fr.y) * tap),
-            (1, 0, fr.x * (1.0 - fr.y) * tap),
-            (0, 1, (1.0 - fr.x) * fr.y * tap),
-            (1, 1, fr.x * fr.y * tap),
-        ];
-        for (a, b, w) in texels {
-            if w > 0.0 {
-                let c = DVec2::new(cx[a], cy[b]);
-                if !self.texel_compare(s, cascade, pl, c, w, (&mut lit_w, &mut lit_n), (&mut unb_w, &mut unb_n)) {
-                    return None;
-                }
+        for (c, w) in bilinear_tap(grid, pl.at) {
+            if w > 0.0 && !self.texel_compare(s, cascade, pl, c, w, (&mut lit_w, &mut lit_n), (&mut unb_w, &mut unb_n))
+            {
+                return None;
             }
         }
         Some(vote(s, self.own_only, (lit_w, lit_n), (unb_w, unb_n)))
@@ -1329,6 +1311,29 @@ impl PlaneLookup {
             true
         }
     }
+}
+
+/// The texel centres ([`Grid::centre`]) and weights of one bilinear tap at `at` on `grid`:
+/// [`each_footprint`]'s four texels with `k = 1` (weights of 0 included), in its order and by
+/// the same operations, with the texel indices' conversions to f64 made once per axis.
+#[inline(always)]
+fn bilinear_tap(grid: &Grid, at: DVec2) -> [(DVec2, f64); 4] {
+    // `each_footprint` with k = 1: one tap at `at + 0`, weight 1/k² = 1.
+    let tap = 1.0;
+    let b = (at + DVec2::ZERO) - DVec2::splat(0.5);
+    let i0 = DVec2::new(floor(b.x), floor(b.y));
+    let fr = b - i0;
+    let (i, j) = (i0.x as i64, i0.y as i64);
+    // `Grid::centre` of each texel: ((index + fraction) + 0.5) * texel.
+    let (f, t) = (grid.fraction, grid.texel);
+    let cx = [((i as f64 + f.x) + 0.5) * t.x, (((i + 1) as f64 + f.x) + 0.5) * t.x];
+    let cy = [((j as f64 + f.y) + 0.5) * t.y, (((j + 1) as f64 + f.y) + 0.5) * t.y];
+    [
+        (DVec2::new(cx[0], cy[0]), (1.0 - fr.x) * (1.0 - fr.y) * tap),
+        (DVec2::new(cx[1], cy[0]), fr.x * (1.0 - fr.y) * tap),
+        (DVec2::new(cx[0], cy[1]), (1.0 - fr.x) * fr.y * tap),
+        (DVec2::new(cx[1], cy[1]), fr.x * fr.y * tap),
+    ]
 }
 
 /// [`place`] through a frame's binary32 matrix: the offset point (f64) is stored in f32
@@ -2960,6 +2965,57 @@ mod tests {
         }
     }
 
+    /// [`bilinear_tap`] hands out [`each_footprint`]'s texels at PCF 1 (bilinear), their
+    /// centres ([`Grid::centre`]) and weights, to the bit: placements spread over ±3,000
+    /// texels and on whole, half and quarter texels and ±0, on grids of random fractions and
+    /// texel sizes.
+    #[test]
+    fn the_bilinear_tap_is_the_footprint_to_the_bit() {
+        let mut rng = SplitMix64::new(5);
+        let mut ats: Vec<DVec2> = (0..2000)
+            .map(|_| DVec2::new(rng.range(-3000.0, 3000.0), rng.range(-3000.0, 3000.0)))
+            .collect();
+        for x in [-2.0, -1.5, -0.75, -0.5, -0.0, 0.0, 0.25, 0.5, 1.0, 7.25, 1e6 + 0.5] {
+            ats.extend([DVec2::new(x, 3.5), DVec2::new(0.5, x), DVec2::splat(x)]);
+        }
+        for (n, at) in ats.into_iter().enumerate() {
+            let fraction = DVec2::new(rng.range(0.0, 1.0), rng.range(0.0, 1.0));
+            let grid = Grid {
+                basis: LightBasis::new(DVec3::new(-0.4, -1.0, -0.3)),
+                texel: DVec2::new(rng.range(1e-3, 3.0), rng.range(1e-3, 3.0)),
+                fraction: if n % 3 == 0 {
+                    DVec2::ZERO
+                } else {
+                    (fraction * FRACTION_STEPS).floor() / FRACTION_STEPS
+                },
+                start: 0.0,
+                length: 1.0,
+                cover: None,
+                family: 0,
+                seen: Fast::default(),
+                used: true,
+            };
+            let mut want = Vec::new();
+            each_footprint(at, 1, PcfFilter::Bilinear, |g, w| {
+                want.push((grid.centre(g), w));
+                true
+            });
+            let got: Vec<(DVec2, f64)> = bilinear_tap(&grid, at).into_iter().filter(|(_, w)| *w > 0.0).collect();
+            let bits = |v: &[(DVec2, f64)]| {
+                v.iter()
+                    .map(|(c, w)| (c.x.to_bits(), c.y.to_bits(), w.to_bits()))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(
+                bits(&got),
+                bits(&want),
+                "at {at} on {:?} x {:?}",
+                grid.fraction,
+                grid.texel
+            );
+        }
+    }
+
     #[test]
     fn floor_is_f64_floor_to_the_bit() {
         let mut xs = vec![
@@ -2991,9 +3047,13 @@ mod tests {
         }
         let mut rng = crate::rng::SplitMix64::new(3);
         xs.extend((0..10_000).map(|_| rng.range(-1e6, 1e6)));
+        xs.extend([2f64.powi(63), -(2f64.powi(63)), 2f64.powi(63).next_down(), 1e19, -1e19]);
         for x in xs {
             assert_eq!(floor(x).to_bits(), x.floor().to_bits(), "{x}");
+            // One conversion: the same integer as `floor` and then `as i64` (saturating).
+            assert_eq!(floor_i64(x), x.floor() as i64, "{x}");
         }
         assert!(floor(f64::NAN).is_nan());
+        assert_eq!(floor_i64(f64::NAN), 0);
     }
 }
