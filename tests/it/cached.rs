@@ -388,6 +388,30 @@ fn a_held_map_flips_no_receiver_between_its_updates() {
     assert_eq!(plain.update_steps.iter().sum::<u64>(), total(&plain).1);
     assert!(total(&plain).0 > 0, "the unsnapped strafe flickers");
     let held = run(&[1, 2, 3, 4]);
+    // Without texel counts (a sweep's rows) the walk steps the receivers through blocks of
+    // frames: the same counts, held cascades included.
+    let in_blocks = csm_core::truth::flicker_cached(
+        csm_core::truth::ShadowMaps::new(scene).counting(false),
+        &rig,
+        &rig.light,
+        c.camera_path().unwrap().into_iter(),
+        false,
+        &points,
+        &sampling,
+        Cadence {
+            every: &[1, 2, 3, 4],
+            first_frame: 0,
+        },
+        &mut |_, _| {},
+    );
+    assert_eq!(in_blocks.stats, csm_core::truth::CacheStats::default());
+    assert_eq!(
+        csm_core::truth::Flicker {
+            stats: held.stats,
+            ..in_blocks
+        },
+        held
+    );
     let (flips, steps) = total(&held);
     assert_eq!(
         held.update_flips.iter().sum::<u64>(),

@@ -948,6 +948,40 @@ fn every_frame_of_the_walk_equals_tracing_it_from_scratch() {
             csm_core::walk::Cadence::EVERY_FRAME,
             &mut |w, _, states| walked[w].push(states.to_vec()),
         );
+        // Without texel counts (a sweep's rows) the walk steps the receivers through blocks
+        // of frames: every frame's states and every count are the frame-by-frame walk's.
+        let mut blocks: [Vec<Vec<Option<truth::Answer>>>; 2] = [Vec::new(), Vec::new()];
+        let in_blocks = truth::flicker_walks(
+            vec![
+                (truth::ShadowMaps::new(scene).counting(false), true),
+                (truth::ShadowMaps::new(scene).counting(false), false),
+            ],
+            rig,
+            &rig.light,
+            poses.iter().copied(),
+            &g.points,
+            &s,
+            csm_core::walk::Cadence::EVERY_FRAME,
+            &mut |w, t, states| {
+                assert_eq!(t, blocks[w].len(), "frames in order");
+                blocks[w].push(states.to_vec())
+            },
+        );
+        assert!(poses.len() > 17, "{} frames: more than one block", poses.len());
+        for w in 0..2 {
+            assert!(
+                blocks[w] == walked[w],
+                "{path} {extra:?} walk {w}: a frame's states differ in blocks"
+            );
+            let (a, b) = (&in_blocks[w], &flicker[w]);
+            assert_eq!(
+                (a.s5, a.s5_edge, a.s5_acne, &a.flips, &a.steps, a.frames),
+                (b.s5, b.s5_edge, b.s5_acne, &b.flips, &b.steps, b.frames),
+                "{path} {extra:?} walk {w}"
+            );
+            assert_eq!((&a.update_flips, &a.update_steps), (&b.update_flips, &b.update_steps));
+            assert_eq!(a.stats, truth::CacheStats::default(), "no counts without counting");
+        }
         for (w, snapped) in [true, false].into_iter().enumerate() {
             assert_eq!(walked[w].len(), poses.len());
             let mut answered = 0;

@@ -793,6 +793,14 @@ impl<'a> ShadowMaps<'a> {
         }
         let grids = &self.grids;
         self.index.retain(|_, id| grids[*id].is_some());
+        self.next_frame();
+    }
+
+    /// Starts a new frame without dropping any grid: the light bases met in this frame become
+    /// those met in an earlier one (a basis met in a second frame gets a cover). The walk
+    /// takes a block of frames' grids this way, then [`ShadowMaps::end_frame`] drops the grids
+    /// no frame of the block read.
+    fn next_frame(&mut self) {
         for b in self.frame_bases.drain(..) {
             if !self.bases.contains(&b) {
                 self.bases.push(b);
@@ -961,6 +969,21 @@ fn floor(x: f64) -> f64 {
     }
 }
 
+/// `floor(x) as i64`, to the bit, with one conversion to an integer instead of two.
+#[inline]
+fn floor_i64(x: f64) -> i64 {
+    if x.abs() < 4_503_599_627_370_496.0 && x != 0.0 {
+        let t = x as i64;
+        if t as f64 > x {
+            t - 1
+        } else {
+            t
+        }
+    } else {
+        x as i64
+    }
+}
+
 /// Largest depth slope per texel kept (a surface edge-on to the light).
 const MAX_SLOPE_TEXELS: f64 = 1e6;
 
@@ -1021,7 +1044,7 @@ impl Unplaced {
         let s = self.q - fraction;
         Placement {
             at: s,
-            texel: (floor(s.x) as i64, floor(s.y) as i64),
+            texel: (floor_i64(s.x), floor_i64(s.y)),
             depth: self.depth,
             slope: self.slope,
             bias: self.bias,
@@ -1204,10 +1227,54 @@ impl PlaneLookup {
     /// [`answer_at`] from the plane, when every compare clears its margin (None: trace).
     #[inline]
     fn answer(&self, grid: &Grid, s: &Sampling, cascade: usize, pl: &Placement) -> Option<Answer> {
+        if s.pcf == 1 && s.filter == PcfFilter::Bilinear {
+            return self.answer_bilinear(grid, s, cascade, pl);
+        }
+        self.answer_any(grid, s, cascade, pl)
+    }
+
+    /// [`PlaneLookup::answer`] for any PCF width and filter: the footprint's texels one by one.
+    #[inline]
+    fn answer_any(&self, grid: &Grid, s: &Sampling, cascade: usize, pl: &Placement) -> Option<Answer> {
         let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
-        let (near, far) = s.ranges[cascade];
         let clear = each_footprint(pl.at, s.pcf, s.filter, |g, w| {
             let c = grid.centre(g);
+            self.texel_compare(s, cascade, pl, c, w, (&mut lit_w, &mut lit_n), (&mut unb_w, &mut unb_n))
+        });
+        clear.then(|| vote(s, self.own_only, (lit_w, lit_n), (unb_w, unb_n)))
+    }
+
+    /// [`PlaneLookup::answer_any`] for one bilinear tap (PCF 1, the default): the same texels,
+    /// weights, compares and sums in the same order ([`bilinear_tap`]), written out for the
+    /// 2x2 texels.
+    #[inline]
+    fn answer_bilinear(&self, grid: &Grid, s: &Sampling, cascade: usize, pl: &Placement) -> Option<Answer> {
+        let (mut lit_w, mut lit_n, mut unb_w, mut unb_n) = (0.0, 0u32, 0.0, 0u32);
+        for (c, w) in bilinear_tap(grid, pl.at) {
+            if w > 0.0 && !self.texel_compare(s, cascade, pl, c, w, (&mut lit_w, &mut lit_n), (&mut unb_w, &mut unb_n))
+            {
+                return None;
+            }
+        }
+        Some(vote(s, self.own_only, (lit_w, lit_n), (unb_w, unb_n)))
+    }
+
+    /// One texel's compares from the plane (its centre `c`, weight `w`), added to the passing
+    /// weights and counts; false when a compare lies within its margin (then trace).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn texel_compare(
+        &self,
+        s: &Sampling,
+        cascade: usize,
+        pl: &Placement,
+        c: DVec2,
+        w: f64,
+        (lit_w, lit_n): (&mut f64, &mut u32),
+        (unb_w, unb_n): (&mut f64, &mut u32),
+    ) -> bool {
+        let (near, far) = s.ranges[cascade];
+        {
             let d = self.k - self.gx * c.x - self.gy * c.y;
             let unbiased = self.own_depth - d;
             let lit = match self.lit_fixed {
@@ -1234,17 +1301,39 @@ impl PlaneLookup {
                 }
             };
             if lit {
-                lit_w += w;
-                lit_n += 1;
+                *lit_w += w;
+                *lit_n += 1;
             }
             if unbiased < 0.0 {
-                unb_w += w;
-                unb_n += 1;
+                *unb_w += w;
+                *unb_n += 1;
             }
             true
-        });
-        clear.then(|| vote(s, self.own_only, (lit_w, lit_n), (unb_w, unb_n)))
+        }
     }
+}
+
+/// The texel centres ([`Grid::centre`]) and weights of one bilinear tap at `at` on `grid`:
+/// [`each_footprint`]'s four texels with `k = 1` (weights of 0 included), in its order and by
+/// the same operations, with the texel indices' conversions to f64 made once per axis.
+#[inline(always)]
+fn bilinear_tap(grid: &Grid, at: DVec2) -> [(DVec2, f64); 4] {
+    // `each_footprint` with k = 1: one tap at `at + 0`, weight 1/k² = 1.
+    let tap = 1.0;
+    let b = (at + DVec2::ZERO) - DVec2::splat(0.5);
+    let i0 = DVec2::new(floor(b.x), floor(b.y));
+    let fr = b - i0;
+    let (i, j) = (i0.x as i64, i0.y as i64);
+    // `Grid::centre` of each texel: ((index + fraction) + 0.5) * texel.
+    let (f, t) = (grid.fraction, grid.texel);
+    let cx = [((i as f64 + f.x) + 0.5) * t.x, (((i + 1) as f64 + f.x) + 0.5) * t.x];
+    let cy = [((j as f64 + f.y) + 0.5) * t.y, (((j + 1) as f64 + f.y) + 0.5) * t.y];
+    [
+        (DVec2::new(cx[0], cy[0]), (1.0 - fr.x) * (1.0 - fr.y) * tap),
+        (DVec2::new(cx[1], cy[0]), fr.x * (1.0 - fr.y) * tap),
+        (DVec2::new(cx[0], cy[1]), (1.0 - fr.x) * fr.y * tap),
+        (DVec2::new(cx[1], cy[1]), fr.x * fr.y * tap),
+    ]
 }
 
 /// [`place`] through a frame's binary32 matrix: the offset point (f64) is stored in f32
@@ -1870,6 +1959,10 @@ struct Lane {
 /// Receivers per task of the walk's parallel pass.
 const WALK_CHUNK: usize = 512;
 
+/// Frames per block of the walk: each receiver is stepped through a block's frames before the
+/// next receiver (its lanes stay in cache), one parallel pass per block.
+const WALK_BLOCK: usize = 16;
+
 /// What a walk of the path measured for one snap mode.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Flicker {
@@ -1968,82 +2061,120 @@ pub fn flicker_walks(
     let per_tap = if s.filter == PcfFilter::Bilinear { 4 } else { 1 };
     let k2 = (s.pcf * s.pcf * per_tap) as u64;
     let rebuilt = s.binary32.is_some();
+    // Frames per block: one when the maps count the texels read (each frame's reads are
+    // fetched while its grids live).
+    let block = if walks.iter().any(|(maps, _)| maps.count) {
+        1
+    } else {
+        WALK_BLOCK
+    };
+    let mut poses = poses.enumerate();
     let mut frames = 0;
-    for (t, pose) in poses.enumerate() {
-        frames += 1;
-        let grids: Vec<Vec<FrameGrid>> = walks
-            .iter_mut()
-            .zip(held.iter_mut())
-            .map(|((maps, snapped), held)| {
-                if cadence.caches() {
-                    let lp = LightPose::new(light, &pose);
-                    (0..m)
-                        .map(|i| {
-                            let (basis, win) = match held[i] {
-                                Some(h) if !cadence.updates(i, t) => h,
-                                _ => (rig.basis(i, &lp), rig.window(i, &lp, *snapped)),
-                            };
-                            held[i] = Some((basis, win));
-                            maps.grid(i, &basis, &win)
-                        })
-                        .collect()
-                } else {
-                    frame_grids(maps, rig, light, &pose, *snapped, s)
-                }
-            })
-            .collect();
-        // One parallel pass, in place: each receiver's cascade (the same in every walk), then
-        // per walk its key, its answer when the key changed (every receiver with the binary32
-        // pipeline: its matrix, hence every depth, is rebuilt each frame), and its step. On the
-        // grid of its previous key (f64) a receiver keeps its texel, so only whether the window
-        // still holds it is asked. The totals are integer sums: the same in any order.
-        let reader = Reader::new(rig, &pose);
+    // The block's states, per chunk of receivers frame- and walk-major: receiver `j0 + jj` of
+    // the chunk starting at `j0` (`cn` receivers) has its state in walk k at the block's frame
+    // dt at `j0 * len * w + (dt * w + k) * cn + jj`.
+    let mut block_states: Vec<Option<Answer>> = Vec::new();
+    loop {
+        // Frame 0 alone (a basis gets its cover when met in a second frame, so frame 0's
+        // grids have none), then blocks of `block` frames. Each frame's grids are made in
+        // order, as a frame-by-frame walk makes them; they live until the block is walked.
+        let len = if frames == 0 { 1 } else { block };
+        let mut block_grids: Vec<Vec<Vec<FrameGrid>>> = Vec::with_capacity(len);
+        let mut readers: Vec<Reader> = Vec::with_capacity(len);
+        for (t, pose) in poses.by_ref().take(len) {
+            let grids: Vec<Vec<FrameGrid>> = walks
+                .iter_mut()
+                .zip(held.iter_mut())
+                .map(|((maps, snapped), held)| {
+                    let grids = if cadence.caches() {
+                        let lp = LightPose::new(light, &pose);
+                        (0..m)
+                            .map(|i| {
+                                let (basis, win) = match held[i] {
+                                    Some(h) if !cadence.updates(i, t) => h,
+                                    _ => (rig.basis(i, &lp), rig.window(i, &lp, *snapped)),
+                                };
+                                held[i] = Some((basis, win));
+                                maps.grid(i, &basis, &win)
+                            })
+                            .collect()
+                    } else {
+                        frame_grids(maps, rig, light, &pose, *snapped, s)
+                    };
+                    maps.next_frame();
+                    grids
+                })
+                .collect();
+            block_grids.push(grids);
+            readers.push(Reader::new(rig, &pose));
+        }
+        let len = readers.len();
+        if len == 0 {
+            break;
+        }
+        let t0 = frames;
+        frames += len;
+        block_states.clear();
+        block_states.resize(n * len * w, None);
+        // One parallel pass over the receivers per block, in place: per receiver, frame by
+        // frame, its cascade (the same in every walk), then per walk its key, its answer when
+        // the key changed (every receiver with the binary32 pipeline: its matrix, hence every
+        // depth, is rebuilt each frame), and its step. On the grid of its previous key (f64)
+        // a receiver keeps its texel, so only whether the window still holds it is asked.
+        // A receiver's lanes stay in cache over the block's frames. The totals are integer
+        // sums: the same in any order.
         let maps: Vec<&ShadowMaps> = walks.iter().map(|(maps, _)| maps).collect();
         // In chunks of receivers, each chunk's totals in a local accumulator.
         let frame = points
             .par_chunks(WALK_CHUNK)
             .zip(at.par_chunks(WALK_CHUNK))
             .zip(lanes.par_chunks_mut(WALK_CHUNK * w))
-            .map(|((rs, ats), ls)| {
+            .zip(block_states.par_chunks_mut(WALK_CHUNK * len * w))
+            .map(|(((rs, ats), ls), out)| {
                 let mut acc: Vec<FrameTotals> = (0..w).map(|_| FrameTotals::new(m)).collect();
-                for ((r, &p), ls) in rs.iter().zip(ats).zip(ls.chunks_exact_mut(w)) {
-                    let cascade = reader.cascade(p);
-                    for (k, lane) in ls.iter_mut().enumerate() {
-                        let (maps, grids, acc) = (maps[k], &grids[k], &mut acc[k]);
-                        let old = lane.key;
-                        let (key, answer) = walk_step(maps, grids, cascade, r, s, rebuilt, old, &mut lane.memo);
-                        let next = match (key, answer) {
-                            (None, _) => None,
-                            (Some(_), Some(a)) => a,
-                            (Some(_), None) => lane.state,
-                        };
-                        if let (Some(k), Some(_)) = (key, answer) {
-                            if maps.count {
-                                let (i, _, _) = k;
-                                acc.wanted.extend(texels_read(maps, &grids[i], r, s, i));
+                let cn = rs.len();
+                for (jj, ((r, &p), ls)) in rs.iter().zip(ats).zip(ls.chunks_exact_mut(w)).enumerate() {
+                    for (dt, (reader, grids)) in readers.iter().zip(&block_grids).enumerate() {
+                        let t = t0 + dt;
+                        let cascade = reader.cascade(p);
+                        for (k, lane) in ls.iter_mut().enumerate() {
+                            let (maps, grids, acc) = (maps[k], &grids[k], &mut acc[k]);
+                            let old = lane.key;
+                            let (key, answer) = walk_step(maps, grids, cascade, r, s, rebuilt, old, &mut lane.memo);
+                            let next = match (key, answer) {
+                                (None, _) => None,
+                                (Some(_), Some(a)) => a,
+                                (Some(_), None) => lane.state,
+                            };
+                            if let (Some(k), Some(_)) = (key, answer) {
+                                if maps.count {
+                                    let (i, _, _) = k;
+                                    acc.wanted.extend(texels_read(maps, &grids[i], r, s, i));
+                                }
                             }
-                        }
-                        acc.reads += u64::from(key.is_some());
-                        if t > 0 {
-                            let same_cascade = matches!((old, key), (Some(a), Some(b)) if a.0 == b.0);
-                            if let (true, Some(a), Some(b)) = (same_cascade, lane.state, next) {
-                                lane.steps += 1;
-                                acc.steps.total += 1;
-                                let i = key.map_or(0, |k| k.0);
-                                let update = cadence.updates(i, t);
-                                acc.steps.update_steps[i] += u64::from(update);
-                                if a.lit != b.lit {
-                                    acc.steps.update_flips[i] += u64::from(update);
-                                    lane.flips += 1;
-                                    acc.steps.flips += 1;
-                                    if !(a.own_only && b.own_only) {
-                                        acc.steps.edge += 1;
+                            acc.reads += u64::from(key.is_some());
+                            if t > 0 {
+                                let same_cascade = matches!((old, key), (Some(a), Some(b)) if a.0 == b.0);
+                                if let (true, Some(a), Some(b)) = (same_cascade, lane.state, next) {
+                                    lane.steps += 1;
+                                    acc.steps.total += 1;
+                                    let i = key.map_or(0, |k| k.0);
+                                    let update = cadence.updates(i, t);
+                                    acc.steps.update_steps[i] += u64::from(update);
+                                    if a.lit != b.lit {
+                                        acc.steps.update_flips[i] += u64::from(update);
+                                        lane.flips += 1;
+                                        acc.steps.flips += 1;
+                                        if !(a.own_only && b.own_only) {
+                                            acc.steps.edge += 1;
+                                        }
                                     }
                                 }
                             }
+                            lane.state = next;
+                            lane.key = key;
+                            out[(dt * w + k) * cn + jj] = next;
                         }
-                        lane.state = next;
-                        lane.key = key;
                     }
                 }
                 acc
@@ -2059,10 +2190,17 @@ pub fn flicker_walks(
                 // The texels a cache would fetch: those of receivers whose key changed.
                 maps.fetch(f.wanted);
             }
-            for (state, ls) in states.iter_mut().zip(lanes.chunks_exact(w)) {
-                *state = ls[k].state;
+        }
+        for dt in 0..len {
+            for k in 0..w {
+                for (j0, chunk) in (0..n).step_by(WALK_CHUNK).zip(states.chunks_mut(WALK_CHUNK)) {
+                    let at = j0 * len * w + (dt * w + k) * chunk.len();
+                    chunk.copy_from_slice(&block_states[at..at + chunk.len()]);
+                }
+                on_frame(k, t0 + dt, &states);
             }
-            on_frame(k, t, &states);
+        }
+        for (maps, _) in walks.iter_mut() {
             maps.end_frame();
         }
     }
@@ -2747,6 +2885,137 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2000))]
+
+        /// The plane lookup written out for one bilinear tap (`answer_bilinear`, the walk's
+        /// path at PCF 1) answers as the footprint loop (`answer_any`) to the bit: random
+        /// planes through the receiver's depth, margins from far below to above the depth
+        /// differences (some compares within them: both trace), the biased compare fixed or
+        /// not, placements on and off whole and half texels, window fractions, texel sizes,
+        /// with and without a depth format.
+        #[test]
+        fn the_bilinear_plane_lookup_is_the_footprint_loop(
+            g in (-3.0f64..3.0, -3.0f64..3.0),
+            at in (-3000.0f64..3000.0, -3000.0f64..3000.0),
+            snap in 0u8..4,
+            fraction in (0u32..1 << 20, 0u32..1 << 20),
+            texel in 0.001f64..3.0,
+            offsets in (-2.0f64..2.0, -2.0f64..2.0),
+            bias in 0.0f64..1.0,
+            tol_exp in -14i32..1,
+            lit_fixed in 0u8..3,
+            format in proptest::bool::ANY,
+        ) {
+            let at = DVec2::new(at.0, at.1);
+            let at = match snap {
+                0 => at,
+                1 => at.round(),
+                2 => (at * 2.0).round() / 2.0,
+                _ => at.round() + DVec2::new(0.5, 0.0),
+            };
+            let fraction = DVec2::new(fraction.0 as f64, fraction.1 as f64) / FRACTION_STEPS;
+            let grid = Grid {
+                basis: LightBasis::new(DVec3::new(-0.4, -1.0, -0.3)),
+                texel: DVec2::splat(texel),
+                fraction,
+                start: -100.0,
+                length: 300.0,
+                cover: None,
+                family: 0,
+                seen: Fast::default(),
+                used: true,
+            };
+            // The plane's depth at the receiver's light-space x/y, moved by up to two texels'
+            // worth of its gradient: the compares fall either side of it.
+            let c = (at + fraction) * texel;
+            let k = 10.0 + g.0 * c.x + g.1 * c.y;
+            let slope = (g.0.abs() + g.1.abs()) * texel;
+            let own_depth = 10.0 + offsets.0 * slope;
+            let tol = 10f64.powi(tol_exp) * slope.max(1e-9);
+            let p = PlaneLookup {
+                k,
+                gx: g.0,
+                gy: g.1,
+                own_depth,
+                own_only: offsets.1 > 0.0,
+                tol,
+                tol_lit: tol * 1.5,
+                tol_unbiased: tol * 0.7,
+                lit_fixed: [None, Some(true), Some(false)][lit_fixed as usize],
+                fixed: None,
+            };
+            let pl = Placement {
+                at,
+                texel: (floor(at.x) as i64, floor(at.y) as i64),
+                depth: 10.0 + offsets.1 * slope,
+                slope,
+                bias: bias * slope,
+            };
+            let s = Sampling {
+                bias: vec![Bias::ZERO],
+                format: format.then_some(DepthFormat::D16),
+                ranges: vec![(10.0 - 1.5 * slope, 10.0 + 1.5 * slope)],
+                pcf: 1,
+                filter: PcfFilter::Bilinear,
+                binary32: None,
+            };
+            proptest::prop_assert_eq!(p.answer_bilinear(&grid, &s, 0, &pl), p.answer_any(&grid, &s, 0, &pl));
+            proptest::prop_assert_eq!(p.answer(&grid, &s, 0, &pl), p.answer_any(&grid, &s, 0, &pl));
+        }
+    }
+
+    /// [`bilinear_tap`] hands out [`each_footprint`]'s texels at PCF 1 (bilinear), their
+    /// centres ([`Grid::centre`]) and weights, to the bit: placements spread over ±3,000
+    /// texels and on whole, half and quarter texels and ±0, on grids of random fractions and
+    /// texel sizes.
+    #[test]
+    fn the_bilinear_tap_is_the_footprint_to_the_bit() {
+        let mut rng = SplitMix64::new(5);
+        let mut ats: Vec<DVec2> = (0..2000)
+            .map(|_| DVec2::new(rng.range(-3000.0, 3000.0), rng.range(-3000.0, 3000.0)))
+            .collect();
+        for x in [-2.0, -1.5, -0.75, -0.5, -0.0, 0.0, 0.25, 0.5, 1.0, 7.25, 1e6 + 0.5] {
+            ats.extend([DVec2::new(x, 3.5), DVec2::new(0.5, x), DVec2::splat(x)]);
+        }
+        for (n, at) in ats.into_iter().enumerate() {
+            let fraction = DVec2::new(rng.range(0.0, 1.0), rng.range(0.0, 1.0));
+            let grid = Grid {
+                basis: LightBasis::new(DVec3::new(-0.4, -1.0, -0.3)),
+                texel: DVec2::new(rng.range(1e-3, 3.0), rng.range(1e-3, 3.0)),
+                fraction: if n % 3 == 0 {
+                    DVec2::ZERO
+                } else {
+                    (fraction * FRACTION_STEPS).floor() / FRACTION_STEPS
+                },
+                start: 0.0,
+                length: 1.0,
+                cover: None,
+                family: 0,
+                seen: Fast::default(),
+                used: true,
+            };
+            let mut want = Vec::new();
+            each_footprint(at, 1, PcfFilter::Bilinear, |g, w| {
+                want.push((grid.centre(g), w));
+                true
+            });
+            let got: Vec<(DVec2, f64)> = bilinear_tap(&grid, at).into_iter().filter(|(_, w)| *w > 0.0).collect();
+            let bits = |v: &[(DVec2, f64)]| {
+                v.iter()
+                    .map(|(c, w)| (c.x.to_bits(), c.y.to_bits(), w.to_bits()))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(
+                bits(&got),
+                bits(&want),
+                "at {at} on {:?} x {:?}",
+                grid.fraction,
+                grid.texel
+            );
+        }
+    }
+
     #[test]
     fn floor_is_f64_floor_to_the_bit() {
         let mut xs = vec![
@@ -2778,9 +3047,13 @@ mod tests {
         }
         let mut rng = crate::rng::SplitMix64::new(3);
         xs.extend((0..10_000).map(|_| rng.range(-1e6, 1e6)));
+        xs.extend([2f64.powi(63), -(2f64.powi(63)), 2f64.powi(63).next_down(), 1e19, -1e19]);
         for x in xs {
             assert_eq!(floor(x).to_bits(), x.floor().to_bits(), "{x}");
+            // One conversion: the same integer as `floor` and then `as i64` (saturating).
+            assert_eq!(floor_i64(x), x.floor() as i64, "{x}");
         }
         assert!(floor(f64::NAN).is_nan());
+        assert_eq!(floor_i64(f64::NAN), 0);
     }
 }
