@@ -448,19 +448,27 @@ fn paint_heights(
     let data = pixmap.data_mut();
     let (py0, py1) = (t.max(0.0) as usize, b.max(0.0) as usize);
     let (px0, px1) = (l.max(0.0) as usize, r.max(0.0) as usize);
+    // A pixel's column of cells depends on its x alone and its row on its y alone: each is
+    // worked out once per pixel column and row (the same expressions), not once per pixel.
+    let columns: Vec<(usize, usize)> = (px0..px1.min(w))
+        .filter_map(|px| {
+            let x = x0 + (px as f64 + 0.5 - l) / (r - l) * (x1 - x0);
+            if x < hx0 || x >= hx1 {
+                return None;
+            }
+            let i = (((x - hx0) / (hx1 - hx0)) * hm.cols as f64) as usize;
+            Some((px, i.min(hm.cols - 1)))
+        })
+        .collect();
     for py in py0..py1 {
         let z = z0 + (py as f64 + 0.5 - t) / (b - t) * (z1 - z0);
         if z < hz0 || z >= hz1 {
             continue;
         }
         let j = (((z - hz0) / (hz1 - hz0)) * hm.rows as f64) as usize;
-        for px in px0..px1.min(w) {
-            let x = x0 + (px as f64 + 0.5 - l) / (r - l) * (x1 - x0);
-            if x < hx0 || x >= hx1 {
-                continue;
-            }
-            let i = (((x - hx0) / (hx1 - hx0)) * hm.cols as f64) as usize;
-            let c = colours[j.min(hm.rows - 1) * hm.cols + i.min(hm.cols - 1)];
+        let row = &colours[j.min(hm.rows - 1) * hm.cols..][..hm.cols];
+        for &(px, i) in &columns {
+            let c = row[i];
             let o = (py * w + px) * 4;
             if o + 3 < data.len() {
                 data[o..o + 3].copy_from_slice(&c);
