@@ -541,6 +541,66 @@ pub(crate) const FILE: &str = "plan.png";
 mod tests {
     use super::*;
     use csm_core::mesh::Mesh;
+    use proptest::prelude::*;
+
+    /// [`paint_heights`] pixel by pixel, each pixel's cell worked out on its own (as it was
+    /// painted before the columns were worked out once).
+    fn paint_heights_per_pixel(
+        pixmap: &mut resvg::tiny_skia::Pixmap,
+        hm: &Heights,
+        colours: &[[u8; 3]],
+        area: [i32; 4],
+        padded: (f64, f64, f64, f64),
+        scale: f32,
+    ) {
+        let (x0, x1, z0, z1) = padded;
+        let [l, t, r, b] = area.map(|v| f64::from(v) * f64::from(scale));
+        let (hx0, hx1, hz0, hz1) = hm.rect;
+        let w = pixmap.width() as usize;
+        let data = pixmap.data_mut();
+        for py in t.max(0.0) as usize..b.max(0.0) as usize {
+            let z = z0 + (py as f64 + 0.5 - t) / (b - t) * (z1 - z0);
+            if z < hz0 || z >= hz1 {
+                continue;
+            }
+            let j = (((z - hz0) / (hz1 - hz0)) * hm.rows as f64) as usize;
+            for px in l.max(0.0) as usize..(r.max(0.0) as usize).min(w) {
+                let x = x0 + (px as f64 + 0.5 - l) / (r - l) * (x1 - x0);
+                if x < hx0 || x >= hx1 {
+                    continue;
+                }
+                let i = (((x - hx0) / (hx1 - hx0)) * hm.cols as f64) as usize;
+                let c = colours[j.min(hm.rows - 1) * hm.cols + i.min(hm.cols - 1)];
+                let o = (py * w + px) * 4;
+                if o + 3 < data.len() {
+                    data[o..o + 3].copy_from_slice(&c);
+                    data[o + 3] = 255;
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn the_height_image_paints_each_pixel_as_its_own_cell_lookup_does(
+            (cols, rows) in (1usize..40, 1usize..40),
+            (w, h) in (1u32..120, 1u32..120),
+            area in (-20i32..60, -20i32..60, 20i32..160, 20i32..160),
+            padded in (-50.0..0.0f64, 1.0..50.0f64, -50.0..0.0f64, 1.0..50.0f64),
+            rect in (-60.0..10.0f64, 0.5..60.0f64, -60.0..10.0f64, 0.5..60.0f64),
+            scale in prop::sample::select(vec![0.5f32, 1.0, 1.5, 2.0]),
+        ) {
+            let hm = Heights { cols, rows, rect: (rect.0, rect.0 + rect.1, rect.2, rect.2 + rect.3), h: vec![None; cols * rows] };
+            let colours: Vec<[u8; 3]> = (0..cols * rows).map(|k| [k as u8, (k >> 8) as u8, 7]).collect();
+            let area = [area.0, area.1, area.0 + area.2, area.1 + area.3];
+            let mut ours = resvg::tiny_skia::Pixmap::new(w, h).unwrap();
+            let mut theirs = ours.clone();
+            paint_heights(&mut ours, &hm, &colours, area, padded, scale);
+            paint_heights_per_pixel(&mut theirs, &hm, &colours, area, padded, scale);
+            prop_assert!(ours.data() == theirs.data());
+        }
+    }
 
     #[test]
     fn the_height_image_holds_the_top_surface_of_every_cell() {

@@ -186,7 +186,7 @@ mod tests {
             };
             let ticks = vec![0.5, 1.5, 2.5];
             if log {
-                let chart = builder(&root)
+                let mut chart = builder(&root)
                     .build_cartesian_2d(ticked_axis(0.0, 3.0, ticks), log_axis(0.1, 100.0))
                     .unwrap();
                 let rects = rects
@@ -201,7 +201,7 @@ mod tests {
                 }
                 chart.plotting_area().draw(&Circle::new((1.0, 1.0), 3, RED)).unwrap();
             } else {
-                let chart = builder(&root)
+                let mut chart = builder(&root)
                     .build_cartesian_2d(ticked_axis(0.0, 3.0, ticks.clone()), ticked_axis(-1.0, 4.0, ticks))
                     .unwrap();
                 if direct {
