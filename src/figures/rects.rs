@@ -172,9 +172,12 @@ mod tests {
     use crate::figures::{log_axis, ticked_axis};
     use proptest::prelude::*;
 
+    /// A rectangle's two corners (chart coordinates) and its colour.
+    type Filled = ((f64, f64), (f64, f64), RGBColor);
+
     /// A chart's SVG with `rects` drawn by plotters (`draw_series`) or by [`draw_filled`]
     /// and spliced, between two plotters elements.
-    fn chart_svg(size: (u32, u32), log: bool, rects: &[((f64, f64), (f64, f64), RGBColor)], direct: bool) -> String {
+    fn chart_svg(size: (u32, u32), log: bool, rects: &[Filled], direct: bool) -> String {
         let mut s = String::new();
         {
             let root = SVGBackend::with_string(&mut s, size).into_drawing_area();
@@ -218,7 +221,7 @@ mod tests {
         splice(s)
     }
 
-    fn rect() -> impl Strategy<Value = ((f64, f64), (f64, f64), RGBColor)> {
+    fn rect() -> impl Strategy<Value = Filled> {
         // Corners inside, on and outside the axes' ranges (clamped), in either order.
         (
             -2.0..6.0f64,
