@@ -348,6 +348,7 @@ fn walk_axis_centred<P: Borrow<CameraPose>>(
 }
 
 /// Whether every pose of `poses` has the first one's axes, bit for bit.
+#[inline]
 fn same_world_axes(poses: &[CameraPose]) -> bool {
     let bits = |p: &CameraPose| [p.forward, p.right, p.up].map(|v| v.to_array().map(f64::to_bits));
     let a = bits(&poses[0]);
