@@ -10,6 +10,7 @@ pub(crate) mod bench;
 pub(crate) mod compare;
 pub(crate) mod plan;
 pub(crate) mod raster;
+pub(crate) mod rects;
 pub(crate) mod screen;
 pub(crate) mod sun;
 pub(crate) mod sweep;
@@ -90,7 +91,7 @@ pub trait Figure {
             self.draw(&root).map_err(|e| PlotError::Draw(e.0))?;
             root.present().map_err(|e| PlotError::Draw(e.to_string()))?;
         }
-        Ok(s.into_bytes())
+        Ok(rects::splice(s).into_bytes())
     }
 
     /// The SVG rasterised at the size a report page shows it ([`png_scale`]). Going through

@@ -448,26 +448,34 @@ fn paint_heights(
     let data = pixmap.data_mut();
     let (py0, py1) = (t.max(0.0) as usize, b.max(0.0) as usize);
     let (px0, px1) = (l.max(0.0) as usize, r.max(0.0) as usize);
+    // A pixel's column of cells depends on its x alone and its row on its y alone: each is
+    // worked out once per pixel column and row, not once per pixel.
+    let columns: Vec<(usize, usize)> = (px0..px1.min(w))
+        .filter_map(|px| Some((px, cell_index(px, (l, r), (x0, x1), (hx0, hx1), hm.cols)?)))
+        .collect();
     for py in py0..py1 {
-        let z = z0 + (py as f64 + 0.5 - t) / (b - t) * (z1 - z0);
-        if z < hz0 || z >= hz1 {
+        let Some(j) = cell_index(py, (t, b), (z0, z1), (hz0, hz1), hm.rows) else {
             continue;
-        }
-        let j = (((z - hz0) / (hz1 - hz0)) * hm.rows as f64) as usize;
-        for px in px0..px1.min(w) {
-            let x = x0 + (px as f64 + 0.5 - l) / (r - l) * (x1 - x0);
-            if x < hx0 || x >= hx1 {
-                continue;
-            }
-            let i = (((x - hx0) / (hx1 - hx0)) * hm.cols as f64) as usize;
-            let c = colours[j.min(hm.rows - 1) * hm.cols + i.min(hm.cols - 1)];
+        };
+        let row = &colours[j * hm.cols..][..hm.cols];
+        for &(px, i) in &columns {
             let o = (py * w + px) * 4;
             if o + 3 < data.len() {
-                data[o..o + 3].copy_from_slice(&c);
+                data[o..o + 3].copy_from_slice(&row[i]);
                 data[o + 3] = 255;
             }
         }
     }
+}
+
+/// The cell along one axis under pixel `p`, whose centre maps from the pixels `px` (from, to)
+/// onto the axis' span `axis`, over `n` cells covering `cells` (from, to); None outside them.
+fn cell_index(p: usize, px: (f64, f64), axis: (f64, f64), cells: (f64, f64), n: usize) -> Option<usize> {
+    let v = axis.0 + (p as f64 + 0.5 - px.0) / (px.1 - px.0) * (axis.1 - axis.0);
+    if v < cells.0 || v >= cells.1 {
+        return None;
+    }
+    Some(((((v - cells.0) / (cells.1 - cells.0)) * n as f64) as usize).min(n - 1))
 }
 
 /// A caption for the report: how many views and what colours them.
@@ -533,6 +541,55 @@ pub(crate) const FILE: &str = "plan.png";
 mod tests {
     use super::*;
     use csm_core::mesh::Mesh;
+    use proptest::prelude::*;
+
+    /// [`paint_heights`] pixel by pixel, each pixel's cell looked up on its own.
+    fn paint_heights_per_pixel(
+        pixmap: &mut resvg::tiny_skia::Pixmap,
+        hm: &Heights,
+        colours: &[[u8; 3]],
+        area: [i32; 4],
+        padded: (f64, f64, f64, f64),
+        scale: f32,
+    ) {
+        let [l, t, r, b] = area.map(|v| f64::from(v) * f64::from(scale));
+        let (w, h) = (pixmap.width() as usize, pixmap.height() as usize);
+        for (py, px) in (0..h).flat_map(|py| (0..w).map(move |px| (py, px))) {
+            let inside = |p: usize, lo: f64, hi: f64| p >= lo.max(0.0) as usize && p < hi.max(0.0) as usize;
+            if !(inside(px, l, r) && inside(py, t, b)) {
+                continue;
+            }
+            let i = cell_index(px, (l, r), (padded.0, padded.1), (hm.rect.0, hm.rect.1), hm.cols);
+            let j = cell_index(py, (t, b), (padded.2, padded.3), (hm.rect.2, hm.rect.3), hm.rows);
+            if let (Some(i), Some(j)) = (i, j) {
+                let o = 4 * (py * w + px);
+                let c = colours[j * hm.cols + i];
+                pixmap.data_mut()[o..o + 4].copy_from_slice(&[c[0], c[1], c[2], 255]);
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn the_height_image_paints_each_pixel_as_its_own_cell_lookup_does(
+            (cols, rows) in (1usize..40, 1usize..40),
+            (w, h) in (1u32..120, 1u32..120),
+            area in (-20i32..60, -20i32..60, 20i32..160, 20i32..160),
+            padded in (-50.0..0.0f64, 1.0..50.0f64, -50.0..0.0f64, 1.0..50.0f64),
+            rect in (-60.0..10.0f64, 0.5..60.0f64, -60.0..10.0f64, 0.5..60.0f64),
+            scale in prop::sample::select(vec![0.5f32, 1.0, 1.5, 2.0]),
+        ) {
+            let hm = Heights { cols, rows, rect: (rect.0, rect.0 + rect.1, rect.2, rect.2 + rect.3), h: vec![None; cols * rows] };
+            let colours: Vec<[u8; 3]> = (0..cols * rows).map(|k| [k as u8, (k >> 8) as u8, 7]).collect();
+            let area = [area.0, area.1, area.0 + area.2, area.1 + area.3];
+            let mut ours = resvg::tiny_skia::Pixmap::new(w, h).unwrap();
+            let mut theirs = ours.clone();
+            paint_heights(&mut ours, &hm, &colours, area, padded, scale);
+            paint_heights_per_pixel(&mut theirs, &hm, &colours, area, padded, scale);
+            prop_assert!(ours.data() == theirs.data());
+        }
+    }
 
     #[test]
     fn the_height_image_holds_the_top_surface_of_every_cell() {

@@ -429,15 +429,18 @@ pub(crate) fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>,
     let (pw, ph) = chart.plotting_area().dim_in_pixel();
     // One pixel in data units: cells reach a pixel into their right and upper neighbours.
     let (ox, oy) = (nx as f64 / pw.max(1) as f64, ny as f64 / ph.max(1) as f64);
-    chart.draw_series(p.cells.iter().map(|&(i, j, v, _)| {
-        let color = match v {
-            Some(v) => colormap(t_of(v)),
-            None => palette::NO_DATA,
-        };
-        let x1 = if i + 1 < nx { i as f64 + 1.0 + ox } else { nx as f64 };
-        let y1 = if j + 1 < ny { j as f64 + 1.0 + oy } else { ny as f64 };
-        Rectangle::new([(i as f64, j as f64), (x1, y1)], color.filled())
-    }))?;
+    super::rects::draw_filled(
+        &chart,
+        p.cells.iter().map(|&(i, j, v, _)| {
+            let color = match v {
+                Some(v) => colormap(t_of(v)),
+                None => palette::NO_DATA,
+            };
+            let x1 = if i + 1 < nx { i as f64 + 1.0 + ox } else { nx as f64 };
+            let y1 = if j + 1 < ny { j as f64 + 1.0 + oy } else { ny as f64 };
+            ((i as f64, j as f64), (x1, y1), color)
+        }),
+    )?;
     // The budget line: the edges between a cell within the budget and its neighbour above or to
     // the right that exceeds it.
     let within = |i: usize, j: usize| p.cells.iter().find(|c| c.0 == i && c.1 == j).map(|c| c.3);
@@ -487,12 +490,15 @@ pub(crate) fn draw_heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>,
         .y_label_formatter(&|v| tick(*v))
         .draw()?;
     let steps = 40;
-    bar.draw_series((0..steps).map(|k| {
-        // Each step reaches a little into the next one, so no seam shows between them.
-        let a = lo * (hi / lo).powf(k as f64 / steps as f64);
-        let b = (lo * (hi / lo).powf((k as f64 + 1.3) / steps as f64)).min(hi);
-        Rectangle::new([(0.0, a), (1.0, b)], colormap((k as f64 + 0.5) / steps as f64).filled())
-    }))?;
+    super::rects::draw_filled(
+        &bar,
+        (0..steps).map(|k| {
+            // Each step reaches a little into the next one, so no seam shows between them.
+            let a = lo * (hi / lo).powf(k as f64 / steps as f64);
+            let b = (lo * (hi / lo).powf((k as f64 + 1.3) / steps as f64)).min(hi);
+            ((0.0, a), (1.0, b), colormap((k as f64 + 0.5) / steps as f64))
+        }),
+    )?;
     Ok(())
 }
 

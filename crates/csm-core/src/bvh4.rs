@@ -123,6 +123,100 @@ impl Tri4 {
     }
 }
 
+/// [`Tri4::intersect`] of rays straight down (`d`: zero x and z) from a grid of origins at one
+/// height, with each term of the test that depends on the origin's x alone worked out once per
+/// column and each that depends on its z alone once per row: the same operations on the same
+/// operands, so the same bits. With `d = (0, dy, 0)` the test's cross products are
+/// `r0 = dy c2 - 0 c1`, `r1 = 0 c0 - 0 c2` (a signed zero, from the signs of `c0` and `c2`) and
+/// `r2 = 0 c1 - dy c0`, where `c0` depends on x, `c2` on z and `c1` on neither.
+struct Down4 {
+    tri: Tri4,
+    d: [f32; 3],
+    /// Per lane: `c1`, `n1 c1` and the inverse determinant (the same for every origin).
+    c1: [f32; 4],
+    n1c1: [f32; 4],
+    inv_det: [f32; 4],
+    /// Per column and lane: `d2 c0`, `r2 e2z`, `r2 e1z`, `n0 c0`.
+    cols: Vec<[[f32; 4]; 4]>,
+}
+
+/// The terms of one row of origins (one z), per lane: `d0 c2`, `r0 e2x`, `r0 e1x`, `n2 c2`.
+struct DownRow([[f32; 4]; 4]);
+
+impl Tri4 {
+    /// The column terms of rays straight down (`d`) from `(x, y, ·)` for each x of `xs`.
+    fn down(&self, xs: &[f32], y: f32, d: [f32; 3]) -> Down4 {
+        let (v0, n, e1, e2) = (&self.v0, &self.n, &self.e1, &self.e2);
+        let mut c1 = [0.0f32; 4];
+        let mut n1c1 = [0.0f32; 4];
+        let mut inv_det = [0.0f32; 4];
+        for i in 0..4 {
+            c1[i] = v0[1][i] - y;
+            n1c1[i] = n[1][i] * c1[i];
+            inv_det[i] = 1.0 / (n[0][i] * d[0] + n[1][i] * d[1] + n[2][i] * d[2]);
+        }
+        let cols = xs
+            .iter()
+            .map(|&x| {
+                let mut t = [[0.0f32; 4]; 4];
+                for i in 0..4 {
+                    let c0 = v0[0][i] - x;
+                    let r2 = d[0] * c1[i] - d[1] * c0;
+                    t[0][i] = d[2] * c0;
+                    t[1][i] = r2 * e2[2][i];
+                    t[2][i] = r2 * e1[2][i];
+                    t[3][i] = n[0][i] * c0;
+                }
+                t
+            })
+            .collect();
+        Down4 {
+            tri: *self,
+            d,
+            c1,
+            n1c1,
+            inv_det,
+            cols,
+        }
+    }
+}
+
+impl Down4 {
+    /// The row terms of the origins at `z`.
+    fn row(&self, z: f32) -> DownRow {
+        let (v0, n, e1, e2, d) = (&self.tri.v0, &self.tri.n, &self.tri.e1, &self.tri.e2, &self.d);
+        let mut t = [[0.0f32; 4]; 4];
+        for i in 0..4 {
+            let c2 = v0[2][i] - z;
+            let r0 = d[1] * c2 - d[2] * self.c1[i];
+            t[0][i] = d[0] * c2;
+            t[1][i] = r0 * e2[0][i];
+            t[2][i] = r0 * e1[0][i];
+            t[3][i] = n[2][i] * c2;
+        }
+        DownRow(t)
+    }
+
+    /// [`Tri4::intersect`] of the ray from column `c` of `row`.
+    #[inline(always)]
+    fn intersect(&self, row: &DownRow, c: usize, tmin: f32, tmax: f32) -> [f32; 4] {
+        let (e1, e2) = (&self.tri.e1, &self.tri.e2);
+        let (col, row) = (&self.cols[c], &row.0);
+        let mut out = [0.0f32; 4];
+        for i in 0..4 {
+            let r1 = col[0][i] - row[0][i];
+            let u = (row[1][i] + r1 * e2[1][i] + col[1][i]) * self.inv_det[i];
+            let v = (row[2][i] + r1 * e1[1][i] + col[2][i]) * self.inv_det[i];
+            let w = 1.0 - u - v;
+            let inside = (u.to_bits() | v.to_bits() | w.to_bits()) & 0x8000_0000 == 0;
+            let t = (col[3][i] + self.n1c1[i] + row[3][i]) * self.inv_det[i];
+            let ok = self.inv_det[i] != 0.0 && inside && t >= tmin && t <= tmax;
+            out[i] = if ok { t } else { f32::INFINITY };
+        }
+        out
+    }
+}
+
 /// One entry of the traversal stack: a child, and the distance at which the ray enters its box.
 #[derive(Clone, Copy)]
 pub(crate) struct Entry {
@@ -372,10 +466,15 @@ impl Bvh4 {
         };
         for ((tri, ids), b) in self.leaves.iter().zip(&self.ids).zip(&self.leaf_box) {
             let (ri, rj) = (range(xs, b[0], b[1]), range(zs, b[4], b[5]));
+            if ri.is_empty() || rj.is_empty() {
+                continue;
+            }
+            let down = tri.down(&xs[ri.clone()], y, d);
             for j in rj {
-                for i in ri.clone() {
+                let row = down.row(zs[j]);
+                for (c, i) in ri.clone().enumerate() {
                     let k = j * cols + i;
-                    let ts = tri.intersect([xs[i], y, zs[j]], d, tmin, tmax);
+                    let ts = down.intersect(&row, c, tmin, tmax);
                     for (&t, &id) in ts.iter().zip(ids) {
                         if id != NONE && (t < best_t[k] || (t == best_t[k] && best[k] != NONE && id < best[k])) {
                             best_t[k] = t;
@@ -640,6 +739,50 @@ mod tests {
             });
         }
         tris
+    }
+
+    /// A coordinate drawn from small integers, halves, signed zeros and arbitrary values: the
+    /// cases where a lane's barycentric sign or distance sits on a zero.
+    fn coordinate() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            (-6i32..6).prop_map(|k| k as f32),
+            (-12i32..12).prop_map(|k| k as f32 * 0.5),
+            Just(0.0f32),
+            Just(-0.0f32),
+            -20.0f32..20.0,
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+
+        /// The grid form of the four-lane test gives each straight-down ray the bits of the
+        /// plain test ([`Tri4::intersect`]), whatever the triangles (flat, vertical, degenerate,
+        /// on signed zeros) and origins.
+        #[test]
+        fn the_straight_down_grid_test_is_the_lane_test_to_the_bit(
+            verts in prop::collection::vec(prop::array::uniform9(coordinate()), 1..=4),
+            xs in prop::collection::vec(coordinate(), 1..6),
+            zs in prop::collection::vec(coordinate(), 1..6),
+            y in coordinate(),
+            (tmin, tmax) in prop::sample::select(vec![(0.0f32, 100.0f32), (0.5, 3.0), (-5.0, 5.0)]),
+        ) {
+            let tris: Vec<Triangle> = verts
+                .iter()
+                .map(|l| Triangle { v0: v([l[0], l[1], l[2]]), v1: v([l[3], l[4], l[5]]), v2: v([l[6], l[7], l[8]]) })
+                .collect();
+            let tri = Tri4::new(&tris);
+            let d = [0.0f32, -1.0, 0.0];
+            let down = tri.down(&xs, y, d);
+            for &z in &zs {
+                let row = down.row(z);
+                for (c, &x) in xs.iter().enumerate() {
+                    let ours = down.intersect(&row, c, tmin, tmax).map(f32::to_bits);
+                    let theirs = tri.intersect([x, y, z], d, tmin, tmax).map(f32::to_bits);
+                    prop_assert_eq!(ours, theirs, "origin ({}, {}, {})", x, y, z);
+                }
+            }
+        }
     }
 
     fn ray(o: [f32; 3], d: [f32; 3], tmin: f32, tmax: f32) -> Ray {
