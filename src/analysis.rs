@@ -841,6 +841,22 @@ fn screen_inputs(config: &Config) -> Option<ScreenInputs> {
     screen_inputs_seen_by(config, &config.camera, || rig(config))
 }
 
+/// Each view's part of a level's pool: its pass, splits, texel sizes and visible range from
+/// `inputs` (one per view, in order) and its weight from `views`.
+fn pool_parts<'a>(inputs: &'a [ScreenInputs], views: &[crate::config::ViewSettings]) -> Vec<screen::PoolPart<'a>> {
+    inputs
+        .iter()
+        .zip(views)
+        .map(|(x, v)| screen::PoolPart {
+            vis: &x.vis,
+            splits: &x.splits,
+            texel: &x.texel,
+            visible: x.visible,
+            steps: screen::view_weight_steps(v.weight),
+        })
+        .collect()
+}
+
 /// [`screen_inputs`] of the config as `view` sees it (`config_for_view`), without copying the
 /// config: the set-up is built with the view's camera, and so is the rig (an engine preset's
 /// reads a whole config: that one is built from the view's config).
@@ -910,17 +926,7 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
         .iter()
         .map(|v| view_screen_inputs(config, v))
         .collect::<Option<_>>()?;
-    let parts: Vec<screen::PoolPart<'_>> = inputs
-        .iter()
-        .zip(config.views.iter())
-        .map(|(x, v)| screen::PoolPart {
-            vis: &x.vis,
-            splits: &x.splits,
-            texel: &x.texel,
-            visible: x.visible,
-            steps: screen::view_weight_steps(v.weight),
-        })
-        .collect();
+    let parts = pool_parts(&inputs, &config.views);
     let pooled = screen::pool_memo(&parts, &geometry.pool_memo);
     // Band k's receivers of each view, pooled band by band (a view without that band has none).
     let band_count = |x: &ScreenInputs, k: usize| -> u64 { x.band_counts.get(k).copied().unwrap_or(0) };
@@ -988,17 +994,7 @@ pub(crate) fn split_set_done(config: &Config) {
             None => return,
         },
     };
-    let parts: Vec<screen::PoolPart<'_>> = inputs
-        .iter()
-        .zip(config.views.iter())
-        .map(|(x, v)| screen::PoolPart {
-            vis: &x.vis,
-            splits: &x.splits,
-            texel: &x.texel,
-            visible: x.visible,
-            steps: screen::view_weight_steps(v.weight),
-        })
-        .collect();
+    let parts = pool_parts(&inputs, &config.views);
     screen::split_set_done(&parts, &geometry.pool_memo);
 }
 

@@ -2578,6 +2578,27 @@ mod tests {
         }
     }
 
+    /// A drawn split set: the views (tied factors), the splits from the sorted `cuts`
+    /// between 0.5 and 220, and one texel size per cascade for each of `scales`.
+    fn split_set_case(
+        seeds: &[(u64, usize, f64, u32)],
+        mut cuts: Vec<f64>,
+        scales: &[f64],
+    ) -> (Vec<Visibility>, Vec<f64>, Vec<Vec<f64>>) {
+        let vis: Vec<Visibility> = seeds
+            .iter()
+            .map(|&(seed, n, spread, levels)| tied(seed, n, spread, levels))
+            .collect();
+        cuts.sort_by(f64::total_cmp);
+        let splits: Vec<f64> = std::iter::once(0.5)
+            .chain(cuts.iter().map(|c| 1.0 + 199.0 * c))
+            .chain([220.0])
+            .collect();
+        let base: Vec<f64> = (0..splits.len() - 1).map(|i| 0.3 * 1.7f64.powi(i as i32)).collect();
+        let texels: Vec<Vec<f64>> = scales.iter().map(|&f| base.iter().map(|t| t * f).collect()).collect();
+        (vis, splits, texels)
+    }
+
     /// Empties this thread's cache of [`Served`], so that the next pass makes its own.
     fn forget_served() {
         SERVED.with(|c| *c.borrow_mut() = ServedCache::default());
@@ -2597,12 +2618,7 @@ mod tests {
             scales in proptest::collection::vec(0.05f64..20.0, 2..5),
             weights in proptest::collection::vec(0.25f64..4.0, 3),
         ) {
-            let vis: Vec<Visibility> = seeds.iter().map(|&(seed, n, spread, levels)| tied(seed, n, spread, levels)).collect();
-            let mut cuts = cuts;
-            cuts.sort_by(f64::total_cmp);
-            let splits: Vec<f64> = std::iter::once(0.5).chain(cuts.iter().map(|c| 1.0 + 199.0 * c)).chain([220.0]).collect();
-            let base: Vec<f64> = (0..splits.len() - 1).map(|i| 0.3 * 1.7f64.powi(i as i32)).collect();
-            let texels: Vec<Vec<f64>> = scales.iter().map(|&f| base.iter().map(|t| t * f).collect()).collect();
+            let (vis, splits, texels) = split_set_case(&seeds, cuts, &scales);
             // Together: one cache for every texel size.
             forget_served();
             let together: Vec<_> = texels
@@ -2662,12 +2678,7 @@ mod tests {
             scales in proptest::collection::vec(0.05f64..20.0, 1..4),
             weights in proptest::collection::vec(0.25f64..4.0, 4),
         ) {
-            let vis: Vec<Visibility> = seeds.iter().map(|&(seed, n, spread, levels)| tied(seed, n, spread, levels)).collect();
-            let mut cuts = cuts;
-            cuts.sort_by(f64::total_cmp);
-            let splits: Vec<f64> = std::iter::once(0.5).chain(cuts.iter().map(|c| 1.0 + 199.0 * c)).chain([220.0]).collect();
-            let base: Vec<f64> = (0..splits.len() - 1).map(|i| 0.3 * 1.7f64.powi(i as i32)).collect();
-            let texels: Vec<Vec<f64>> = scales.iter().map(|&f| base.iter().map(|t| t * f).collect()).collect();
+            let (vis, splits, texels) = split_set_case(&seeds, cuts, &scales);
             let all = |memo: &PoolMemo| -> Vec<(Pooled, Pooled, Vec<ScreenStats>, Vec<u64>)> {
                 texels
                     .iter()
