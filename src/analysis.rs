@@ -2139,18 +2139,7 @@ mod split_set_done_tests {
         };
         let direct = |c: &Config| {
             let inputs: Vec<ScreenInputs> = c.views.iter().map(|v| view_screen_inputs(c, v).unwrap()).collect();
-            let parts: Vec<screen::PoolPart<'_>> = inputs
-                .iter()
-                .zip(c.views.iter())
-                .map(|(x, v)| screen::PoolPart {
-                    vis: &x.vis,
-                    splits: &x.splits,
-                    texel: &x.texel,
-                    visible: x.visible,
-                    steps: screen::view_weight_steps(v.weight),
-                })
-                .collect();
-            screen::pool(&parts)
+            screen::pool(&pool_parts(&inputs, &c.views))
         };
         let order = [
             (0.5, 4, 512),

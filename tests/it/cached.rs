@@ -353,30 +353,22 @@ fn a_held_map_flips_no_receiver_between_its_updates() {
         filter: csm_core::truth::PcfFilter::Nearest,
         binary32: None,
     };
-    let run = |every: &[usize]| {
+    // The unsnapped walk with `counting` texel reads, at `cadence`.
+    let walk = |counting: bool, cadence: Cadence<'_>| {
         csm_core::truth::flicker_cached(
-            csm_core::truth::ShadowMaps::new(scene),
+            csm_core::truth::ShadowMaps::new(scene).counting(counting),
             &rig,
             &rig.light,
             c.camera_path().unwrap().into_iter(),
             false,
             &points,
             &sampling,
-            Cadence { every, first_frame: 0 },
+            cadence,
             &mut |_, _| {},
         )
     };
-    let plain = csm_core::truth::flicker_cached(
-        csm_core::truth::ShadowMaps::new(scene),
-        &rig,
-        &rig.light,
-        c.camera_path().unwrap().into_iter(),
-        false,
-        &points,
-        &sampling,
-        Cadence::EVERY_FRAME,
-        &mut |_, _| {},
-    );
+    let run = |every: &[usize]| walk(true, Cadence { every, first_frame: 0 });
+    let plain = walk(true, Cadence::EVERY_FRAME);
     let ones = run(&[1, 1, 1, 1]);
     assert_eq!(ones, plain);
     let total = |f: &csm_core::truth::Flicker| -> (u64, u64) {
@@ -390,19 +382,12 @@ fn a_held_map_flips_no_receiver_between_its_updates() {
     let held = run(&[1, 2, 3, 4]);
     // Without texel counts (a sweep's rows) the walk steps the receivers through blocks of
     // frames: the same counts, held cascades included.
-    let in_blocks = csm_core::truth::flicker_cached(
-        csm_core::truth::ShadowMaps::new(scene).counting(false),
-        &rig,
-        &rig.light,
-        c.camera_path().unwrap().into_iter(),
+    let in_blocks = walk(
         false,
-        &points,
-        &sampling,
         Cadence {
             every: &[1, 2, 3, 4],
             first_frame: 0,
         },
-        &mut |_, _| {},
     );
     assert_eq!(in_blocks.stats, csm_core::truth::CacheStats::default());
     assert_eq!(

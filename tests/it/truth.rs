@@ -934,39 +934,31 @@ fn every_frame_of_the_walk_equals_tracing_it_from_scratch() {
         let poses: Vec<_> = c.camera_path().unwrap();
         // Both snap modes walked in one pass (as the pass walks them), each frame of each
         // compared with tracing it from scratch.
+        // Both modes' walks, counting texel reads or not.
+        let walks = |counting: bool, on: &mut truth::OnWalkFrame<'_>| {
+            truth::flicker_walks(
+                vec![
+                    (truth::ShadowMaps::new(scene).counting(counting), true),
+                    (truth::ShadowMaps::new(scene).counting(counting), false),
+                ],
+                rig,
+                &rig.light,
+                poses.iter().copied(),
+                &g.points,
+                &s,
+                csm_core::walk::Cadence::EVERY_FRAME,
+                on,
+            )
+        };
         let mut walked: [Vec<Vec<Option<truth::Answer>>>; 2] = [Vec::new(), Vec::new()];
-        let flicker = truth::flicker_walks(
-            vec![
-                (truth::ShadowMaps::new(scene), true),
-                (truth::ShadowMaps::new(scene), false),
-            ],
-            rig,
-            &rig.light,
-            poses.iter().copied(),
-            &g.points,
-            &s,
-            csm_core::walk::Cadence::EVERY_FRAME,
-            &mut |w, _, states| walked[w].push(states.to_vec()),
-        );
+        let flicker = walks(true, &mut |w, _, states| walked[w].push(states.to_vec()));
         // Without texel counts (a sweep's rows) the walk steps the receivers through blocks
         // of frames: every frame's states and every count are the frame-by-frame walk's.
         let mut blocks: [Vec<Vec<Option<truth::Answer>>>; 2] = [Vec::new(), Vec::new()];
-        let in_blocks = truth::flicker_walks(
-            vec![
-                (truth::ShadowMaps::new(scene).counting(false), true),
-                (truth::ShadowMaps::new(scene).counting(false), false),
-            ],
-            rig,
-            &rig.light,
-            poses.iter().copied(),
-            &g.points,
-            &s,
-            csm_core::walk::Cadence::EVERY_FRAME,
-            &mut |w, t, states| {
-                assert_eq!(t, blocks[w].len(), "frames in order");
-                blocks[w].push(states.to_vec())
-            },
-        );
+        let in_blocks = walks(false, &mut |w, t, states| {
+            assert_eq!(t, blocks[w].len(), "frames in order");
+            blocks[w].push(states.to_vec())
+        });
         assert!(poses.len() > 17, "{} frames: more than one block", poses.len());
         for w in 0..2 {
             assert!(
