@@ -1458,12 +1458,13 @@ impl Statistic {
 pub fn statistic(vis: &Visibility, splits: &[f64], texel: &[f64], which: Statistic) -> f64 {
     with_scratch(|sc| {
         let pass = ViewPass::new(vis, splits, texel, false, sc);
-        statistic_of(&pass, which, sc)
+        statistic_of(&pass, which, sc, &mut no_hints())
     })
 }
 
-/// [`statistic`] from a built pass.
-fn statistic_of(pass: &ViewPass<'_>, which: Statistic, sc: &mut Scratch) -> f64 {
+/// [`statistic`] from a built pass, a percentile tried first from `hints` (and its window
+/// kept there; the other five windows are left as they are).
+fn statistic_of(pass: &ViewPass<'_>, which: Statistic, sc: &mut Scratch, hints: &mut Hints) -> f64 {
     if let Some((kind, slot)) = which.percentile() {
         return match pass.range {
             Some((lo, hi)) => {
@@ -1471,7 +1472,7 @@ fn statistic_of(pass: &ViewPass<'_>, which: Statistic, sc: &mut Scratch) -> f64 
                 let wanted = 1 << (3 * kind + slot);
                 let pools = [(pass, 1)];
                 let how = brackets_for(&pools, (lo, hi));
-                let (v, _) = select(&pools, how, sc, &mut no_hints(), wanted);
+                let (v, _) = select(&pools, how, sc, hints, wanted);
                 v[kind][slot]
             }
             None => 0.0,
@@ -1547,6 +1548,28 @@ pub struct Pooled {
     pub views: Vec<ScreenStats>,
 }
 
+/// One view's own statistics in a level's pool as far as a ranking of the views reads them
+/// (a sweep's: its objective and its near-tie breaker): the view's largest value and, when
+/// asked for, one statistic. Each is bit for bit that field of the view's own [`ScreenStats`]
+/// ([`stats`] of the view alone); nothing else is measured.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RankedView {
+    /// The view's `aliasing_max`.
+    pub max: f64,
+    /// The statistic asked for and the view's value of it; None when none was asked.
+    pub asked: Option<(Statistic, f64)>,
+}
+
+/// The level's screen statistics over every view's pixels together (as in [`Pooled`]), and of
+/// each view only what a ranking reads ([`RankedView`]): a sweep's row, which would otherwise
+/// select six percentiles per view that no output shows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RankedPool {
+    pub level: ScreenStats,
+    /// Per part, in order.
+    pub views: Vec<RankedView>,
+}
+
 /// The screen statistics of a level of views: every served receiver pixel of every view,
 /// carrying its view's weight ([`PoolPart::steps`]), pooled into one set of statistics, and
 /// each view's own statistics beside them. With equal weights the level's percentiles are the
@@ -1562,11 +1585,24 @@ pub struct Pooled {
 /// lengths and prefix sums, its maxima from one bucket per cascade, and the percentiles from
 /// the few buckets whose values can hold them ([`select`]).
 pub fn pool(parts: &[PoolPart<'_>]) -> Pooled {
-    pool_passes(parts, false, &mut PoolHints::default()).0
+    let (level, views, _) = with_scratch(|sc| {
+        pool_passes_in(
+            parts,
+            false,
+            &mut PoolHints::default(),
+            sc,
+            &mut |pass, visible, sc, hints| own_stats(pass, visible, sc, hints),
+        )
+    });
+    Pooled { level, views }
 }
 
-/// [`pool`], with each part's pass (its served count and, with `octaves`, its values per
-/// [`octave`]).
+/// [`pool`] with each view's own statistics limited to what a ranking reads ([`RankedView`]:
+/// its largest value, and `asked`'s statistic); the level's are the same bits as [`pool`]'s.
+pub fn pool_ranked(parts: &[PoolPart<'_>], asked: Option<Statistic>) -> RankedPool {
+    ranked_passes(parts, asked, false, &mut PoolHints::default()).0
+}
+
 /// Where a pool's percentiles were found ([`Win`]): the level's, and each view's own.
 #[derive(Clone, Default)]
 struct PoolHints {
@@ -1574,19 +1610,39 @@ struct PoolHints {
     views: Vec<Hints>,
 }
 
-/// [`pool`], with each part's pass (its served count and, with `octaves`, its values per
-/// [`octave`]); `hints` are tried first and updated ([`select`]).
-fn pool_passes<'a>(parts: &[PoolPart<'a>], octaves: bool, hints: &mut PoolHints) -> (Pooled, Vec<ViewPass<'a>>) {
-    with_scratch(|sc| pool_passes_in(parts, octaves, hints, sc))
+/// [`pool_ranked`], with each part's pass (its served count and, with `octaves`, its values
+/// per [`octave`]); `hints` are tried first and updated ([`select`]).
+fn ranked_passes<'a>(
+    parts: &[PoolPart<'a>],
+    asked: Option<Statistic>,
+    octaves: bool,
+    hints: &mut PoolHints,
+) -> (RankedPool, Vec<ViewPass<'a>>) {
+    let (level, views, passes) = with_scratch(|sc| {
+        pool_passes_in(parts, octaves, hints, sc, &mut |pass, _, sc, hints| RankedView {
+            max: pass.max,
+            // Of the view's own percentiles only the one asked for is selected (with its
+            // window), by the selection of its own target alone that [`statistic`] makes.
+            asked: asked.map(|s| (s, statistic_of(pass, s, sc, hints))),
+        })
+    });
+    (RankedPool { level, views }, passes)
 }
 
-/// [`pool_passes`] with the buffers `sc`.
-fn pool_passes_in<'a>(
+/// What a pool measures of one view beside the level: from its pass, its visible range, the
+/// buffers and its windows.
+type OwnOf<'f, V> = dyn FnMut(&ViewPass<'_>, Option<(f64, f64)>, &mut Scratch, &mut Hints) -> V + 'f;
+
+/// The level's statistics of `parts` and `own` of each view, with each part's pass (its
+/// served count and, with `octaves`, its values per [`octave`]); `hints` are tried first and
+/// updated ([`select`]); `sc` the buffers.
+fn pool_passes_in<'a, V>(
     parts: &[PoolPart<'a>],
     octaves: bool,
     hints: &mut PoolHints,
     sc: &mut Scratch,
-) -> (Pooled, Vec<ViewPass<'a>>) {
+    own: &mut OwnOf<'_, V>,
+) -> (ScreenStats, Vec<V>, Vec<ViewPass<'a>>) {
     if hints.views.len() != parts.len() {
         *hints = PoolHints {
             level: no_hints(),
@@ -1597,11 +1653,11 @@ fn pool_passes_in<'a>(
         .iter()
         .map(|p| ViewPass::new(p.vis, p.splits, p.texel, octaves, sc))
         .collect();
-    let views: Vec<ScreenStats> = parts
+    let views: Vec<V> = parts
         .iter()
         .zip(&passes)
         .zip(hints.views.iter_mut())
-        .map(|((p, pass), h)| own_stats(pass, p.visible, sc, h))
+        .map(|((p, pass), h)| own(pass, p.visible, sc, h))
         .collect();
     // The level's percentiles on one bucket key over every part's values.
     let range = passes
@@ -1680,7 +1736,7 @@ fn pool_passes_in<'a>(
         visible_z_hi,
         cascade_pixels,
     };
-    (Pooled { level, views }, passes)
+    (level, views, passes)
 }
 
 /// Number of [`octave`]s: every finite `m >= 0` has one below it.
@@ -1706,7 +1762,8 @@ fn pow2(e: i32) -> f64 {
 }
 
 /// Pooled statistics already computed, by their inputs up to one power-of-two factor of every
-/// texel size (see [`pool_memo`]). A cache: two memos always compare equal.
+/// texel size and by the statistic asked of each view (see [`pool_memo`]). A cache: two memos
+/// always compare equal.
 #[derive(Default)]
 pub struct PoolMemo {
     entries: std::sync::Mutex<std::collections::HashMap<Vec<u64>, std::sync::Arc<MemoEntry>>>,
@@ -1730,11 +1787,12 @@ impl PartialEq for PoolMemo {
 /// View statistics the memo keeps at most (entries times views): about 50 MB.
 const MEMO_VIEW_STATS: usize = 200_000;
 
-/// One memo entry: the pooled statistics at the normalised texel sizes, and per part its
-/// served count and, for the undersampled counts at any scale, the number of its values at or
-/// above each octave (ascending octaves, those that hold values only).
+/// One memo entry: the pooled statistics at the normalised texel sizes (each view's as far as
+/// a ranking reads them, the statistic asked for named in each), and per part its served count
+/// and, for the undersampled counts at any scale, the number of its values at or above each
+/// octave (ascending octaves, those that hold values only).
 struct MemoEntry {
-    pooled: Pooled,
+    pooled: RankedPool,
     served: Vec<u64>,
     above: Vec<Vec<(u16, u64)>>,
 }
@@ -1808,18 +1866,19 @@ fn key_of(parts: &[PoolPart<'_>], texels: bool) -> Vec<u64> {
         .collect()
 }
 
-/// [`pool`], remembered in `memo`. Every statistic of [`pool`] but the undersampled fractions
+/// [`pool_ranked`], remembered in `memo` (keyed by its inputs and by `asked`, the statistic
+/// each view's [`RankedView`] holds). Every statistic of [`pool`] but the undersampled fractions
 /// scales exactly with the texel sizes when they all change by one power-of-two factor `2^e`
 /// (a product `t g` of a normal result, its sums, means, maxima and percentiles are all scaled
 /// by `2^e` without rounding), and the undersampled count `m > 1` is the count of normalised
 /// values above `2^-e`, read from the values' octaves. So the statistics of texel sizes
 /// `t · 2^e` are computed once, at `t`, for every `e`: a sweep's resolutions (powers of two)
 /// share one computation, and so do settings that build the same cascades (a single
-/// cascade at every λ). The result equals [`pool`]'s bit for bit; when a value could leave the
-/// normal range at either scale, [`pool`] runs as is.
-pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
+/// cascade at every λ). The result equals [`pool_ranked`]'s bit for bit; when a value could
+/// leave the normal range at either scale, [`pool_ranked`] runs as is.
+pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo, asked: Option<Statistic>) -> RankedPool {
     let Some(e) = normaliser(parts) else {
-        return pool(parts);
+        return pool_ranked(parts, asked);
     };
     let f = pow2(-e);
     let texels: Vec<Vec<f64>> = parts.iter().map(|p| p.texel.iter().map(|&t| t * f).collect()).collect();
@@ -1828,7 +1887,11 @@ pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
         .zip(&texels)
         .map(|(p, t)| PoolPart { texel: t, ..*p })
         .collect();
-    let key = key_of(&norm, true);
+    let mut key = key_of(&norm, true);
+    // What each view's entry holds: the statistic asked for (its place in Statistic::ALL).
+    key.push(asked.map_or(u64::MAX, |a| {
+        Statistic::ALL.iter().position(|&s| s == a).unwrap_or(0) as u64
+    }));
     let found = memo.entries.lock().ok().and_then(|m| m.get(&key).cloned());
     let entry = found.unwrap_or_else(|| {
         // The hints of the same views and splits at any texel sizes.
@@ -1839,7 +1902,7 @@ pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
             .ok()
             .and_then(|m| m.get(&hint_key).cloned())
             .unwrap_or_default();
-        let (pooled, passes) = pool_passes(&norm, true, &mut hints);
+        let (pooled, passes) = ranked_passes(&norm, asked, true, &mut hints);
         if let Ok(mut m) = memo.hints.lock() {
             if (m.len() + 1) * parts.len().max(1) > MEMO_VIEW_STATS {
                 m.clear();
@@ -1875,13 +1938,13 @@ pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
     // Back to the true scale: the values times 2^e, the undersampled counts above 2^-e.
     let s = pow2(e);
     let under: Vec<u64> = (0..parts.len()).map(|k| entry.count_above(k, -e)).collect();
-    let scale = |st: &ScreenStats, under: Option<f64>| ScreenStats {
+    let scale = |st: &ScreenStats, under: f64| ScreenStats {
         aliasing_mean: st.aliasing_mean * s,
         aliasing_p50: st.aliasing_p50 * s,
         aliasing_p95: st.aliasing_p95 * s,
         aliasing_p99: st.aliasing_p99 * s,
         aliasing_max: st.aliasing_max * s,
-        undersampled_fraction: under.unwrap_or(st.undersampled_fraction),
+        undersampled_fraction: under,
         visible_mean: st.visible_mean * s,
         visible_p50: st.visible_p50 * s,
         visible_p95: st.visible_p95 * s,
@@ -1894,9 +1957,23 @@ pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
         .views
         .iter()
         .enumerate()
-        .map(|(k, st)| {
+        .map(|(k, v)| {
             let n = entry.served[k];
-            scale(st, Some(if n == 0 { 0.0 } else { under[k] as f64 / n as f64 }))
+            RankedView {
+                max: v.max * s,
+                asked: v.asked.map(|(st, x)| {
+                    let x = if st == Statistic::UndersampledFraction {
+                        if n == 0 {
+                            0.0
+                        } else {
+                            under[k] as f64 / n as f64
+                        }
+                    } else {
+                        x * s
+                    };
+                    (st, x)
+                }),
+            }
         })
         .collect();
     let (mut u, mut n) = (0u128, 0u128);
@@ -1905,8 +1982,8 @@ pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
         n += entry.served[k] as u128 * p.steps as u128;
     }
     let level_under = if n > 0 { u as f64 / n as f64 } else { 0.0 };
-    Pooled {
-        level: scale(&entry.pooled.level, Some(level_under)),
+    RankedPool {
+        level: scale(&entry.pooled.level, level_under),
         views,
     }
 }
@@ -2359,37 +2436,104 @@ mod tests {
             vec![1.0, 200.0],
         ];
         let base: [Vec<f64>; 3] = [vec![0.5, 2.0, 7.0], vec![1.1, 3.3, 9.0], vec![4.0]];
-        let memo = PoolMemo::default();
         let entries = |m: &PoolMemo| m.entries.lock().unwrap().len();
         // 2^k scales share one entry; 0.7 and 3 are new ones. The values straddle m = 1 at
         // most scales, so the undersampled counts change with the scale.
         let scales = [1.0, 0.5, 0.25, 2.0, 1.0 / 64.0, 0.7, 3.0, 0.5];
-        let mut unders = Vec::new();
-        for (i, &scale) in scales.iter().enumerate() {
-            let texels: Vec<Vec<f64>> = base.iter().map(|t| t.iter().map(|&x| x * scale).collect()).collect();
-            let parts: Vec<PoolPart<'_>> = (0..3)
-                .map(|k| PoolPart {
-                    vis: &vis[k],
-                    splits: &splits[k],
-                    texel: &texels[k],
-                    visible: Some((1.0, 150.0 + k as f64)),
-                    steps: view_weight_steps([1.0, 2.5, 0.5][k]),
-                })
-                .collect();
-            let direct = pool(&parts);
-            assert_eq!(pool_memo(&parts, &memo), direct, "scale {scale}");
-            unders.push(direct.level.undersampled_fraction);
-            let want = match i {
-                0..=4 => 1,
-                5 => 2,
-                _ => 3,
-            };
-            assert_eq!(entries(&memo), want, "after scale {scale}");
+        // Each view's undersampled fraction, read from the octaves like the level's, a
+        // percentile, and nothing asked of the views.
+        let asked = [Some(Statistic::UndersampledFraction), Some(Statistic::VisibleP95), None];
+        let both = PoolMemo::default();
+        for (round, &asked) in asked.iter().enumerate() {
+            let memo = PoolMemo::default();
+            let mut unders = Vec::new();
+            for (i, &scale) in scales.iter().enumerate() {
+                let texels: Vec<Vec<f64>> = base.iter().map(|t| t.iter().map(|&x| x * scale).collect()).collect();
+                let parts: Vec<PoolPart<'_>> = (0..3)
+                    .map(|k| PoolPart {
+                        vis: &vis[k],
+                        splits: &splits[k],
+                        texel: &texels[k],
+                        visible: Some((1.0, 150.0 + k as f64)),
+                        steps: view_weight_steps([1.0, 2.5, 0.5][k]),
+                    })
+                    .collect();
+                let direct = pool(&parts);
+                let want = ranked_of(&direct, asked);
+                assert_eq!(pool_memo(&parts, &memo, asked), want, "scale {scale}, {asked:?}");
+                // One memo asked for different statistics keeps an entry for each.
+                assert_eq!(pool_memo(&parts, &both, asked), want, "scale {scale}, {asked:?}");
+                unders.push(direct.level.undersampled_fraction);
+                let want = match i {
+                    0..=4 => 1,
+                    5 => 2,
+                    _ => 3,
+                };
+                assert_eq!(entries(&memo), want, "after scale {scale}");
+                assert_eq!(entries(&both), 3 * round + want, "after scale {scale}");
+            }
+            // The shared entries answered different undersampled fractions.
+            unders.sort_by(f64::total_cmp);
+            unders.dedup();
+            assert!(unders.len() >= 5, "{unders:?}");
         }
-        // The shared entries answered different undersampled fractions.
-        unders.sort_by(f64::total_cmp);
-        unders.dedup();
-        assert!(unders.len() >= 5, "{unders:?}");
+    }
+
+    /// What a ranking reads of `full`'s views (each view's largest value and its `asked`
+    /// statistic), beside its level: the direct form of [`pool_ranked`].
+    fn ranked_of(full: &Pooled, asked: Option<Statistic>) -> RankedPool {
+        RankedPool {
+            level: full.level.clone(),
+            views: full
+                .views
+                .iter()
+                .map(|v| {
+                    let mut st = v.clone();
+                    RankedView {
+                        max: v.aliasing_max,
+                        asked: asked.map(|s| (s, *s.field(&mut st))),
+                    }
+                })
+                .collect(),
+        }
+    }
+
+    /// Every statistic asked of each view, and none (the last).
+    fn every_asked() -> impl Iterator<Item = Option<Statistic>> {
+        Statistic::ALL.iter().copied().map(Some).chain([None])
+    }
+
+    /// The six percentiles of `ALL`'s order, as `[plain p50, p95, p99, contrast p50, p95, p99]`.
+    const PERCENTILES: [Statistic; 6] = [
+        Statistic::AliasingP50,
+        Statistic::AliasingP95,
+        Statistic::AliasingP99,
+        Statistic::VisibleP50,
+        Statistic::VisibleP95,
+        Statistic::VisibleP99,
+    ];
+
+    /// The level's statistics of `parts` through `memo` and each view's six percentiles, each
+    /// asked of the memo in turn (as six sweeps of six objectives sharing one memo would), with
+    /// the level's bits checked equal in every answer.
+    fn memo_percentiles(
+        parts: &[PoolPart<'_>],
+        memo: &PoolMemo,
+    ) -> Result<(ScreenStats, Vec<[f64; 6]>), proptest::test_runner::TestCaseError> {
+        let mut level: Option<ScreenStats> = None;
+        let mut own = vec![[0.0; 6]; parts.len()];
+        for (j, &s) in PERCENTILES.iter().enumerate() {
+            let got = pool_memo(parts, memo, Some(s));
+            if let Some(l) = &level {
+                proptest::prop_assert_eq!(l, &got.level);
+            }
+            for (k, v) in got.views.iter().enumerate() {
+                proptest::prop_assert_eq!(v.asked.map(|a| a.0), Some(s));
+                own[k][j] = v.asked.map_or(f64::NAN, |a| a.1);
+            }
+            level = Some(got.level);
+        }
+        Ok((level.unwrap_or_default(), own))
     }
 
     fn served_of(p: &PoolPart<'_>) -> usize {
@@ -2446,20 +2590,22 @@ mod tests {
             .collect()
     }
 
-    /// The level's and each view's percentiles in `got` equal a sort of the scaled values.
+    /// The level's percentiles in `level` and each view's in `own` ([`memo_percentiles`]) equal
+    /// a sort of the scaled values.
     fn percentiles_equal_sorts(
         parts: &[PoolPart<'_>],
-        got: &Pooled,
+        level: &ScreenStats,
+        own: &[[f64; 6]],
     ) -> Result<(), proptest::test_runner::TestCaseError> {
         let (p, vp, _, _, _) = brute_percentiles(parts);
-        let l = &got.level;
+        let l = level;
         proptest::prop_assert_eq!([l.aliasing_p50, l.aliasing_p95, l.aliasing_p99], p);
         proptest::prop_assert_eq!([l.visible_p50, l.visible_p95, l.visible_p99], vp);
         for (k, part) in parts.iter().enumerate() {
             let (p, vp, _, _, _) = brute_percentiles(std::slice::from_ref(part));
-            let v = &got.views[k];
-            proptest::prop_assert_eq!([v.aliasing_p50, v.aliasing_p95, v.aliasing_p99], p);
-            proptest::prop_assert_eq!([v.visible_p50, v.visible_p95, v.visible_p99], vp);
+            let v = &own[k];
+            proptest::prop_assert_eq!([v[0], v[1], v[2]], p);
+            proptest::prop_assert_eq!([v[3], v[4], v[5]], vp);
         }
         Ok(())
     }
@@ -2515,10 +2661,10 @@ mod tests {
                 let mut texel: Vec<f64> = base.iter().map(|t| t * scale).collect();
                 *texel.last_mut().unwrap() *= last;
                 let parts = parts_at(&vis, &splits, &texel, &weights);
-                let got = pool_memo(&parts, &memo);
-                percentiles_equal_sorts(&parts, &got)?;
+                let (level, own) = memo_percentiles(&parts, &memo)?;
+                percentiles_equal_sorts(&parts, &level, &own)?;
                 let (_, _, max, vmax, _) = brute_percentiles(&parts);
-                proptest::prop_assert_eq!((got.level.aliasing_max, got.level.visible_max), (max, vmax));
+                proptest::prop_assert_eq!((level.aliasing_max, level.visible_max), (max, vmax));
             }
         }
     }
@@ -2529,9 +2675,10 @@ mod tests {
         /// all change by about one factor (each cascade's then moved by a few units in the
         /// last place, as a resolution's rounding does, or by up to 0.3 %, which
         /// reorders close values across cascades), the percentiles of a sort of the scaled
-        /// values, for the level and each view alone; views with tied factors and zero
-        /// contrast weights. And where every texel size changes by exactly one factor, the
-        /// windows answer (at least the level's six and each view's six percentiles).
+        /// values, for the level and each view alone (each of a view's six asked in turn);
+        /// views with tied factors and zero contrast weights. And where every texel size changes
+        /// by exactly one factor, the windows answer (at least the level's six and each view's
+        /// one, per ask).
         #[test]
         fn windowed_percentiles_equal_a_sort_of_the_scaled_values(
             seeds in proptest::collection::vec((0u64..1_000_000, 50usize..2500, 1.0f64..12.0, 0u32..40), 1..4),
@@ -2560,9 +2707,9 @@ mod tests {
                     .collect();
                 let parts = parts_at(&vis, &splits, &texel, &weights);
                 let before = CONFIRMED.with(|c| c.get());
-                let got = pool_memo(&parts, &memo);
+                let (level, own) = memo_percentiles(&parts, &memo)?;
                 let confirmed = CONFIRMED.with(|c| c.get()) - before;
-                percentiles_equal_sorts(&parts, &got)?;
+                percentiles_equal_sorts(&parts, &level, &own)?;
                 // Every texel size by one factor (not a power of two, which the memo answers
                 // whole), after a first round that found the windows.
                 let exact = *how == 0 && scales[..round].iter().all(|x| x.2 == 0);
@@ -2571,8 +2718,9 @@ mod tests {
                 // ties than that select anew every round, correctly; a drawn case is in the
                 // regression file).
                 let untied = seeds.iter().all(|s| s.3 == 0);
+                // Each of the six asks reads the level's six percentiles and each view's one.
                 if round > 0 && exact && !pow2 && untied {
-                    proptest::prop_assert!(confirmed >= 6 * (1 + vis.len()) - 6, "{confirmed}");
+                    proptest::prop_assert!(confirmed >= 6 * (6 + vis.len()) - 6, "{confirmed}");
                 }
             }
         }
@@ -2688,13 +2836,14 @@ mod tests {
             weights in proptest::collection::vec(0.25f64..4.0, 4),
         ) {
             let (vis, splits, texels) = split_set_case(&seeds, cuts, &scales);
-            let all = |memo: &PoolMemo| -> Vec<(Pooled, Pooled, Vec<ScreenStats>, Vec<u64>)> {
+            let all = |memo: &PoolMemo| -> Vec<(Pooled, Vec<RankedPool>, Vec<ScreenStats>, Vec<u64>)> {
                 texels
                     .iter()
                     .map(|t| {
                         let parts = parts_at(&vis, &splits, t, &weights);
                         let (own, one) = each_view_and_statistic(&vis, &splits, t);
-                        (pool(&parts), pool_memo(&parts, memo), own, one)
+                        let ranked = every_asked().map(|a| pool_memo(&parts, memo, a)).collect();
+                        (pool(&parts), ranked, own, one)
                     })
                     .collect()
             };
@@ -2708,7 +2857,9 @@ mod tests {
                 proptest::prop_assert_eq!(&v.1, &c.1);
                 proptest::prop_assert_eq!(&v.0, &k.0);
                 proptest::prop_assert_eq!(&v.1, &k.1);
-                proptest::prop_assert_eq!(&v.0, &v.1);
+                for (asked, ranked) in every_asked().zip(&v.1) {
+                    proptest::prop_assert_eq!(&ranked_of(&v.0, asked), ranked);
+                }
                 proptest::prop_assert_eq!(&v.2, &k.2);
                 proptest::prop_assert_eq!(&v.3, &k.3);
                 let parts = parts_at(&vis, &splits, t, &weights);
@@ -2732,26 +2883,75 @@ mod tests {
             .collect();
         let splits = vec![0.5, 12.0, 45.0, 160.0];
         let base = [0.4, 1.3, 4.1];
-        let memo = PoolMemo::default();
-        let mut confirmed = Vec::new();
-        for scale in [1.0, 0.75, 1.3, 0.3] {
-            let texel: Vec<f64> = base.iter().map(|t| t * scale).collect();
-            let parts: Vec<PoolPart<'_>> = vis
-                .iter()
-                .map(|v| PoolPart {
-                    vis: v,
-                    splits: &splits,
-                    texel: &texel,
-                    visible: Some((1.0, 150.0)),
-                    steps: view_weight_steps(1.0),
-                })
-                .collect();
-            let before = CONFIRMED.with(|c| c.get());
-            assert_eq!(pool_memo(&parts, &memo), pool(&parts), "scale {scale}");
-            confirmed.push(CONFIRMED.with(|c| c.get()) - before);
+        // Each percentile asked of the views, with a memo of its own (as in a sweep), and none
+        // (the level's alone): per scale, the confirmations of every ask and of the level's.
+        let mut confirmed = [0usize; 4];
+        let mut level = [0usize; 4];
+        for asked in PERCENTILES.map(Some).into_iter().chain([None]) {
+            let memo = PoolMemo::default();
+            for (i, scale) in [1.0, 0.75, 1.3, 0.3].into_iter().enumerate() {
+                let texel: Vec<f64> = base.iter().map(|t| t * scale).collect();
+                let parts: Vec<PoolPart<'_>> = vis
+                    .iter()
+                    .map(|v| PoolPart {
+                        vis: v,
+                        splits: &splits,
+                        texel: &texel,
+                        visible: Some((1.0, 150.0)),
+                        steps: view_weight_steps(1.0),
+                    })
+                    .collect();
+                let before = CONFIRMED.with(|c| c.get());
+                let want = ranked_of(&pool(&parts), asked);
+                assert_eq!(pool_memo(&parts, &memo, asked), want, "scale {scale}");
+                let n = CONFIRMED.with(|c| c.get()) - before;
+                match asked {
+                    Some(_) => confirmed[i] += n,
+                    None => level[i] = n,
+                }
+            }
         }
-        // Six percentiles of the level and six of each view: none hinted at first, then most.
-        assert_eq!(confirmed[0], 0);
-        assert!(confirmed[1..].iter().all(|&c| c >= 12), "{confirmed:?}");
+        // Six percentiles of the level and six of each view (each view's one per ask, the
+        // level's six in every ask): none hinted at first, then most.
+        let distinct: Vec<usize> = (0..4).map(|i| confirmed[i] - 5 * level[i]).collect();
+        assert_eq!(distinct[0], 0);
+        assert!(distinct[1..].iter().all(|&c| c >= 12), "{distinct:?}");
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+        /// What a pool keeps of each view for a ranking ([`RankedView`]) equals that view's
+        /// own statistics ([`stats`] of it alone) bit for bit: its largest value and the asked
+        /// statistic's field, whichever is asked (or none), through a memo over a sequence of
+        /// texel sizes (powers of two apart, which the memo answers whole, and other factors,
+        /// which its windows answer), over views with tied factors, zero contrast weights,
+        /// uneven view weights and values straddling m = 1; and the level's statistics are
+        /// those of the full pool.
+        #[test]
+        fn a_ranked_views_statistic_equals_its_own_statistics_field(
+            seeds in proptest::collection::vec((0u64..1_000_000, 1usize..3000, 1.0f64..12.0, 0u32..40), 1..5),
+            cuts in proptest::collection::vec(0.02f64..0.98, 0..5),
+            scales in proptest::collection::vec((0.05f64..20.0, 0i32..3), 1..5),
+            weights in proptest::collection::vec(0.25f64..4.0, 4),
+            asked in 0usize..12,
+        ) {
+            let asked = every_asked().nth(asked).unwrap();
+            // Each drawn scale, and the same times a power of two.
+            let factors: Vec<f64> = scales.iter().flat_map(|&(f, e)| [f, f * f64::from(1 << e)]).collect();
+            let (vis, splits, texels) = split_set_case(&seeds, cuts, &factors);
+            let memo = PoolMemo::default();
+            for t in &texels {
+                let parts = parts_at(&vis, &splits, t, &weights);
+                let got = pool_memo(&parts, &memo, asked);
+                proptest::prop_assert_eq!(&got.level, &pool(&parts).level);
+                proptest::prop_assert_eq!(got.views.len(), vis.len());
+                for (v, r) in vis.iter().zip(&got.views) {
+                    let mut own = stats(v, &splits, t, None);
+                    proptest::prop_assert_eq!(r.max.to_bits(), own.aliasing_max.to_bits());
+                    let want = asked.map(|s| (s, s.field(&mut own).to_bits()));
+                    proptest::prop_assert_eq!(r.asked.map(|(s, x)| (s, x.to_bits())), want);
+                }
+            }
+        }
     }
 }
