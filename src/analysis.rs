@@ -48,6 +48,22 @@ pub struct AnalysisOptions {
     /// The ground-truth pass's texel reads and rays (`analyze` prints them): counting the rays
     /// keeps a set of the texels read per map grid. Without it the pass's counts are 0.
     pub texel_counts: bool,
+    /// What a level of views keeps of each view's own screen metrics ([`ViewDetail`]).
+    pub views: ViewDetail,
+}
+
+/// What the analysis of a level of views keeps of each view's own screen metrics
+/// (docs/views.md, "What a row keeps of each view").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ViewDetail {
+    /// Every view's own screen metrics in full ([`Summary::views`]): what `views.csv`,
+    /// `summary.json` and the report show.
+    Full,
+    /// Only what a sweep's ranking of the views reads ([`Summary::view_ranks`]): each view's
+    /// own value of the statistic its objective is (None: the objective is none of a view's
+    /// statistics, and a view's rows take the level's value), its largest `m` and whether it
+    /// sees a receiver.
+    Ranking(Option<screen::Statistic>),
 }
 
 impl AnalysisOptions {
@@ -62,6 +78,7 @@ impl AnalysisOptions {
             ground_truth: true,
             cost_means: true,
             texel_counts: true,
+            views: ViewDetail::Full,
         }
     }
 
@@ -76,6 +93,7 @@ impl AnalysisOptions {
             ground_truth: false,
             cost_means: false,
             texel_counts: false,
+            views: ViewDetail::Full,
         }
     }
 }
@@ -132,13 +150,20 @@ pub struct Summary {
     /// The ground-truth metrics (acne, leaks, S5), when the pass ran; the registry writes them.
     #[serde(skip)]
     pub truth: Option<ground_truth::TruthSummary>,
-    /// With configured views (`[[view]]`, `[views]`) and scene geometry: each view's own screen
-    /// metrics, in the config's order, while [`Summary::screen`] and
+    /// With configured views (`[[view]]`, `[views]`) and scene geometry, where they are shown
+    /// ([`ViewDetail::Full`]: `analyze`, and a sweep's row at the level's choice): each view's
+    /// own screen metrics in full, in the config's order, while [`Summary::screen`] and
     /// [`Summary::band_pixel_share`] hold the level's, pooled over the views
-    /// ([`level_screen`]). Empty otherwise (`[camera]` is the one view), and then absent from
-    /// the serde form (a shard's rows carry them only for a level).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    /// ([`level_screen`]). Empty otherwise (no views, or a sweep row that shows none), and never
+    /// in the serde form: a shard's rows carry [`Summary::view_ranks`], and `merge` measures
+    /// the shown row's views again as the sweep does.
+    #[serde(skip)]
     pub views: Vec<ViewScreen>,
+    /// A sweep's row of a level ([`ViewDetail::Ranking`]): per view, in the config's order,
+    /// what the ranking of the views reads. Empty otherwise, and then absent from the serde
+    /// form.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub view_ranks: Vec<ViewRank>,
     /// Cached cascades (`[shadow] update_every`), when some cascade is held between updates;
     /// None otherwise, and then absent from every output.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
@@ -149,8 +174,24 @@ pub struct Summary {
     pub cost: cost::CostSummary,
 }
 
+/// What a sweep's ranking reads of one view of a level at one setting ([`ViewDetail::Ranking`]):
+/// the view alone is ranked by the same rule as the level, on its own value of the objective
+/// and its own worst case (`level::choose`). Every field is measured; a view's other
+/// statistics are not (they are shown only at the level's choice, measured there in full).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ViewRank {
+    /// The view's own value of the statistic the sweep's objective is (bit for bit that field
+    /// of its [`ScreenStats`]); None when the objective is none of a view's screen statistics
+    /// (a cost, the bounds' mean aliasing, ...): the view's value is then the level's.
+    pub objective: Option<f64>,
+    /// The view's own `screen_aliasing_max`, the near-tie breaker.
+    pub worst: f64,
+    /// The view sees a lit-facing receiver (`screen_receiver_fraction` above 0).
+    pub seen: bool,
+}
+
 /// One view's own screen metrics in a level of views (`views.csv`).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct ViewScreen {
     pub name: String,
     pub weight: f64,
@@ -159,11 +200,9 @@ pub struct ViewScreen {
     pub band_pixel_share: f64,
     /// The ground-truth pass judged this view (`analyze` with ground truth; at most
     /// [`views_truth::MAX_JUDGED`] views of a level are).
-    #[serde(skip)]
     pub judged: bool,
     /// A judged view's own ground-truth metrics (None when not judged, or when the view needs
     /// no cascades).
-    #[serde(skip)]
     pub truth: Option<ground_truth::TruthSummary>,
 }
 
@@ -238,6 +277,7 @@ impl Summary {
             light: None,
             truth: None,
             views: Vec::new(),
+            view_ranks: Vec::new(),
             cache: None,
             cost: cost::CostSummary::default(),
         }
@@ -768,12 +808,13 @@ pub(crate) fn analyze_with_progress(
     opts: &AnalysisOptions,
     on_frames: &(dyn Fn(u64) + Sync),
 ) -> Analysis {
-    let level = level_screen(config);
+    let level = level_screen_with(config, opts.views);
     let mut a = analyze_camera(config, opts, on_frames, level.is_none(), Detail::Full);
     if let Some(level) = level {
         a.summary.screen = Some(level.screen);
         a.summary.band_pixel_share = level.band_pixel_share;
         a.summary.views = level.views;
+        a.summary.view_ranks = level.ranks;
         // Ground truth over the level: the judged views pooled (the camera's pass stays for
         // cascades.csv, bias.csv and the pictures).
         if ground_truth_runs(config, opts) {
@@ -789,12 +830,16 @@ fn ground_truth_runs(config: &Config, opts: &AnalysisOptions) -> bool {
     config.truth.enabled && opts.ground_truth && config.geometry.is_some()
 }
 
-/// The level's screen metrics, pooled over its configured views, and each view's own.
+/// The level's screen metrics, pooled over its configured views, and each view's own (in full
+/// or as a ranking reads them, [`ViewDetail`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LevelScreen {
     pub screen: ScreenStats,
     pub band_pixel_share: f64,
+    /// Each view's own metrics in full ([`ViewDetail::Full`]); empty otherwise.
     pub views: Vec<ViewScreen>,
+    /// What a ranking reads of each view ([`ViewDetail::Ranking`]); empty otherwise.
+    pub ranks: Vec<ViewRank>,
 }
 
 /// The config as seen from one of its views: `[camera]` replaced by the view's camera, and no
@@ -911,9 +956,16 @@ fn screen_inputs_seen_by(
 /// The level's screen metrics when the config names views and has scene geometry: every
 /// view's receiver pixels pooled, each carrying its view's weight (`csm_core::screen::pool`),
 /// the cascades built for each view's own pose; the blend-band share pooled the same way,
-/// band by band. None without configured views (`[camera]` is then the one view and
-/// [`analyze`] measures it as always) or without geometry.
+/// band by band; each view's own metrics in full. None without configured views (`[camera]`
+/// is then the one view and [`analyze`] measures it as always) or without geometry.
 pub fn level_screen(config: &Config) -> Option<LevelScreen> {
+    level_screen_with(config, ViewDetail::Full)
+}
+
+/// [`level_screen`] with each view's own metrics as `detail` asks: in full, or only what a
+/// sweep's ranking reads (the pool then selects of each view's percentiles only the one its
+/// objective is, if any).
+fn level_screen_with(config: &Config, detail: ViewDetail) -> Option<LevelScreen> {
     if config.views.is_empty() {
         return None;
     }
@@ -927,7 +979,11 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
         .map(|v| view_screen_inputs(config, v))
         .collect::<Option<_>>()?;
     let parts = pool_parts(&inputs, &config.views);
-    let pooled = screen::pool_memo(&parts, &geometry.pool_memo);
+    let asked = match detail {
+        ViewDetail::Full => None,
+        ViewDetail::Ranking(asked) => asked,
+    };
+    let pooled = screen::pool_memo(&parts, &geometry.pool_memo, asked);
     // Band k's receivers of each view, pooled band by band (a view without that band has none).
     let band_count = |x: &ScreenInputs, k: usize| -> u64 { x.band_counts.get(k).copied().unwrap_or(0) };
     let bands = inputs.iter().map(|x| x.bands.len()).max().unwrap_or(0);
@@ -941,26 +997,65 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
             screen::pooled_share(&counts)
         })
         .sum();
-    let views = config
-        .views
-        .iter()
-        .zip(&inputs)
-        .zip(pooled.views)
-        .map(|((v, x), st)| ViewScreen {
-            name: v.name.clone(),
-            weight: v.weight,
-            screen: st,
-            band_pixel_share: x.band_shares().iter().sum(),
-            judged: false,
-            truth: None,
-        })
-        .collect();
+    let (views, ranks) = match detail {
+        ViewDetail::Full => (full_views(config, &inputs), Vec::new()),
+        ViewDetail::Ranking(_) => {
+            let ranks = inputs
+                .iter()
+                .zip(&pooled.views)
+                .map(|(x, r)| ViewRank {
+                    objective: r.asked.map(|a| a.1),
+                    worst: r.max,
+                    seen: !x.vis.receivers.is_empty(),
+                })
+                .collect();
+            (Vec::new(), ranks)
+        }
+    };
     LAST_LEVEL.with(|l| *l.borrow_mut() = Some(inputs));
     Some(LevelScreen {
         screen: pooled.level,
         band_pixel_share,
         views,
+        ranks,
     })
+}
+
+/// Each view's own screen metrics in full from its inputs (one per view, in order): its
+/// statistics alone ([`screen::stats`], what [`screen::pool`] gives each view) and its blend-band
+/// share.
+fn full_views(config: &Config, inputs: &[ScreenInputs]) -> Vec<ViewScreen> {
+    config
+        .views
+        .iter()
+        .zip(inputs)
+        .map(|(v, x)| ViewScreen {
+            name: v.name.clone(),
+            weight: v.weight,
+            screen: screen::stats(&x.vis, &x.splits, &x.texel, x.visible),
+            band_pixel_share: x.band_shares().iter().sum(),
+            judged: false,
+            truth: None,
+        })
+        .collect()
+}
+
+/// Every view's own screen metrics in full at `config`'s setting (what [`analyze`] with
+/// [`ViewDetail::Full`] puts in [`Summary::views`]), without the level's pool: for the one row
+/// of a sweep that shows them, whose rows kept only what the ranking reads. None without
+/// configured views or geometry.
+pub(crate) fn level_views(config: &Config) -> Option<Vec<ViewScreen>> {
+    if config.views.is_empty() {
+        return None;
+    }
+    let geometry = config.geometry.as_ref()?;
+    geometry.scene.keep_at_least(2 * config.views.len() + 8);
+    let inputs: Vec<ScreenInputs> = config
+        .views
+        .iter()
+        .map(|v| view_screen_inputs(config, v))
+        .collect::<Option<_>>()?;
+    Some(full_views(config, &inputs))
 }
 
 thread_local! {
@@ -1433,6 +1528,7 @@ impl CameraParts<'_> {
             light: LightSummary::of(self.config.shadow.snap, self.paths()),
             truth: self.truth.map(|t| t.summary),
             views: Vec::new(),
+            view_ranks: Vec::new(),
             cache: self.cache.map(|c| c.0),
             cost,
             screen: self.screen,

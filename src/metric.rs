@@ -1010,6 +1010,45 @@ impl SummaryMetric {
     pub(crate) fn is_fraction(self) -> bool {
         self.def().unit.is_empty() && self.name().ends_with("_fraction")
     }
+
+    /// The screen statistic of per-pixel aliasing this metric is (a field of
+    /// [`csm_core::screen::ScreenStats`] that [`csm_core::screen::Statistic`] names), if any:
+    /// what a level's sweep measures of each view's own for ranking it, and what the split
+    /// search measures alone.
+    pub(crate) fn screen_statistic(self) -> Option<csm_core::screen::Statistic> {
+        use csm_core::screen::Statistic;
+        Some(match self.name() {
+            "screen_aliasing_mean" => Statistic::AliasingMean,
+            "screen_aliasing_p50" => Statistic::AliasingP50,
+            "screen_aliasing_p95" => Statistic::AliasingP95,
+            "screen_aliasing_p99" => Statistic::AliasingP99,
+            "screen_aliasing_max" => Statistic::AliasingMax,
+            "screen_undersampled_fraction" => Statistic::UndersampledFraction,
+            "visible_aliasing_mean" => Statistic::VisibleMean,
+            "visible_aliasing_p50" => Statistic::VisibleP50,
+            "visible_aliasing_p95" => Statistic::VisibleP95,
+            "visible_aliasing_p99" => Statistic::VisibleP99,
+            "visible_aliasing_max" => Statistic::VisibleMax,
+            _ => return None,
+        })
+    }
+}
+
+/// The objective of a sweep of `config`: `[sweep] objective` if written, else the
+/// contrast-weighted 95th percentile of the per-pixel aliasing on screen
+/// (`visible_aliasing_p95`) when the scene has geometry, else the mean aliasing over depth.
+/// (`commands::sweep::rank::default_objective`; here so that a sweep's rows, measured below
+/// the ranking, keep what its objective reads.)
+pub(crate) fn sweep_objective(config: &crate::config::Config) -> SummaryMetric {
+    // The name was checked against the registry when the file was loaded.
+    if let Some(m) = config.sweep.as_ref().and_then(|s| s.objective.as_deref()) {
+        return SummaryMetric::named(m);
+    }
+    SummaryMetric::named(if config.geometry.is_some() {
+        "visible_aliasing_p95"
+    } else {
+        "mean_aliasing"
+    })
 }
 
 /// The one "worst case" csm-lab prints, ranks and breaks ties on. With scene geometry it is on

@@ -1,12 +1,13 @@
 //! A sweep over a level of views: what each view alone would choose, what the level's choice
 //! costs it, and the level's worst view. The level's rows already hold the pooled screen
-//! metrics ([`crate::analysis::level_screen`]) and each view's own ([`Summary::views`]): a
-//! view's rows are the level's with its own screen metrics in place of the pooled ones, ranked
-//! by the same rule.
+//! metrics ([`crate::analysis::level_screen`]) and of each view what the ranking reads
+//! ([`Summary::view_ranks`]: its own value of the objective, its worst case, whether it sees a
+//! receiver): a view's rows are the level's ranked by the same rule on the view's own values.
 
 use crate::analysis::Summary;
 use crate::commands::sweep::rank::{self, Recommendation};
 use crate::commands::sweep::run::Row;
+use crate::config::ViewSettings;
 use crate::metric::{Direction, SummaryMetric};
 
 /// One view of a level sweep.
@@ -46,8 +47,8 @@ pub(crate) fn view_summary(summary: &Summary, k: usize) -> Summary {
     own
 }
 
-/// `summary` with no views (`views` empty), made without copying its views' metrics (a
-/// clone would copy every view's, only to drop them).
+/// `summary` with no views (`views` and `view_ranks` empty), made without copying its views'
+/// metrics (a clone would copy every view's, only to drop them).
 fn without_views(summary: &Summary) -> Summary {
     // Every field named, so that a field added to `Summary` is added here too.
     let Summary {
@@ -73,6 +74,7 @@ fn without_views(summary: &Summary) -> Summary {
         light,
         truth,
         views: _,
+        view_ranks: _,
         cache,
         cost,
     } = summary;
@@ -99,6 +101,7 @@ fn without_views(summary: &Summary) -> Summary {
         light: *light,
         truth: *truth,
         views: Vec::new(),
+        view_ranks: Vec::new(),
         cache: *cache,
         cost: *cost,
     }
@@ -139,41 +142,39 @@ pub(crate) fn worst_of(values: &[f64], seen: &[bool], objective: SummaryMetric) 
     worst
 }
 
-/// Each view's own choice and the level's cost to it; None when the rows hold no views.
+/// Each view's own choice and the level's cost to it, from what the rows keep of each view
+/// ([`Summary::view_ranks`], measured for `objective`: the sweep's); None when the rows hold no
+/// views. `views` are the config's (their names).
 pub(crate) fn choose(
     rows: &[Row],
     rec: Option<&Recommendation>,
     configured: Option<usize>,
     budget_mib: f64,
     objective: SummaryMetric,
+    views: &[ViewSettings],
 ) -> Option<LevelChoice> {
-    let count = rows.first()?.summary.views.len();
+    let count = rows.first()?.summary.view_ranks.len();
     if count == 0 {
         return None;
     }
     let at = rec.map(|r| r.index).or(configured).unwrap_or(0);
-    // A view's rows: the level's, without views, each given the view's own screen metrics in
-    // turn (made once, filled per view: no row is copied per view).
-    let mut own: Vec<Row> = rows
-        .iter()
-        .map(|r| Row {
-            setting: r.setting,
-            summary: without_views(&r.summary),
-        })
-        .collect();
     let views: Vec<ViewChoice> = (0..count)
         .map(|k| {
-            for (o, r) in own.iter_mut().zip(rows) {
-                put_view(&mut o.summary, &r.summary, k);
-            }
-            // Views exist only with geometry: the worst case is on screen. A view that sees no
-            // receiver has no statistics to choose by.
-            let seen = sees_receivers(&rows[at].summary, k);
-            let alone = rank::recommend_by(&own, budget_mib, objective, crate::metric::worst_aliasing(true))
+            // The view's rows: the level's, ranked on the view's own value of the objective
+            // (the level's where the objective is none of a view's statistics) and its own worst
+            // case on screen (views exist only with geometry).
+            let value = |i: usize| {
+                let s = &rows[i].summary;
+                s.view_ranks[k].objective.unwrap_or_else(|| objective.value(s))
+            };
+            let worst = |i: usize| rows[i].summary.view_ranks[k].worst;
+            // A view that sees no receiver has no statistics to choose by.
+            let seen = rows[at].summary.view_ranks[k].seen;
+            let alone = rank::recommend_with(rows, budget_mib, rank::CostLimit::NONE, &value, &worst)
                 .map(|r| r.index)
                 .filter(|_| seen);
-            let objective_alone = alone.map(|i| objective.value(&own[i].summary));
-            let objective_at_level = objective.value(&own[at].summary);
+            let objective_alone = alone.map(value);
+            let objective_at_level = value(at);
             let cost = objective_alone
                 .filter(|&x| x != 0.0)
                 .map(|x| match objective.direction() {
@@ -181,7 +182,7 @@ pub(crate) fn choose(
                     _ => objective_at_level / x - 1.0,
                 });
             ViewChoice {
-                name: rows[at].summary.views[k].name.clone(),
+                name: views.get(k).map_or_else(String::new, |v| v.name.clone()),
                 alone,
                 objective_alone,
                 objective_at_level,

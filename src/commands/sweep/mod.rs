@@ -105,8 +105,11 @@ pub struct SweepResult {
 
 impl SweepResult {
     /// The result of a sweep's rows, in grid order ([`Grid::settings`]; with sun axes every
-    /// (sun, setting) row, judged here per setting by its worst sun angle). Fails only when the
-    /// engine setting to write cannot be built.
+    /// (sun, setting) row, judged here per setting by its worst sun angle). With a level of
+    /// views, the row at the level's choice ([`level::LevelChoice::at`]) gets every view's own
+    /// screen metrics in full ([`crate::analysis::Summary::views`]; the rows keep only what the
+    /// ranking reads). Fails only when the engine setting to write cannot be built or the
+    /// shown row's setting no longer applies to `config`.
     pub fn new(config: Config, grid: Grid, mut rows: Vec<Row>, command: String) -> Result<Self> {
         // Every row's cost against the configured setting's (1 = as configured).
         let reference = crate::analysis::cost::configured_model(&config);
@@ -159,7 +162,22 @@ impl SweepResult {
         let range_edges = rank::range_edges(&config, &grid, &rows, recommendation.as_ref());
         let at = recommendation.as_ref().map(|x| x.index).or(configured).unwrap_or(0);
         let light_update = light::choose(&grid, &rows, at);
-        let level = level::choose(&rows, recommendation.as_ref(), configured, budget_mib, objective);
+        let level = level::choose(
+            &rows,
+            recommendation.as_ref(),
+            configured,
+            budget_mib,
+            objective,
+            &config.views,
+        );
+        // The rows keep of each view only what the ranking reads; the one row that shows every
+        // view's own metrics (`views.csv`, the report's views) has them measured in full here,
+        // at its setting (its sun angle included), as `analyze` measures them.
+        let mut rows = rows;
+        if let Some(c) = &level {
+            let shown = rows[c.at].setting.apply(&config)?;
+            rows[c.at].summary.views = crate::analysis::level_views(&shown).unwrap_or_default();
+        }
         let engine_setting = terms::for_sweep(
             &config,
             &command,

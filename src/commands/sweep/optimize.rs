@@ -31,7 +31,6 @@ use crate::config::Config;
 use crate::error::{GridError, Result};
 use crate::metric::SummaryMetric;
 use csm_core::free_splits::{round_significant, valid, FractionSpace};
-use csm_core::screen::Statistic;
 
 use crate::commands::sweep::grid::{Grid, Setting};
 use crate::commands::sweep::rank::acceptable;
@@ -152,19 +151,10 @@ pub fn evaluate(point: &Config, fractions: &[f64]) -> Option<Summary> {
 /// render-cost counts, the receiver fractions, the visible depth range, and any metric not
 /// listed here).
 pub(crate) fn reads(objective: SummaryMetric) -> Reads {
-    let screen = |s| Reads::Screen(s);
+    if let Some(s) = objective.screen_statistic() {
+        return Reads::Screen(s);
+    }
     match objective.name() {
-        "screen_aliasing_mean" => screen(Statistic::AliasingMean),
-        "screen_aliasing_p50" => screen(Statistic::AliasingP50),
-        "screen_aliasing_p95" => screen(Statistic::AliasingP95),
-        "screen_aliasing_p99" => screen(Statistic::AliasingP99),
-        "screen_aliasing_max" => screen(Statistic::AliasingMax),
-        "screen_undersampled_fraction" => screen(Statistic::UndersampledFraction),
-        "visible_aliasing_mean" => screen(Statistic::VisibleMean),
-        "visible_aliasing_p50" => screen(Statistic::VisibleP50),
-        "visible_aliasing_p95" => screen(Statistic::VisibleP95),
-        "visible_aliasing_p99" => screen(Statistic::VisibleP99),
-        "visible_aliasing_max" => screen(Statistic::VisibleMax),
         "cascades_needed"
         | "z_lo"
         | "z_hi"
@@ -576,6 +566,7 @@ fn optimize_group(base: &Config, rows: &[Row], group: &[usize], objective: Summa
 mod tests {
     use super::*;
     use crate::metric::SUMMARY;
+    use csm_core::screen::Statistic;
     use proptest::prelude::*;
     use std::sync::OnceLock;
 

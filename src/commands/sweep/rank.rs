@@ -88,15 +88,7 @@ max aliasing wins, then less memory, then fewer cascades";
 /// percentile of the per-pixel aliasing on screen (`visible_aliasing_p95`) when the scene has
 /// geometry, else the mean aliasing over depth.
 pub fn default_objective(config: &Config) -> SummaryMetric {
-    // The name was checked against the registry when the file was loaded.
-    if let Some(m) = config.sweep.as_ref().and_then(|s| s.objective.as_deref()) {
-        return SummaryMetric::named(m);
-    }
-    SummaryMetric::named(if config.geometry.is_some() {
-        "visible_aliasing_p95"
-    } else {
-        "mean_aliasing"
-    })
+    crate::metric::sweep_objective(config)
 }
 
 /// [`OBJECTIVE`] for the mean aliasing without geometry; the same rule in words for any other
@@ -197,6 +189,21 @@ pub fn recommend_within(
     objective: SummaryMetric,
     worst: SummaryMetric,
 ) -> Option<Recommendation> {
+    let objective_of = |i: usize| objective.value(&rows[i].summary);
+    let worst_of = |i: usize| worst.value(&rows[i].summary);
+    recommend_with(rows, budget_mib, cost, &objective_of, &worst_of)
+}
+
+/// [`recommend_within`] with each row's objective and worst case given by `objective` and
+/// `worst` (by row index) rather than read from its summary: a view of a level alone is
+/// ranked on its own values ([`super::level::choose`]), everything else on the row's.
+pub(crate) fn recommend_with(
+    rows: &[Row],
+    budget_mib: f64,
+    cost: CostLimit,
+    objective: &dyn Fn(usize) -> f64,
+    worst: &dyn Fn(usize) -> f64,
+) -> Option<Recommendation> {
     let budget_bytes = (budget_mib * 1024.0 * 1024.0).floor() as u64;
     let ok: Vec<usize> = (0..rows.len()).filter(|&i| acceptable(&rows[i])).collect();
     let within: Vec<usize> = ok
@@ -279,20 +286,21 @@ pub fn no_recommendation(rows: &[Row], budget_mib: f64, objective: SummaryMetric
 /// The best of `candidates` by [`OBJECTIVE`]: the shortlist within [`MEAN_TOLERANCE`] of the
 /// lowest objective, then the lowest worst case (`worst`), less memory, fewer cascades, grid
 /// order.
-fn pick(rows: &[Row], candidates: &[usize], objective: SummaryMetric, worst: SummaryMetric) -> Option<usize> {
-    let best = candidates
-        .iter()
-        .map(|&i| objective.value(&rows[i].summary))
-        .min_by(f64::total_cmp)?;
+fn pick(
+    rows: &[Row],
+    candidates: &[usize],
+    objective: &dyn Fn(usize) -> f64,
+    worst: &dyn Fn(usize) -> f64,
+) -> Option<usize> {
+    let best = candidates.iter().map(|&i| objective(i)).min_by(f64::total_cmp)?;
     candidates
         .iter()
         .copied()
-        .filter(|&i| objective.value(&rows[i].summary) <= best * (1.0 + MEAN_TOLERANCE))
+        .filter(|&i| objective(i) <= best * (1.0 + MEAN_TOLERANCE))
         .min_by(|&a, &b| {
             let (x, y) = (&rows[a].summary, &rows[b].summary);
-            worst
-                .value(x)
-                .total_cmp(&worst.value(y))
+            worst(a)
+                .total_cmp(&worst(b))
                 .then(x.memory_bytes.cmp(&y.memory_bytes))
                 .then(rows[a].setting.cascades.cmp(&rows[b].setting.cascades))
                 .then(a.cmp(&b))

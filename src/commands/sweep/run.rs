@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 
-use crate::analysis::{analyze, AnalysisOptions, Summary};
+use crate::analysis::{analyze, AnalysisOptions, Summary, ViewDetail};
 use crate::commands::sweep::grid::{Grid, Setting};
 use crate::config::Config;
 use crate::error::{Error, GridError, Result};
@@ -56,6 +56,10 @@ pub(crate) fn run_settings(
             })
         })
     };
+    // A level's rows keep of each view only what the ranking of the views reads: its own
+    // value of the statistic the sweep's objective is, its worst case and whether it sees a
+    // receiver (the one row that shows the views is measured in full by `SweepResult::new`).
+    let views = ViewDetail::Ranking(crate::metric::sweep_objective(base).screen_statistic());
     let mut warmed_views = None;
     // Without scene geometry and views there is nothing to warm: the points are built once,
     // in the parallel part, whose first refused point in grid order is the error (the same
@@ -98,6 +102,7 @@ pub(crate) fn run_settings(
                         let s = &settings[k];
                         let opts = AnalysisOptions {
                             cost_means,
+                            views,
                             ..AnalysisOptions::summary_only()
                         };
                         let row = config.map(|config| {

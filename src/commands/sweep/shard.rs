@@ -30,7 +30,7 @@ pub(crate) const MANIFEST_FILE: &str = "shard.json";
 pub(crate) const ROWS_FILE: &str = "shard-rows.jsonl";
 /// The format named by the first line of [`ROWS_FILE`], and its version.
 const ROWS_FORMAT: &str = "csm-lab shard rows";
-const ROWS_VERSION: u32 = 4;
+const ROWS_VERSION: u32 = 5;
 /// Most shards a grid may be split into.
 pub(crate) const MAX_SHARDS: usize = 100_000;
 
