@@ -1040,6 +1040,18 @@ fn full_views(config: &Config, inputs: &[ScreenInputs]) -> Vec<ViewScreen> {
         .collect()
 }
 
+/// The full pool of `config`'s views at its setting ([`screen::pool`]: the level's statistics
+/// and each view's in full), the direct form the views' statistics are checked against.
+#[cfg(test)]
+pub(crate) fn full_pool(config: &Config) -> Option<screen::Pooled> {
+    let inputs: Vec<ScreenInputs> = config
+        .views
+        .iter()
+        .map(|v| view_screen_inputs(config, v))
+        .collect::<Option<_>>()?;
+    Some(screen::pool(&pool_parts(&inputs, &config.views)))
+}
+
 /// Every view's own screen metrics in full at `config`'s setting (what [`analyze`] with
 /// [`ViewDetail::Full`] puts in [`Summary::views`]), without the level's pool: for the one row
 /// of a sweep that shows them, whose rows kept only what the ranking reads. None without

@@ -163,9 +163,10 @@ fn pooled_statistics_equal_a_brute_force_pool_of_the_single_camera_views() {
     assert!(p95.iter().any(|&x| x != l.aliasing_p95), "{p95:?}");
 }
 
-/// A sweep over a level: each row's per-view metrics are the rows of each view's own sweep
-/// (the view as the single camera), every other metric is `[camera]`'s sweep row, and the
-/// pooled maximum is the largest of the views'.
+/// A sweep over a level: what each row keeps of each view (its own value of the objective,
+/// its worst case, whether it sees a receiver) is that of each view's own sweep (the view as
+/// the single camera), every other metric is `[camera]`'s sweep row, and the pooled maximum is
+/// the largest of the views'.
 #[test]
 fn the_sweep_over_views_equals_the_per_view_sweeps() {
     use csm_lab::commands::sweep::grid::Grid;
@@ -185,22 +186,22 @@ fn the_sweep_over_views_equals_the_per_view_sweeps() {
         let alone = camera_at(p, t);
         let own = run(&alone, &grid, Some(1), &|| {}).unwrap();
         for (r, o) in rows.iter().zip(&own) {
-            assert_eq!(r.summary.views[k].screen, *o.summary.screen.as_ref().unwrap());
-            assert_eq!(r.summary.views[k].band_pixel_share, o.summary.band_pixel_share);
+            // The sweep's objective (visible_aliasing_p95 with geometry), bit for bit.
+            let screen = o.summary.screen.as_ref().unwrap();
+            let kept = &r.summary.view_ranks[k];
+            assert_eq!(kept.objective.map(f64::to_bits), Some(screen.visible_p95.to_bits()));
+            assert_eq!(kept.worst.to_bits(), screen.aliasing_max.to_bits());
+            assert_eq!(kept.seen, screen.receiver_fraction > 0.0);
         }
     }
     for (r, o) in rows.iter().zip(&cam_rows) {
+        assert!(r.summary.views.is_empty(), "the rows keep no view's full metrics");
         let mut s = r.summary.clone();
-        s.views.clear();
+        s.view_ranks.clear();
         s.screen = o.summary.screen.clone();
         s.band_pixel_share = o.summary.band_pixel_share;
         assert_eq!(s, o.summary);
-        let max = r
-            .summary
-            .views
-            .iter()
-            .map(|v| v.screen.aliasing_max)
-            .fold(0.0, f64::max);
+        let max = r.summary.view_ranks.iter().map(|v| v.worst).fold(0.0, f64::max);
         assert_eq!(r.summary.screen.as_ref().unwrap().aliasing_max, max);
     }
 }

@@ -132,6 +132,7 @@ mod tests {
             }),
             truth: None,
             views: Vec::new(),
+            view_ranks: Vec::new(),
             cache: Some(crate::analysis::CacheSummary {
                 renders_per_frame: 2.75,
                 figures: crate::analysis::StaleFigures {

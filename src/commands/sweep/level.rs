@@ -203,7 +203,7 @@ pub(crate) fn choose(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::ViewScreen;
+    use crate::analysis::{ViewRank, ViewScreen};
     use crate::commands::sweep::grid::Setting;
     use crate::config::Fit;
     use csm_core::screen::ScreenStats;
@@ -286,27 +286,53 @@ mod tests {
         }
     }
 
-    /// Each view's choice, made over rows filled in place view after view, equals the choice
-    /// over that view's rows each cloned afresh (the direct form), for random levels, budgets
-    /// and objectives.
-    #[test]
-    fn choices_over_rows_filled_in_place_equal_those_over_cloned_rows() {
-        let objectives = [
-            "screen_aliasing_p95",
-            "screen_aliasing_mean",
-            "screen_receiver_fraction",
-        ];
-        for seed in 0..40 {
-            let views = 1 + (seed as usize % 6);
-            let rows = rows(seed, 24, views);
-            let objective = SummaryMetric::named(objectives[seed as usize % 3]);
-            let budget = 2.0 + (seed % 7) as f64;
-            let rec = rank::recommend_by(&rows, budget, objective, crate::metric::worst_aliasing(true));
-            let got = choose(&rows, rec.as_ref(), Some(3), budget, objective).unwrap();
-            let at = rec.as_ref().map_or(3, |r| r.index);
-            assert_eq!(got.at, at);
-            assert_eq!(got.views.len(), views);
-            for (k, v) in got.views.iter().enumerate() {
+    /// What the rows of a sweep keep of each view for `objective`, from each view's full
+    /// metrics: its own value of the statistic the objective is (or none), its largest `m`,
+    /// whether it sees a receiver (the direct form of the analysis' ranking record).
+    fn with_ranks(mut rows: Vec<Row>, objective: SummaryMetric) -> Vec<Row> {
+        for r in rows.iter_mut() {
+            r.summary.view_ranks = r
+                .summary
+                .views
+                .iter()
+                .map(|v| {
+                    let mut st = v.screen.clone();
+                    ViewRank {
+                        objective: objective.screen_statistic().map(|s| *s.field(&mut st)),
+                        worst: v.screen.aliasing_max,
+                        seen: v.screen.receiver_fraction > 0.0,
+                    }
+                })
+                .collect();
+        }
+        rows
+    }
+
+    /// Views named "view k", at the default config's camera.
+    fn named_views(n: usize) -> Vec<ViewSettings> {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/default.toml");
+        let camera = crate::config::Config::load(&path).expect("loads").camera.clone();
+        (0..n)
+            .map(|k| ViewSettings {
+                name: format!("view {k}"),
+                camera: camera.clone(),
+                weight: 1.0,
+            })
+            .collect()
+    }
+
+    /// The direct form of a level's choice: for each view, every row's summary cloned with the
+    /// view's full metrics in place of the level's, ranked by [`rank::recommend_by`].
+    fn choose_over_full_rows(
+        rows: &[Row],
+        rec: Option<&Recommendation>,
+        configured: usize,
+        budget: f64,
+        objective: SummaryMetric,
+    ) -> Vec<ViewChoice> {
+        let at = rec.map_or(configured, |r| r.index);
+        (0..rows[0].summary.views.len())
+            .map(|k| {
                 let own: Vec<Row> = rows
                     .iter()
                     .map(|r| Row {
@@ -314,16 +340,154 @@ mod tests {
                         summary: cloned_view_summary(&r.summary, k),
                     })
                     .collect();
-                let seen = sees_receivers(&rows[at].summary, k);
+                let seen = rows[at].summary.views[k].screen.receiver_fraction > 0.0;
                 let alone = rank::recommend_by(&own, budget, objective, crate::metric::worst_aliasing(true))
                     .map(|r| r.index)
                     .filter(|_| seen);
-                assert_eq!(v.seen, seen);
-                assert_eq!(v.alone, alone, "seed {seed} view {k}");
-                assert_eq!(v.objective_alone, alone.map(|i| objective.value(&own[i].summary)));
-                assert_eq!(v.objective_at_level, objective.value(&own[at].summary));
-                assert_eq!(v.name, format!("view {k}"));
+                let objective_alone = alone.map(|i| objective.value(&own[i].summary));
+                let objective_at_level = objective.value(&own[at].summary);
+                let cost = objective_alone
+                    .filter(|&x| x != 0.0)
+                    .map(|x| objective_at_level / x - 1.0)
+                    .filter(|c| c.is_finite());
+                ViewChoice {
+                    name: rows[at].summary.views[k].name.clone(),
+                    alone,
+                    objective_alone,
+                    objective_at_level,
+                    cost,
+                    seen,
+                }
+            })
+            .collect()
+    }
+
+    /// The objectives a sweep may have (`[sweep] objective`: a metric to minimise) that the
+    /// tests rank views by: screen statistics (percentiles, means, maxima, the undersampled
+    /// share) and metrics that are none of a view's (the bounds' mean aliasing, shimmer).
+    const OBJECTIVES: [&str; 8] = [
+        "visible_aliasing_p95",
+        "screen_aliasing_p95",
+        "screen_aliasing_mean",
+        "screen_aliasing_max",
+        "screen_aliasing_p50",
+        "screen_undersampled_fraction",
+        "mean_aliasing",
+        "shimmer_unsnapped",
+    ];
+
+    /// Each view's choice from what the rows keep for the ranking equals the choice over that
+    /// view's rows with its full metrics, each cloned afresh (the direct form), for random
+    /// levels, budgets and objectives.
+    #[test]
+    fn choices_from_the_ranks_equal_those_over_the_full_rows() {
+        for seed in 0..80 {
+            let views = 1 + (seed as usize % 6);
+            let objective = SummaryMetric::named(OBJECTIVES[seed as usize % OBJECTIVES.len()]);
+            let rows = with_ranks(rows(seed, 24, views), objective);
+            let budget = 2.0 + (seed % 7) as f64;
+            let rec = rank::recommend_by(&rows, budget, objective, crate::metric::worst_aliasing(true));
+            let got = choose(&rows, rec.as_ref(), Some(3), budget, objective, &named_views(views)).unwrap();
+            assert_eq!(got.at, rec.as_ref().map_or(3, |r| r.index));
+            let want = choose_over_full_rows(&rows, rec.as_ref(), 3, budget, objective);
+            assert_eq!(got.views, want, "seed {seed}, {}", objective.name());
+        }
+    }
+
+    /// Every metric a sweep may minimise reads, of a view's summary, either the one screen
+    /// statistic [`SummaryMetric::screen_statistic`] names (the field the rows keep per view)
+    /// or nothing of the view's (its value is the level's): so the ranking record holds all an
+    /// objective reads.
+    #[test]
+    fn an_objective_reads_of_a_view_only_its_screen_statistic() {
+        let objectives = SummaryMetric::all().filter(|m| m.direction() == Direction::HigherIsWorse);
+        let rows = rows(7, 6, 3);
+        for m in objectives {
+            for r in &rows {
+                for (k, v) in r.summary.views.iter().enumerate() {
+                    let got = m.value(&view_summary(&r.summary, k));
+                    let want = match m.screen_statistic() {
+                        Some(s) => *s.field(&mut v.screen.clone()),
+                        None => m.value(&r.summary),
+                    };
+                    assert_eq!(got.to_bits(), want.to_bits(), "{}", m.name());
+                }
             }
         }
+    }
+
+    /// On a level config (20 views of the default scene, a small grid), the rows the sweep
+    /// keeps give every view the choice the rows with each view's full metrics give; each
+    /// view's kept values are its full metrics' fields bit for bit; and the row at the level's
+    /// choice is completed with every view's full metrics, equal to a full pool of the views at
+    /// its setting.
+    #[test]
+    fn on_a_level_config_the_ranks_choose_as_the_full_statistics() {
+        use crate::analysis::{analyze, AnalysisOptions, ViewDetail};
+        use crate::commands::sweep::grid::Grid;
+        use crate::config::sweep_spec::SweepAxes;
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/default_20_views.toml");
+        let text = std::fs::read_to_string(&path)
+            .expect("the bench config")
+            .replace(
+                "lambda = { start = 0.0, end = 1.0, step = 0.05 }",
+                "lambda = [0.25, 0.75]",
+            )
+            .replace("cascades = [1, 2, 3, 4, 5, 6, 7, 8]", "cascades = [1, 3]")
+            .replace("resolution = [512, 1024, 2048, 4096]", "resolution = [512, 2048]");
+        let base = crate::config::Config::from_toml_str(&text, "views.toml", None).expect("the bench config loads");
+        let grid = Grid::resolve(&base, &SweepAxes::default()).expect("a grid");
+        assert_eq!(grid.len(), 8);
+        let objective = rank::default_objective(&base);
+        assert_eq!(objective.name(), "visible_aliasing_p95");
+        let rows = crate::commands::sweep::run::run(&base, &grid, Some(1), &|| {}).expect("rows");
+        let full: Vec<Row> = grid
+            .settings()
+            .iter()
+            .map(|s| Row {
+                setting: *s,
+                summary: analyze(
+                    &s.apply(&base).expect("a point"),
+                    &AnalysisOptions {
+                        views: ViewDetail::Full,
+                        ..AnalysisOptions::summary_only()
+                    },
+                )
+                .summary,
+            })
+            .collect();
+        for (r, f) in rows.iter().zip(&full) {
+            assert!(r.summary.views.is_empty());
+            assert_eq!(r.summary.view_ranks.len(), 20);
+            // The same row but for what it keeps of the views.
+            assert_eq!(without_views(&r.summary), without_views(&f.summary));
+            let want = with_ranks(vec![f.clone()], objective);
+            assert_eq!(r.summary.view_ranks, want[0].summary.view_ranks);
+        }
+        let budget = 64.0;
+        let rec = rank::recommend_by(&rows, budget, objective, crate::metric::worst_aliasing(true));
+        let configured = rank::configured(&base, &rows).unwrap_or(0);
+        let got = choose(&rows, rec.as_ref(), Some(configured), budget, objective, &base.views).unwrap();
+        let want = choose_over_full_rows(&full, rec.as_ref(), configured, budget, objective);
+        assert_eq!(got.views, want);
+        assert!(
+            got.views.iter().any(|v| v.alone != Some(got.at)),
+            "the views choose alike"
+        );
+        // The sweep's result completes the shown row: every view's full metrics, those of the
+        // full pool at its setting.
+        let result = crate::commands::sweep::SweepResult::new(base.clone(), grid, rows, String::new()).unwrap();
+        let c = result.level.as_ref().expect("a level");
+        assert_eq!(c.views, got.views);
+        let shown = &result.rows[c.at];
+        assert_eq!(shown.summary.views, full[c.at].summary.views);
+        let pooled = crate::analysis::full_pool(&shown.setting.apply(&base).unwrap()).unwrap();
+        let screens: Vec<&ScreenStats> = shown.summary.views.iter().map(|v| &v.screen).collect();
+        assert_eq!(screens, pooled.views.iter().collect::<Vec<_>>());
+        assert!(result
+            .rows
+            .iter()
+            .enumerate()
+            .all(|(i, r)| (i == c.at) != r.summary.views.is_empty()));
     }
 }
