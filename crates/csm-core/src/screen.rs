@@ -2836,7 +2836,10 @@ mod tests {
             weights in proptest::collection::vec(0.25f64..4.0, 4),
         ) {
             let (vis, splits, texels) = split_set_case(&seeds, cuts, &scales);
-            let all = |memo: &PoolMemo| -> Vec<(Pooled, Vec<RankedPool>, Vec<ScreenStats>, Vec<u64>)> {
+            // Per texel size: the pool, the memo's answer for every ask, each view alone and the
+            // first view's statistics one at a time.
+            type Answers = (Pooled, Vec<RankedPool>, Vec<ScreenStats>, Vec<u64>);
+            let all = |memo: &PoolMemo| -> Vec<Answers> {
                 texels
                     .iter()
                     .map(|t| {
