@@ -1741,31 +1741,10 @@ fn range_key(setup: &csm_core::scene::Setup) -> RangeKey {
 /// `[camera]` and each view of a level (160 bytes of key each).
 const HELD_RANGES: usize = 4096;
 
-/// A hasher for keys of whole words ([`RangeKey`]): a multiply and a rotate per word, where
-/// the standard SipHash costs more than the look-up it serves. A cache's hash: a poor one costs
-/// time, never a wrong range (the map compares whole keys).
-#[derive(Default, Clone, Copy)]
-struct WordHasher(u64);
-
-impl std::hash::Hasher for WordHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut word = [0u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from_le_bytes(word));
-        }
-    }
-
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
-    }
-
-    fn finish(&self) -> u64 {
-        self.0
-    }
-}
-
-type WordMap<K, V> = std::collections::HashMap<K, V, std::hash::BuildHasherDefault<WordHasher>>;
+// The split ranges are kept in a `WordMap` (a multiply and a rotate per word of the key, where
+// the standard SipHash costs more than the look-up it serves). A cache's hash: a poor one costs
+// time, never a wrong range (the map compares whole keys).
+use csm_core::hash::WordMap;
 
 thread_local! {
     /// The split ranges this thread computed, by their [`RangeKey`].

@@ -530,7 +530,7 @@ impl Served {
 /// read the same. Bounded by [`SERVED_BYTES`] (then it starts again).
 #[derive(Default)]
 struct ServedCache {
-    map: std::collections::HashMap<(u64, Vec<u64>), std::rc::Rc<Served>>,
+    map: crate::hash::WordMap<(u64, Vec<u64>), std::rc::Rc<Served>>,
     bytes: usize,
 }
 
@@ -1709,9 +1709,9 @@ fn pow2(e: i32) -> f64 {
 /// texel size (see [`pool_memo`]). A cache: two memos always compare equal.
 #[derive(Default)]
 pub struct PoolMemo {
-    entries: std::sync::Mutex<std::collections::HashMap<Vec<u64>, std::sync::Arc<MemoEntry>>>,
+    entries: std::sync::Mutex<crate::hash::WordMap<Vec<u64>, std::sync::Arc<MemoEntry>>>,
     /// Where each pool's percentiles were found, by its inputs but the texel sizes.
-    hints: std::sync::Mutex<std::collections::HashMap<Vec<u64>, PoolHints>>,
+    hints: std::sync::Mutex<crate::hash::WordMap<Vec<u64>, PoolHints>>,
 }
 
 impl std::fmt::Debug for PoolMemo {
@@ -1837,7 +1837,7 @@ pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
             .hints
             .lock()
             .ok()
-            .and_then(|m| m.get(&hint_key).cloned())
+            .and_then(|mut m| m.remove(&hint_key))
             .unwrap_or_default();
         let (pooled, passes) = pool_passes(&norm, true, &mut hints);
         if let Ok(mut m) = memo.hints.lock() {
@@ -1917,7 +1917,11 @@ pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo) -> Pooled {
 /// served parts. Memory only: a later pool of the same splits makes them again, and every
 /// result is the same bit for bit with or without them.
 pub fn split_set_done(parts: &[PoolPart<'_>], memo: &PoolMemo) {
-    SERVED.with(|c| *c.borrow_mut() = ServedCache::default());
+    SERVED.with(|c| {
+        let mut c = c.borrow_mut();
+        c.map.clear();
+        c.bytes = 0;
+    });
     if let Ok(mut m) = memo.hints.lock() {
         m.remove(&key_of(parts, false));
     }
