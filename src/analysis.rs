@@ -838,7 +838,7 @@ impl ScreenInputs {
 /// inputs are checked against.
 #[cfg(test)]
 fn screen_inputs(config: &Config) -> Option<ScreenInputs> {
-    screen_inputs_seen_by(config, &config.camera, || rig(config))
+    screen_inputs_seen_by(config, &config.camera, |_| rig(config))
 }
 
 /// Each view's part of a level's pool: its pass, splits, texel sizes and visible range from
@@ -861,25 +861,23 @@ fn pool_parts<'a>(inputs: &'a [ScreenInputs], views: &[crate::config::ViewSettin
 /// config: the set-up is built with the view's camera, and so is the rig (an engine preset's
 /// reads a whole config: that one is built from the view's config).
 fn view_screen_inputs(config: &Config, view: &crate::config::ViewSettings) -> Option<ScreenInputs> {
-    screen_inputs_seen_by(config, &view.camera, || match &config.shadow.preset {
+    screen_inputs_seen_by(config, &view.camera, |setup| match &config.shadow.preset {
         Some(_) => rig(&config_for_view(config, view)),
-        None => {
-            let setup = config.setup_seen_by(&view.camera);
-            Rig::for_setup_in(&setup, split_range(&setup))
-        }
+        None => Rig::for_setup_in(setup, split_range(setup)),
     })
 }
 
-/// The screen inputs of `config` seen from `camera`, whose rig `rig` builds.
+/// The screen inputs of `config` seen from `camera`, whose rig `rig` builds from the set-up
+/// seen by `camera` (made once for both).
 fn screen_inputs_seen_by(
     config: &Config,
     camera: &crate::config::CameraSettings,
-    rig: impl FnOnce() -> Option<Rig>,
+    rig: impl FnOnce(&csm_core::scene::Setup) -> Option<Rig>,
 ) -> Option<ScreenInputs> {
     let setup = config.setup_seen_by(camera);
     let vis = setup.visibility()?;
     let visible = visible_depths(&setup, Some(&vis));
-    let (splits, texel, bands) = match rig() {
+    let (splits, texel, bands) = match rig(&setup) {
         None => (vec![0.0, 0.0], vec![0.0], Vec::new()),
         Some(rig) => {
             let pose0 = camera.pose();
@@ -888,7 +886,8 @@ fn screen_inputs_seen_by(
                 .map(|i| rig.window(i, &lp0, config.shadow.snap).texel_size())
                 .collect();
             let bands = seams::bands(&rig);
-            (rig.splits.clone(), texel, bands)
+            // The splits move out of the rig, which is dropped here.
+            (rig.splits, texel, bands)
         }
     };
     // Each band's receivers (depth-ordered): the level's pooled band share and the view's own

@@ -1782,30 +1782,31 @@ fn normaliser(parts: &[PoolPart<'_>]) -> Option<i32> {
 /// A pool's inputs as a memo key: per part its pass, weight, pose, light, visible range and
 /// splits, and with `texels` its texel sizes.
 fn key_of(parts: &[PoolPart<'_>], texels: bool) -> Vec<u64> {
-    parts
-        .iter()
-        .flat_map(|p| {
-            let v = &p.vis.view;
-            let head = [
-                p.vis.receivers.as_ptr() as usize as u64,
-                p.vis.receivers.len() as u64,
-                p.steps,
-                v.pose.position.x.to_bits(),
-                v.pose.position.y.to_bits(),
-                v.pose.position.z.to_bits(),
-                v.light.x.to_bits(),
-                v.light.y.to_bits(),
-                v.light.z.to_bits(),
-                p.visible.map_or(u64::MAX, |x| x.0.to_bits()),
-                p.visible.map_or(u64::MAX, |x| x.1.to_bits()),
-                p.splits.len() as u64,
-            ];
-            let texel: &[f64] = if texels { p.texel } else { &[] };
-            head.into_iter()
-                .chain(p.splits.iter().map(|x| x.to_bits()))
-                .chain(texel.iter().map(|x| x.to_bits()))
-        })
-        .collect()
+    // Sized once and filled part by part (a chain of iterators per part cost ~30 instructions
+    // a word); the words and their order are the same.
+    let texel_len = |p: &PoolPart<'_>| if texels { p.texel.len() } else { 0 };
+    let len = parts.iter().map(|p| 12 + p.splits.len() + texel_len(p)).sum();
+    let mut key = Vec::with_capacity(len);
+    for p in parts {
+        let v = &p.vis.view;
+        key.extend_from_slice(&[
+            p.vis.receivers.as_ptr() as usize as u64,
+            p.vis.receivers.len() as u64,
+            p.steps,
+            v.pose.position.x.to_bits(),
+            v.pose.position.y.to_bits(),
+            v.pose.position.z.to_bits(),
+            v.light.x.to_bits(),
+            v.light.y.to_bits(),
+            v.light.z.to_bits(),
+            p.visible.map_or(u64::MAX, |x| x.0.to_bits()),
+            p.visible.map_or(u64::MAX, |x| x.1.to_bits()),
+            p.splits.len() as u64,
+        ]);
+        key.extend(p.splits.iter().map(|x| x.to_bits()));
+        key.extend(p.texel[..texel_len(p)].iter().map(|x| x.to_bits()));
+    }
+    key
 }
 
 /// [`pool`], remembered in `memo`. Every statistic of [`pool`] but the undersampled fractions
@@ -1979,6 +1980,46 @@ mod tests {
             state ^= state >> 7;
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// A memo key holds, part by part, the twelve words of its pass, weight, pose, light,
+    /// visible range and split count, then its splits, then (with `texels`) its texel sizes:
+    /// built word by word here from a drawn split set of one to three views, with and without
+    /// a visible range.
+    #[test]
+    fn memo_keys_hold_each_parts_words_in_order() {
+        for (seeds, cuts) in [
+            (vec![(1, 40, 3.0, 0)], vec![]),
+            (vec![(2, 300, 6.0, 5), (3, 7, 1.0, 0)], vec![0.3, 0.6]),
+            (
+                vec![(4, 90, 2.0, 2), (5, 1, 9.0, 0), (6, 500, 4.0, 30)],
+                vec![0.1, 0.5, 0.9],
+            ),
+        ] {
+            let (vis, splits, texels) = split_set_case(&seeds, cuts, &[1.0]);
+            let mut parts = parts_at(&vis, &splits, &texels[0], &[0.5, 1.0, 3.0]);
+            parts[0].visible = None;
+            for texels in [false, true] {
+                let mut want: Vec<u64> = Vec::new();
+                for p in &parts {
+                    let v = &p.vis.view;
+                    want.push(p.vis.receivers.as_ptr() as usize as u64);
+                    want.push(p.vis.receivers.len() as u64);
+                    want.push(p.steps);
+                    want.extend(v.pose.position.to_array().map(f64::to_bits));
+                    want.extend(v.light.to_array().map(f64::to_bits));
+                    let (lo, hi) = p
+                        .visible
+                        .map_or((u64::MAX, u64::MAX), |(a, b)| (a.to_bits(), b.to_bits()));
+                    want.extend([lo, hi, p.splits.len() as u64]);
+                    want.extend(p.splits.iter().map(|x| x.to_bits()));
+                    if texels {
+                        want.extend(p.texel.iter().map(|x| x.to_bits()));
+                    }
+                }
+                assert_eq!(key_of(&parts, texels), want);
+            }
         }
     }
 
