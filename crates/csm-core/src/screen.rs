@@ -530,8 +530,11 @@ impl Served {
 /// read the same. Bounded by [`SERVED_BYTES`] (then it starts again).
 #[derive(Default)]
 struct ServedCache {
-    map: crate::hash::WordMap<(u64, Vec<u64>), std::rc::Rc<Served>>,
+    /// By `[ScreenIndex::id, m, the splits' bits...]`.
+    map: crate::hash::WordMap<Vec<u64>, std::rc::Rc<Served>>,
     bytes: usize,
+    /// The key of the look-up at hand, kept so that a look-up allocates nothing.
+    key: Vec<u64>,
 }
 
 /// Bytes a thread's [`ServedCache`] holds at most: 16 MB, a split set of a hundred views of 8
@@ -544,23 +547,29 @@ thread_local! {
 
 /// The [`Served`] of a pass at `splits` (`m` cascades), from this thread's cache or made.
 fn served_of(vis: &Visibility, ix: &ScreenIndex, splits: &[f64], m: usize, sc: &mut Scratch) -> std::rc::Rc<Served> {
-    let key = (
-        ix.id,
-        std::iter::once(m as u64)
-            .chain(splits.iter().map(|x| x.to_bits()))
-            .collect::<Vec<u64>>(),
-    );
-    if let Some(found) = SERVED.with(|c| c.borrow().map.get(&key).cloned()) {
+    let key_into = |key: &mut Vec<u64>| {
+        key.clear();
+        key.extend([ix.id, m as u64]);
+        key.extend(splits.iter().map(|x| x.to_bits()));
+    };
+    let found = SERVED.with(|c| {
+        let c = &mut *c.borrow_mut();
+        key_into(&mut c.key);
+        c.map.get(c.key.as_slice()).cloned()
+    });
+    if let Some(found) = found {
         return found;
     }
     let sv = std::rc::Rc::new(Served::new(vis, ix, splits, m, sc));
     SERVED.with(|c| {
-        let mut c = c.borrow_mut();
+        let c = &mut *c.borrow_mut();
         if c.bytes + sv.bytes() > SERVED_BYTES {
             c.map.clear();
             c.bytes = 0;
         }
         c.bytes += sv.bytes();
+        let mut key = Vec::with_capacity(splits.len() + 2);
+        key_into(&mut key);
         c.map.insert(key, sv.clone());
     });
     sv
