@@ -883,7 +883,7 @@ impl ScreenInputs {
 /// inputs are checked against.
 #[cfg(test)]
 fn screen_inputs(config: &Config) -> Option<ScreenInputs> {
-    screen_inputs_seen_by(config, &config.camera, || rig(config))
+    screen_inputs_seen_by(config, &config.camera, |_| rig(config))
 }
 
 /// Each view's part of a level's pool: its pass, splits, texel sizes and visible range from
@@ -906,25 +906,23 @@ fn pool_parts<'a>(inputs: &'a [ScreenInputs], views: &[crate::config::ViewSettin
 /// config: the set-up is built with the view's camera, and so is the rig (an engine preset's
 /// reads a whole config: that one is built from the view's config).
 fn view_screen_inputs(config: &Config, view: &crate::config::ViewSettings) -> Option<ScreenInputs> {
-    screen_inputs_seen_by(config, &view.camera, || match &config.shadow.preset {
+    screen_inputs_seen_by(config, &view.camera, |setup| match &config.shadow.preset {
         Some(_) => rig(&config_for_view(config, view)),
-        None => {
-            let setup = config.setup_seen_by(&view.camera);
-            Rig::for_setup_in(&setup, split_range(&setup))
-        }
+        None => Rig::for_setup_in(setup, split_range(setup)),
     })
 }
 
-/// The screen inputs of `config` seen from `camera`, whose rig `rig` builds.
+/// The screen inputs of `config` seen from `camera`, whose rig `rig` builds from the set-up
+/// seen by `camera` (made once for both).
 fn screen_inputs_seen_by(
     config: &Config,
     camera: &crate::config::CameraSettings,
-    rig: impl FnOnce() -> Option<Rig>,
+    rig: impl FnOnce(&csm_core::scene::Setup) -> Option<Rig>,
 ) -> Option<ScreenInputs> {
     let setup = config.setup_seen_by(camera);
     let vis = setup.visibility()?;
     let visible = visible_depths(&setup, Some(&vis));
-    let (splits, texel, bands) = match rig() {
+    let (splits, texel, bands) = match rig(&setup) {
         None => (vec![0.0, 0.0], vec![0.0], Vec::new()),
         Some(rig) => {
             let pose0 = camera.pose();
@@ -933,7 +931,8 @@ fn screen_inputs_seen_by(
                 .map(|i| rig.window(i, &lp0, config.shadow.snap).texel_size())
                 .collect();
             let bands = seams::bands(&rig);
-            (rig.splits.clone(), texel, bands)
+            // The splits move out of the rig, which is dropped here.
+            (rig.splits, texel, bands)
         }
     };
     // Each band's receivers (depth-ordered): the level's pooled band share and the view's own
@@ -1849,31 +1848,10 @@ fn range_key(setup: &csm_core::scene::Setup) -> RangeKey {
 /// `[camera]` and each view of a level (160 bytes of key each).
 const HELD_RANGES: usize = 4096;
 
-/// A hasher for keys of whole words ([`RangeKey`]): a multiply and a rotate per word, where
-/// the standard SipHash costs more than the look-up it serves. A cache's hash: a poor one costs
-/// time, never a wrong range (the map compares whole keys).
-#[derive(Default, Clone, Copy)]
-struct WordHasher(u64);
-
-impl std::hash::Hasher for WordHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut word = [0u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from_le_bytes(word));
-        }
-    }
-
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
-    }
-
-    fn finish(&self) -> u64 {
-        self.0
-    }
-}
-
-type WordMap<K, V> = std::collections::HashMap<K, V, std::hash::BuildHasherDefault<WordHasher>>;
+// The split ranges are kept in a `WordMap` (a multiply and a rotate per word of the key, where
+// the standard SipHash costs more than the look-up it serves). A cache's hash: a poor one costs
+// time, never a wrong range (the map compares whole keys).
+use csm_core::hash::WordMap;
 
 thread_local! {
     /// The split ranges this thread computed, by their [`RangeKey`].

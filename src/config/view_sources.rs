@@ -455,7 +455,7 @@ pub(crate) fn check_views(config: &mut Config, v: &Validator<'_>, keys: &[(usize
             near: c.near,
             far: c.far,
         };
-        if viewpoints::receivers_seen(scene, &cam, config.light_direction) == 0 {
+        if !viewpoints::sees_receiver(scene, &cam, config.light_direction) {
             let (cols, rows) = viewpoints::RECEIVER_GRID;
             warnings.push(format!(
                 "view {:?} sees no receiver: none of a {cols} x {rows} grid of rays over its screen meets a surface \

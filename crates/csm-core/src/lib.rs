@@ -20,6 +20,7 @@ pub mod depth_range;
 pub mod fitting;
 pub mod free_splits;
 pub mod geometry;
+pub mod hash;
 pub mod light_cover;
 pub mod light_motion;
 pub mod mesh;

@@ -18,6 +18,10 @@
 //! **Receivers seen.** A view sees a receiver when a ray of a coarse grid over its screen
 //! ([`RECEIVER_GRID`]) meets, between the near and far planes, a surface whose normal (turned
 //! toward the camera) points toward the light: the lit-facing receivers of [`crate::visibility`].
+//! Only whether any ray does matters (a view that sees none draws a warning), so
+//! [`sees_receiver`] stops at the first ray that does, rows from the bottom of the screen up:
+//! each ray's answer depends on that ray alone, so the answer is that of every ray cast
+//! ([`receivers_seen`] counts them all; a test holds the two together).
 //!
 //! **Walkable positions.** [`sample_positions`] draws points uniformly over the scene bounds'
 //! x/z extent from a seeded [`SplitMix64`], casts a vertical ray down from above the bounds and
@@ -133,31 +137,45 @@ pub struct ViewCamera {
     pub far: f64,
 }
 
+/// Whether ray (`col`, `row`) of a [`RECEIVER_GRID`] over the view meets a lit-facing
+/// surface between the near and far planes (`light` is the unit direction light travels).
+fn sees_at(scene: &SceneGeometry, cam: &ViewCamera, light: DVec3, col: u32, row: u32) -> bool {
+    let (cols, rows) = RECEIVER_GRID;
+    let sx = (2.0 * (col as f64 + 0.5) / cols as f64 - 1.0) * cam.lens.tan_h;
+    let sy = (1.0 - 2.0 * (row as f64 + 0.5) / rows as f64) * cam.lens.tan_v;
+    // Depth along the view axis is t |d| along the unit ray, as in the visibility pass.
+    let d = cam.pose.forward + cam.pose.right * sx + cam.pose.up * sy;
+    let len = d.length();
+    let Some(hit) = scene.first_hit(cam.pose.position, d / len, cam.near * len, cam.far * len) else {
+        return false;
+    };
+    let mut n = scene.triangle_normal(hit.triangle);
+    if n.dot(d) > 0.0 {
+        n = -n;
+    }
+    n.dot(-light) > 0.0
+}
+
 /// How many rays of a [`RECEIVER_GRID`] over the view meet a lit-facing surface between the
 /// near and far planes (`light` is the unit direction light travels).
 pub fn receivers_seen(scene: &SceneGeometry, cam: &ViewCamera, light: DVec3) -> usize {
     let (cols, rows) = RECEIVER_GRID;
-    let mut seen = 0;
-    for row in 0..rows {
-        for col in 0..cols {
-            let sx = (2.0 * (col as f64 + 0.5) / cols as f64 - 1.0) * cam.lens.tan_h;
-            let sy = (1.0 - 2.0 * (row as f64 + 0.5) / rows as f64) * cam.lens.tan_v;
-            // Depth along the view axis is t |d| along the unit ray, as in the visibility pass.
-            let d = cam.pose.forward + cam.pose.right * sx + cam.pose.up * sy;
-            let len = d.length();
-            let Some(hit) = scene.first_hit(cam.pose.position, d / len, cam.near * len, cam.far * len) else {
-                continue;
-            };
-            let mut n = scene.triangle_normal(hit.triangle);
-            if n.dot(d) > 0.0 {
-                n = -n;
-            }
-            if n.dot(-light) > 0.0 {
-                seen += 1;
-            }
-        }
-    }
-    seen
+    (0..rows)
+        .flat_map(|row| (0..cols).map(move |col| (col, row)))
+        .filter(|&(col, row)| sees_at(scene, cam, light, col, row))
+        .count()
+}
+
+/// Whether [`receivers_seen`] is above zero, casting only as many of its rays as it takes: the
+/// same rays, one at a time, stopping at the first that meets a lit-facing surface. Each ray's
+/// answer depends on that ray alone, so the order is free; the rows are taken from the bottom
+/// of the screen up (a view's lower rows look at the ground, where a receiver is most often
+/// found first), each row left to right. A view that sees no receiver still casts every ray.
+pub fn sees_receiver(scene: &SceneGeometry, cam: &ViewCamera, light: DVec3) -> bool {
+    let (cols, rows) = RECEIVER_GRID;
+    (0..rows)
+        .rev()
+        .any(|row| (0..cols).any(|col| sees_at(scene, cam, light, col, row)))
 }
 
 /// How [`sample_positions`] draws player views.
@@ -337,11 +355,59 @@ mod tests {
             far: 500.0,
         };
         assert_eq!(receivers_seen(&s, &cam(up), light), 0);
+        assert!(!sees_receiver(&s, &cam(up), light));
         // Looking down 45° with a 1 rad fov: every ray hits the ground, lit from above.
         let (c, r) = RECEIVER_GRID;
         assert_eq!(receivers_seen(&s, &cam(down), light) as u32, c * r);
+        assert!(sees_receiver(&s, &cam(down), light));
         // Lit from below, the ground is self-shadowed: no receiver.
         assert_eq!(receivers_seen(&s, &cam(down), -light), 0);
+        assert!(!sees_receiver(&s, &cam(down), -light));
+    }
+
+    /// The early stop answers as the full count does: on views from many places in a scene
+    /// of boxes over a ground (some inside a box, some looking at the sky, some at the ground),
+    /// under lights from above and from below, `sees_receiver` is `receivers_seen > 0`; and
+    /// both answers occur.
+    #[test]
+    fn the_early_stop_answers_as_the_count_does() {
+        let boxes = [
+            Aabb::new(DVec3::new(-8.0, 0.0, -8.0), DVec3::new(-2.0, 5.0, -2.0)),
+            Aabb::new(DVec3::new(2.0, 0.0, 2.0), DVec3::new(9.0, 3.0, 9.0)),
+        ];
+        let s = scene(&boxes, Some((0.0, 40.0)));
+        let mut rng = SplitMix64::new(11);
+        let (mut yes, mut no) = (0, 0);
+        for k in 0..120 {
+            let eye = DVec3::new(rng.range(-12.0, 12.0), rng.range(0.5, 8.0), rng.range(-12.0, 12.0));
+            let forward = look_direction(rng.range(0.0, std::f64::consts::TAU), rng.range(-1.4, 1.4));
+            let Some(pose) = CameraPose::look_to(eye, forward, DVec3::Y) else {
+                continue;
+            };
+            let cam = ViewCamera {
+                pose,
+                lens: Lens::new(rng.range(0.2, 1.6), 16.0 / 9.0),
+                near: 0.1,
+                far: rng.range(2.0, 300.0),
+            };
+            let light = if k % 3 == 0 {
+                DVec3::new(0.2, 1.0, -0.4).normalize()
+            } else {
+                DVec3::new(0.3, -1.0, 0.2).normalize()
+            };
+            let seen = receivers_seen(&s, &cam, light);
+            assert_eq!(
+                sees_receiver(&s, &cam, light),
+                seen > 0,
+                "view {k}: {seen} rays see a receiver"
+            );
+            if seen > 0 {
+                yes += 1;
+            } else {
+                no += 1;
+            }
+        }
+        assert!(yes > 10 && no > 10, "{yes} views see a receiver, {no} do not");
     }
 
     #[test]
