@@ -168,7 +168,7 @@ fn served_runs(vis: &Visibility, splits: &[f64], m: usize) -> (Vec<Run>, Vec<usi
 /// Receivers per bucket of a [`ScreenIndex`] (consecutive in the order of `g`).
 const BUCKET: usize = 128;
 /// Receivers per block of a [`ScreenIndex`]'s depth-order prefix sums.
-const BLOCK: usize = 64;
+const BLOCK: usize = 16;
 /// Receivers per row of a [`ScreenIndex`]'s bucket counts (in depth order), at least.
 const ROW: usize = 256;
 /// Rows of a [`ScreenIndex`], at most: a row holds a count per bucket (a bucket per [`BUCKET`]
@@ -439,8 +439,9 @@ impl Served {
                 )
             })
             .collect();
-        // Each bucket's entries before each bound, and their contrast weight: the row at or
-        // below the bound, and the receivers from it to the bound counted on.
+        // Each bucket's entries before each bound, and their contrast weight, bound by bound
+        // (one row of `buckets` per bound): the nearest row (below or above the bound) and the
+        // receivers between it and the bound counted on or back.
         let nb = bounds.len();
         let buckets = ix.buckets();
         // Every entry is set below before it is counted on: the buffers only grow.
@@ -449,44 +450,73 @@ impl Served {
             cut.resize(buckets * nb, 0);
             wcut.resize(buckets * nb, 0);
         }
-        sv.groups.reserve((buckets * sv.runs.len()).min(n));
+        let rows = ix.rows.len() / buckets;
         for (j, &p) in bounds.iter().enumerate() {
-            let row = p / ix.row;
-            let (c, w) = (
+            let (c, w) = (&mut cut[j * buckets..][..buckets], &mut wcut[j * buckets..][..buckets]);
+            let below = p / ix.row;
+            let up = below + 1 < rows && (below + 1) * ix.row - p < p - below * ix.row;
+            let row = below + up as usize;
+            let (rc, rw) = (
                 &ix.rows[row * buckets..][..buckets],
                 &ix.wrows[row * buckets..][..buckets],
             );
-            for b in 0..buckets {
-                cut[b * nb + j] = ix.start[b] + c[b];
-                wcut[b * nb + j] = w[b];
+            for ((c, &s), &r) in c.iter_mut().zip(&ix.start[..buckets]).zip(rc) {
+                *c = s + r;
             }
-            for k in row * ix.row..p {
-                let b = ix.bucket_of[k] as usize;
-                cut[b * nb + j] += 1;
-                wcut[b * nb + j] += vis.weights[k] as u64;
+            w.copy_from_slice(rw);
+            if up {
+                let span = p..row * ix.row;
+                for (&b, &wk) in ix.bucket_of[span.clone()].iter().zip(&vis.weights[span]) {
+                    c[b as usize] -= 1;
+                    w[b as usize] -= wk as u64;
+                }
+            } else {
+                let span = row * ix.row..p;
+                for (&b, &wk) in ix.bucket_of[span.clone()].iter().zip(&vis.weights[span]) {
+                    c[b as usize] += 1;
+                    w[b as usize] += wk as u64;
+                }
             }
         }
         for &(ja, jb) in &ends {
             let first = sv.groups.len();
             let mut top = None;
             let mut wtop = None;
-            for b in 0..buckets {
-                let (glo, ghi) = (cut[b * nb + ja], cut[b * nb + jb]);
-                if glo == ghi {
-                    continue;
+            let (ca, cz) = (&cut[ja * buckets..][..buckets], &cut[jb * buckets..][..buckets]);
+            let (wa, wz) = (&wcut[ja * buckets..][..buckets], &wcut[jb * buckets..][..buckets]);
+            // The run's buckets that hold receivers: the entries before its end exceed those
+            // before its start. A stretch of buckets at once (the entries before the end never
+            // fall below those before the start, so the stretch holds none when the sums of
+            // both agree), then bucket by bucket.
+            const STRETCH: usize = 16;
+            let mut from = 0;
+            while from < buckets {
+                let to = (from + STRETCH).min(buckets);
+                let held: u32 = cz[from..to]
+                    .iter()
+                    .zip(&ca[from..to])
+                    .fold(0u32, |acc, (&z, &a)| acc.wrapping_add(z - a));
+                if held != 0 {
+                    for b in from..to {
+                        let (glo, ghi) = (ca[b], cz[b]);
+                        if glo == ghi {
+                            continue;
+                        }
+                        let cw = wz[b] - wa[b];
+                        sv.groups.push(Group {
+                            lo: glo,
+                            hi: ghi,
+                            cw,
+                            glo: ix.glo[b],
+                            ghi: ix.ghi[b],
+                        });
+                        top = Some(sv.groups.len() - 1);
+                        if cw > 0 {
+                            wtop = Some(sv.groups.len() - 1);
+                        }
+                    }
                 }
-                let cw = wcut[b * nb + jb] - wcut[b * nb + ja];
-                sv.groups.push(Group {
-                    lo: glo,
-                    hi: ghi,
-                    cw,
-                    glo: ix.glo[b],
-                    ghi: ix.ghi[b],
-                });
-                top = Some(sv.groups.len() - 1);
-                if cw > 0 {
-                    wtop = Some(sv.groups.len() - 1);
-                }
+                from = to;
             }
             sv.run_groups.push((first, sv.groups.len()));
             // The maxima's factors: the largest g of the run's highest bucket (of weight
