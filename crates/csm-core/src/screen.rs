@@ -205,6 +205,11 @@ pub struct ScreenIndex {
     idx: Vec<u32>,
     g: Vec<f64>,
     w: Vec<u32>,
+    /// Per entry: its rank within its bucket (the order of `(g, depth order)`).
+    rank: Vec<u8>,
+    /// Per bucket and rank (entry `b BUCKET + r` for rank `r` of bucket `b`): the entry of that
+    /// rank, as its place within the bucket. So a bucket's `g` can be read in ascending order.
+    at_rank: Vec<u8>,
     /// Per receiver (depth order): its bucket.
     bucket_of: Vec<u32>,
     /// Receivers per row: [`ROW`], or more for a pass of over `ROW × MAX_ROWS` receivers.
@@ -273,11 +278,13 @@ impl ScreenIndex {
         let mut glo = Vec::with_capacity(buckets);
         let mut ghi = Vec::with_capacity(buckets);
         let mut bucket_of = vec![0u32; n];
+        let mut rank_of = vec![0u8; n];
         for (b, chunk) in order.chunks(BUCKET).enumerate() {
             glo.push(r[chunk[0] as usize].1);
             ghi.push(r[chunk[chunk.len() - 1] as usize].1);
-            for &i in chunk {
+            for (k, &i) in chunk.iter().enumerate() {
                 bucket_of[i as usize] = b as u32;
+                rank_of[i as usize] = k as u8;
             }
         }
         let start: Vec<u32> = (0..=buckets).map(|b| (b * BUCKET).min(n) as u32).collect();
@@ -292,6 +299,12 @@ impl ScreenIndex {
         }
         let g: Vec<f64> = order.iter().map(|&i| r[i as usize].1).collect();
         let w: Vec<u32> = order.iter().map(|&i| vis.weights[i as usize]).collect();
+        let rank: Vec<u8> = order.iter().map(|&i| rank_of[i as usize]).collect();
+        let mut at_rank = vec![0u8; n];
+        for (e, &k) in rank.iter().enumerate() {
+            let base = e - e % BUCKET;
+            at_rank[base + k as usize] = (e - base) as u8;
+        }
         let row = ROW.max(n.div_ceil(MAX_ROWS));
         let mut rows = Vec::with_capacity((n / row + 1) * buckets);
         let mut wrows = Vec::with_capacity((n / row + 1) * buckets);
@@ -332,6 +345,8 @@ impl ScreenIndex {
             idx: order,
             g,
             w,
+            rank,
+            at_rank,
             bucket_of,
             row,
             rows,
@@ -347,6 +362,79 @@ impl ScreenIndex {
 
     fn buckets(&self) -> usize {
         self.glo.len()
+    }
+
+    /// The bucket holding entry `e`: its first entry and its length.
+    #[inline]
+    fn bucket_at(&self, e: usize) -> (usize, usize) {
+        let base = e - e % BUCKET;
+        (base, BUCKET.min(self.g.len() - base))
+    }
+
+    /// How many entries of the bucket at `base` (of `len` entries) have `t g` below `x`: a
+    /// binary search over its ranks (`t g` never decreases with the rank, `t >= 0`).
+    #[inline]
+    fn ranks_below(&self, base: usize, len: usize, t: f64, x: f64) -> usize {
+        self.ranks_where(base, len, |g| t * g < x)
+    }
+
+    /// How many entries of the bucket at `base` (of `len` entries) satisfy `low`, for a `low`
+    /// that holds for the lowest ranks and not above them (a condition on `g` that is
+    /// monotone in it): a binary search over the bucket's ranks.
+    #[inline]
+    fn ranks_where(&self, base: usize, len: usize, low: impl Fn(f64) -> bool) -> usize {
+        let at = &self.at_rank[base..base + len];
+        let g = &self.g[base..base + len];
+        let (mut lo, mut hi) = (0usize, len);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if low(g[at[mid] as usize]) {
+                lo = mid + 1;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+
+    /// The count and contrast weight of group `gr`'s entries of rank below `k` in their bucket
+    /// (at `base`, `len` entries): read over the ranks below `k`, over the ranks from `k`, or
+    /// over the group's entries, whichever is fewest.
+    #[inline]
+    fn group_below(&self, gr: &Group, base: usize, len: usize, k: usize) -> (u64, u64) {
+        let (a, z) = (gr.lo as usize - base, gr.hi as usize - base);
+        let size = (z - a) as u64;
+        if k == 0 {
+            return (0, 0);
+        }
+        if k == len {
+            return (size, gr.cw);
+        }
+        let inside = |e: u8| (e as usize).wrapping_sub(a) < z - a;
+        let (mut n, mut wsum) = (0u64, 0u64);
+        if k <= z - a && k <= len - k {
+            for &e in &self.at_rank[base..base + k] {
+                let m = inside(e) as u64;
+                n += m;
+                wsum += m * self.w[base + e as usize] as u64;
+            }
+            (n, wsum)
+        } else if len - k < z - a {
+            for &e in &self.at_rank[base + k..base + len] {
+                let m = inside(e) as u64;
+                n += m;
+                wsum += m * self.w[base + e as usize] as u64;
+            }
+            (size - n, gr.cw - wsum)
+        } else {
+            let span = gr.lo as usize..gr.hi as usize;
+            for (&r, &w) in self.rank[span.clone()].iter().zip(&self.w[span]) {
+                let m = ((r as usize) < k) as u64;
+                n += m;
+                wsum += m * w as u64;
+            }
+            (n, wsum)
+        }
     }
 
     /// The sums of `g`, `w g` (whole units) and `w` over the receivers before `p` (depth order).
@@ -689,10 +777,20 @@ impl<'a> ViewPass<'a> {
                         sc.oct[o] += (sv.cum[a + end].0 - sv.cum[a + k].0) as u32;
                         k = end;
                     } else {
-                        let gr = run[k];
-                        for &g in &ix.g[gr.lo as usize..gr.hi as usize] {
-                            sc.oct[octave(t * g)] += 1;
+                        // A group straddling octaves: per octave boundary, the bucket's ranks
+                        // below it (a binary search on the bucket in the order of g) and the
+                        // group's entries among them.
+                        let gr = &run[k];
+                        let (base, len) = ix.bucket_at(gr.lo as usize);
+                        let (o_lo, o_hi) = (octave(t * gr.glo), octave(t * gr.ghi));
+                        let mut done = 0u64;
+                        for o in o_lo..o_hi {
+                            let r = ix.ranks_where(base, len, |g| octave(t * g) <= o);
+                            let (n, _) = ix.group_below(gr, base, len, r);
+                            sc.oct[o] += (n - done) as u32;
+                            done = n;
                         }
+                        sc.oct[o_hi] += (gr.hi - gr.lo) as u32 - done as u32;
                         k += 1;
                     }
                 }
@@ -1219,25 +1317,33 @@ fn select(
                 let from = run.count(0, run.groups.len(), true, lo_v, false);
                 let to = run.count(from, run.groups.len(), false, hi_v, false);
                 for gr in &run.groups[from..to] {
-                    let span = gr.lo as usize..gr.hi as usize;
-                    let (gs, ws) = (&ix.g[span.clone()], &ix.w[span]);
-                    if t * gr.glo < lo_v {
-                        // The values below the bracket: counted without a branch per value, and
-                        // their contrast weight, then weighted by the view's steps once.
-                        let (mut n, mut wsum) = (0u64, 0u64);
-                        for (&g, &w) in gs.iter().zip(ws) {
-                            let under = (t * g < lo_v) as u64;
-                            n += under;
-                            wsum += under * w as u64;
-                        }
+                    // The bucket's entries in the order of g: those below the bracket are its
+                    // lowest ranks, those in it the next ones (binary searches on t g).
+                    let (base, len) = ix.bucket_at(gr.lo as usize);
+                    let k_lo = if t * gr.glo < lo_v {
+                        ix.ranks_below(base, len, t, lo_v)
+                    } else {
+                        0
+                    };
+                    let k_hi = if t * gr.ghi < hi_v {
+                        len
+                    } else {
+                        ix.ranks_below(base, len, t, hi_v)
+                    };
+                    if k_lo > 0 {
+                        // The values below the bracket: counted, with their contrast weight,
+                        // then weighted by the view's steps once.
+                        let (n, wsum) = ix.group_below(gr, base, len, k_lo);
                         below[j] += if contrast { wsum as u128 * s } else { n as u128 * s };
                     }
-                    for (&g, &w) in gs.iter().zip(ws) {
-                        let m = t * g;
-                        if m >= lo_v && m < hi_v {
-                            let w = if contrast { w as u128 * s } else { s };
+                    let (a, z) = (gr.lo as usize - base, gr.hi as usize - base);
+                    for &e in &ix.at_rank[base + k_lo..base + k_hi.max(k_lo)] {
+                        let e = e as usize;
+                        if e.wrapping_sub(a) < z - a {
+                            let g = ix.g[base + e];
+                            let w = if contrast { ix.w[base + e] as u128 * s } else { s };
                             if w != 0 {
-                                sc.cands[j].push(Cand { m, w, g, tag });
+                                sc.cands[j].push(Cand { m: t * g, w, g, tag });
                             }
                         }
                     }
