@@ -2890,4 +2890,146 @@ mod tests {
         assert_eq!(confirmed[0], 0);
         assert!(confirmed[1..].iter().all(|&c| c >= 12), "{confirmed:?}");
     }
+
+    /// A view of `n` receivers whose factors follow the depth (`mix` 1) or not (`mix` 0), drawn
+    /// over `spread` octaves and rounded to `levels` values when `levels > 0` (ties), with zero
+    /// contrast weights now and then.
+    fn correlated(seed: u64, n: usize, spread: f64, mix: f64, levels: u32) -> Visibility {
+        let mut next = xorshift(seed);
+        let mut depths: Vec<f64> = (0..n).map(|_| 1.0 + 199.0 * next()).collect();
+        depths.sort_by(f64::total_cmp);
+        let receivers = depths
+            .iter()
+            .map(|&d| {
+                let u = mix * (d - 1.0) / 199.0 + (1.0 - mix) * next();
+                let u = if levels > 0 {
+                    (u * levels as f64).floor() / levels as f64
+                } else {
+                    u
+                };
+                (d, 0.05 * (spread * u).exp2())
+            })
+            .collect();
+        let weights = (0..n)
+            .map(|k| {
+                if k % 6 == 0 {
+                    0
+                } else {
+                    crate::visibility::contrast_weight(next())
+                }
+            })
+            .collect();
+        pass_of(receivers, weights, n / 4)
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// A split set's served parts ([`Served`]: bound-major entry counts from the nearest
+        /// row, buckets scanned a stretch at a time), its pass's values per octave and
+        /// undersampled count, and the counts a selection reads from a bucket in the order of g
+        /// ([`ScreenIndex::ranks_below`], [`ScreenIndex::group_below`]) equal a count of the
+        /// receivers one by one: per run and bucket the entries of its receivers, their contrast
+        /// weight, the largest g; per run the sums of g, w g and w; per octave the served values;
+        /// and per group and threshold the values below it. Views whose factors follow the depth
+        /// or not, with ties, zero contrast weights, and past `ROW × MAX_ROWS` receivers.
+        #[test]
+        fn served_parts_and_rank_counts_equal_a_count_one_by_one(
+            (seed, n, spread, mix, levels) in (0u64..1_000_000, 1usize..6000, 1.0f64..14.0, 0.0f64..1.0, 0u32..30),
+            big in 0u32..8,
+            cuts in proptest::collection::vec(0.0f64..1.0, 0..7),
+            scale in 0.01f64..50.0,
+            probes in proptest::collection::vec(0.0f64..1.0, 4),
+        ) {
+            // Now and then a pass whose rows are spaced further apart.
+            let n = if big == 0 { n + ROW * MAX_ROWS } else { n };
+            let vis = correlated(seed, n, spread, mix, levels);
+            let ix = vis.index();
+            let mut cuts = cuts;
+            cuts.sort_by(f64::total_cmp);
+            let splits: Vec<f64> = std::iter::once(0.5)
+                .chain(cuts.iter().map(|c| 1.0 + 199.0 * c))
+                .chain([220.0])
+                .collect();
+            let m = splits.len() - 1;
+            let texel: Vec<f64> = (0..m).map(|i| scale * 0.3 * 1.9f64.powi(i as i32)).collect();
+            let mut sc = Scratch::new();
+            let sv = Served::new(&vis, ix, &splits, m, &mut sc);
+            let (runs, counts) = served_runs(&vis, &splits, m);
+            proptest::prop_assert_eq!(&sv.runs, &runs);
+            proptest::prop_assert_eq!(&sv.counts, &counts);
+            proptest::prop_assert_eq!(sv.cum.len(), sv.groups.len() + usize::from(sv.n > 0));
+            for (r, &(a, z, _)) in runs.iter().enumerate() {
+                // Per bucket, its entries of receivers a..z, one by one.
+                let mut want = Vec::new();
+                for b in 0..ix.buckets() {
+                    let span = ix.start[b] as usize..ix.start[b + 1] as usize;
+                    let inside: Vec<usize> = span.filter(|&e| (a..z).contains(&(ix.idx[e] as usize))).collect();
+                    if let (Some(&lo), Some(&hi)) = (inside.first(), inside.last()) {
+                        proptest::prop_assert_eq!(inside.len(), hi + 1 - lo);
+                        let cw: u64 = inside.iter().map(|&e| ix.w[e] as u64).sum();
+                        want.push((lo as u32, hi as u32 + 1, cw, ix.glo[b].to_bits(), ix.ghi[b].to_bits()));
+                    }
+                }
+                let (ga, gz) = sv.run_groups[r];
+                let got: Vec<_> = sv.groups[ga..gz].iter().map(|g| (g.lo, g.hi, g.cw, g.glo.to_bits(), g.ghi.to_bits())).collect();
+                proptest::prop_assert_eq!(&got, &want);
+                let before: u64 = sv.groups[..ga].iter().map(|g| (g.hi - g.lo) as u64).sum();
+                let wbefore: u64 = sv.groups[..ga].iter().map(|g| g.cw).sum();
+                proptest::prop_assert_eq!(sv.cum[ga], (before, wbefore));
+                for k in ga..gz {
+                    let (c, w) = sv.cum[k];
+                    proptest::prop_assert_eq!(sv.cum[k + 1], (c + (sv.groups[k].hi - sv.groups[k].lo) as u64, w + sv.groups[k].cw));
+                }
+                // The sums in whole units, receiver by receiver.
+                let (mut sg, mut swg, mut sw) = (0u128, 0u128, 0u64);
+                for k in a..z {
+                    let (g, w) = (vis.receivers[k].1, vis.weights[k]);
+                    sg += whole_units(g, 1, ix.unit);
+                    swg += whole_units(g, w, ix.unit + WEIGHT_BITS);
+                    sw += w as u64;
+                }
+                let want_sums = (scaled(sg as f64, ix.unit), scaled(swg as f64, ix.unit + WEIGHT_BITS), sw);
+                proptest::prop_assert_eq!(sv.sums[r], want_sums);
+                // The largest g of the run's highest group (and of its highest with weight).
+                let top = sv.groups[ga..gz].last();
+                let gmax = top.map(|g| (g.lo..g.hi).map(|e| ix.g[e as usize]).fold(0.0f64, f64::max));
+                let wtop = sv.groups[ga..gz].iter().rev().find(|g| g.cw > 0);
+                let wgmax = wtop.map(|g| (g.lo..g.hi).filter(|&e| ix.w[e as usize] > 0).map(|e| ix.g[e as usize]).fold(0.0f64, f64::max));
+                proptest::prop_assert_eq!(sv.gmax[r], (gmax, wgmax));
+                // Per group: the values below thresholds (bucket values and values between).
+                let t = texel[runs[r].2];
+                for gr in &sv.groups[ga..gz] {
+                    let (base, len) = ix.bucket_at(gr.lo as usize);
+                    proptest::prop_assert_eq!(base, ix.start[base / BUCKET] as usize);
+                    proptest::prop_assert_eq!(base + len, ix.start[base / BUCKET + 1] as usize);
+                    for &p in &probes {
+                        let e = base + ((p * len as f64) as usize).min(len - 1);
+                        for x in [t * ix.g[e], t * ix.g[e] * (1.0 + 1e-9), t * gr.glo * (1.0 - p) + t * gr.ghi * p] {
+                            let k = ix.ranks_below(base, len, t, x);
+                            let bucket_below = (base..base + len).filter(|&e| t * ix.g[e] < x).count();
+                            proptest::prop_assert_eq!(k, bucket_below);
+                            let span = gr.lo as usize..gr.hi as usize;
+                            let n_below = span.clone().filter(|&e| t * ix.g[e] < x).count() as u64;
+                            let w_below: u64 = span.filter(|&e| t * ix.g[e] < x).map(|e| ix.w[e] as u64).sum();
+                            proptest::prop_assert_eq!(ix.group_below(gr, base, len, k), (n_below, w_below));
+                        }
+                    }
+                }
+            }
+            // The values per octave and the undersampled count of the pass at these texel sizes.
+            let pass = ViewPass::new(&vis, &splits, &texel, true, &mut sc);
+            let mut octs = std::collections::BTreeMap::new();
+            let mut under = 0u64;
+            for &(a, z, i) in &runs {
+                for k in a..z {
+                    let v = texel[i] * vis.receivers[k].1;
+                    *octs.entry(octave(v) as u16).or_insert(0u32) += 1;
+                    under += (v > 1.0) as u64;
+                }
+            }
+            let want: Vec<(u16, u32)> = octs.into_iter().collect();
+            proptest::prop_assert_eq!(&pass.octaves, &want);
+            proptest::prop_assert_eq!(pass.under, under);
+        }
+    }
 }
