@@ -840,6 +840,8 @@ struct Scratch {
     at: Vec<usize>,
     /// Per target (plain p50, p95, p99, then contrast): the values in its bracket.
     cands: [Vec<Cand>; 6],
+    /// Per target: the groups reaching into its bracket.
+    reach: [Vec<Reach>; 6],
     /// [`resolve`]'s histogram (zero between calls).
     fine: Vec<u128>,
     /// [`from_window`]'s values.
@@ -1005,6 +1007,8 @@ struct PoolRun<'a> {
     groups: &'a [Group],
     cum: &'a [(u64, u64)],
     s: u128,
+    /// Its view's index (the groups' values).
+    ix: &'a ScreenIndex,
 }
 
 impl PoolRun<'_> {
@@ -1285,69 +1289,141 @@ fn select(
                 groups: &sv.groups[a..z],
                 cum: &sv.cum[a..=z],
                 s: s as u128,
+                ix: p.ix,
             });
         }
     }
     // Per target: its bracket `[lo, hi)` of values, the weight of the values below it, and the
     // weight to reach.
-    let brackets = match how {
+    let mut brackets = match how {
         Brackets::Values => value_brackets(&runs, &open, &target_of, sc),
         Brackets::Keys(buckets, count) => key_brackets(&runs, &open, &target_of, totals, buckets, count, sc),
     };
     let mut below = [0u128; 6];
+    // Per target: the bucket ranks of each group reaching into its bracket that lie in it, an
+    // upper bound of their count, and the smallest and largest value at those ranks.
+    let mut ranks = [0usize; 6];
+    let mut span = [(f64::INFINITY, 0.0f64); 6];
     for &j in &open {
         below[j] = brackets[j].2;
         sc.cands[j].clear();
+        sc.reach[j].clear();
     }
-    let mut run_of = 0usize;
-    for &(pass, s) in pools {
-        let s = s as u128;
-        let ix = pass.ix;
-        for _ in 0..pass.sv.runs.len() {
-            let run = &runs[run_of];
-            let tag = run_of as u64;
-            run_of += 1;
-            let t = run.t;
-            for &j in &open {
-                let (lo_v, hi_v) = (brackets[j].0, brackets[j].1);
-                let contrast = j >= 3;
-                // The run's groups reaching into the bracket are consecutive (their bounds never
-                // decrease): those after every group ending below it, before the first starting
-                // at or above its end.
-                let from = run.count(0, run.groups.len(), true, lo_v, false);
-                let to = run.count(from, run.groups.len(), false, hi_v, false);
-                for gr in &run.groups[from..to] {
-                    // The bucket's entries in the order of g: those below the bracket are its
-                    // lowest ranks, those in it the next ones (binary searches on t g).
-                    let (base, len) = ix.bucket_at(gr.lo as usize);
-                    let k_lo = if t * gr.glo < lo_v {
-                        ix.ranks_below(base, len, t, lo_v)
-                    } else {
-                        0
-                    };
-                    let k_hi = if t * gr.ghi < hi_v {
-                        len
-                    } else {
-                        ix.ranks_below(base, len, t, hi_v)
-                    };
-                    if k_lo > 0 {
-                        // The values below the bracket: counted, with their contrast weight,
-                        // then weighted by the view's steps once.
-                        let (n, wsum) = ix.group_below(gr, base, len, k_lo);
-                        below[j] += if contrast { wsum as u128 * s } else { n as u128 * s };
-                    }
-                    let (a, z) = (gr.lo as usize - base, gr.hi as usize - base);
-                    for &e in &ix.at_rank[base + k_lo..base + k_hi.max(k_lo)] {
-                        let e = e as usize;
-                        if e.wrapping_sub(a) < z - a {
-                            let g = ix.g[base + e];
-                            let w = if contrast { ix.w[base + e] as u128 * s } else { s };
-                            if w != 0 {
-                                sc.cands[j].push(Cand { m: t * g, w, g, tag });
-                            }
-                        }
-                    }
+    for (r, run) in runs.iter().enumerate() {
+        let (t, s, ix) = (run.t, run.s, run.ix);
+        for &j in &open {
+            let (lo_v, hi_v) = (brackets[j].0, brackets[j].1);
+            let contrast = j >= 3;
+            // The run's groups reaching into the bracket are consecutive (their bounds never
+            // decrease): those after every group ending below it, before the first starting
+            // at or above its end.
+            let from = run.count(0, run.groups.len(), true, lo_v, false);
+            let to = run.count(from, run.groups.len(), false, hi_v, false);
+            for (i, gr) in run.groups[from..to].iter().enumerate() {
+                // The bucket's entries in the order of g: those below the bracket are its
+                // lowest ranks, those in it the next ones (binary searches on t g).
+                let (base, len) = ix.bucket_at(gr.lo as usize);
+                let k_lo = if t * gr.glo < lo_v {
+                    ix.ranks_below(base, len, t, lo_v)
+                } else {
+                    0
+                };
+                let k_hi = if t * gr.ghi < hi_v {
+                    len
+                } else {
+                    ix.ranks_below(base, len, t, hi_v)
+                };
+                if k_lo > 0 {
+                    // The values below the bracket: counted, with their contrast weight,
+                    // then weighted by the view's steps once.
+                    let (n, wsum) = ix.group_below(gr, base, len, k_lo);
+                    below[j] += if contrast { wsum as u128 * s } else { n as u128 * s };
                 }
+                if k_hi > k_lo {
+                    sc.reach[j].push(Reach {
+                        run: r as u32,
+                        group: (from + i) as u32,
+                        k_lo: k_lo as u16,
+                        k_hi: k_hi as u16,
+                    });
+                    ranks[j] += k_hi - k_lo;
+                    let (lo_m, hi_m) = (
+                        ix.g[base + ix.at_rank[base + k_lo] as usize],
+                        ix.g[base + ix.at_rank[base + k_hi - 1] as usize],
+                    );
+                    span[j] = (span[j].0.min(t * lo_m), span[j].1.max(t * hi_m));
+                }
+            }
+        }
+    }
+    for &j in &open {
+        let contrast = j >= 3;
+        let reach = &sc.reach[j];
+        // Each reaching group's entries of ranks `a..z` of its bucket, run by run, as values.
+        let members = |rc: &Reach, a: usize, z: usize, f: &mut dyn FnMut(f64, f64, u128)| {
+            let run = &runs[rc.run as usize];
+            let (t, s, ix) = (run.t, run.s, run.ix);
+            let gr = &run.groups[rc.group as usize];
+            let (base, _) = ix.bucket_at(gr.lo as usize);
+            let (ga, gz) = (gr.lo as usize - base, gr.hi as usize - base);
+            for &e in &ix.at_rank[base + a..base + z] {
+                let e = e as usize;
+                if e.wrapping_sub(ga) < gz - ga {
+                    let g = ix.g[base + e];
+                    let w = if contrast { ix.w[base + e] as u128 * s } else { s };
+                    f(t * g, g, w);
+                }
+            }
+        };
+        if ranks[j] > DIRECT_RANKS {
+            // Many values in the bracket: their weights on [`FIRST_KEYS`] keys of the values'
+            // range first, and only the values of the key holding the target kept; the weight of
+            // the keys below it is added to the weight below.
+            let b = Buckets::new(span[j].0, span[j].1, FIRST_KEYS);
+            let hist = &mut sc.fine;
+            if hist.len() < FIRST_KEYS {
+                hist.clear();
+                hist.resize(FIRST_KEYS, 0);
+            }
+            for rc in reach {
+                members(rc, rc.k_lo as usize, rc.k_hi as usize, &mut |m, _, w| {
+                    hist[b.key(m)] += w
+                });
+            }
+            let target = brackets[j].3;
+            let mut k = 0;
+            while below[j] + hist[k] < target {
+                below[j] += hist[k];
+                k += 1;
+            }
+            hist[..FIRST_KEYS].fill(0);
+            let (f0, f1) = (b.floor_of(k), b.floor_of(k + 1));
+            let cands = &mut sc.cands[j];
+            for rc in reach {
+                let run = &runs[rc.run as usize];
+                let (t, ix) = (run.t, run.ix);
+                let (base, len) = ix.bucket_at(run.groups[rc.group as usize].lo as usize);
+                let (a, z) = (rc.k_lo as usize, rc.k_hi as usize);
+                let mid = ix.ranks_below(base, len, t, f0).clamp(a, z);
+                let end = ix.ranks_below(base, len, t, f1).clamp(mid, z);
+                let tag = rc.run as u64;
+                members(rc, mid, end, &mut |m, g, w| {
+                    if w != 0 {
+                        cands.push(Cand { m, w, g, tag });
+                    }
+                });
+            }
+            brackets[j].0 = f0;
+            brackets[j].1 = brackets[j].1.min(f1);
+        } else {
+            let cands = &mut sc.cands[j];
+            for rc in reach {
+                let tag = rc.run as u64;
+                members(rc, rc.k_lo as usize, rc.k_hi as usize, &mut |m, g, w| {
+                    if w != 0 {
+                        cands.push(Cand { m, w, g, tag });
+                    }
+                });
             }
         }
     }
@@ -1376,6 +1452,23 @@ fn select(
     }
     (out, totals)
 }
+
+/// A group reaching into a percentile's bracket ([`select`]): its run in the pool, its place
+/// among the run's groups, and the ranks `k_lo..k_hi` of its bucket whose values lie in the
+/// bracket (its own entries among them are the group's values there).
+#[derive(Clone, Copy)]
+struct Reach {
+    run: u32,
+    group: u32,
+    k_lo: u16,
+    k_hi: u16,
+}
+
+/// Bucket ranks in a bracket, at most, whose values [`select`] lists as they are; past this
+/// it first narrows them on [`FIRST_KEYS`] keys without listing them.
+const DIRECT_RANKS: usize = 128;
+/// Keys of [`select`]'s first narrowing of a bracket's values.
+const FIRST_KEYS: usize = 256;
 
 /// A value in a percentile's bracket: `m = t g`, its weight, and its run in the pool (the
 /// runs of every part flattened, part by part).
