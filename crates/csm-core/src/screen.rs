@@ -1375,7 +1375,15 @@ fn select(
                 }
             }
         };
+        #[cfg(test)]
+        let ranks = if tests::LIST_ALL.with(|c| c.get()) {
+            [0; 6]
+        } else {
+            ranks
+        };
         if ranks[j] > DIRECT_RANKS {
+            #[cfg(test)]
+            tests::NARROWED.with(|c| c.set(c.get() + 1));
             // Many values in the bracket: their weights on [`FIRST_KEYS`] keys of the values'
             // range first, and only the values of the key holding the target kept; the weight of
             // the keys below it is added to the weight below.
@@ -2657,6 +2665,11 @@ mod tests {
         /// ([`Brackets::Keys`], `Some(true)`) or by binary searches on the value (`Some(false)`),
         /// rather than by the pool's size (`None`).
         pub(super) static BY_KEYS: std::cell::Cell<Option<bool>> = const { std::cell::Cell::new(None) };
+        /// Whether [`select`] lists every value of a bracket as it is (`true`), never narrowing
+        /// them on keys first.
+        pub(super) static LIST_ALL: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+        /// Brackets this thread's [`select`] calls narrowed on keys before listing their values.
+        pub(super) static NARROWED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
     }
 
     /// A view of `n` receivers with factors `g` drawn over `spread` octaves, rounded to
@@ -3124,5 +3137,74 @@ mod tests {
             proptest::prop_assert_eq!(&pass.octaves, &want);
             proptest::prop_assert_eq!(pass.under, under);
         }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+        /// A bracket's values narrowed on keys before they are listed give the same bits as
+        /// every value listed and narrowed after: the pool, the pool remembered across texel
+        /// sizes (its windows made either way), each view alone and each statistic alone, over
+        /// views whose factors follow the depth or not, with ties and zero contrast weights, the
+        /// brackets found by either method; and the level's percentiles equal a brute-force pool.
+        #[test]
+        fn brackets_narrowed_before_listing_equal_every_value_listed(
+            seeds in proptest::collection::vec((0u64..1_000_000, 1usize..4000, 1.0f64..12.0, 0.0f64..1.0, 0u32..40), 1..5),
+            cuts in proptest::collection::vec(0.02f64..0.98, 0..5),
+            scales in proptest::collection::vec(0.05f64..20.0, 1..4),
+            weights in proptest::collection::vec(0.25f64..4.0, 4),
+            keys in proptest::option::of(proptest::bool::ANY),
+        ) {
+            let vis: Vec<Visibility> = seeds
+                .iter()
+                .map(|&(seed, n, spread, mix, levels)| correlated(seed, n, spread, mix, levels))
+                .collect();
+            let (_, splits, texels) = split_set_case(&[], cuts, &scales);
+            let all = |list: bool| -> Vec<(Pooled, Pooled, Vec<ScreenStats>, Vec<u64>)> {
+                LIST_ALL.with(|c| c.set(list));
+                BY_KEYS.with(|k| k.set(keys));
+                let memo = PoolMemo::default();
+                let out = texels
+                    .iter()
+                    .map(|t| {
+                        forget_served();
+                        let parts = parts_at(&vis, &splits, t, &weights);
+                        let (own, one) = each_view_and_statistic(&vis, &splits, t);
+                        (pool(&parts), pool_memo(&parts, &memo), own, one)
+                    })
+                    .collect();
+                LIST_ALL.with(|c| c.set(false));
+                BY_KEYS.with(|k| k.set(None));
+                out
+            };
+            let listed = all(true);
+            let narrowed = all(false);
+            proptest::prop_assert_eq!(&listed, &narrowed);
+            for (t, got) in texels.iter().zip(&narrowed) {
+                let parts = parts_at(&vis, &splits, t, &weights);
+                let (p, vp, max, vmax, _) = brute_percentiles(&parts);
+                let l = &got.0.level;
+                proptest::prop_assert_eq!([l.aliasing_p50, l.aliasing_p95, l.aliasing_p99], p);
+                proptest::prop_assert_eq!([l.visible_p50, l.visible_p95, l.visible_p99], vp);
+                proptest::prop_assert_eq!((l.aliasing_max, l.visible_max), (max, vmax));
+            }
+        }
+    }
+
+    /// A level of views with many values near each percentile narrows its brackets on keys
+    /// before listing them (the path the proptest above compares), and its percentiles equal a
+    /// brute-force pool.
+    #[test]
+    fn a_level_narrows_its_brackets_before_listing() {
+        let vis: Vec<Visibility> = (0..6).map(|k| correlated(40 + k, 5000, 6.0, 0.5, 0)).collect();
+        let splits = vec![0.5, 20.0, 70.0, 210.0];
+        let texel = vec![0.2, 0.5, 1.4];
+        let parts = parts_at(&vis, &splits, &texel, &[1.0; 6]);
+        let before = NARROWED.with(|c| c.get());
+        let got = pool(&parts);
+        assert!(NARROWED.with(|c| c.get()) > before);
+        let (p, vp, _, _, _) = brute_percentiles(&parts);
+        let l = &got.level;
+        assert_eq!([l.aliasing_p50, l.aliasing_p95, l.aliasing_p99], p);
+        assert_eq!([l.visible_p50, l.visible_p95, l.visible_p99], vp);
     }
 }
