@@ -1384,10 +1384,12 @@ fn select(
         if ranks[j] > DIRECT_RANKS {
             #[cfg(test)]
             tests::NARROWED.with(|c| c.set(c.get() + 1));
-            // Many values in the bracket: their weights on [`FIRST_KEYS`] keys of the values'
-            // range first, and only the values of the key holding the target kept; the weight of
-            // the keys below it is added to the weight below.
-            let b = Buckets::new(span[j].0, span[j].1, FIRST_KEYS);
+            // Many values in the bracket: their weights on keys of the values' range first
+            // (about eight bucket ranks per key, from 16 to FIRST_KEYS keys), and only the values
+            // of the key holding the target kept; the weight of the keys below it is added to
+            // the weight below.
+            let keys = (ranks[j] / 8).next_power_of_two().clamp(16, FIRST_KEYS);
+            let b = Buckets::new(span[j].0, span[j].1, keys);
             let hist = &mut sc.fine;
             if hist.len() < FIRST_KEYS {
                 hist.clear();
@@ -1404,7 +1406,7 @@ fn select(
                 below[j] += hist[k];
                 k += 1;
             }
-            hist[..FIRST_KEYS].fill(0);
+            hist[..keys].fill(0);
             let (f0, f1) = (b.floor_of(k), b.floor_of(k + 1));
             let cands = &mut sc.cands[j];
             for rc in reach {
@@ -1473,9 +1475,10 @@ struct Reach {
 }
 
 /// Bucket ranks in a bracket, at most, whose values [`select`] lists as they are; past this
-/// it first narrows them on [`FIRST_KEYS`] keys without listing them.
+/// it first narrows them on keys (about one per eight ranks, at most [`FIRST_KEYS`]) without
+/// listing them.
 const DIRECT_RANKS: usize = 128;
-/// Keys of [`select`]'s first narrowing of a bracket's values.
+/// Keys of [`select`]'s first narrowing of a bracket's values, at most.
 const FIRST_KEYS: usize = 256;
 
 /// A value in a percentile's bracket: `m = t g`, its weight, and its run in the pool (the
