@@ -780,7 +780,7 @@ impl<'a> ViewPass<'a> {
                             sc.oct[o] += (n - done) as u32;
                             done = n;
                         }
-                        sc.oct[o_hi] += (gr.hi - gr.lo) as u32 - done as u32;
+                        sc.oct[o_hi] += (gr.hi - gr.lo) - done as u32;
                         k += 1;
                     }
                 }
