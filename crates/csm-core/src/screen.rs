@@ -383,8 +383,18 @@ impl ScreenIndex {
     /// monotone in it): a binary search over the bucket's ranks.
     #[inline]
     fn ranks_where(&self, base: usize, len: usize, low: impl Fn(f64) -> bool) -> usize {
+        let at = &self.at_rank[base..base + len];
         let g = &self.g[base..base + len];
-        self.at_rank[base..base + len].partition_point(|&e| low(g[e as usize]))
+        let (mut lo, mut hi) = (0usize, len);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if low(g[at[mid] as usize]) {
+                lo = mid + 1;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
     }
 
     /// The count and contrast weight of group `gr`'s entries of rank below `k` in their bucket
