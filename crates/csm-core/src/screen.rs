@@ -168,7 +168,7 @@ fn served_runs(vis: &Visibility, splits: &[f64], m: usize) -> (Vec<Run>, Vec<usi
 /// Receivers per bucket of a [`ScreenIndex`] (consecutive in the order of `g`).
 const BUCKET: usize = 128;
 /// Receivers per block of a [`ScreenIndex`]'s depth-order prefix sums.
-const BLOCK: usize = 64;
+const BLOCK: usize = 16;
 /// Receivers per row of a [`ScreenIndex`]'s bucket counts (in depth order), at least.
 const ROW: usize = 256;
 /// Rows of a [`ScreenIndex`], at most: a row holds a count per bucket (a bucket per [`BUCKET`]
@@ -205,6 +205,11 @@ pub struct ScreenIndex {
     idx: Vec<u32>,
     g: Vec<f64>,
     w: Vec<u32>,
+    /// Per entry: its rank within its bucket (the order of `(g, depth order)`).
+    rank: Vec<u8>,
+    /// Per bucket and rank (entry `b BUCKET + r` for rank `r` of bucket `b`): the entry of that
+    /// rank, as its place within the bucket. So a bucket's `g` can be read in ascending order.
+    at_rank: Vec<u8>,
     /// Per receiver (depth order): its bucket.
     bucket_of: Vec<u32>,
     /// Receivers per row: [`ROW`], or more for a pass of over `ROW × MAX_ROWS` receivers.
@@ -273,11 +278,13 @@ impl ScreenIndex {
         let mut glo = Vec::with_capacity(buckets);
         let mut ghi = Vec::with_capacity(buckets);
         let mut bucket_of = vec![0u32; n];
+        let mut rank_of = vec![0u8; n];
         for (b, chunk) in order.chunks(BUCKET).enumerate() {
             glo.push(r[chunk[0] as usize].1);
             ghi.push(r[chunk[chunk.len() - 1] as usize].1);
-            for &i in chunk {
+            for (k, &i) in chunk.iter().enumerate() {
                 bucket_of[i as usize] = b as u32;
+                rank_of[i as usize] = k as u8;
             }
         }
         let start: Vec<u32> = (0..=buckets).map(|b| (b * BUCKET).min(n) as u32).collect();
@@ -292,6 +299,12 @@ impl ScreenIndex {
         }
         let g: Vec<f64> = order.iter().map(|&i| r[i as usize].1).collect();
         let w: Vec<u32> = order.iter().map(|&i| vis.weights[i as usize]).collect();
+        let rank: Vec<u8> = order.iter().map(|&i| rank_of[i as usize]).collect();
+        let mut at_rank = vec![0u8; n];
+        for (e, &k) in rank.iter().enumerate() {
+            let base = e - e % BUCKET;
+            at_rank[base + k as usize] = (e - base) as u8;
+        }
         let row = ROW.max(n.div_ceil(MAX_ROWS));
         let mut rows = Vec::with_capacity((n / row + 1) * buckets);
         let mut wrows = Vec::with_capacity((n / row + 1) * buckets);
@@ -332,6 +345,8 @@ impl ScreenIndex {
             idx: order,
             g,
             w,
+            rank,
+            at_rank,
             bucket_of,
             row,
             rows,
@@ -347,6 +362,79 @@ impl ScreenIndex {
 
     fn buckets(&self) -> usize {
         self.glo.len()
+    }
+
+    /// The bucket holding entry `e`: its first entry and its length.
+    #[inline]
+    fn bucket_at(&self, e: usize) -> (usize, usize) {
+        let base = e - e % BUCKET;
+        (base, BUCKET.min(self.g.len() - base))
+    }
+
+    /// How many entries of the bucket at `base` (of `len` entries) have `t g` below `x`: a
+    /// binary search over its ranks (`t g` never decreases with the rank, `t >= 0`).
+    #[inline]
+    fn ranks_below(&self, base: usize, len: usize, t: f64, x: f64) -> usize {
+        self.ranks_where(base, len, |g| t * g < x)
+    }
+
+    /// How many entries of the bucket at `base` (of `len` entries) satisfy `low`, for a `low`
+    /// that holds for the lowest ranks and not above them (a condition on `g` that is
+    /// monotone in it): a binary search over the bucket's ranks.
+    #[inline]
+    fn ranks_where(&self, base: usize, len: usize, low: impl Fn(f64) -> bool) -> usize {
+        let at = &self.at_rank[base..base + len];
+        let g = &self.g[base..base + len];
+        let (mut lo, mut hi) = (0usize, len);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if low(g[at[mid] as usize]) {
+                lo = mid + 1;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+
+    /// The count and contrast weight of group `gr`'s entries of rank below `k` in their bucket
+    /// (at `base`, `len` entries): read over the ranks below `k`, over the ranks from `k`, or
+    /// over the group's entries, whichever is fewest.
+    #[inline]
+    fn group_below(&self, gr: &Group, base: usize, len: usize, k: usize) -> (u64, u64) {
+        let (a, z) = (gr.lo as usize - base, gr.hi as usize - base);
+        let size = (z - a) as u64;
+        if k == 0 {
+            return (0, 0);
+        }
+        if k == len {
+            return (size, gr.cw);
+        }
+        let inside = |e: u8| (e as usize).wrapping_sub(a) < z - a;
+        let (mut n, mut wsum) = (0u64, 0u64);
+        if k <= z - a && k <= len - k {
+            for &e in &self.at_rank[base..base + k] {
+                let m = inside(e) as u64;
+                n += m;
+                wsum += m * self.w[base + e as usize] as u64;
+            }
+            (n, wsum)
+        } else if len - k < z - a {
+            for &e in &self.at_rank[base + k..base + len] {
+                let m = inside(e) as u64;
+                n += m;
+                wsum += m * self.w[base + e as usize] as u64;
+            }
+            (size - n, gr.cw - wsum)
+        } else {
+            let span = gr.lo as usize..gr.hi as usize;
+            for (&r, &w) in self.rank[span.clone()].iter().zip(&self.w[span]) {
+                let m = ((r as usize) < k) as u64;
+                n += m;
+                wsum += m * w as u64;
+            }
+            (n, wsum)
+        }
     }
 
     /// The sums of `g`, `w g` (whole units) and `w` over the receivers before `p` (depth order).
@@ -439,8 +527,9 @@ impl Served {
                 )
             })
             .collect();
-        // Each bucket's entries before each bound, and their contrast weight: the row at or
-        // below the bound, and the receivers from it to the bound counted on.
+        // Each bucket's entries before each bound, and their contrast weight, bound by bound
+        // (one row of `buckets` per bound): the nearest row (below or above the bound) and the
+        // receivers between it and the bound counted on or back.
         let nb = bounds.len();
         let buckets = ix.buckets();
         // Every entry is set below before it is counted on: the buffers only grow.
@@ -449,44 +538,73 @@ impl Served {
             cut.resize(buckets * nb, 0);
             wcut.resize(buckets * nb, 0);
         }
-        sv.groups.reserve((buckets * sv.runs.len()).min(n));
+        let rows = ix.rows.len() / buckets;
         for (j, &p) in bounds.iter().enumerate() {
-            let row = p / ix.row;
-            let (c, w) = (
+            let (c, w) = (&mut cut[j * buckets..][..buckets], &mut wcut[j * buckets..][..buckets]);
+            let below = p / ix.row;
+            let up = below + 1 < rows && (below + 1) * ix.row - p < p - below * ix.row;
+            let row = below + up as usize;
+            let (rc, rw) = (
                 &ix.rows[row * buckets..][..buckets],
                 &ix.wrows[row * buckets..][..buckets],
             );
-            for b in 0..buckets {
-                cut[b * nb + j] = ix.start[b] + c[b];
-                wcut[b * nb + j] = w[b];
+            for ((c, &s), &r) in c.iter_mut().zip(&ix.start[..buckets]).zip(rc) {
+                *c = s + r;
             }
-            for k in row * ix.row..p {
-                let b = ix.bucket_of[k] as usize;
-                cut[b * nb + j] += 1;
-                wcut[b * nb + j] += vis.weights[k] as u64;
+            w.copy_from_slice(rw);
+            if up {
+                let span = p..row * ix.row;
+                for (&b, &wk) in ix.bucket_of[span.clone()].iter().zip(&vis.weights[span]) {
+                    c[b as usize] -= 1;
+                    w[b as usize] -= wk as u64;
+                }
+            } else {
+                let span = row * ix.row..p;
+                for (&b, &wk) in ix.bucket_of[span.clone()].iter().zip(&vis.weights[span]) {
+                    c[b as usize] += 1;
+                    w[b as usize] += wk as u64;
+                }
             }
         }
         for &(ja, jb) in &ends {
             let first = sv.groups.len();
             let mut top = None;
             let mut wtop = None;
-            for b in 0..buckets {
-                let (glo, ghi) = (cut[b * nb + ja], cut[b * nb + jb]);
-                if glo == ghi {
-                    continue;
+            let (ca, cz) = (&cut[ja * buckets..][..buckets], &cut[jb * buckets..][..buckets]);
+            let (wa, wz) = (&wcut[ja * buckets..][..buckets], &wcut[jb * buckets..][..buckets]);
+            // The run's buckets that hold receivers: the entries before its end exceed those
+            // before its start. A stretch of buckets at once (the entries before the end never
+            // fall below those before the start, so the stretch holds none when the sums of
+            // both agree), then bucket by bucket.
+            const STRETCH: usize = 16;
+            let mut from = 0;
+            while from < buckets {
+                let to = (from + STRETCH).min(buckets);
+                let held: u32 = cz[from..to]
+                    .iter()
+                    .zip(&ca[from..to])
+                    .fold(0u32, |acc, (&z, &a)| acc.wrapping_add(z - a));
+                if held != 0 {
+                    for b in from..to {
+                        let (glo, ghi) = (ca[b], cz[b]);
+                        if glo == ghi {
+                            continue;
+                        }
+                        let cw = wz[b] - wa[b];
+                        sv.groups.push(Group {
+                            lo: glo,
+                            hi: ghi,
+                            cw,
+                            glo: ix.glo[b],
+                            ghi: ix.ghi[b],
+                        });
+                        top = Some(sv.groups.len() - 1);
+                        if cw > 0 {
+                            wtop = Some(sv.groups.len() - 1);
+                        }
+                    }
                 }
-                let cw = wcut[b * nb + jb] - wcut[b * nb + ja];
-                sv.groups.push(Group {
-                    lo: glo,
-                    hi: ghi,
-                    cw,
-                    glo: ix.glo[b],
-                    ghi: ix.ghi[b],
-                });
-                top = Some(sv.groups.len() - 1);
-                if cw > 0 {
-                    wtop = Some(sv.groups.len() - 1);
-                }
+                from = to;
             }
             sv.run_groups.push((first, sv.groups.len()));
             // The maxima's factors: the largest g of the run's highest bucket (of weight
@@ -668,10 +786,20 @@ impl<'a> ViewPass<'a> {
                         sc.oct[o] += (sv.cum[a + end].0 - sv.cum[a + k].0) as u32;
                         k = end;
                     } else {
-                        let gr = run[k];
-                        for &g in &ix.g[gr.lo as usize..gr.hi as usize] {
-                            sc.oct[octave(t * g)] += 1;
+                        // A group straddling octaves: per octave boundary, the bucket's ranks
+                        // below it (a binary search on the bucket in the order of g) and the
+                        // group's entries among them.
+                        let gr = &run[k];
+                        let (base, len) = ix.bucket_at(gr.lo as usize);
+                        let (o_lo, o_hi) = (octave(t * gr.glo), octave(t * gr.ghi));
+                        let mut done = 0u64;
+                        for o in o_lo..o_hi {
+                            let r = ix.ranks_where(base, len, |g| octave(t * g) <= o);
+                            let (n, _) = ix.group_below(gr, base, len, r);
+                            sc.oct[o] += (n - done) as u32;
+                            done = n;
                         }
+                        sc.oct[o_hi] += (gr.hi - gr.lo) - done as u32;
                         k += 1;
                     }
                 }
@@ -721,6 +849,8 @@ struct Scratch {
     at: Vec<usize>,
     /// Per target (plain p50, p95, p99, then contrast): the values in its bracket.
     cands: [Vec<Cand>; 6],
+    /// Per target: the groups reaching into its bracket.
+    reach: [Vec<Reach>; 6],
     /// [`resolve`]'s histogram (zero between calls).
     fine: Vec<u128>,
     /// [`from_window`]'s values.
@@ -886,6 +1016,8 @@ struct PoolRun<'a> {
     groups: &'a [Group],
     cum: &'a [(u64, u64)],
     s: u128,
+    /// Its view's index (the groups' values).
+    ix: &'a ScreenIndex,
 }
 
 impl PoolRun<'_> {
@@ -1166,61 +1298,151 @@ fn select(
                 groups: &sv.groups[a..z],
                 cum: &sv.cum[a..=z],
                 s: s as u128,
+                ix: p.ix,
             });
         }
     }
     // Per target: its bracket `[lo, hi)` of values, the weight of the values below it, and the
     // weight to reach.
-    let brackets = match how {
+    let mut brackets = match how {
         Brackets::Values => value_brackets(&runs, &open, &target_of, sc),
         Brackets::Keys(buckets, count) => key_brackets(&runs, &open, &target_of, totals, buckets, count, sc),
     };
     let mut below = [0u128; 6];
+    // Per target: the bucket ranks of each group reaching into its bracket that lie in it, an
+    // upper bound of their count, and the smallest and largest value at those ranks.
+    let mut ranks = [0usize; 6];
+    let mut span = [(f64::INFINITY, 0.0f64); 6];
     for &j in &open {
         below[j] = brackets[j].2;
         sc.cands[j].clear();
+        sc.reach[j].clear();
     }
-    let mut run_of = 0usize;
-    for &(pass, s) in pools {
-        let s = s as u128;
-        let ix = pass.ix;
-        for _ in 0..pass.sv.runs.len() {
-            let run = &runs[run_of];
-            let tag = run_of as u64;
-            run_of += 1;
-            let t = run.t;
-            for &j in &open {
-                let (lo_v, hi_v) = (brackets[j].0, brackets[j].1);
-                let contrast = j >= 3;
-                // The run's groups reaching into the bracket are consecutive (their bounds never
-                // decrease): those after every group ending below it, before the first starting
-                // at or above its end.
-                let from = run.count(0, run.groups.len(), true, lo_v, false);
-                let to = run.count(from, run.groups.len(), false, hi_v, false);
-                for gr in &run.groups[from..to] {
-                    let span = gr.lo as usize..gr.hi as usize;
-                    let (gs, ws) = (&ix.g[span.clone()], &ix.w[span]);
-                    if t * gr.glo < lo_v {
-                        // The values below the bracket: counted without a branch per value, and
-                        // their contrast weight, then weighted by the view's steps once.
-                        let (mut n, mut wsum) = (0u64, 0u64);
-                        for (&g, &w) in gs.iter().zip(ws) {
-                            let under = (t * g < lo_v) as u64;
-                            n += under;
-                            wsum += under * w as u64;
-                        }
-                        below[j] += if contrast { wsum as u128 * s } else { n as u128 * s };
-                    }
-                    for (&g, &w) in gs.iter().zip(ws) {
-                        let m = t * g;
-                        if m >= lo_v && m < hi_v {
-                            let w = if contrast { w as u128 * s } else { s };
-                            if w != 0 {
-                                sc.cands[j].push(Cand { m, w, g, tag });
-                            }
-                        }
-                    }
+    for (r, run) in runs.iter().enumerate() {
+        let (t, s, ix) = (run.t, run.s, run.ix);
+        for &j in &open {
+            let (lo_v, hi_v) = (brackets[j].0, brackets[j].1);
+            let contrast = j >= 3;
+            // The run's groups reaching into the bracket are consecutive (their bounds never
+            // decrease): those after every group ending below it, before the first starting
+            // at or above its end.
+            let from = run.count(0, run.groups.len(), true, lo_v, false);
+            let to = run.count(from, run.groups.len(), false, hi_v, false);
+            for (i, gr) in run.groups[from..to].iter().enumerate() {
+                // The bucket's entries in the order of g: those below the bracket are its
+                // lowest ranks, those in it the next ones (binary searches on t g).
+                let (base, len) = ix.bucket_at(gr.lo as usize);
+                let k_lo = if t * gr.glo < lo_v {
+                    ix.ranks_below(base, len, t, lo_v)
+                } else {
+                    0
+                };
+                let k_hi = if t * gr.ghi < hi_v {
+                    len
+                } else {
+                    ix.ranks_below(base, len, t, hi_v)
+                };
+                if k_lo > 0 {
+                    // The values below the bracket: counted, with their contrast weight,
+                    // then weighted by the view's steps once.
+                    let (n, wsum) = ix.group_below(gr, base, len, k_lo);
+                    below[j] += if contrast { wsum as u128 * s } else { n as u128 * s };
                 }
+                if k_hi > k_lo {
+                    sc.reach[j].push(Reach {
+                        run: r as u32,
+                        group: (from + i) as u32,
+                        k_lo: k_lo as u16,
+                        k_hi: k_hi as u16,
+                    });
+                    ranks[j] += k_hi - k_lo;
+                    let (lo_m, hi_m) = (
+                        ix.g[base + ix.at_rank[base + k_lo] as usize],
+                        ix.g[base + ix.at_rank[base + k_hi - 1] as usize],
+                    );
+                    span[j] = (span[j].0.min(t * lo_m), span[j].1.max(t * hi_m));
+                }
+            }
+        }
+    }
+    for &j in &open {
+        let contrast = j >= 3;
+        let reach = &sc.reach[j];
+        // Each reaching group's entries of ranks `a..z` of its bucket, run by run, as values.
+        let members = |rc: &Reach, a: usize, z: usize, f: &mut dyn FnMut(f64, f64, u128)| {
+            let run = &runs[rc.run as usize];
+            let (t, s, ix) = (run.t, run.s, run.ix);
+            let gr = &run.groups[rc.group as usize];
+            let (base, _) = ix.bucket_at(gr.lo as usize);
+            let (ga, gz) = (gr.lo as usize - base, gr.hi as usize - base);
+            for &e in &ix.at_rank[base + a..base + z] {
+                let e = e as usize;
+                if e.wrapping_sub(ga) < gz - ga {
+                    let g = ix.g[base + e];
+                    let w = if contrast { ix.w[base + e] as u128 * s } else { s };
+                    f(t * g, g, w);
+                }
+            }
+        };
+        #[cfg(test)]
+        let ranks = if tests::LIST_ALL.with(|c| c.get()) {
+            [0; 6]
+        } else {
+            ranks
+        };
+        if ranks[j] > DIRECT_RANKS {
+            #[cfg(test)]
+            tests::NARROWED.with(|c| c.set(c.get() + 1));
+            // Many values in the bracket: their weights on keys of the values' range first
+            // (about eight bucket ranks per key, from 16 to FIRST_KEYS keys), and only the values
+            // of the key holding the target kept; the weight of the keys below it is added to
+            // the weight below.
+            let keys = (ranks[j] / 8).next_power_of_two().clamp(16, FIRST_KEYS);
+            let b = Buckets::new(span[j].0, span[j].1, keys);
+            let hist = &mut sc.fine;
+            if hist.len() < FIRST_KEYS {
+                hist.clear();
+                hist.resize(FIRST_KEYS, 0);
+            }
+            for rc in reach {
+                members(rc, rc.k_lo as usize, rc.k_hi as usize, &mut |m, _, w| {
+                    hist[b.key(m)] += w
+                });
+            }
+            let target = brackets[j].3;
+            let mut k = 0;
+            while below[j] + hist[k] < target {
+                below[j] += hist[k];
+                k += 1;
+            }
+            hist[..keys].fill(0);
+            let (f0, f1) = (b.floor_of(k), b.floor_of(k + 1));
+            let cands = &mut sc.cands[j];
+            for rc in reach {
+                let run = &runs[rc.run as usize];
+                let (t, ix) = (run.t, run.ix);
+                let (base, len) = ix.bucket_at(run.groups[rc.group as usize].lo as usize);
+                let (a, z) = (rc.k_lo as usize, rc.k_hi as usize);
+                let mid = ix.ranks_below(base, len, t, f0).clamp(a, z);
+                let end = ix.ranks_below(base, len, t, f1).clamp(mid, z);
+                let tag = rc.run as u64;
+                members(rc, mid, end, &mut |m, g, w| {
+                    if w != 0 {
+                        cands.push(Cand { m, w, g, tag });
+                    }
+                });
+            }
+            brackets[j].0 = f0;
+            brackets[j].1 = brackets[j].1.min(f1);
+        } else {
+            let cands = &mut sc.cands[j];
+            for rc in reach {
+                let tag = rc.run as u64;
+                members(rc, rc.k_lo as usize, rc.k_hi as usize, &mut |m, g, w| {
+                    if w != 0 {
+                        cands.push(Cand { m, w, g, tag });
+                    }
+                });
             }
         }
     }
@@ -1249,6 +1471,24 @@ fn select(
     }
     (out, totals)
 }
+
+/// A group reaching into a percentile's bracket ([`select`]): its run in the pool, its place
+/// among the run's groups, and the ranks `k_lo..k_hi` of its bucket whose values lie in the
+/// bracket (its own entries among them are the group's values there).
+#[derive(Clone, Copy)]
+struct Reach {
+    run: u32,
+    group: u32,
+    k_lo: u16,
+    k_hi: u16,
+}
+
+/// Bucket ranks in a bracket, at most, whose values [`select`] lists as they are; past this
+/// it first narrows them on keys (about one per eight ranks, at most [`FIRST_KEYS`]) without
+/// listing them.
+const DIRECT_RANKS: usize = 128;
+/// Keys of [`select`]'s first narrowing of a bracket's values, at most.
+const FIRST_KEYS: usize = 256;
 
 /// A value in a percentile's bracket: `m = t g`, its weight, and its run in the pool (the
 /// runs of every part flattened, part by part).
@@ -2626,6 +2866,11 @@ mod tests {
         /// ([`Brackets::Keys`], `Some(true)`) or by binary searches on the value (`Some(false)`),
         /// rather than by the pool's size (`None`).
         pub(super) static BY_KEYS: std::cell::Cell<Option<bool>> = const { std::cell::Cell::new(None) };
+        /// Whether [`select`] lists every value of a bracket as it is (`true`), never narrowing
+        /// them on keys first.
+        pub(super) static LIST_ALL: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+        /// Brackets this thread's [`select`] calls narrowed on keys before listing their values.
+        pub(super) static NARROWED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
     }
 
     /// A view of `n` receivers with factors `g` drawn over `spread` octaves, rounded to
@@ -3010,5 +3255,216 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A view of `n` receivers whose factors follow the depth (`mix` 1) or not (`mix` 0), drawn
+    /// over `spread` octaves and rounded to `levels` values when `levels > 0` (ties), with zero
+    /// contrast weights now and then.
+    fn correlated(seed: u64, n: usize, spread: f64, mix: f64, levels: u32) -> Visibility {
+        let mut next = xorshift(seed);
+        let mut depths: Vec<f64> = (0..n).map(|_| 1.0 + 199.0 * next()).collect();
+        depths.sort_by(f64::total_cmp);
+        let receivers = depths
+            .iter()
+            .map(|&d| {
+                let u = mix * (d - 1.0) / 199.0 + (1.0 - mix) * next();
+                let u = if levels > 0 {
+                    (u * levels as f64).floor() / levels as f64
+                } else {
+                    u
+                };
+                (d, 0.05 * (spread * u).exp2())
+            })
+            .collect();
+        let weights = (0..n)
+            .map(|k| {
+                if k % 6 == 0 {
+                    0
+                } else {
+                    crate::visibility::contrast_weight(next())
+                }
+            })
+            .collect();
+        pass_of(receivers, weights, n / 4)
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// A split set's served parts ([`Served`]: bound-major entry counts from the nearest
+        /// row, buckets scanned a stretch at a time), its pass's values per octave and
+        /// undersampled count, and the counts a selection reads from a bucket in the order of g
+        /// ([`ScreenIndex::ranks_below`], [`ScreenIndex::group_below`]) equal a count of the
+        /// receivers one by one: per run and bucket the entries of its receivers, their contrast
+        /// weight, the largest g; per run the sums of g, w g and w; per octave the served values;
+        /// and per group and threshold the values below it. Views whose factors follow the depth
+        /// or not, with ties, zero contrast weights, and past `ROW × MAX_ROWS` receivers.
+        #[test]
+        fn served_parts_and_rank_counts_equal_a_count_one_by_one(
+            (seed, n, spread, mix, levels) in (0u64..1_000_000, 1usize..6000, 1.0f64..14.0, 0.0f64..1.0, 0u32..30),
+            big in 0u32..8,
+            cuts in proptest::collection::vec(0.0f64..1.0, 0..7),
+            scale in 0.01f64..50.0,
+            probes in proptest::collection::vec(0.0f64..1.0, 4),
+        ) {
+            // Now and then a pass whose rows are spaced further apart.
+            let n = if big == 0 { n + ROW * MAX_ROWS } else { n };
+            let vis = correlated(seed, n, spread, mix, levels);
+            let ix = vis.index();
+            let mut cuts = cuts;
+            cuts.sort_by(f64::total_cmp);
+            let splits: Vec<f64> = std::iter::once(0.5)
+                .chain(cuts.iter().map(|c| 1.0 + 199.0 * c))
+                .chain([220.0])
+                .collect();
+            let m = splits.len() - 1;
+            let texel: Vec<f64> = (0..m).map(|i| scale * 0.3 * 1.9f64.powi(i as i32)).collect();
+            let mut sc = Scratch::new();
+            let sv = Served::new(&vis, ix, &splits, m, &mut sc);
+            let (runs, counts) = served_runs(&vis, &splits, m);
+            proptest::prop_assert_eq!(&sv.runs, &runs);
+            proptest::prop_assert_eq!(&sv.counts, &counts);
+            proptest::prop_assert_eq!(sv.cum.len(), sv.groups.len() + usize::from(sv.n > 0));
+            for (r, &(a, z, _)) in runs.iter().enumerate() {
+                // Per bucket, its entries of receivers a..z, one by one.
+                let mut want = Vec::new();
+                for b in 0..ix.buckets() {
+                    let span = ix.start[b] as usize..ix.start[b + 1] as usize;
+                    let inside: Vec<usize> = span.filter(|&e| (a..z).contains(&(ix.idx[e] as usize))).collect();
+                    if let (Some(&lo), Some(&hi)) = (inside.first(), inside.last()) {
+                        proptest::prop_assert_eq!(inside.len(), hi + 1 - lo);
+                        let cw: u64 = inside.iter().map(|&e| ix.w[e] as u64).sum();
+                        want.push((lo as u32, hi as u32 + 1, cw, ix.glo[b].to_bits(), ix.ghi[b].to_bits()));
+                    }
+                }
+                let (ga, gz) = sv.run_groups[r];
+                let got: Vec<_> = sv.groups[ga..gz].iter().map(|g| (g.lo, g.hi, g.cw, g.glo.to_bits(), g.ghi.to_bits())).collect();
+                proptest::prop_assert_eq!(&got, &want);
+                let before: u64 = sv.groups[..ga].iter().map(|g| (g.hi - g.lo) as u64).sum();
+                let wbefore: u64 = sv.groups[..ga].iter().map(|g| g.cw).sum();
+                proptest::prop_assert_eq!(sv.cum[ga], (before, wbefore));
+                for k in ga..gz {
+                    let (c, w) = sv.cum[k];
+                    proptest::prop_assert_eq!(sv.cum[k + 1], (c + (sv.groups[k].hi - sv.groups[k].lo) as u64, w + sv.groups[k].cw));
+                }
+                // The sums in whole units, receiver by receiver.
+                let (mut sg, mut swg, mut sw) = (0u128, 0u128, 0u64);
+                for k in a..z {
+                    let (g, w) = (vis.receivers[k].1, vis.weights[k]);
+                    sg += whole_units(g, 1, ix.unit);
+                    swg += whole_units(g, w, ix.unit + WEIGHT_BITS);
+                    sw += w as u64;
+                }
+                let want_sums = (scaled(sg as f64, ix.unit), scaled(swg as f64, ix.unit + WEIGHT_BITS), sw);
+                proptest::prop_assert_eq!(sv.sums[r], want_sums);
+                // The largest g of the run's highest group (and of its highest with weight).
+                let top = sv.groups[ga..gz].last();
+                let gmax = top.map(|g| (g.lo..g.hi).map(|e| ix.g[e as usize]).fold(0.0f64, f64::max));
+                let wtop = sv.groups[ga..gz].iter().rev().find(|g| g.cw > 0);
+                let wgmax = wtop.map(|g| (g.lo..g.hi).filter(|&e| ix.w[e as usize] > 0).map(|e| ix.g[e as usize]).fold(0.0f64, f64::max));
+                proptest::prop_assert_eq!(sv.gmax[r], (gmax, wgmax));
+                // Per group: the values below thresholds (bucket values and values between).
+                let t = texel[runs[r].2];
+                for gr in &sv.groups[ga..gz] {
+                    let (base, len) = ix.bucket_at(gr.lo as usize);
+                    proptest::prop_assert_eq!(base, ix.start[base / BUCKET] as usize);
+                    proptest::prop_assert_eq!(base + len, ix.start[base / BUCKET + 1] as usize);
+                    for &p in &probes {
+                        let e = base + ((p * len as f64) as usize).min(len - 1);
+                        for x in [t * ix.g[e], t * ix.g[e] * (1.0 + 1e-9), t * gr.glo * (1.0 - p) + t * gr.ghi * p] {
+                            let k = ix.ranks_below(base, len, t, x);
+                            let bucket_below = (base..base + len).filter(|&e| t * ix.g[e] < x).count();
+                            proptest::prop_assert_eq!(k, bucket_below);
+                            let span = gr.lo as usize..gr.hi as usize;
+                            let n_below = span.clone().filter(|&e| t * ix.g[e] < x).count() as u64;
+                            let w_below: u64 = span.filter(|&e| t * ix.g[e] < x).map(|e| ix.w[e] as u64).sum();
+                            proptest::prop_assert_eq!(ix.group_below(gr, base, len, k), (n_below, w_below));
+                        }
+                    }
+                }
+            }
+            // The values per octave and the undersampled count of the pass at these texel sizes.
+            let pass = ViewPass::new(&vis, &splits, &texel, true, &mut sc);
+            let mut octs = std::collections::BTreeMap::new();
+            let mut under = 0u64;
+            for &(a, z, i) in &runs {
+                for k in a..z {
+                    let v = texel[i] * vis.receivers[k].1;
+                    *octs.entry(octave(v) as u16).or_insert(0u32) += 1;
+                    under += (v > 1.0) as u64;
+                }
+            }
+            let want: Vec<(u16, u32)> = octs.into_iter().collect();
+            proptest::prop_assert_eq!(&pass.octaves, &want);
+            proptest::prop_assert_eq!(pass.under, under);
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+        /// A bracket's values narrowed on keys before they are listed give the same bits as
+        /// every value listed and narrowed after: the pool, the pool remembered across texel
+        /// sizes (its windows made either way), each view alone and each statistic alone, over
+        /// views whose factors follow the depth or not, with ties and zero contrast weights, the
+        /// brackets found by either method; and the level's percentiles equal a brute-force pool.
+        #[test]
+        fn brackets_narrowed_before_listing_equal_every_value_listed(
+            seeds in proptest::collection::vec((0u64..1_000_000, 1usize..4000, 1.0f64..12.0, 0.0f64..1.0, 0u32..40), 1..5),
+            cuts in proptest::collection::vec(0.02f64..0.98, 0..5),
+            scales in proptest::collection::vec(0.05f64..20.0, 1..4),
+            weights in proptest::collection::vec(0.25f64..4.0, 4),
+            keys in proptest::option::of(proptest::bool::ANY),
+        ) {
+            let vis: Vec<Visibility> = seeds
+                .iter()
+                .map(|&(seed, n, spread, mix, levels)| correlated(seed, n, spread, mix, levels))
+                .collect();
+            let (_, splits, texels) = split_set_case(&[], cuts, &scales);
+            let all = |list: bool| -> Vec<(Pooled, Pooled, Vec<ScreenStats>, Vec<u64>)> {
+                LIST_ALL.with(|c| c.set(list));
+                BY_KEYS.with(|k| k.set(keys));
+                let memo = PoolMemo::default();
+                let out = texels
+                    .iter()
+                    .map(|t| {
+                        forget_served();
+                        let parts = parts_at(&vis, &splits, t, &weights);
+                        let (own, one) = each_view_and_statistic(&vis, &splits, t);
+                        (pool(&parts), pool_memo(&parts, &memo), own, one)
+                    })
+                    .collect();
+                LIST_ALL.with(|c| c.set(false));
+                BY_KEYS.with(|k| k.set(None));
+                out
+            };
+            let listed = all(true);
+            let narrowed = all(false);
+            proptest::prop_assert_eq!(&listed, &narrowed);
+            for (t, got) in texels.iter().zip(&narrowed) {
+                let parts = parts_at(&vis, &splits, t, &weights);
+                let (p, vp, max, vmax, _) = brute_percentiles(&parts);
+                let l = &got.0.level;
+                proptest::prop_assert_eq!([l.aliasing_p50, l.aliasing_p95, l.aliasing_p99], p);
+                proptest::prop_assert_eq!([l.visible_p50, l.visible_p95, l.visible_p99], vp);
+                proptest::prop_assert_eq!((l.aliasing_max, l.visible_max), (max, vmax));
+            }
+        }
+    }
+
+    /// A level of views with many values near each percentile narrows its brackets on keys
+    /// before listing them (the path the proptest above compares), and its percentiles equal a
+    /// brute-force pool.
+    #[test]
+    fn a_level_narrows_its_brackets_before_listing() {
+        let vis: Vec<Visibility> = (0..6).map(|k| correlated(40 + k, 5000, 6.0, 0.5, 0)).collect();
+        let splits = vec![0.5, 20.0, 70.0, 210.0];
+        let texel = vec![0.2, 0.5, 1.4];
+        let parts = parts_at(&vis, &splits, &texel, &[1.0; 6]);
+        let before = NARROWED.with(|c| c.get());
+        let got = pool(&parts);
+        assert!(NARROWED.with(|c| c.get()) > before);
+        let (p, vp, _, _, _) = brute_percentiles(&parts);
+        let l = &got.level;
+        assert_eq!([l.aliasing_p50, l.aliasing_p95, l.aliasing_p99], p);
+        assert_eq!([l.visible_p50, l.visible_p95, l.visible_p99], vp);
     }
 }
