@@ -855,7 +855,8 @@ struct Scratch {
     fine: Vec<u128>,
     /// [`from_window`]'s values.
     window: Vec<(f64, u128)>,
-    /// [`ViewPass::new`]'s entries and contrast weights before each bound, per bucket.
+    /// [`ViewPass::new`]'s entries and contrast weights before each bound, per bound then bucket
+    /// (`j * buckets + b`).
     cut: Vec<u32>,
     wcut: Vec<u64>,
     /// [`ViewPass::new`]'s count per [`octave`] (zero between calls).
@@ -3403,7 +3404,7 @@ mod tests {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
         /// A bracket's values narrowed on keys before they are listed give the same bits as
         /// every value listed and narrowed after: the pool, the pool remembered across texel
-        /// sizes (its windows made either way), each view alone and each statistic alone, over
+        /// sizes (its level and each view's visible p95; its windows made either way), each view alone and each statistic alone, over
         /// views whose factors follow the depth or not, with ties and zero contrast weights, the
         /// brackets found by either method; and the level's percentiles equal a brute-force pool.
         #[test]
@@ -3419,7 +3420,7 @@ mod tests {
                 .map(|&(seed, n, spread, mix, levels)| correlated(seed, n, spread, mix, levels))
                 .collect();
             let (_, splits, texels) = split_set_case(&[], cuts, &scales);
-            let all = |list: bool| -> Vec<(Pooled, Pooled, Vec<ScreenStats>, Vec<u64>)> {
+            let all = |list: bool| -> Vec<(Pooled, RankedPool, Vec<ScreenStats>, Vec<u64>)> {
                 LIST_ALL.with(|c| c.set(list));
                 BY_KEYS.with(|k| k.set(keys));
                 let memo = PoolMemo::default();
@@ -3429,7 +3430,7 @@ mod tests {
                         forget_served();
                         let parts = parts_at(&vis, &splits, t, &weights);
                         let (own, one) = each_view_and_statistic(&vis, &splits, t);
-                        (pool(&parts), pool_memo(&parts, &memo), own, one)
+                        (pool(&parts), pool_memo(&parts, &memo, Some(Statistic::VisibleP95)), own, one)
                     })
                     .collect();
                 LIST_ALL.with(|c| c.set(false));
