@@ -12,7 +12,9 @@ if [ "${SPEED_CALLGRIND:-0}" = 1 ] && command -v valgrind >/dev/null; then
     [ "$opt_flag" = none ] || opt_args=("$opt_flag")
     RAYON_NUM_THREADS=1 valgrind --tool=callgrind --callgrind-out-file=target/speed/out/optimize-cg.out \
       "$BIN" sweep configs/default.toml "${opt_args[@]}" --no-plots --quiet --out target/speed/out/optimize-cg >/dev/null 2>&1
-    opt_ir=$(callgrind_annotate target/speed/out/optimize-cg.out 2>/dev/null | awk '/PROGRAM TOTALS/ { print $1; exit }')
+    # Through a file: awk's early exit would end callgrind_annotate by SIGPIPE (pipefail).
+    callgrind_annotate target/speed/out/optimize-cg.out >target/speed/out/optimize-cg.txt 2>/dev/null || true
+    opt_ir=$(awk '/PROGRAM TOTALS/ { print $1; exit }' target/speed/out/optimize-cg.txt)
     speed_row "| ${SPEED_JOB:-} | instructions, sweep --no-plots ${opt_args[*]:-without the search}, one thread (callgrind): $opt_ir | | | | | |"
   done
 fi
