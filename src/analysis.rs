@@ -972,11 +972,7 @@ fn level_screen_with(config: &Config, detail: ViewDetail) -> Option<LevelScreen>
     // One pass per view, shared by every setting of a sweep: none may be evicted.
     geometry.scene.keep_at_least(2 * config.views.len() + 8);
     // Each view's inputs are the config's seen by the view's camera (no config is copied).
-    let inputs: Vec<ScreenInputs> = config
-        .views
-        .iter()
-        .map(|v| view_screen_inputs(config, v))
-        .collect::<Option<_>>()?;
+    let inputs = views_inputs(config)?;
     let parts = pool_parts(&inputs, &config.views);
     let asked = match detail {
         ViewDetail::Full => None,
@@ -1043,12 +1039,14 @@ fn full_views(config: &Config, inputs: &[ScreenInputs]) -> Vec<ViewScreen> {
 /// and each view's in full), the direct form the views' statistics are checked against.
 #[cfg(test)]
 pub(crate) fn full_pool(config: &Config) -> Option<screen::Pooled> {
-    let inputs: Vec<ScreenInputs> = config
-        .views
-        .iter()
-        .map(|v| view_screen_inputs(config, v))
-        .collect::<Option<_>>()?;
+    let inputs = views_inputs(config)?;
     Some(screen::pool(&pool_parts(&inputs, &config.views)))
+}
+
+/// Each configured view's screen inputs at `config`'s setting ([`view_screen_inputs`]); None
+/// when a view has none (no geometry).
+fn views_inputs(config: &Config) -> Option<Vec<ScreenInputs>> {
+    config.views.iter().map(|v| view_screen_inputs(config, v)).collect()
 }
 
 /// Every view's own screen metrics in full at `config`'s setting (what [`analyze`] with
@@ -1061,11 +1059,7 @@ pub(crate) fn level_views(config: &Config) -> Option<Vec<ViewScreen>> {
     }
     let geometry = config.geometry.as_ref()?;
     geometry.scene.keep_at_least(2 * config.views.len() + 8);
-    let inputs: Vec<ScreenInputs> = config
-        .views
-        .iter()
-        .map(|v| view_screen_inputs(config, v))
-        .collect::<Option<_>>()?;
+    let inputs = views_inputs(config)?;
     Some(full_views(config, &inputs))
 }
 
@@ -1090,12 +1084,7 @@ pub(crate) fn split_set_done(config: &Config) {
     let held = LAST_LEVEL.with(|l| l.borrow_mut().take());
     let inputs = match held {
         Some(inputs) if inputs.len() == config.views.len() => inputs,
-        _ => match config
-            .views
-            .iter()
-            .map(|v| view_screen_inputs(config, v))
-            .collect::<Option<Vec<ScreenInputs>>>()
-        {
+        _ => match views_inputs(config) {
             Some(inputs) => inputs,
             None => return,
         },
