@@ -965,14 +965,7 @@ pub fn level_screen(config: &Config) -> Option<LevelScreen> {
 /// sweep's ranking reads (the pool then selects of each view's percentiles only the one its
 /// objective is, if any).
 fn level_screen_with(config: &Config, detail: ViewDetail) -> Option<LevelScreen> {
-    if config.views.is_empty() {
-        return None;
-    }
-    let geometry = config.geometry.as_ref()?;
-    // One pass per view, shared by every setting of a sweep: none may be evicted.
-    geometry.scene.keep_at_least(2 * config.views.len() + 8);
-    // Each view's inputs are the config's seen by the view's camera (no config is copied).
-    let inputs = views_inputs(config)?;
+    let (geometry, inputs) = level_inputs(config)?;
     let parts = pool_parts(&inputs, &config.views);
     let asked = match detail {
         ViewDetail::Full => None,
@@ -1049,17 +1042,25 @@ fn views_inputs(config: &Config) -> Option<Vec<ScreenInputs>> {
     config.views.iter().map(|v| view_screen_inputs(config, v)).collect()
 }
 
-/// Every view's own screen metrics in full at `config`'s setting (what [`analyze`] with
-/// [`ViewDetail::Full`] puts in [`Summary::views`]), without the level's pool: for the one row
-/// of a sweep that shows them, whose rows kept only what the ranking reads. None without
-/// configured views or geometry.
-pub(crate) fn level_views(config: &Config) -> Option<Vec<ViewScreen>> {
+/// A level's scene geometry and each view's screen inputs ([`views_inputs`]); None without
+/// configured views or geometry. The scene keeps every view's pass (one per view, shared by
+/// every setting of a sweep: none may be evicted).
+fn level_inputs(config: &Config) -> Option<(&crate::config::GeometrySettings, Vec<ScreenInputs>)> {
     if config.views.is_empty() {
         return None;
     }
     let geometry = config.geometry.as_ref()?;
     geometry.scene.keep_at_least(2 * config.views.len() + 8);
-    let inputs = views_inputs(config)?;
+    // Each view's inputs are the config's seen by the view's camera (no config is copied).
+    Some((geometry, views_inputs(config)?))
+}
+
+/// Every view's own screen metrics in full at `config`'s setting (what [`analyze`] with
+/// [`ViewDetail::Full`] puts in [`Summary::views`]), without the level's pool: for the one row
+/// of a sweep that shows them, whose rows kept only what the ranking reads. None without
+/// configured views or geometry.
+pub(crate) fn level_views(config: &Config) -> Option<Vec<ViewScreen>> {
+    let (_, inputs) = level_inputs(config)?;
     Some(full_views(config, &inputs))
 }
 
@@ -2212,10 +2213,6 @@ mod split_set_done_tests {
                 .apply(&base)
                 .expect("a valid point")
         };
-        let direct = |c: &Config| {
-            let inputs: Vec<ScreenInputs> = c.views.iter().map(|v| view_screen_inputs(c, v).unwrap()).collect();
-            screen::pool(&pool_parts(&inputs, &c.views))
-        };
         let order = [
             (0.5, 4, 512),
             (0.5, 4, 1024),
@@ -2228,7 +2225,7 @@ mod split_set_done_tests {
         for (i, &(lambda, cascades, resolution)) in order.iter().enumerate() {
             let c = at(lambda, cascades, resolution);
             let level = level_screen(&c).expect("views and geometry");
-            let pooled = direct(&c);
+            let pooled = full_pool(&c).expect("views and geometry");
             assert_eq!(level.screen, pooled.level, "step {i}");
             for (v, p) in level.views.iter().zip(&pooled.views) {
                 assert_eq!(v.screen, *p, "step {i}, {}", v.name);

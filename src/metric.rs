@@ -1037,8 +1037,9 @@ impl SummaryMetric {
 /// The objective of a sweep of `config`: `[sweep] objective` if written, else the
 /// contrast-weighted 95th percentile of the per-pixel aliasing on screen
 /// (`visible_aliasing_p95`) when the scene has geometry, else the mean aliasing over depth.
-/// (`commands::sweep::rank::default_objective`; here so that a sweep's rows, measured below
-/// the ranking, keep what its objective reads.)
+/// `commands::sweep::rank::default_objective` is this (the name tests and reports use); it is
+/// defined here because the sweep's row runner (`commands::sweep::run`), which keeps of each
+/// view what the objective reads, cannot import `rank`: `rank` ranks `run`'s rows.
 pub(crate) fn sweep_objective(config: &crate::config::Config) -> SummaryMetric {
     // The name was checked against the registry when the file was loaded.
     if let Some(m) = config.sweep.as_ref().and_then(|s| s.objective.as_deref()) {

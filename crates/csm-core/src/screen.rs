@@ -410,23 +410,23 @@ impl ScreenIndex {
         if k == len {
             return (size, gr.cw);
         }
-        let inside = |e: u8| (e as usize).wrapping_sub(a) < z - a;
-        let (mut n, mut wsum) = (0u64, 0u64);
-        if k <= z - a && k <= len - k {
-            for &e in &self.at_rank[base..base + k] {
-                let m = inside(e) as u64;
+        // The group's entries among the bucket's entries of `ranks`, and their contrast weight.
+        let among = |ranks: std::ops::Range<usize>| {
+            let (mut n, mut wsum) = (0u64, 0u64);
+            for &e in &self.at_rank[base + ranks.start..base + ranks.end] {
+                let m = ((e as usize).wrapping_sub(a) < z - a) as u64;
                 n += m;
                 wsum += m * self.w[base + e as usize] as u64;
             }
             (n, wsum)
+        };
+        if k <= z - a && k <= len - k {
+            among(0..k)
         } else if len - k < z - a {
-            for &e in &self.at_rank[base + k..base + len] {
-                let m = inside(e) as u64;
-                n += m;
-                wsum += m * self.w[base + e as usize] as u64;
-            }
+            let (n, wsum) = among(k..len);
             (size - n, gr.cw - wsum)
         } else {
+            let (mut n, mut wsum) = (0u64, 0u64);
             let span = gr.lo as usize..gr.hi as usize;
             for (&r, &w) in self.rank[span.clone()].iter().zip(&self.w[span]) {
                 let m = ((r as usize) < k) as u64;
@@ -1391,13 +1391,13 @@ fn select(
         } else {
             ranks
         };
-        if ranks[j] > DIRECT_RANKS {
+        // Many values in the bracket: their weights on keys of the values' range first (about
+        // eight bucket ranks per key, from 16 to FIRST_KEYS keys), and only the values of the
+        // key holding the target listed; the weight of the keys below it is added to the
+        // weight below. Few: every value in the bracket listed.
+        let narrowed = (ranks[j] > DIRECT_RANKS).then(|| {
             #[cfg(test)]
             tests::NARROWED.with(|c| c.set(c.get() + 1));
-            // Many values in the bracket: their weights on keys of the values' range first
-            // (about eight bucket ranks per key, from 16 to FIRST_KEYS keys), and only the values
-            // of the key holding the target kept; the weight of the keys below it is added to
-            // the weight below.
             let keys = (ranks[j] / 8).next_power_of_two().clamp(16, FIRST_KEYS);
             let b = Buckets::new(span[j].0, span[j].1, keys);
             let hist = &mut sc.fine;
@@ -1410,40 +1410,39 @@ fn select(
                     hist[b.key(m)] += w
                 });
             }
-            let target = brackets[j].3;
-            let mut k = 0;
-            while below[j] + hist[k] < target {
-                below[j] += hist[k];
-                k += 1;
-            }
+            let k = key_reaching(hist, &mut below[j], brackets[j].3);
             hist[..keys].fill(0);
             let (f0, f1) = (b.floor_of(k), b.floor_of(k + 1));
-            let cands = &mut sc.cands[j];
-            for rc in reach {
-                let run = &runs[rc.run as usize];
-                let (t, ix) = (run.t, run.ix);
-                let (base, len) = ix.bucket_at(run.groups[rc.group as usize].lo as usize);
-                let (a, z) = (rc.k_lo as usize, rc.k_hi as usize);
-                let mid = ix.ranks_below(base, len, t, f0).clamp(a, z);
-                let end = ix.ranks_below(base, len, t, f1).clamp(mid, z);
-                let tag = rc.run as u64;
-                members(rc, mid, end, &mut |m, g, w| {
-                    if w != 0 {
-                        cands.push(Cand { m, w, g, tag });
-                    }
-                });
-            }
             brackets[j].0 = f0;
             brackets[j].1 = brackets[j].1.min(f1);
-        } else {
-            let cands = &mut sc.cands[j];
-            for rc in reach {
-                let tag = rc.run as u64;
-                members(rc, rc.k_lo as usize, rc.k_hi as usize, &mut |m, g, w| {
-                    if w != 0 {
-                        cands.push(Cand { m, w, g, tag });
-                    }
-                });
+            (f0, f1)
+        });
+        let cands = &mut sc.cands[j];
+        // The values of a reaching group's ranks `a..z` listed (those of weight above 0).
+        let mut list = |rc: &Reach, a: usize, z: usize| {
+            let tag = rc.run as u64;
+            members(rc, a, z, &mut |m, g, w| {
+                if w != 0 {
+                    cands.push(Cand { m, w, g, tag });
+                }
+            });
+        };
+        match narrowed {
+            None => {
+                for rc in reach {
+                    list(rc, rc.k_lo as usize, rc.k_hi as usize);
+                }
+            }
+            Some((f0, f1)) => {
+                for rc in reach {
+                    // The ranks of the key holding the target.
+                    let run = &runs[rc.run as usize];
+                    let (t, ix) = (run.t, run.ix);
+                    let (base, len) = ix.bucket_at(run.groups[rc.group as usize].lo as usize);
+                    let (a, z) = (rc.k_lo as usize, rc.k_hi as usize);
+                    let mid = ix.ranks_below(base, len, t, f0).clamp(a, z);
+                    list(rc, mid, ix.ranks_below(base, len, t, f1).clamp(mid, z));
+                }
             }
         }
     }
@@ -1491,6 +1490,19 @@ const DIRECT_RANKS: usize = 128;
 /// Keys of [`select`]'s first narrowing of a bracket's values, at most.
 const FIRST_KEYS: usize = 256;
 
+/// The first key of `hist` (weights by key, ascending) at which the running weight from
+/// `below` reaches `target`, with `below` advanced by the weight of the keys before it. The
+/// target is reached within `hist`.
+#[inline]
+fn key_reaching(hist: &[u128], below: &mut u128, target: u128) -> usize {
+    let mut k = 0;
+    while *below + hist[k] < target {
+        *below += hist[k];
+        k += 1;
+    }
+    k
+}
+
 /// A value in a percentile's bracket: `m = t g`, its weight, and its run in the pool (the
 /// runs of every part flattened, part by part).
 #[derive(Clone, Copy)]
@@ -1533,11 +1545,7 @@ fn resolve(
         for c in cands.iter() {
             hist[b.key(c.m)] += c.w;
         }
-        let mut k = 0;
-        while below + hist[k] < target {
-            below += hist[k];
-            k += 1;
-        }
+        let k = key_reaching(hist, &mut below, target);
         if cands.len() < COUNT {
             for c in cands.iter() {
                 hist[b.key(c.m)] = 0;
@@ -2139,10 +2147,8 @@ pub fn pool_memo(parts: &[PoolPart<'_>], memo: &PoolMemo, asked: Option<Statisti
         .map(|(p, t)| PoolPart { texel: t, ..*p })
         .collect();
     let mut key = key_of(&norm, true);
-    // What each view's entry holds: the statistic asked for (its place in Statistic::ALL).
-    key.push(asked.map_or(u64::MAX, |a| {
-        Statistic::ALL.iter().position(|&s| s == a).unwrap_or(0) as u64
-    }));
+    // What each view's entry holds: the statistic asked for (its discriminant).
+    key.push(asked.map_or(u64::MAX, |a| a as u64));
     let found = memo.entries.lock().ok().and_then(|m| m.get(&key).cloned());
     let entry = found.unwrap_or_else(|| {
         // The hints of the same views and splits at any texel sizes.
