@@ -3,6 +3,13 @@
 
 use clap::Parser;
 
+// mimalloc in place of the system allocator: a sweep allocates and frees many mid-sized
+// buffers per view and setting; glibc's malloc faulted each view's pages in one by one (17k
+// page faults on the 20-view sweep against ~400 here) and its malloc/free took 5-9 % of the
+// CPU. Measured in docs/speed.md ("The allocator").
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() {
     let cli = csm_lab::cli::Cli::parse();
     match csm_lab::cli::run(cli) {

@@ -693,8 +693,10 @@ pub fn geometric_factor(view: &View, light: &LightBasis, n: DVec3, d: DVec3, t: 
     factor_with(view.ray_derivatives(), light, n, d, t)
 }
 
-/// [`geometric_factor`] with the view's ray derivatives `(d_u, d_v)` given.
-#[inline]
+/// [`geometric_factor`] with the view's ray derivatives `(d_u, d_v)` given. Always inlined:
+/// its chain of divisions and square roots is latency-bound, and inlined into the shading
+/// loop the next pixels' chains overlap it (a call per pixel left them serial).
+#[inline(always)]
 fn factor_with((du, dv): (DVec3, DVec3), light: &LightBasis, n: DVec3, d: DVec3, t: f64) -> f64 {
     let nd = n.dot(d);
     let xu = t * (du - d * (n.dot(du) / nd));
@@ -705,6 +707,7 @@ fn factor_with((du, dv): (DVec3, DVec3), light: &LightBasis, n: DVec3, d: DVec3,
 
 /// Smallest singular value of `[[a, b], [c, d]]`, clamped below at
 /// `sigma_max / MAX_ANISOTROPY` (and at the smallest positive normal f64 for a zero matrix).
+#[inline(always)]
 pub fn sigma_min_2x2(a: f64, b: f64, c: f64, d: f64) -> f64 {
     let e = a * a + b * b + c * c + d * d;
     let det = (a * d - b * c).abs();
