@@ -123,6 +123,55 @@ impl Tri4 {
     }
 }
 
+/// [`Tri4::intersect`] of rays from one origin (a packet's), with each term of the test that
+/// depends on the origin and the triangle alone worked out once: `c = v0 - o` and the
+/// distance's numerator `n . c`. The remaining per-ray operations are the plain test's, on the
+/// same operands in the same order, so each lane's distance is the same to the bit.
+struct FromOrigin {
+    /// Per lane: `c` (x, y, z rows) and `n . c`.
+    c: [[f32; 4]; 3],
+    nc: [f32; 4],
+}
+
+impl Tri4 {
+    /// The origin's terms of each lane ([`FromOrigin`]).
+    #[inline(always)]
+    fn from_origin(&self, o: [f32; 3]) -> FromOrigin {
+        let (v0, n) = (&self.v0, &self.n);
+        let mut c = [[0.0f32; 4]; 3];
+        let mut nc = [0.0f32; 4];
+        for i in 0..4 {
+            c[0][i] = v0[0][i] - o[0];
+            c[1][i] = v0[1][i] - o[1];
+            c[2][i] = v0[2][i] - o[2];
+            nc[i] = n[0][i] * c[0][i] + n[1][i] * c[1][i] + n[2][i] * c[2][i];
+        }
+        FromOrigin { c, nc }
+    }
+
+    /// [`Tri4::intersect`] of the ray from the origin of `at` ([`Tri4::from_origin`]) along `d`.
+    #[inline(always)]
+    fn intersect_from(&self, at: &FromOrigin, d: [f32; 3], tmin: f32, tmax: f32) -> [f32; 4] {
+        let (n, e1, e2, c) = (&self.n, &self.e1, &self.e2, &at.c);
+        let mut out = [0.0f32; 4];
+        for i in 0..4 {
+            let (c0, c1, c2) = (c[0][i], c[1][i], c[2][i]);
+            let r0 = d[1] * c2 - d[2] * c1;
+            let r1 = d[2] * c0 - d[0] * c2;
+            let r2 = d[0] * c1 - d[1] * c0;
+            let inv_det = 1.0 / (n[0][i] * d[0] + n[1][i] * d[1] + n[2][i] * d[2]);
+            let u = (r0 * e2[0][i] + r1 * e2[1][i] + r2 * e2[2][i]) * inv_det;
+            let v = (r0 * e1[0][i] + r1 * e1[1][i] + r2 * e1[2][i]) * inv_det;
+            let w = 1.0 - u - v;
+            let inside = (u.to_bits() | v.to_bits() | w.to_bits()) & 0x8000_0000 == 0;
+            let t = at.nc[i] * inv_det;
+            let ok = inv_det != 0.0 && inside && t >= tmin && t <= tmax;
+            out[i] = if ok { t } else { f32::INFINITY };
+        }
+        out
+    }
+}
+
 /// [`Tri4::intersect`] of rays straight down (`d`: zero x and z) from a grid of origins at one
 /// height, with each term of the test that depends on the origin's x alone worked out once per
 /// column and each that depends on its z alone once per row: the same operations on the same
@@ -616,11 +665,12 @@ impl Bvh4 {
                 }
                 let leaf = &self.leaves[cur.child as usize];
                 let ids = &self.ids[cur.child as usize];
+                let at = leaf.from_origin(o);
                 for r in 0..n {
                     if !meets[r] {
                         continue;
                     }
-                    let ts = leaf.intersect(o, [d[0][r], d[1][r], d[2][r]], tmin[r], tmax[r]);
+                    let ts = leaf.intersect_from(&at, [d[0][r], d[1][r], d[2][r]], tmin[r], tmax[r]);
                     for (i, &t) in ts.iter().enumerate().take(cur.count as usize) {
                         if t < best_t[r] || (t == best_t[r] && best[r] != NONE && ids[i] < best[r]) {
                             best_t[r] = t;
