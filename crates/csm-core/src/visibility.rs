@@ -825,14 +825,24 @@ thread_local! {
 /// widened by a relative 1e-4 (ray units are world units along the unit direction, so view
 /// depth `t` is `t |d|` along the ray). The hit is then recomputed in f64.
 pub fn traced_ray(view: &View, d: DVec3) -> Ray {
+    let r = primary_ray(view, d);
+    Ray::new(r.origin, r.direction, r.tmin, r.tmax)
+}
+
+/// [`traced_ray`] without its inverse direction (left zero): the packet traversal computes
+/// its own ([`Bvh4::nearest_packet`] reads the origin, the direction and `tmin..tmax` only),
+/// so each primary ray skips `obvhs`'s three divisions.
+#[inline]
+fn primary_ray(view: &View, d: DVec3) -> Ray {
     let len = d.length();
     let slack = 1e-4;
-    Ray::new(
-        v3(view.pose.position),
-        v3(d / len),
-        (view.near * len * (1.0 - slack)) as f32,
-        (view.far * len * (1.0 + slack)) as f32,
-    )
+    Ray {
+        origin: v3(view.pose.position),
+        direction: v3(d / len),
+        inv_direction: glam_bvh::Vec3A::ZERO,
+        tmin: (view.near * len * (1.0 - slack)) as f32,
+        tmax: (view.far * len * (1.0 + slack)) as f32,
+    }
 }
 
 /// The binary32 rays of every sampled pixel of a view, row-major: what [`SceneGeometry`]
@@ -878,18 +888,19 @@ fn unlit(view: &View) -> View {
 const TILE: usize = 8;
 const _: () = assert!(TILE * TILE <= PACKET);
 
-/// `f(k, id)` of every sample `k` of a `cols x rows` grid, row-major, as two arrays, where
-/// `id` is the nearest BVH triangle along `ray(k)` (an index into [`bvh_input`]'s triangles,
-/// or `u32::MAX`). The grid goes in bands of [`TILE`] rows (in parallel) and a band in
-/// `TILE x TILE` tiles, each tile's rays traced as one packet ([`Bvh4::nearest_packet`]: each
-/// ray's answer is its own). The order changes no value.
+/// `f(k, d, id)` of every sample `k` of a view's grid ([`View::ray_terms`]), row-major, as two
+/// arrays, where `d` is the sample's ray direction ([`RayTerms::ray`], made once per sample)
+/// and `id` the nearest BVH triangle along its binary32 ray ([`primary_ray`]; an index into
+/// [`bvh_input`]'s triangles, or `u32::MAX`). The grid goes in bands of [`TILE`] rows (in
+/// parallel) and a band in `TILE x TILE` tiles, each tile's rays traced as one packet
+/// ([`Bvh4::nearest_packet`]: each ray's answer is its own). The order changes no value.
 fn tiled<A: Send + Clone + Default, B: Send + Clone + Default>(
     tracer: &Tracer,
-    cols: usize,
-    rows: usize,
-    ray: impl Fn(usize) -> Ray + Sync,
-    f: impl Fn(usize, u32) -> (A, B) + Sync,
+    view: &View,
+    terms: &RayTerms,
+    f: impl Fn(usize, DVec3, u32) -> (A, B) + Sync,
 ) -> (Vec<A>, Vec<B>) {
+    let (cols, rows) = (terms.cols, terms.down.len());
     let mut out_a: Vec<A> = vec![A::default(); cols * rows];
     let mut out_b: Vec<B> = vec![B::default(); cols * rows];
     out_a
@@ -901,14 +912,19 @@ fn tiled<A: Send + Clone + Default, B: Send + Clone + Default>(
             let mut stack = tracer.bvh.as_ref().map_or_else(Vec::new, Bvh4::stack);
             let mut rays = Vec::with_capacity(TILE * TILE);
             let mut at = Vec::with_capacity(TILE * TILE);
+            let mut dirs = [DVec3::ZERO; TILE * TILE];
             let mut ids = [u32::MAX; TILE * TILE];
             for x0 in (0..cols).step_by(TILE) {
                 rays.clear();
                 at.clear();
                 for y in 0..band_rows {
+                    // `terms.ray(k)` of the samples of this row: the same sum in the same order.
+                    let down = terms.down[band * TILE + y];
                     for x in x0..(x0 + TILE).min(cols) {
+                        let d = terms.forward + terms.across[x] + down;
+                        dirs[at.len()] = d;
                         at.push(y * cols + x);
-                        rays.push(ray((band * TILE + y) * cols + x));
+                        rays.push(primary_ray(view, d));
                     }
                 }
                 let ids = &mut ids[..rays.len()];
@@ -916,8 +932,8 @@ fn tiled<A: Send + Clone + Default, B: Send + Clone + Default>(
                     Some(bvh) => bvh.nearest_packet(&rays, ids, &mut stack),
                     None => ids.fill(u32::MAX),
                 }
-                for (&i, &id) in at.iter().zip(ids.iter()) {
-                    (out_a[i], out_b[i]) = f(band * TILE * cols + i, id);
+                for ((&i, &id), &d) in at.iter().zip(ids.iter()).zip(&dirs) {
+                    (out_a[i], out_b[i]) = f(band * TILE * cols + i, d, id);
                 }
             }
         });
@@ -1100,13 +1116,7 @@ impl SceneGeometry {
         });
         let (cols, rows) = view.grid();
         let terms = view.ray_terms();
-        let (depth, triangle) = tiled(
-            tracer,
-            cols as usize,
-            rows as usize,
-            |k| traced_ray(view, terms.ray(k)),
-            |k, id| self.hit(tracer, normals, view, terms.ray(k), id),
-        );
+        let (depth, triangle) = tiled(tracer, view, &terms, |_, d, id| self.hit(tracer, normals, view, d, id));
         Hits::new(*view, cols, rows, depth, triangle, normals.clone())
     }
 
@@ -1206,16 +1216,7 @@ impl SceneGeometry {
     /// caller's rayon pool.
     pub fn trace(&self, view: &View) -> Vec<u32> {
         let tracer = self.tracer.get_or_init(|| Tracer::new(&self.mesh));
-        let (cols, rows) = view.grid();
-        let terms = view.ray_terms();
-        tiled(
-            tracer,
-            cols as usize,
-            rows as usize,
-            |k| traced_ray(view, terms.ray(k)),
-            |_, id| (id, ()),
-        )
-        .0
+        tiled(tracer, view, &view.ray_terms(), |_, _, id| (id, ())).0
     }
 
     /// Unit normal of triangle `id` (winding order; not oriented).
