@@ -1447,6 +1447,24 @@ mod tests {
         assert!(hits > rays.len() / 2, "{hits} of {}", rays.len());
     }
 
+    /// The packets' rays ([`primary_ray`], no inverse direction) are [`traced_ray`]'s (made
+    /// through `obvhs`'s constructor) in every field the traversal reads, to the bit, over a
+    /// view's whole grid.
+    #[test]
+    fn primary_rays_are_the_traced_rays() {
+        let (_, view) = scene_and_view(DVec3::new(-0.4, -1.0, -0.3));
+        let terms = view.ray_terms();
+        let (cols, rows) = view.grid();
+        let bits = |r: &Ray| {
+            let (o, d) = (r.origin, r.direction);
+            [o.x, o.y, o.z, d.x, d.y, d.z, r.tmin, r.tmax].map(f32::to_bits)
+        };
+        for k in 0..(cols * rows) as usize {
+            let d = terms.ray(k);
+            assert_eq!(bits(&primary_ray(&view, d)), bits(&traced_ray(&view, d)), "sample {k}");
+        }
+    }
+
     #[test]
     fn sigma_min_of_a_diagonal_and_a_rotation() {
         assert!((sigma_min_2x2(3.0, 0.0, 0.0, 2.0) - 2.0).abs() < 1e-15);
