@@ -224,23 +224,30 @@ impl Hits {
         let derivatives = view.ray_derivatives();
         let towards_light = -view.light.normalize();
         // Per pixel: g, negated where the hit faces away from the light, and the contrast.
-        let (mut signed_factor, mut contrast): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
-        self.depth
-            .par_iter()
-            .zip(&self.triangle)
+        // Row by row, each sample's direction the row's and column's terms added
+        // ([`RayTerms::ray`]'s sum, without dividing the sample index by the row length).
+        let cols = self.cols as usize;
+        let (mut signed_factor, mut contrast) = (vec![0.0; self.len()], vec![0.0; self.len()]);
+        signed_factor
+            .par_chunks_mut(cols)
+            .zip(contrast.par_chunks_mut(cols))
+            .zip(self.depth.par_chunks(cols).zip(self.triangle.par_chunks(cols)))
             .enumerate()
-            .with_min_len(4096)
-            .map(|(k, (&depth, &id))| {
-                if id == MISS {
-                    return (0.0, 0.0);
+            .with_min_len(4096usize.div_ceil(cols))
+            .for_each(|(row, ((sf, c), (depth, ids)))| {
+                let down = terms.down[row];
+                for (col, (&depth, &id)) in depth.iter().zip(ids).enumerate() {
+                    if id == MISS {
+                        continue;
+                    }
+                    let d = terms.forward + terms.across[col] + down;
+                    let n = toward(self.normals[id as usize], d);
+                    let g = factor_with(derivatives, &light, n, d, depth);
+                    let lit = n.dot(-view.light) > 0.0;
+                    sf[col] = if lit { g } else { -g };
+                    c[col] = n.dot(towards_light).max(0.0);
                 }
-                let d = terms.ray(k);
-                let n = toward(self.normals[id as usize], d);
-                let g = factor_with(derivatives, &light, n, d, depth);
-                let lit = n.dot(-view.light) > 0.0;
-                (if lit { g } else { -g }, n.dot(towards_light).max(0.0))
-            })
-            .unzip_into_vecs(&mut signed_factor, &mut contrast);
+            });
         // The lit samples in depth order, straight into the receivers and their weights;
         // equal depths then by factor (then weight), so the list is the one sorting every
         // (depth, factor, weight) triple would give.
