@@ -3,7 +3,7 @@
 # paired LABEL_A LABEL_B -- CMD_A... -- CMD_B...
 #                                     A and B interleaved (A B A B ...), best of $RUNS each,
 #                                     one row each and a row with the CPU ratio B / A
-# Every row also gives the run's peak resident memory (max RSS, from /usr/bin/time's %M).
+# Every row also gives the run's peak resident memory (max RSS).
 # peer_python                         prints the venv's python (numpy, embreex), installing once
 # All rows go to stdout and to target/speed/speed.md.
 RUNS=${RUNS:-3}
@@ -23,11 +23,17 @@ speed_section() { SPEED_JOB=$1; }
 speed_footer() { speed_row ""; speed_row "written to target/speed/speed.md"; }
 
 # one_run CMD...: prints "wall user sys maxrss_kb" of one whole-process run; the command's own output is
-# discarded (its exit status must be 0 or 1: 1 is a threshold verdict, not a failure).
+# discarded (its exit status must be 0 or 1: 1 is a threshold verdict, not a failure). The
+# child's own CPU and peak memory to the microsecond (scripts/speed/one_run.py); without python3,
+# /usr/bin/time's, rounded to 10 ms.
 one_run() {
   local t
   t=$(mktemp)
-  /usr/bin/time -f '%e %U %S %M' -o "$t" "$@" >/dev/null 2>&1 || {
+  local timer=(/usr/bin/time -f '%e %U %S %M' -o "$t")
+  if command -v python3 >/dev/null; then
+    timer=(python3 "$SPEED_ROOT/scripts/speed/one_run.py" "$t")
+  fi
+  "${timer[@]}" "$@" >/dev/null 2>&1 || {
     local rc=$?
     if [ "$rc" -ne 1 ]; then echo "speed: '$*' exited $rc" >&2; rm -f "$t"; return "$rc"; fi
   }
@@ -43,7 +49,7 @@ best_of() {
     local load w u s m cpu
     load=$(cut -d' ' -f1 /proc/loadavg)
     read -r w u s m < <(one_run "$@")
-    cpu=$(awk -v u="$u" -v s="$s" 'BEGIN { printf "%.2f", u + s }')
+    cpu=$(awk -v u="$u" -v s="$s" 'BEGIN { printf "%.3f", u + s }')
     if [ -z "$bestcpu" ] || awk -v a="$cpu" -v b="$bestcpu" 'BEGIN { exit !(a < b) }'; then
       bestcpu=$cpu; best="$w $u $s $cpu $load $m"
     fi
