@@ -905,11 +905,169 @@ fn pool_parts<'a>(inputs: &'a [ScreenInputs], views: &[crate::config::ViewSettin
 /// [`screen_inputs`] of the config as `view` sees it (`config_for_view`), without copying the
 /// config: the set-up is built with the view's camera, and so is the rig (an engine preset's
 /// reads a whole config: that one is built from the view's config).
+///
+/// For csm-lab's own rig, what does not read the resolution is made once per view and split
+/// set on each thread ([`SplitSetInputs`]) and read by every resolution of it: the pass, the
+/// visible range, the rig (moved to each resolution, [`Rig::set_resolution`]), its splits, bands
+/// and band counts; only the texel sizes are made per call. The result is the direct
+/// computation's bit for bit.
 fn view_screen_inputs(config: &Config, view: &crate::config::ViewSettings) -> Option<ScreenInputs> {
-    screen_inputs_seen_by(config, &view.camera, |setup| match &config.shadow.preset {
-        Some(_) => rig(&config_for_view(config, view)),
-        None => Rig::for_setup_in(setup, split_range(setup)),
+    if config.shadow.preset.is_some() {
+        return screen_inputs_seen_by(config, &view.camera, |_| rig(&config_for_view(config, view)));
+    }
+    let setup = config.setup_seen_by(&view.camera);
+    let snap = config.shadow.snap;
+    SPLIT_SETS.with(|held| {
+        let mut held = held.borrow_mut();
+        // The entries are of one split set (and scene: an entry keeps its scene alive): another
+        // split set's setting starts them again.
+        if held.entries.first().is_some_and(|h| !h.same_split_set(&setup, snap)) {
+            held.entries.clear();
+        }
+        // So the view's entry is the one of its camera: looked for from the entry after the
+        // last one read (a level's views are read in order).
+        let n = held.entries.len();
+        let found = (0..n)
+            .map(|k| (held.next + k) % n)
+            .find(|&k| held.entries[k].setup.camera == setup.camera);
+        let at = match found {
+            Some(at) => at,
+            None => {
+                let made = SplitSetInputs::new(setup.clone(), snap, &view.camera)?;
+                // At most two per view of the level, then the thread starts again.
+                if n >= (2 * config.views.len()).max(HELD_SPLIT_SETS) {
+                    held.entries.clear();
+                }
+                held.entries.push(made);
+                held.entries.len() - 1
+            }
+        };
+        held.next = at + 1;
+        Some(held.entries[at].inputs(setup.shadow.resolution))
     })
+}
+
+/// Split-set entries a thread keeps at least (see [`view_screen_inputs`]).
+const HELD_SPLIT_SETS: usize = 64;
+
+thread_local! {
+    /// What each view's screen inputs at a split set share between its resolutions.
+    static SPLIT_SETS: std::cell::RefCell<HeldSplitSet> = const {
+        std::cell::RefCell::new(HeldSplitSet {
+            entries: Vec::new(),
+            next: 0,
+        })
+    };
+}
+
+/// A thread's [`SplitSetInputs`]: one split set's, one entry per view (camera) read, and
+/// where the next look-up starts.
+struct HeldSplitSet {
+    entries: Vec<SplitSetInputs>,
+    next: usize,
+}
+
+/// One view's screen inputs at one split set (settings equal but for the resolution) without
+/// the texel sizes: made as [`screen_inputs_seen_by`] makes them, with csm-lab's own rig.
+struct SplitSetInputs {
+    /// The set-up seen by the view, its resolution 0 (the key).
+    setup: csm_core::scene::Setup,
+    /// `[shadow] snap` of the windows the texel sizes are read from (part of the key).
+    snap: bool,
+    vis: std::sync::Arc<Visibility>,
+    visible: Option<(f64, f64)>,
+    /// The rig and the light's pose at the view's frame 0; None when the scene needs no cascades.
+    rig: Option<(Rig, LightPose)>,
+    bands: Vec<(f64, f64)>,
+    band_counts: Vec<u64>,
+}
+
+impl SplitSetInputs {
+    fn new(
+        mut setup: csm_core::scene::Setup,
+        snap: bool,
+        camera: &crate::config::CameraSettings,
+    ) -> Option<SplitSetInputs> {
+        let vis = setup.visibility()?;
+        let visible = visible_depths(&setup, Some(&vis));
+        let rig = Rig::for_setup_in(&setup, split_range(&setup)).map(|rig| {
+            let lp0 = LightPose::new(&rig.light, &camera.pose());
+            (rig, lp0)
+        });
+        let bands = rig.as_ref().map(|(r, _)| seams::bands(r)).unwrap_or_default();
+        let band_counts = band_counts(&vis, &bands);
+        setup.shadow.resolution = 0;
+        Some(SplitSetInputs {
+            setup,
+            snap,
+            vis,
+            visible,
+            rig,
+            bands,
+            band_counts,
+        })
+    }
+
+    /// Whether this entry is of `setup`'s split set with `snap`, whatever its camera: equal
+    /// set-ups but for the camera and the resolution, the same scene (by identity: the entry
+    /// keeps it alive, so no other scene can take its address) seen at the same screen
+    /// sampling. With equal cameras, the entry is `setup`'s.
+    fn same_split_set(&self, setup: &csm_core::scene::Setup, snap: bool) -> bool {
+        let (a, b) = (&self.setup, setup);
+        let geometry = match (&a.geometry, &b.geometry) {
+            (Some(x), Some(y)) => {
+                std::sync::Arc::ptr_eq(&x.scene, &y.scene)
+                    && x.screen_width == y.screen_width
+                    && x.screen_scale == y.screen_scale
+            }
+            (None, None) => true,
+            _ => false,
+        };
+        let shadow = csm_core::scene::ShadowParams {
+            resolution: 0,
+            ..b.shadow
+        };
+        self.snap == snap
+            && a.shadow == shadow
+            && a.light_direction == b.light_direction
+            && a.bounds == b.bounds
+            && geometry
+            && a.motion == b.motion
+            && a.light == b.light
+    }
+
+    /// The screen inputs at `resolution`: the rig moved to it, its windows' texel sizes.
+    fn inputs(&mut self, resolution: u32) -> ScreenInputs {
+        let (splits, texel) = match &mut self.rig {
+            None => (vec![0.0, 0.0], vec![0.0]),
+            Some((rig, lp0)) => {
+                if rig.resolution != resolution {
+                    rig.set_resolution(resolution);
+                }
+                let texel = (0..rig.cascade_count())
+                    .map(|i| rig.window(i, lp0, self.snap).texel_size())
+                    .collect();
+                (rig.splits.clone(), texel)
+            }
+        };
+        ScreenInputs {
+            vis: self.vis.clone(),
+            splits,
+            texel,
+            visible: self.visible,
+            bands: self.bands.clone(),
+            band_counts: self.band_counts.clone(),
+        }
+    }
+}
+
+/// The count of `vis`'s receivers (depth-ordered) in each band `[lo, hi)`.
+fn band_counts(vis: &Visibility, bands: &[(f64, f64)]) -> Vec<u64> {
+    let r = &vis.receivers;
+    bands
+        .iter()
+        .map(|&(lo, hi)| (r.partition_point(|&(d, _)| d < hi) - r.partition_point(|&(d, _)| d < lo)) as u64)
+        .collect()
 }
 
 /// The screen inputs of `config` seen from `camera`, whose rig `rig` builds from the set-up
@@ -937,11 +1095,7 @@ fn screen_inputs_seen_by(
     };
     // Each band's receivers (depth-ordered): the level's pooled band share and the view's own
     // read the same counts.
-    let r = &vis.receivers;
-    let band_counts = bands
-        .iter()
-        .map(|&(lo, hi)| (r.partition_point(|&(d, _)| d < hi) - r.partition_point(|&(d, _)| d < lo)) as u64)
-        .collect();
+    let band_counts = band_counts(&vis, &bands);
     Some(ScreenInputs {
         vis,
         splits,
@@ -2192,6 +2346,95 @@ mod view_inputs_tests {
                 assert_eq!(bits(&a.band_shares()), bits(&seams::band_shares(&a.vis, &a.bands)));
             }
         }
+    }
+    /// A view's screen inputs read from what the thread keeps of its split set equal the
+    /// direct computation (`screen_inputs` of the view's own config, nothing kept), bit for bit,
+    /// along a walk that changes one axis at a time (resolution alone: the kept entry is read;
+    /// λ, cascade count, fit, split range, distance, sun, snap: a new split set) and returns
+    /// to earlier settings. A key that missed any of these axes would hand back another split
+    /// set's splits, bands or pass, and a texel size not moved to the resolution would differ.
+    #[test]
+    fn view_inputs_kept_per_split_set_equal_the_direct_computation() {
+        use crate::commands::sweep::grid::{Setting, Sun};
+        use csm_core::scene::SplitRange;
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/default_20_views.toml");
+        let base = Config::load(&path).expect("the bench config loads");
+        // As a level keeps them (`level_inputs`): every view's pass, so that both forms read one.
+        let scene = &base.geometry.as_ref().expect("geometry").scene;
+        scene.keep_at_least(2 * base.views.len() + 8);
+        let fit = base.shadow.fit;
+        let other_fit = match fit {
+            csm_core::fitting::Fit::Sphere => csm_core::fitting::Fit::Aabb,
+            csm_core::fitting::Fit::Aabb => csm_core::fitting::Fit::Sphere,
+        };
+        let plain = |lambda, cascades, resolution| Setting::plain(lambda, cascades, resolution, fit);
+        let sun = Some(Sun {
+            azimuth_deg: 120.0,
+            elevation_deg: 35.0,
+        });
+        let walk = [
+            plain(0.5, 4, 512),
+            plain(0.5, 4, 2048),
+            plain(0.5, 4, 1024),
+            plain(0.6, 4, 1024),
+            plain(0.6, 3, 1024),
+            Setting::plain(0.6, 3, 1024, other_fit),
+            Setting::plain(0.6, 3, 4096, other_fit),
+            Setting {
+                split_range: SplitRange::Visible,
+                ..plain(0.6, 3, 4096)
+            },
+            Setting {
+                distance: Some(60.0),
+                ..plain(0.6, 3, 4096)
+            },
+            Setting {
+                sun,
+                ..plain(0.6, 3, 4096)
+            },
+            Setting {
+                sun,
+                ..plain(0.6, 3, 512)
+            },
+            plain(0.5, 4, 4096),
+            plain(0.5, 4, 512),
+        ];
+        let mut configs: Vec<Config> = walk.iter().map(|s| s.apply(&base).expect("a valid point")).collect();
+        // Snap is no axis of the grid: the last point again, unsnapped.
+        let mut unsnapped = configs.last().expect("a point").clone();
+        unsnapped.shadow.snap = !unsnapped.shadow.snap;
+        unsnapped.shadow.params.snap = unsnapped.shadow.snap;
+        configs.push(unsnapped);
+        for (step, config) in configs.iter().enumerate() {
+            for v in config.views.iter() {
+                let a = view_screen_inputs(config, v).expect("geometry");
+                let b = screen_inputs(&config_for_view(config, v)).expect("geometry");
+                let at = format!("step {step}, {}", v.name);
+                assert!(std::sync::Arc::ptr_eq(&a.vis, &b.vis), "{at}");
+                assert_eq!(bits(&a.splits), bits(&b.splits), "{at}");
+                assert_eq!(bits(&a.texel), bits(&b.texel), "{at}");
+                assert_eq!(
+                    a.visible.map(|(l, h)| (l.to_bits(), h.to_bits())),
+                    b.visible.map(|(l, h)| (l.to_bits(), h.to_bits())),
+                    "{at}"
+                );
+                let flat = |x: &[(f64, f64)]| {
+                    x.iter()
+                        .flat_map(|&(l, h)| [l.to_bits(), h.to_bits()])
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(flat(&a.bands), flat(&b.bands), "{at}");
+                assert_eq!(a.band_counts, b.band_counts, "{at}");
+            }
+        }
+        // Kept entries are read: two resolutions of one split set make one entry per view.
+        SPLIT_SETS.with(|h| h.borrow_mut().entries.clear());
+        for config in &configs[..2] {
+            for v in config.views.iter() {
+                view_screen_inputs(config, v).expect("geometry");
+            }
+        }
+        assert_eq!(SPLIT_SETS.with(|h| h.borrow().entries.len()), base.views.len());
     }
 }
 

@@ -816,6 +816,8 @@ impl<'a> ViewPass<'a> {
         }
         pass.range = (lo <= hi).then_some((lo, hi));
         if octaves && oct_lo <= oct_hi {
+            // One allocation: at most one entry per octave of the range.
+            pass.octaves.reserve_exact(oct_hi - oct_lo + 1);
             for o in oct_lo..=oct_hi {
                 if sc.oct[o] > 0 {
                     pass.octaves.push((o as u16, sc.oct[o]));
