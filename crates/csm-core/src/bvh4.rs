@@ -101,25 +101,9 @@ impl Tri4 {
     /// Branch-free over the four lanes (so that the compiler makes it four-wide).
     #[inline(always)]
     fn intersect(&self, o: [f32; 3], d: [f32; 3], tmin: f32, tmax: f32) -> [f32; 4] {
-        let (v0, n, e1, e2) = (&self.v0, &self.n, &self.e1, &self.e2);
-        let mut out = [0.0f32; 4];
-        for i in 0..4 {
-            let c0 = v0[0][i] - o[0];
-            let c1 = v0[1][i] - o[1];
-            let c2 = v0[2][i] - o[2];
-            let r0 = d[1] * c2 - d[2] * c1;
-            let r1 = d[2] * c0 - d[0] * c2;
-            let r2 = d[0] * c1 - d[1] * c0;
-            let inv_det = 1.0 / (n[0][i] * d[0] + n[1][i] * d[1] + n[2][i] * d[2]);
-            let u = (r0 * e2[0][i] + r1 * e2[1][i] + r2 * e2[2][i]) * inv_det;
-            let v = (r0 * e1[0][i] + r1 * e1[1][i] + r2 * e1[2][i]) * inv_det;
-            let w = 1.0 - u - v;
-            let inside = (u.to_bits() | v.to_bits() | w.to_bits()) & 0x8000_0000 == 0;
-            let t = (n[0][i] * c0 + n[1][i] * c1 + n[2][i] * c2) * inv_det;
-            let ok = inv_det != 0.0 && inside && t >= tmin && t <= tmax;
-            out[i] = if ok { t } else { f32::INFINITY };
-        }
-        out
+        // The origin's terms, then the per-ray rest: one copy of the test for single rays and
+        // packets (the same operations in the same order either way).
+        self.intersect_seen(&self.seen_from(o), d, tmin, tmax)
     }
 }
 
@@ -763,6 +747,31 @@ mod tests {
     use glam_bvh::Vec3A;
     use proptest::prelude::*;
 
+    /// Möller–Trumbore in binary32 for each lane of `tri`, every term from the ray's origin:
+    /// the reference the shared-origin test ([`Tri4::seen_from`], [`Tri4::intersect_seen`])
+    /// must equal to the bit.
+    fn plain_lane_test(tri: &Tri4, o: [f32; 3], d: [f32; 3], tmin: f32, tmax: f32) -> [f32; 4] {
+        let (v0, n, e1, e2) = (&tri.v0, &tri.n, &tri.e1, &tri.e2);
+        let mut out = [0.0f32; 4];
+        for i in 0..4 {
+            let c0 = v0[0][i] - o[0];
+            let c1 = v0[1][i] - o[1];
+            let c2 = v0[2][i] - o[2];
+            let r0 = d[1] * c2 - d[2] * c1;
+            let r1 = d[2] * c0 - d[0] * c2;
+            let r2 = d[0] * c1 - d[1] * c0;
+            let inv_det = 1.0 / (n[0][i] * d[0] + n[1][i] * d[1] + n[2][i] * d[2]);
+            let u = (r0 * e2[0][i] + r1 * e2[1][i] + r2 * e2[2][i]) * inv_det;
+            let v = (r0 * e1[0][i] + r1 * e1[1][i] + r2 * e1[2][i]) * inv_det;
+            let w = 1.0 - u - v;
+            let inside = (u.to_bits() | v.to_bits() | w.to_bits()) & 0x8000_0000 == 0;
+            let t = (n[0][i] * c0 + n[1][i] * c1 + n[2][i] * c2) * inv_det;
+            let ok = inv_det != 0.0 && inside && t >= tmin && t <= tmax;
+            out[i] = if ok { t } else { f32::INFINITY };
+        }
+        out
+    }
+
     fn v(p: [f32; 3]) -> Vec3A {
         Vec3A::new(p[0], p[1], p[2])
     }
@@ -845,8 +854,9 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(2000))]
 
         /// The packet's leaf test, with the origin's terms worked out once per leaf, gives each
-        /// ray of a shared origin the bits of the plain test ([`Tri4::intersect`]), whatever
-        /// the triangles (flat, vertical, degenerate, on signed zeros), origin and directions.
+        /// ray of a shared origin the bits of the plain lane test written out in full
+        /// ([`plain_lane_test`]; [`Tri4::intersect`] is the packet's test too), whatever the
+        /// triangles (flat, vertical, degenerate, on signed zeros), origin and directions.
         #[test]
         fn the_shared_origin_test_is_the_lane_test_to_the_bit(
             verts in prop::collection::vec(prop::array::uniform9(coordinate()), 1..=4),
@@ -862,8 +872,9 @@ mod tests {
             let at = tri.seen_from(o);
             for d in dirs {
                 let ours = tri.intersect_seen(&at, d, tmin, tmax).map(f32::to_bits);
-                let theirs = tri.intersect(o, d, tmin, tmax).map(f32::to_bits);
+                let theirs = plain_lane_test(&tri, o, d, tmin, tmax).map(f32::to_bits);
                 prop_assert_eq!(ours, theirs, "direction {:?}", d);
+                prop_assert_eq!(tri.intersect(o, d, tmin, tmax).map(f32::to_bits), theirs);
             }
         }
 
