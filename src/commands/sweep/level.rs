@@ -144,12 +144,16 @@ pub(crate) fn worst_of(values: &[f64], seen: &[bool], objective: SummaryMetric) 
 
 /// Each view's own choice and the level's cost to it, from what the rows keep of each view
 /// ([`Summary::view_ranks`], measured for `objective`: the sweep's); None when the rows hold no
-/// views. `views` are the config's (their names).
+/// views. `views` are the config's (their names). A view alone is judged under the level's
+/// budgets: `budget_mib` and `cost_limit` (a row's memory and render cost are the same for every
+/// view), so that what the level's choice costs a view is measured against a setting the team
+/// could ship.
 pub(crate) fn choose(
     rows: &[Row],
     rec: Option<&Recommendation>,
     configured: Option<usize>,
     budget_mib: f64,
+    cost_limit: rank::CostLimit,
     objective: SummaryMetric,
     views: &[ViewSettings],
 ) -> Option<LevelChoice> {
@@ -170,7 +174,7 @@ pub(crate) fn choose(
             let worst = |i: usize| rows[i].summary.view_ranks[k].worst;
             // A view that sees no receiver has no statistics to choose by.
             let seen = rows[at].summary.view_ranks[k].seen;
-            let alone = rank::recommend_with(rows, budget_mib, rank::CostLimit::NONE, &value, &worst)
+            let alone = rank::recommend_with(rows, budget_mib, cost_limit, &value, &worst)
                 .map(|r| r.index)
                 .filter(|_| seen);
             let objective_alone = alone.map(value);
@@ -254,6 +258,8 @@ mod tests {
                     })
                     .collect();
                 let memory = 1 + (rng.unit() * 8.0) as u64;
+                // A render cost on a grid of tenths (ties likely), unmeasured in one row of ten.
+                let cost_index = (i % 10 != 9).then(|| (rng.unit() * 20.0).round() / 10.0);
                 Row {
                     setting: Setting::plain(0.25 * (1 + i % 3) as f64, cascades, 512 << (i % 3), Fit::Sphere),
                     summary: Summary {
@@ -266,6 +272,10 @@ mod tests {
                         band_pixel_share: rng.unit(),
                         screen: Some(level),
                         views,
+                        cost: crate::analysis::cost::CostSummary {
+                            cost_index,
+                            ..Default::default()
+                        },
                         ..Summary::nothing_needed(memory << 20)
                     },
                 }
@@ -322,12 +332,14 @@ mod tests {
     }
 
     /// The direct form of a level's choice: for each view, every row's summary cloned with the
-    /// view's full metrics in place of the level's, ranked by [`rank::recommend_by`].
+    /// view's full metrics in place of the level's, ranked by [`rank::recommend_within`] under
+    /// the level's budgets.
     fn choose_over_full_rows(
         rows: &[Row],
         rec: Option<&Recommendation>,
         configured: usize,
         budget: f64,
+        cost_limit: rank::CostLimit,
         objective: SummaryMetric,
     ) -> Vec<ViewChoice> {
         let at = rec.map_or(configured, |r| r.index);
@@ -341,9 +353,10 @@ mod tests {
                     })
                     .collect();
                 let seen = rows[at].summary.views[k].screen.receiver_fraction > 0.0;
-                let alone = rank::recommend_by(&own, budget, objective, crate::metric::worst_aliasing(true))
-                    .map(|r| r.index)
-                    .filter(|_| seen);
+                let alone =
+                    rank::recommend_within(&own, budget, cost_limit, objective, crate::metric::worst_aliasing(true))
+                        .map(|r| r.index)
+                        .filter(|_| seen);
                 let objective_alone = alone.map(|i| objective.value(&own[i].summary));
                 let objective_at_level = objective.value(&own[at].summary);
                 let cost = objective_alone
@@ -376,22 +389,104 @@ mod tests {
         "shimmer_unsnapped",
     ];
 
+    /// The cost budgets the tests judge levels under: none, a `cost_budget` (`cost_index` at
+    /// most 0.6 or 1.2 of the configured setting's) and a `shadow_ms_budget` (no row here is
+    /// calibrated, so none fits it: the cheapest rows win).
+    const COST_LIMITS: [rank::CostLimit; 4] = [
+        rank::CostLimit::NONE,
+        rank::CostLimit {
+            index: Some(0.6),
+            ms: None,
+        },
+        rank::CostLimit {
+            index: Some(1.2),
+            ms: None,
+        },
+        rank::CostLimit {
+            index: None,
+            ms: Some(2.0),
+        },
+    ];
+
     /// Each view's choice from what the rows keep for the ranking equals the choice over that
     /// view's rows with its full metrics, each cloned afresh (the direct form), for random
-    /// levels, budgets and objectives.
+    /// levels, memory budgets, cost budgets and objectives.
     #[test]
     fn choices_from_the_ranks_equal_those_over_the_full_rows() {
-        for seed in 0..80 {
+        for seed in 0..160 {
             let views = 1 + (seed as usize % 6);
             let objective = SummaryMetric::named(OBJECTIVES[seed as usize % OBJECTIVES.len()]);
             let rows = with_ranks(rows(seed, 24, views), objective);
             let budget = 2.0 + (seed % 7) as f64;
-            let rec = rank::recommend_by(&rows, budget, objective, crate::metric::worst_aliasing(true));
-            let got = choose(&rows, rec.as_ref(), Some(3), budget, objective, &named_views(views)).unwrap();
+            let limit = COST_LIMITS[(seed as usize / 3) % COST_LIMITS.len()];
+            let worst = crate::metric::worst_aliasing(true);
+            let rec = rank::recommend_within(&rows, budget, limit, objective, worst);
+            let got = choose(
+                &rows,
+                rec.as_ref(),
+                Some(3),
+                budget,
+                limit,
+                objective,
+                &named_views(views),
+            )
+            .unwrap();
             assert_eq!(got.at, rec.as_ref().map_or(3, |r| r.index));
-            let want = choose_over_full_rows(&rows, rec.as_ref(), 3, budget, objective);
-            assert_eq!(got.views, want, "seed {seed}, {}", objective.name());
+            let want = choose_over_full_rows(&rows, rec.as_ref(), 3, budget, limit, objective);
+            assert_eq!(got.views, want, "seed {seed}, {}, {limit:?}", objective.name());
         }
+    }
+
+    /// Under a cost budget a view alone is held to it as the level is: wherever some acceptable
+    /// row fits both budgets, every view's own choice fits them too, and a view's own choice
+    /// is never better than its best over the rows that fit (brute force over the rows).
+    #[test]
+    fn a_views_own_choice_keeps_the_levels_cost_budget() {
+        let objective = SummaryMetric::named("visible_aliasing_p95");
+        let mut checked = 0;
+        for seed in 0..60 {
+            let views = 2 + (seed as usize % 4);
+            let rows = with_ranks(rows(seed, 24, views), objective);
+            let budget = 4.0 + (seed % 5) as f64;
+            let limit = rank::CostLimit {
+                index: Some(0.8),
+                ms: None,
+            };
+            let bytes = (budget * 1024.0 * 1024.0).floor() as u64;
+            let fits = |i: usize| {
+                rank::acceptable(&rows[i]) && rows[i].summary.memory_bytes <= bytes && limit.fits(&rows[i].summary)
+            };
+            if !(0..rows.len()).any(fits) {
+                continue;
+            }
+            let rec = rank::recommend_within(&rows, budget, limit, objective, crate::metric::worst_aliasing(true));
+            let got = choose(
+                &rows,
+                rec.as_ref(),
+                Some(0),
+                budget,
+                limit,
+                objective,
+                &named_views(views),
+            )
+            .unwrap();
+            for (k, v) in got.views.iter().enumerate() {
+                let Some(i) = v.alone else { continue };
+                assert!(fits(i), "seed {seed}: view {k} alone picks row {i}, over a budget");
+                let best = (0..rows.len())
+                    .filter(|&j| fits(j))
+                    .map(|j| rows[j].summary.view_ranks[k].objective.unwrap())
+                    .fold(f64::INFINITY, f64::min);
+                let own = rows[i].summary.view_ranks[k].objective.unwrap();
+                // Values within 1 % of the best are equal for the ranking (ties go to the worst case).
+                assert!(
+                    own <= best * (1.0 + rank::MEAN_TOLERANCE) + 1e-12,
+                    "seed {seed}: view {k}: {own} against {best}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 50, "only {checked} views checked");
     }
 
     /// Every metric a sweep may minimise reads, of a view's summary, either the one screen
@@ -467,8 +562,24 @@ mod tests {
         let budget = 64.0;
         let rec = rank::recommend_by(&rows, budget, objective, crate::metric::worst_aliasing(true));
         let configured = rank::configured(&base, &rows).unwrap_or(0);
-        let got = choose(&rows, rec.as_ref(), Some(configured), budget, objective, &base.views).unwrap();
-        let want = choose_over_full_rows(&full, rec.as_ref(), configured, budget, objective);
+        let got = choose(
+            &rows,
+            rec.as_ref(),
+            Some(configured),
+            budget,
+            rank::CostLimit::NONE,
+            objective,
+            &base.views,
+        )
+        .unwrap();
+        let want = choose_over_full_rows(
+            &full,
+            rec.as_ref(),
+            configured,
+            budget,
+            rank::CostLimit::NONE,
+            objective,
+        );
         assert_eq!(got.views, want);
         assert!(
             got.views.iter().any(|v| v.alone != Some(got.at)),

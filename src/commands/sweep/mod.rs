@@ -167,6 +167,7 @@ impl SweepResult {
             recommendation.as_ref(),
             configured,
             budget_mib,
+            cost_limit,
             objective,
             &config.views,
         );
