@@ -452,7 +452,7 @@ mod tests {
                 index: Some(0.8),
                 ms: None,
             };
-            let bytes = (budget * 1024.0 * 1024.0).floor() as u64;
+            let bytes = rank::budget_bytes(budget);
             let fits = |i: usize| {
                 rank::acceptable(&rows[i]) && rows[i].summary.memory_bytes <= bytes && limit.fits(&rows[i].summary)
             };

@@ -143,6 +143,12 @@ impl CostLimit {
     }
 }
 
+/// A memory budget in MiB as the largest number of bytes a row may take (whole bytes, rounded
+/// down).
+pub(crate) fn budget_bytes(budget_mib: f64) -> u64 {
+    (budget_mib * 1024.0 * 1024.0).floor() as u64
+}
+
 /// The recommended row and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Recommendation {
@@ -204,7 +210,7 @@ pub(crate) fn recommend_with(
     objective: &dyn Fn(usize) -> f64,
     worst: &dyn Fn(usize) -> f64,
 ) -> Option<Recommendation> {
-    let budget_bytes = (budget_mib * 1024.0 * 1024.0).floor() as u64;
+    let budget_bytes = budget_bytes(budget_mib);
     let ok: Vec<usize> = (0..rows.len()).filter(|&i| acceptable(&rows[i])).collect();
     let within: Vec<usize> = ok
         .iter()
@@ -258,7 +264,7 @@ pub struct NoRecommendation {
 
 /// The failure analysis of a sweep without a recommendation.
 pub fn no_recommendation(rows: &[Row], budget_mib: f64, objective: SummaryMetric) -> NoRecommendation {
-    let budget_bytes = (budget_mib * 1024.0 * 1024.0).floor() as u64;
+    let budget_bytes = budget_bytes(budget_mib);
     let needed: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed).collect();
     let closest = needed.iter().copied().min_by(|&a, &b| {
         let (x, y) = (&rows[a].summary, &rows[b].summary);
@@ -570,7 +576,7 @@ pub(crate) fn ranked(
     objective: SummaryMetric,
     worst: SummaryMetric,
 ) -> Vec<usize> {
-    let budget = rec.map_or((budget_mib * 1048576.0) as u64, |r| r.budget_bytes);
+    let budget = rec.map_or(budget_bytes(budget_mib), |r| r.budget_bytes);
     let mut idx: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].summary.cascades_needed).collect();
     let key = |i: usize| {
         let s = &rows[i].summary;
